@@ -1,0 +1,55 @@
+"""Estimator output: loads, standard deviations, constraint residuals and flags."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+WHEELS = ("fl", "fr", "rl", "rr")
+RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
+
+
+class StepFlag(enum.IntFlag):
+    """Per-sample status bits: which updates were skipped for missing inputs."""
+
+    SUSPENSION_FL_SKIPPED = 1
+    SUSPENSION_FR_SKIPPED = 2
+    SUSPENSION_RL_SKIPPED = 4
+    SUSPENSION_RR_SKIPPED = 8
+    VERTICAL_SKIPPED = 16
+    PITCH_SKIPPED = 32
+    ROLL_SKIPPED = 64
+
+    @classmethod
+    def update_flags(cls) -> tuple[StepFlag, ...]:
+        """The seven update flags in the order of the filter's ``used`` output."""
+        return tuple(cls)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Estimate:
+    """Wheel-load estimates of ``n`` samples, wheel order FL, FR, RL, RR.
+
+    ``residual`` is :math:`b - A x` after the update [N, N m, N m].
+    """
+
+    t: np.ndarray  # (n,)
+    loads: np.ndarray  # (n, 4) N
+    std: np.ndarray  # (n, 4) N
+    residual: np.ndarray  # (n, 3)
+    flags: np.ndarray  # (n,) StepFlag bits
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Columns ``t, fz_fl.., fz_std_fl.., residual_vertical.., flags``."""
+        columns = {"t": self.t}
+        columns.update({f"fz_{w}": self.loads[:, i] for i, w in enumerate(WHEELS)})
+        columns.update({f"fz_std_{w}": self.std[:, i] for i, w in enumerate(WHEELS)})
+        columns.update({name: self.residual[:, i] for i, name in enumerate(RESIDUALS)})
+        columns["flags"] = self.flags
+        return pd.DataFrame(columns)

@@ -1,0 +1,117 @@
+"""The model parameter vector: one ordered layout shared by every CasADi function.
+
+Every symbolic model takes its parameters as an explicit vector ``p`` so that
+the same function serves the Python filter (numeric ``p``), generated C with
+runtime parameters, and identification (Jacobians with respect to ``p``).
+
+Example
+-------
+>>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
+>>> p.vector().shape
+(26,)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
+from wheelload.models.vehicle import Vehicle
+
+
+@dataclass(frozen=True, kw_only=True)
+class ModelParameters:
+    """Parameters of the suspension and equilibrium models (numbers or CasADi symbols).
+
+    Mass and geometry are of the whole vehicle (sprung + unsprung); the aero
+    point is relative to the whole-vehicle CG (x forward, z up).
+    """
+
+    mass: Any
+    lf: Any
+    lr: Any
+    track_front: Any
+    track_rear: Any
+    cg_height: Any
+    air_density: Any
+    reference_area: Any
+    lift_coefficient: Any
+    drag_coefficient: Any
+    aero_x: Any
+    aero_z: Any
+    spring_front: Any
+    spring_rear: Any
+    damper_push_front: Any
+    damper_pull_front: Any
+    damper_push_rear: Any
+    damper_pull_rear: Any
+    arb_rate_front: Any
+    arb_rate_rear: Any
+    arb_ratio_front: Any
+    arb_ratio_rear: Any
+    static_fl: Any
+    static_fr: Any
+    static_rl: Any
+    static_rr: Any
+
+    @staticmethod
+    def names() -> tuple[str, ...]:
+        return tuple(f.name for f in dataclasses.fields(ModelParameters))
+
+    @classmethod
+    def symbolic(cls, name: str = "p") -> tuple[ca.SX, ModelParameters]:
+        """A CasADi SX vector and the parameters unpacked from it."""
+        p = ca.SX.sym(name, len(cls.names()))
+        return p, cls(**{key: p[i] for i, key in enumerate(cls.names())})
+
+    @classmethod
+    def from_vehicle(
+        cls, vehicle: Vehicle, static: np.ndarray | None = None
+    ) -> ModelParameters:
+        """Numeric parameters; ``static`` overrides the static wheel loads [N]."""
+        centre = vehicle_mass_centre(vehicle)
+        static = static_loads(vehicle) if static is None else np.asarray(static, float)
+        if static.shape != (4,) or not np.all(np.isfinite(static)):
+            raise ValueError(f"static loads must be 4 finite values, got {static}")
+        front, rear = vehicle.suspension.front, vehicle.suspension.rear
+        aero = vehicle.aero
+        return cls(
+            mass=vehicle.mass.total,
+            lf=centre.lf,
+            lr=centre.lr,
+            track_front=vehicle.geometry.track_front,
+            track_rear=vehicle.geometry.track_rear,
+            cg_height=centre.height,
+            air_density=aero.air_density,
+            reference_area=aero.reference_area,
+            lift_coefficient=aero.lift_coefficient,
+            drag_coefficient=aero.drag_coefficient,
+            aero_x=aero.application_point[0] - centre.offset_x,
+            aero_z=aero.application_point[2] + vehicle.geometry.cg_height - centre.height,
+            spring_front=front.spring_rate,
+            spring_rear=rear.spring_rate,
+            damper_push_front=front.damper_push,
+            damper_pull_front=front.damper_pull,
+            damper_push_rear=rear.damper_push,
+            damper_pull_rear=rear.damper_pull,
+            arb_rate_front=front.arb_rate,
+            arb_rate_rear=rear.arb_rate,
+            arb_ratio_front=front.arb_ratio,
+            arb_ratio_rear=rear.arb_ratio,
+            static_fl=float(static[0]),
+            static_fr=float(static[1]),
+            static_rl=float(static[2]),
+            static_rr=float(static[3]),
+        )
+
+    def vector(self) -> np.ndarray:
+        """The numeric parameter vector in layout order."""
+        return np.array([float(getattr(self, key)) for key in self.names()])
+
+    def static(self) -> tuple[Any, Any, Any, Any]:
+        return (self.static_fl, self.static_fr, self.static_rl, self.static_rr)

@@ -1,0 +1,267 @@
+"""Vehicle parameters: a frozen, validated description read from a TOML file.
+
+The file layout mirrors the dataclasses below: one table per section, one key
+per field. Every key is required (except the optional ``[plant]`` section),
+unknown keys are rejected, and every error names the file and the key. SI
+units; positions relative to the sprung-mass CG in ISO 8855 axes (x forward,
+y left, z up).
+
+Example
+-------
+>>> vehicle = load_vehicle(example_vehicle_path())
+>>> round(vehicle.mass.total, 1)
+1613.2
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+import types
+import typing
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+GRAVITY = 9.80665  # m/s^2, standard gravity
+
+WHEELS = ("fl", "fr", "rl", "rr")
+
+
+class VehicleFileError(ValueError):
+    """A vehicle file that cannot be read: names the file and the key."""
+
+
+Vector3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Mass:
+    total: float  # kg, sprung + unsprung
+    sprung: float  # kg
+    unsprung_front: float  # kg, both front corners together
+    unsprung_rear: float  # kg, both rear corners together
+
+    def _check(self) -> None:
+        for key in ("total", "sprung", "unsprung_front", "unsprung_rear"):
+            _positive(self, key)
+        parts = self.sprung + self.unsprung_front + self.unsprung_rear
+        if abs(parts - self.total) > 0.005 * self.total:
+            raise _KeyError(
+                "total",
+                f"is {self.total} kg but sprung + unsprung_front + unsprung_rear = {parts:.1f} kg",
+            )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Geometry:
+    wheelbase: float  # m
+    lf: float  # m, sprung CG to front axle
+    lr: float  # m, sprung CG to rear axle
+    track_front: float  # m
+    track_rear: float  # m
+    cg_height: float  # m, sprung CG above ground
+    imu_position: Vector3  # m, relative to the sprung CG
+
+    def _check(self) -> None:
+        for key in ("wheelbase", "lf", "lr", "track_front", "track_rear", "cg_height"):
+            _positive(self, key)
+        if abs(self.lf + self.lr - self.wheelbase) > 0.03 * self.wheelbase:
+            raise _KeyError(
+                "lf",
+                f"+ lr = {self.lf + self.lr:.3f} m is more than 3 % away from "
+                f"wheelbase = {self.wheelbase} m",
+            )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Tyres:
+    radius_front: float  # m, unloaded
+    radius_rear: float  # m
+    vertical_stiffness_front: float  # N/m
+    vertical_stiffness_rear: float  # N/m
+
+    def _check(self) -> None:
+        for field in dataclasses.fields(self):
+            _positive(self, field.name)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Aero:
+    air_density: float  # kg/m^3
+    reference_area: float  # m^2
+    lift_coefficient: float  # -, > 0 is lift
+    drag_coefficient: float  # -
+    application_point: Vector3  # m, relative to the sprung CG
+
+    def _check(self) -> None:
+        _positive(self, "air_density")
+        _positive(self, "reference_area")
+        _non_negative(self, "drag_coefficient")
+
+
+@dataclass(frozen=True, kw_only=True)
+class AxleSuspension:
+    spring_rate: float  # N/m at the wheel
+    damper_push: float  # N s/m, compression (v > 0)
+    damper_pull: float  # N s/m, rebound (v < 0)
+    arb_rate: float  # N/m, anti-roll bar
+    arb_ratio: float  # -, gamma_arb of eq. (8)
+
+    def _check(self) -> None:
+        _positive(self, "spring_rate")
+        for key in ("damper_push", "damper_pull", "arb_rate", "arb_ratio"):
+            _non_negative(self, key)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Suspension:
+    front: AxleSuspension
+    rear: AxleSuspension
+
+    def _check(self) -> None:
+        pass
+
+
+@dataclass(frozen=True, kw_only=True)
+class FilterTuning:
+    process_noise_density: float  # N^2/s:  Q = q dt I
+    suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
+    constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt
+    initial_std: float  # N
+
+    def _check(self) -> None:
+        _positive(self, "process_noise_density")
+        _positive(self, "suspension_noise_density")
+        _positive(self, "initial_std")
+        if min(self.constraint_noise_density) <= 0.0:
+            raise _KeyError("constraint_noise_density", "must be > 0 in every row")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Vehicle:
+    """A vehicle: mass, geometry, tyres, aerodynamics, suspension, filter tuning."""
+
+    name: str
+    description: str
+    mass: Mass
+    geometry: Geometry
+    tyres: Tyres
+    aero: Aero
+    suspension: Suspension
+    filter: FilterTuning
+
+    def _check(self) -> None:
+        pass
+
+    def replace(self, **changes: object) -> Vehicle:
+        """A copy with whole sections replaced, validated again."""
+        new = dataclasses.replace(self, **changes)
+        _validate(new, "")
+        return new
+
+
+class _KeyError(ValueError):
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(message)
+        self.key = key
+
+
+def _positive(section: object, key: str) -> None:
+    if not getattr(section, key) > 0.0:
+        raise _KeyError(key, f"must be > 0, got {getattr(section, key)}")
+
+
+def _non_negative(section: object, key: str) -> None:
+    if not getattr(section, key) >= 0.0:
+        raise _KeyError(key, f"must be >= 0, got {getattr(section, key)}")
+
+
+def _validate(obj: object, prefix: str) -> None:
+    for field in dataclasses.fields(obj):  # type: ignore[arg-type]
+        value = getattr(obj, field.name)
+        if dataclasses.is_dataclass(value):
+            _validate(value, f"{prefix}{field.name}.")
+    try:
+        obj._check()  # type: ignore[attr-defined]
+    except _KeyError as error:
+        raise VehicleFileError(f"key '{prefix}{error.key}' {error}") from None
+
+
+def _convert(value: object, kind: object, key: str) -> object:
+    """Convert one TOML value to the annotated field type, or raise naming the key."""
+    if kind is str:
+        if not isinstance(value, str):
+            raise VehicleFileError(f"key '{key}' must be a string, got {value!r}")
+        return value
+    if kind is float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise VehicleFileError(f"key '{key}' must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise VehicleFileError(f"key '{key}' must be finite, got {value!r}")
+        return float(value)
+    if typing.get_origin(kind) is tuple:
+        items = typing.get_args(kind)
+        if not isinstance(value, list) or len(value) != len(items):
+            raise VehicleFileError(f"key '{key}' must be a list of {len(items)} numbers")
+        return tuple(_convert(v, t, f"{key}[{i}]") for i, (v, t) in enumerate(zip(value, items)))
+    if isinstance(kind, type) and dataclasses.is_dataclass(kind):
+        if not isinstance(value, dict):
+            raise VehicleFileError(f"key '{key}' must be a table [{key}]")
+        return _build(kind, value, f"{key}.")
+    if isinstance(kind, types.UnionType) and value is None:
+        return None
+    if isinstance(kind, types.UnionType):
+        (inner,) = [t for t in typing.get_args(kind) if t is not type(None)]
+        return _convert(value, inner, key)
+    raise TypeError(f"unsupported field type {kind} for key '{key}'")
+
+
+def _build(cls: type, table: dict, prefix: str) -> object:
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(table) - set(fields))
+    if unknown:
+        raise VehicleFileError(f"unknown key '{prefix}{unknown[0]}'")
+    values = {}
+    for name, field in fields.items():
+        if name not in table:
+            if field.default is not dataclasses.MISSING:
+                continue
+            raise VehicleFileError(f"missing key '{prefix}{name}'")
+        values[name] = _convert(table[name], hints[name], f"{prefix}{name}")
+    return cls(**values)
+
+
+def vehicle_from_dict(table: dict) -> Vehicle:
+    """Build and validate a :class:`Vehicle` from a parsed TOML table."""
+    vehicle = _build(Vehicle, table, "")
+    _validate(vehicle, "")
+    return vehicle  # type: ignore[return-value]
+
+
+def load_vehicle(path: str | Path) -> Vehicle:
+    """Read a vehicle TOML file; errors name the file and the offending key."""
+    path = Path(path)
+    try:
+        with path.open("rb") as stream:
+            table = tomllib.load(stream)
+    except FileNotFoundError:
+        raise VehicleFileError(f"{path}: no such vehicle file") from None
+    except tomllib.TOMLDecodeError as error:
+        raise VehicleFileError(f"{path}: not valid TOML: {error}") from None
+    try:
+        return vehicle_from_dict(table)
+    except VehicleFileError as error:
+        raise VehicleFileError(f"{path}: {error}") from None
+
+
+def example_vehicle_path() -> Path:
+    """Path of the bundled reference vehicle (paper Table I sports car)."""
+    return Path(str(resources.files("wheelload.models") / "vehicles" / "sports_car.toml"))
+
+
+def vehicle_template() -> str:
+    """A fully commented vehicle file (the bundled reference vehicle) to edit."""
+    return example_vehicle_path().read_text(encoding="utf-8")
