@@ -81,9 +81,14 @@ class Signals:
             return None if array is None else array[start:stop]
 
         return Signals(
-            t=self.t[start:stop], vx=self.vx[start:stop], acc=self.acc[start:stop],
-            d=self.d[start:stop], v=self.v[start:stop], rates=cut(self.rates),
-            reference=cut(self.reference), velocities_derived=self.velocities_derived,
+            t=self.t[start:stop],
+            vx=self.vx[start:stop],
+            acc=self.acc[start:stop],
+            d=self.d[start:stop],
+            v=self.v[start:stop],
+            rates=cut(self.rates),
+            reference=cut(self.reference),
+            velocities_derived=self.velocities_derived,
             source=self.source,
         )
 
@@ -120,7 +125,8 @@ def signals_from_frame(
         bad = np.flatnonzero(np.isnan(values) & frame[name].notna().to_numpy())
         if bad.size:
             raise LogError(
-                f"{source}: column '{name}' is not numeric at row {bad[0]}: {frame[name].iloc[bad[0]]!r}"
+                f"{source}: column '{name}' is not numeric at row {bad[0]}: "
+                f"{frame[name].iloc[bad[0]]!r}"
             )
         return values
 
@@ -147,8 +153,15 @@ def signals_from_frame(
     if derived:
         v = derive_velocities(t, d, velocity_cutoff, source)
     return Signals(
-        t=t, vx=signals_vx, acc=acc, d=d, v=v, rates=group(RATES), reference=group(REFERENCE),
-        velocities_derived=derived, source=source,
+        t=t,
+        vx=signals_vx,
+        acc=acc,
+        d=d,
+        v=v,
+        rates=group(RATES),
+        reference=group(REFERENCE),
+        velocities_derived=derived,
+        source=source,
     )
 
 

@@ -23,7 +23,6 @@ here: the tyres, not the air, carry the part of :math:`m a_x` due to drag.
 from __future__ import annotations
 
 import casadi as ca
-
 from wheelload.models.parameters import ModelParameters
 
 
@@ -60,6 +59,10 @@ def equilibrium_function(name: str = "equilibrium") -> ca.Function:
     acc = ca.SX.sym("acc", 3)
     vx = ca.SX.sym("vx")
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(name, [acc, vx, p_vector],
-                       [equilibrium_matrix(p), equilibrium_vector(acc, vx, p)],
-                       ["acc", "vx", "p"], ["A", "b"])
+    return ca.Function(
+        name,
+        [acc, vx, p_vector],
+        [equilibrium_matrix(p), equilibrium_vector(acc, vx, p)],
+        ["acc", "vx", "p"],
+        ["A", "b"],
+    )

@@ -19,7 +19,6 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.vehicle import Vehicle
 
@@ -70,9 +69,7 @@ class ModelParameters:
         return p, cls(**{key: p[i] for i, key in enumerate(cls.names())})
 
     @classmethod
-    def from_vehicle(
-        cls, vehicle: Vehicle, static: np.ndarray | None = None
-    ) -> ModelParameters:
+    def from_vehicle(cls, vehicle: Vehicle, static: np.ndarray | None = None) -> ModelParameters:
         """Numeric parameters; ``static`` overrides the static wheel loads [N]."""
         centre = vehicle_mass_centre(vehicle)
         static = static_loads(vehicle) if static is None else np.asarray(static, float)

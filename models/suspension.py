@@ -17,7 +17,6 @@ Example
 from __future__ import annotations
 
 import casadi as ca
-
 from wheelload.models.parameters import ModelParameters
 
 
@@ -39,10 +38,14 @@ def anti_roll_bar_forces(d_left, d_right, rate, ratio):
 def suspension_loads(d, v, p: ModelParameters) -> ca.SX:
     """Pseudo-measured wheel loads FL, FR, RL, RR from travel ``d`` and rate ``v`` (eq. 9)."""
     axles = (
-        (p.spring_front, p.damper_push_front, p.damper_pull_front, p.arb_rate_front,
-         p.arb_ratio_front),
-        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear,
-         p.arb_ratio_rear),
+        (
+            p.spring_front,
+            p.damper_push_front,
+            p.damper_pull_front,
+            p.arb_rate_front,
+            p.arb_ratio_front,
+        ),
+        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear, p.arb_ratio_rear),
     )
     static = p.static()
     loads = []
@@ -61,5 +64,4 @@ def suspension_function(name: str = "suspension_load") -> ca.Function:
     d = ca.SX.sym("d", 4)
     v = ca.SX.sym("v", 4)
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(name, [d, v, p_vector], [suspension_loads(d, v, p)],
-                       ["d", "v", "p"], ["z"])
+    return ca.Function(name, [d, v, p_vector], [suspension_loads(d, v, p)], ["d", "v", "p"], ["z"])

@@ -1,0 +1,36 @@
+"""``wheelload vehicle``: print the commented template or check a vehicle file."""
+
+from __future__ import annotations
+
+import argparse
+
+from wheelload.models import load_vehicle, static_loads, vehicle_mass_centre, vehicle_template
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "vehicle", help="print a commented vehicle-file template, or check a vehicle file"
+    )
+    group = parser.add_mutually_exclusive_group(required=True)
+    group.add_argument("--template", action="store_true", help="print a commented template")
+    group.add_argument("file", nargs="?", help="vehicle TOML file to check and summarise")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.template:
+        print(vehicle_template(), end="")
+        return 0
+    vehicle = load_vehicle(args.file)
+    centre = vehicle_mass_centre(vehicle)
+    loads = static_loads(vehicle)
+    print(f"{args.file}: valid vehicle '{vehicle.name}'")
+    print(
+        f"  total mass {vehicle.mass.total:.1f} kg, whole-vehicle CG: lf {centre.lf:.3f} m, "
+        f"lr {centre.lr:.3f} m, height {centre.height:.3f} m"
+    )
+    print(
+        "  static loads [N]: "
+        + ", ".join(f"{w} {f:.0f}" for w, f in zip(("FL", "FR", "RL", "RR"), loads))
+    )
+    return 0

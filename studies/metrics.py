@@ -1,0 +1,62 @@
+"""Error metrics of the main paper (Siegloff & Choi §IV-B, eq. 26-34).
+
+.. math:: e_i = \\hat F_{z,i} - F^{ref}_{z,i}, \\quad
+          RMSE_i = \\sqrt{\\tfrac1N \\sum_k e_i^2}, \\quad
+          RMSE_{\\%,i} = 100\\, RMSE_i / \\overline{F^{ref}_{z,i}}
+
+P95 is the 95th percentile of :math:`|e|`, Max its maximum; the pooled row
+pools all wheels and samples (eq. 31-34).
+
+Example
+-------
+>>> table = wheel_metrics(estimate.loads, signals.reference)
+>>> table.loc["pooled", "RMSE"]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+WHEELS = ("fl", "fr", "rl", "rr")
+COLUMNS = ("RMSE", "RMSE %", "P95", "Max")
+
+
+def _row(errors: np.ndarray, mean_reference: float) -> list[float]:
+    absolute = np.abs(errors)
+    rmse = float(np.sqrt(np.mean(errors**2)))
+    return [
+        rmse,
+        100.0 * rmse / mean_reference,
+        float(np.percentile(absolute, 95)),
+        float(absolute.max()),
+    ]
+
+
+def wheel_metrics(estimate: np.ndarray, reference: np.ndarray) -> pd.DataFrame:
+    """Per-wheel and pooled RMSE [N], RMSE [%], P95 [N], Max [N] (eq. 27-34).
+
+    Samples where either array is not finite are left out (the count is in
+    the ``samples`` column).
+    """
+    estimate = np.asarray(estimate, float)
+    reference = np.asarray(reference, float)
+    if estimate.shape != reference.shape or estimate.ndim != 2 or estimate.shape[1] != 4:
+        raise ValueError(
+            f"estimate {estimate.shape} and reference {reference.shape} must both be (n, 4)"
+        )
+    keep = np.all(np.isfinite(estimate) & np.isfinite(reference), axis=1)
+    if not keep.any():
+        raise ValueError("no sample has both a finite estimate and a finite reference")
+    errors = estimate[keep] - reference[keep]
+    means = reference[keep].mean(axis=0)
+    rows = [_row(errors[:, i], means[i]) for i in range(4)]
+    rows.append(_row(errors.ravel(), float(means.mean())))
+    table = pd.DataFrame(rows, index=[*WHEELS, "pooled"], columns=COLUMNS)
+    table["samples"] = int(keep.sum())
+    return table
+
+
+def pooled_metrics(estimate: np.ndarray, reference: np.ndarray) -> dict[str, float]:
+    """Pooled RMSE, RMSE %, P95 and Max over all wheels and samples (eq. 31-34)."""
+    return wheel_metrics(estimate, reference).loc["pooled", list(COLUMNS)].to_dict()

@@ -1,0 +1,27 @@
+"""Every source folder is packaged: an unlisted folder would silently miss the wheel."""
+
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_every_python_folder_is_a_listed_package():
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    listed = set(config["tool"]["setuptools"]["packages"])
+    folders = {
+        "wheelload." + ".".join(path.parent.relative_to(ROOT).parts)
+        for path in ROOT.rglob("*.py")
+        if path.parent != ROOT
+        and path.parent.relative_to(ROOT).parts[0] in ("models", "estimators", "studies")
+        and "__pycache__" not in path.parts
+    }
+    assert folders == listed
+
+
+def test_installed_package_is_importable_under_one_name():
+    import wheelload.estimators
+    import wheelload.models
+    import wheelload.studies
+
+    assert Path(wheelload.models.__file__).parent == ROOT / "models"
