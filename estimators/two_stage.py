@@ -10,7 +10,7 @@ Tuning is per second (white-noise densities): :math:`Q = q\\,dt\\,I`,
 
 The per-sample step is one CasADi Function built from the model Functions in
 ``wheelload.models``; :meth:`TwoStageKF.run` maps it over a log in compiled
-code (``mapaccum``, JIT-compiled with the system C compiler).
+code (a generated C loop, the equivalent of ``mapaccum``; see ``compiled``).
 
 Example
 -------
@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kalman import predict, update
+from wheelload.estimators.compiled import CompiledLoop
+from wheelload.estimators.kalman import predict, sequential_update, upper
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
@@ -46,7 +47,6 @@ TUNING = (
     "constraint_noise_roll",
 )
 STEP_NAME = "wheelload_kf_step"
-CHUNK = 4096  # samples per compiled mapaccum call
 
 
 def tuning_vector(vehicle: Vehicle) -> np.ndarray:
@@ -79,8 +79,14 @@ def _sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
     return ca.vertcat(*[ca.if_else(valid[i], u[i], 0) for i in range(u.shape[0])])
 
 
-def step_expressions(suspension: ca.Function, equilibrium: ca.Function):
-    """Symbolic inputs and outputs of one filter step built from the model Functions."""
+def step_expressions(
+    suspension: ca.Function, equilibrium: ca.Function, *, constraint_update=sequential_update
+):
+    """Symbolic inputs and outputs of one filter step built from the model Functions.
+
+    ``constraint_update(x, P, b, A, r_c, mask) -> (x, P)`` is the second stage;
+    the default is the soft-constraint Kalman update (eq. 23-25).
+    """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", 4, 4)
     u_raw = ca.SX.sym("u", len(INPUTS))
@@ -97,12 +103,13 @@ def step_expressions(suspension: ca.Function, equilibrium: ca.Function):
     mask_c = _dependency_mask(b, u_raw, valid)
 
     Q = tuning[0] * dt * ca.DM.eye(4)
-    Rs = tuning[1] / dt * ca.DM.eye(4)
-    Rc = ca.diag(tuning[2:5]) / dt
+    rs = ca.repmat(tuning[1] / dt, 4, 1)
+    rc = tuning[2:5] / dt
 
-    x_pred, P_pred = predict(x, P, Q)
-    x_s, P_s = update(x_pred, P_pred, z, ca.DM.eye(4), Rs, mask_s)
-    x_new, P_new = update(x_s, P_s, b, A, Rc, mask_c)
+    # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
+    x_pred, P_pred = predict(x, upper(P), Q)
+    x_s, P_s = sequential_update(x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s)
+    x_new, P_new = constraint_update(x_s, P_s, b, A, rc, mask_c)
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
@@ -120,25 +127,16 @@ def step_function(
     suspension: ca.Function | None = None,
     equilibrium: ca.Function | None = None,
     name: str = STEP_NAME,
+    *,
+    constraint_update=sequential_update,
 ) -> ca.Function:
     """The filter step as a CasADi Function (model Functions default to ``wheelload.models``)."""
     inputs, outputs = step_expressions(
-        suspension or suspension_function(), equilibrium or equilibrium_function()
+        suspension or suspension_function(),
+        equilibrium or equilibrium_function(),
+        constraint_update=constraint_update,
     )
     return ca.Function(name, inputs, outputs, STEP_INPUT_NAMES, STEP_OUTPUT_NAMES)
-
-
-@functools.cache
-def _compiled_run(chunk: int) -> ca.Function:
-    """``mapaccum`` of the step over ``chunk`` samples, JIT-compiled once per process."""
-    accumulate = step_function().mapaccum("wheelload_kf_run", chunk, 2)
-    symbols = accumulate.mx_in()
-    return ca.Function(
-        "wheelload_kf_run_jit",
-        symbols,
-        accumulate(*symbols),
-        {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"], "verbose": False}},
-    )
 
 
 @dataclass(frozen=True)
@@ -217,38 +215,40 @@ class TwoStageKF:
 
     def run(self, signals: Signals, state: FilterState | None = None) -> Estimate:
         """Filter a whole log in compiled code; same numbers as repeated :meth:`step`."""
+        return self._run(signals, state, with_covariance=False)[0]
+
+    def run_with_covariance(
+        self, signals: Signals, state: FilterState | None = None
+    ) -> tuple[Estimate, np.ndarray]:
+        """As :meth:`run`, also returning the posterior covariances, shape (n, 4, 4)."""
+        return self._run(signals, state, with_covariance=True)
+
+    @functools.cached_property
+    def _loop(self) -> CompiledLoop:
+        """This filter's step looped over a log in C (state x, P carried)."""
+        return CompiledLoop(self._step, 2, ("u", "u_valid", "dt"))
+
+    def _run(self, signals: Signals, state: FilterState | None, with_covariance: bool):
         state = state or self.initial_state()
-        n = len(signals)
-        u = input_matrix(signals)
+        u = input_matrix(signals).T
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
-        dt = sample_intervals(signals.t)
-        run = _compiled_run(CHUNK)
-        x, P = state.x, state.P
-        outputs = [np.empty((4, n)), np.empty((4, n)), np.empty((3, n)), np.empty((7, n))]
-        for start in range(0, n, CHUNK):
-            stop = min(start + CHUNK, n)
-            pad = CHUNK - (stop - start)
-            chunk_u = np.pad(u[:, start:stop], ((0, 0), (0, pad)))
-            chunk_valid = np.pad(valid[:, start:stop], ((0, 0), (0, pad)))
-            chunk_dt = np.pad(dt[start:stop], (0, pad), constant_values=dt[stop - 1])
-            xs, Ps, std, residual, used, _ = run(
-                x, P, chunk_u, chunk_valid, chunk_dt[None, :], self.p, self.tuning
-            )
-            xs = np.asarray(xs)
-            for target, source in zip(outputs, (xs, std, residual, used)):
-                target[:, start:stop] = np.asarray(source)[:, : stop - start]
-            last = stop - start - 1
-            x = xs[:, last]
-            P = np.asarray(Ps)[:, 4 * last : 4 * last + 4]
-        loads, std, residual, used = outputs
-        return Estimate(
-            t=signals.t.copy(),
-            loads=loads.T,
-            std=std.T,
-            residual=residual.T,
-            flags=flags_from_used(used),
+        dt = sample_intervals(signals.t)[:, None]
+        _, history, (std, residual, used, _) = self._loop(
+            [state.x, state.P],
+            [self.p, self.tuning],
+            [u, valid, dt],
+            record=(0, 1) if with_covariance else (0,),
         )
+        estimate = Estimate(
+            t=signals.t.copy(),
+            loads=history[0],
+            std=std,
+            residual=residual,
+            flags=flags_from_used(used.T),
+        )
+        covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
+        return estimate, covariances
 
 
 def sample_intervals(t: np.ndarray) -> np.ndarray:

@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     per_numpy = numpy_time / args.loop_samples * 1e6
     per_step = step_time / n_step * 1e6
     print(f"two-stage KF, {vehicle.name}, 1 kHz synthetic slalom log")
-    print(f"  JIT compile (once per process):        {compile_time:8.2f} s")
+    print(f"  build or load the compiled C loop:      {compile_time:8.2f} s")
     print(
         f"  run(), compiled mapaccum, {args.samples:>9} samples: {run_time:8.3f} s "
         f"= {per_run:7.3f} us/sample"
