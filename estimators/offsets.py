@@ -11,6 +11,7 @@ travel sensors at the logged rest position:
 from __future__ import annotations
 
 import numpy as np
+
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, static_loads, suspension_function
 

@@ -13,7 +13,12 @@ RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 
 
 class StepFlag(enum.IntFlag):
-    """Per-sample status bits: which updates were skipped for missing inputs."""
+    """Per-sample status bits: which updates were skipped for missing inputs.
+
+    ``STEP_REJECTED`` is set by the generated C step only, when the interval
+    is not a positive finite number or the step's result would not be
+    finite; the state is then held and every update flag is set too.
+    """
 
     SUSPENSION_FL_SKIPPED = 1
     SUSPENSION_FR_SKIPPED = 2
@@ -22,11 +27,12 @@ class StepFlag(enum.IntFlag):
     VERTICAL_SKIPPED = 16
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
+    STEP_REJECTED = 128
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
         """The seven update flags in the order of the filter's ``used`` output."""
-        return tuple(cls)
+        return tuple(cls)[:7]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

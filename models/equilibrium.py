@@ -23,6 +23,7 @@ here: the tyres, not the air, carry the part of :math:`m a_x` due to drag.
 from __future__ import annotations
 
 import casadi as ca
+
 from wheelload.models.parameters import ModelParameters
 
 

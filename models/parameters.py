@@ -19,6 +19,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.vehicle import Vehicle
 

@@ -17,6 +17,7 @@ Example
 from __future__ import annotations
 
 import casadi as ca
+
 from wheelload.models.parameters import ModelParameters
 
 

@@ -15,6 +15,7 @@ from the model Functions and handles no missing samples.
 from __future__ import annotations
 
 import numpy as np
+
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import input_matrix, sample_intervals
 from wheelload.models import equilibrium_function, suspension_function

@@ -9,6 +9,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
 from wheelload.estimators import Estimate, Signals  # noqa: E402
 
 WHEEL_NAMES = ("front left", "front right", "rear left", "rear right")

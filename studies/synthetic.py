@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+
 from wheelload.estimators.signals import Signals, derive_velocities
 from wheelload.models import (
     GRAVITY,

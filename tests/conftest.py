@@ -1,4 +1,5 @@
 import pytest
+
 from wheelload.models import example_vehicle_path, load_vehicle
 
 

@@ -3,6 +3,7 @@
 import numpy as np
 import pandas as pd
 import pytest
+
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kalman import update
 from wheelload.estimators.offsets import still_period_static_loads

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from wheelload.studies.metrics import pooled_metrics, wheel_metrics
 
 

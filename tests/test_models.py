@@ -5,6 +5,7 @@ Tolerances are 1e-9 relative: both sides are exact algebra in double precision.
 
 import numpy as np
 import pytest
+
 from wheelload.models import (
     GRAVITY,
     ModelParameters,

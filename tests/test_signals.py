@@ -3,6 +3,7 @@
 import numpy as np
 import pandas as pd
 import pytest
+
 from wheelload.estimators import LogError, read_log, write_log
 from wheelload.estimators.signals import derive_velocities
 from wheelload.studies.synthetic import steady_cornering, synthetic_log

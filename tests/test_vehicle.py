@@ -3,6 +3,7 @@
 import tomllib
 
 import pytest
+
 from wheelload.models import (
     GRAVITY,
     VehicleFileError,

@@ -6,6 +6,7 @@ import argparse
 import time
 
 import numpy as np
+
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle

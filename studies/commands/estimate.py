@@ -7,6 +7,7 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
+
 from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
 from wheelload.estimators.offsets import still_period_static_loads
 from wheelload.models import example_vehicle_path, load_vehicle
