@@ -1,0 +1,187 @@
+"""Straight-line C from a CasADi SX Function, in double or true single precision.
+
+CasADi's own code generator writes ``double`` literals and helper functions
+that a single-precision build cannot take under ``-Wdouble-promotion
+-Wconversion``. This emitter walks the Function's algorithm instead
+(``instruction_id``, ``instruction_input``, ``instruction_output``,
+``instruction_constant``) and prints one C statement per instruction on
+local work variables of a ``real`` typedef, with ``f``-suffixed literals and
+``sqrtf``/``fmaxf``-style maths functions in single precision.
+
+Example
+-------
+>>> body = emit_statements(f, ["x[{}]", "u[{}]"], ["y[{}]"], Precision.FLOAT, "wl_real")
+"""
+
+from __future__ import annotations
+
+import collections
+import enum
+import math
+from collections.abc import Sequence
+
+import casadi as ca
+import numpy as np
+
+
+class Precision(enum.Enum):
+    """Floating-point type of the generated code."""
+
+    DOUBLE = "double"
+    FLOAT = "float"
+
+
+class EmitError(ValueError):
+    """The Function holds an operation or a constant that has no C form here."""
+
+
+def literal(value: float, precision: Precision) -> str:
+    """A C floating literal of ``value`` in ``precision`` (shortest round-trip digits)."""
+    if not math.isfinite(value):
+        raise EmitError(f"constant {value!r} has no finite C literal")
+    if precision is Precision.FLOAT:
+        text = str(np.float32(value))
+    else:
+        text = repr(float(value))
+    if not any(mark in text for mark in ".en"):
+        text += ".0"
+    return text + ("f" if precision is Precision.FLOAT else "")
+
+
+# Unary and binary operations: C expression templates on operands {0}, {1};
+# {f} is the maths-function suffix ("" for double, "f" for float), {one} and
+# {zero} the literals 1 and 0 of the precision.
+_TEMPLATES = {
+    ca.OP_ASSIGN: "{0}",
+    ca.OP_ADD: "{0} + {1}",
+    ca.OP_SUB: "{0} - {1}",
+    ca.OP_MUL: "{0} * {1}",
+    ca.OP_DIV: "{0} / {1}",
+    ca.OP_NEG: "-{0}",
+    ca.OP_SQ: "{0} * {0}",
+    ca.OP_TWICE: "{0} + {0}",
+    ca.OP_INV: "{one} / {0}",
+    ca.OP_SQRT: "sqrt{f}({0})",
+    ca.OP_EXP: "exp{f}({0})",
+    ca.OP_LOG: "log{f}({0})",
+    ca.OP_POW: "pow{f}({0}, {1})",
+    ca.OP_CONSTPOW: "pow{f}({0}, {1})",
+    ca.OP_SIN: "sin{f}({0})",
+    ca.OP_COS: "cos{f}({0})",
+    ca.OP_TAN: "tan{f}({0})",
+    ca.OP_ASIN: "asin{f}({0})",
+    ca.OP_ACOS: "acos{f}({0})",
+    ca.OP_ATAN: "atan{f}({0})",
+    ca.OP_ATAN2: "atan2{f}({0}, {1})",
+    ca.OP_SINH: "sinh{f}({0})",
+    ca.OP_COSH: "cosh{f}({0})",
+    ca.OP_TANH: "tanh{f}({0})",
+    ca.OP_FLOOR: "floor{f}({0})",
+    ca.OP_CEIL: "ceil{f}({0})",
+    ca.OP_FMOD: "fmod{f}({0}, {1})",
+    ca.OP_FABS: "fabs{f}({0})",
+    ca.OP_FMIN: "fmin{f}({0}, {1})",
+    ca.OP_FMAX: "fmax{f}({0}, {1})",
+    ca.OP_COPYSIGN: "copysign{f}({0}, {1})",
+    ca.OP_ERF: "erf{f}({0})",
+    ca.OP_HYPOT: "hypot{f}({0}, {1})",
+    ca.OP_SIGN: "({0} > {zero}) ? {one} : (({0} < {zero}) ? -{one} : {zero})",
+    ca.OP_LT: "({0} < {1}) ? {one} : {zero}",
+    ca.OP_LE: "({0} <= {1}) ? {one} : {zero}",
+    ca.OP_EQ: "({0} == {1}) ? {one} : {zero}",
+    ca.OP_NE: "({0} != {1}) ? {one} : {zero}",
+    ca.OP_NOT: "({0} == {zero}) ? {one} : {zero}",
+    ca.OP_AND: "(({0} != {zero}) && ({1} != {zero})) ? {one} : {zero}",
+    ca.OP_OR: "(({0} != {zero}) || ({1} != {zero})) ? {one} : {zero}",
+    ca.OP_IF_ELSE_ZERO: "({0} != {zero}) ? {1} : {zero}",
+}
+
+#: Operations that are floating-point arithmetic (counted as FLOPs); the rest
+#: are data movement, selects and comparisons.
+ARITHMETIC = frozenset(
+    op
+    for op in _TEMPLATES
+    if op not in (ca.OP_ASSIGN, ca.OP_IF_ELSE_ZERO, ca.OP_LT, ca.OP_LE, ca.OP_EQ, ca.OP_NE,
+                  ca.OP_NOT, ca.OP_AND, ca.OP_OR, ca.OP_SIGN)
+)  # fmt: skip
+
+OPERATION_NAMES = {
+    getattr(ca, name): name[3:].lower() for name in dir(ca) if name.startswith("OP_")
+}
+
+
+def operation_counts(f: ca.Function) -> collections.Counter[str]:
+    """How many instructions of each operation (``add``, ``mul``, ...) ``f`` executes."""
+    return collections.Counter(
+        OPERATION_NAMES[f.instruction_id(k)] for k in range(f.n_instructions())
+    )
+
+
+def flop_count(f: ca.Function) -> int:
+    """Floating-point operations per evaluation of ``f`` (one per arithmetic instruction)."""
+    return sum(1 for k in range(f.n_instructions()) if f.instruction_id(k) in ARITHMETIC)
+
+
+def _element(names: str | Sequence[str], nz: int) -> str:
+    return names.format(nz) if isinstance(names, str) else names[nz]
+
+
+def emit_statements(
+    f: ca.Function,
+    inputs: Sequence[str | Sequence[str]],
+    outputs: Sequence[str | Sequence[str]],
+    precision: Precision,
+    real: str,
+) -> str:
+    """C statements that evaluate the SX Function ``f``.
+
+    Parameters
+    ----------
+    f
+        An SX Function.
+    inputs, outputs
+        Per input and output of ``f``, the C expression (inputs) or lvalue
+        (outputs) of each nonzero: a format string with one ``{}`` for the
+        nonzero index, e.g. ``"x[{}]"``, or one string per nonzero, e.g.
+        ``["params->mass", ...]``.
+    precision
+        Literal suffix and maths-function names.
+    real
+        Name of the C floating type of the work variables.
+    """
+    if not f.is_a("SXFunction"):
+        raise EmitError(f"{f.name()}: only SX Functions can be emitted, got {f.class_name()}")
+    if len(inputs) != f.n_in() or len(outputs) != f.n_out():
+        raise EmitError(
+            f"{f.name()}: has {f.n_in()} inputs and {f.n_out()} outputs, "
+            f"got {len(inputs)} and {len(outputs)} C names"
+        )
+    suffix = "f" if precision is Precision.FLOAT else ""
+    one, zero = literal(1.0, precision), literal(0.0, precision)
+    lines = []
+    used = set()
+    for k in range(f.n_instructions()):
+        op = f.instruction_id(k)
+        if op == ca.OP_OUTPUT:
+            (work,) = f.instruction_input(k)
+            index, nz = f.instruction_output(k)
+            lines.append(f"{_element(outputs[index], nz)} = w{work};")
+            continue
+        (target,) = f.instruction_output(k)
+        used.add(target)
+        if op == ca.OP_INPUT:
+            index, nz = f.instruction_input(k)
+            expression = _element(inputs[index], nz)
+        elif op == ca.OP_CONST:
+            expression = literal(f.instruction_constant(k), precision)
+        elif op in _TEMPLATES:
+            operands = [f"w{w}" for w in f.instruction_input(k) if w >= 0]
+            expression = _TEMPLATES[op].format(*operands, f=suffix, one=one, zero=zero)
+        else:
+            raise EmitError(
+                f"{f.name()}: operation '{OPERATION_NAMES.get(op, op)}' at instruction {k} "
+                "has no C form in wheelload's emitter"
+            )
+        lines.append(f"w{target} = {expression};")
+    declarations = [f"{real} {', '.join(f'w{w}' for w in sorted(used))};"] if used else []
+    return "\n".join(declarations + lines)

@@ -1,0 +1,266 @@
+"""Generate the two-stage KF as a self-contained, allocation-free C99 library.
+
+The C step is emitted from the CasADi step Function the Python filter runs
+(:func:`wheelload.estimators.two_stage.step_function`), so a change of the
+suspension or equilibrium model in ``wheelload.models`` changes the C with no
+other edit. The covariance is kept in symmetric storage (upper triangle, row
+by row); the step reads only that triangle of ``P``.
+
+Files written to the output folder, for prefix ``wheelload_kf``:
+``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
+``wheelload_kf_example.c`` (CSV log in, CSV estimates out),
+``wheelload_kf_selftest.c`` (long-run check and timing) and a ``Makefile``.
+
+Example
+-------
+>>> library = generate(example_vehicle_path(), "out/c", CodegenOptions(precision=Precision.FLOAT))
+>>> library.header.name
+'wheelload_kf.h'
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+import re
+import string
+from dataclasses import dataclass
+from importlib import resources
+from importlib.metadata import version
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.result import StepFlag
+from wheelload.estimators.two_stage import STEP_NAME, TUNING, step_function, tuning_vector
+from wheelload.models import WHEELS, ModelParameters, load_vehicle
+
+#: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
+PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
+#: Calibration values that must be positive (the rest must be finite).
+POSITIVE = ("mass", *TUNING, "initial_std")
+
+
+class ParamMode(enum.Enum):
+    """Where the calibration lives in the generated code."""
+
+    BAKED = "baked"  # constants folded into the step
+    RUNTIME = "runtime"  # fields of the parameter struct
+
+
+@dataclass(frozen=True, kw_only=True)
+class CodegenOptions:
+    """Precision, parameter handling and C symbol prefix of the generated library."""
+
+    precision: Precision = Precision.DOUBLE
+    params: ParamMode = ParamMode.RUNTIME
+    prefix: str = "wheelload_kf"
+
+    def __post_init__(self) -> None:
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.prefix):
+            raise ValueError(f"prefix '{self.prefix}' is not a C identifier")
+
+
+@dataclass(frozen=True)
+class GeneratedLibrary:
+    """Paths of the generated files and the kernel Function they were emitted from."""
+
+    header: Path
+    source: Path
+    example: Path
+    selftest: Path
+    makefile: Path
+    kernel: ca.Function
+
+    @property
+    def flops(self) -> int:
+        """Arithmetic operations of one step of the kernel."""
+        return flop_count(self.kernel)
+
+
+def calibration_names() -> tuple[str, ...]:
+    """Fields of the runtime parameter struct: model parameters, tuning, initial std."""
+    return (*ModelParameters.names(), *TUNING, "initial_std")
+
+
+def packed(P: ca.SX) -> ca.SX:
+    """The upper triangle of ``P`` in :data:`PACKED` order."""
+    return ca.vertcat(*[P[i, j] for i, j in PACKED])
+
+
+def unpacked(values: ca.SX) -> ca.SX:
+    """The symmetric 4 x 4 matrix of a :data:`PACKED` vector."""
+    where = {pair: k for k, pair in enumerate(PACKED)}
+    return ca.vertcat(
+        *[ca.horzcat(*[values[where[min(i, j), max(i, j)]] for j in range(4)]) for i in range(4)]
+    )
+
+
+def kernel_function(
+    step: ca.Function,
+    mode: ParamMode,
+    p: np.ndarray,
+    tuning: np.ndarray,
+) -> ca.Function:
+    """The step on symmetric storage, without the outputs the C library does not use.
+
+    ``kernel(x, P[10], u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10], std,
+    residual, used)``; with :attr:`ParamMode.BAKED` the numeric ``p`` and
+    ``tuning`` are substituted so that CasADi folds the constants.
+    """
+    x = ca.SX.sym("x", 4)
+    P = ca.SX.sym("P", len(PACKED))
+    u = ca.SX.sym("u", step.size1_in(2))
+    valid = ca.SX.sym("u_valid", step.size1_in(3))
+    dt = ca.SX.sym("dt")
+    inputs = [x, P, u, valid, dt]
+    if mode is ParamMode.RUNTIME:
+        p_in, tuning_in = ca.SX.sym("p", p.size), ca.SX.sym("tuning", tuning.size)
+        inputs += [p_in, tuning_in]
+    else:
+        p_in, tuning_in = ca.DM(p), ca.DM(tuning)
+    x_next, P_next, std, residual, used, _ = step(x, unpacked(P), u, valid, dt, p_in, tuning_in)
+    return ca.Function(
+        f"{step.name()}_kernel",
+        inputs,
+        [x_next, packed(P_next), std, residual, used],
+        ["x", "P", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
+        ["x_next", "P_next", "std", "residual", "used"],
+    )
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _template(name: str) -> string.Template:
+    text = (resources.files("wheelload.estimators") / "templates" / name).read_text("utf-8")
+    return string.Template(text)
+
+
+def _substitutions(
+    vehicle_path: Path, options: CodegenOptions, step: ca.Function, kernel: ca.Function
+) -> dict[str, str]:
+    vehicle = load_vehicle(vehicle_path)
+    parameters = ModelParameters.from_vehicle(vehicle)
+    p, tuning = parameters.vector(), tuning_vector(vehicle)
+    values = dict(zip(calibration_names(), [*p, *tuning, vehicle.filter.initial_std]))
+    precision, prefix = options.precision, options.prefix
+    real = precision.value
+    runtime = options.params is ParamMode.RUNTIME
+    fields = calibration_names() if runtime else ("initial_std",)
+
+    def param(name: str) -> str:
+        return f"params->{name}" if runtime else literal(values[name], precision)
+
+    inputs = ["x[{}]", "P[{}]", "u[{}]", "u_valid[{}]", "dt"]
+    if runtime:
+        inputs += [
+            [f"params->{n}" for n in ModelParameters.names()],
+            [f"params->{n}" for n in TUNING],
+        ]
+    body = emit_statements(
+        kernel,
+        inputs,
+        ["x_next[{}]", "P_next[{}]", "std[{}]", "residual[{}]", "used[{}]"],
+        precision,
+        f"{prefix}_real",
+    )
+    checks = [
+        f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
+        for k, name in enumerate(fields)
+    ]
+    flags = [f"#define {prefix.upper()}_FLAG_{flag.name} {flag.value}u" for flag in StepFlag]
+    return {
+        "prefix": prefix,
+        "PREFIX": prefix.upper(),
+        "real": real,
+        "real_c": "x##f" if precision is Precision.FLOAT else "x",
+        "sqrt": "sqrtf" if precision is Precision.FLOAT else "sqrt",
+        "digits": "%.9g" if precision is Precision.FLOAT else "%.17g",
+        "precision": real,
+        "params_mode": options.params.value,
+        "single_precision": str(int(precision is Precision.FLOAT)),
+        "runtime_params": str(int(runtime)),
+        "wheelload_version": version("wheelload"),
+        "casadi_version": ca.__version__,
+        "vehicle_name": vehicle_path.name,
+        "vehicle_sha256": _sha256(vehicle_path.read_bytes()),
+        "model_sha256": _sha256(step.serialize().encode()),
+        "step_name": step.name(),
+        "flops": str(flop_count(kernel)),
+        "kernel_flops": str(flop_count(kernel)),
+        "n_params": str(len(fields)),
+        "params_note": (
+            "Every calibration value; change them without regenerating."
+            if runtime
+            else "Vehicle and tuning are baked into the step; only the initial "
+            "standard deviation of reset is here."
+        ),
+        "param_fields": "\n".join(f"    {prefix}_real {name};" for name in fields),
+        "param_defaults": "\n".join(
+            f"    {literal(values[name], precision)}, /* {name} */" for name in fields
+        ),
+        "param_names": "\n".join(f'    "{name}",' for name in fields),
+        "param_checks": "\n".join(checks),
+        "flag_defines": "\n".join(flags),
+        "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),
+        "kernel_params_doc": ", p, tuning" if runtime else " (vehicle and tuning baked in)",
+        "kernel_params_arg": f", const {prefix}_params *params" if runtime else "",
+        "kernel_params_call": ", params" if runtime else "",
+        "unused_params": "" if runtime else "    (void)params;",
+        "static_loads": "\n".join(
+            f"    state->x[{k}] = {param(f'static_{wheel}')};" for k, wheel in enumerate(WHEELS)
+        ),
+        "kernel_body": _indent(body),
+    }
+
+
+def _check(name: str) -> str:
+    """C condition of a valid calibration value (finite; positive where it must be)."""
+    value = f"params->{name}"
+    return f"isfinite({value}) && {value} > ZERO" if name in POSITIVE else f"isfinite({value})"
+
+
+def _indent(text: str) -> str:
+    return "\n".join(f"    {line}" for line in text.splitlines())
+
+
+def generate(
+    vehicle_path: str | Path,
+    out_dir: str | Path,
+    options: CodegenOptions | None = None,
+    step: ca.Function | None = None,
+) -> GeneratedLibrary:
+    """Write the C library for a vehicle file; ``step`` defaults to :func:`step_function`.
+
+    ``step`` may be built with alternative model Functions
+    (``step_function(suspension=..., equilibrium=...)``); the emitted C
+    follows it.
+    """
+    options = options or CodegenOptions()
+    vehicle_path = Path(vehicle_path)
+    out_dir = Path(out_dir)
+    step = step or step_function(name=STEP_NAME)
+    vehicle = load_vehicle(vehicle_path)
+    kernel = kernel_function(
+        step,
+        options.params,
+        ModelParameters.from_vehicle(vehicle).vector(),
+        tuning_vector(vehicle),
+    )
+    values = _substitutions(vehicle_path, options, step, kernel)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    prefix = options.prefix
+    targets = {
+        "library.h": out_dir / f"{prefix}.h",
+        "library.c": out_dir / f"{prefix}.c",
+        "example.c": out_dir / f"{prefix}_example.c",
+        "selftest.c": out_dir / f"{prefix}_selftest.c",
+        "Makefile": out_dir / "Makefile",
+    }
+    for template, target in targets.items():
+        target.write_text(_template(template).substitute(values), encoding="utf-8")
+    return GeneratedLibrary(*targets.values(), kernel=kernel)
