@@ -1,0 +1,110 @@
+"""MHE on OSQP: equals the KF for N = 1, hard equilibrium, exact bounds, fallback."""
+
+import math
+
+import numpy as np
+import pytest
+
+from wheelload.estimators import TwoStageKF
+from wheelload.estimators.mhe import (
+    Arrival,
+    Constraint,
+    MheSettings,
+    MovingHorizonEstimator,
+    SolverSettings,
+)
+from wheelload.estimators.projection import ProjectionKF
+from wheelload.models import ModelParameters, equilibrium_function
+from wheelload.studies.synthetic import SensorNoise, slalom, steady_cornering, synthetic_log
+
+NOISE = SensorNoise(acceleration=0.05, travel=0.0003)
+TIGHT = SolverSettings(eps_abs=1e-9, eps_rel=1e-9, polish=True, max_iter=20000)
+
+
+@pytest.fixture(scope="module")
+def drive(vehicle):
+    return synthetic_log(vehicle, slalom(duration=3.0), noise=NOISE, spring_error=0.08, seed=5)
+
+
+@pytest.fixture(scope="module")
+def wheel_lift(vehicle):
+    """A 15 m/s^2 left turn: the inner (left) wheels' linear loads go below zero."""
+    manoeuvre = steady_cornering(ay=15.0, duration=3.0)
+    return synthetic_log(vehicle, manoeuvre, noise=NOISE, spring_error=0.08, seed=6)
+
+
+def right_hand_sides(vehicle, signals):
+    p = ModelParameters.from_vehicle(vehicle).vector()
+    _, b = equilibrium_function().map(len(signals))(signals.acc.T, signals.vx[None, :], p)
+    return np.asarray(b).T
+
+
+def test_one_sample_soft_window_with_kalman_arrival_is_the_kf(vehicle, drive):
+    settings = MheSettings(horizon=1, constraint=Constraint.SOFT, bounded=False, solver=TIGHT)
+    mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
+    kf = TwoStageKF(vehicle).run(drive)
+    assert not mhe.fallback.any()
+    # solver tolerance 1e-9 in kN on 4 kN loads, with polishing: measured 1.4e-5 N
+    np.testing.assert_allclose(mhe.loads, kf.loads, rtol=0, atol=1e-3)
+
+
+def test_one_sample_hard_window_is_the_maximum_probability_projection(vehicle, drive):
+    settings = MheSettings(horizon=1, constraint=Constraint.HARD, solver=TIGHT)
+    mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
+    projected = ProjectionKF(vehicle).run(drive)
+    np.testing.assert_allclose(mhe.loads, projected.loads, rtol=0, atol=1e-3)
+
+
+def test_soft_unbounded_window_with_exact_arrival_keeps_the_kf_estimate(vehicle, drive):
+    """Linear-Gaussian MHE with the Kalman arrival cost is the KF for any N."""
+    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10)).run(drive)
+    kf = TwoStageKF(vehicle).run(drive)
+    # default tolerances 1e-6 kN: a few tenths of a newton
+    np.testing.assert_allclose(mhe.loads, kf.loads, rtol=0, atol=1.0)
+
+
+@pytest.mark.parametrize("bounded", [False, True])
+@pytest.mark.parametrize("arrival", list(Arrival))
+def test_hard_window_satisfies_equilibrium_on_every_sample(vehicle, wheel_lift, bounded, arrival):
+    settings = MheSettings(horizon=10, constraint=Constraint.HARD, bounded=bounded, arrival=arrival)
+    mhe = MovingHorizonEstimator(vehicle, settings).run(wheel_lift)
+    b = right_hand_sides(vehicle, wheel_lift)
+    feasible = ~mhe.fallback
+    relative = np.abs(mhe.residual) / np.abs(b).max(axis=1, keepdims=True)
+    assert feasible.mean() > 0.9
+    assert relative[feasible].max() <= 1e-6
+
+
+@pytest.mark.parametrize("constraint", list(Constraint))
+def test_bounds_keep_every_load_at_or_above_zero(vehicle, wheel_lift, constraint):
+    assert TwoStageKF(vehicle).run(wheel_lift).loads.min() < -50.0  # the KF reports lift-off
+    settings = MheSettings(horizon=10, constraint=constraint, bounded=True, max_load=2.0e4)
+    mhe = MovingHorizonEstimator(vehicle, settings).run(wheel_lift)
+    assert mhe.loads.min() >= 0.0  # exactly: in-tolerance violations are clipped
+    assert mhe.loads.max() <= 2.0e4
+    assert np.all(np.isfinite(mhe.loads))
+    assert (mhe.loads.min(axis=1) == 0.0).sum() > 10  # the bound is active during lift-off
+
+
+def test_iteration_cap_falls_back_to_the_kf_and_flags_it(vehicle, drive):
+    solver = SolverSettings(max_iter=1, check_termination=1)
+    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=5, solver=solver)).run(drive)
+    kf = TwoStageKF(vehicle).run(drive)
+    capped = mhe.status != 1
+    assert capped.any()
+    assert np.array_equal(mhe.fallback, capped)
+    np.testing.assert_array_equal(mhe.loads[capped], kf.loads[capped])
+    frame = mhe.to_pandas()
+    assert {"status", "iterations", "fallback", "solve_time"} <= set(frame.columns)
+
+
+def test_settings_reject_bad_values():
+    with pytest.raises(ValueError, match="horizon"):
+        MheSettings(horizon=0)
+    with pytest.raises(TypeError, match="Constraint"):
+        MheSettings(constraint="hard")
+    with pytest.raises(ValueError, match="max_load"):
+        MheSettings(max_load=-1.0)
+    with pytest.raises(TypeError):
+        MheSettings(horizon=5, window=3)
+    assert MheSettings().max_load == math.inf
