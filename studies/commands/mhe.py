@@ -1,0 +1,162 @@
+"""``wheelload study mhe-vs-kf``, ``wheelload bench-mhe`` and ``wheelload codegen-mhe``.
+
+``study mhe-vs-kf`` scores the KF, projection KF and MHE family on logs
+(``--logs``) or on plant scenarios it simulates first (``--scenarios``).
+``bench-mhe`` prints the MHE's time per sample beside the KF's, in the same
+run, from Python and (when a C compiler is found) from the generated C.
+``codegen-mhe`` writes the embedded MHE as C (to merge with ``codegen``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from wheelload.estimators import Sample, TwoStageKF, read_log
+from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.two_stage import sample_intervals
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf
+from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
+
+STUDY_SCENARIOS = ("iso-dlc", "nurburgring", "hockenheim", "wheel-lift")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    study = subparsers.add_parser("study", help="run a comparison study and print its table")
+    study.add_argument("name", choices=["mhe-vs-kf"], help="mhe-vs-kf: KF, projection KF, MHE")
+    study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
+    study.add_argument(
+        "--scenarios",
+        nargs="*",
+        default=None,
+        help="simulate these plant scenarios first (no names: "
+        + ", ".join(STUDY_SCENARIOS) + ", those that exist)",
+    )  # fmt: skip
+    study.add_argument("--horizons", type=int, nargs="+", default=list(HORIZONS))
+    study.add_argument("--out", default="mhe-vs-kf", help="output prefix for .csv and .png")
+    study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    study.set_defaults(handler=run_study)
+
+    bench = subparsers.add_parser("bench-mhe", help="print MHE and KF time per sample")
+    bench.add_argument("--samples", type=int, default=3000, help="samples per run (default 3000)")
+    bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
+    bench.add_argument("--no-c", action="store_true", help="skip the generated C")
+    bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    bench.set_defaults(handler=run_bench)
+
+    codegen = subparsers.add_parser("codegen-mhe", help="emit the embedded MHE as C")
+    codegen.add_argument("--out", required=True, help="output folder")
+    codegen.add_argument("--horizon", type=int, default=10)
+    codegen.add_argument("--hard", action="store_true", help="hard equilibrium constraints")
+    codegen.add_argument("--bounded", action="store_true", help="bounds 0 <= Fz")
+    codegen.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    codegen.set_defaults(handler=run_codegen)
+
+
+def _simulate(names: list[str], folder: Path) -> list[Path]:
+    from wheelload.studies.cli import main
+    from wheelload.studies.scenarios import SCENARIOS
+
+    names = names or [name for name in STUDY_SCENARIOS if name in SCENARIOS]
+    paths = []
+    for name in names:
+        path = folder / f"{name}.parquet"
+        if main(["simulate", name, "--out", str(path)]) != 0:
+            raise ValueError(f"scenario '{name}' could not be simulated")
+        paths.append(path)
+    return paths
+
+
+def run_study(args: argparse.Namespace) -> int:
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    paths = [Path(p) for p in args.logs]
+    with tempfile.TemporaryDirectory() as folder:
+        if args.scenarios is not None:
+            paths += _simulate(args.scenarios, Path(folder))
+        if not paths:
+            raise ValueError("give --logs or --scenarios")
+        logs = [read_log(path) for path in paths]
+    table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
+    from wheelload.studies.mhe_vs_kf import plot_accuracy_against_time
+
+    out = Path(args.out)
+    table.to_csv(out.with_suffix(".csv"))
+    plot_accuracy_against_time(table, out.with_suffix(".png"))
+    print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
+    print(table.to_string(float_format=lambda v: f"{v:.1f}"))
+    print(f"written {out.with_suffix('.csv')} and {out.with_suffix('.png')}")
+    return 0
+
+
+def _kf_step_times(kf: TwoStageKF, signals) -> np.ndarray:
+    dt = sample_intervals(signals.t)
+    state = kf.initial_state()
+    times = np.empty(len(signals))
+    for k in range(len(signals)):
+        sample = Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=float(signals.vx[k]))
+        start = time.perf_counter()
+        state, _ = kf.step(state, sample, float(dt[k]))
+        times[k] = time.perf_counter() - start
+    return times
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    duration = args.samples / 100.0
+    signals = synthetic_log(vehicle, slalom(duration=duration), noise=SensorNoise(
+        acceleration=0.05, travel=0.0003), spring_error=0.08)  # fmt: skip
+    kf = TwoStageKF(vehicle)
+    kf.run(signals.slice(0, 10))
+    start = time.perf_counter()
+    kf.run(signals)
+    kf_run = (time.perf_counter() - start) / len(signals) * 1e6
+    kf_step = np.median(_kf_step_times(kf, signals)) * 1e6
+    print(f"{len(signals)} samples at 100 Hz (synthetic slalom)")
+    print(f"{'estimator':38s} {'median us':>10s} {'p99 us':>10s} {'x KF step':>10s}")
+    print(f"{'KF step (Python, CasADi call)':38s} {kf_step:10.1f} {'':>10s} {1.0:10.2f}")
+    print(f"{'KF run (compiled loop, amortised)':38s} {kf_run:10.2f}")
+    c_available = not args.no_c and shutil.which("gcc") is not None
+    for horizon in args.horizons:
+        for constraint in Constraint:
+            for bounded in (False, True):
+                settings = MheSettings(horizon=horizon, constraint=constraint, bounded=bounded)
+                estimate = MovingHorizonEstimator(vehicle, settings).run(signals)
+                times = estimate.solve_time * 1e6
+                median = float(np.median(times))
+                print(f"{settings.label() + ' Python':38s} {median:10.1f} "
+                      f"{np.percentile(times, 99):10.1f} {median / kf_step:10.2f}")  # fmt: skip
+                if c_available:
+                    _bench_c(vehicle, settings, signals, kf_step)
+    return 0
+
+
+def _bench_c(vehicle, settings: MheSettings, signals, kf_step: float) -> None:
+    from wheelload.estimators.mhe_codegen import build_mhe_library
+
+    with tempfile.TemporaryDirectory() as folder:
+        library = build_mhe_library(vehicle, settings, Path(folder), dt=0.01)
+        result = library.run(signals)
+    times = result.solve_time * 1e6
+    median = float(np.median(times))
+    print(f"{settings.label() + ' C':38s} {median:10.1f} {np.percentile(times, 99):10.1f} "
+          f"{median / kf_step:10.2f}")  # fmt: skip
+
+
+def run_codegen(args: argparse.Namespace) -> int:
+    from wheelload.estimators.mhe_codegen import generate_mhe
+
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    settings = MheSettings(
+        horizon=args.horizon,
+        constraint=Constraint.HARD if args.hard else Constraint.SOFT,
+        bounded=args.bounded,
+    )
+    folder = generate_mhe(vehicle, settings, Path(args.out), dt=0.01)
+    print(f"written the embedded {settings.label()} to {folder}")
+    return 0

@@ -1,0 +1,144 @@
+"""Study ``mhe-vs-kf``: accuracy against time per sample of the KF, projection KF and MHE.
+
+Estimators: the two-stage KF, the projection KF with :math:`W = P^{-1}` and
+:math:`W = I`, and the MHE with soft and hard equilibrium, with and without
+the bounds :math:`0 \\le F_z`, for each window length. Errors are pooled over
+all wheels, samples and logs (Siegloff & Choi eq. 31-34, via
+:func:`wheelload.studies.metrics.pooled_metrics`).
+
+Time per sample: the MHE's own wall time of each QP update and solve; for
+the filters, the wall time of the per-sample :meth:`step` call on the first
+``timing_samples`` samples of each log (their whole-log ``run`` is a compiled
+loop, reported separately as ``run us``).
+
+Example
+-------
+>>> table = mhe_vs_kf([read_log("iso-dlc.csv")], load_vehicle(example_vehicle_path()))
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from wheelload.estimators import Sample, Signals, TwoStageKF
+from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.projection import ProjectionKF, Weighting
+from wheelload.estimators.two_stage import sample_intervals
+from wheelload.models import Vehicle
+from wheelload.studies.metrics import pooled_metrics
+
+HORIZONS = (1, 5, 10, 20, 50)
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudySettings:
+    horizons: tuple[int, ...] = HORIZONS
+    timing_samples: int = 2000  # per log, for the filters' per-sample step timing
+
+
+def estimators(vehicle: Vehicle, horizons: tuple[int, ...]) -> list:
+    """The compared estimators, filters first."""
+    family = [
+        TwoStageKF(vehicle),
+        ProjectionKF(vehicle, weighting=Weighting.MAXIMUM_PROBABILITY),
+        ProjectionKF(vehicle, weighting=Weighting.LEAST_SQUARES),
+    ]
+    for constraint in Constraint:
+        for bounded in (False, True):
+            for horizon in horizons:
+                settings = MheSettings(horizon=horizon, constraint=constraint, bounded=bounded)
+                family.append(MovingHorizonEstimator(vehicle, settings))
+    return family
+
+
+def step_times(kf: TwoStageKF, signals: Signals, samples: int) -> np.ndarray:
+    """Wall time [s] of each per-sample :meth:`TwoStageKF.step` call on the first samples."""
+    n = min(samples, len(signals))
+    dt = sample_intervals(signals.t)
+    state = kf.initial_state()
+    times = np.empty(n)
+    for k in range(n):
+        sample = Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=float(signals.vx[k]))
+        start = time.perf_counter()
+        state, _ = kf.step(state, sample, float(dt[k]))
+        times[k] = time.perf_counter() - start
+    return times
+
+
+def mhe_vs_kf(
+    logs: list[Signals], vehicle: Vehicle, settings: StudySettings = StudySettings()
+) -> pd.DataFrame:
+    """One row per estimator: pooled RMSE, P95, Max [N], minimum load [N], times [us]."""
+    for signals in logs:
+        if signals.reference is None:
+            raise ValueError(f"{signals.source}: the log has no reference loads (fz_* columns)")
+    reference = np.vstack([signals.reference for signals in logs])
+    rows = []
+    for estimator in estimators(vehicle, settings.horizons):
+        loads, times, run_time, fallback = [], [], 0.0, 0
+        for signals in logs:
+            start = time.perf_counter()
+            estimate = estimator.run(signals)
+            run_time += time.perf_counter() - start
+            loads.append(estimate.loads)
+            if isinstance(estimator, MovingHorizonEstimator):
+                times.append(estimate.solve_time)
+                fallback += int(estimate.fallback.sum())
+            else:
+                times.append(step_times(estimator, signals, settings.timing_samples))
+        loads = np.vstack(loads)
+        times = np.concatenate(times) * 1e6
+        metrics = pooled_metrics(loads, reference)
+        rows.append(
+            {
+                "estimator": estimator.name,
+                "RMSE": metrics["RMSE"],
+                "P95": metrics["P95"],
+                "Max": metrics["Max"],
+                "min load": float(loads.min()),
+                "median us": float(np.median(times)),
+                "p99 us": float(np.percentile(times, 99)),
+                "run us": 1e6 * run_time / len(reference),
+                "fallback": fallback,
+            }
+        )
+    return pd.DataFrame(rows).set_index("estimator")
+
+
+def plot_accuracy_against_time(table: pd.DataFrame, path: str | Path) -> Path:
+    """Pooled RMSE against median time per sample, one point per estimator."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    groups = {
+        "filters": ~table.index.str.startswith("MHE"),
+        "MHE soft": table.index.str.contains(r"\(soft\)"),
+        "MHE soft, bounded": table.index.str.contains("soft, bounded"),
+        "MHE hard": table.index.str.contains(r"\(hard\)"),
+        "MHE hard, bounded": table.index.str.contains("hard, bounded"),
+    }
+    for label, rows in groups.items():
+        part = table[rows]
+        ax.plot(part["median us"], part["RMSE"], "o-" if label != "filters" else "s", label=label)
+        for name, row in part.iterrows():
+            short = name.split(" (")[0].replace("MHE ", "")
+            ax.annotate(short, (row["median us"], row["RMSE"]), fontsize=7,
+                        xytext=(3, 3), textcoords="offset points")  # fmt: skip
+    ax.set_xscale("log")
+    ax.set_xlabel("median time per sample [us] (Python)")
+    ax.set_ylabel("pooled RMSE [N]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
