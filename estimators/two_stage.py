@@ -182,16 +182,25 @@ class TwoStageKF:
     static
         Static wheel loads [N] used as pseudo-measurement offsets and initial
         estimate; default: the vehicle file's static load distribution.
+    step
+        The step Function, e.g. ``step_function(suspension=...)`` with another
+        model; default :func:`step_function`.
     """
 
     name = "two-stage KF"
 
-    def __init__(self, vehicle: Vehicle, *, static: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        *,
+        static: np.ndarray | None = None,
+        step: ca.Function | None = None,
+    ) -> None:
         self.vehicle = vehicle
         self.parameters = ModelParameters.from_vehicle(vehicle, static)
         self.p = self.parameters.vector()
         self.tuning = tuning_vector(vehicle)
-        self._step = step_function()
+        self._step = step or step_function()
 
     def initial_state(self) -> FilterState:
         """Static loads with covariance ``initial_std^2 I``."""
