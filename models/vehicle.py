@@ -151,6 +151,7 @@ class Vehicle:
     aero: Aero
     suspension: Suspension
     filter: FilterTuning
+    plant: Plant | None = None  # ground-truth simulator only (models/plant_params.py)
 
     def _check(self) -> None:
         pass
@@ -265,3 +266,7 @@ def example_vehicle_path() -> Path:
 def vehicle_template() -> str:
     """A fully commented vehicle file (the bundled reference vehicle) to edit."""
     return example_vehicle_path().read_text(encoding="utf-8")
+
+
+# Imported last: the plant sections reuse the validation helpers above.
+from wheelload.models.plant_params import Plant  # noqa: E402

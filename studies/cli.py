@@ -17,6 +17,10 @@ COMMANDS = (
     "wheelload.studies.commands.vehicle",
     "wheelload.studies.commands.estimate",
     "wheelload.studies.commands.bench",
+    "wheelload.studies.commands.simulate",
+    "wheelload.studies.commands.mhe",
+    "wheelload.studies.commands.codegen",
+    "wheelload.studies.commands.bench_codegen",
 )
 
 

@@ -1,0 +1,375 @@
+r"""Full-vehicle ground-truth plant: 6-DOF body, four unsprung masses, four wheel spins.
+
+State (32): path position ``s, n`` and CG height ``z``; Euler roll, pitch and
+heading relative to the centre line ``phi, theta, psi``; body velocities
+``u, v, w`` and rates ``p, q, r`` (ISO 8855 body axes at the sprung CG);
+suspension compression ``d`` and rate ``dd`` per corner (d > 0 in bump, 0 at
+static equilibrium on level ground); wheel spin ``omega``; transient slip
+``kappa`` and ``tan(alpha)`` per tyre (first-order relaxation, Pacejka ch. 7).
+Input (9): front road-wheel steer angle, four drive torques, four brake
+torques (brakes oppose the spin).
+
+Equations (body frame, sprung CG; corner i with wheel centre :math:`r_{W,i}`
+and contact point :math:`r_{P,i}`):
+
+.. math::
+    m (\dot u + q w - r v,\ \dot v + r u - p w) &= \textstyle\sum F_{t,i} + F_a + m g_b
+        \quad \text{(x, y; whole-vehicle mass)} \\
+    m_s (\dot w + p v - q u) &= \textstyle\sum F_{s,i} + L + m_s g_{b,z} \\
+    I \dot\omega + \omega \times I \omega &= \textstyle\sum r_{W,i} \times C_i
+        + (r_{P,i} - r_{W,i}) \times F_{t,i} + r_a \times F_a \\
+    m_{u,i} (a_z + [\dot\omega \times r_{W,i} + \omega \times \omega \times r_{W,i}]_z
+        + \ddot d_i) &= F_{t,i,z} + m_{u,i} g_{b,z} - F_{s,i}
+
+where :math:`C_i = (F_{t,i,x} + m_{u,i}(g_{b,x} - a_x),\ F_{t,i,y} +
+m_{u,i}(g_{b,y} - a_y),\ F_{s,i})` is the force a corner passes to the body
+(the suspension links carry the in-plane part, the spring, damper, bar and
+stops the vertical part; the unsprung masses move in-plane with the body CG).
+The tyre force :math:`F_{t,i} = F_x e_x + F_y e_y + F_z n` acts along the
+local road normal and in the road plane; :math:`F_z = k_t \max(0, r_0 -
+\text{distance from wheel centre to road plane})`, so a tyre can leave the
+ground. Integration: classical RK4 with a fixed step, compiled.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from wheelload.models.mass_properties import static_loads
+from wheelload.models.plant_params import DamperMap, Plant
+from wheelload.models.road_surface import RoadSurface, road_lookup
+from wheelload.models.suspension import anti_roll_bar_forces
+from wheelload.models.tyre import tyre_forces
+from wheelload.models.vehicle import GRAVITY, Vehicle
+
+STATE_NAMES = (
+    ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")
+    + tuple(f"d_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + tuple(f"dd_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + tuple(f"omega_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + tuple(f"kappa_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + tuple(f"alpha_{w}" for w in ("fl", "fr", "rl", "rr"))
+)
+INPUT_NAMES = (
+    ("steer",)
+    + tuple(f"drive_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + tuple(f"brake_{w}" for w in ("fl", "fr", "rl", "rr"))
+)
+# Outputs of one chunk, sampled at its last step.
+OUTPUT_NAMES = (
+    tuple(f"fz_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + ("ax", "ay", "az")  # specific force at the IMU, body axes
+    + ("ax_cg", "ay_cg", "az_cg")  # kinematic acceleration of the sprung CG, body axes
+)
+STATE = {name: i for i, name in enumerate(STATE_NAMES)}
+OUTPUT = {name: i for i, name in enumerate(OUTPUT_NAMES)}
+SPIN_SMOOTHING = 0.5  # rad/s, brake and rolling-resistance torques fade below this spin
+
+
+class PlantError(ValueError):
+    """A vehicle or setting the plant cannot be built from."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Corner:
+    """Numbers of one corner, derived from the vehicle file."""
+
+    x: float  # m, wheel centre ahead of the sprung CG
+    y: float  # m, to the left
+    z_static: float  # m, wheel centre relative to the sprung CG at static equilibrium
+    radius: float  # m, unloaded tyre radius
+    tyre_rate: float  # N/m
+    unsprung: float  # kg
+    preload: float  # N, spring force at d = 0
+    static_load: float  # N
+    spring: float  # N/m
+    damper: DamperMap
+    bump_gap: float  # m
+    spin_inertia: float  # kg m^2
+    nominal_load: float  # N, tyre F_z0
+    left: bool
+
+
+def vehicle_plant(vehicle: Vehicle) -> Plant:
+    """The vehicle's ``[plant]`` section, or an error naming the file key."""
+    if vehicle.plant is None:
+        raise PlantError(f"vehicle '{vehicle.name}' has no [plant] section")
+    return vehicle.plant
+
+
+def corners(vehicle: Vehicle) -> tuple[Corner, ...]:
+    """Corner data FL, FR, RL, RR; the preloads hold the static loads of static_loads()."""
+    plant = vehicle_plant(vehicle)
+    g, t, m, susp = vehicle.geometry, vehicle.tyres, vehicle.mass, vehicle.suspension
+    loads = static_loads(vehicle)
+    result = []
+    for i in range(4):
+        front = i < 2
+        left = i % 2 == 0
+        radius = t.radius_front if front else t.radius_rear
+        rate = t.vertical_stiffness_front if front else t.vertical_stiffness_rear
+        unsprung = 0.5 * (m.unsprung_front if front else m.unsprung_rear)
+        track = g.track_front if front else g.track_rear
+        result.append(
+            Corner(
+                x=g.lf if front else -g.lr,
+                y=0.5 * track if left else -0.5 * track,
+                z_static=radius - loads[i] / rate - g.cg_height,
+                radius=radius,
+                tyre_rate=rate,
+                unsprung=unsprung,
+                preload=loads[i] - unsprung * GRAVITY,
+                static_load=float(loads[i]),
+                spring=(susp.front if front else susp.rear).spring_rate,
+                damper=plant.dampers.front if front else plant.dampers.rear,
+                bump_gap=plant.stops.bump_gap_front if front else plant.stops.bump_gap_rear,
+                spin_inertia=(
+                    plant.wheels.spin_inertia_front if front else plant.wheels.spin_inertia_rear
+                ),
+                nominal_load=(
+                    plant.tyre.nominal_load_front if front else plant.tyre.nominal_load_rear
+                ),
+                left=left,
+            )
+        )
+    return tuple(result)
+
+
+def damper_map_force(v, damper: DamperMap):
+    r"""Damper force [N] (> 0 resists compression) by linear interpolation of the map.
+
+    Through (0, 0), :math:`(v_1, F_1)`, :math:`(v_2, F_2)`, extended with the
+    last slope; rebound (v < 0) uses the pull points with a negative sign.
+    """
+    (v1, v2) = damper.velocities
+
+    def branch(speed, f1, f2):
+        low = f1 / v1 * speed
+        high = f1 + (f2 - f1) / (v2 - v1) * (speed - v1)
+        return ca.if_else(speed <= v1, low, high)
+
+    push = branch(v, *damper.push)
+    pull = -branch(-v, *damper.pull)
+    return ca.if_else(v >= 0, push, pull)
+
+
+def stop_force(d, bump_gap, rebound_gap, linear_rate, progressive_rate):
+    r"""Bump (> 0) and rebound (< 0) stop force: :math:`k_1 x + k_2 x^2` past each gap."""
+    bump = ca.fmax(d - bump_gap, 0.0)
+    rebound = ca.fmax(-d - rebound_gap, 0.0)
+    return (linear_rate * bump + progressive_rate * bump**2) - (
+        linear_rate * rebound + progressive_rate * rebound**2
+    )
+
+
+def _rotation(phi, theta, psi):
+    """Body-to-path rotation :math:`R_z(\\psi) R_y(\\theta) R_x(\\phi)`."""
+    cf, sf = ca.cos(phi), ca.sin(phi)
+    ct, st = ca.cos(theta), ca.sin(theta)
+    cp, sp = ca.cos(psi), ca.sin(psi)
+    return ca.vertcat(
+        ca.horzcat(cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf),
+        ca.horzcat(sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf),
+        ca.horzcat(-st, ct * sf, ct * cf),
+    )
+
+
+def _unit(vector):
+    return vector / ca.norm_2(vector)
+
+
+def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
+    """SX expressions ``(x, u, xdot, y)`` of the plant on one road (see module docstring)."""
+    plant = vehicle_plant(vehicle)
+    lookup = road_lookup(road)
+    x = ca.SX.sym("x", len(STATE_NAMES))
+    inp = ca.SX.sym("u", len(INPUT_NAMES))
+    s, n, z, phi, theta, psi = (x[i] for i in range(6))
+    vel = x[6:9]
+    omega = x[9:12]
+    d, dd, spin, kappa, alpha = x[12:16], x[16:20], x[20:24], x[24:28], x[28:32]
+    steer = inp[0]
+    drive, brake = inp[1:5], inp[5:9]
+
+    m_s = vehicle.mass.sprung
+    m = vehicle.mass.total
+    inertia = ca.DM(plant.body.inertia)  # principal axes
+    rot = _rotation(phi, theta, psi)
+    g_body = rot.T @ ca.DM([0.0, 0.0, -GRAVITY])
+    curvature = lookup(s)[3]
+
+    items = corners(vehicle)
+    stops, tyre = plant.stops, plant.tyre
+    susp = vehicle.suspension
+    arb = []
+    for axle, setting in enumerate((susp.front, susp.rear)):
+        arb.extend(
+            anti_roll_bar_forces(d[2 * axle], d[2 * axle + 1], setting.arb_rate, setting.arb_ratio)
+        )
+
+    tyre_vectors, contacts, centres, susp_forces, fz_list, wheel_terms = [], [], [], [], [], []
+    for i, c in enumerate(items):
+        r_w = ca.vertcat(c.x, c.y, c.z_static + d[i])
+        offset = rot @ r_w
+        n_i = n + offset[1]
+        s_i = s + offset[0] / (1.0 - curvature * n)
+        row = lookup(s_i)
+        elevation, grade, bank = row[0], row[1], row[2]
+        rough = row[4] if c.left else row[5]
+        slope_norm = ca.sqrt(1.0 + grade**2 + bank**2)
+        normal_path = ca.vertcat(-grade, -bank, 1.0) / slope_norm
+        normal = rot.T @ normal_path
+        gap = (z + offset[2] - (elevation + n_i * bank + rough)) / slope_norm
+        deflection = c.radius - gap
+        fz = c.tyre_rate * ca.fmax(deflection, 0.0)
+        heading = ca.vertcat(ca.cos(steer), ca.sin(steer), 0.0) if i < 2 else ca.DM([1, 0, 0])
+        e_x = _unit(heading - ca.dot(heading, normal) * normal)
+        e_y = ca.cross(normal, e_x)
+        v_w = vel + ca.cross(omega, r_w)
+        vx_w, vy_w = ca.dot(v_w, e_x), ca.dot(v_w, e_y)
+        fx, fy = tyre_forces(kappa[i], alpha[i], fz, c.nominal_load, tyre)
+        force = fx * e_x + fy * e_y + fz * normal
+        loaded = ca.fmin(gap, c.radius)
+        rolling_radius = c.radius - ca.fmax(deflection, 0.0) / 3.0
+        spin_sign = ca.tanh(spin[i] / SPIN_SMOOTHING)
+        spin_acc = (
+            drive[i]
+            - brake[i] * spin_sign
+            - fx * loaded
+            - tyre.rolling_resistance * fz * loaded * spin_sign
+        ) / c.spin_inertia
+        kappa_dot = ((spin[i] * rolling_radius - vx_w) - ca.fabs(vx_w) * kappa[i]) / (
+            tyre.relaxation_length_x
+        )
+        alpha_dot = (-vy_w - ca.fabs(vx_w) * alpha[i]) / tyre.relaxation_length_y
+        f_s = (
+            c.preload
+            + c.spring * d[i]
+            + damper_map_force(dd[i], c.damper)
+            + arb[i]
+            + stop_force(
+                d[i], c.bump_gap, stops.rebound_gap, stops.linear_rate, stops.progressive_rate
+            )
+        )
+        tyre_vectors.append(force)
+        contacts.append(r_w - gap * normal)
+        centres.append(r_w)
+        susp_forces.append(f_s)
+        fz_list.append(fz)
+        wheel_terms.append((spin_acc, kappa_dot, alpha_dot))
+
+    aero = vehicle.aero
+    pressure = 0.5 * aero.air_density * aero.reference_area * vel[0] ** 2
+    drag = pressure * aero.drag_coefficient * ca.tanh(vel[0] / SPIN_SMOOTHING)
+    lift = pressure * aero.lift_coefficient
+    f_aero = ca.vertcat(-drag, 0.0, lift)
+    r_aero = ca.DM(aero.application_point)
+
+    tyre_sum = sum(tyre_vectors[1:], tyre_vectors[0])
+    coriolis = ca.cross(omega, vel)
+    acc_xy = (tyre_sum[0:2] + f_aero[0:2]) / m + g_body[0:2]
+    acc_z = (sum(susp_forces) + lift) / m_s + g_body[2]
+    acc = ca.vertcat(acc_xy, acc_z)  # kinematic acceleration of the sprung CG
+    moment = ca.cross(r_aero, f_aero)
+    for i, c in enumerate(items):
+        link = ca.vertcat(
+            tyre_vectors[i][0:2] + c.unsprung * (g_body[0:2] - acc[0:2]), susp_forces[i]
+        )
+        moment += ca.cross(centres[i], link) + ca.cross(contacts[i] - centres[i], tyre_vectors[i])
+    omega_dot = (moment - ca.cross(omega, inertia * omega)) / inertia
+
+    d_ddot = []
+    for i, c in enumerate(items):
+        r_w = centres[i]
+        carried = acc + ca.cross(omega_dot, r_w) + ca.cross(omega, ca.cross(omega, r_w))
+        d_ddot.append(
+            (tyre_vectors[i][2] + c.unsprung * g_body[2] - susp_forces[i]) / c.unsprung - carried[2]
+        )
+
+    path_velocity = rot @ vel
+    s_dot = path_velocity[0] / (1.0 - n * curvature)
+    phi_dot = omega[0] + (omega[1] * ca.sin(phi) + omega[2] * ca.cos(phi)) * ca.tan(theta)
+    theta_dot = omega[1] * ca.cos(phi) - omega[2] * ca.sin(phi)
+    psi_dot = (omega[1] * ca.sin(phi) + omega[2] * ca.cos(phi)) / ca.cos(theta) - curvature * s_dot
+    xdot = ca.vertcat(
+        s_dot,
+        path_velocity[1],
+        path_velocity[2],
+        phi_dot,
+        theta_dot,
+        psi_dot,
+        acc - coriolis,
+        omega_dot,
+        dd,
+        ca.vertcat(*d_ddot),
+        ca.vertcat(*[t[0] for t in wheel_terms]),
+        ca.vertcat(*[t[1] for t in wheel_terms]),
+        ca.vertcat(*[t[2] for t in wheel_terms]),
+    )
+    imu = ca.DM(vehicle.geometry.imu_position)
+    imu_acc = acc + ca.cross(omega_dot, imu) + ca.cross(omega, ca.cross(omega, imu)) - g_body
+    y = ca.vertcat(ca.vertcat(*fz_list), imu_acc, acc)
+    return x, inp, xdot, y
+
+
+def plant_functions(vehicle: Vehicle, road: RoadSurface, name: str = "plant"):
+    """``(name_ode(x, u) -> (xdot, y), name_rk4(x, u, dt) -> x_next)`` as SX Functions."""
+    x, inp, xdot, y = plant_dynamics(vehicle, road)
+    ode = ca.Function(f"{name}_ode", [x, inp], [xdot, y], ["x", "u"], ["xdot", "y"])
+    dt = ca.SX.sym("dt")
+    k1 = ode(x, inp)[0]
+    k2 = ode(x + 0.5 * dt * k1, inp)[0]
+    k3 = ode(x + 0.5 * dt * k2, inp)[0]
+    k4 = ode(x + dt * k3, inp)[0]
+    x_next = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    rk4 = ca.Function(f"{name}_rk4", [x, inp, dt], [x_next], ["x", "u", "dt"], ["x_next"])
+    return ode, rk4
+
+
+JIT_OPTIONS = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}}
+
+
+def chunk_function(
+    vehicle: Vehicle, road: RoadSurface, internal_rate: float, steps: int, jit: bool = True
+) -> ca.Function:
+    """``plant_chunk(x0, u) -> (x, y)``: ``steps`` RK4 steps at ``internal_rate`` with input held.
+
+    ``y`` holds :data:`OUTPUT_NAMES` at the final state. Compiled with the
+    system C compiler when ``jit`` is true.
+    """
+    if internal_rate <= 0 or steps < 1:
+        raise PlantError(f"need internal_rate > 0 and steps >= 1, got {internal_rate}, {steps}")
+    ode, rk4 = plant_functions(vehicle, road)
+    dt = 1.0 / internal_rate
+    x0 = ca.MX.sym("x0", len(STATE_NAMES))
+    inp = ca.MX.sym("u", len(INPUT_NAMES))
+    accum = rk4.mapaccum("plant_steps", steps)
+    states = accum(x0, ca.repmat(inp, 1, steps), ca.repmat(dt, 1, steps))
+    x_end = states[:, -1]
+    y_end = ode(x_end, inp)[1]
+    options = JIT_OPTIONS if jit else {}
+    return ca.Function("plant_chunk", [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"], options)
+
+
+def initial_state(vehicle: Vehicle, road: RoadSurface, s: float, speed: float, n: float = 0.0):
+    """Static-equilibrium state at arc length ``s`` and lateral offset ``n``, rolling at ``speed``.
+
+    Body at its static height above the road, attitude following grade and
+    bank, wheels spinning at zero slip; small transients remain on a grade.
+    """
+    grade = float(np.interp(s, road.s, road.grade))
+    bank = float(np.interp(s, road.s, road.bank))
+    x = np.zeros(len(STATE_NAMES))
+    x[STATE["s"]] = s
+    x[STATE["n"]] = n
+    x[STATE["z"]] = float(road.height(s, n)) + vehicle.geometry.cg_height
+    x[STATE["theta"]] = -np.arctan(grade)
+    x[STATE["phi"]] = np.arctan(bank)
+    x[STATE["u"]] = speed
+    for i, c in enumerate(corners(vehicle)):
+        deflection = c.static_load / c.tyre_rate
+        x[STATE["omega_fl"] + i] = speed / (c.radius - deflection / 3.0)
+    return x

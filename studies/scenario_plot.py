@@ -1,0 +1,40 @@
+"""One figure per simulated scenario: speed, accelerations and the four reference loads."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from wheelload.models.vehicle import WHEELS
+
+
+def plot_scenario(frame: pd.DataFrame, path: str | Path, title: str) -> Path:
+    """Save a three-panel figure (speed; ax, ay; Fz per wheel) of a log frame to ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = frame["t"].to_numpy()
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True, constrained_layout=True)
+    axes[0].plot(t, frame["vx"] * 3.6, color="k")
+    axes[0].set_ylabel("speed [km/h]")
+    axes[1].plot(t, frame["ax"], label="$a_x$")
+    axes[1].plot(t, frame["ay"], label="$a_y$")
+    axes[1].plot(t, frame["az"] - 9.80665, label="$a_z - g$", alpha=0.6)
+    axes[1].set_ylabel("specific force at IMU [m/s²]")
+    axes[1].legend(loc="upper right", ncol=3)
+    for wheel in WHEELS:
+        axes[2].plot(t, frame[f"fz_{wheel}"] / 1000.0, label=wheel.upper())
+    axes[2].set_ylabel("reference load $F_z$ [kN]")
+    axes[2].set_xlabel("time [s]")
+    axes[2].legend(loc="upper right", ncol=4)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    fig.suptitle(title)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

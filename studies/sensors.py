@@ -1,0 +1,121 @@
+r"""Sensor models: a body IMU and four suspension displacement sensors.
+
+A noise scale ``s`` multiplies every stochastic part (paper §IV-F); ``s = 0``
+returns the clean signals.
+
+IMU (MTi-1 class, Xsens MTi-1 series datasheet figures as quoted by
+Kucharczyk et al., Transport and Aerospace Research 2023, table
+"Characteristics of IMU Xsens MTi-1 sensors"): accelerometer noise density
+120 µg/√Hz, bias instability 0.03 mg, bandwidth 324 Hz; gyroscope noise
+density 0.007 °/s/√Hz, bias instability 10 °/h, bandwidth 255 Hz. Per sample
+
+.. math:: y_k = x_k + b + \beta_k + N \sqrt{\min(B, f_s/2)}\, \epsilon_k, \quad
+          \beta_{k+1} = \beta_k + \sigma_{rw} \sqrt{\Delta t}\, \eta_k
+
+with a constant turn-on bias ``b`` (not in the quoted table: 5 mg and
+0.2 °/s, 1 sigma, assumed for a MEMS part after factory calibration) and a
+bias random walk whose 100 s growth equals the bias instability.
+
+Suspension sensors (ILPS-19 class, 19 mm inductive linear sensor; the
+ILPS-19 datasheet is not available to the project, so the figures are those
+of a comparable 19 mm non-contact sensor, Positek P118: linearity ±0.25 % of
+full scale), 150 mm stroke: linearity error ±0.25 % FS as a fixed smooth
+curve per sensor, repeatability 0.02 mm (1 sigma, assumed), 12-bit logger
+quantisation of the stroke (0.037 mm). The logged rate ``v`` is the true
+rate plus the backward difference of the displacement error, so ``v`` stays
+consistent with the noisy ``d``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from wheelload.models.vehicle import GRAVITY, WHEELS
+
+MICRO_G = 1e-6 * GRAVITY
+DEG = np.pi / 180.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class ImuModel:
+    accel_noise_density: float = 120.0 * MICRO_G  # m/s^2/sqrt(Hz)
+    accel_bandwidth: float = 324.0  # Hz
+    accel_bias: float = 5000.0 * MICRO_G  # m/s^2, 1 sigma turn-on bias (assumed)
+    accel_bias_instability: float = 30.0 * MICRO_G  # m/s^2
+    gyro_noise_density: float = 0.007 * DEG  # rad/s/sqrt(Hz)
+    gyro_bandwidth: float = 255.0  # Hz
+    gyro_bias: float = 0.2 * DEG  # rad/s, 1 sigma turn-on bias (assumed)
+    gyro_bias_instability: float = 10.0 * DEG / 3600.0  # rad/s
+    instability_time: float = 100.0  # s, horizon over which the walk reaches the instability
+
+
+@dataclass(frozen=True, kw_only=True)
+class TravelSensorModel:
+    full_scale: float = 0.150  # m, stroke
+    linearity: float = 0.0025  # fraction of full scale
+    repeatability: float = 0.02e-3  # m, 1 sigma
+    bits: int = 12
+
+
+def _imu_channel(clean, rng, dt, density, bandwidth, bias, instability, horizon, scale):
+    count = clean.size
+    white = density * np.sqrt(min(bandwidth, 0.5 / dt)) * rng.standard_normal(count)
+    walk = np.cumsum(instability / np.sqrt(horizon) * np.sqrt(dt) * rng.standard_normal(count))
+    return clean + scale * (bias * rng.standard_normal() + walk + white)
+
+
+def measure(
+    truth: pd.DataFrame,
+    scale: float,
+    rng: np.random.Generator,
+    imu: ImuModel = ImuModel(),
+    travel: TravelSensorModel = TravelSensorModel(),
+) -> pd.DataFrame:
+    """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* fz_*``)."""
+    if scale < 0:
+        raise ValueError(f"noise scale must be >= 0, got {scale}")
+    dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
+    log = truth.copy()
+    for axis in ("ax", "ay", "az"):
+        log[axis] = _imu_channel(
+            truth[axis].to_numpy(),
+            rng,
+            dt,
+            imu.accel_noise_density,
+            imu.accel_bandwidth,
+            imu.accel_bias,
+            imu.accel_bias_instability,
+            imu.instability_time,
+            scale,
+        )
+    for axis in ("wx", "wy", "wz"):
+        log[axis] = _imu_channel(
+            truth[axis].to_numpy(),
+            rng,
+            dt,
+            imu.gyro_noise_density,
+            imu.gyro_bandwidth,
+            imu.gyro_bias,
+            imu.gyro_bias_instability,
+            imu.instability_time,
+            scale,
+        )
+    step = scale * travel.full_scale / 2**travel.bits
+    for wheel in WHEELS:
+        d = truth[f"d_{wheel}"].to_numpy()
+        phase = rng.uniform(0.0, 2.0 * np.pi)
+        linear = (
+            travel.linearity
+            * travel.full_scale
+            * np.sin(2.0 * np.pi * d / travel.full_scale + phase)
+        )
+        noisy = d + scale * (linear + travel.repeatability * rng.standard_normal(d.size))
+        if step > 0:
+            noisy = step * np.round(noisy / step)
+        error = noisy - d
+        log[f"d_{wheel}"] = noisy
+        log[f"v_{wheel}"] = truth[f"v_{wheel}"].to_numpy() + np.diff(error, prepend=error[0]) / dt
+    return log
