@@ -87,6 +87,7 @@ class SolverSettings:
     max_iter: int = 500
     polish: bool = False
     check_termination: int = 5
+    adaptive_rho_interval: int = 25  # fixed, so that Python and generated C iterate alike
 
     def __post_init__(self) -> None:
         if not (self.eps_abs > 0 and self.eps_rel >= 0):
@@ -211,6 +212,11 @@ class MovingHorizonEstimator:
         _, b = self._equilibrium.map(n)(u[8:11], u[11:12], self.p)
         return np.asarray(z).T, np.asarray(b).T
 
+    def cost_factor(self, dt: float) -> float:
+        """Cost scale :math:`c`: the QP's Hessian :math:`c s^2 H` has diagonal entries near one."""
+        q, r_s = self.tuning[0], self.tuning[1]
+        return 1.0 / (LOAD_SCALE**2 * (dt / r_s + 2.0 / (q * dt)))
+
     def steady_state_covariance(self, dt: float, samples: int = 20000) -> np.ndarray:
         """Fixed point of the filter covariance recursion at interval ``dt``, inputs all valid."""
         step = self.filter._step
@@ -249,8 +255,7 @@ class MovingHorizonEstimator:
         Pi_inv = np.linalg.inv(Pi)
         Pi_inv = 0.5 * (Pi_inv + Pi_inv.transpose(0, 2, 1))
         w_q[0] = 0.0  # the first sample has no predecessor: the arrival cost takes its place
-        # cost factor c: the QP's Hessian c s^2 H has diagonal entries of order one
-        cost = 1.0 / (LOAD_SCALE**2 * float(np.median(w_s.mean(axis=1) + 2.0 * w_q)))
+        cost = self.cost_factor(float(np.median(dt)))
         upper_load = s.max_load if s.bounded else math.inf
         lower_load = 0.0 if s.bounded else -math.inf
         if s.constraint is Constraint.SOFT:
@@ -380,6 +385,7 @@ class _Window:
             max_iter=s.solver.max_iter,
             polishing=s.solver.polish,
             check_termination=s.solver.check_termination,
+            adaptive_rho_interval=s.solver.adaptive_rho_interval,
             warm_starting=True,
         )  # fmt: skip
         self.x = np.zeros(dimension)
