@@ -17,11 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Sample, TwoStageKF, read_log
+from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
-from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf
+from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf, step_times
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 STUDY_SCENARIOS = ("iso-dlc", "nurburgring", "hockenheim", "wheel-lift")
@@ -94,18 +93,6 @@ def run_study(args: argparse.Namespace) -> int:
     return 0
 
 
-def _kf_step_times(kf: TwoStageKF, signals) -> np.ndarray:
-    dt = sample_intervals(signals.t)
-    state = kf.initial_state()
-    times = np.empty(len(signals))
-    for k in range(len(signals)):
-        sample = Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=float(signals.vx[k]))
-        start = time.perf_counter()
-        state, _ = kf.step(state, sample, float(dt[k]))
-        times[k] = time.perf_counter() - start
-    return times
-
-
 def run_bench(args: argparse.Namespace) -> int:
     vehicle = load_vehicle(args.vehicle or example_vehicle_path())
     duration = args.samples / 100.0
@@ -116,7 +103,7 @@ def run_bench(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     kf.run(signals)
     kf_run = (time.perf_counter() - start) / len(signals) * 1e6
-    kf_step = np.median(_kf_step_times(kf, signals)) * 1e6
+    kf_step = np.median(step_times(kf, signals, len(signals))) * 1e6
     print(f"{len(signals)} samples at 100 Hz (synthetic slalom)")
     print(f"{'estimator':38s} {'median us':>10s} {'p99 us':>10s} {'x KF step':>10s}")
     print(f"{'KF step (Python, CasADi call)':38s} {kf_step:10.1f} {'':>10s} {1.0:10.2f}")
