@@ -24,6 +24,7 @@ import enum
 import hashlib
 import re
 import string
+import subprocess
 from dataclasses import dataclass
 from importlib import resources
 from importlib.metadata import version
@@ -39,6 +40,11 @@ from wheelload.models import WHEELS, ModelParameters, load_vehicle
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
+#: gcc flags the generated code compiles clean under, in both precisions.
+STRICT_CFLAGS = (
+    "-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion",
+    "-Werror",
+)  # fmt: skip
 #: Calibration values that must be positive (the rest must be finite).
 POSITIVE = ("mass", *TUNING, "initial_std")
 
@@ -264,3 +270,20 @@ def generate(
     for template, target in targets.items():
         target.write_text(_template(template).substitute(values), encoding="utf-8")
     return GeneratedLibrary(*targets.values(), kernel=kernel)
+
+
+def build_program(
+    library: GeneratedLibrary,
+    main_source: Path,
+    binary: str | Path,
+    *,
+    compiler: str = "gcc",
+    flags: tuple[str, ...] = STRICT_CFLAGS,
+) -> Path:
+    """Compile ``main_source`` (e.g. ``library.example``) with the library; errors show gcc."""
+    binary = Path(binary)
+    command = [compiler, *flags, "-o", str(binary), str(main_source), str(library.source), "-lm"]
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"{main_source}: {' '.join(command)} failed:\n{result.stderr}")
+    return binary

@@ -110,7 +110,7 @@ def scalar_update(x, P, z, h, r, valid=1):
     entries = {}
     for j in range(n):
         for k in range(j, n):
-            entries[j, k] = P[j, k] + K[j] * t[k] - b[j] * K[k]
+            entries[j, k] = (P[j, k] - b[j] * K[k]) + K[j] * t[k]  # short dependency chain
     P_new = ca.vertcat(
         *[ca.horzcat(*[entries[min(j, k), max(j, k)] for k in range(n)]) for j in range(n)]
     )

@@ -17,30 +17,25 @@ import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF, read_log, write_log
 from wheelload.estimators.c_emitter import Precision
-from wheelload.estimators.codegen import CodegenOptions, ParamMode, calibration_names, generate
+from wheelload.estimators.codegen import (
+    CodegenOptions,
+    ParamMode,
+    build_program,
+    calibration_names,
+    generate,
+)
 from wheelload.estimators.result import RESIDUALS, WHEELS
 from wheelload.estimators.two_stage import step_function
 from wheelload.models import example_vehicle_path, suspension_function
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
-CFLAGS = (
-    "-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion",
-    "-Werror",
-)  # fmt: skip
 LOADS = [f"fz_{w}" for w in WHEELS]
 STD = [f"fz_std_{w}" for w in WHEELS]
 
 
 def compile_program(library, main_source, name):
-    """Build ``main_source`` with the library by the real gcc; warnings are errors."""
-    binary = library.header.parent / name
-    subprocess.run(
-        ["gcc", *CFLAGS, "-o", str(binary), str(main_source), str(library.source), "-lm"],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    return binary
+    """Build by the real gcc with the strict warning flags, warnings as errors."""
+    return build_program(library, main_source, library.header.parent / name)
 
 
 def run_example(library, log_path):

@@ -1,0 +1,164 @@
+"""``wheelload bench-codegen``: time the generated C step beside Python and filterpy.
+
+Prints, from one run on this machine, the median time per step of the
+generated C step (double and float, runtime parameters), the Python
+per-sample :meth:`TwoStageKF.step`, and filterpy's ``KalmanFilter`` doing the
+same prediction and two sequential updates (if filterpy, the ``bench``
+extra, is installed), and the FLOPs per step of the generated step against
+the machine's scalar peak. Printed, never asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators.c_emitter import Precision, operation_counts
+from wheelload.estimators.codegen import CodegenOptions, build_program, generate
+from wheelload.estimators.two_stage import sample_intervals
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.numpy_kf import pseudo_measurements
+from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
+
+TARGET_NS = 150.0
+#: Scalar floating-point operations a core can issue per cycle: two multiply
+#: (FMA) and two add pipes on AMD Zen 3-5 and Intel Golden Cove class cores.
+SCALAR_OPS_PER_CYCLE = 4
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "bench-codegen", help="time the generated C step against Python and filterpy"
+    )
+    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
+    parser.add_argument("--repeats", type=int, default=51, help="C repeats (median taken)")
+    parser.add_argument("--python-samples", type=int, default=2000, help="Python steps timed")
+    parser.set_defaults(handler=run)
+
+
+def c_step_ns(vehicle_path: Path, precision: Precision, folder: Path, samples: int, repeats: int):
+    """Median ns per step of the generated library's self-test benchmark, and its FLOPs."""
+    library = generate(vehicle_path, folder / precision.value, CodegenOptions(precision=precision))
+    binary = build_program(library, library.selftest, folder / precision.value / "selftest")
+    out = subprocess.run(
+        [str(binary), "bench", str(samples), str(repeats)], capture_output=True, text=True,
+        check=True,
+    ).stdout  # fmt: skip
+    return float(re.search(r"median_ns (\S+)", out).group(1)), library
+
+
+def _median_ns(step, n: int) -> float:
+    times = []
+    for k in range(n):
+        start = time.perf_counter_ns()
+        step(k)
+        times.append(time.perf_counter_ns() - start)
+    return float(statistics.median(times))
+
+
+def python_step_ns(kf: TwoStageKF, signals, n: int) -> float:
+    """Median ns of one :meth:`TwoStageKF.step` (CasADi virtual machine)."""
+    dt = sample_intervals(signals.t)
+    state = [kf.initial_state()]
+    samples = [
+        Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
+        for k in range(n)
+    ]
+
+    def step(k):
+        state[0], _ = kf.step(state[0], samples[k], dt[k])
+
+    return _median_ns(step, n)
+
+
+def filterpy_step_ns(kf: TwoStageKF, signals, n: int) -> float | None:
+    """Median ns of filterpy's predict + suspension update + equilibrium update.
+
+    The pseudo-measurements z and b are computed beforehand and not timed.
+    """
+    try:
+        from filterpy.kalman import KalmanFilter
+    except ImportError:
+        return None
+    z, A, b = pseudo_measurements(signals, kf.p)
+    dt = sample_intervals(signals.t)
+    q, rs, rc = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
+    filt = KalmanFilter(dim_x=4, dim_z=4)
+    initial = kf.initial_state()
+    filt.x, filt.P, filt.F = initial.x[:, None].copy(), initial.P.copy(), np.eye(4)
+    H_s = np.eye(4)
+
+    def step(k):
+        filt.Q = q * dt[k] * np.eye(4)
+        filt.predict()
+        filt.update(z[k][:, None], R=rs / dt[k] * np.eye(4), H=H_s)
+        filt.update(b[k][:, None], R=np.diag(rc / dt[k]), H=A)
+
+    return _median_ns(step, n)
+
+
+def cpu_mhz() -> float | None:
+    """Clock frequency from /proc/cpuinfo (Linux), or None."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return None
+    match = re.search(r"cpu MHz\s*:\s*([\d.]+)", text)
+    return float(match.group(1)) if match else None
+
+
+def run(args: argparse.Namespace) -> int:
+    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle = load_vehicle(vehicle_path)
+    with tempfile.TemporaryDirectory(prefix="wheelload_bench_") as folder:
+        c_double, library = c_step_ns(
+            vehicle_path, Precision.DOUBLE, Path(folder), args.samples, args.repeats
+        )
+        c_float, _ = c_step_ns(
+            vehicle_path, Precision.FLOAT, Path(folder), args.samples, args.repeats
+        )
+    kf = TwoStageKF(vehicle)
+    signals = synthetic_log(
+        vehicle, slalom(duration=30.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
+    )
+    n = min(args.python_samples, len(signals))
+    py = python_step_ns(kf, signals, n)
+    fp = filterpy_step_ns(kf, signals, n)
+
+    flops = library.flops
+    counts = operation_counts(library.kernel)
+    arithmetic = ", ".join(
+        f"{counts[op]} {op}" for op in ("mul", "add", "sub", "div", "sqrt", "fmax", "neg")
+    )
+    print(f"two-stage KF step, {vehicle.name}, median ns per step (one run, this machine)")
+    print(f"  generated C, double:             {c_double:10.1f} ns")
+    print(f"  generated C, float:              {c_float:10.1f} ns")
+    print(f"  Python TwoStageKF.step:          {py:10.1f} ns  ({py / c_double:.0f}x C double)")
+    if fp is None:
+        print("  filterpy KalmanFilter:           skipped (install the 'bench' extra: filterpy)")
+    else:
+        print(f"  filterpy KalmanFilter, 2 updates:{fp:10.1f} ns  ({fp / c_double:.0f}x C double)")
+    verdict = "met" if max(c_double, c_float) < TARGET_NS else "missed"
+    print(f"  target {TARGET_NS:.0f} ns for the C step: {verdict}")
+    print(f"FLOPs per step (generated kernel): {flops} ({arithmetic})")
+    mhz = cpu_mhz()
+    if mhz is None:
+        print("  scalar peak unknown (no clock frequency in /proc/cpuinfo)")
+        return 0
+    peak = mhz * 1e-3 * SCALAR_OPS_PER_CYCLE
+    for name, ns in (("double", c_double), ("float", c_float)):
+        rate = flops / ns
+        print(
+            f"  C {name}: {rate:.2f} GFLOP/s = {100 * rate / peak:.0f} % of the scalar peak "
+            f"{peak:.1f} GFLOP/s ({mhz:.0f} MHz x {SCALAR_OPS_PER_CYCLE} ops/cycle)"
+        )
+    return 0

@@ -1,0 +1,33 @@
+"""``wheelload codegen``: the command writes a library that its own Makefile builds and runs."""
+
+import subprocess
+
+from wheelload.models import example_vehicle_path
+from wheelload.studies.cli import main
+
+
+def test_codegen_command_writes_a_library_its_makefile_builds(tmp_path, capsys):
+    out = tmp_path / "c"
+    argv = ["codegen", "--vehicle", str(example_vehicle_path()), "--out", str(out),
+            "--precision", "float", "--params", "baked", "--prefix", "car7"]  # fmt: skip
+    assert main(argv) == 0
+    assert "arithmetic operations per step" in capsys.readouterr().out
+    assert {"car7.h", "car7.c", "car7_example.c", "car7_selftest.c", "Makefile"} <= {
+        path.name for path in out.iterdir()
+    }
+    assert "typedef float car7_real;" in (out / "car7.h").read_text()
+    subprocess.run(["make", "-s", "-C", str(out)], check=True, capture_output=True)
+    log = tmp_path / "no_rates.csv"
+    log.write_text(
+        "t,vx,ax,ay,az,d_fl,d_fr,d_rl,d_rr\n0,0,0,0,9.81,0,0,0,0\n0.01,0,0,0,9.81,0,0,0,0\n"
+    )
+    result = subprocess.run([str(out / "car7_example"), str(log)], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "missing column 'v_fl'" in result.stderr
+
+
+def test_codegen_command_names_a_bad_prefix(tmp_path, capsys):
+    argv = ["codegen", "--vehicle", str(example_vehicle_path()), "--out", str(tmp_path),
+            "--prefix", "9lives"]  # fmt: skip
+    assert main(argv) == 2
+    assert "prefix '9lives'" in capsys.readouterr().err
