@@ -210,6 +210,9 @@ def _substitutions(
             f"    {literal(values[name], precision)}, /* {name} */" for name in fields
         ),
         "param_names": "\n".join(f'    "{name}",' for name in fields),
+        "param_cases": "\n".join(
+            f"    case {k}:\n        return &params->{name};" for k, name in enumerate(fields)
+        ),
         "param_checks": "\n".join(checks),
         "flag_defines": "\n".join(flags),
         "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),

@@ -156,3 +156,40 @@ def test_float_build_long_run_stays_finite_and_positive_definite(tmp_path_factor
     assert report["steps"] == "10000000"
     assert report["nonfinite"] == report["indefinite"] == report["rejected"] == "0"
     assert int(report["flagged"]) > 100_000  # one missing input every 97 samples
+
+
+def test_runtime_params_change_the_filter_without_regenerating(vehicle, tmp_path_factory, log_path):
+    """Spring rate and roll-constraint noise set at run time equal a regenerated vehicle file."""
+    library = generated(tmp_path_factory, Precision.DOUBLE, ParamMode.RUNTIME)
+    binary = compile_program(library, library.example, "example")
+    out = library.header.parent / "overridden.csv"
+    subprocess.run(
+        [str(binary), str(log_path), str(out), "spring_front=66000", "constraint_noise_roll=5000"],
+        check=True,
+    )
+    front = dataclasses.replace(vehicle.suspension.front, spring_rate=66000.0)
+    noise = (*vehicle.filter.constraint_noise_density[:2], 5000.0)
+    changed = vehicle.replace(
+        suspension=dataclasses.replace(vehicle.suspension, front=front),
+        filter=dataclasses.replace(vehicle.filter, constraint_noise_density=noise),
+    )
+    expected = TwoStageKF(changed).run(read_log(log_path)).to_pandas()
+    default = TwoStageKF(vehicle).run(read_log(log_path)).to_pandas()
+    assert np.max(np.abs(expected[LOADS].to_numpy() - default[LOADS].to_numpy())) > 1.0
+    np.testing.assert_allclose(pd.read_csv(out)[LOADS], expected[LOADS], rtol=1e-9, atol=1e-5)
+
+
+def test_bad_inputs_skip_updates_and_bad_intervals_hold_the_state(tmp_path_factory, log_path):
+    """Inf skips the updates it feeds; a repeated time stamp (dt = 0) is rejected, state held."""
+    frame = pd.read_csv(log_path).iloc[:200].copy()
+    frame.loc[50, "az"] = np.inf
+    frame.loc[120, "t"] = frame.loc[119, "t"]
+    bad = log_path.parent / "bad_inputs.csv"
+    frame.to_csv(bad, index=False)
+    library = generated(tmp_path_factory, Precision.FLOAT, ParamMode.BAKED)
+    c = run_example(library, bad)
+    assert np.isfinite(c.drop(columns="flags").to_numpy()).all()
+    assert c.loc[50, "flags"] == StepFlag.VERTICAL_SKIPPED
+    everything = sum(StepFlag)
+    assert c.loc[120, "flags"] == everything
+    np.testing.assert_array_equal(c.loc[120, LOADS], c.loc[119, LOADS])

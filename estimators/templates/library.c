@@ -19,6 +19,15 @@ const char *const ${prefix}_param_names[${PREFIX}_N_PARAMS] = {
 ${param_names}
 };
 
+${prefix}_real *${prefix}_param_field(${prefix}_params *params, int index)
+{
+    switch (index) {
+${param_cases}
+    default:
+        return 0;
+    }
+}
+
 static const uint32_t update_flags[7] = {${update_flags}};
 
 /* The filter step of CasADi Function ${step_name}: inputs x, P (symmetric

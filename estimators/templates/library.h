@@ -85,6 +85,10 @@ extern const char *const ${prefix}_param_names[${PREFIX}_N_PARAMS];
 /* Build identification: versions and both hashes, kept in the binary. */
 extern const char ${prefix}_build_id[];
 
+/* Address of field `index` (order of ${prefix}_param_names) of params, or a
+ * null pointer for an index out of range: sets a field found by name. */
+${prefix}_real *${prefix}_param_field(${prefix}_params *params, int index);
+
 /* Check the calibration and reset the state. Returns 0, or 1 + the index in
  * ${prefix}_param_names of the first invalid field (state left untouched). */
 int ${prefix}_init(${prefix}_state *state, const ${prefix}_params *params);
