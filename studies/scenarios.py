@@ -3,7 +3,6 @@
 | name | source | what |
 | --- | --- | --- |
 | iso-dlc | main paper §IV-C; ISO 3888-1 | double lane change, 80 km/h entry |
-| hockenheim, nordschleife | main paper §IV-D | full laps, quasi-steady-state speed profile |
 | brake-in-turn, accel-in-turn | combined-slip checks | 100 m / 60 m radius turns |
 | bounce-sweep | ycoo paper §5, Fig. 6 | sine bumps, wavelength down to 1.6 m at 20 km/h |
 | slope-20 | ycoo paper Fig. 7 | flat road onto a 20 % grade |
