@@ -33,7 +33,10 @@ ground. Integration: classical RK4 with a fixed step, compiled.
 
 from __future__ import annotations
 
+import os
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -329,7 +332,15 @@ def plant_functions(vehicle: Vehicle, road: RoadSurface, name: str = "plant"):
     return ode, rk4
 
 
-JIT_OPTIONS = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}}
+def _jit_options() -> dict:
+    """CasADi JIT with the system C compiler; its temporary files go to the system temp folder."""
+    folder = Path(tempfile.gettempdir()) / "wheelload-build"
+    folder.mkdir(exist_ok=True)
+    return {
+        "jit": True,
+        "compiler": "shell",
+        "jit_options": {"flags": ["-O2"], "directory": f"{folder}{os.sep}"},
+    }
 
 
 def chunk_function(
@@ -350,7 +361,7 @@ def chunk_function(
     states = accum(x0, ca.repmat(inp, 1, steps), ca.repmat(dt, 1, steps))
     x_end = states[:, -1]
     y_end = ode(x_end, inp)[1]
-    options = JIT_OPTIONS if jit else {}
+    options = _jit_options() if jit else {}
     return ca.Function("plant_chunk", [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"], options)
 
 
