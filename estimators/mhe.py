@@ -24,10 +24,20 @@ The arrival prior is the MHE estimate at :math:`k-N` with
 hard constraints) or its steady state. With :math:`N = 1`, soft constraints
 and no bounds the QP's minimiser is the two-stage KF estimate.
 
-The QP is set up once per log with a fixed sparsity; each sample updates
-``q`` (and ``l, u`` for hard constraints), the Hessian values only when they
-change (arrival weight, sample interval, missing inputs), warm-starts with
-the shifted previous solution and solves. A sample whose QP is not solved
+The per-sample terms come from one CasADi Function built from the model
+Functions (:func:`wheelload.estimators.mhe_terms.terms_function`), mapped
+over the log by :meth:`MovingHorizonEstimator.run` and called once per
+sample by :meth:`MovingHorizonEstimator.step`; the generated C calls the
+same Function. :class:`MheState` holds the window of terms, the fallback
+filter's state, the previous estimates, the warm start and OSQP's
+:math:`\rho`; ``run`` and ``step`` share the code that advances it, so they
+agree to rounding in the filter and the terms (far below the solver
+tolerance).
+
+The QP is set up once per estimator with a fixed sparsity; each sample
+updates ``q`` (and ``l, u`` when they change), the Hessian values only when
+they change (arrival weight, sample interval, missing inputs), warm-starts
+with the shifted previous solution and solves. A sample whose QP is not solved
 (status other than *solved*, or a bound violated by more than the solver
 tolerance) takes the Kalman estimate, clipped to the bounds, and is marked
 in :attr:`MheEstimate.fallback`. Bounds hold exactly: the solver's
@@ -37,38 +47,48 @@ Example
 -------
 >>> mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, bounded=True))
 >>> estimate = mhe.run(read_log("drive.csv"))
+>>> state, one = mhe.step(mhe.initial_state(dt=0.01), sample, 0.01)
 """
 
 from __future__ import annotations
 
 import enum
+import functools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators.mhe_terms import LOAD_SCALE, Constraint, terms_function
 from wheelload.estimators.projection import ProjectionKF, Weighting
-from wheelload.estimators.result import Estimate, StepFlag
+from wheelload.estimators.quiet import quiet_stdout
+from wheelload.estimators.result import Estimate
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import (
+    FilterState,
+    Sample,
     TwoStageKF,
+    flags_from_used,
     input_matrix,
     sample_intervals,
 )
-from wheelload.models import Vehicle, equilibrium_function, suspension_function
+from wheelload.models import Vehicle, equilibrium_function
 
-LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
+__all__ = [
+    "LOAD_SCALE",
+    "Arrival",
+    "Constraint",
+    "MheEstimate",
+    "MheSettings",
+    "MheState",
+    "MovingHorizonEstimator",
+    "SolverSettings",
+]
+
 SOLVED = osqp.SolverStatus.OSQP_SOLVED.value
-
-
-class Constraint(enum.Enum):
-    """How the equilibrium :math:`A x = b` enters the window."""
-
-    SOFT = "soft"  # penalty weighted by R_c^-1 (eq. 17)
-    HARD = "hard"  # equality on every sample
 
 
 class Arrival(enum.Enum):
@@ -88,10 +108,13 @@ class SolverSettings:
     polish: bool = False
     check_termination: int = 5
     adaptive_rho_interval: int = 25  # fixed, so that Python and generated C iterate alike
+    rho: float = 0.1  # initial ADMM step size; adapted during the solves and carried in the state
 
     def __post_init__(self) -> None:
         if not (self.eps_abs > 0 and self.eps_rel >= 0):
             raise ValueError(f"eps_abs must be > 0 and eps_rel >= 0, got {self}")
+        if not self.rho > 0:
+            raise ValueError(f"rho must be > 0, got {self.rho}")
         if self.max_iter < 1 or self.check_termination < 1:
             raise ValueError(f"max_iter and check_termination must be >= 1, got {self}")
 
@@ -140,25 +163,47 @@ class MheEstimate(Estimate):
         return frame
 
 
-@dataclass(frozen=True, eq=False)
-class LogTerms:
-    """Per-sample data of a log, padded with ``N - 1`` inert samples in front.
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MheState:
+    """Explicit MHE state: the window of per-sample QP terms and what carries between samples.
 
-    Soft: ``H`` (4x4 Hessian block without process terms), ``g`` (4) linear
-    term; hard: scalars in the warp amplitude. ``link`` is the weight of the
-    random-walk term joining a sample to the one before (0 for the first),
-    ``arrival`` the arrival weight :math:`\\Pi^{-1}` for a window starting
-    at the sample. All scaled to the QP's units.
+    The window holds the last :math:`N` samples, oldest first; before the
+    log's first samples it is padded with inert ones (unit Hessian, zero
+    terms, bounds 0). Terms are in the QP's units (see :mod:`mhe_terms`).
     """
+
+    k: int  # samples taken
+    cost: float  # QP cost scale c from the nominal interval
+    steady: np.ndarray  # (4, 4) steady-state arrival weight (used with Arrival.STEADY_STATE)
+    kf: FilterState  # the fallback filter (two-stage or projection KF)
+    H: np.ndarray  # (N, w, w) Hessian blocks without process terms
+    g: np.ndarray  # (N, w) linear terms
+    link: np.ndarray  # (N,) random-walk weight to the sample before (0 for the log's first)
+    drift: np.ndarray  # (N,) hard: the random walk's pull link n^T (xp_j - xp_{j-1}) / s
+    xp: np.ndarray  # (N, 4) hard: A^+ b [N]; soft: zeros
+    lower: np.ndarray  # (N, w) bounds of the QP variables
+    upper: np.ndarray  # (N, w)
+    arrival: np.ndarray  # (N, 4, 4) arrival weight for a window starting at the sample
+    history: np.ndarray  # (N, 4) estimates of the N samples before [N]; the prior is row 0
+    x: np.ndarray  # (N w,) primal warm start (the last solution)
+    y: np.ndarray  # (m,) dual warm start
+    rho: float  # OSQP's step size after the last solve
+
+
+@dataclass(frozen=True, eq=False)
+class _SampleTerms:
+    """One sample's outputs of the terms Function plus the fallback filter's (1-D arrays)."""
 
     H: np.ndarray
     g: np.ndarray
-    drift: np.ndarray  # hard: c s w_q n^T (A^+ b_j - A^+ b_{j-1}), the random walk's pull
-    link: np.ndarray
-    arrival: np.ndarray
-    lower: np.ndarray  # (.., 4) soft or (..,) hard: bounds of the QP variable
+    link: float
+    xp: np.ndarray
+    lower: np.ndarray
     upper: np.ndarray
-    particular: np.ndarray  # (.., 4): A^+ b (hard) or zeros (soft)
+    b: np.ndarray
+    used: np.ndarray
+    kf: FilterState  # the filter's state after the sample
+    std: np.ndarray  # the filter's standard deviations
 
 
 class MovingHorizonEstimator:
@@ -183,34 +228,31 @@ class MovingHorizonEstimator:
     ) -> None:
         self.settings = settings or MheSettings()
         self.name = self.settings.label()
-        hard = self.settings.constraint is Constraint.HARD
+        s = self.settings
+        self.hard = s.constraint is Constraint.HARD
         self.filter = (
             ProjectionKF(vehicle, weighting=Weighting.MAXIMUM_PROBABILITY, static=static)
-            if hard
+            if self.hard
             else TwoStageKF(vehicle, static=static)
         )
         self.p = self.filter.p
         self.tuning = self.filter.tuning
-        self._suspension = suspension_function()
-        self._equilibrium = equilibrium_function()
-        A, _ = self._equilibrium(np.zeros(3), 0.0, self.p)
+        A, _ = equilibrium_function()(np.zeros(3), 0.0, self.p)
         self.A = np.asarray(A)
         self.null = _null_vector(self.A)
         self.pinv = np.linalg.pinv(self.A)
+        self.width = 1 if self.hard else 4
+        self.load_bounds = (0.0, s.max_load) if s.bounded else (-math.inf, math.inf)
+        self.terms = terms_function(
+            s.constraint,
+            null=self.null,
+            pinv=self.pinv,
+            lower_load=self.load_bounds[0],
+            upper_load=self.load_bounds[1],
+        )
+        self.workspace = _Workspace(s, self.width)
 
-    # -- per-log data ------------------------------------------------------------------------
-
-    def model_terms(self, signals: Signals) -> tuple[np.ndarray, np.ndarray]:
-        """Pseudo-measurements ``z`` (n, 4) and equilibrium right-hand sides ``b`` (n, 3).
-
-        Evaluated with the model Functions mapped over the log; missing inputs
-        are replaced by zero here and masked out by the caller.
-        """
-        n = len(signals)
-        u = np.nan_to_num(input_matrix(signals), nan=0.0, posinf=0.0, neginf=0.0)
-        z = self._suspension.map(n)(u[0:4], u[4:8], self.p)
-        _, b = self._equilibrium.map(n)(u[8:11], u[11:12], self.p)
-        return np.asarray(z).T, np.asarray(b).T
+    # -- set-up ------------------------------------------------------------------------------
 
     def cost_factor(self, dt: float) -> float:
         """Cost scale :math:`c`: the QP's Hessian :math:`c s^2 H` has diagonal entries near one."""
@@ -231,246 +273,292 @@ class MovingHorizonEstimator:
             P = P_next
         return P
 
-    def log_terms(self, signals: Signals, fallback: Estimate, covariances: np.ndarray) -> LogTerms:
-        """The QP data of every sample of ``signals`` (see :class:`LogTerms`)."""
-        s = self.settings
-        N, n = s.horizon, len(signals)
-        dt = sample_intervals(signals.t)
-        z, b = self.model_terms(signals)
-        bits = np.array([flag.value for flag in StepFlag.update_flags()])
-        used = (fallback.flags[:, None] & bits[None, :]) == 0
-        q, r_s, r_c = self.tuning[0], self.tuning[1], self.tuning[2:5]
-        w_s = used[:, :4] * (dt / r_s)[:, None]
-        w_c = used[:, 4:] * dt[:, None] / r_c[None, :]
-        w_q = 1.0 / (q * dt)
-        P0 = self.filter.initial_state().P
-        if s.arrival is Arrival.KALMAN:
-            previous = np.concatenate([P0[None], covariances[:-1]])
-            Pi = previous + (q * dt)[:, None, None] * np.eye(4)
-        else:
-            median = float(np.median(dt))
-            steady = self.steady_state_covariance(median)
-            Pi = np.broadcast_to(steady + q * median * np.eye(4), (n, 4, 4)).copy()
-            Pi[0] = P0 + q * dt[0] * np.eye(4)
-        Pi_inv = np.linalg.inv(Pi)
-        Pi_inv = 0.5 * (Pi_inv + Pi_inv.transpose(0, 2, 1))
-        w_q[0] = 0.0  # the first sample has no predecessor: the arrival cost takes its place
-        cost = self.cost_factor(float(np.median(dt)))
-        upper_load = s.max_load if s.bounded else math.inf
-        lower_load = 0.0 if s.bounded else -math.inf
-        if s.constraint is Constraint.SOFT:
-            H = w_s[:, :, None] * np.eye(4) + np.einsum("ai,ka,aj->kij", self.A, w_c, self.A)
-            g = -(w_s * z + (w_c * b) @ self.A)
-            drift = np.zeros(n)
-            lower = np.full((n, 4), lower_load)
-            upper = np.full((n, 4), upper_load)
-            xp = np.zeros((n, 4))
-            inert_H = np.eye(4)
-        else:
-            xp = self._equilibrium_points(b, fallback.loads, used[:, 4:])
-            nv = self.null
-            H = (w_s * nv**2).sum(axis=1)
-            g = nv @ (w_s * (xp - z)).T
-            drift = w_q * (np.diff(xp, axis=0, prepend=xp[:1]) @ nv)
-            lower, upper = self._warp_bounds(xp, lower_load, upper_load)
-            inert_H = 1.0
-        terms = dict(
-            H=(cost * LOAD_SCALE**2 * H, inert_H),
-            g=(cost * LOAD_SCALE * g, 0.0),
-            drift=(cost * LOAD_SCALE * drift, 0.0),
-            link=(cost * LOAD_SCALE**2 * w_q, 0.0),
-            arrival=(cost * LOAD_SCALE**2 * Pi_inv, 0.0),
-            lower=(lower / LOAD_SCALE, 0.0),
-            upper=(upper / LOAD_SCALE, 0.0),
-            particular=(xp, 0.0),
-        )
-        return LogTerms(**{key: _pad(value, N - 1, fill) for key, (value, fill) in terms.items()})
+    def initial_state(self, dt: float) -> MheState:
+        """A window of inert samples before the log; ``dt`` [s] is the nominal sample interval.
 
-    def _equilibrium_points(self, b: np.ndarray, loads: np.ndarray, used: np.ndarray) -> np.ndarray:
-        """:math:`A^+ b` per sample; a row with missing inputs takes ``A x`` of the filter."""
-        b = np.where(used, b, loads @ self.A.T)
-        return b @ self.pinv.T
-
-    def _warp_bounds(
-        self, xp: np.ndarray, lower_load: float, upper_load: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Interval of :math:`\\omega` with ``lower <= xp + n omega <= upper``, per sample.
-
-        An empty interval (no bounded loads satisfy the equilibrium) collapses
-        to its midpoint; the output is then clipped to the bounds.
+        ``dt`` sets the cost scale and, with :attr:`Arrival.STEADY_STATE`,
+        the interval of the steady-state arrival weight. :meth:`run` takes
+        the median interval of its log.
         """
-        nv = self.null
-        with np.errstate(invalid="ignore"):
-            a = (lower_load - xp) / nv
-            c = (upper_load - xp) / nv
-        low = np.where(nv > 0, a, c).max(axis=1)
-        high = np.where(nv > 0, c, a).min(axis=1)
-        empty = low > high
-        with np.errstate(invalid="ignore"):
-            middle = 0.5 * (low + high)
-        low = np.where(empty, middle, low)
-        high = np.where(empty, middle, high)
-        return low, high
-
-    # -- solving -----------------------------------------------------------------------------
-
-    def run(self, signals: Signals) -> MheEstimate:
-        """Estimate a whole log: one warm-started QP per sample, set up once."""
-        fallback, covariances = self.filter.run_with_covariance(signals)
-        terms = self.log_terms(signals, fallback, covariances)
-        window = _Window(self, terms)
-        n = len(signals)
-        loads = np.empty((n, 4))
-        status = np.empty(n, dtype=np.int64)
-        iterations = np.empty(n, dtype=np.int64)
-        failed = np.zeros(n, dtype=bool)
-        seconds = np.empty(n)
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"the nominal sample interval must be > 0, got {dt}")
+        N, w = self.settings.horizon, self.width
+        cost = self.cost_factor(dt)
+        if self.settings.arrival is Arrival.STEADY_STATE:
+            steady = self.steady_state_covariance(dt)
+            steady = _arrival_weights(steady[None], self.tuning[0] * np.array([dt]), cost)[0]
+        else:
+            steady = np.zeros((4, 4))
         x0 = np.array(self.filter.parameters.static(), dtype=float)
-        history = np.vstack([np.tile(x0, (self.settings.horizon, 1)), loads])
-        for k in range(n):
-            start = time.perf_counter()
-            prior = history[k]
-            x, status[k], iterations[k], ok = window.solve(k, prior)
-            if not ok:
-                x = np.clip(fallback.loads[k], *window.load_bounds)
-                failed[k] = True
-            loads[k] = x
-            history[k + self.settings.horizon] = x
-            seconds[k] = time.perf_counter() - start
-        _, b = self.model_terms(signals)
-        return MheEstimate(
-            t=signals.t.copy(),
-            loads=loads,
-            std=fallback.std,
-            residual=b - loads @ self.A.T,
-            flags=fallback.flags,
-            status=status,
-            iterations=iterations,
-            fallback=failed,
-            solve_time=seconds,
+        return MheState(
+            k=0,
+            cost=cost,
+            steady=steady,
+            kf=self.filter.initial_state(),
+            H=np.broadcast_to(np.eye(w), (N, w, w)).copy(),
+            g=np.zeros((N, w)),
+            link=np.zeros(N),
+            drift=np.zeros(N),
+            xp=np.zeros((N, 4)),
+            lower=np.zeros((N, w)),
+            upper=np.zeros((N, w)),
+            arrival=np.zeros((N, 4, 4)),
+            history=np.tile(x0, (N, 1)),
+            x=np.zeros(N * w),
+            y=np.zeros(N * w if self.settings.bounded else 0),
+            rho=self.settings.solver.rho,
         )
 
+    # -- per sample --------------------------------------------------------------------------
 
-class _Window:
-    """The OSQP problem of one window, set up once and updated per sample."""
+    def step(self, state: MheState, sample: Sample, dt: float) -> tuple[MheState, MheEstimate]:
+        """Filter one sample, add its terms to the window and solve; returns the new state.
 
-    def __init__(self, mhe: MovingHorizonEstimator, terms: LogTerms) -> None:
-        s = mhe.settings
-        self.N = N = s.horizon
-        self.hard = s.constraint is Constraint.HARD
-        self.terms = terms
-        self.null = mhe.null
-        self.width = 1 if self.hard else 4
-        self.load_bounds = (0.0, s.max_load) if s.bounded else (-math.inf, math.inf)
-        self.bounded = s.bounded
-        self.eps = (s.solver.eps_abs, s.solver.eps_rel)
-        P = _hessian_pattern(N, self.width)
-        self.order = _csc_value_order(N, self.width)
-        P.data = self._hessian_values(0)
-        self.last_Px = P.data.copy()
-        q = self._linear(0, np.zeros(4))
-        dimension = N * self.width
-        if s.bounded:
+        Same numbers as :meth:`run` over the same samples from the same state.
+        """
+        u = sample.vector()
+        valid = np.isfinite(u).astype(float)
+        kf, estimate = self.filter.step(state.kf, sample, dt)
+        out = self.terms(
+            np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0),
+            valid, dt, kf.x, self.p, self.tuning, state.cost,
+        )  # fmt: skip
+        H, g, link, xp, lower, upper, b, used = (np.asarray(o).ravel() for o in out)
+        terms = _SampleTerms(H, g, float(link[0]), xp, lower, upper, b, used, kf, estimate.std[0])
+        arrival = self._arrival(state, state.kf.P[None], np.array([dt]))[0]
+        state, report = self._advance(state, terms, arrival)
+        return state, _estimate(np.array([np.nan]), [report], self.A)
+
+    def _arrival(self, state: MheState, previous: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        r"""Arrival weights :math:`c s^2 \Pi^{-1}` of samples ``state.k, state.k + 1, ...``.
+
+        ``previous`` holds the filter covariance before each sample.
+        """
+        weights = _arrival_weights(previous, self.tuning[0] * dt, state.cost)
+        if self.settings.arrival is Arrival.STEADY_STATE:
+            first = np.arange(len(dt)) + state.k == 0  # the log's first sample: P0 + Q
+            weights = np.where(first[:, None, None], weights, state.steady)
+        return weights
+
+    def _advance(self, state: MheState, terms: _SampleTerms, arrival: np.ndarray):
+        """Push one sample's terms into the window, solve, and return the state and report."""
+        start = time.perf_counter()
+        link = terms.link if state.k > 0 else 0.0  # the log's first sample: the arrival instead
+        drift = link / LOAD_SCALE * float(self.null @ (terms.xp - state.xp[-1]))
+        w = self.width
+        window = dict(
+            H=_shift(state.H, terms.H.reshape(w, w)),
+            g=_shift(state.g, terms.g),
+            link=_shift(state.link, link),
+            drift=_shift(state.drift, drift if self.hard else 0.0),
+            xp=_shift(state.xp, terms.xp),
+            lower=_shift(state.lower, terms.lower),
+            upper=_shift(state.upper, terms.upper),
+            arrival=_shift(state.arrival, arrival),
+        )
+        N = self.settings.horizon
+        j0 = max(0, N - 1 - state.k)
+        prior = state.history[0]
+        Px = _hessian_values(window, j0, self.null, self.hard)
+        q = _linear(window, j0, prior, self.null, self.hard)
+        x_warm = np.concatenate([state.x[w:], state.x[-w:]])
+        y_warm = np.concatenate([state.y[w:], state.y[-w:]]) if state.y.size else state.y
+        bounds = (window["lower"].ravel(), window["upper"].ravel()) if state.y.size else None
+        result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
+        status, iterations = int(result.info.status_val), int(result.info.iter)
+        x = None
+        if status == SOLVED:
+            x_warm, y_warm = np.array(result.x), np.array(result.y)
+            x = self._loads(x_warm[-w:], window)
+        failed = x is None
+        if failed:
+            x = np.clip(terms.kf.x, *self.load_bounds)
+        state = replace(
+            state,
+            k=state.k + 1,
+            kf=terms.kf,
+            history=_shift(state.history, x),
+            x=x_warm,
+            y=y_warm,
+            rho=rho,
+            **window,
+        )
+        report = (x, terms, status, iterations, failed, time.perf_counter() - start)
+        return state, report
+
+    def _loads(self, last: np.ndarray, window: dict) -> np.ndarray | None:
+        """The newest sample's loads [N] from its QP variables, or None if out of bounds."""
+        eps = (self.settings.solver.eps_abs, self.settings.solver.eps_rel)
+        clipped = _clip_checked(last, window["lower"][-1], window["upper"][-1], eps)
+        if clipped is None:
+            return None
+        if not self.hard:
+            return clipped * LOAD_SCALE
+        x = window["xp"][-1] + self.null * (clipped[0] * LOAD_SCALE)
+        # rounding of A^+ b + n omega only: far below a newton
+        return _clip_checked(x, *self.load_bounds, (1e-9, 1e-12))
+
+    # -- whole log ---------------------------------------------------------------------------
+
+    def run(self, signals: Signals, state: MheState | None = None) -> MheEstimate:
+        """Estimate a whole log; the same numbers as :meth:`step` over its samples.
+
+        The filter runs in compiled code and the terms Function is mapped
+        over the log first; each sample then goes through the per-sample
+        window update and solve of :meth:`step`. Without ``state`` the
+        window starts from :meth:`initial_state` at the median interval.
+        """
+        n = len(signals)
+        dt = sample_intervals(signals.t)
+        state = state or self.initial_state(float(np.median(dt)))
+        fallback, covariances = self.filter.run_with_covariance(signals, state.kf)
+        u = input_matrix(signals)
+        valid = np.isfinite(u).astype(float)
+        u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
+        out = self.terms.map(n)(
+            u, valid, dt[None], fallback.loads.T, self.p, self.tuning, state.cost
+        )
+        H, g, link, xp, lower, upper, b, used = (np.asarray(o).T for o in out)
+        previous = np.concatenate([state.kf.P[None], covariances[:-1]])
+        arrival = self._arrival(state, previous, dt)
+        reports = []
+        for k in range(n):
+            kf = FilterState(fallback.loads[k], covariances[k])
+            terms = _SampleTerms(
+                H[k], g[k], float(link[k, 0]), xp[k], lower[k], upper[k], b[k], used[k], kf,
+                fallback.std[k],
+            )  # fmt: skip
+            state, report = self._advance(state, terms, arrival[k])
+            reports.append(report)
+        return _estimate(signals.t.copy(), reports, self.A)
+
+
+def _estimate(t: np.ndarray, reports: list, A: np.ndarray) -> MheEstimate:
+    """The :class:`MheEstimate` of the reports of :meth:`MovingHorizonEstimator._advance`."""
+    loads = np.array([r[0] for r in reports]).reshape(-1, 4)
+    terms = [r[1] for r in reports]
+    b = np.array([s.b for s in terms]).reshape(-1, 3)
+    used = np.array([s.used for s in terms]).reshape(-1, 7)
+    return MheEstimate(
+        t=t,
+        loads=loads,
+        std=np.array([s.std for s in terms]).reshape(-1, 4),
+        residual=b - loads @ A.T,
+        flags=flags_from_used(used.T),
+        status=np.array([r[2] for r in reports], dtype=np.int64),
+        iterations=np.array([r[3] for r in reports], dtype=np.int64),
+        fallback=np.array([r[4] for r in reports], dtype=bool),
+        solve_time=np.array([r[5] for r in reports], dtype=float),
+    )
+
+
+def _arrival_weights(P: np.ndarray, q_dt: np.ndarray, cost: float) -> np.ndarray:
+    r""":math:`c s^2 (P + q\,dt\,I)^{-1}`, symmetrised, for each of the stacked ``P``."""
+    W = np.linalg.inv(P + q_dt[:, None, None] * np.eye(4))
+    return cost * LOAD_SCALE**2 * 0.5 * (W + W.transpose(0, 2, 1))
+
+
+def _shift(window: np.ndarray, newest) -> np.ndarray:
+    """``window`` moved one sample on, ``newest`` appended at the end."""
+    return np.concatenate([window[1:], np.asarray(newest, dtype=float)[None]])
+
+
+def _hessian_values(window: dict, j0: int, null: np.ndarray, hard: bool) -> np.ndarray:
+    """Values of the window's upper-triangular Hessian in CSC order (:func:`_csc_value_order`)."""
+    link = window["link"]
+    N = link.size
+    diagonal = link.copy()
+    diagonal[0] = 0.0
+    diagonal[:-1] += link[1:]
+    arrival = window["arrival"][j0]
+    if hard:
+        H = window["H"][:, 0, 0] + diagonal
+        H[j0] += null @ arrival @ null
+        values = np.concatenate([H, -link[1:]])
+    else:
+        H = window["H"] + diagonal[:, None, None] * np.eye(4)
+        H[j0] += arrival
+        values = np.concatenate([H.ravel(), np.repeat(-link[1:], 4)])
+    return values[_csc_value_order(N, 1 if hard else 4)]
+
+
+def _linear(window: dict, j0: int, prior: np.ndarray, null: np.ndarray, hard: bool) -> np.ndarray:
+    """The window's linear term ``q``: samples' terms, random-walk drift, arrival prior."""
+    q = window["g"].copy()
+    W = window["arrival"][j0]
+    if hard:
+        drift = window["drift"][1:]
+        q[1:, 0] += drift
+        q[:-1, 0] -= drift
+        q[j0, 0] += null @ W @ (window["xp"][j0] - prior) / LOAD_SCALE
+    else:
+        q[j0] -= W @ prior / LOAD_SCALE
+    return q.ravel()
+
+
+class _Workspace:
+    """The window's OSQP problem, set up once with placeholder values and updated per sample.
+
+    It remembers the values it holds (Hessian, bounds, :math:`\\rho`) and
+    updates only what differs, so a state from elsewhere gives the same
+    numbers as the one it continued from.
+    """
+
+    def __init__(self, settings: MheSettings, width: int) -> None:
+        N = settings.horizon
+        dimension = N * width
+        P = _hessian_pattern(N, width)
+        placeholder = np.concatenate(
+            [np.eye(width).ravel()] * N + [np.full((N - 1) * width, -0.25)]
+        )
+        P.data = placeholder[_csc_value_order(N, width)]
+        self.Px = P.data.copy()
+        if settings.bounded:
             A = sp.identity(dimension, format="csc")
-            l, u = self._bounds(0)
+            self.bounds = (np.zeros(dimension), np.zeros(dimension))
         else:
             A = sp.csc_matrix((0, dimension))
-            l = u = np.zeros(0)
+            self.bounds = (np.zeros(0), np.zeros(0))
+        self.rho = settings.solver.rho
+        # polishing needs inequality constraints (an active set); without them it only prints
+        self.polish = settings.solver.polish and settings.bounded
         self.solver = osqp.OSQP()
         self.solver.setup(
-            P, q, A, l, u,
+            P, np.zeros(dimension), A, *self.bounds,
             verbose=False,
-            eps_abs=s.solver.eps_abs,
-            eps_rel=s.solver.eps_rel,
-            max_iter=s.solver.max_iter,
-            polishing=s.solver.polish,
-            check_termination=s.solver.check_termination,
-            adaptive_rho_interval=s.solver.adaptive_rho_interval,
+            eps_abs=settings.solver.eps_abs,
+            eps_rel=settings.solver.eps_rel,
+            max_iter=settings.solver.max_iter,
+            polishing=self.polish,
+            check_termination=settings.solver.check_termination,
+            adaptive_rho_interval=settings.solver.adaptive_rho_interval,
+            rho=self.rho,
             warm_starting=True,
         )  # fmt: skip
-        self.x = np.zeros(dimension)
-        self.y = np.zeros(A.shape[0])
 
-    def _hessian_values(self, k: int) -> np.ndarray:
-        t, N = self.terms, self.N
-        window = slice(k, k + N)
-        link = t.link[window]
-        following = np.concatenate([link[1:], [0.0]])
-        diagonal = link.copy()
-        diagonal[0] = 0.0
-        diagonal += following
-        j0 = max(0, N - 1 - k)
-        if self.hard:
-            H = t.H[window] + diagonal
-            H[j0] += self.null @ t.arrival[k + j0] @ self.null
-            return np.concatenate([H, -link[1:]])[self.order]
-        H = t.H[window] + diagonal[:, None, None] * np.eye(4)
-        H[j0] += t.arrival[k + j0]
-        off = np.repeat(-link[1:], 4)
-        return np.concatenate([H.ravel(), off])[self.order]
-
-    def _linear(self, k: int, prior: np.ndarray) -> np.ndarray:
-        t, N = self.terms, self.N
-        q = t.g[k : k + N].copy()
-        j0 = max(0, N - 1 - k)
-        W = t.arrival[k + j0]
-        if self.hard:
-            drift = t.drift[k + 1 : k + N]
-            q[1:] += drift
-            q[:-1] -= drift
-            offset = (t.particular[k + j0] - prior) / LOAD_SCALE
-            q[j0] += self.null @ W @ offset
-        else:
-            q[j0] -= W @ prior / LOAD_SCALE
-        return q.ravel()
-
-    def _bounds(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        t, N = self.terms, self.N
-        return t.lower[k : k + N].ravel(), t.upper[k : k + N].ravel()
-
-    def solve(self, k: int, prior: np.ndarray) -> tuple[np.ndarray, int, int, bool]:
-        """Update the QP for the window ending at sample ``k`` and solve it."""
+    def solve(self, Px, q, bounds, x, y, rho):
+        """Load what changed, warm-start with ``x, y`` and solve; returns (result, rho)."""
         solver = self.solver
-        Px = self._hessian_values(k)
-        if not np.array_equal(Px, self.last_Px):
+        if not np.array_equal(Px, self.Px):
             solver.update(Px=Px)
-            self.last_Px = Px
-        q = self._linear(k, prior)
-        if self.bounded and (self.hard or k < self.N):
-            l, u = self._bounds(k)  # the warm-up windows hold inert samples fixed at zero
-            solver.update(q=q, l=l, u=u)
+            self.Px = Px
+        if rho != self.rho:
+            solver.update_settings(rho=rho)
+        if bounds is not None and not (
+            np.array_equal(bounds[0], self.bounds[0]) and np.array_equal(bounds[1], self.bounds[1])
+        ):
+            solver.update(q=q, l=bounds[0], u=bounds[1])
+            self.bounds = bounds
         else:
             solver.update(q=q)
-        w = self.width
-        self.x[:-w] = self.x[w:]
-        if self.y.size:
-            self.y[:-w] = self.y[w:]
-            solver.warm_start(x=self.x, y=self.y)
+        solver.warm_start(x=x, y=y if y.size else None)
+        if self.polish:
+            with quiet_stdout():
+                result = solver.solve(raise_error=False)
         else:
-            solver.warm_start(x=self.x)
-        result = solver.solve(raise_error=False)
-        status = int(result.info.status_val)
-        iterations = int(result.info.iter)
-        if status != SOLVED:
-            return np.zeros(4), status, iterations, False
-        self.x[:] = result.x
-        if self.y.size:
-            self.y[:] = result.y
-        last = result.x[-w:]
-        i = k + self.N - 1
-        eps = self.eps
-        clipped = _clip_checked(last, self.terms.lower[i], self.terms.upper[i], eps)
-        if clipped is None:
-            return np.zeros(4), status, iterations, False
-        if self.hard:
-            x = self.terms.particular[i] + self.null * (clipped[0] * LOAD_SCALE)
-            # rounding of A^+ b + n omega only: far below a newton
-            x = _clip_checked(x, *self.load_bounds, (1e-9, 1e-12))
-            if x is None:
-                return np.zeros(4), status, iterations, False
-        else:
-            x = clipped * LOAD_SCALE
-        return x, status, iterations, True
+            result = solver.solve(raise_error=False)
+        self.rho = solver._solver.get_settings().rho  # adapted during the solve
+        return result, self.rho
 
 
 def _clip_checked(value, low, high, eps: tuple[float, float]):
@@ -495,11 +583,6 @@ def _null_vector(A: np.ndarray) -> np.ndarray:
     return nv if nv[0] >= 0 else -nv
 
 
-def _pad(value: np.ndarray, count: int, fill) -> np.ndarray:
-    pad = np.broadcast_to(np.asarray(fill, dtype=float), (count, *value.shape[1:]))
-    return np.concatenate([pad, value])
-
-
 def _hessian_pattern(N: int, width: int) -> sp.csc_matrix:
     """Upper-triangular block-tridiagonal pattern: dense diagonal blocks, diagonal couplings."""
     rows, cols = [], []
@@ -519,6 +602,7 @@ def _hessian_pattern(N: int, width: int) -> sp.csc_matrix:
     return matrix
 
 
+@functools.cache
 def _csc_value_order(N: int, width: int) -> np.ndarray:
     """Indices into ``[diagonal blocks (N, w, w) raveled, couplings (N-1, w)]`` in CSC order."""
     index = []

@@ -1,5 +1,6 @@
 """The generated embedded MHE (OSQP embedded C + CasADi sample routine) equals the Python MHE."""
 
+import dataclasses
 import shutil
 
 import numpy as np
@@ -32,3 +33,24 @@ def test_generated_c_equals_python(vehicle, wheel_lift, tmp_path, constraint, bo
     np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
     if bounded:
         assert c.loads.min() >= 0.0
+
+
+@pytest.mark.parametrize("constraint", list(Constraint))
+def test_generated_c_drops_the_terms_of_missing_inputs_like_python(
+    vehicle, wheel_lift, tmp_path, constraint
+):
+    d, acc = wheel_lift.d.copy(), wheel_lift.acc.copy()
+    d[50:60, 2] = np.nan  # a rear travel sensor drops out: its suspension rows are skipped
+    if constraint is Constraint.SOFT:  # hard: C holds its previous estimate's A x for b
+        acc[80, 0] = np.inf  # the pitch row is skipped
+    signals = dataclasses.replace(wheel_lift, d=d, acc=acc)
+    settings = MheSettings(
+        horizon=10, constraint=constraint, bounded=True, arrival=Arrival.STEADY_STATE
+    )
+    c = build_mhe_library(vehicle, settings, tmp_path, dt=0.01).run(signals)
+    python = MovingHorizonEstimator(vehicle, settings).run(signals)
+    assert np.all(c.status == 1)
+    np.testing.assert_array_equal(c.flags, python.flags)
+    assert c.flags[55] != 0
+    # as above: the same iterations, a tenth of the solver tolerance scaled to newtons
+    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)

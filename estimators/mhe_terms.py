@@ -1,0 +1,137 @@
+r"""The quadratic-program terms one sample adds to the MHE window, as one CasADi Function.
+
+For sample :math:`j` with suspension pseudo-measurement :math:`z_j` (Siegloff
+& Choi eq. 13) and equilibrium :math:`A x_j = b_j` (eq. 14-17), weights
+:math:`W_s = \mathrm{diag}(m_s)\,dt/r_s`, :math:`W_c = \mathrm{diag}(m_c)\,dt/r_c`
+(:math:`m`: the filter's dependency masks, 0 where an input the row needs is
+missing) and random-walk weight :math:`w_q = 1/(q\,dt)`:
+
+.. math::
+    \text{soft:}\quad H_j = W_s + A^\top W_c A, \quad g_j = -(W_s z_j + A^\top W_c b_j)
+
+    \text{hard:}\quad x_j = \bar x_j + n\,\omega_j, \quad
+    \bar x_j = A^+ \tilde b_j, \quad H_j = n^\top W_s n, \quad
+    g_j = n^\top W_s (\bar x_j - z_j)
+
+where :math:`\tilde b_j` takes :math:`A x_{ref}` on rows whose inputs are
+missing, and the bounds :math:`F_{min} \le x_j \le F_{max}` become an interval
+of the warp amplitude :math:`\omega_j` (collapsed to its midpoint when empty).
+All outputs are in the QP's units: loads in kN, cost scaled by ``cost``.
+
+The Python MHE maps this Function over a log (``.map(n)``) or calls it once
+per :meth:`step`; the embedded C MHE calls its generated code per sample.
+
+Example
+-------
+>>> f = terms_function(Constraint.SOFT, null=n, pinv=A_pinv, lower_load=0.0, upper_load=inf)
+>>> H, g, link, xp, lower, upper, b, used = f(u, u_valid, dt, x_ref, p, tuning, cost)
+"""
+
+from __future__ import annotations
+
+import enum
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.two_stage import INPUTS, TUNING, _dependency_mask, _sanitise
+from wheelload.models import ModelParameters, equilibrium_function, suspension_function
+
+TERMS_NAME = "wheelload_mhe_terms"
+LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
+TERMS_INPUTS = ["u", "u_valid", "dt", "x_ref", "p", "tuning", "cost"]
+TERMS_OUTPUTS = ["H", "g", "link", "xp", "lower", "upper", "b", "used"]
+
+
+class Constraint(enum.Enum):
+    """How the equilibrium :math:`A x = b` enters the window."""
+
+    SOFT = "soft"  # penalty weighted by R_c^-1 (eq. 17)
+    HARD = "hard"  # equality on every sample
+
+
+def warp_interval(xp, null: np.ndarray, lower_load: float, upper_load: float):
+    r"""Interval of :math:`\omega` with ``lower_load <= xp + null * omega <= upper_load``.
+
+    An empty interval (no bounded loads satisfy the equilibrium) collapses to
+    its midpoint; the caller clips the loads to the bounds.
+    """
+    ends = [((lower_load - xp[i]) / null[i], (upper_load - xp[i]) / null[i]) for i in range(4)]
+    ordered = [(a, c) if null[i] > 0 else (c, a) for i, (a, c) in enumerate(ends)]
+    low = ca.mmax(ca.vertcat(*[a for a, _ in ordered]))
+    high = ca.mmin(ca.vertcat(*[c for _, c in ordered]))
+    middle = 0.5 * (low + high)
+    empty = low > high
+    return ca.if_else(empty, middle, low), ca.if_else(empty, middle, high)
+
+
+def terms_function(
+    constraint: Constraint,
+    *,
+    null: np.ndarray,
+    pinv: np.ndarray,
+    lower_load: float,
+    upper_load: float,
+    suspension: ca.Function | None = None,
+    equilibrium: ca.Function | None = None,
+) -> ca.Function:
+    """``wheelload_mhe_terms(u, u_valid, dt, x_ref, p, tuning, cost) -> (H, g, link, xp, lower,
+    upper, b, used)``, the terms of the module docstring.
+
+    ``null`` and ``pinv`` are the unit null vector and pseudo-inverse of the
+    vehicle's equilibrium matrix; ``lower_load``/``upper_load`` [N] the load
+    bounds (infinite when unbounded); ``x_ref`` [N] the loads whose
+    :math:`A x` stands in for equilibrium rows with missing inputs (hard
+    only). ``used`` is the 7 masks (4 suspension, 3 equilibrium rows).
+    """
+    if not isinstance(constraint, Constraint):
+        raise TypeError(f"constraint must be a Constraint, got {constraint!r}")
+    suspension = suspension or suspension_function()
+    equilibrium = equilibrium or equilibrium_function()
+    u_raw = ca.SX.sym("u", len(INPUTS))
+    valid = ca.SX.sym("u_valid", len(INPUTS))
+    dt = ca.SX.sym("dt")
+    x_ref = ca.SX.sym("x_ref", 4)
+    p = ca.SX.sym("p", len(ModelParameters.names()))
+    tuning = ca.SX.sym("tuning", len(TUNING))
+    cost = ca.SX.sym("cost")
+
+    u = _sanitise(u_raw, valid)
+    z = suspension(u[0:4], u[4:8], p)
+    A, b = equilibrium(u[8:11], u[11], p)
+    mask_s = _dependency_mask(z, u_raw, valid)
+    mask_c = _dependency_mask(b, u_raw, valid)
+    w_s = mask_s * dt / tuning[1]
+    w_c = mask_c * dt / tuning[2:5]
+    link = cost * LOAD_SCALE**2 / (tuning[0] * dt)
+    n = ca.DM(null)
+    if constraint is Constraint.SOFT:
+        H = ca.diag(w_s) + ca.mtimes([A.T, ca.diag(w_c), A])
+        g = -(w_s * z + ca.mtimes(A.T, w_c * b))
+        xp = ca.DM.zeros(4)
+        lower = ca.DM.ones(4) * lower_load
+        upper = ca.DM.ones(4) * upper_load
+    else:
+        b_kept = ca.vertcat(
+            *[ca.if_else(mask_c[i], b[i], ca.mtimes(A[i, :], x_ref)) for i in range(3)]
+        )
+        xp = ca.mtimes(ca.DM(pinv), b_kept)
+        H = ca.dot(n, w_s * n)
+        g = ca.dot(n, w_s * (xp - z))
+        if np.isfinite(lower_load) or np.isfinite(upper_load):
+            lower, upper = warp_interval(xp, null, lower_load, upper_load)
+        else:
+            lower, upper = ca.DM(-np.inf), ca.DM(np.inf)
+    outputs = [
+        cost * LOAD_SCALE**2 * ca.reshape(H, -1, 1),
+        cost * LOAD_SCALE * g,
+        link,
+        xp,
+        lower / LOAD_SCALE,
+        upper / LOAD_SCALE,
+        b,
+        ca.vertcat(mask_s, mask_c),
+    ]
+    inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
+    dense = [ca.densify(ca.SX(output)) for output in outputs]  # C reads every entry
+    return ca.Function(TERMS_NAME, inputs, dense, TERMS_INPUTS, TERMS_OUTPUTS)
