@@ -31,3 +31,22 @@ def test_codegen_command_names_a_bad_prefix(tmp_path, capsys):
             "--prefix", "9lives"]  # fmt: skip
     assert main(argv) == 2
     assert "prefix '9lives'" in capsys.readouterr().err
+
+
+def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
+    out = tmp_path / "mhe"
+    argv = ["codegen", "--estimator", "mhe", "--out", str(out), "--horizon", "5",
+            "--constraint", "hard", "--bounded", "--dt", "0.005"]  # fmt: skip
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "MHE N=5 (hard, bounded)" in printed and "dt = 0.005 s" in printed
+    assert {"wheelload_mhe.c", "wheelload_mhe_terms.c", "osqp"} <= {p.name for p in out.iterdir()}
+    assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
+
+
+def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):
+    assert main(["codegen", "--out", str(tmp_path), "--horizon", "5", "--bounded"]) == 2
+    assert "--horizon, --bounded: not an option of --estimator kf" in capsys.readouterr().err
+    argv = ["codegen", "--estimator", "mhe", "--out", str(tmp_path), "--prefix", "car7"]
+    assert main(argv) == 2
+    assert "--prefix: not an option of --estimator mhe" in capsys.readouterr().err

@@ -1,45 +1,116 @@
-"""``wheelload codegen``: write the two-stage KF as a self-contained C99 library."""
+"""``wheelload codegen``: write an estimator as C.
+
+``--estimator kf`` (default) writes the two-stage KF as a self-contained,
+allocation-free C99 library; ``--estimator mhe`` writes the embedded MHE
+(OSQP's generated solver, the generated QP-terms routine and the window
+driver; see :mod:`wheelload.estimators.mhe_codegen`). Options that belong to
+the other estimator are rejected with a message naming them.
+"""
 
 from __future__ import annotations
 
 import argparse
+import enum
+from pathlib import Path
 
 from wheelload.estimators.c_emitter import Precision
 from wheelload.estimators.codegen import CodegenOptions, ParamMode, generate
+from wheelload.estimators.mhe import Constraint, MheSettings
+from wheelload.models import example_vehicle_path, load_vehicle
+
+
+class Estimator(enum.Enum):
+    """The estimator to generate."""
+
+    KF = "kf"
+    MHE = "mhe"
+
+
+#: Options of one estimator only, with their defaults (None on the parser, to see what was given).
+KF_OPTIONS = {
+    "precision": Precision.DOUBLE.value,
+    "params": ParamMode.RUNTIME.value,
+    "prefix": "wheelload_kf",
+}
+MHE_OPTIONS = {"horizon": 10, "constraint": Constraint.SOFT.value, "bounded": False, "dt": 0.01}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "codegen",
-        help="generate the two-stage KF as an allocation-free C99 library",
-        description="Write PREFIX.h, PREFIX.c (the library, libm only), PREFIX_example.c "
+        help="generate the two-stage KF (default) or the MHE as C",
+        description="kf: write PREFIX.h, PREFIX.c (the library, libm only), PREFIX_example.c "
         "(CSV log in, CSV estimates out; needs the v_* travel-rate columns), "
-        "PREFIX_selftest.c and a Makefile.",
+        "PREFIX_selftest.c and a Makefile. mhe: write the embedded MHE (OSQP embedded "
+        "solver, wheelload_mhe_terms.c, wheelload_mhe.c).",
     )
-    parser.add_argument("--vehicle", required=True, help="vehicle TOML file")
+    parser.add_argument(
+        "--estimator",
+        choices=[e.value for e in Estimator],
+        default=Estimator.KF.value,
+        help="kf: two-stage KF (default); mhe: moving-horizon estimator on OSQP",
+    )
+    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     parser.add_argument("--out", required=True, help="output folder (created if missing)")
-    parser.add_argument(
-        "--precision", choices=[p.value for p in Precision], default=Precision.DOUBLE.value
-    )
-    parser.add_argument(
+    kf = parser.add_argument_group("kf only")
+    kf.add_argument("--precision", choices=[p.value for p in Precision], help="default double")
+    kf.add_argument(
         "--params",
         choices=[m.value for m in ParamMode],
-        default=ParamMode.RUNTIME.value,
-        help="runtime: calibration in the parameter struct; baked: folded into the code",
+        help="runtime (default): calibration in the parameter struct; baked: folded into the code",
     )
-    parser.add_argument("--prefix", default="wheelload_kf", help="C symbol prefix")
+    kf.add_argument("--prefix", help="C symbol prefix (default wheelload_kf)")
+    mhe = parser.add_argument_group("mhe only")
+    mhe.add_argument("--horizon", type=int, help="window length N (default 10)")
+    mhe.add_argument(
+        "--constraint",
+        choices=[c.value for c in Constraint],
+        help="equilibrium as a penalty (soft, default) or an equality (hard)",
+    )
+    mhe.add_argument("--bounded", action="store_const", const=True, help="bounds 0 <= Fz")
+    mhe.add_argument("--dt", type=float, help="the fixed sample interval [s] (default 0.01)")
     parser.set_defaults(handler=run)
 
 
+def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estimator) -> dict:
+    """The estimator's options with defaults filled in; another estimator's is an error."""
+    foreign = [f"--{name}" for name in other if getattr(args, name) is not None]
+    if foreign:
+        raise ValueError(f"{', '.join(foreign)}: not an option of --estimator {estimator.value}")
+    return {name: default if getattr(args, name) is None else getattr(args, name)
+            for name, default in own.items()}  # fmt: skip
+
+
 def run(args: argparse.Namespace) -> int:
+    estimator = Estimator(args.estimator)
+    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    if estimator is Estimator.MHE:
+        return _run_mhe(args, vehicle_path)
+    values = _options(args, KF_OPTIONS, MHE_OPTIONS, estimator)
     options = CodegenOptions(
-        precision=Precision(args.precision), params=ParamMode(args.params), prefix=args.prefix
+        precision=Precision(values["precision"]),
+        params=ParamMode(values["params"]),
+        prefix=values["prefix"],
     )
-    library = generate(args.vehicle, args.out, options)
+    library = generate(vehicle_path, args.out, options)
     for path in (library.header, library.source, library.example, library.selftest):
         print(path)
     print(
         f"{library.flops} arithmetic operations per step ({options.precision.value}, "
         f"{options.params.value} parameters); build with: make -C {args.out}"
     )
+    return 0
+
+
+def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
+    from wheelload.estimators.mhe_codegen import generate_mhe
+
+    values = _options(args, MHE_OPTIONS, KF_OPTIONS, Estimator.MHE)
+    settings = MheSettings(
+        horizon=values["horizon"],
+        constraint=Constraint(values["constraint"]),
+        bounded=values["bounded"],
+    )
+    folder = generate_mhe(load_vehicle(vehicle_path), settings, Path(args.out), dt=values["dt"])
+    print(f"written the embedded {settings.label()} (dt = {values['dt']} s) to {folder}")
     return 0

@@ -1,10 +1,10 @@
-"""``wheelload study mhe-vs-kf``, ``wheelload bench-mhe`` and ``wheelload codegen-mhe``.
+"""``wheelload study mhe-vs-kf`` and ``wheelload bench-mhe``.
 
 ``study mhe-vs-kf`` scores the KF, projection KF and MHE family on logs
 (``--logs``) or on plant scenarios it simulates first (``--scenarios``).
 ``bench-mhe`` prints the MHE's time per sample beside the KF's, in the same
 run, from Python and (when a C compiler is found) from the generated C.
-``codegen-mhe`` writes the embedded MHE as C (to merge with ``codegen``).
+The embedded MHE's C is written by ``wheelload codegen --estimator mhe``.
 """
 
 from __future__ import annotations
@@ -48,14 +48,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")
     bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     bench.set_defaults(handler=run_bench)
-
-    codegen = subparsers.add_parser("codegen-mhe", help="emit the embedded MHE as C")
-    codegen.add_argument("--out", required=True, help="output folder")
-    codegen.add_argument("--horizon", type=int, default=10)
-    codegen.add_argument("--hard", action="store_true", help="hard equilibrium constraints")
-    codegen.add_argument("--bounded", action="store_true", help="bounds 0 <= Fz")
-    codegen.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    codegen.set_defaults(handler=run_codegen)
 
 
 def _simulate(names: list[str], folder: Path) -> list[Path]:
@@ -133,17 +125,3 @@ def _bench_c(vehicle, settings: MheSettings, signals, kf_step: float) -> None:
     median = float(np.median(times))
     print(f"{settings.label() + ' C':38s} {median:10.1f} {np.percentile(times, 99):10.1f} "
           f"{median / kf_step:10.2f}")  # fmt: skip
-
-
-def run_codegen(args: argparse.Namespace) -> int:
-    from wheelload.estimators.mhe_codegen import generate_mhe
-
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
-    settings = MheSettings(
-        horizon=args.horizon,
-        constraint=Constraint.HARD if args.hard else Constraint.SOFT,
-        bounded=args.bounded,
-    )
-    folder = generate_mhe(vehicle, settings, Path(args.out), dt=0.01)
-    print(f"written the embedded {settings.label()} to {folder}")
-    return 0
