@@ -2,14 +2,26 @@ r"""Closed-loop driver: preview (pure-pursuit) steering and a speed controller.
 
 Steering aims at the target point a preview distance :math:`L_p = \max(L_0,
 T_p u)` ahead on the target path; with :math:`e` its lateral offset and
-:math:`\ell` its distance in the vehicle frame, the demanded path curvature is
-:math:`c = 2 e / \ell^2` and the road-wheel angle
-:math:`\delta = c (L + K_{us} u^2)`, with the linear-bicycle understeer
-gradient :math:`K_{us} = (m / L)(l_r / C_f - l_f / C_r)`.
+:math:`\ell` its distance in the frame of the velocity (the course, heading
+plus sideslip :math:`\beta`, so that a sliding car aims where it travels, not
+where it points), the demanded path curvature is :math:`c = 2 e / \ell^2` and
+the road-wheel angle :math:`\delta = c (L + K_{us} u^2) + k_I \int e_n\,dt`
+(the integral of the path error :math:`e_n` takes out the understeer the
+linear-bicycle gradient :math:`K_{us} = (m / L)(l_r / C_f - l_f / C_r)` misses
+near the limit).
 
 Speed: :math:`F = m (a_{ref} + k_p (v_{ref} - u) + k_i \int (v_{ref} - u))`
-plus drag and rolling resistance, split into drive torque (power-limited,
-``drive_share_front``) or brake torque (``brake_share_front``).
+plus drag, rolling resistance and grade, limited to the friction ellipse
+:math:`|F| \le m \mu g \sqrt{1 - (a_y / \mu g)^2}` with the measured
+:math:`a_y = r u` and :math:`\mu` a share of the tyres' cornering friction
+(:func:`~wheelload.studies.speed_profile.cornering_friction`); drive is eased
+out as the path error grows past ``ease_error``. Drive torque is
+power-limited and split by ``drive_share_front``. Brake force is shared in
+proportion to the quasi-static axle loads :math:`(l_r + h a_x / g) / L` (what
+electronic brake-force distribution does); a fixed front bias over-brakes the
+rear above :math:`a_x \approx 0.9 g` and locks it. A slip guard (ABS and
+traction control) scales a wheel's torque down linearly as its slip ratio
+passes from ``slip_guard`` to twice that times the tyre's peak slip.
 """
 
 from __future__ import annotations
@@ -19,8 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wheelload.models.plant import INPUT_NAMES, STATE, corners, vehicle_plant
+from wheelload.models.tyre import peak_input
 from wheelload.models.vehicle import GRAVITY, Vehicle
 from wheelload.studies.roads import Road
+from wheelload.studies.speed_profile import cornering_friction
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -31,6 +45,16 @@ class DriverTuning:
     speed_integral: float = 0.3  # 1/s^2
     speed_preview: float = 0.3  # s, the speed target is read this far ahead
     max_steer: float = 0.6  # rad, road-wheel angle
+    path_integral: float = 0.0  # rad/(m s), k_I on the path error
+    yaw_damping: float = 0.1  # s, k_r on the yaw-rate error u c - r
+    friction_use: float = 0.9  # -, share of the cornering friction the speed controller uses
+    ease_error: float = 0.5  # m, path error from which drive is eased out ...
+    ease_span: float = 1.0  # m, ... reaching zero drive this much further
+    slip_release: float = 1.0  # -, slip (share of the peak slip) above which ABS/TCS releases
+    slip_apply: float = 0.6  # -, slip (share of the peak slip) below which it re-applies
+    release_factor: float = 0.5  # -, torque factor multiplier per sample on release
+    apply_step: float = 0.1  # -, torque factor increase per sample on re-apply
+    force_rate: float = 4.0  # g/s, rate limit of the longitudinal force (pedal speed)
 
 
 def understeer_gradient(vehicle: Vehicle) -> float:
@@ -50,6 +74,13 @@ def understeer_gradient(vehicle: Vehicle) -> float:
     return vehicle.mass.total / length * (g.lr / stiffness[0] - g.lf / stiffness[1])
 
 
+def peak_slip_ratio(vehicle: Vehicle) -> float:
+    r"""Slip ratio of the longitudinal force peak at nominal load, :math:`X_p / B_x`."""
+    tyre = vehicle_plant(vehicle).tyre
+    b_x = tyre.slip_stiffness_x / (tyre.shape_x * tyre.friction_x)
+    return peak_input(tyre.shape_x, tyre.curvature_x) / b_x
+
+
 @dataclass(kw_only=True)
 class Driver:
     """Driver of one run: call :meth:`inputs` once per output sample with the plant state."""
@@ -59,6 +90,9 @@ class Driver:
     speed: np.ndarray  # m/s, target speed on the road grid
     tuning: DriverTuning = field(default_factory=DriverTuning)
     integral: float = 0.0
+    path_integral: float = 0.0
+    slip_factor: np.ndarray = field(default_factory=lambda: np.ones(4))
+    last_force: float | None = None
 
     def __post_init__(self) -> None:
         self._understeer = understeer_gradient(self.vehicle)
@@ -66,6 +100,8 @@ class Driver:
         g = self.vehicle.geometry
         self._length = g.lf + g.lr
         self._radius = [c.radius for c in corners(self.vehicle)]
+        self._friction = self.tuning.friction_use * cornering_friction(self.vehicle)
+        self._peak_slip = peak_slip_ratio(self.vehicle)
 
     def _point(self, s: float, offset: float):
         road = self.road
@@ -74,7 +110,7 @@ class Driver:
         heading = np.interp(s, road.s, road.heading)
         return x - offset * np.sin(heading), y + offset * np.cos(heading), heading
 
-    def steer(self, state: np.ndarray) -> float:
+    def steer(self, state: np.ndarray, dt: float = 0.0) -> float:
         """Road-wheel steer angle [rad] by preview on the target path."""
         s, n, psi, u = (state[STATE[k]] for k in ("s", "n", "psi", "u"))
         x0, y0, heading0 = self._point(s, n)
@@ -85,24 +121,55 @@ class Driver:
         dx, dy = x1 - x0, y1 - y0
         lateral = -np.sin(heading) * dx + np.cos(heading) * dy
         curvature = 2.0 * lateral / (dx * dx + dy * dy)
-        angle = curvature * (self._length + self._understeer * u * u)
+        error = np.interp(s, self.road.s, self.road.target) - n
+        self.path_integral += error * dt
+        angle = (
+            curvature * (self._length + self._understeer * u * u)
+            + self.tuning.path_integral * self.path_integral
+            + self.tuning.yaw_damping * (u * curvature - state[STATE["r"]])
+        )
         return float(np.clip(angle, -self.tuning.max_steer, self.tuning.max_steer))
 
     def force(self, state: np.ndarray, dt: float) -> float:
-        """Longitudinal force demand [N]: feed-forward plus PI on the speed error."""
+        """Longitudinal force demand [N]: feed-forward plus PI on the speed error, grip-limited."""
         s, u = state[STATE["s"]], state[STATE["u"]]
         ahead = s + self.tuning.speed_preview * max(u, 0.0)
         target = np.interp(ahead, self.road.s, self.speed)
         accel = np.interp(ahead, self.road.s, self._accel)
         error = target - u
-        self.integral += error * dt
         aero = self.vehicle.aero
         drag = 0.5 * aero.air_density * aero.reference_area * aero.drag_coefficient * u * abs(u)
         rolling = vehicle_plant(self.vehicle).tyre.rolling_resistance * self.vehicle.mass.total
         grade = np.interp(s, self.road.s, self.road.surface.grade)
         m = self.vehicle.mass.total
         demand = accel + self.tuning.speed_gain * error + self.tuning.speed_integral * self.integral
-        return m * demand + drag + rolling * GRAVITY + m * GRAVITY * grade / np.hypot(1.0, grade)
+        force = m * demand + drag + rolling * GRAVITY + m * GRAVITY * grade / np.hypot(1.0, grade)
+        mu_g = self._friction * GRAVITY
+        curvature = np.interp(s, self.road.s, self.road.surface.curvature)
+        lateral = min(u * u * abs(curvature) / mu_g, 1.0)
+        limit = m * mu_g * np.sqrt(1.0 - lateral * lateral)
+        path_error = abs(np.interp(s, self.road.s, self.road.target) - state[STATE["n"]])
+        ease = np.clip(1.0 - (path_error - self.tuning.ease_error) / self.tuning.ease_span, 0, 1)
+        bounded = float(np.clip(force, -limit, limit * ease))
+        if self.last_force is not None:
+            step = self.tuning.force_rate * m * GRAVITY * dt
+            bounded = float(np.clip(bounded, self.last_force - step, self.last_force + step))
+        self.last_force = bounded
+        if bounded == force:  # anti-windup: integrate only while unsaturated
+            self.integral += error * dt
+        return bounded
+
+    def _guard(self, state: np.ndarray, torque: np.ndarray) -> np.ndarray:
+        """ABS / traction control: per-wheel torque factor with release and re-apply thresholds."""
+        slip = np.abs(state[STATE["kappa_fl"] : STATE["kappa_fl"] + 4]) / self._peak_slip
+        tuning = self.tuning
+        factor = self.slip_factor
+        slip[2:] = max(slip[2], slip[3])  # select-low on the rear axle: no yaw from rear brakes
+        release = slip > tuning.slip_release
+        apply = slip < tuning.slip_apply
+        factor[release] *= tuning.release_factor
+        factor[apply] = np.minimum(factor[apply] + tuning.apply_step, 1.0)
+        return torque * factor
 
     def inputs(self, state: np.ndarray, dt: float) -> np.ndarray:
         """Plant input vector (steer, four drive torques, four brake torques)."""
@@ -110,15 +177,19 @@ class Driver:
         force = self.force(state, dt)
         u = max(state[STATE["u"]], 1.0)
         inp = np.zeros(len(INPUT_NAMES))
-        inp[0] = self.steer(state)
+        inp[0] = self.steer(state, dt)
         if force >= 0.0:
             force = min(force, line.max_power / u)
-            shares = (line.drive_share_front, 1.0 - line.drive_share_front)
+            front = line.drive_share_front
             offset = 1
         else:
             force = -force
-            shares = (line.brake_share_front, 1.0 - line.brake_share_front)
+            g = self.vehicle.geometry
+            front = (g.lr + g.cg_height * force / (self.vehicle.mass.total * GRAVITY)) / (
+                self._length
+            )
             offset = 5
-        for i in range(4):
-            inp[offset + i] = 0.5 * shares[i // 2] * force * self._radius[i]
+        shares = (front, 1.0 - front)
+        torque = np.array([0.5 * shares[i // 2] * force * self._radius[i] for i in range(4)])
+        inp[offset : offset + 4] = self._guard(state, torque)
         return inp

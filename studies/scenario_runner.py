@@ -30,6 +30,8 @@ def summary(frame: pd.DataFrame) -> dict:
     return {
         "duration_s": float(frame["t"].iloc[-1] - frame["t"].iloc[0]),
         "distance_m": float(frame["s"].iloc[-1] - frame["s"].iloc[0]),
+        "min_speed_mps": float(frame["vx"].min()),
+        "max_speed_mps": float(frame["vx"].max()),
         "max_abs_ax_mps2": float(np.abs(frame["ax"]).max()),
         "max_abs_ay_mps2": float(np.abs(frame["ay"]).max()),
         "max_path_error_m": float(np.abs(frame["n"] - frame["target"]).max()),

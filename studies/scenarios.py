@@ -9,6 +9,8 @@
 | chicane-bank-30 | road-angle paper §V | ±0.5 g chicane at 30 km/h, 30 % bank |
 | chicane-incline-20 | road-angle paper §V | the same on a 20 % incline |
 | wheel-lift | this project | 0.8 g turn; the inner wheels cross a kerb and lift off |
+| hockenheim | main paper Table IV; issue 4 | flying lap of the Hockenheim GP circuit, 4.57 km |
+| nordschleife | main paper Table III; issue 4 | flying lap of the Nordschleife, 20.7 km |
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from wheelload.models.plant import vehicle_plant
 from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.studies import laps
 from wheelload.studies.roads import Road, build_road, iso8608_profile, smooth_step
 from wheelload.studies.simulation import Run
 
@@ -191,6 +194,8 @@ SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
     "chicane-bank-30": chicane_bank_30,
     "chicane-incline-20": chicane_incline_20,
     "wheel-lift": wheel_lift,
+    "hockenheim": laps.hockenheim,
+    "nordschleife": laps.nordschleife,
 }
 
 
