@@ -2,26 +2,33 @@ r"""Closed-loop driver: preview (pure-pursuit) steering and a speed controller.
 
 Steering aims at the target point a preview distance :math:`L_p = \max(L_0,
 T_p u)` ahead on the target path; with :math:`e` its lateral offset and
-:math:`\ell` its distance in the frame of the velocity (the course, heading
-plus sideslip :math:`\beta`, so that a sliding car aims where it travels, not
-where it points), the demanded path curvature is :math:`c = 2 e / \ell^2` and
-the road-wheel angle :math:`\delta = c (L + K_{us} u^2) + k_I \int e_n\,dt`
-(the integral of the path error :math:`e_n` takes out the understeer the
-linear-bicycle gradient :math:`K_{us} = (m / L)(l_r / C_f - l_f / C_r)` misses
-near the limit).
+:math:`\ell` its distance in the vehicle frame, the demanded path curvature is
+:math:`c = 2 e / \ell^2` and the road-wheel angle
+
+.. math:: \delta = c (L + K_{us} u^2) + k_r (u c - r) + k_I \int e_n\,dt
+
+with the linear-bicycle understeer gradient :math:`K_{us} = (m / L)(l_r / C_f -
+l_f / C_r)`. The yaw-rate term damps the yaw mode, which pure pursuit alone
+leaves underdamped at 45-60 m/s when braking unloads the rear axle (it let the
+car spin on Hockenheim's kink before the hairpin); the path-error integral is
+off by default. (Aiming along the course, heading plus sideslip, was tried and
+destabilises the loop under braking.)
 
 Speed: :math:`F = m (a_{ref} + k_p (v_{ref} - u) + k_i \int (v_{ref} - u))`
 plus drag, rolling resistance and grade, limited to the friction ellipse
-:math:`|F| \le m \mu g \sqrt{1 - (a_y / \mu g)^2}` with the measured
-:math:`a_y = r u` and :math:`\mu` a share of the tyres' cornering friction
+:math:`|F| \le m \mu g \sqrt{1 - (a_y / \mu g)^2}` with the path's
+:math:`a_y = u^2 \kappa` (the measured :math:`r u` swings in yaw transients and
+then withholds the braking the car needs) and :math:`\mu` a share of the tyres' cornering friction
 (:func:`~wheelload.studies.speed_profile.cornering_friction`); drive is eased
 out as the path error grows past ``ease_error``. Drive torque is
 power-limited and split by ``drive_share_front``. Brake force is shared in
 proportion to the quasi-static axle loads :math:`(l_r + h a_x / g) / L` (what
 electronic brake-force distribution does); a fixed front bias over-brakes the
-rear above :math:`a_x \approx 0.9 g` and locks it. A slip guard (ABS and
-traction control) scales a wheel's torque down linearly as its slip ratio
-passes from ``slip_guard`` to twice that times the tyre's peak slip.
+rear above :math:`a_x \approx 0.9 g` and locks it. ABS and traction
+control: a per-wheel torque factor is multiplied by ``release_factor`` each
+sample the slip ratio exceeds ``slip_release`` times the tyre's peak slip and
+raised by ``apply_step`` while it is below ``slip_apply`` times that (select-low
+on the rear axle); the longitudinal force is rate-limited to ``force_rate``.
 """
 
 from __future__ import annotations
