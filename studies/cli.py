@@ -20,7 +20,6 @@ COMMANDS = (
     "wheelload.studies.commands.simulate",
     "wheelload.studies.commands.mhe",
     "wheelload.studies.commands.codegen",
-    "wheelload.studies.commands.bench_codegen",
 )
 
 

@@ -1,4 +1,4 @@
-"""Wall time of every scenario on the ground-truth plant: ``wheelload bench-scenarios``.
+"""Wall time of every scenario on the ground-truth plant: ``wheelload bench scenarios``.
 
 Prints, per scenario, the simulated time, the plant build (code generation
 and compilation) time, the wall time of the closed loop and the real-time
@@ -8,7 +8,6 @@ factor. Speed is measured here, never asserted in tests.
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Sequence
 
 from wheelload.models.vehicle import example_vehicle_path
@@ -47,9 +46,10 @@ def bench(names: Sequence[str], internal_rate: float, output_rate: float) -> lis
     return rows
 
 
-def register(subparsers) -> None:
+def register_bench(subparsers) -> None:
+    """``wheelload bench scenarios``."""
     parser = subparsers.add_parser(
-        "bench-scenarios", help="print the wall time of each scenario", description=__doc__
+        "scenarios", help="wall time of each plant scenario", description=__doc__
     )
     parser.add_argument("names", nargs="*", metavar="NAME", help="scenarios (default: all)")
     parser.add_argument("--internal-rate", type=float, default=1000.0)
@@ -64,13 +64,3 @@ def handle(args: argparse.Namespace) -> int:
         raise ValueError(f"unknown scenario '{unknown[0]}'; choose from {', '.join(SCENARIOS)}")
     bench(names, args.internal_rate, args.rate)
     return 0
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="wheelload-bench-scenarios")
-    register(parser.add_subparsers(dest="command", required=True))
-    return handle(parser.parse_args(["bench-scenarios", *(argv or sys.argv[1:])]))
-
-
-if __name__ == "__main__":
-    sys.exit(main())

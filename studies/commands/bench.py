@@ -1,8 +1,13 @@
-"""``wheelload bench kf``: throughput of the two-stage KF, printed, never asserted."""
+"""``wheelload bench WHAT``: timings, printed, never asserted.
+
+``kf`` is the two-stage KF's throughput; the other benchmarks are registered
+by the modules named in :data:`BENCHMARKS` (``register_bench(subparsers)``).
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import time
 
 import numpy as np
@@ -13,10 +18,17 @@ from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.numpy_kf import joint_filter
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
+BENCHMARKS = (
+    "wheelload.studies.commands.bench_codegen",
+    "wheelload.studies.commands.mhe",
+    "wheelload.studies.scenario_bench",
+)
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("bench", help="print timings of the estimators")
-    parser.add_argument("what", choices=["kf"], help="kf: the two-stage Kalman filter")
+    bench = subparsers.add_parser("bench", help="print timings (kf, codegen, mhe, scenarios)")
+    benchmarks = bench.add_subparsers(dest="what", required=True, metavar="WHAT")
+    parser = benchmarks.add_parser("kf", help="two-stage KF: compiled run, step, numpy loop")
     parser.add_argument(
         "--samples", type=int, default=1_000_000, help="samples for the compiled run (default 1e6)"
     )
@@ -28,6 +40,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     parser.set_defaults(handler=run)
+    for module in BENCHMARKS:
+        importlib.import_module(module).register_bench(benchmarks)
 
 
 def _tile(signals, n):
@@ -85,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"two-stage KF, {vehicle.name}, 1 kHz synthetic slalom log")
     print(f"  build or load the compiled C loop:      {compile_time:8.2f} s")
     print(
-        f"  run(), compiled mapaccum, {args.samples:>9} samples: {run_time:8.3f} s "
+        f"  run(), compiled C loop,  {args.samples:>9} samples: {run_time:8.3f} s "
         f"= {per_run:7.3f} us/sample"
     )
     print(f"  plain numpy per-sample loop (joint update): {per_numpy:7.2f} us/sample")

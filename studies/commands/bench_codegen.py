@@ -1,4 +1,4 @@
-"""``wheelload bench-codegen``: time the generated C step beside Python and filterpy.
+"""``wheelload bench codegen``: time the generated C step beside Python and filterpy.
 
 Prints, from one run on this machine, the median time per step of the
 generated C step (double and float, runtime parameters), the Python
@@ -34,9 +34,10 @@ TARGET_NS = 150.0
 SCALAR_OPS_PER_CYCLE = 4
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def register_bench(subparsers: argparse._SubParsersAction) -> None:
+    """``wheelload bench codegen``."""
     parser = subparsers.add_parser(
-        "bench-codegen", help="time the generated C step against Python and filterpy"
+        "codegen", help="generated C step (double, float) against Python and filterpy"
     )
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")

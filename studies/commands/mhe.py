@@ -1,8 +1,8 @@
-"""``wheelload study mhe-vs-kf`` and ``wheelload bench-mhe``.
+"""``wheelload study mhe-vs-kf`` and ``wheelload bench mhe``.
 
 ``study mhe-vs-kf`` scores the KF, projection KF and MHE family on logs
 (``--logs``) or on plant scenarios it simulates first (``--scenarios``).
-``bench-mhe`` prints the MHE's time per sample beside the KF's, in the same
+``bench mhe`` prints the MHE's time per sample beside the KF's, in the same
 run, from Python and (when a C compiler is found) from the generated C.
 The embedded MHE's C is written by ``wheelload codegen --estimator mhe``.
 """
@@ -23,7 +23,7 @@ from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf, step_times
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
-STUDY_SCENARIOS = ("iso-dlc", "nurburgring", "hockenheim", "wheel-lift")
+STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -42,7 +42,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     study.set_defaults(handler=run_study)
 
-    bench = subparsers.add_parser("bench-mhe", help="print MHE and KF time per sample")
+
+def register_bench(subparsers: argparse._SubParsersAction) -> None:
+    """``wheelload bench mhe``."""
+    bench = subparsers.add_parser("mhe", help="MHE and KF time per sample, Python and C")
     bench.add_argument("--samples", type=int, default=3000, help="samples per run (default 3000)")
     bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")

@@ -1,6 +1,6 @@
 """``wheelload simulate NAME --out LOG``: run a scenario on the ground-truth plant.
 
-Also registers ``wheelload bench-scenarios`` (wall time of every scenario).
+The wall time of every scenario is printed by ``wheelload bench scenarios``.
 """
 
 from __future__ import annotations
@@ -48,9 +48,6 @@ def register(subparsers) -> None:
         help="ISO 8608 road class (default: smooth road)",
     )
     parser.set_defaults(handler=handle)
-    from wheelload.studies import scenario_bench
-
-    scenario_bench.register(subparsers)
 
 
 def handle(args: argparse.Namespace) -> int:
