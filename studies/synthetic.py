@@ -163,15 +163,3 @@ def synthetic_log(
         velocities_derived=True,
         source="synthetic",
     )
-
-
-def example_drive(vehicle: Vehicle) -> Signals:
-    """The bundled example log: 20 s slalom at 100 Hz, MEMS-grade noise, springs 8 % off."""
-    return synthetic_log(
-        vehicle,
-        slalom(duration=20.0),
-        rate=100.0,
-        noise=SensorNoise(acceleration=0.05, travel=0.0003),
-        spring_error=0.08,
-        seed=1,
-    )
