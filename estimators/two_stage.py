@@ -211,8 +211,20 @@ class TwoStageKF:
         """One prediction and both updates; returns the new state and the estimate."""
         u = sample.vector()
         valid = np.isfinite(u).astype(float)
-        out = self._step(state.x, state.P, np.nan_to_num(u), valid, dt, self.p, self.tuning)
-        x, P, std, residual, used, _ = (np.asarray(o) for o in out)
+        flat = np.concatenate(
+            [
+                state.x,
+                np.ravel(state.P, order="F"),
+                np.nan_to_num(u),
+                valid,
+                [dt],
+                self.p,
+                self.tuning,
+            ]
+        )
+        x, P, std, residual, used, _ = np.split(
+            np.asarray(self._flat_step(flat)).ravel(), self._flat_splits
+        )
         estimate = Estimate(
             t=np.array([np.nan]),
             loads=x.reshape(1, 4),
@@ -220,7 +232,22 @@ class TwoStageKF:
             residual=residual.reshape(1, 3),
             flags=flags_from_used(used.reshape(7, 1)),
         )
-        return FilterState(x.ravel(), P), estimate
+        return FilterState(x, P.reshape(4, 4, order="F")), estimate
+
+    @functools.cached_property
+    def _flat_step(self) -> ca.Function:
+        """The step with inputs and outputs stacked into one vector each (one cheap call)."""
+        inputs = self._step.sx_in()
+        outputs = self._step.call(inputs)
+        return ca.Function(
+            f"{self._step.name()}_flat",
+            [ca.vertcat(*[ca.vec(i) for i in inputs])],
+            [ca.vertcat(*[ca.vec(o) for o in outputs])],
+        )
+
+    @functools.cached_property
+    def _flat_splits(self) -> np.ndarray:
+        return np.cumsum([self._step.nnz_out(i) for i in range(self._step.n_out())])[:-1]
 
     def run(self, signals: Signals, state: FilterState | None = None) -> Estimate:
         """Filter a whole log in compiled code; same numbers as repeated :meth:`step`."""
