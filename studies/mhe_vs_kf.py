@@ -111,34 +111,40 @@ def mhe_vs_kf(
 
 
 def plot_accuracy_against_time(table: pd.DataFrame, path: str | Path) -> Path:
-    """Pooled RMSE against median time per sample, one point per estimator."""
+    """Pooled RMSE and minimum estimated load against median time per sample."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     path = Path(path)
-    fig, ax = plt.subplots(figsize=(8, 5.5))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5), sharex=True)
     groups = {
-        "filters": ~table.index.str.startswith("MHE"),
-        "MHE soft": table.index.str.contains(r"\(soft\)"),
-        "MHE soft, bounded": table.index.str.contains("soft, bounded"),
-        "MHE hard": table.index.str.contains(r"\(hard\)"),
-        "MHE hard, bounded": table.index.str.contains("hard, bounded"),
+        "filters": (~table.index.str.startswith("MHE"), "s", (4, 6)),
+        "MHE soft": (table.index.str.contains(r"\(soft\)"), "o-", (3, 5)),
+        "MHE soft, bounded": (table.index.str.contains("soft, bounded"), "o--", (3, -11)),
+        "MHE hard": (table.index.str.contains(r"\(hard\)"), "^-", (3, 5)),
+        "MHE hard, bounded": (table.index.str.contains("hard, bounded"), "^--", (3, -11)),
     }
-    for label, rows in groups.items():
-        part = table[rows]
-        ax.plot(part["median us"], part["RMSE"], "o-" if label != "filters" else "s", label=label)
-        for name, row in part.iterrows():
-            short = name.split(" (")[0].replace("MHE ", "")
-            ax.annotate(short, (row["median us"], row["RMSE"]), fontsize=7,
-                        xytext=(3, 3), textcoords="offset points")  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_xlabel("median time per sample [us] (Python)")
-    ax.set_ylabel("pooled RMSE [N]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    for column, ax in zip(("RMSE", "min load"), axes):
+        for label, (rows, style, offset) in groups.items():
+            part = table[rows]
+            ax.plot(part["median us"], part[column], style, label=label, alpha=0.85)
+            for i, (name, row) in enumerate(part.iterrows()):
+                short = name.split(" (")[0].replace("MHE ", "")
+                if label == "filters":
+                    short = name
+                    offset = (4, 6 - 12 * i)
+                ax.annotate(short, (row["median us"], row[column]), fontsize=7,
+                            xytext=offset, textcoords="offset points")  # fmt: skip
+        ax.set_xscale("log")
+        ax.set_xlabel("median time per sample [us], Python")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("pooled RMSE [N]")
+    axes[1].set_ylabel("minimum estimated load [N]")
+    axes[1].axhline(0.0, color="black", lw=0.8)
+    axes[0].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=150)
+    fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
