@@ -54,6 +54,17 @@ class Signals:
     velocities_derived: bool = False
     source: str = "<memory>"
 
+    def __post_init__(self) -> None:
+        n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
+        shapes = {"t": (n,), "vx": (n,), "acc": (n, 3), "d": (n, 4), "v": (n, 4),
+                  "rates": (n, 3), "reference": (n, 4)}  # fmt: skip
+        for name, shape in shapes.items():
+            value = getattr(self, name)
+            if value is not None and np.shape(value) != shape:
+                raise LogError(
+                    f"{self.source}: '{name}' has shape {np.shape(value)}, expected {shape}"
+                )
+
     def __len__(self) -> int:
         return len(self.t)
 

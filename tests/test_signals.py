@@ -113,3 +113,9 @@ def test_user_data_is_not_altered(tmp_path, signals):
     assert np.isnan(back.d[5, 0])
     np.testing.assert_allclose(back.d[6:, 0], data["d_fl"].to_numpy()[6:], rtol=1e-12)
     assert pd.isna(back.v[5, 0])
+
+
+def test_signals_built_in_memory_are_shape_checked(signals):
+    with pytest.raises(LogError, match=r"'d' has shape \(300, 3\), expected \(300, 4\)"):
+        type(signals)(t=signals.t, vx=signals.vx, acc=signals.acc, d=signals.d[:, :3],
+                      v=signals.v)  # fmt: skip
