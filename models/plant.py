@@ -318,18 +318,29 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
     return x, inp, xdot, y
 
 
-def plant_functions(vehicle: Vehicle, road: RoadSurface, name: str = "plant"):
-    """``(name_ode(x, u) -> (xdot, y), name_rk4(x, u, dt) -> x_next)`` as SX Functions."""
-    x, inp, xdot, y = plant_dynamics(vehicle, road)
-    ode = ca.Function(f"{name}_ode", [x, inp], [xdot, y], ["x", "u"], ["xdot", "y"])
+def rk4_function(ode: ca.Function, name: str) -> ca.Function:
+    r"""``name(x, u, dt) -> x_next``: one classical RK4 step of ``ode(x, u) -> (xdot, ...)``.
+
+    .. math:: x^+ = x + \tfrac{h}{6}(k_1 + 2 k_2 + 2 k_3 + k_4)
+
+    with the input held over the step.
+    """
+    x = ca.SX.sym("x", ode.size1_in(0))
+    inp = ca.SX.sym("u", ode.size1_in(1))
     dt = ca.SX.sym("dt")
     k1 = ode(x, inp)[0]
     k2 = ode(x + 0.5 * dt * k1, inp)[0]
     k3 = ode(x + 0.5 * dt * k2, inp)[0]
     k4 = ode(x + dt * k3, inp)[0]
     x_next = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    rk4 = ca.Function(f"{name}_rk4", [x, inp, dt], [x_next], ["x", "u", "dt"], ["x_next"])
-    return ode, rk4
+    return ca.Function(name, [x, inp, dt], [x_next], ["x", "u", "dt"], ["x_next"])
+
+
+def plant_functions(vehicle: Vehicle, road: RoadSurface, name: str = "plant"):
+    """``(name_ode(x, u) -> (xdot, y), name_rk4(x, u, dt) -> x_next)`` as SX Functions."""
+    x, inp, xdot, y = plant_dynamics(vehicle, road)
+    ode = ca.Function(f"{name}_ode", [x, inp], [xdot, y], ["x", "u"], ["xdot", "y"])
+    return ode, rk4_function(ode, f"{name}_rk4")
 
 
 def _jit_options() -> dict:
@@ -343,6 +354,28 @@ def _jit_options() -> dict:
     }
 
 
+def chunk_from_ode(
+    ode: ca.Function, internal_rate: float, steps: int, name: str, jit: bool = True
+) -> ca.Function:
+    """``name(x0, u) -> (x, y)``: ``steps`` RK4 steps of ``ode`` at ``internal_rate``, input held.
+
+    ``y`` is the second output of ``ode`` at the final state. Compiled with
+    the system C compiler when ``jit`` is true.
+    """
+    if internal_rate <= 0 or steps < 1:
+        raise PlantError(f"need internal_rate > 0 and steps >= 1, got {internal_rate}, {steps}")
+    rk4 = rk4_function(ode, f"{name}_rk4")
+    dt = 1.0 / internal_rate
+    x0 = ca.MX.sym("x0", ode.size1_in(0))
+    inp = ca.MX.sym("u", ode.size1_in(1))
+    accum = rk4.mapaccum(f"{name}_steps", steps)
+    states = accum(x0, ca.repmat(inp, 1, steps), ca.repmat(dt, 1, steps))
+    x_end = states[:, -1]
+    y_end = ode(x_end, inp)[1]
+    options = _jit_options() if jit else {}
+    return ca.Function(name, [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"], options)
+
+
 def chunk_function(
     vehicle: Vehicle, road: RoadSurface, internal_rate: float, steps: int, jit: bool = True
 ) -> ca.Function:
@@ -351,18 +384,8 @@ def chunk_function(
     ``y`` holds :data:`OUTPUT_NAMES` at the final state. Compiled with the
     system C compiler when ``jit`` is true.
     """
-    if internal_rate <= 0 or steps < 1:
-        raise PlantError(f"need internal_rate > 0 and steps >= 1, got {internal_rate}, {steps}")
-    ode, rk4 = plant_functions(vehicle, road)
-    dt = 1.0 / internal_rate
-    x0 = ca.MX.sym("x0", len(STATE_NAMES))
-    inp = ca.MX.sym("u", len(INPUT_NAMES))
-    accum = rk4.mapaccum("plant_steps", steps)
-    states = accum(x0, ca.repmat(inp, 1, steps), ca.repmat(dt, 1, steps))
-    x_end = states[:, -1]
-    y_end = ode(x_end, inp)[1]
-    options = _jit_options() if jit else {}
-    return ca.Function("plant_chunk", [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"], options)
+    ode, _ = plant_functions(vehicle, road)
+    return chunk_from_ode(ode, internal_rate, steps, "plant_chunk", jit)
 
 
 def initial_state(vehicle: Vehicle, road: RoadSurface, s: float, speed: float, n: float = 0.0):

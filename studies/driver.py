@@ -5,14 +5,17 @@ T_p u)` ahead on the target path; with :math:`e` its lateral offset and
 :math:`\ell` its distance in the vehicle frame, the demanded path curvature is
 :math:`c = 2 e / \ell^2` and the road-wheel angle
 
-.. math:: \delta = c (L + K_{us} u^2) + k_r (u c - r) + k_I \int e_n\,dt
+.. math:: \delta = c L + K_{us} (u^2 c + g \sin\beta) + k_r (u c - r) + k_I \int e_n\,dt
 
 with the linear-bicycle understeer gradient :math:`K_{us} = (m / L)(l_r / C_f -
-l_f / C_r)`. The yaw-rate term damps the yaw mode, which pure pursuit alone
-leaves underdamped at 45-60 m/s when braking unloads the rear axle (it let the
-car spin on Hockenheim's kink before the hairpin); the path-error integral is
-off by default. (Aiming along the course, heading plus sideslip, was tried and
-destabilises the loop under braking.)
+l_f / C_r)` applied to the lateral tyre force per unit mass, which on a road
+of bank angle :math:`\beta` also carries the downhill pull of gravity (the
+steady steer of straight running across a slope). The yaw-rate term damps
+the yaw mode, which pure pursuit alone leaves underdamped at 45-60 m/s when
+braking unloads the rear axle (it let the car spin on Hockenheim's kink
+before the hairpin); the path-error integral is off by default. (Aiming
+along the course, heading plus sideslip, was tried and destabilises the loop
+under braking.)
 
 Speed: :math:`F = m (a_{ref} + k_p (v_{ref} - u) + k_i \int (v_{ref} - u))`
 plus drag, rolling resistance and grade, limited to the friction ellipse
@@ -24,11 +27,10 @@ out as the path error grows past ``ease_error``. Drive torque is
 power-limited and split by ``drive_share_front``. Brake force is shared in
 proportion to the quasi-static axle loads :math:`(l_r + h a_x / g) / L` (what
 electronic brake-force distribution does); a fixed front bias over-brakes the
-rear above :math:`a_x \approx 0.9 g` and locks it. ABS and traction
-control: a per-wheel torque factor is multiplied by ``release_factor`` each
-sample the slip ratio exceeds ``slip_release`` times the tyre's peak slip and
-raised by ``apply_step`` while it is below ``slip_apply`` times that (select-low
-on the rear axle); the longitudinal force is rate-limited to ``force_rate``.
+rear above :math:`a_x \approx 0.9 g` and locks it. The longitudinal
+force is rate-limited to ``force_rate``. The torques are requests: ABS and
+traction control act on them inside the plant chunk at the internal rate
+(:mod:`wheelload.models.slip_control`).
 """
 
 from __future__ import annotations
@@ -38,7 +40,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wheelload.models.plant import INPUT_NAMES, STATE, corners, vehicle_plant
-from wheelload.models.tyre import peak_input
 from wheelload.models.vehicle import GRAVITY, Vehicle
 from wheelload.studies.roads import Road
 from wheelload.studies.speed_profile import cornering_friction
@@ -57,10 +58,6 @@ class DriverTuning:
     friction_use: float = 0.9  # -, share of the cornering friction the speed controller uses
     ease_error: float = 0.5  # m, path error from which drive is eased out ...
     ease_span: float = 1.0  # m, ... reaching zero drive this much further
-    slip_release: float = 1.0  # -, slip (share of the peak slip) above which ABS/TCS releases
-    slip_apply: float = 0.6  # -, slip (share of the peak slip) below which it re-applies
-    release_factor: float = 0.5  # -, torque factor multiplier per sample on release
-    apply_step: float = 0.1  # -, torque factor increase per sample on re-apply
     force_rate: float = 4.0  # g/s, rate limit of the longitudinal force (pedal speed)
 
 
@@ -81,13 +78,6 @@ def understeer_gradient(vehicle: Vehicle) -> float:
     return vehicle.mass.total / length * (g.lr / stiffness[0] - g.lf / stiffness[1])
 
 
-def peak_slip_ratio(vehicle: Vehicle) -> float:
-    r"""Slip ratio of the longitudinal force peak at nominal load, :math:`X_p / B_x`."""
-    tyre = vehicle_plant(vehicle).tyre
-    b_x = tyre.slip_stiffness_x / (tyre.shape_x * tyre.friction_x)
-    return peak_input(tyre.shape_x, tyre.curvature_x) / b_x
-
-
 @dataclass(kw_only=True)
 class Driver:
     """Driver of one run: call :meth:`inputs` once per output sample with the plant state."""
@@ -98,7 +88,6 @@ class Driver:
     tuning: DriverTuning = field(default_factory=DriverTuning)
     integral: float = 0.0
     path_integral: float = 0.0
-    slip_factor: np.ndarray = field(default_factory=lambda: np.ones(4))
     last_force: float | None = None
 
     def __post_init__(self) -> None:
@@ -108,7 +97,6 @@ class Driver:
         self._length = g.lf + g.lr
         self._radius = [c.radius for c in corners(self.vehicle)]
         self._friction = self.tuning.friction_use * cornering_friction(self.vehicle)
-        self._peak_slip = peak_slip_ratio(self.vehicle)
 
     def _point(self, s: float, offset: float):
         road = self.road
@@ -130,8 +118,11 @@ class Driver:
         curvature = 2.0 * lateral / (dx * dx + dy * dy)
         error = np.interp(s, self.road.s, self.road.target) - n
         self.path_integral += error * dt
+        bank = np.interp(s, self.road.s, self.road.surface.bank)
+        downhill = GRAVITY * bank / np.hypot(1.0, bank)  # lateral tyre force per mass on a bank
         angle = (
-            curvature * (self._length + self._understeer * u * u)
+            curvature * self._length
+            + self._understeer * (u * u * curvature + downhill)
             + self.tuning.path_integral * self.path_integral
             + self.tuning.yaw_damping * (u * curvature - state[STATE["r"]])
         )
@@ -166,20 +157,8 @@ class Driver:
             self.integral += error * dt
         return bounded
 
-    def _guard(self, state: np.ndarray, torque: np.ndarray) -> np.ndarray:
-        """ABS / traction control: per-wheel torque factor with release and re-apply thresholds."""
-        slip = np.abs(state[STATE["kappa_fl"] : STATE["kappa_fl"] + 4]) / self._peak_slip
-        tuning = self.tuning
-        factor = self.slip_factor
-        slip[2:] = max(slip[2], slip[3])  # select-low on the rear axle: no yaw from rear brakes
-        release = slip > tuning.slip_release
-        apply = slip < tuning.slip_apply
-        factor[release] *= tuning.release_factor
-        factor[apply] = np.minimum(factor[apply] + tuning.apply_step, 1.0)
-        return torque * factor
-
     def inputs(self, state: np.ndarray, dt: float) -> np.ndarray:
-        """Plant input vector (steer, four drive torques, four brake torques)."""
+        """Input request (steer, four drive and four brake torques), before slip control."""
         line = vehicle_plant(self.vehicle).driveline
         force = self.force(state, dt)
         u = max(state[STATE["u"]], 1.0)
@@ -198,5 +177,5 @@ class Driver:
             offset = 5
         shares = (front, 1.0 - front)
         torque = np.array([0.5 * shares[i // 2] * force * self._radius[i] for i in range(4)])
-        inp[offset : offset + 4] = self._guard(state, torque)
+        inp[offset : offset + 4] = torque
         return inp

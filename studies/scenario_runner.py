@@ -70,6 +70,7 @@ def run_scenario(
         "noise_scale": noise,
         "options": dataclasses.asdict(options),
         "driver": dataclasses.asdict(run.tuning),
+        "slip_control": dataclasses.asdict(run.slip_control),
         "wheelload_version": version("wheelload"),
         "reference_loads": "tyre normal force along the road normal [N], clean",
         "wall_time_s": truth.wall_time,

@@ -152,16 +152,9 @@ def _chicane(vehicle: Vehicle, options: Options, bank: float, grade: float) -> R
         half_width=6.0,
         roughness=_rough(s, vehicle, options),
     )
-    # The plant starts from a level-ground equilibrium: 20 m (2.4 s) on the
-    # bank or grade let that start transient decay before recording.
-    return Run(
-        road=road,
-        speed=_constant(road, speed),
-        start=0.0,
-        stop=180.0,
-        max_time=30.0,
-        record_from=20.0,
-    )
+    # The plant starts in steady motion on the bank or grade
+    # (models/plant_equilibrium.py): no lead-in to drop.
+    return Run(road=road, speed=_constant(road, speed), start=0.0, stop=180.0, max_time=30.0)
 
 
 def chicane_bank_30(vehicle: Vehicle, options: Options) -> Run:

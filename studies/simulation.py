@@ -1,8 +1,10 @@
 """Closed-loop simulation: the compiled plant in chunks, the driver at the output rate.
 
-Each output sample advances the plant by ``internal_rate / output_rate`` RK4
-steps with the driver's inputs held (a zero-order hold), then records the
-true signals at the end of the chunk.
+Each output sample advances the plant and its wheel-slip control
+(:mod:`wheelload.models.slip_control`) by ``internal_rate / output_rate`` RK4
+steps with the driver's requests held (a zero-order hold), then records the
+true signals at the end of the chunk. ABS and traction control thus act at
+the internal rate; path and speed control at the output rate.
 """
 
 from __future__ import annotations
@@ -13,13 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from wheelload.models.plant import (
-    OUTPUT,
-    STATE,
-    STATE_NAMES,
-    chunk_function,
-    initial_state,
-)
+from wheelload.models.plant import INPUT_NAMES, OUTPUT, OUTPUT_NAMES, STATE, STATE_NAMES
+from wheelload.models.plant_equilibrium import initial_state
+from wheelload.models.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
 from wheelload.models.vehicle import WHEELS, Vehicle
 from wheelload.studies.driver import Driver, DriverTuning
 from wheelload.studies.roads import Road
@@ -40,6 +38,7 @@ class Run:
     max_time: float  # s
     record_from: float | None = None  # m, drop samples before this arc length
     tuning: DriverTuning = DriverTuning()
+    slip_control: SlipControl = SlipControl()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -65,29 +64,39 @@ def simulate(
             f"internal rate {internal_rate} Hz must be a multiple of output rate {output_rate} Hz"
         )
     tic = time.perf_counter()
-    chunk = chunk_function(vehicle, run.road.surface, internal_rate, int(round(steps)))
+    chunk = controlled_chunk_function(
+        vehicle, run.road.surface, run.slip_control, internal_rate, int(round(steps))
+    )
     build_time = time.perf_counter() - tic
     speed0 = float(np.interp(run.start, run.road.s, run.speed))
     target0 = float(np.interp(run.start, run.road.s, run.road.target))
-    x = initial_state(vehicle, run.road.surface, run.start, speed0, target0)
-    driver = Driver(vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning)
     dt = 1.0 / output_rate
+    # Start in steady motion under the driver's first request; the request
+    # depends on the start (heading, rates), so solve twice with fresh drivers.
+    x = initial_state(vehicle, run.road.surface, run.start, speed0, target0, solve=False)
+    for _ in range(2):
+        probe = Driver(vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning)
+        request = probe.inputs(x, dt)
+        x = initial_state(vehicle, run.road.surface, run.start, speed0, target0, request=request)
+    driver = Driver(vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning)
+    z = np.concatenate([x, np.ones(len(FACTOR_NAMES))])
     count = int(np.ceil(run.max_time * output_rate))
-    states = np.empty((count, len(STATE_NAMES)))
-    outputs = np.empty((count, len(OUTPUT)))
-    inputs = np.empty((count, 9))
+    n_x, n_y = len(STATE_NAMES), len(OUTPUT_NAMES)
+    states = np.empty((count, n_x))
+    outputs = np.empty((count, n_y))
+    inputs = np.empty((count, len(INPUT_NAMES)))
     s_limit = run.road.s[-1] - 10.0
     recorded = 0
     tic = time.perf_counter()
     for k in range(count):
-        inp = driver.inputs(x, dt)
-        x_dm, y_dm = chunk(x, inp)
-        x = x_dm.full().ravel()
-        states[k], outputs[k], inputs[k] = x, y_dm.full().ravel(), inp
+        request = driver.inputs(z[:n_x], dt)
+        z_dm, y_dm = chunk(z, request)
+        z, y = z_dm.full().ravel(), y_dm.full().ravel()
+        states[k], outputs[k], inputs[k] = z[:n_x], y[:n_y], y[n_y:]
         recorded = k + 1
-        if not np.all(np.isfinite(x)):
+        if not np.all(np.isfinite(z)):
             raise SimulationError(f"plant state not finite at t = {(k + 1) * dt:.3f} s")
-        if x[STATE["s"]] >= min(run.stop, s_limit):
+        if z[STATE["s"]] >= min(run.stop, s_limit):
             break
     wall = time.perf_counter() - tic
     frame = truth_frame(states[:recorded], outputs[:recorded], inputs[:recorded], dt, run.road)
@@ -100,7 +109,10 @@ def simulate(
 def truth_frame(
     states: np.ndarray, outputs: np.ndarray, inputs: np.ndarray, dt: float, road: Road
 ) -> pd.DataFrame:
-    """Log columns (clean) plus path columns ``s n psi target steer`` and CG accelerations."""
+    """Log columns (clean) plus path columns ``s n psi target steer`` and CG accelerations.
+
+    ``inputs`` are the inputs applied to the plant (after slip control).
+    """
     frame = {"t": dt * np.arange(1, len(states) + 1), "vx": states[:, STATE["u"]]}
     for axis in ("ax", "ay", "az"):
         frame[axis] = outputs[:, OUTPUT[axis]]

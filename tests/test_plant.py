@@ -16,9 +16,9 @@ from wheelload.models.plant import (
     chunk_function,
     corners,
     damper_map_force,
-    initial_state,
     stop_force,
 )
+from wheelload.models.plant_equilibrium import initial_state
 from wheelload.models.vehicle import example_vehicle_path
 from wheelload.studies.roads import build_road
 from wheelload.studies.scenarios import Options, scenario_run
