@@ -142,7 +142,8 @@ class MheSettings:
 
     def label(self) -> str:
         bounds = ", bounded" if self.bounded else ""
-        return f"MHE N={self.horizon} ({self.constraint.value}{bounds})"
+        arrival = ", steady arrival" if self.arrival is Arrival.STEADY_STATE else ""
+        return f"MHE N={self.horizon} ({self.constraint.value}{bounds}{arrival})"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

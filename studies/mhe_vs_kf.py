@@ -2,9 +2,10 @@
 
 Estimators: the two-stage KF, the projection KF with :math:`W = P^{-1}` and
 :math:`W = I`, and the MHE with soft and hard equilibrium, with and without
-the bounds :math:`0 \\le F_z`, for each window length. Errors are pooled over
-all wheels, samples and logs (Siegloff & Choi eq. 31-34, via
-:func:`wheelload.studies.metrics.pooled_metrics`).
+the bounds :math:`0 \\le F_z`, for each window length, all with the Kalman
+arrival cost; and the soft, unbounded MHE with the steady-state arrival cost.
+Errors are pooled over all wheels, samples and logs (Siegloff & Choi eq.
+31-34, via :func:`wheelload.studies.metrics.pooled_metrics`).
 
 Time per sample: the MHE's own wall time of each QP update and solve; for
 the filters, the wall time of the per-sample :meth:`step` call on the first
@@ -26,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import Sample, Signals, TwoStageKF
-from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.mhe import Arrival, Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.estimators.projection import ProjectionKF, Weighting
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import Vehicle
@@ -53,6 +54,11 @@ def estimators(vehicle: Vehicle, horizons: tuple[int, ...]) -> list:
             for horizon in horizons:
                 settings = MheSettings(horizon=horizon, constraint=constraint, bounded=bounded)
                 family.append(MovingHorizonEstimator(vehicle, settings))
+    # With the exact Kalman arrival cost an unbounded window adds nothing to the
+    # filter; with the steady-state arrival the window length matters.
+    for horizon in horizons:
+        settings = MheSettings(horizon=horizon, arrival=Arrival.STEADY_STATE)
+        family.append(MovingHorizonEstimator(vehicle, settings))
     return family
 
 
@@ -123,6 +129,7 @@ def plot_accuracy_against_time(table: pd.DataFrame, path: str | Path) -> Path:
         "filters": (~table.index.str.startswith("MHE"), "s", (4, 6)),
         "MHE soft": (table.index.str.contains(r"\(soft\)"), "o-", (3, 5)),
         "MHE soft, bounded": (table.index.str.contains("soft, bounded"), "o--", (3, -11)),
+        "MHE soft, steady arrival": (table.index.str.contains("steady arrival"), "D:", (3, 5)),
         "MHE hard": (table.index.str.contains(r"\(hard\)"), "^-", (3, 5)),
         "MHE hard, bounded": (table.index.str.contains("hard, bounded"), "^--", (3, -11)),
     }

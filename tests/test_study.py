@@ -24,7 +24,10 @@ def test_study_table_and_figure(tmp_path, capsys, vehicle):
     # Soft MHE without bounds and with the Kalman arrival cost is the KF (solver tolerance
     # 1e-3 N on loads of ~4 kN: RMSE equal to 0.1 N); bounded rows never go below 0 N.
     soft = table.loc[[name for name in table.index if name.endswith("(soft)")], "RMSE"]
+    assert len(soft) == 2
     assert np.allclose(soft, direct["RMSE"], atol=0.1)
     bounded = table.loc[[name for name in table.index if "bounded" in name], "min load"]
     assert (bounded >= 0.0).all()
-    assert len(table) == 3 + 4 * 2  # three filters, four MHE variants at two horizons
+    # three filters; four MHE variants with the Kalman arrival and one with the steady
+    # arrival, at two horizons
+    assert len(table) == 3 + 5 * 2
