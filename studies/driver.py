@@ -1,7 +1,13 @@
 r"""Closed-loop driver: preview (pure-pursuit) steering and a speed controller.
 
 Steering aims at the target point a preview distance :math:`L_p = \max(L_0,
-T_p u)` ahead on the target path; with :math:`e` its lateral offset and
+T_p u)` ahead on the target path, located on the centre line that the plant
+drives on, :math:`\psi' = \kappa(s)` integrated from the road's curvature
+(:func:`~wheelload.studies.roads.integrate_centre_line`). The road's own
+``x, y, heading`` are the source polyline of a track, straight between
+vertices 5 m apart: its heading steps at every vertex (by up to 8 deg in a
+hairpin), and steering on it jerked the wheel at :math:`u / 5` m (2.7 Hz at
+13 m/s) into a limit cycle near the grip limit; with :math:`e` its lateral offset and
 :math:`\ell` its distance in the vehicle frame, the demanded path curvature is
 :math:`c = 2 e / \ell^2` and the road-wheel angle
 
@@ -41,7 +47,7 @@ import numpy as np
 
 from wheelload.models.plant import INPUT_NAMES, STATE, corners, vehicle_plant
 from wheelload.models.vehicle import GRAVITY, Vehicle
-from wheelload.studies.roads import Road
+from wheelload.studies.roads import Road, integrate_centre_line
 from wheelload.studies.speed_profile import cornering_friction
 
 
@@ -97,12 +103,12 @@ class Driver:
         self._length = g.lf + g.lr
         self._radius = [c.radius for c in corners(self.vehicle)]
         self._friction = self.tuning.friction_use * cornering_friction(self.vehicle)
+        # The plant's own centre line: the integral of the curvature it drives on.
+        self._line = integrate_centre_line(self.road.s, self.road.surface.curvature)
 
     def _point(self, s: float, offset: float):
-        road = self.road
-        x = np.interp(s, road.s, road.x)
-        y = np.interp(s, road.s, road.y)
-        heading = np.interp(s, road.s, road.heading)
+        grid = self.road.s
+        x, y, heading = (np.interp(s, grid, column) for column in self._line)
         return x - offset * np.sin(heading), y + offset * np.cos(heading), heading
 
     def steer(self, state: np.ndarray, dt: float = 0.0) -> float:
