@@ -19,7 +19,9 @@ of bank angle :math:`\beta` also carries the downhill pull of gravity (the
 steady steer of straight running across a slope). The yaw-rate term damps
 the yaw mode, which pure pursuit alone leaves underdamped at 45-60 m/s when
 braking unloads the rear axle (it let the car spin on Hockenheim's kink
-before the hairpin); the path-error integral is off by default. (Aiming
+before the hairpin); the path-error integral is off by default. The angle is rate-limited to
+``steer_rate``, a quick human or robot driver (the fastest steering on the
+Hockenheim lap is 17 deg/s at the road wheel, under half the limit). (Aiming
 along the course, heading plus sideslip, was tried and destabilises the loop
 under braking.)
 
@@ -59,6 +61,7 @@ class DriverTuning:
     speed_integral: float = 0.3  # 1/s^2
     speed_preview: float = 0.3  # s, the speed target is read this far ahead
     max_steer: float = 0.6  # rad, road-wheel angle
+    steer_rate: float = 0.7  # rad/s, road wheel: 600 deg/s at the hand wheel over a 15:1 ratio
     path_integral: float = 0.0  # rad/(m s), k_I on the path error
     yaw_damping: float = 0.1  # s, k_r on the yaw-rate error u c - r
     friction_use: float = 0.9  # -, share of the cornering friction the speed controller uses
@@ -95,6 +98,7 @@ class Driver:
     integral: float = 0.0
     path_integral: float = 0.0
     last_force: float | None = None
+    last_steer: float | None = None
 
     def __post_init__(self) -> None:
         self._understeer = understeer_gradient(self.vehicle)
@@ -111,7 +115,7 @@ class Driver:
         x, y, heading = (np.interp(s, grid, column) for column in self._line)
         return x - offset * np.sin(heading), y + offset * np.cos(heading), heading
 
-    def steer(self, state: np.ndarray, dt: float = 0.0) -> float:
+    def steer(self, state: np.ndarray, dt: float) -> float:
         """Road-wheel steer angle [rad] by preview on the target path."""
         s, n, psi, u = (state[STATE[k]] for k in ("s", "n", "psi", "u"))
         x0, y0, heading0 = self._point(s, n)
@@ -132,7 +136,12 @@ class Driver:
             + self.tuning.path_integral * self.path_integral
             + self.tuning.yaw_damping * (u * curvature - state[STATE["r"]])
         )
-        return float(np.clip(angle, -self.tuning.max_steer, self.tuning.max_steer))
+        angle = float(np.clip(angle, -self.tuning.max_steer, self.tuning.max_steer))
+        if self.last_steer is not None:
+            step = self.tuning.steer_rate * dt
+            angle = float(np.clip(angle, self.last_steer - step, self.last_steer + step))
+        self.last_steer = angle
+        return angle
 
     def force(self, state: np.ndarray, dt: float) -> float:
         """Longitudinal force demand [N]: feed-forward plus PI on the speed error, grip-limited."""
