@@ -39,7 +39,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
-import numpy as np
 
 from wheelload.models.mass_properties import static_loads
 from wheelload.models.plant_params import DamperMap, Plant
@@ -386,24 +385,3 @@ def chunk_function(
     """
     ode, _ = plant_functions(vehicle, road)
     return chunk_from_ode(ode, internal_rate, steps, "plant_chunk", jit)
-
-
-def initial_state(vehicle: Vehicle, road: RoadSurface, s: float, speed: float, n: float = 0.0):
-    """Static-equilibrium state at arc length ``s`` and lateral offset ``n``, rolling at ``speed``.
-
-    Body at its static height above the road, attitude following grade and
-    bank, wheels spinning at zero slip; small transients remain on a grade.
-    """
-    grade = float(np.interp(s, road.s, road.grade))
-    bank = float(np.interp(s, road.s, road.bank))
-    x = np.zeros(len(STATE_NAMES))
-    x[STATE["s"]] = s
-    x[STATE["n"]] = n
-    x[STATE["z"]] = float(road.height(s, n)) + vehicle.geometry.cg_height
-    x[STATE["theta"]] = -np.arctan(grade)
-    x[STATE["phi"]] = np.arctan(bank)
-    x[STATE["u"]] = speed
-    for i, c in enumerate(corners(vehicle)):
-        deflection = c.static_load / c.tyre_rate
-        x[STATE["omega_fl"] + i] = speed / (c.radius - deflection / 3.0)
-    return x
