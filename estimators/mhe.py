@@ -68,6 +68,7 @@ from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import (
+    MAX_INTERVAL,
     FilterState,
     Sample,
     TwoStageKF,
@@ -150,7 +151,7 @@ class MheSettings:
 class MheEstimate(Estimate):
     """:class:`Estimate` plus the solver's per-sample report."""
 
-    status: np.ndarray  # (n,) OSQP status value (1 = solved)
+    status: np.ndarray  # (n,) OSQP status value (1 = solved; 0 = interval rejected)
     iterations: np.ndarray  # (n,) ADMM iterations
     fallback: np.ndarray  # (n,) True where the Kalman estimate was used
     solve_time: np.ndarray  # (n,) s, wall time of the sample's QP update and solve
@@ -315,8 +316,12 @@ class MovingHorizonEstimator:
     def step(self, state: MheState, sample: Sample, dt: float) -> tuple[MheState, MheEstimate]:
         """Filter one sample, add its terms to the window and solve; returns the new state.
 
-        Same numbers as :meth:`run` over the same samples from the same state.
+        Same numbers as :meth:`run` over the same samples from the same state. A
+        non-positive or non-finite ``dt`` solves nothing: the state and the last
+        estimate are held and flagged ``STEP_REJECTED`` (status 0).
         """
+        if not 0.0 < dt < MAX_INTERVAL:
+            return state, self._rejected(state, sample, dt)
         u = sample.vector()
         valid = np.isfinite(u).astype(float)
         kf, estimate = self.filter.step(state.kf, sample, dt)
@@ -329,6 +334,22 @@ class MovingHorizonEstimator:
         arrival = self._arrival(state, state.kf.P[None], np.array([dt]))[0]
         state, report = self._advance(state, terms, arrival)
         return state, _estimate(np.array([np.nan]), [report], self.A)
+
+    def _rejected(self, state: MheState, sample: Sample, dt: float) -> MheEstimate:
+        """The held estimate of a sample whose interval is rejected."""
+        kf, held_kf = self.filter.step(state.kf, sample, dt)
+        held = state.history[-1]
+        return MheEstimate(
+            t=np.array([np.nan]),
+            loads=held[None, :],
+            std=held_kf.std,
+            residual=held_kf.residual + ((kf.x - held) @ self.A.T)[None, :],
+            flags=held_kf.flags,
+            status=np.zeros(1, dtype=np.int64),
+            iterations=np.zeros(1, dtype=np.int64),
+            fallback=np.zeros(1, dtype=bool),
+            solve_time=np.zeros(1),
+        )
 
     def _arrival(self, state: MheState, previous: np.ndarray, dt: np.ndarray) -> np.ndarray:
         r"""Arrival weights :math:`c s^2 \Pi^{-1}` of samples ``state.k, state.k + 1, ...``.

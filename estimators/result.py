@@ -15,9 +15,10 @@ RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 class StepFlag(enum.IntFlag):
     """Per-sample status bits: which updates were skipped for missing inputs.
 
-    ``STEP_REJECTED`` is set by the generated C step only, when the interval
-    is not a positive finite number or the step's result would not be
-    finite; the state is then held and every update flag is set too.
+    ``STEP_REJECTED``: the sample interval is not a positive finite number
+    (``TwoStageKF.step`` and the generated C), or, in C only, the step's
+    result would not be finite; the state is then held and every update flag
+    is set too.
     """
 
     SUSPENSION_FL_SKIPPED = 1

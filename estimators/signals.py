@@ -34,6 +34,7 @@ RATES = ("wx", "wy", "wz")
 REQUIRED = ("t", "vx", "ax", "ay", "az", *TRAVEL)
 
 VELOCITY_CUTOFF = 20.0  # Hz, differentiator corner frequency
+MAX_SAMPLE_INTERVAL = 0.5  # s, longest median sample interval taken as seconds
 
 
 class LogError(ValueError):
@@ -64,6 +65,7 @@ class Signals:
                 raise LogError(
                     f"{self.source}: '{name}' has shape {np.shape(value)}, expected {shape}"
                 )
+        _check_time(np.asarray(self.t, dtype=float), self.source)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -132,6 +134,15 @@ def signals_from_frame(
             raise LogError(f"{source}: missing column '{name}'")
 
     def column(name: str) -> np.ndarray:
+        kind = frame[name].dtype
+        if not (
+            pd.api.types.is_numeric_dtype(kind)
+            or pd.api.types.is_object_dtype(kind)
+            or pd.api.types.is_string_dtype(kind)
+        ) or pd.api.types.is_bool_dtype(kind):
+            raise LogError(
+                f"{source}: column '{name}' has type {kind}: give plain numbers in SI units"
+            )  # fmt: skip
         values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
         bad = np.flatnonzero(np.isnan(values) & frame[name].notna().to_numpy())
         if bad.size:
@@ -155,6 +166,12 @@ def signals_from_frame(
 
     t = column("t")
     _check_time(t, source)
+    step = float(np.median(np.diff(t)))
+    if step > MAX_SAMPLE_INTERVAL:
+        raise LogError(
+            f"{source}: column 't' advances by {step:.4g} per sample: more than "
+            f"{MAX_SAMPLE_INTERVAL} s, it looks like milliseconds (give seconds)"
+        )
     acc = np.column_stack([column(name) for name in ("ax", "ay", "az")])
     d = group(TRAVEL)
     v = group(TRAVEL_RATE)
@@ -230,9 +247,9 @@ def derive_velocities(
 ) -> np.ndarray:
     r"""Causal filtered derivative of the travel, :math:`\omega_c s/(s+\omega_c)` (Tustin).
 
-    Needs near-uniform sampling (jitter below 5 % of the median interval); a
-    missing travel sample gives a missing velocity and the filter holds its
-    last input over the gap.
+    Needs near-uniform sampling (jitter below 5 % of the median interval). A
+    missing travel sample gives a missing velocity, and the filter restarts at
+    rest on the first sample after a gap, so a gap makes no false velocity.
     """
     dt = np.diff(t)
     median = float(np.median(dt))
@@ -249,16 +266,19 @@ def derive_velocities(
         )
     omega = 2.0 * np.pi * cutoff
     b, a = sp_signal.bilinear([omega, 0.0], [1.0, omega], fs=1.0 / median)
-    filled = pd.DataFrame(d).ffill().bfill().to_numpy()
-    v = np.empty_like(d)
+    rest = sp_signal.lfilter_zi(b, a)
+    v = np.full(d.shape, np.nan)
     for wheel in range(d.shape[1]):
-        if not np.any(np.isfinite(d[:, wheel])):
-            v[:, wheel] = np.nan
-            continue
-        zi = sp_signal.lfilter_zi(b, a) * filled[0, wheel]
-        v[:, wheel], _ = sp_signal.lfilter(b, a, filled[:, wheel], zi=zi)
-    v[~np.isfinite(d)] = np.nan
+        for start, stop in _valid_runs(np.isfinite(d[:, wheel])):
+            run = d[start:stop, wheel]
+            v[start:stop, wheel], _ = sp_signal.lfilter(b, a, run, zi=rest * run[0])
     return v
+
+
+def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
+    """``(start, stop)`` of each run of consecutive True values."""
+    edges = np.diff(np.concatenate([[0], valid.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
 def write_log(signals: Signals, path: str | Path) -> None:

@@ -79,6 +79,14 @@ def _sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
     return ca.vertcat(*[ca.if_else(valid[i], u[i], 0) for i in range(u.shape[0])])
 
 
+MAX_INTERVAL = 1e6  # s, longest sample interval taken as valid
+
+
+def interval_is_valid(dt):
+    """1 where the sample interval is finite and positive (NaN compares false)."""
+    return ca.logic_and(dt > 0, dt < MAX_INTERVAL)
+
+
 def step_expressions(
     suspension: ca.Function, equilibrium: ca.Function, *, constraint_update=sequential_update
 ):
@@ -99,12 +107,15 @@ def step_expressions(
     d, v, acc, vx = u[0:4], u[4:8], u[8:11], u[11]
     z = suspension(d, v, p)
     A, b = equilibrium(acc, vx, p)
-    mask_s = _dependency_mask(z, u_raw, valid)
-    mask_c = _dependency_mask(b, u_raw, valid)
+    # A non-positive or non-finite interval skips the whole step: the state is held.
+    dt_ok = interval_is_valid(dt)
+    dt_safe = ca.if_else(dt_ok, dt, 1.0)
+    mask_s = _dependency_mask(z, u_raw, valid) * dt_ok
+    mask_c = _dependency_mask(b, u_raw, valid) * dt_ok
 
-    Q = tuning[0] * dt * ca.DM.eye(4)
-    rs = ca.repmat(tuning[1] / dt, 4, 1)
-    rc = tuning[2:5] / dt
+    Q = tuning[0] * dt_safe * dt_ok * ca.DM.eye(4)
+    rs = ca.repmat(tuning[1] / dt_safe, 4, 1)
+    rc = tuning[2:5] / dt_safe
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
     x_pred, P_pred = predict(x, upper(P), Q)
@@ -225,12 +236,15 @@ class TwoStageKF:
         x, P, std, residual, used, _ = np.split(
             np.asarray(self._flat_step(flat)).ravel(), self._flat_splits
         )
+        flags = flags_from_used(used.reshape(7, 1))
+        if not 0.0 < dt < MAX_INTERVAL:
+            flags |= StepFlag.STEP_REJECTED
         estimate = Estimate(
             t=np.array([np.nan]),
             loads=x.reshape(1, 4),
             std=std.reshape(1, 4),
             residual=residual.reshape(1, 3),
-            flags=flags_from_used(used.reshape(7, 1)),
+            flags=flags,
         )
         return FilterState(x, P.reshape(4, 4, order="F")), estimate
 

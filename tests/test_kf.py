@@ -188,3 +188,15 @@ def test_still_period_that_is_not_still_is_rejected(vehicle):
     signals = synthetic_log(vehicle, steady_cornering(duration=3.0))
     with pytest.raises(ValueError, match="channel 'vx'"):
         still_period_static_loads(signals, vehicle, duration=1.0)
+
+
+@pytest.mark.parametrize("dt", [0.0, -0.01, np.nan, np.inf])
+def test_an_invalid_interval_is_rejected_and_the_state_held(vehicle, drive, dt):
+    kf = TwoStageKF(vehicle)
+    state = kf.initial_state()
+    sample = Sample(d=drive.d[50], v=drive.v[50], acc=drive.acc[50], vx=drive.vx[50])
+    held, estimate = kf.step(state, sample, dt)
+    np.testing.assert_array_equal(held.x, state.x)
+    np.testing.assert_array_equal(held.P, state.P)
+    assert estimate.flags[0] == 255  # every update skipped, step rejected (as the C step)
+    assert np.isfinite(estimate.loads).all() and np.isfinite(estimate.std).all()

@@ -141,3 +141,20 @@ def test_polishing_prints_nothing(vehicle, wheel_lift, capfd):
         settings = MheSettings(horizon=5, bounded=bounded, solver=TIGHT)
         MovingHorizonEstimator(vehicle, settings).run(wheel_lift.slice(0, 50))
     assert capfd.readouterr().out == ""
+
+
+@pytest.mark.parametrize("dt", [0.0, -0.01, math.nan])
+def test_invalid_interval_holds_the_estimate_and_solving_goes_on(vehicle, drive, dt):
+    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=5))
+    state = mhe.initial_state(0.01)
+    samples = [Sample(d=drive.d[k], v=drive.v[k], acc=drive.acc[k], vx=drive.vx[k])
+               for k in range(4)]  # fmt: skip
+    state, first = mhe.step(state, samples[0], 0.01)
+    held_state, held = mhe.step(state, samples[1], dt)
+    assert held_state is state  # nothing solved, nothing changed
+    np.testing.assert_array_equal(held.loads, first.loads)
+    assert held.flags[0] == 255 and held.status[0] == 0
+    assert np.isfinite(held.residual).all() and np.isfinite(held.std).all()
+    for sample in samples[2:]:
+        held_state, estimate = mhe.step(held_state, sample, 0.01)
+        assert estimate.status[0] == 1 and np.isfinite(estimate.loads).all()

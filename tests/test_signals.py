@@ -119,3 +119,39 @@ def test_signals_built_in_memory_are_shape_checked(signals):
     with pytest.raises(LogError, match=r"'d' has shape \(300, 3\), expected \(300, 4\)"):
         type(signals)(t=signals.t, vx=signals.vx, acc=signals.acc, d=signals.d[:, :3],
                       v=signals.v)  # fmt: skip
+
+
+def test_signals_with_a_repeated_time_stamp_are_rejected(signals):
+    t = signals.t.copy()
+    t[11] = t[10]
+    with pytest.raises(LogError, match=r"column 't' is not increasing at row 11"):
+        type(signals)(t=t, vx=signals.vx, acc=signals.acc, d=signals.d, v=signals.v)
+
+
+def test_derived_velocity_restarts_after_a_gap():
+    # Travel moving at 0.02 m/s with a 0.5 s gap: holding the last value over the gap
+    # would turn the jump into a false velocity of ~0.5 m/s; restarting at rest keeps
+    # every derived velocity within the true rate (first-order response, no overshoot).
+    t = np.arange(0.0, 3.0, 0.01)
+    d = np.tile(0.02 * t[:, None], (1, 4))
+    d[100:150, 0] = np.nan
+    v = derive_velocities(t, d)
+    assert np.all(np.abs(v[150:, 0]) <= 0.02 + 1e-12)
+    assert np.isnan(v[100:150, 0]).all()
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda f: f.assign(t=pd.to_datetime(f["t"], unit="s")), "column 't' has type"),
+        (lambda f: f.assign(t=pd.to_timedelta(f["t"], unit="s")), "column 't' has type"),
+        (lambda f: f.assign(ay=f["ay"] > 0), "column 'ay' has type bool"),
+        (lambda f: f.assign(t=(f["t"] * 1000).round()), "looks like milliseconds"),
+    ],
+    ids=["datetime", "timedelta", "bool", "milliseconds"],
+)
+def test_columns_of_the_wrong_kind_are_reported(tmp_path, signals, change, message):
+    path = tmp_path / "drive.parquet"
+    change(frame(signals)).to_parquet(path)
+    with pytest.raises(LogError, match=message):
+        read_log(path)
