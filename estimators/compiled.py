@@ -4,7 +4,7 @@ CasADi generates C for the step; a short generated C loop feeds it one
 sample after another and carries the accumulated outputs (the filter state)
 to the next sample, like ``Function.mapaccum`` but without its per-call
 copying. The shared library is built with the system C compiler once per
-step Function, cached under the system temporary folder by the hash of its
+step Function, cached in a private per-user build folder by the hash of its
 source (so it is never stale), and called through ctypes on numpy arrays.
 """
 
@@ -19,6 +19,8 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
+
+from wheelload.models.build_folder import build_folder
 
 COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
 
@@ -85,13 +87,14 @@ def _loop_source(
 def _shared_library(source: str, name: str) -> ctypes.CDLL:
     """Compile ``source`` once (cached by its hash) and load it."""
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
-    folder = Path(tempfile.gettempdir()) / "wheelload-build"
-    folder.mkdir(exist_ok=True)
+    folder = build_folder()
     library = folder / f"{name}_{digest}.so"
     if not library.exists():
-        c_file = folder / f"{name}_{digest}_{os.getpid()}.c"
-        c_file.write_text(source)
-        partial = library.with_suffix(f".{os.getpid()}.tmp")
+        handle, c_name = tempfile.mkstemp(suffix=".c", prefix=f"{name}_", dir=folder)
+        c_file = Path(c_name)
+        with os.fdopen(handle, "w") as stream:
+            stream.write(source)
+        partial = c_file.with_suffix(".so.tmp")
         try:
             subprocess.run(
                 [*COMPILER, "-o", str(partial), str(c_file), "-lm"],

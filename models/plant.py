@@ -33,13 +33,11 @@ ground. Integration: classical RK4 with a fixed step, compiled.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import casadi as ca
 
+from wheelload.models.build_folder import jit_options
 from wheelload.models.mass_properties import static_loads
 from wheelload.models.plant_params import DamperMap, Plant
 from wheelload.models.road_surface import RoadSurface, road_lookup
@@ -342,17 +340,6 @@ def plant_functions(vehicle: Vehicle, road: RoadSurface, name: str = "plant"):
     return ode, rk4_function(ode, f"{name}_rk4")
 
 
-def _jit_options() -> dict:
-    """CasADi JIT with the system C compiler; its temporary files go to the system temp folder."""
-    folder = Path(tempfile.gettempdir()) / "wheelload-build"
-    folder.mkdir(exist_ok=True)
-    return {
-        "jit": True,
-        "compiler": "shell",
-        "jit_options": {"flags": ["-O2"], "directory": f"{folder}{os.sep}"},
-    }
-
-
 def chunk_from_ode(
     ode: ca.Function, internal_rate: float, steps: int, name: str, jit: bool = True
 ) -> ca.Function:
@@ -371,7 +358,7 @@ def chunk_from_ode(
     states = accum(x0, ca.repmat(inp, 1, steps), ca.repmat(dt, 1, steps))
     x_end = states[:, -1]
     y_end = ode(x_end, inp)[1]
-    options = _jit_options() if jit else {}
+    options = jit_options() if jit else {}
     return ca.Function(name, [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"], options)
 
 
