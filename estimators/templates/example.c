@@ -9,14 +9,31 @@
  * LOG.csv has a header row and the columns of the wheelload log format, in
  * any order: t, vx, ax, ay, az, d_fl, d_fr, d_rl, d_rr and the travel rates
  * v_fl, v_fr, v_rl, v_rr. Unlike wheelload's Python reader, this example
- * does not derive missing travel rates: the v_* columns are required. An
- * empty or non-numeric field is a missing sample (its updates are skipped).
+ * does not derive missing travel rates: the v_* columns are required.
  * Writes t, fz_*, fz_std_*, residual_*, flags as CSV (stdout by default).
  * The interval before a sample is t[k] - t[k-1]; the first sample uses
  * t[1] - t[0], as wheelload's Python filter does.
+ *
+ * The log is read strictly:
+ * - fields are separated by commas (no quoted commas); names and fields are
+ *   trimmed of blanks and of one pair of surrounding double quotes;
+ * - blank lines are skipped and '#' starts a comment to the end of the line,
+ *   as in wheelload's Python reader;
+ * - every data row has as many fields as the header;
+ * - a field is a decimal number, [+-]digits[.digits][e[+-]digits], converted
+ *   by strtod in full; an empty field or nan (any case) is a missing sample
+ *   (the updates it feeds are skipped); anything else (trailing text, hex,
+ *   inf) or a value beyond the range of ${prefix}_real is an error;
+ * - t must be present, finite and increasing in every row;
+ * - columns the filter does not use are not read.
+ * An error is reported on stderr with the data row, counted from 1 at the
+ * first row after the header (wheelload's Python reader counts from 0),
+ * the line of the file, the column and the text; the exit status is then 2
+ * and a partly written ESTIMATES.csv is removed.
  */
 #include "${prefix}.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,44 +43,213 @@
 #define MAX_COLUMNS 256
 #define N_CHANNELS 13
 
+/* Largest magnitude an input channel may have (t is kept in double). */
+#if ${PREFIX}_SINGLE_PRECISION
+#define REAL_MAX ((double)FLT_MAX)
+#else
+#define REAL_MAX DBL_MAX
+#endif
+
 static const char *const channels[N_CHANNELS] = {
     "t", "ax", "ay", "az", "vx",
     "d_fl", "d_fr", "d_rl", "d_rr", "v_fl", "v_fr", "v_rl", "v_rr",
 };
 
-/* Split a CSV line in place; returns the number of fields. */
+/* The log being read and the position in it, for error messages. */
+typedef struct {
+    FILE *file;
+    const char *name;
+    long line; /* line of the file last read, from 1 */
+    long row;  /* data row last read, from 1 at the first row after the header */
+} log_reader;
+
+static int is_blank(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
+}
+
+static int is_digit(char c)
+{
+    return c >= '0' && c <= '9';
+}
+
+/* Cut blanks off both ends of text in place; returns the new start. */
+static char *strip(char *text)
+{
+    size_t n;
+    while (is_blank(*text)) {
+        ++text;
+    }
+    n = strlen(text);
+    while (n > 0 && is_blank(text[n - 1])) {
+        text[--n] = '\0';
+    }
+    return text;
+}
+
+/* strip, then remove one pair of surrounding double quotes and strip again. */
+static char *trim(char *text)
+{
+    size_t n;
+    text = strip(text);
+    n = strlen(text);
+    if (n >= 2 && text[0] == '"' && text[n - 1] == '"') {
+        text[n - 1] = '\0';
+        text = strip(text + 1);
+    }
+    return text;
+}
+
+/* Read the next line that is not blank once a '#' comment is cut off.
+ * Returns 1, 0 at the end of the file, or -1 on an error (reported). */
+static int next_line(log_reader *log, char *buffer)
+{
+    for (;;) {
+        const char *c;
+        char *comment;
+        size_t n;
+        if (fgets(buffer, MAX_LINE, log->file) == NULL) {
+            if (ferror(log->file)) {
+                fprintf(stderr, "%s: read error after line %ld\n", log->name, log->line);
+                return -1;
+            }
+            return 0;
+        }
+        ++log->line;
+        n = strlen(buffer);
+        if (n == MAX_LINE - 1 && buffer[n - 1] != '\n' && !feof(log->file)) {
+            fprintf(stderr, "%s: line %ld is longer than %d characters\n", log->name,
+                    log->line, MAX_LINE - 2);
+            return -1;
+        }
+        if (log->line == 1 && strncmp(buffer, "\xEF\xBB\xBF", 3) == 0) {
+            memmove(buffer, buffer + 3, n - 2); /* UTF-8 byte order mark */
+        }
+        comment = strchr(buffer, '#');
+        if (comment != NULL) {
+            *comment = '\0';
+        }
+        for (c = buffer; is_blank(*c); ++c) {
+        }
+        if (*c != '\0') {
+            return 1;
+        }
+    }
+}
+
+/* Split a line at commas in place and trim the fields; returns the number
+ * of fields, or -1 if there are more than MAX_COLUMNS. */
 static int split(char *line, char **fields)
 {
     int n = 0;
     char *cursor = line;
-    line[strcspn(line, "\r\n")] = '\0';
-    fields[n++] = cursor;
-    while ((cursor = strchr(cursor, ',')) != NULL && n < MAX_COLUMNS) {
-        *cursor++ = '\0';
-        fields[n++] = cursor;
+    for (;;) {
+        char *comma = strchr(cursor, ',');
+        if (n == MAX_COLUMNS) {
+            return -1;
+        }
+        if (comma != NULL) {
+            *comma = '\0';
+        }
+        fields[n++] = trim(cursor);
+        if (comma == NULL) {
+            return n;
+        }
+        cursor = comma + 1;
     }
-    return n;
 }
 
-static double number(const char *text)
+/* 1 if text is [+-]digits[.digits][e[+-]digits] or [+-].digits[e[+-]digits]. */
+static int is_decimal(const char *text)
+{
+    int digits = 0;
+    if (*text == '+' || *text == '-') {
+        ++text;
+    }
+    for (; is_digit(*text); ++text) {
+        ++digits;
+    }
+    if (*text == '.') {
+        for (++text; is_digit(*text); ++text) {
+            ++digits;
+        }
+    }
+    if (digits == 0) {
+        return 0;
+    }
+    if (*text == 'e' || *text == 'E') {
+        ++text;
+        if (*text == '+' || *text == '-') {
+            ++text;
+        }
+        if (!is_digit(*text)) {
+            return 0;
+        }
+        while (is_digit(*text)) {
+            ++text;
+        }
+    }
+    return *text == '\0';
+}
+
+static int is_nan(const char *text)
+{
+    return (text[0] == 'n' || text[0] == 'N') && (text[1] == 'a' || text[1] == 'A')
+           && (text[2] == 'n' || text[2] == 'N') && text[3] == '\0';
+}
+
+enum { FIELD_OK, FIELD_NOT_DECIMAL, FIELD_OUT_OF_RANGE };
+
+/* Convert a trimmed field: NAN for an empty field or nan, else a decimal
+ * number that strtod reads in full and whose magnitude is at most limit. */
+static int number(const char *text, double limit, double *value)
 {
     char *end;
-    double value = strtod(text, &end);
-    return (end == text) ? (double)NAN : value;
+    if (text[0] == '\0' || is_nan(text)) {
+        *value = (double)NAN;
+        return FIELD_OK;
+    }
+    if (!is_decimal(text)) {
+        return FIELD_NOT_DECIMAL;
+    }
+    *value = strtod(text, &end);
+    if (*end != '\0') {
+        return FIELD_NOT_DECIMAL;
+    }
+    return fabs(*value) <= limit ? FIELD_OK : FIELD_OUT_OF_RANGE;
 }
 
-/* Parse one data row into t and a filter input; 0 on a short row. */
-static int parse(char *line, const int *column, double *t, ${prefix}_input *input)
+/* Parse the current data row of log (in line) into t and a filter input;
+ * 0 on an error (reported). t is present and finite on success. */
+static int parse(const log_reader *log, char *line, int n_columns, const int *column,
+                 double *t, ${prefix}_input *input)
 {
     char *fields[MAX_COLUMNS];
     double values[N_CHANNELS];
     int n = split(line, fields);
     int k;
+    if (n != n_columns) {
+        fprintf(stderr, "%s: row %ld (line %ld) has %s%d fields, the header has %d\n",
+                log->name, log->row, log->line, n < 0 ? "more than " : "",
+                n < 0 ? MAX_COLUMNS : n, n_columns);
+        return 0;
+    }
     for (k = 0; k < N_CHANNELS; ++k) {
-        if (column[k] >= n) {
+        const char *text = fields[column[k]];
+        int status = number(text, k == 0 ? DBL_MAX : REAL_MAX, &values[k]);
+        if (status != FIELD_OK) {
+            fprintf(stderr, "%s: column '%s' is %s at row %ld (line %ld): '%s'\n", log->name,
+                    channels[k],
+                    status == FIELD_NOT_DECIMAL ? "not a decimal number"
+                                                : "out of range for ${real}",
+                    log->row, log->line, text);
             return 0;
         }
-        values[k] = number(fields[column[k]]);
+    }
+    if (!isfinite(values[0])) {
+        fprintf(stderr, "%s: column 't' has no valid time stamp at row %ld (line %ld): '%s'\n",
+                log->name, log->row, log->line, fields[column[0]]);
+        return 0;
     }
     *t = values[0];
     input->ax = (${prefix}_real)values[1];
@@ -73,6 +259,28 @@ static int parse(char *line, const int *column, double *t, ${prefix}_input *inpu
     for (k = 0; k < 4; ++k) {
         input->d[k] = (${prefix}_real)values[5 + k];
         input->v[k] = (${prefix}_real)values[9 + k];
+    }
+    return 1;
+}
+
+/* Read and parse the next data row; 1, 0 at the end of the log, -1 on an
+ * error (reported), including a t not after t_previous. */
+static int next_row(log_reader *log, char *line, int n_columns, const int *column,
+                    double t_previous, double *t, ${prefix}_input *input)
+{
+    int status = next_line(log, line);
+    if (status <= 0) {
+        return status;
+    }
+    ++log->row;
+    if (!parse(log, line, n_columns, column, t, input)) {
+        return -1;
+    }
+    if (!(*t > t_previous)) {
+        fprintf(stderr,
+                "%s: column 't' is not increasing at row %ld (line %ld): %.17g then %.17g\n",
+                log->name, log->row, log->line, t_previous, *t);
+        return -1;
     }
     return 1;
 }
@@ -93,7 +301,8 @@ static void write_row(FILE *out, double t, const ${prefix}_output *estimate)
     fprintf(out, ",%lu\n", (unsigned long)estimate->flags);
 }
 
-/* Apply one NAME=VALUE override; 0 if the name is unknown or the value not a number. */
+/* Apply one NAME=VALUE override; 0 if the name is unknown or the value not a
+ * decimal number. */
 static int override(${prefix}_params *params, const char *assignment)
 {
     const char *equals = strchr(assignment, '=');
@@ -105,9 +314,8 @@ static int override(${prefix}_params *params, const char *assignment)
         const char *name = ${prefix}_param_names[k];
         if (strlen(name) == (size_t)(equals - assignment)
             && strncmp(name, assignment, strlen(name)) == 0) {
-            char *end;
-            double value = strtod(equals + 1, &end);
-            if (end == equals + 1 || *end != '\0') {
+            double value;
+            if (!is_decimal(equals + 1) || number(equals + 1, REAL_MAX, &value) != FIELD_OK) {
                 return 0;
             }
             *${prefix}_param_field(params, k) = (${prefix}_real)value;
@@ -117,23 +325,53 @@ static int override(${prefix}_params *params, const char *assignment)
     return 0;
 }
 
-static char header[MAX_LINE], first_line[MAX_LINE], line[MAX_LINE];
+static char line[MAX_LINE];
+
+/* Filter the rows of log after the first two (already read) and write the
+ * estimates; 0, or 2 on an error (reported). */
+static int run(log_reader *log, int n_columns, const int *column, const double *t_first,
+               const ${prefix}_input *first, FILE *out, const ${prefix}_params *params)
+{
+    ${prefix}_state state;
+    ${prefix}_output estimate;
+    ${prefix}_input input = first[1];
+    double t = t_first[1], t_previous = t_first[0];
+    int status = ${prefix}_init(&state, params);
+    if (status != 0) {
+        fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
+        return 2;
+    }
+    fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
+                 "residual_vertical,residual_pitch,residual_roll,flags\n");
+    ${prefix}_step(&state, params, &first[0], (${prefix}_real)(t - t_previous), &estimate);
+    write_row(out, t_previous, &estimate);
+    do {
+        ${prefix}_step(&state, params, &input, (${prefix}_real)(t - t_previous), &estimate);
+        write_row(out, t, &estimate);
+        t_previous = t;
+        status = next_row(log, line, n_columns, column, t_previous, &t, &input);
+    } while (status > 0);
+    return status < 0 ? 2 : 0;
+}
 
 int main(int argc, char **argv)
 {
-    FILE *log_file, *out;
+    FILE *out;
     char *fields[MAX_COLUMNS];
     int column[N_CHANNELS];
-    int n_fields, k, j, status;
-    long row = 1;
-    double t_first, t, t_previous;
-    ${prefix}_input first, input;
-    ${prefix}_output estimate;
-    ${prefix}_state state;
+    int n_columns, k, j, status;
+    double t_first[2];
+    ${prefix}_input first[2];
     ${prefix}_params params;
+    log_reader log;
 
     if (argc < 2) {
-        fprintf(stderr, "usage: %s LOG.csv [ESTIMATES.csv|- [NAME=VALUE ...]]\n", argv[0]);
+        fprintf(stderr,
+                "usage: %s LOG.csv [ESTIMATES.csv|- [NAME=VALUE ...]]\n"
+                "LOG.csv fields are decimal numbers; an empty field or nan is a missing\n"
+                "sample; t must be present and increasing; blank and '#' lines are skipped.\n"
+                "Errors name the data row (from 1) and the line; exit status 2.\n",
+                argv[0]);
         return 2;
     }
     params = ${prefix}_default_params;
@@ -143,69 +381,75 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    log_file = fopen(argv[1], "r");
-    if (log_file == NULL) {
-        fprintf(stderr, "%s: cannot open\n", argv[1]);
+    log.name = argv[1];
+    log.line = 0;
+    log.row = 0;
+    log.file = fopen(log.name, "r");
+    if (log.file == NULL) {
+        fprintf(stderr, "%s: cannot open\n", log.name);
         return 2;
     }
-    if (fgets(header, MAX_LINE, log_file) == NULL) {
-        fprintf(stderr, "%s: empty file\n", argv[1]);
+    status = next_line(&log, line);
+    if (status <= 0) {
+        if (status == 0) {
+            fprintf(stderr, "%s: no header row\n", log.name);
+        }
         return 2;
     }
-    n_fields = split(header, fields);
+    n_columns = split(line, fields);
+    if (n_columns < 0) {
+        fprintf(stderr, "%s: the header has more than %d columns\n", log.name, MAX_COLUMNS);
+        return 2;
+    }
     for (k = 0; k < N_CHANNELS; ++k) {
         column[k] = -1;
-        for (j = 0; j < n_fields; ++j) {
-            if (strcmp(fields[j], channels[k]) == 0) {
-                column[k] = j;
+        for (j = 0; j < n_columns; ++j) {
+            if (strcmp(fields[j], channels[k]) != 0) {
+                continue;
             }
+            if (column[k] >= 0) {
+                fprintf(stderr, "%s: column '%s' appears twice in the header\n", log.name,
+                        channels[k]);
+                return 2;
+            }
+            column[k] = j;
         }
         if (column[k] < 0) {
-            fprintf(stderr, "%s: missing column '%s'%s\n", argv[1], channels[k],
+            fprintf(stderr, "%s: missing column '%s'%s\n", log.name, channels[k],
                     k >= 9 ? " (this example needs the travel rates v_fl v_fr v_rl v_rr)" : "");
             return 2;
         }
     }
-    if (fgets(first_line, MAX_LINE, log_file) == NULL
-        || !parse(first_line, column, &t_first, &first)
-        || fgets(line, MAX_LINE, log_file) == NULL
-        || !parse(line, column, &t, &input)) {
-        fprintf(stderr, "%s: needs at least 2 complete rows\n", argv[1]);
-        return 2;
+    for (k = 0; k < 2; ++k) {
+        status = next_row(&log, line, n_columns, column, k == 0 ? -HUGE_VAL : t_first[0],
+                          &t_first[k], &first[k]);
+        if (status <= 0) {
+            if (status == 0) {
+                fprintf(stderr, "%s: needs at least 2 data rows, has %ld\n", log.name, log.row);
+            }
+            return 2;
+        }
     }
     out = (argc >= 3 && strcmp(argv[2], "-") != 0) ? fopen(argv[2], "w") : stdout;
     if (out == NULL) {
         fprintf(stderr, "%s: cannot write\n", argv[2]);
         return 2;
     }
-    status = ${prefix}_init(&state, &params);
-    if (status != 0) {
-        fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
-        return 2;
-    }
-    fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
-                 "residual_vertical,residual_pitch,residual_roll,flags\n");
-    ${prefix}_step(&state, &params, &first, (${prefix}_real)(t - t_first),
-                   &estimate);
-    write_row(out, t_first, &estimate);
-    t_previous = t_first;
-    for (;;) {
-        ++row;
-        ${prefix}_step(&state, &params, &input,
-                       (${prefix}_real)(t - t_previous), &estimate);
-        write_row(out, t, &estimate);
-        t_previous = t;
-        if (fgets(line, MAX_LINE, log_file) == NULL || line[0] == '\n' || line[0] == '\0') {
-            break;
+    status = run(&log, n_columns, column, t_first, first, out, &params);
+    fclose(log.file);
+    if (out == stdout) {
+        if (fflush(stdout) != 0 && status == 0) {
+            fprintf(stderr, "-: write error\n");
+            status = 2;
         }
-        if (!parse(line, column, &t, &input)) {
-            fprintf(stderr, "%s: row %ld has too few fields\n", argv[1], row + 1);
-            return 2;
+    } else {
+        if ((ferror(out) || fclose(out) != 0) && status == 0) {
+            fprintf(stderr, "%s: write error\n", argv[2]);
+            status = 2;
+        }
+        if (status != 0) {
+            remove(argv[2]);
         }
     }
-    fclose(log_file);
-    if (out != stdout) {
-        fclose(out);
-    }
-    return 0;
+    return status;
 }
