@@ -27,6 +27,7 @@ from pathlib import Path
 GRAVITY = 9.80665  # m/s^2, standard gravity
 
 WHEELS = ("fl", "fr", "rl", "rr")
+TOTAL_MASS_TOLERANCE = 0.5  # kg, allowed |total - (sprung + unsprung)|
 
 
 class VehicleFileError(ValueError):
@@ -47,7 +48,9 @@ class Mass:
         for key in ("total", "sprung", "unsprung_front", "unsprung_rear"):
             _positive(self, key)
         parts = self.sprung + self.unsprung_front + self.unsprung_rear
-        if abs(parts - self.total) > 0.005 * self.total:
+        # The equilibrium uses the total, the plant the parts: they must agree
+        # to rounding, or every static load carries the difference.
+        if abs(parts - self.total) > TOTAL_MASS_TOLERANCE:
             raise _KeyError(
                 "total",
                 f"is {self.total} kg but sprung + unsprung_front + unsprung_rear = {parts:.1f} kg",
