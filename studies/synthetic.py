@@ -2,12 +2,13 @@
 
 Reference loads satisfy the rigid-body equilibrium of ``wheelload.models``
 exactly, with the one free "warp" direction fixed by sharing the roll moment
-between the axles in proportion to their roll stiffness,
-:math:`K_a = (k_a + 2 k_{arb,a}\\gamma_a) T_a^2 / 2`. The suspension travel is
-the inverse of the pseudo-measurement model with optionally mis-stated spring
-rates (``spring_error``), so the filter meets a known model mismatch. These
-logs exercise the estimators' structure; the full-vehicle plant is the ground
-truth for accuracy studies.
+between the axles in proportion to the roll stiffness of the suspension
+model. The suspension travel is the inverse of the pseudo-measurement model
+with optionally mis-stated spring rates (``spring_error``), so the filter
+meets a known model mismatch. Because these logs are built from the models
+themselves, they exercise the estimators' structure, not the models' signs:
+those are pinned by hand derivations and by the full-vehicle plant, the
+ground truth for accuracy studies.
 """
 
 from __future__ import annotations
@@ -83,15 +84,29 @@ def slalom(duration: float = 30.0, speed: float = 25.0) -> Manoeuvre:
     )
 
 
+def travel_stiffness(vehicle: Vehicle) -> np.ndarray:
+    """:math:`J = \\partial z / \\partial d` (4 x 4) of the suspension model at rest, in N/m."""
+    d = ca.SX.sym("d", 4)
+    p = ModelParameters.from_vehicle(vehicle).vector()
+    z = suspension_function()(d, ca.DM.zeros(4), p)
+    return np.asarray(ca.Function("J", [d], [ca.jacobian(z, d)])(np.zeros(4)))
+
+
 def roll_share_front(vehicle: Vehicle) -> float:
-    """Front share of the roll stiffness, :math:`K_f / (K_f + K_r)`."""
-    g, s = vehicle.geometry, vehicle.suspension
+    """Front share :math:`K_f / (K_f + K_r)` of the roll stiffness of the suspension model.
 
-    def roll_stiffness(axle, track):
-        return (axle.spring_rate + 2.0 * axle.arb_rate * axle.arb_ratio) * track**2 / 2.0
-
-    front = roll_stiffness(s.front, g.track_front)
-    return front / (front + roll_stiffness(s.rear, g.track_rear))
+    A roll angle :math:`\\varphi` compresses an axle's wheels by
+    :math:`\\pm \\varphi T/2`; the axle's roll moment is :math:`T/2 (F_L - F_R)`.
+    """
+    J = travel_stiffness(vehicle)
+    g = vehicle.geometry
+    stiffness = []
+    for wheels, track in (((0, 1), g.track_front), ((2, 3), g.track_rear)):
+        roll = np.zeros(4)
+        roll[list(wheels)] = [0.5 * track, -0.5 * track]  # travel per radian of roll
+        loads = J @ roll
+        stiffness.append(0.5 * track * (loads[wheels[0]] - loads[wheels[1]]))
+    return stiffness[0] / sum(stiffness)
 
 
 def reference_loads(vehicle: Vehicle, acc: np.ndarray, vx: np.ndarray) -> np.ndarray:
@@ -122,13 +137,8 @@ def travel_from_loads(vehicle: Vehicle, loads: np.ndarray, spring_error: float) 
     generating = vehicle.replace(
         suspension=type(vehicle.suspension)(front=axles["front"], rear=axles["rear"])
     )
-    parameters = ModelParameters.from_vehicle(generating)
-    d = ca.SX.sym("d", 4)
-    jacobian = ca.Function(
-        "J", [d], [ca.jacobian(suspension_function()(d, ca.DM.zeros(4), parameters.vector()), d)]
-    )
-    J = np.asarray(jacobian(np.zeros(4)))
-    return np.linalg.solve(J, (loads - np.array(parameters.static())).T).T
+    static = np.array(ModelParameters.from_vehicle(generating).static())
+    return np.linalg.solve(travel_stiffness(generating), (loads - static).T).T
 
 
 def _scaled_spring(axle, spring_error: float):
