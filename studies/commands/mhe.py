@@ -53,26 +53,33 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     bench.set_defaults(handler=run_bench)
 
 
-def _simulate(names: list[str], folder: Path) -> list[Path]:
-    from wheelload.studies.cli import main
+def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
+    """Simulate the scenarios on the plant with the study's vehicle; the log paths."""
+    from wheelload.studies.scenario_log import write_log
+    from wheelload.studies.scenario_runner import run_scenario
     from wheelload.studies.scenarios import SCENARIOS
 
     names = names or [name for name in STUDY_SCENARIOS if name in SCENARIOS]
+    unknown = [name for name in names if name not in SCENARIOS]
+    if unknown:
+        raise ValueError(f"unknown scenario '{unknown[0]}'; choose from {', '.join(SCENARIOS)}")
     paths = []
     for name in names:
+        result = run_scenario(name, vehicle_path)
         path = folder / f"{name}.parquet"
-        if main(["simulate", name, "--out", str(path)]) != 0:
-            raise ValueError(f"scenario '{name}' could not be simulated")
+        write_log(result.log, path, result.metadata)
+        print(f"{name}: {len(result.log)} samples simulated")
         paths.append(path)
     return paths
 
 
 def run_study(args: argparse.Namespace) -> int:
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    vehicle_path = Path(args.vehicle or example_vehicle_path())
+    vehicle = load_vehicle(vehicle_path)
     paths = [Path(p) for p in args.logs]
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
-            paths += _simulate(args.scenarios, Path(folder))
+            paths += _simulate(args.scenarios, Path(folder), vehicle_path)
         if not paths:
             raise ValueError("give --logs or --scenarios")
         logs = [read_log(path) for path in paths]
