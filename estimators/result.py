@@ -41,6 +41,10 @@ class Estimate:
     """Wheel-load estimates of ``n`` samples, wheel order FL, FR, RL, RR.
 
     ``residual`` is :math:`b - A x` after the update [N, N m, N m].
+
+    ``has_std`` is False for a method that has no standard deviation (an
+    algebraic or deterministic estimator): its ``std`` is then all zeros (never
+    NaN) and :meth:`to_pandas` leaves the ``fz_std_*`` columns out.
     """
 
     t: np.ndarray  # (n,)
@@ -48,15 +52,17 @@ class Estimate:
     std: np.ndarray  # (n, 4) N
     residual: np.ndarray  # (n, 3)
     flags: np.ndarray  # (n,) StepFlag bits
+    has_std: bool = True
 
     def __len__(self) -> int:
         return len(self.t)
 
     def to_pandas(self) -> pd.DataFrame:
-        """Columns ``t, fz_fl.., fz_std_fl.., residual_vertical.., flags``."""
+        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_vertical.., flags``."""
         columns = {"t": self.t}
         columns.update({f"fz_{w}": self.loads[:, i] for i, w in enumerate(WHEELS)})
-        columns.update({f"fz_std_{w}": self.std[:, i] for i, w in enumerate(WHEELS)})
+        if self.has_std:
+            columns.update({f"fz_std_{w}": self.std[:, i] for i, w in enumerate(WHEELS)})
         columns.update({name: self.residual[:, i] for i, name in enumerate(RESIDUALS)})
         columns["flags"] = self.flags
         return pd.DataFrame(columns)

@@ -160,12 +160,16 @@ class FilterState:
 
 @dataclass(frozen=True, kw_only=True)
 class Sample:
-    """One sample of the signals used by the filter (SI units)."""
+    """One sample of the signals used by the filter (SI units).
+
+    ``rates`` is optional and not part of :meth:`vector` (the KF does not use it).
+    """
 
     d: np.ndarray  # (4,) travel
     v: np.ndarray  # (4,) travel rate
     acc: np.ndarray  # (3,) ax, ay, az specific force
     vx: float
+    rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
 
     def vector(self) -> np.ndarray:
         return np.concatenate([self.d, self.v, self.acc, [self.vx]]).astype(float)
