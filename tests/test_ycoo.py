@@ -26,7 +26,7 @@ def linear_vehicle():
 
 
 def eq14_first_row(s, settings, mu, bs, ks):
-    """Eq. (14) row 1: [m_u, m_u s^2 + b_s s + k_s] w0^2 / ((s^2 + 2 z w0 s + w0^2)(tau s + 1)^2)."""
+    """Eq. (14) row 1: [m_u, m_u s^2 + b_s s + k_s] times the closed-loop shape of eq. (8)."""
     w0, z, tau = settings.omega, settings.damping, settings.tau
     shape = w0**2 / ((s**2 + 2 * z * w0 * s + w0**2) * (tau * s + 1) ** 2)
     return mu * shape, (mu * s**2 + bs * s + ks) * shape

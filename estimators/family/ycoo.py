@@ -114,7 +114,7 @@ def filter_outputs(X, settings: YcooSettings):
 
 
 def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
-    """``ycoo_step(X, u_prev, u, u_valid, dt, p, m_u) -> (X, u_prev, loads, std, residual, flags)``."""
+    """``(X, u_prev, u, u_valid, dt, p, m_u) -> (X, u_prev, loads, std, residual, flags)``."""
     X = ca.SX.sym("X", STATES * CHANNELS)
     u_prev = ca.SX.sym("u_prev", CHANNELS)
     u_raw = ca.SX.sym("u", len(INPUTS))
