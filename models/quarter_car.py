@@ -39,46 +39,54 @@ QUARTER_CAR_PARAMETERS = ("sprung_mass", "unsprung_mass", "spring_rate", "damper
 
 
 def quarter_car_function(name: str = "quarter_car") -> ca.Function:
-    """``name(x[3], e[2], qp[4]) -> (xdot[3], y[3])``: eq. 2-5 in translated coordinates.
+    """``name(x[3], e[2], u, qp[4]) -> (xdot[3], y[3])``: eq. 2-5 in translated coordinates.
 
     ``x = [p_s, p_u, q~]``, ``e = [f~_z, Delta f_z]``, ``qp`` in
-    :data:`QUARTER_CAR_PARAMETERS` order, ``y = [a_s, q~, q_dot]``.
+    :data:`QUARTER_CAR_PARAMETERS` order, ``y = [a_s, q~, q_dot]``. The known
+    input ``u`` is a further suspension force between the masses (pushing
+    them apart like the spring): the anti-roll bar and the damper's departure
+    from the linear rate, which the paper's model leaves out (§2).
     """
     x = ca.SX.sym("x", 3)
     e = ca.SX.sym("e", 2)
+    u = ca.SX.sym("u")
     qp = ca.SX.sym("qp", len(QUARTER_CAR_PARAMETERS))
     ms, mu, ks, bs = qp[0], qp[1], qp[2], qp[3]
     ps, pu, q = x[0], x[1], x[2]
     q_dot = pu / mu - ps / ms
     # Gravity cancels against the static spring force in translated coordinates (eq. 5).
-    ps_dot = ks * q + bs * q_dot - e[1]
-    pu_dot = -ks * q - bs * q_dot + e[0]
+    suspension = ks * q + bs * q_dot + u
+    ps_dot = suspension - e[1]
+    pu_dot = -suspension + e[0]
     xdot = ca.vertcat(ps_dot, pu_dot, q_dot)
     y = ca.vertcat(ps_dot / ms, q, q_dot)
-    return ca.Function(name, [x, e, qp], [xdot, y], ["x", "e", "qp"], ["xdot", "y"])
+    return ca.Function(name, [x, e, u, qp], [xdot, y], ["x", "e", "u", "qp"], ["xdot", "y"])
 
 
 def reduced_quarter_car_function(name: str = "quarter_car_reduced") -> ca.Function:
-    r"""``name(qp) -> (A[2x2], H[2x2], C[3x2], G[3x2])`` of the observable part (§4).
+    r"""``name(qp) -> (A[2x2], H[2x2], C[3x2], G[3x2], B[2], D[3])`` of the observable part (§4).
 
     With :math:`z = T x`, :math:`T = [[0, 0, 1], [-1/m_s, 1/m_u, 0]]` and the
     unobservable direction :math:`(m_s, m_u, 0)` in the kernel of :math:`T`
     and invariant under the dynamics: :math:`A_r = T A T^+`,
-    :math:`H = T B_e`, :math:`C_r = C T^+`, :math:`G = D_e`.
+    :math:`H = T B_e`, :math:`C_r = C T^+`, :math:`G = D_e`; the known input
+    enters through :math:`B = T B_u` and :math:`D = D_u`.
     """
     full = quarter_car_function()
     x = ca.SX.sym("x", 3)
     e = ca.SX.sym("e", 2)
+    u = ca.SX.sym("u")
     qp = ca.SX.sym("qp", len(QUARTER_CAR_PARAMETERS))
-    xdot, y = full(x, e, qp)
+    xdot, y = full(x, e, u, qp)
     A, B = ca.jacobian(xdot, x), ca.jacobian(xdot, e)
     C, D = ca.jacobian(y, x), ca.jacobian(y, e)
+    B_u, D_u = ca.jacobian(xdot, u), ca.jacobian(y, u)
     ms, mu = qp[0], qp[1]
     T = ca.vertcat(ca.horzcat(0, 0, 1), ca.horzcat(-1 / ms, 1 / mu, 0))
     # Right inverse of T orthogonal to its kernel: T+ = T' (T T')^-1.
     T_plus = ca.mtimes(T.T, ca.inv(ca.mtimes(T, T.T)))
-    reduced = [ca.simplify(m) for m in (T @ A @ T_plus, T @ B, C @ T_plus, D)]
-    return ca.Function(name, [qp], reduced, ["qp"], ["A", "H", "C", "G"])
+    reduced = [ca.simplify(m) for m in (T @ A @ T_plus, T @ B, C @ T_plus, D, T @ B_u, D_u)]
+    return ca.Function(name, [qp], reduced, ["qp"], ["A", "H", "C", "G", "B", "D"])
 
 
 def tyre_loads(d, v, a_u, unsprung, p: ModelParameters):
