@@ -9,6 +9,7 @@
 | chicane-bank-30 | road-angle paper §V | ±0.5 g chicane at 30 km/h, 30 % bank |
 | chicane-incline-20 | road-angle paper §V | the same on a 20 % incline |
 | wheel-lift | this project | 0.8 g turn; the inner wheels cross a kerb and lift off |
+| standstill | ycoo paper §5 | held at rest for 5 s on a plane of ``grade`` and ``bank`` (options) |
 | hockenheim | main paper Table IV; issue 4 | flying lap of the Hockenheim GP circuit, 4.57 km |
 | nordschleife | main paper Table III; issue 4 | flying lap of the Nordschleife, 20.7 km |
 """
@@ -38,6 +39,8 @@ class Options:
     seed: int = 0
     min_wavelength: float = 1.6  # m, bounce-sweep only
     shorten: float = 1.0  # fraction of a lap to drive (tests); 1 = full lap
+    grade: float = 0.0  # standstill only: rise over run, > 0 uphill
+    bank: float = 0.0  # standstill only: rise over run, > 0 left edge higher
 
 
 def _rough(s: np.ndarray, vehicle: Vehicle, options: Options) -> tuple | None:
@@ -187,6 +190,25 @@ def wheel_lift(vehicle: Vehicle, options: Options) -> Run:
     return Run(road=road, speed=_constant(road, 17.0), start=0.0, stop=200.0, max_time=20.0)
 
 
+def standstill(vehicle: Vehicle, options: Options) -> Run:
+    """Held at rest for 5 s on a plane of ``options.grade`` and ``options.bank``.
+
+    The target speed is zero: the driver's speed control holds the car against
+    the grade with drive torque (the plant's brakes fade below 0.5 rad/s of
+    wheel spin), so it stands still to a creep of a few cm/s after the first
+    second, with the tyres carrying the in-plane part of gravity.
+    """
+    s = np.arange(0.0, 100.0, GRID)
+    road = build_road(
+        s,
+        elevation=options.grade * s,
+        bank=np.full_like(s, options.bank),
+        half_width=5.0,
+        roughness=_rough(s, vehicle, options),
+    )
+    return Run(road=road, speed=np.zeros_like(s), start=50.0, stop=95.0, max_time=5.0)
+
+
 SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
     "iso-dlc": iso_dlc,
     "brake-in-turn": brake_in_turn,
@@ -196,6 +218,7 @@ SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
     "chicane-bank-30": chicane_bank_30,
     "chicane-incline-20": chicane_incline_20,
     "wheel-lift": wheel_lift,
+    "standstill": standstill,
     "hockenheim": laps.hockenheim,
     "nordschleife": laps.nordschleife,
 }

@@ -47,12 +47,23 @@ def register(subparsers) -> None:
         default=None,
         help="ISO 8608 road class (default: smooth road)",
     )
+    parser.add_argument(
+        "--grade",
+        type=float,
+        default=0.0,
+        help="standstill: road grade, rise over run (0.2 = 20 %%)",
+    )
+    parser.add_argument(
+        "--bank", type=float, default=0.0, help="standstill: road bank, rise over run, left up > 0"
+    )
     parser.set_defaults(handler=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
     vehicle = args.vehicle or example_vehicle_path()
-    options = Options(roughness=args.roughness, seed=args.seed)
+    if (args.grade or args.bank) and args.name != "standstill":
+        raise ValueError("--grade and --bank apply to the standstill scenario only")
+    options = Options(roughness=args.roughness, seed=args.seed, grade=args.grade, bank=args.bank)
     result = run_scenario(
         args.name,
         vehicle,

@@ -1,0 +1,79 @@
+"""``wheelload weigh LOG... --vehicle FILE [--out NEW.toml]``: mass and CG from logs at rest.
+
+Solves the standstill balance (ycoo-umvf paper §5) for the whole-vehicle
+mass, CG distance to the front axle, lateral CG offset and CG height, with
+their 1-sigma uncertainties; ``--out`` writes a copy of the vehicle file with
+the sprung mass, total mass, lf, lr and CG height replaced (the vehicle file
+has no lateral CG offset: it is printed only).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from wheelload.estimators.family.standstill import WeighSettings, sprung_geometry, weigh
+from wheelload.estimators.signals import read_log
+from wheelload.models import load_vehicle, vehicle_mass_centre
+from wheelload.studies.vehicle_file_edit import check_target, write_vehicle_copy
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "weigh",
+        help="vehicle mass and CG position from logs at rest on one or more slopes",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument("logs", nargs="+", metavar="LOG", help="logs at rest (.csv or .parquet)")
+    parser.add_argument("--vehicle", required=True, help="vehicle TOML file (suspension, geometry)")
+    parser.add_argument("--out", help="write an updated copy of the vehicle file here")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
+    parser.add_argument(
+        "--max-speed", type=float, default=0.3, help="speed below which a sample is at rest [m/s]"
+    )
+    parser.add_argument(
+        "--settle", type=float, default=1.0, help="seconds dropped at the start of a still period"
+    )
+    parser.set_defaults(handler=handle)
+
+
+def handle(args: argparse.Namespace) -> int:
+    vehicle_path = Path(args.vehicle)
+    vehicle = load_vehicle(vehicle_path)
+    inputs = (vehicle_path, *(Path(p) for p in args.logs))
+    if args.out:  # before the work: an output that would replace a file is refused at once
+        check_target(Path(args.out), inputs, force=args.force)
+    settings = WeighSettings(max_speed=args.max_speed, settle=args.settle)
+    result = weigh([read_log(path) for path in args.logs], vehicle, settings)
+    centre = vehicle_mass_centre(vehicle)
+    file_values = (vehicle.mass.total, centre.lf, 0.0, centre.height)
+    print(f"{'':>22}{'estimate':>12}{'1 sigma':>10}{'file':>10}")
+    labels = ("mass [kg]", "CG to front axle [m]", "CG lateral, left [m]", "CG height [m]")
+    for label, value, std, file_value in zip(labels, result.values, result.std, file_values):
+        print(f"{label:>22}{value:12.4f}{std:10.4f}{file_value:10.4f}")
+    for attitude in result.attitudes:
+        ax, ay, az = attitude.acc
+        print(
+            f"{attitude.source}: {attitude.samples} samples at rest, "
+            f"a = ({ax:.3f}, {ay:.3f}, {az:.3f}) m/s^2"
+        )
+    print(f"fit: chi2 = {result.chi2:.3g} on {result.dof} degrees of freedom (whole vehicle)")
+    if args.out:
+        sprung = sprung_geometry(vehicle, result)
+        changes = {
+            ("mass", "total"): sprung["total"],
+            ("mass", "sprung"): sprung["sprung"],
+            ("geometry", "lf"): sprung["lf"],
+            ("geometry", "lr"): sprung["lr"],
+            ("geometry", "cg_height"): sprung["cg_height"],
+        }
+        write_vehicle_copy(
+            vehicle_path,
+            Path(args.out),
+            changes,
+            inputs=inputs,
+            force=args.force,
+        )
+        print(f"vehicle file written to {args.out} (sprung CG: lf {sprung['lf']:.4f} m, "
+              f"height {sprung['cg_height']:.4f} m)")  # fmt: skip
+    return 0
