@@ -51,7 +51,7 @@ from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle, suspension_function
 from wheelload.models.quarter_car import corner_acceleration_function, quarter_car_function
 
-OBSERVER_BANDWIDTH = 10.0  # Hz, both observer poles
+OBSERVER_BANDWIDTH = 25.0  # Hz, both poles: above the wheel-hop mode (~14 Hz), below Nyquist
 #: v_hat[4], w_hat[4], previous rates[3], previous rates valid, last F_hat[4]
 FRONT_END_STATES = 16
 FRONT_END_CONSTANTS = 13  # m_u[4], corner x[4], corner y[4] from the IMU, bandwidth
