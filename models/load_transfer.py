@@ -1,7 +1,9 @@
 r"""Algebraic and quasi-static load transfer (Siegloff & Choi §IV-B, methods B and C).
 
-Body attitude relative to the road from the four travels (small angles,
-ISO 8855: pitch > 0 nose down, roll > 0 right side down):
+Body attitude relative to the road from the four travels
+(:mod:`wheelload.models.body_attitude`, small angles, ISO 8855: pitch > 0
+nose down, roll > 0 right side down; wheelbase :math:`l_f + l_r` of the
+equilibrium):
 
 .. math::
     \theta = \frac{\bar d_f - \bar d_r}{l_f + l_r}, \quad
@@ -38,24 +40,16 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.body_attitude import attitude_from_travel, road_frame
 from wheelload.models.equilibrium import equilibrium_matrix, equilibrium_vector
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.suspension import suspension_loads
 
 
 def body_attitude(d, p: ModelParameters):
-    """Pitch and roll [rad] of the body relative to the road from the travels ``d`` [m]."""
-    pitch = (0.5 * (d[0] + d[1]) - 0.5 * (d[2] + d[3])) / (p.lf + p.lr)
-    roll = 0.5 * ((d[1] - d[0]) / p.track_front + (d[3] - d[2]) / p.track_rear)
+    """Pitch and roll [rad] relative to the road from the travels (road-angle paper eq. 7)."""
+    roll, pitch = attitude_from_travel(d, p.track_front, p.track_rear, p.lf + p.lr)
     return pitch, roll
-
-
-def road_frame(acc, pitch, roll):
-    r"""Specific force :math:`R_y(\theta) R_x(\varphi) f^b` in road-parallel axes."""
-    cp, sp, cr, sr = ca.cos(pitch), ca.sin(pitch), ca.cos(roll), ca.sin(roll)
-    R_y = ca.vertcat(ca.horzcat(cp, 0, sp), ca.horzcat(0, 1, 0), ca.horzcat(-sp, 0, cp))
-    R_x = ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, cr, -sr), ca.horzcat(0, sr, cr))
-    return ca.mtimes([R_y, R_x, acc])
 
 
 def algebraic_loads(acc, p: ModelParameters):
@@ -107,7 +101,7 @@ def algebraic_function(name: str = "algebraic_load") -> ca.Function:
     return ca.Function(
         name,
         [acc, pitch, roll, p_vector],
-        [algebraic_loads(road_frame(acc, pitch, roll), p)],
+        [algebraic_loads(road_frame(acc, roll, pitch), p)],
         ["acc", "pitch", "roll", "p"],
         ["x"],
     )

@@ -29,8 +29,8 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import (
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     hold,
     step_function,
     step_symbols,
@@ -64,7 +64,7 @@ def algebraic_step() -> ca.Function:
     )
 
 
-class Algebraic(CompiledMethod):
+class Algebraic(StepMethod):
     """Method B: Alatorre-style algebraic load transfer (module docstring)."""
 
     name = "B algebraic"

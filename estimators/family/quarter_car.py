@@ -1,30 +1,30 @@
 r"""Method E, quarter-car tyre-force observer after Cheon et al. (Siegloff & Choi §IV-B, [12]).
 
-Per corner, the quarter-car balance of the unsprung mass
-(:mod:`wheelload.models.quarter_car`),
+Per corner, the unsprung-mass balance of the quarter car
+(:func:`wheelload.models.quarter_car.tyre_load_function`),
 
-.. math:: \ddot d = \frac{F - z(d, v)}{m_u} - a_s,
+.. math:: F = z(d, v) + m_u a_u, \qquad \ddot d = a_u - a_s,
 
-with the tyre normal load :math:`F = z + w` split into the suspension load
-:math:`z` of eq. 9 (from the measured travel and rate) and the unsprung
-inertia force :math:`w = m_u \ddot z_u`, an unknown input (random walk);
-the body corner's vertical acceleration :math:`a_s` is reconstructed from
-the body IMU: :math:`a_s = a_z - g - x_i \dot\omega_y + y_i \dot\omega_x`,
-the angular accelerations by differencing the gyro rates (zero when the log
-has no rates). A discrete observer on the measured compression rate
-:math:`v`,
+with :math:`z` the suspension load of eq. 9 (static load, spring, damper,
+anti-roll bar) from the measured travel and rate, the unsprung vertical
+acceleration :math:`a_u` an unknown input (random walk), and the body
+corner's vertical acceleration :math:`a_s` reconstructed from the body IMU
+(:func:`wheelload.models.body_attitude.corner_vertical_acceleration`:
+:math:`a_z - g - x_i \dot\omega_y + y_i \dot\omega_x`), the angular
+accelerations by differencing the gyro rates (zero when the log has no
+rates). A discrete observer on the measured compression rate :math:`v`,
 
 .. math::
-    v^- = \hat v + \Delta t\,(\hat w/m_u - a_s), \quad
-    \hat v^+ = v^- + k_1 (v - v^-), \quad \hat w^+ = \hat w + k_2 (v - v^-), \\
-    k_1 = 1 - \lambda^2, \quad k_2 = (1 - \lambda)^2 m_u / \Delta t, \quad
-    \lambda = e^{-2\pi f_o \Delta t}, \quad \hat F = z + \hat w,
+    v^- = \hat v + \Delta t\,(\hat a_u - a_s), \quad
+    \hat v^+ = v^- + k_1 (v - v^-), \quad \hat a_u^+ = \hat a_u + k_2 (v - v^-), \\
+    k_1 = 1 - \lambda^2, \quad k_2 = (1 - \lambda)^2 / \Delta t, \quad
+    \lambda = e^{-2\pi f_o \Delta t}, \quad \hat F = z + m_u \hat a_u,
 
 places both poles of the error dynamics at :math:`\lambda` (bandwidth
 :math:`f_o`, :data:`OBSERVER_BANDWIDTH`).
 
 Adaptations (the main paper gives no equations for E and [12] is not in
-our library): the observer form, its split :math:`F = z + w` (observing
+our library): the observer form, its split :math:`F = z + m_u a_u` (observing
 only the unsprung inertia, so the observer's lag does not delay the
 suspension load) and its pole placement are ours; corner
 inputs are reconstructed from the body IMU and suspension signals as the
@@ -40,19 +40,20 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import (
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     StepSymbols,
     hold,
     step_function,
     step_symbols,
 )
 from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle, suspension_function
-from wheelload.models.quarter_car import corner_acceleration_function, quarter_car_function
+from wheelload.models import ModelParameters, Vehicle
+from wheelload.models.body_attitude import corner_vertical_acceleration
+from wheelload.models.quarter_car import tyre_load_function
 
 OBSERVER_BANDWIDTH = 25.0  # Hz, both poles: above the wheel-hop mode (~14 Hz), below Nyquist
-#: v_hat[4], w_hat[4], previous rates[3], previous rates valid, last F_hat[4]
+#: v_hat[4], a_u_hat[4], previous rates[3], previous rates valid, last F_hat[4]
 FRONT_END_STATES = 16
 FRONT_END_CONSTANTS = 13  # m_u[4], corner x[4], corner y[4] from the IMU, bandwidth
 
@@ -93,39 +94,44 @@ def body_corner_accelerations(sym: StepSymbols, rates: ca.SX, c: ca.SX):
     ``rates`` is the state (previous rates[3], previous valid); returns ``(a_s, next rates)``.
     """
     omega_dot, rate_state = body_angular_acceleration(sym, rates[0:3], rates[3])
-    corner = corner_acceleration_function()
-    a_s = ca.vertcat(*[corner(sym.acc[2], omega_dot, c[4 + i], c[8 + i]) for i in range(4)])
+    positions = [(c[4 + i], c[8 + i]) for i in range(4)]
+    a_s = corner_vertical_acceleration(sym.acc[2], omega_dot[0], omega_dot[1], positions)
     return a_s, rate_state
 
 
-def corner_inputs(sym: StepSymbols, s: ca.SX, c: ca.SX):
-    """Suspension loads, body-corner accelerations and their validity for the four corners.
+def unsprung_acceleration(F, d, v, m_u, p_vector, corner: int):
+    """The unsprung acceleration of ``corner`` that gives tyre load ``F``.
 
-    Returns ``(z, a_s, ok, rate_state)``; ``rate_state`` is the next (rates, rates valid).
+    Solves ``F = tyre_load(d, v, a_u, m_u, p)`` (affine in ``a_u``) with the
+    model Function's value at ``a_u = 0`` and its Jacobian.
     """
-    z = suspension_function()(sym.d, sym.v, sym.p_vector)
-    a_s, rate_state = body_corner_accelerations(sym, s[8:12], c)
-    ok = sym.mask(z) * sym.mask(sym.acc[2])
-    return z, a_s, ok, rate_state
+    tyre = tyre_load_function()
+    a = ca.SX.sym("a_u", 4)
+    loads = tyre(d, v, a, m_u, p_vector)
+    base = ca.substitute(loads, a, ca.DM.zeros(4))
+    slope = ca.substitute(ca.jacobian(loads, a), a, ca.DM.zeros(4))
+    return (F - base[corner]) / slope[corner, corner]
 
 
 def front_end(sym: StepSymbols, s: ca.SX, c: ca.SX):
     """One observer step of the four corners: ``(s_next, F_hat, used)`` (module docstring)."""
-    v_hat, w_hat, F_held = s[0:4], s[4:8], s[12:16]
+    v_hat, a_u, F_held = s[0:4], s[4:8], s[12:16]
     m_u, bandwidth = c[0:4], c[12]
-    z, a_s, ok, rate_state = corner_inputs(sym, s, c)
+    a_s, rate_state = body_corner_accelerations(sym, s[8:12], c)
     lam = ca.exp(-2.0 * ca.pi * bandwidth * sym.dt)
     k1 = 1.0 - lam**2
-    k2 = (1.0 - lam) ** 2 * m_u / sym.dt
-    balance = quarter_car_function()
-    v_pred = ca.vertcat(
-        *[v_hat[i] + sym.dt * balance(z[i] + w_hat[i], z[i], a_s[i], m_u[i]) for i in range(4)]
-    )
+    k2 = (1.0 - lam) ** 2 / sym.dt
+    # Compression kinematics: d'' = a_u - a_s (unsprung minus body-corner acceleration).
+    v_pred = v_hat + sym.dt * (a_u - a_s)
     innovation = sym.v - v_pred
+    a_u_new = a_u + k2 * innovation
+    tyre = tyre_load_function()
+    F = tyre(sym.d, sym.v, a_u_new, m_u, sym.p_vector)
+    # Needs the corner's travel and rate (and the bar partner's travel) and a_z; rates optional.
+    ok = sym.mask(tyre(sym.d, sym.v, ca.DM.zeros(4), m_u, sym.p_vector)) * sym.mask(sym.acc[2])
     v_new = hold(ok, v_pred + k1 * innovation, v_hat)
-    w_new = hold(ok, w_hat + k2 * innovation, w_hat)
-    F_new = hold(ok, z + w_new, F_held)
-    return ca.vertcat(v_new, w_new, rate_state, F_new), F_new, ok
+    F_new = hold(ok, F, F_held)
+    return ca.vertcat(v_new, hold(ok, a_u_new, a_u), rate_state, F_new), F_new, ok
 
 
 @functools.cache
@@ -136,7 +142,7 @@ def quarter_car_step() -> ca.Function:
     return step_function("wheelload_quarter_car_step", sym, s_next, F, ca.SX.zeros(4), used)
 
 
-class QuarterCarObserver(CompiledMethod):
+class QuarterCarObserver(StepMethod):
     """Method E: four independent quarter-car tyre-force observers (module docstring)."""
 
     name = "E quarter-car observer"

@@ -20,7 +20,6 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import CompiledMethod, step_function, step_symbols
 from wheelload.estimators.family.quarter_car import (
     FRONT_END_CONSTANTS,
     FRONT_END_STATES,
@@ -29,6 +28,7 @@ from wheelload.estimators.family.quarter_car import (
     front_end,
     front_end_initial,
 )
+from wheelload.estimators.family.step_method import StepMethod, step_function, step_symbols
 from wheelload.estimators.kalman import predict, sequential_update, upper
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.two_stage import TUNING, tuning_vector
@@ -58,7 +58,7 @@ def constrained_step() -> ca.Function:
     return step_function("wheelload_quarter_car_constrained_step", sym, s_next, x_new, std, used_s)
 
 
-class ConstrainedQuarterCar(CompiledMethod):
+class ConstrainedQuarterCar(StepMethod):
     """Method E+C: quarter-car observers + the two-stage KF's updates (module docstring)."""
 
     name = "E+C quarter-car + constraint"

@@ -23,8 +23,8 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import (
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     hold,
     step_function,
     step_symbols,
@@ -46,7 +46,7 @@ def quasi_static_step() -> ca.Function:
     )
 
 
-class QuasiStatic(CompiledMethod):
+class QuasiStatic(StepMethod):
     """Method C: quasi-static rigid-body load transfer (module docstring)."""
 
     name = "C quasi-static"

@@ -2,7 +2,8 @@ r"""Method F, per-corner strong-tracking UKF after Ding et al. (Siegloff & Choi 
 
 Per corner, state :math:`x = [d, v, F]` (compression, compression rate,
 tyre normal load), measurements :math:`y = [d, v]`, and the quarter-car
-process of :mod:`wheelload.models.quarter_car`
+process (the unsprung balance of :func:`wheelload.models.quarter_car.tyre_load_function`
+solved for the unsprung acceleration)
 
 .. math:: \dot d = v, \quad \dot v = \frac{F - z(d, v)}{m_u} - a_s, \quad \dot F = w_F
 
@@ -41,18 +42,21 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import (
-    CompiledMethod,
+from wheelload.estimators.family.quarter_car import (
+    body_corner_accelerations,
+    corner_geometry,
+    unsprung_acceleration,
+)
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     hold,
     step_function,
     step_symbols,
 )
-from wheelload.estimators.family.quarter_car import body_corner_accelerations, corner_geometry
 from wheelload.estimators.family.unscented import sigma_points, unscented_transform
 from wheelload.estimators.kalman import sequential_update, symmetrise
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle, suspension_function
-from wheelload.models.quarter_car import quarter_car_function
 
 #: Process noise densities of d [m^2/s] and v [(m/s)^2/s]: unmodelled corner kinematics, about
 #: 0.5 m/s^2 of body-corner acceleration error at 100 Hz ((0.5 * 0.01)^2 / 0.01).
@@ -72,14 +76,12 @@ H = ca.DM([[1, 0, 0], [0, 1, 0]])
 
 def _process(sym, corner: int, m_u, a_s):
     """Continuous corner dynamics ``f(x)`` with the other wheels' travel and rate as measured."""
-    suspension = suspension_function()
-    balance = quarter_car_function()
 
     def f(x):
         d = ca.vertcat(*[x[0] if i == corner else sym.d[i] for i in range(4)])
         v = ca.vertcat(*[x[1] if i == corner else sym.v[i] for i in range(4)])
-        z = suspension(d, v, sym.p_vector)[corner]
-        return ca.vertcat(x[1], balance(x[2], z, a_s, m_u), 0)
+        a_u = unsprung_acceleration(x[2], d, v, m_u, sym.p_vector, corner)
+        return ca.vertcat(x[1], a_u - a_s, 0)
 
     return f
 
@@ -95,7 +97,7 @@ def _rk4(f, x, dt):
 def corner_update(sym, s, corner: int, a_s, c):
     """One strong-tracking UKF step of one corner: ``(s_next, F, std_F)``."""
     x, P, V = s[0:3], ca.reshape(s[3:12], 3, 3), ca.reshape(s[12:16], 2, 2)
-    m_u = c[corner]
+    m_u = c[0:4]
     q, r = c[12:15], c[15:17]
     rho, beta, max_fading = c[17], c[18], c[19]
     f = _process(sym, corner, m_u, a_s)
@@ -137,7 +139,7 @@ def strong_tracking_step() -> ca.Function:
     )
 
 
-class StrongTrackingUKF(CompiledMethod):
+class StrongTrackingUKF(StepMethod):
     """Method F: four strong-tracking UKFs on compression and rate (module docstring)."""
 
     name = "F strong-tracking UKF"

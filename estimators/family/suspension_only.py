@@ -15,8 +15,8 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import (
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     hold,
     step_function,
     step_symbols,
@@ -35,7 +35,7 @@ def suspension_only_step() -> ca.Function:
     return step_function("wheelload_suspension_only_step", sym, loads, loads, ca.SX.zeros(4), mask)
 
 
-class SuspensionOnly(CompiledMethod):
+class SuspensionOnly(StepMethod):
     """Method D: the suspension pseudo-measurement as the estimate (module docstring)."""
 
     name = "D suspension-only"

@@ -1,0 +1,117 @@
+r"""Body attitude relative to the road, and body-frame kinematics of the corners.
+
+ISO 8855 axes (x forward, y left, z up), roll :math:`\phi > 0` lifts the left
+side, pitch :math:`\theta > 0` lowers the nose; travel ``d > 0`` in compression.
+
+- :func:`attitude_from_travel` (road-angle paper eq. 7): body roll and pitch
+  relative to the road plane from the four travels,
+
+  .. math:: \phi = \tfrac12\Big(\frac{d_{FR} - d_{FL}}{T_f} + \frac{d_{RR} - d_{RL}}{T_r}\Big),
+            \quad \theta = \frac{d_{FL} + d_{FR} - d_{RL} - d_{RR}}{2 L}
+
+  (the paper prints the roll difference the other way round: with
+  compression positive, a compressed left side is a left side *down*, which is
+  negative roll).
+- :func:`road_frame` (eq. 4-5): specific force rotated from the body into the
+  road frame, :math:`a_r = R_y(\theta) R_x(\phi) a_m` (the paper's labels of
+  the two matrices are swapped: its :math:`R_\theta` is a rotation about x).
+- :func:`corner_vertical_acceleration`: sprung-mass vertical acceleration at
+  each corner without gravity, :math:`a_{s,i} = a_z - g + \dot\omega_x y_i -
+  \dot\omega_y x_i` (rigid body, centripetal terms left out), positions
+  relative to the IMU.
+- :func:`roll_pitch_stiffness`: suspension roll and pitch stiffness and
+  damping from the springs, dampers and anti-roll bars of the vehicle file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from wheelload.models.vehicle import GRAVITY, Vehicle
+
+
+def attitude_from_travel(d, track_front, track_rear, wheelbase):
+    """Body roll and pitch relative to the road [rad] from travels FL, FR, RL, RR (eq. 7)."""
+    roll = 0.5 * ((d[1] - d[0]) / track_front + (d[3] - d[2]) / track_rear)
+    pitch = (d[0] + d[1] - d[2] - d[3]) / (2.0 * wheelbase)
+    return roll, pitch
+
+
+def road_frame(acc, roll, pitch):
+    r"""Specific force in the road frame, :math:`R_y(\theta) R_x(\phi) a` (eq. 4-5)."""
+    c_r, s_r, c_p, s_p = ca.cos(roll), ca.sin(roll), ca.cos(pitch), ca.sin(pitch)
+    rx = ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c_r, -s_r), ca.horzcat(0, s_r, c_r))
+    ry = ca.vertcat(ca.horzcat(c_p, 0, s_p), ca.horzcat(0, 1, 0), ca.horzcat(-s_p, 0, c_p))
+    return ca.mtimes(ry, ca.mtimes(rx, acc))
+
+
+def attitude_function(vehicle: Vehicle, name: str = "body_attitude") -> ca.Function:
+    """``name(d[4], acc[3]) -> (roll, pitch, acc_road[3])``: eq. 7 then eq. 4-5."""
+    d = ca.SX.sym("d", 4)
+    acc = ca.SX.sym("acc", 3)
+    g = vehicle.geometry
+    roll, pitch = attitude_from_travel(d, g.track_front, g.track_rear, g.wheelbase)
+    return ca.Function(
+        name,
+        [d, acc],
+        [roll, pitch, road_frame(acc, roll, pitch)],
+        ["d", "acc"],
+        ["roll", "pitch", "acc_road"],
+    )
+
+
+def corner_positions(vehicle: Vehicle) -> np.ndarray:
+    """Wheel centres (x, y) relative to the IMU [m], rows FL, FR, RL, RR."""
+    g = vehicle.geometry
+    x_imu, y_imu = g.imu_position[0], g.imu_position[1]
+    rows = [
+        (g.lf, 0.5 * g.track_front),
+        (g.lf, -0.5 * g.track_front),
+        (-g.lr, 0.5 * g.track_rear),
+        (-g.lr, -0.5 * g.track_rear),
+    ]
+    return np.array([(x - x_imu, y - y_imu) for x, y in rows])
+
+
+def corner_vertical_acceleration(az, roll_acc, pitch_acc, positions):
+    r""":math:`a_{s,i} = a_z - g + \dot\omega_x y_i - \dot\omega_y x_i` at the four corners.
+
+    ``positions``: rows (x, y), an array or a sequence of pairs (numbers or symbols).
+    """
+    rows = positions.tolist() if isinstance(positions, np.ndarray) else positions
+    return ca.vertcat(*[az - GRAVITY + roll_acc * y - pitch_acc * x for x, y in rows])
+
+
+@dataclass(frozen=True, kw_only=True)
+class RollPitchStiffness:
+    """Suspension roll / pitch stiffness [N m/rad] and damping [N m s/rad] of the body."""
+
+    roll: float
+    roll_damping: float
+    roll_share_front: float  # front axle's part of the roll stiffness
+    pitch: float
+    pitch_damping: float
+
+
+def roll_pitch_stiffness(vehicle: Vehicle) -> RollPitchStiffness:
+    r"""Body roll and pitch rates of the wheel-rate springs, dampers and bars.
+
+    Per axle :math:`K_\phi = (k/2 + \gamma k_{arb}) T^2` (left and right travel
+    :math:`\mp T\phi/2`), damping :math:`\bar c T^2 / 2` with :math:`\bar c`
+    the mean of push and pull rates; pitch about the sprung CG
+    :math:`K_\theta = 2 (k_f l_f^2 + k_r l_r^2)`.
+    """
+    g, s = vehicle.geometry, vehicle.suspension
+    axles = ((s.front, g.track_front, g.lf), (s.rear, g.track_rear, g.lr))
+    roll = [(a.spring_rate / 2 + a.arb_ratio * a.arb_rate) * t**2 for a, t, _ in axles]
+    damping = [0.5 * (a.damper_push + a.damper_pull) for a, _, _ in axles]
+    return RollPitchStiffness(
+        roll=sum(roll),
+        roll_damping=sum(c * t**2 / 2 for c, (_, t, _) in zip(damping, axles)),
+        roll_share_front=roll[0] / sum(roll),
+        pitch=sum(2 * a.spring_rate * arm**2 for a, _, arm in axles),
+        pitch_damping=sum(2 * c * arm**2 for c, (_, _, arm) in zip(damping, axles)),
+    )
