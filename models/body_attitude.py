@@ -76,9 +76,13 @@ def corner_positions(vehicle: Vehicle) -> np.ndarray:
     return np.array([(x - x_imu, y - y_imu) for x, y in rows])
 
 
-def corner_vertical_acceleration(az, roll_acc, pitch_acc, positions: np.ndarray):
-    r""":math:`a_{s,i} = a_z - g + \dot\omega_x y_i - \dot\omega_y x_i` at the four corners."""
-    return ca.vertcat(*[az - GRAVITY + roll_acc * y - pitch_acc * x for x, y in positions.tolist()])
+def corner_vertical_acceleration(az, roll_acc, pitch_acc, positions):
+    r""":math:`a_{s,i} = a_z - g + \dot\omega_x y_i - \dot\omega_y x_i` at the four corners.
+
+    ``positions``: rows (x, y), an array or a sequence of pairs (numbers or symbols).
+    """
+    rows = positions.tolist() if isinstance(positions, np.ndarray) else positions
+    return ca.vertcat(*[az - GRAVITY + roll_acc * y - pitch_acc * x for x, y in rows])
 
 
 @dataclass(frozen=True, kw_only=True)

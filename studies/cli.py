@@ -16,6 +16,8 @@ from importlib.metadata import version
 COMMANDS = (
     "wheelload.studies.commands.vehicle",
     "wheelload.studies.commands.estimate",
+    "wheelload.studies.commands.methods",
+    "wheelload.studies.commands.compare",
     "wheelload.studies.commands.bench",
     "wheelload.studies.commands.simulate",
     "wheelload.studies.commands.mhe",

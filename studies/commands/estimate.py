@@ -1,4 +1,4 @@
-"""``wheelload estimate``: run the two-stage KF on a log, summarise, write and plot."""
+"""``wheelload estimate``: run an estimator (default: the two-stage KF) on a log."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import numpy as np
 
 from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
 from wheelload.estimators.offsets import still_period_static_loads
+from wheelload.estimators.registry import build, method
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
 
@@ -23,7 +24,7 @@ def example_log_path() -> Path:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "estimate", help="estimate the four wheel loads of a log with the two-stage KF"
+        "estimate", help="estimate the four wheel loads of a log (default: the two-stage KF)"
     )
     parser.add_argument("log", nargs="?", help="log file (.csv or .parquet)")
     parser.add_argument("--vehicle", help="vehicle TOML file")
@@ -31,6 +32,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--example",
         action="store_true",
         help="use the bundled example log and vehicle (sports car)",
+    )
+    parser.add_argument(
+        "--method", default="kf", help="estimator name (see `wheelload methods`; default kf)"
     )
     parser.add_argument("--out", help="write the estimates to this CSV file")
     parser.add_argument("--plot", help="save a figure of the estimates to this PNG file")
@@ -51,14 +55,18 @@ def run(args: argparse.Namespace) -> int:
         if not args.log or not args.vehicle:
             raise ValueError("give a LOG and --vehicle FILE, or --example")
         log_path, vehicle_path = Path(args.log), Path(args.vehicle)
+    info = method(args.method)
+    if args.still_period and info.name != "kf":
+        raise ValueError(f"--still-period applies to --method kf only, not {info.name!r}")
     vehicle = load_vehicle(vehicle_path)
     signals = read_log(log_path)
-    static = (
-        still_period_static_loads(signals, vehicle, args.still_period)
-        if args.still_period
-        else None
-    )
-    estimate = TwoStageKF(vehicle, static=static).run(signals)
+    if args.still_period:
+        static = still_period_static_loads(signals, vehicle, args.still_period)
+        estimator = TwoStageKF(vehicle, static=static)
+    else:
+        estimator = build(info.name, vehicle)
+    estimate = estimator.run(signals)
+    print(f"method {info.name}: {info.description}")
     print(summary(estimate, signals, vehicle.name))
     if args.out:
         estimate.to_pandas().to_csv(args.out, index=False)
@@ -86,10 +94,8 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     ]
     for i, wheel in enumerate(WHEELS):
         load = estimate.loads[:, i]
-        lines.append(
-            f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} "
-            f"{estimate.std[:, i].mean():12.0f}"
-        )
+        std = f"{estimate.std[:, i].mean():12.0f}" if estimate.has_std else f"{'n/a':>12}"
+        lines.append(f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} {std}")
     flagged = int(np.count_nonzero(estimate.flags))
     lines.append(f"samples with a skipped update (missing input): {flagged}")
     if signals.reference is not None:

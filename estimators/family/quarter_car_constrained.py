@@ -1,0 +1,85 @@
+r"""Method E+C: the quarter-car observer followed by the soft equilibrium update (§IV-E2).
+
+The structural study of Siegloff & Choi §IV-E2 ("Cheon + Constraint Kalman
+Filter"): the two-stage filter of §III with the four observer outputs of
+method E (:mod:`wheelload.estimators.family.quarter_car`) in place of the
+suspension pseudo-measurement. Random walk :math:`x^- = x`,
+:math:`P^- = P + q\Delta t I` (eq. 19); update with :math:`z = \hat F_E`,
+:math:`R_s = r_s/\Delta t\,I` (eq. 20-22); soft equilibrium update
+:math:`b = A x + w_c`, :math:`R_c = \mathrm{diag}(r_c)/\Delta t` (eq. 23-25),
+all with the kernels of :mod:`wheelload.estimators.kalman` and the vehicle
+file's filter tuning, exactly as the two-stage KF. A corner whose observer
+was held is not used in the first update; a constraint row with a missing
+input is skipped; both are flagged.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.family.quarter_car import (
+    FRONT_END_CONSTANTS,
+    FRONT_END_STATES,
+    OBSERVER_BANDWIDTH,
+    corner_constants,
+    front_end,
+    front_end_initial,
+)
+from wheelload.estimators.family.step_method import StepMethod, step_function, step_symbols
+from wheelload.estimators.kalman import predict, sequential_update, upper
+from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.two_stage import TUNING, tuning_vector
+from wheelload.models import ModelParameters, Vehicle, equilibrium_function
+
+N_STATES = FRONT_END_STATES + 4 + 16  # observer, x, P (column-major)
+
+
+@functools.cache
+def constrained_step() -> ca.Function:
+    """Step: state = (observer, x, P); constants = (observer constants, KF tuning)."""
+    sym = step_symbols(N_STATES, FRONT_END_CONSTANTS + len(TUNING))
+    observer, F, used_s = front_end(sym, sym.s[:FRONT_END_STATES], sym.c[:FRONT_END_CONSTANTS])
+    x = sym.s[FRONT_END_STATES : FRONT_END_STATES + 4]
+    P = ca.reshape(sym.s[FRONT_END_STATES + 4 :], 4, 4)
+    tuning = sym.c[FRONT_END_CONSTANTS:]
+    A, b = equilibrium_function()(sym.acc, sym.vx, sym.p_vector)
+    mask_c = sym.mask(b)
+    Q = tuning[0] * sym.dt * ca.DM.eye(4)
+    rs = ca.repmat(tuning[1] / sym.dt, 4, 1)
+    rc = tuning[2:5] / sym.dt
+    x_pred, P_pred = predict(x, upper(P), Q)
+    x_s, P_s = sequential_update(x_pred, P_pred, F, ca.DM.eye(4), rs, used_s)
+    x_new, P_new = sequential_update(x_s, P_s, b, A, rc, mask_c)
+    std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
+    s_next = ca.vertcat(observer, x_new, ca.vec(P_new))
+    return step_function("wheelload_quarter_car_constrained_step", sym, s_next, x_new, std, used_s)
+
+
+class ConstrainedQuarterCar(StepMethod):
+    """Method E+C: quarter-car observers + the two-stage KF's updates (module docstring)."""
+
+    name = "E+C quarter-car + constraint"
+    has_std = True
+
+    def __init__(self, vehicle: Vehicle, *, bandwidth: float = OBSERVER_BANDWIDTH) -> None:
+        parameters = ModelParameters.from_vehicle(vehicle)
+        P0 = vehicle.filter.initial_std**2 * np.eye(4)
+        super().__init__(
+            constrained_step(),
+            parameters.vector(),
+            np.concatenate([corner_constants(vehicle, bandwidth), tuning_vector(vehicle)]),
+            np.concatenate(
+                [front_end_initial(parameters), parameters.static(), P0.ravel(order="F")]
+            ),
+        )
+
+
+INFO = MethodInfo(
+    name="E+C",
+    description="method E's observers followed by the KF's soft equilibrium update",
+    reference="Siegloff & Choi §IV-E2 (Cheon + constraint KF); eq. 19-25",
+    build=ConstrainedQuarterCar,
+)

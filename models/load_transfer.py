@@ -1,0 +1,117 @@
+r"""Algebraic and quasi-static load transfer (Siegloff & Choi §IV-B, methods B and C).
+
+Body attitude relative to the road from the four travels
+(:mod:`wheelload.models.body_attitude`, small angles, ISO 8855: pitch > 0
+nose down, roll > 0 right side down; wheelbase :math:`l_f + l_r` of the
+equilibrium):
+
+.. math::
+    \theta = \frac{\bar d_f - \bar d_r}{l_f + l_r}, \quad
+    \varphi = \tfrac12 \Big(\frac{d_{FR} - d_{FL}}{T_f} + \frac{d_{RR} - d_{RL}}{T_r}\Big)
+
+Road-frame specific force :math:`f^r = R_y(\theta) R_x(\varphi) f^b`: the body
+accelerometer's reading expressed in axes parallel to the road plane.
+Because the accelerometer measures specific force (gravity included), its
+road-frame components carry the road grade and bank exactly as the gravity
+terms of Alatorre et al. do: :math:`f^r_x = a_x + g\sin\theta_{road}`,
+:math:`f^r_y = a_y - g\cos\theta_{road}\sin\varphi_{road}`,
+:math:`f^r_z = a_z + g\cos\theta_{road}\cos\varphi_{road}`.
+
+Alatorre-style algebraic loads (lateral transfer shared by the axles in
+proportion to their static loads, no aerodynamics):
+
+.. math::
+    F_{FL,FR} = \frac{m}{2L}(l_r f_z - h f_x) \mp \frac{m h l_r}{L T_f} f_y, \quad
+    F_{RL,RR} = \frac{m}{2L}(l_f f_z + h f_x) \mp \frac{m h l_f}{L T_r} f_y
+
+They satisfy the three rows of :math:`A x = b` (eq. 15-16 without aero) for
+:math:`f = f^r`. Quasi-static loads: the static loads moved onto
+:math:`A x = b` along the suspension's own stiffness,
+
+.. math:: x = x_0 + K A^\top (A K A^\top)^{-1} (b - A x_0), \quad
+          K = \partial z / \partial d
+
+(:math:`z` the suspension model of eq. 9): the load transfer of a rigid body
+on its springs and anti-roll bars, which fixes the roll-moment split that the
+three equilibrium rows leave open.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from wheelload.models.body_attitude import attitude_from_travel, road_frame
+from wheelload.models.equilibrium import equilibrium_matrix, equilibrium_vector
+from wheelload.models.parameters import ModelParameters
+from wheelload.models.suspension import suspension_loads
+
+
+def body_attitude(d, p: ModelParameters):
+    """Pitch and roll [rad] relative to the road from the travels (road-angle paper eq. 7)."""
+    roll, pitch = attitude_from_travel(d, p.track_front, p.track_rear, p.lf + p.lr)
+    return pitch, roll
+
+
+def algebraic_loads(acc, p: ModelParameters):
+    """Alatorre-style wheel loads from road-frame specific force ``acc`` (module docstring)."""
+    fx, fy, fz = acc[0], acc[1], acc[2]
+    m, h, lf, lr = p.mass, p.cg_height, p.lf, p.lr
+    L = lf + lr
+    front = m / (2 * L) * (lr * fz - h * fx)
+    rear = m / (2 * L) * (lf * fz + h * fx)
+    lateral_front = m * h * lr / (L * p.track_front) * fy
+    lateral_rear = m * h * lf / (L * p.track_rear) * fy
+    return ca.vertcat(
+        front - lateral_front, front + lateral_front, rear - lateral_rear, rear + lateral_rear
+    )
+
+
+def suspension_stiffness(p: ModelParameters) -> ca.SX:
+    """:math:`K = \\partial z / \\partial d` of the suspension model (springs, anti-roll bars)."""
+    d = ca.SX.sym("d", 4)
+    z = suspension_loads(d, ca.SX.zeros(4), p)
+    K = ca.jacobian(z, d)
+    # z is affine in d, so K does not depend on d: substitute to drop the symbol.
+    return ca.substitute(K, d, ca.SX.zeros(4))
+
+
+def quasi_static_loads(acc, vx, p: ModelParameters):
+    """Static loads moved onto :math:`A x = b` along the suspension stiffness (module docstring)."""
+    A = equilibrium_matrix(p)
+    b = equilibrium_vector(acc, vx, p)
+    x0 = ca.vertcat(*p.static())
+    K = suspension_stiffness(p)
+    KAt = ca.mtimes(K, A.T)
+    return x0 + ca.mtimes(KAt, ca.solve(ca.mtimes(A, KAt), b - ca.mtimes(A, x0)))
+
+
+def body_attitude_function(name: str = "body_attitude") -> ca.Function:
+    """``name(d[4], p) -> (pitch, roll)``: body attitude relative to the road from the travels."""
+    d = ca.SX.sym("d", 4)
+    p_vector, p = ModelParameters.symbolic()
+    pitch, roll = body_attitude(d, p)
+    return ca.Function(name, [d, p_vector], [pitch, roll], ["d", "p"], ["pitch", "roll"])
+
+
+def algebraic_function(name: str = "algebraic_load") -> ca.Function:
+    """``name(acc[3], pitch, roll, p) -> x[4]``: Alatorre-style loads at a body attitude."""
+    acc = ca.SX.sym("acc", 3)
+    pitch, roll = ca.SX.sym("pitch"), ca.SX.sym("roll")
+    p_vector, p = ModelParameters.symbolic()
+    return ca.Function(
+        name,
+        [acc, pitch, roll, p_vector],
+        [algebraic_loads(road_frame(acc, roll, pitch), p)],
+        ["acc", "pitch", "roll", "p"],
+        ["x"],
+    )
+
+
+def quasi_static_function(name: str = "quasi_static_load") -> ca.Function:
+    """``name(acc[3], vx, p) -> x[4]``: the quasi-static wheel loads."""
+    acc = ca.SX.sym("acc", 3)
+    vx = ca.SX.sym("vx")
+    p_vector, p = ModelParameters.symbolic()
+    return ca.Function(
+        name, [acc, vx, p_vector], [quasi_static_loads(acc, vx, p)], ["acc", "vx", "p"], ["x"]
+    )

@@ -1,0 +1,72 @@
+"""``wheelload compare LOG --vehicle FILE --methods A,B,...``: the paper-style error table.
+
+Runs each registered method on the log, prints RMSE, RMSE %, P95 and Max per
+wheel and pooled (Siegloff & Choi eq. 26-34) and the time per sample, and
+with ``--figures DIR`` writes one figure per wheel of every estimate against
+the reference.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from wheelload.estimators import read_log
+from wheelload.models import load_vehicle
+from wheelload.studies.comparison import compare_methods, format_table, long_table, parse_methods
+from wheelload.studies.comparison_plot import (
+    check_writable,
+    figure_paths,
+    plot_comparison,
+    write_csv,
+)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "compare",
+        help="compare estimators on a log with reference loads (paper-style table, figures)",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument("log", help="log file (.csv or .parquet) with fz_fl..fz_rr reference")
+    parser.add_argument("--vehicle", required=True, help="vehicle TOML file")
+    parser.add_argument(
+        "--methods",
+        default="kf,B,C,D,E,E+C,F",
+        help="comma-separated method names (see `wheelload methods`; default kf,B,C,D,E,E+C,F)",
+    )
+    parser.add_argument("--start", type=float, help="score from this time [s] (default: log start)")
+    parser.add_argument("--end", type=float, help="score up to this time [s] (default: log end)")
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs per method (default 3)")
+    parser.add_argument("--figures", help="folder for one PNG per wheel: LOGNAME_compare_fl.png ..")
+    parser.add_argument("--csv", help="write the table (one row per method and wheel) to this CSV")
+    parser.add_argument("--force", action="store_true", help="overwrite existing output files")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    names = parse_methods(args.methods)
+    log_path = Path(args.log)
+    csv = Path(args.csv) if args.csv else None
+    figures = figure_paths(args.figures, f"{log_path.stem}_compare") if args.figures else []
+    outputs = ([csv] if csv else []) + figures
+    for path in outputs:
+        if log_path.exists() and path.exists() and path.samefile(log_path):
+            raise ValueError(f"{path} is the input log: choose another output file")
+    check_writable(outputs, args.force)
+    vehicle = load_vehicle(Path(args.vehicle))
+    signals = read_log(log_path)
+    window = None
+    if args.start is not None or args.end is not None:
+        start = float(signals.t[0]) if args.start is None else args.start
+        end = float(signals.t[-1]) if args.end is None else args.end
+        window = (start, end)
+    comparison = compare_methods(signals, vehicle, names, window=window, repeat=args.repeat)
+    print(format_table(comparison))
+    if csv:
+        write_csv(long_table(comparison), csv)
+        print(f"table written to {csv}")
+    if figures:
+        plot_comparison(comparison, signals, figures, title=f"{log_path.name}, {vehicle.name}")
+        print(f"figures written to {', '.join(str(p) for p in figures)}")
+    return 0
