@@ -3,7 +3,9 @@
 The step Function takes the carried state first (``n_accum`` inputs, returned
 as the first ``n_accum`` outputs), then the per-sample inputs ``u`` (the
 :data:`INPUTS` below), ``u_valid`` (1 where the input is finite) and ``dt``,
-then fixed parameter vectors. After the carried state it returns ``loads``
+then any further per-sample inputs that depend on the interval alone (e.g. a
+transition matrix, from :meth:`CompiledMethod.interval_inputs`), then fixed
+parameter vectors. After the carried state it returns ``loads``
 (4), ``std`` (4), ``residual`` (3) and ``flags`` (1, a sum of
 :class:`~wheelload.estimators.result.StepFlag` values). :meth:`step` calls the
 Function once; :meth:`run` loops it in compiled C
@@ -72,6 +74,9 @@ class CompiledMethod:
     name = "compiled method"
     has_std = False
 
+    #: Names of the per-sample inputs after ``dt`` given by :meth:`interval_inputs`.
+    interval_names: tuple[str, ...] = ()
+
     def __init__(
         self, step: ca.Function, initial: tuple[np.ndarray, ...], fixed: tuple[np.ndarray, ...]
     ) -> None:
@@ -79,6 +84,10 @@ class CompiledMethod:
         self._initial = tuple(np.asarray(a, float) for a in initial)
         self._fixed = tuple(np.asarray(a, float) for a in fixed)
         self._n_accum = len(initial)
+
+    def interval_inputs(self, dt: np.ndarray) -> list[np.ndarray]:
+        """Per-sample inputs that depend on the intervals ``dt`` (n,) only: arrays (n, k)."""
+        return []
 
     def initial_state(self) -> tuple[np.ndarray, ...]:
         """The carried arrays before the first sample (copies; never mutated)."""
@@ -92,7 +101,13 @@ class CompiledMethod:
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = float(dt) if np.isfinite(dt) else -1.0
-        out = self._step_function(*state, u, valid, dt, *self._fixed)
+        extra = [a[0] for a in self.interval_inputs(np.array([dt]))]
+        arguments = [*state, u, valid, dt, *extra, *self._fixed]
+        shaped = [
+            np.reshape(np.asarray(a, float), self._step_function.size_in(i), order="F")
+            for i, a in enumerate(arguments)
+        ]
+        out = self._step_function(*shaped)
         out = [np.asarray(o, float).ravel(order="F") for o in out]
         shapes = [self._initial[i].shape for i in range(self._n_accum)]
         new_state = tuple(out[i].reshape(shapes[i], order="F") for i in range(self._n_accum))
@@ -109,16 +124,18 @@ class CompiledMethod:
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
-        return CompiledLoop(self._step_function, self._n_accum, PER_SAMPLE)
+        return CompiledLoop(self._step_function, self._n_accum, PER_SAMPLE + self.interval_names)
 
     def run(self, signals: Signals) -> Estimate:
         """A whole log in compiled code from a fresh initial state (same numbers as ``step``)."""
         u = input_matrix(signals)
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
-        dt = sample_intervals(signals.t)[:, None]
+        dt = sample_intervals(signals.t)
         _, _, (loads, std, residual, flags) = self._loop(
-            list(self.initial_state()), list(self._fixed), [u, valid, dt]
+            list(self.initial_state()),
+            list(self._fixed),
+            [u, valid, dt[:, None], *self.interval_inputs(dt)],
         )
         return Estimate(
             t=signals.t.copy(),

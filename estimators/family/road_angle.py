@@ -27,24 +27,32 @@ bank is low-passed by two first-order stages of 2.5 s, the grade (whose
 motion term :math:`\dot v_x` is measured) by one of 1 s. Both filters start
 at the first sample's value.
 
-Per-sample numpy (a 14-state filter): about 1-2 s for a 90 s lap at 100 Hz.
+The step is one CasADi Function (sequential scalar updates, Joseph form, a
+skipped row for a missing input); ``run`` loops it in compiled C.
 """
 
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from wheelload.estimators.protocol import samples
+from wheelload.estimators.family.compiled_method import (
+    INPUTS,
+    CompiledMethod,
+    flag_sum,
+    input_matrix,
+    interval_ok,
+    sanitise,
+)
+from wheelload.estimators.kalman import sequential_update
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import MAX_INTERVAL, Sample, sample_intervals
+from wheelload.estimators.two_stage import MAX_INTERVAL, sample_intervals
 from wheelload.models import (
     GRAVITY,
     ModelParameters,
@@ -86,21 +94,106 @@ class RoadAngleTuning:
                 raise ValueError(f"road-angle tuning '{key}' must be > 0, got {getattr(self, key)}")
 
 
-@dataclass(frozen=True, kw_only=True)
-class RoadAngleState:
-    x: np.ndarray  # (14,)
-    P: np.ndarray  # (14, 14)
-    speed: float  # previous speed (NaN before the first sample)
-    speed_rate: float  # filtered dv/dt
-    grade: float  # rad (NaN before the first sample)
-    bank: float  # rad, output of the second low-pass stage
-    bank_stage: float  # rad, first low-pass stage
+ANGLE_STATE = ("started", "speed", "speed_rate", "grade", "bank_stage", "bank")
 
 
-class RoadAngleKF:
-    """14-state road-angle KF; loads with standard deviations, and road grade and bank."""
+def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
+    """The filter step: predict with the interval's ``F, Q``, sequential update, road angles."""
+    x = ca.SX.sym("x", N)
+    P = ca.SX.sym("P", N, N)
+    angle = ca.SX.sym("angle_state", len(ANGLE_STATE))
+    u_raw = ca.SX.sym("u", len(INPUTS))
+    valid = ca.SX.sym("u_valid", len(INPUTS))
+    dt = ca.SX.sym("dt")
+    F = ca.SX.sym("F", N, N)
+    Q = ca.SX.sym("Q", N, N)
+    p = ca.SX.sym("p", len(ModelParameters.names()))
+    u = sanitise(u_raw, valid)
+    d, v, acc, vx, rates = u[0:4], u[4:8], u[8:11], u[11], u[12:15]
+    ok = interval_ok(dt)
+    dt_safe = ca.if_else(ok, dt, 1.0)
+
+    roll, pitch, acc_road = attitude_function(vehicle)(d, acc)
+    loads_measured = suspension_function()(d, v, p)
+    z = ca.vertcat(roll, rates[0], pitch, rates[1], loads_measured, acc_road)
+    travel_ok = valid[0] * valid[1] * valid[2] * valid[3]
+    acc_ok = travel_ok * valid[8] * valid[9] * valid[10]
+    wheel_ok = [valid[i] * valid[4 + i] for i in range(4)]
+    mask = ca.vertcat(travel_ok, valid[12], travel_ok, valid[13], *wheel_ok, acc_ok, acc_ok, acc_ok)
+    mask = mask * ok
+    r = ca.vertcat(
+        tuning.angle_std**2, tuning.rate_std**2, tuning.angle_std**2, tuning.rate_std**2,
+        *[vehicle.filter.suspension_noise_density / dt_safe] * 4,
+        *[tuning.acceleration_std**2] * 3,
+    )  # fmt: skip
+    H = np.zeros((len(MEASURED), N))
+    H[np.arange(len(MEASURED)), MEASURED] = 1.0
+    x_pred = ca.if_else(ok, ca.mtimes(F, x), x)
+    P_pred = ca.if_else(ok, ca.mtimes([F, P, F.T]) + Q, P)
+    x_new, P_new = sequential_update(x_pred, P_pred, z, ca.DM(H), r, mask)
+
+    # Road grade and bank (module docstring): filtered speed derivative, eq. (2), low-passes.
+    started, speed, speed_rate, grade, bank_stage, bank = (angle[i] for i in range(6))
+    speed_ok = valid[11]
+    blend_v = ca.exp(-dt_safe / tuning.speed_derivative_time_constant)
+    rate_new = ca.if_else(
+        speed_ok * started, blend_v * speed_rate + (1 - blend_v) * (vx - speed) / dt_safe,
+        speed_rate,
+    )  # fmt: skip
+    speed_new = ca.if_else(speed_ok, vx, speed)
+    yaw = rates[2] * valid[14]
+    grade_now = ca.asin(ca.fmin(ca.fmax((x_new[8] - rate_new) / GRAVITY, -1), 1))
+    lateral = (x_new[10] - speed_new * yaw) / (GRAVITY * ca.cos(grade_now))
+    bank_now = ca.asin(ca.fmin(ca.fmax(lateral, -1), 1))
+    blend_g = ca.exp(-dt_safe / tuning.grade_time_constant)
+    blend_b = ca.exp(-dt_safe / tuning.bank_time_constant)
+    stage_new = blend_b * bank_stage + (1 - blend_b) * bank_now
+    angles_new = ca.if_else(
+        started,
+        ca.vertcat(
+            1, speed_new, rate_new, blend_g * grade + (1 - blend_g) * grade_now, stage_new,
+            blend_b * bank + (1 - blend_b) * stage_new,
+        ),
+        ca.vertcat(1, speed_new, rate_new, grade_now, bank_now, bank_now),
+    )  # fmt: skip
+    angles_new = ca.if_else(ok, angles_new, angle)
+
+    loads = x_new[4:8]
+    std = ca.sqrt(ca.fmax(ca.diag(P_new)[4:8], 0))
+    A_eq, b_eq = equilibrium_function()(acc, vx, p)
+    eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
+    residual = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    rejected = 1 - ok
+    missing = ca.fmax(1 - eq_ok, rejected)
+    flags = flag_sum(
+        [(ca.fmax(1 - wheel_ok[i], rejected), flag) for i, flag in enumerate(list(StepFlag)[:4])]
+        + [
+            (missing, StepFlag.VERTICAL_SKIPPED),
+            (missing, StepFlag.PITCH_SKIPPED),
+            (missing, StepFlag.ROLL_SKIPPED),
+            (rejected, StepFlag.STEP_REJECTED),
+        ]
+    )
+    return ca.Function(
+        "wheelload_road_angle_step",
+        [x, P, angle, u_raw, valid, dt, F, Q, p],
+        [x_new, P_new, angles_new, loads, std, residual, flags],
+        ["x", "P", "angle_state", "u", "u_valid", "dt", "F", "Q", "p"],
+        ["x_next", "P_next", "angle_state_next", "loads", "std", "residual", "flags"],
+    )
+
+
+class RoadAngleKF(CompiledMethod):
+    """14-state road-angle KF; loads with standard deviations, and road grade and bank.
+
+    The step is one CasADi Function; ``run`` loops it in compiled C, with the
+    interval's transition and process noise (matrix exponential, Van Loan)
+    computed once per distinct interval and fed in per sample.
+    """
 
     name = "road-angle KF"
+    has_std = True
+    interval_names = ("F", "Q")
 
     def __init__(
         self,
@@ -112,45 +205,29 @@ class RoadAngleKF:
         self.vehicle = vehicle
         self.inertia = inertia
         self.tuning = tuning
-        self.parameters = ModelParameters.from_vehicle(vehicle)
-        self.p = self.parameters.vector()
+        parameters = ModelParameters.from_vehicle(vehicle)
         model = road_angle_model(vehicle, inertia)
         x = ca.SX.sym("x", N)
-        xdot, loads = model(x)
-        self.A = np.asarray(ca.DM(ca.jacobian(xdot, x)), float)
-        self._loads_of = ca.Function("road_angle_loads", [x], [loads])
-        self._attitude = attitude_function(vehicle)
-        self._suspension = suspension_function()
-        self._equilibrium = equilibrium_function()
-        self.H = np.zeros((len(MEASURED), N))
-        self.H[np.arange(len(MEASURED)), MEASURED] = 1.0
-        filt = vehicle.filter
+        self.A = np.asarray(ca.DM(ca.jacobian(model(x)[0], x)), float)
         self._noise = np.zeros(N)  # process noise densities per state
         self._noise[[1, 3]] = tuning.angle_acceleration_density
-        self._noise[4:8] = filt.process_noise_density
+        self._noise[4:8] = vehicle.filter.process_noise_density
         self._noise[[9, 11, 13]] = tuning.jerk_density
-        self._suspension_density = filt.suspension_noise_density
-        self._initial_std = filt.initial_std
-
-    def initial_state(self) -> RoadAngleState:
-        """Level road, static loads (eq. 14), 1 g vertical specific force."""
-        x = np.zeros(N)
-        x[4:8] = self.parameters.static()
-        x[12] = GRAVITY
+        x0 = np.zeros(N)
+        x0[4:8] = parameters.static()
+        x0[12] = GRAVITY
         std = np.zeros(N)
-        std[[0, 2]] = 0.02
-        std[[1, 3]] = 0.1
-        std[4:8] = self._initial_std
-        std[[8, 10, 12]] = 2.0
-        std[[9, 11, 13]] = 5.0
-        return RoadAngleState(
-            x=x, P=np.diag(std**2), speed=math.nan, speed_rate=0.0, grade=math.nan,
-            bank=math.nan, bank_stage=math.nan,
-        )  # fmt: skip
+        std[[0, 2]], std[[1, 3]] = 0.02, 0.1
+        std[4:8] = vehicle.filter.initial_std
+        std[[8, 10, 12]], std[[9, 11, 13]] = 2.0, 5.0
+        initial = (x0, np.diag(std**2), np.zeros(len(ANGLE_STATE)))
+        super().__init__(step_function(vehicle, tuning), initial, (parameters.vector(),))
 
-    @functools.lru_cache(maxsize=16)  # noqa: B019  (one model per sample interval)
+    @functools.lru_cache(maxsize=64)  # noqa: B019  (one model per sample interval)
     def _discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """``(F, Q)`` over ``dt``: exact transition, Van Loan process noise."""
+        if not (np.isfinite(dt) and 0.0 < dt < MAX_INTERVAL):
+            return np.eye(N), np.zeros((N, N))
         M = np.zeros((2 * N, 2 * N))
         M[:N, :N] = -self.A * dt
         M[:N, N:] = np.diag(self._noise) * dt
@@ -160,123 +237,35 @@ class RoadAngleKF:
         Q = F @ E[:N, N:]
         return F, 0.5 * (Q + Q.T)
 
-    def _measurement(self, sample: Sample, dt: float):
-        """Measured vector (eq. 16), its variances, and which rows are usable."""
-        d, v = np.asarray(sample.d, float), np.asarray(sample.v, float)
-        acc = np.asarray(sample.acc, float)
-        rates = np.full(3, np.nan) if sample.rates is None else np.asarray(sample.rates, float)
-        roll, pitch, acc_road = (
-            np.asarray(m, float).ravel()
-            for m in self._attitude(np.nan_to_num(d), np.nan_to_num(acc))
-        )
-        loads = np.asarray(self._suspension(np.nan_to_num(d), np.nan_to_num(v), self.p)).ravel()
-        z = np.concatenate([[roll[0], rates[0], pitch[0], rates[1]], loads, acc_road])
-        travel_ok = bool(np.all(np.isfinite(d)))
-        acc_ok = travel_ok and bool(np.all(np.isfinite(acc)))
-        ok = np.array(
-            [travel_ok, np.isfinite(rates[0]), travel_ok, np.isfinite(rates[1])]
-            + list(np.isfinite(d) & np.isfinite(v))
-            + [acc_ok] * 3
-        )
-        t = self.tuning
-        variance = np.concatenate(
-            [
-                [t.angle_std**2, t.rate_std**2, t.angle_std**2, t.rate_std**2],
-                np.full(4, self._suspension_density / dt),
-                np.full(3, t.acceleration_std**2),
-            ]
-        )
-        return np.where(ok, z, 0.0), variance, ok
-
-    def step(
-        self, state: RoadAngleState, sample: Sample, dt: float
-    ) -> tuple[RoadAngleState, Estimate]:
-        """Predict, update with the usable rows, then the road angles."""
-        acc = np.asarray(sample.acc, float)
-        if not (np.isfinite(dt) and 0.0 < dt < MAX_INTERVAL):
-            flags = int(StepFlag.STEP_REJECTED) | 0x7F
-            return state, self._estimate(state, acc, sample.vx, flags)
-        F, Q = self._discrete(round(float(dt), 7))
-        x = F @ state.x
-        P = F @ state.P @ F.T + Q
-        z, variance, ok = self._measurement(sample, dt)
-        H, R = self.H[ok], np.diag(variance[ok])
-        if H.shape[0]:
-            S = H @ P @ H.T + R
-            K = np.linalg.solve(S, H @ P).T
-            x = x + K @ (z[ok] - H @ x)
-            I_KH = np.eye(N) - K @ H
-            P = I_KH @ P @ I_KH.T + K @ R @ K.T  # Joseph form
-        P = 0.5 * (P + P.T)
-        speed, speed_rate, grade, bank_stage, bank = self._road_angles(state, x, sample, dt)
-        flags = sum(int(list(StepFlag)[i]) for i in range(4) if not ok[4 + i])
-        new = RoadAngleState(
-            x=x, P=P, speed=speed, speed_rate=speed_rate, grade=grade, bank=bank,
-            bank_stage=bank_stage,
-        )  # fmt: skip
-        return new, self._estimate(new, acc, sample.vx, flags)
-
-    def _road_angles(self, state: RoadAngleState, x, sample: Sample, dt: float):
-        """Filtered speed derivative, then grade and bank from eq. (2) in the road frame."""
-        t = self.tuning
-        vx = float(sample.vx)
-        speed_rate = state.speed_rate
-        if np.isfinite(vx) and np.isfinite(state.speed):
-            blend = math.exp(-dt / t.speed_derivative_time_constant)
-            speed_rate = blend * speed_rate + (1 - blend) * (vx - state.speed) / dt
-        speed = vx if np.isfinite(vx) else state.speed
-        yaw_rate = 0.0 if sample.rates is None else float(sample.rates[2])
-        yaw_rate = yaw_rate if np.isfinite(yaw_rate) else 0.0
-        grade_now = math.asin(float(np.clip((x[8] - speed_rate) / GRAVITY, -1, 1)))
-        lateral = (x[10] - (speed if np.isfinite(speed) else 0.0) * yaw_rate) / (
-            GRAVITY * math.cos(grade_now)
-        )
-        bank_now = math.asin(float(np.clip(lateral, -1, 1)))
-        if math.isnan(state.grade):  # first sample: the filters start at the first values
-            return speed, speed_rate, grade_now, bank_now, bank_now
-        blend = math.exp(-dt / t.grade_time_constant)
-        grade = blend * state.grade + (1 - blend) * grade_now
-        blend = math.exp(-dt / t.bank_time_constant)
-        bank_stage = blend * state.bank_stage + (1 - blend) * bank_now
-        bank = blend * state.bank + (1 - blend) * bank_stage
-        return speed, speed_rate, grade, bank_stage, bank
-
-    def _estimate(self, state: RoadAngleState, acc, vx, flags: int) -> Estimate:
-        loads = state.x[4:8]
-        std = np.sqrt(np.maximum(np.diag(state.P)[4:8], 0.0))
-        if np.all(np.isfinite(acc)) and np.isfinite(vx):
-            A, b = (np.asarray(m, float) for m in self._equilibrium(acc, vx, self.p))
-            residual = b.ravel() - A @ loads
-        else:
-            residual = np.zeros(3)
-            flags |= int(StepFlag.VERTICAL_SKIPPED | StepFlag.PITCH_SKIPPED | StepFlag.ROLL_SKIPPED)
-        return Estimate(
-            t=np.array([np.nan]),
-            loads=loads.reshape(1, 4).copy(),
-            std=std.reshape(1, 4),
-            residual=residual.reshape(1, 3),
-            flags=np.array([flags], dtype=np.int64),
-        )
+    def interval_inputs(self, dt: np.ndarray) -> list[np.ndarray]:
+        """``F`` and ``Q`` of each interval (rounded to 0.1 us), column-major rows (n, 196)."""
+        keys = np.round(np.asarray(dt, float), 7)
+        unique, index = np.unique(keys, return_inverse=True)
+        pairs = [self._discrete(float(k)) for k in unique]
+        F = np.array([f.ravel(order="F") for f, _ in pairs])[index]
+        Q = np.array([q.ravel(order="F") for _, q in pairs])[index]
+        return [F, Q]
 
     def run_with_road_angles(self, signals: Signals) -> tuple[Estimate, np.ndarray]:
         """The estimate and the road grade and bank [rad] of every sample, shape (n, 2)."""
-        state = self.initial_state()
-        rows, angles = [], np.empty((len(signals), 2))
-        for k, (sample, dt) in enumerate(zip(samples(signals), sample_intervals(signals.t))):
-            state, estimate = self.step(state, sample, float(dt))
-            rows.append(estimate)
-            angles[k] = state.grade, state.bank
-        return Estimate(
+        u = input_matrix(signals)
+        valid = np.isfinite(u).astype(float)
+        u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
+        dt = sample_intervals(signals.t)
+        _, history, (loads, std, residual, flags) = self._loop(
+            list(self.initial_state()),
+            list(self._fixed),
+            [u, valid, dt[:, None], *self.interval_inputs(dt)],
+            record=(2,),
+        )
+        estimate = Estimate(
             t=signals.t.copy(),
-            loads=np.concatenate([r.loads for r in rows]),
-            std=np.concatenate([r.std for r in rows]),
-            residual=np.concatenate([r.residual for r in rows]),
-            flags=np.concatenate([r.flags for r in rows]),
-        ), angles
-
-    def run(self, signals: Signals) -> Estimate:
-        """Every sample through :meth:`step` from a fresh state."""
-        return self.run_with_road_angles(signals)[0]
+            loads=loads,
+            std=std,
+            residual=residual,
+            flags=np.rint(flags[:, 0]).astype(np.int64),
+        )
+        return estimate, history[2][:, [3, 5]]
 
 
 INFO = MethodInfo(
