@@ -7,6 +7,7 @@ the filter runs on the reduced two-state model derived from it.
 
 import casadi as ca
 import numpy as np
+import pytest
 import scipy.linalg
 
 from wheelload.estimators.family.umvf import (
@@ -109,3 +110,40 @@ def test_vehicle_wrapper_runs_and_holds_static_loads_at_rest():
     assert np.allclose(run.loads[-1], umvf.static, atol=1e-6)
     assert run.flags[40] & 2 and not run.flags[39]
     assert np.array_equal(step_through(umvf, rest).loads, run.loads)
+
+
+def test_compiled_step_equals_the_numpy_reference():
+    """The estimator's CasADi step (rank-one closed forms) against eq. 19-29 in numpy."""
+    import dataclasses
+
+    vehicle = load_vehicle(example_vehicle_path())
+    axles = {
+        name: dataclasses.replace(axle, damper_pull=axle.damper_push, arb_rate=0.0)
+        for name, axle in (("front", vehicle.suspension.front), ("rear", vehicle.suspension.rear))
+    }
+    vehicle = vehicle.replace(suspension=dataclasses.replace(vehicle.suspension, **axles))
+    umvf = Umvf(vehicle)
+    n = 150
+    rng = np.random.default_rng(5)
+    t = DT * np.arange(1, n + 1)
+    d = 0.003 * np.sin(2 * np.pi * 2.0 * t)[:, None] * np.array([1.0, 0.7, -0.5, 0.2])
+    d = d + 2e-4 * rng.standard_normal((n, 4))
+    v = np.gradient(d, t, axis=0)
+    az = 9.80665 + 0.5 * np.sin(2 * np.pi * 1.3 * t)
+    signals = Signals(
+        t=t, vx=np.full(n, 10.0), acc=np.column_stack([np.zeros(n), np.zeros(n), az]), d=d, v=v,
+    )  # fmt: skip
+    compiled = umvf.run(signals).loads
+    tuning = UmvfTuning()
+    for i in range(4):
+        model = discrete_model(umvf._continuous[i], DT)
+        x, P = np.zeros(2), np.diag(np.square(tuning.initial_std))
+        y_all = np.column_stack([az - 9.80665, d[:, i], v[:, i]])
+        previous = np.zeros(3)
+        for k in range(n):
+            x, P, L, innovation = umvf_update(
+                x, P, 0.0, 0.0, y_all[k], model, tuning.Q(DT), tuning.R
+            )
+            e = unknown_input(model, L, innovation, previous)
+            previous = y_all[k] - model.C @ x
+            assert compiled[k, i] == pytest.approx(e[0] + umvf.static[i], abs=1e-6)
