@@ -44,12 +44,13 @@ def discrete_response(ycoo: Ycoo, dt: float, f: np.ndarray):
         [ca.jacobian(xi_next, xi), ca.jacobian(xi_next, u), ca.jacobian(loads, xi),
          ca.jacobian(loads, u)],
     )  # fmt: skip
+    started = np.zeros(xi.shape[0])
+    started[-1] = 1.0  # linearise the running filter, past its first-sample start
     point = np.zeros(len(INPUTS))
     point[INPUTS.index("az")] = 9.80665
     point[INPUTS.index("vx")] = 20.0
     A, B, C, D = (
-        np.asarray(m)
-        for m in jac(np.zeros(xi.shape[0]), point, np.ones(len(INPUTS)), dt, *ycoo._fixed)
+        np.asarray(m) for m in jac(started, point, np.ones(len(INPUTS)), dt, *ycoo._fixed)
     )
     columns = [INPUTS.index("az"), INPUTS.index("d_fl")]
     z = np.exp(2j * np.pi * f * dt)

@@ -25,6 +25,9 @@ Adaptations, each kept as small as the signals allow:
   :math:`a_z - g + \dot\omega_x y_i - \dot\omega_y x_i` with
   :math:`F(s)\,s\,\omega` as the filtered angular acceleration (zero when
   the log has no rates) (:func:`~wheelload.models.body_attitude.corner_vertical_acceleration`).
+- The filters start in steady state on the first sample (the paper leaves
+  its observers uninitialised to show their 0.1 s convergence; a start from
+  zero travel costs a 600 N transient on a log that begins at speed).
 - Discretised with the interval as an input (:mod:`wheelload.estimators.discretise`),
   the hold chosen per channel for the magnitude closest to eq. (14) at the
   logs' 100 Hz: first-order hold on the travels (FOH's sinc^2 droop is
@@ -116,7 +119,8 @@ def filter_outputs(X, settings: YcooSettings):
 def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
     """``(X, u_prev, u, u_valid, dt, p, m_u) -> (X, u_prev, loads, std, residual, flags)``."""
     X = ca.SX.sym("X", STATES * CHANNELS)
-    u_prev = ca.SX.sym("u_prev", CHANNELS)
+    memory = ca.SX.sym("u_prev", CHANNELS + 1)  # previous channel inputs, started flag
+    started = memory[CHANNELS]
     u_raw = ca.SX.sym("u", len(INPUTS))
     valid = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
@@ -124,17 +128,21 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
     mu = ca.SX.sym("m_u", 4)
 
     u = sanitise(u_raw, valid)
+    u_prev_stored = memory[0:CHANNELS]
     d, acc, vx, rates = u[0:4], u[8:11], u[11], u[12:15]
     channel = ca.vertcat(d, acc[2] - GRAVITY, rates[0], rates[1])
     channel_valid = ca.vertcat(valid[0:4], valid[10], valid[12], valid[13])
     # A missing channel holds its last value (the filter sees a constant input).
     held = ca.vertcat(
-        *[ca.if_else(channel_valid[i], channel[i], u_prev[i]) for i in range(CHANNELS)]
+        *[ca.if_else(channel_valid[i], channel[i], u_prev_stored[i]) for i in range(CHANNELS)]
     )
+    # The first sample starts every channel's filter in steady state on its input.
+    u_prev = ca.if_else(started, u_prev_stored, held)
+    steady = ca.vertcat(held.T, held.T, held.T, ca.DM.zeros(1, CHANNELS))
     ok = interval_ok(dt)
     dt_safe = ca.if_else(ok, dt, 1e-3)
     A, B = filter_matrices(settings)
-    Xm = ca.reshape(X, STATES, CHANNELS)
+    Xm = ca.if_else(started, ca.reshape(X, STATES, CHANNELS), steady)
     columns = []
     for hold, first, last in ((first_order_hold, 0, 4), (trapezoidal, 4, CHANNELS)):
         Phi, Gamma1, Gamma2 = hold(ca.DM(A), ca.DM(B), dt_safe)
@@ -145,8 +153,8 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
             + ca.mtimes(Gamma2, now - previous)
         )
     Xn = ca.horzcat(*columns)
-    Xn = ca.if_else(ok, Xn, Xm)
-    u_next = ca.if_else(ok, held, u_prev)
+    Xn = ca.if_else(ok, Xn, ca.reshape(X, STATES, CHANNELS))
+    u_next = ca.if_else(ok, ca.vertcat(held, 1), memory)
 
     y, y_dot, y_ddot = filter_outputs(Xn, settings)
     positions = corner_positions(vehicle)
@@ -168,7 +176,7 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
     )
     return ca.Function(
         "wheelload_ycoo_step",
-        [X, u_prev, u_raw, valid, dt, p, mu],
+        [X, memory, u_raw, valid, dt, p, mu],
         [ca.vec(Xn), u_next, loads, ca.DM.zeros(4), residual, flags],
         ["X", "u_prev", "u", "u_valid", "dt", "p", "m_u"],
         ["X_next", "u_prev_next", "loads", "std", "residual", "flags"],
@@ -191,7 +199,7 @@ class Ycoo(CompiledMethod):
         self.vehicle = vehicle
         self.settings = settings
         p = ModelParameters.from_vehicle(vehicle).vector()
-        initial = (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS))
+        initial = (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS + 1))
         super().__init__(step_function(vehicle, settings), initial, (p, unsprung_masses(vehicle)))
 
 
