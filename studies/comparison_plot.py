@@ -52,7 +52,7 @@ def plot_comparison(
     t = signals.t
     for i, path in enumerate(paths):
         figure, (top, bottom) = plt.subplots(
-            2, 1, figsize=(12, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1.2]}
+            2, 1, figsize=(14, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1.2]}
         )
         top.plot(t, signals.reference[:, i] / 1000.0, color="black", lw=1.4, label="reference")
         for result in comparison.results:
@@ -66,7 +66,7 @@ def plot_comparison(
             ax.grid(alpha=0.3)
         top.set_ylabel("Fz [kN]")
         top.set_title(f"{WHEEL_NAMES[i]}{' — ' + title if title else ''}")
-        top.legend(loc="best", fontsize=8, ncol=2)
+        top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
         bottom.set_ylabel("error [N]")
         bottom.set_xlabel("t [s] (scored window shaded)")
         limit = np.nanpercentile(
