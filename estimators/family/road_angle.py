@@ -20,12 +20,16 @@ gravity from motion in the road-frame specific force (§II-A, eq. 2):
           \sin\beta = \frac{a_{yr} - v_x \omega_z}{g \cos\gamma}
 
 with :math:`\dot v_x` from a filtered derivative of the speed and
-:math:`\omega_z` the yaw rate (zero without rates). The lateral slip
-acceleration :math:`\dot v_y` is not measured (it reaches 1.8 m/s^2, 10 deg
-of bank, in the banked chicane); it averages out over a manoeuvre, so the
-bank is low-passed by two first-order stages of 2.5 s, the grade (whose
-motion term :math:`\dot v_x` is measured) by one of 1 s. Both filters start
-at the first sample's value.
+:math:`\omega_z` the yaw rate (zero without rates). These are the slopes of
+the road plane along and across the vehicle's heading: when the heading
+swings across a banked road (the banked chicane's weave turns it by up to
+19 deg), the slope under the car swings too (+-5.6 deg there), and the
+lateral slip acceleration :math:`\dot v_y`, which is not measured, reaches
+1.8 m/s^2. Both average out over a manoeuvre, so the bank is low-passed by
+two first-order stages of 2.5 s and returns the road's own bank; the grade,
+whose motion term :math:`\dot v_x` is measured, by one stage of 1 s (it
+follows a change of grade within about 3 s). Both filters start at the first
+sample's value.
 
 The step is one CasADi Function (sequential scalar updates, Joseph form, a
 skipped row for a missing input); ``run`` loops it in compiled C.
