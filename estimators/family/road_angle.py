@@ -48,7 +48,6 @@ from wheelload.estimators.family.compiled_method import (
     INPUTS,
     CompiledMethod,
     flag_sum,
-    input_matrix,
     interval_ok,
     sanitise,
 )
@@ -56,7 +55,7 @@ from wheelload.estimators.kalman import sequential_update
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import MAX_INTERVAL, sample_intervals
+from wheelload.estimators.two_stage import MAX_INTERVAL
 from wheelload.models import (
     GRAVITY,
     ModelParameters,
@@ -252,16 +251,7 @@ class RoadAngleKF(CompiledMethod):
 
     def run_with_road_angles(self, signals: Signals) -> tuple[Estimate, np.ndarray]:
         """The estimate and the road grade and bank [rad] of every sample, shape (n, 2)."""
-        u = input_matrix(signals)
-        valid = np.isfinite(u).astype(float)
-        u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
-        dt = sample_intervals(signals.t)
-        _, history, (loads, std, residual, flags) = self._loop(
-            list(self.initial_state()),
-            list(self._fixed),
-            [u, valid, dt[:, None], *self.interval_inputs(dt)],
-            record=(2,),
-        )
+        history, (loads, std, residual, flags) = self.run_loop(signals, record=(2,))
         estimate = Estimate(
             t=signals.t.copy(),
             loads=loads,
