@@ -19,7 +19,8 @@ Identifiability (from the singular values of :math:`A\,\mathrm{diag}(|\theta_0|)
 the information about relative changes): a direction whose 1σ relative
 precision :math:`1/s_i` is worse than ``precision`` is not determined by the
 data; the parameter with the largest share of that direction is held at the
-file value and named in a warning.
+file value and named in a warning. A fitted value whose standard error
+exceeds ``warn_precision`` of its size is named in a milder warning.
 """
 
 from __future__ import annotations
@@ -53,7 +54,8 @@ class Loss(enum.Enum):
 class FitSettings:
     loss: Loss = Loss.LINEAR
     fixed: frozenset[str] = frozenset()  # held at the file value
-    precision: float = 0.10  # largest 1-sigma relative precision of an identified direction
+    precision: float = 0.25  # largest 1-sigma relative precision of a fitted direction
+    warn_precision: float = 0.10  # relative standard error above which a fitted value is flagged
     lower: dict[str, float] = field(default_factory=dict)  # lower bound per parameter
 
 
@@ -225,6 +227,13 @@ def identify(
         std[cols] = np.sqrt(np.maximum(np.diag(cov), 0)) * scale[cols]
         d = np.sqrt(np.maximum(np.diag(cov), 1e-300))
         correlation = cov / np.outer(d, d)
+    for j in free:
+        relative = std[j] / scale[j]
+        if relative > settings.warn_precision:
+            warnings.append(
+                f"'{names[j]}' is only weakly determined by these data (standard error "
+                f"{100 * relative:.0f} % of its size)"
+            )
     final = evaluate(model, sets, value)
     sources = {}
     for j in free:

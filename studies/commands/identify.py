@@ -73,8 +73,8 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--precision",
         type=float,
-        default=0.10,
-        help="largest 1σ relative precision taken as identified (default 0.10)",
+        default=0.25,
+        help="hold a parameter whose 1σ relative precision is worse than this (default 0.25)",
     )
     parser.add_argument("--force", action="store_true", help="replace existing output files")
     parser.set_defaults(handler=handle)
