@@ -203,9 +203,12 @@ def structure(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarr
     rng = np.random.default_rng(0)
     for pred in seen.values():
         s, symbol = pred.function.sx_in()
-        probe = rng.normal(0.0, 0.05, (s.shape[0], 16))
-        jac = np.asarray(pred.jacobian.map(16)(probe, theta))
-        visible |= np.abs(jac.reshape(jac.shape[0], 16, len(theta))).max(axis=(0, 1)) > 0
+        count = 256  # random signs, magnitudes 1e-3 to 1e2 (SI): past any map knot
+        probe = rng.choice([-1.0, 1.0], (s.shape[0], count)) * 10.0 ** rng.uniform(
+            -3.0, 2.0, (s.shape[0], count)
+        )
+        jac = np.asarray(pred.jacobian.map(count)(probe, theta))
+        visible |= np.abs(jac.reshape(jac.shape[0], count, len(theta))).max(axis=(0, 1)) > 0
         y = pred.function.call([s, symbol])[0]
         symbolic.append((ca.jacobian(y, symbol), symbol))
     return visible, symbolic
