@@ -21,6 +21,7 @@ COMMANDS = (
     "wheelload.studies.commands.mhe",
     "wheelload.studies.commands.codegen",
     "wheelload.studies.commands.identify",
+    "wheelload.studies.commands.tune",
 )
 
 
