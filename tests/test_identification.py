@@ -87,7 +87,7 @@ def rig_data(vehicle, folder, duration):
 
 
 def test_standard_errors_shrink_as_one_over_root_n(vehicle, parameters, tmp_path):
-    """Four times the record (10 s and 40 s sweeps): standard errors halve (1.6-2.5 allowed).
+    """Four times the record (5 s and 20 s sweeps): standard errors halve (1.6-2.5 allowed).
 
     The piecewise model matches the plant's map, so the residual is the white
     load-cell noise; with the linear damper the residual is the map mismatch,
@@ -95,8 +95,8 @@ def test_standard_errors_shrink_as_one_over_root_n(vehicle, parameters, tmp_path
     shrinking with denser sampling of the same sweep.
     """
     model = piecewise_model((0.1,))
-    short = identify(model, rig_data(vehicle, tmp_path, 10.0), parameters)
-    long = identify(model, rig_data(vehicle, tmp_path, 40.0), parameters)
+    short = identify(model, rig_data(vehicle, tmp_path, 5.0), parameters)
+    long = identify(model, rig_data(vehicle, tmp_path, 20.0), parameters)
     ratio = short.std_error[list(long.free)] / long.std_error[list(long.free)]
     assert np.all((ratio > 1.6) & (ratio < 2.5)), ratio
 

@@ -8,7 +8,9 @@ maximises
 
 .. math:: \ell(\theta) = -\tfrac12 \sum_{k,i} \big(\log 2\pi S_{k,i} + y_{k,i}^2 / S_{k,i}\big)
 
-over the rows used (Nelder-Mead in the log-parameters). With reference
+over the rows used (Nelder-Mead in the log-parameters, each within a
+factor 1000 of the input: the pseudo-measurement error is correlated in
+time, and unbounded the white-noise likelihood may drive ``r_s`` to zero). With reference
 loads, the tuning that minimises the pooled RMSE is found the same way, and
 the likelihood tuning is scaled as a whole (which leaves the estimates
 unchanged and scales P) so that ±2σ covers 95 % of the error: the model
@@ -35,6 +37,7 @@ from wheelload.estimators.two_stage import TUNING, UPDATE_ROWS, TwoStageKF, step
 from wheelload.models.vehicle import FilterTuning, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out of the objective (initial covariance)
+SPAN = 1e3  # each density stays within input / SPAN .. input * SPAN
 COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma for a Gaussian error
 NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of chi^2_1
 
@@ -157,11 +160,15 @@ class TuningResult:
         return self.likelihood * self.scale
 
 
-def _minimise(objective, start: np.ndarray, iterations: int) -> tuple[np.ndarray, int]:
+def _minimise(
+    objective, start: np.ndarray, iterations: int, span: np.ndarray
+) -> tuple[np.ndarray, int]:
+    """Nelder-Mead in log-parameters within ``span`` (pairs of bounds)."""
     result = optimize.minimize(
         lambda log_tuning: objective(np.exp(log_tuning)),
         np.log(start),
         method="Nelder-Mead",
+        bounds=np.log(span),
         options={"maxiter": iterations, "xatol": 1e-3, "fatol": 1e-4, "adaptive": True},
     )
     return np.exp(result.x), int(result.nfev)
@@ -170,10 +177,11 @@ def _minimise(objective, start: np.ndarray, iterations: int) -> tuple[np.ndarray
 def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: int = 400):
     """Maximum-likelihood tuning; with ``references`` also the RMSE-minimising one and the
     coverage calibration of the likelihood tuning (its estimates unchanged)."""
-    likelihood, count = _minimise(runs.negative_log_likelihood, start, iterations)
+    span = np.column_stack([start / SPAN, start * SPAN])
+    likelihood, count = _minimise(runs.negative_log_likelihood, start, iterations, span)
     rmse, scale = None, 1.0
     if references:
-        rmse, more = _minimise(runs.pooled_rmse, likelihood, iterations)
+        rmse, more = _minimise(runs.pooled_rmse, likelihood, iterations, span)
         count += more
         scale = runs.calibrate(likelihood)
     return TuningResult(

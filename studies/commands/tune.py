@@ -35,6 +35,13 @@ def register(subparsers) -> None:
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
     parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
     parser.add_argument("--force", action="store_true", help="replace an existing --out file")
+    parser.add_argument(
+        "--evaluate",
+        nargs="+",
+        default=[],
+        metavar="LOG",
+        help="logs not used for tuning, with reference loads: print the before/after table",
+    )
     parser.set_defaults(handler=handle)
 
 
@@ -87,4 +94,25 @@ def handle(args: argparse.Namespace) -> int:
         prepend_comment(set_values(text, changes), header), out, inputs=inputs, force=args.force
     )
     print(f"vehicle file written to {out}")
+    if args.evaluate:
+        print(evaluation_table(vehicle, tuple(read_log(p) for p in args.evaluate), result))
     return 0
+
+
+def evaluation_table(vehicle, logs, result) -> str:
+    """Per-log and pooled ±2σ coverage and RMSE of the input and the tuned filter."""
+    if any(signals.reference is None for signals in logs):
+        raise ValueError("--evaluate needs logs with reference loads fz_*")
+    lines = [
+        "held-out logs: ±2σ coverage [%] and pooled RMSE [N], input file -> tuned",
+        f"{'log':>28}{'cov in':>9}{'cov tuned':>11}{'RMSE in':>10}{'RMSE tuned':>12}",
+    ]
+    groups = [(Path(s.source).name, (s,)) for s in logs] + [("pooled", logs)]
+    for name, group in groups:
+        runs = FilterRuns(vehicle, group)
+        before, after = runs.consistency(result.initial), runs.consistency(result.tuned)
+        lines.append(
+            f"{name:>28}{100 * before.coverage:9.1f}{100 * after.coverage:11.1f}"
+            f"{before.rmse:10.1f}{after.rmse:12.1f}"
+        )
+    return "\n".join(lines)
