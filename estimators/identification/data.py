@@ -68,8 +68,12 @@ class DataSet:
         return len(self.t)
 
     def label(self) -> str:
-        where = {DataKind.CORNER_RIG: WHEELS, DataKind.ARB_RIG: AXLES}.get(self.kind)
-        suffix = f" ({where[self.location]})" if where else ""
+        if self.kind is DataKind.CORNER_RIG:
+            suffix = f" ({WHEELS[self.location]})"
+        elif self.kind is DataKind.ARB_RIG:
+            suffix = f" ({AXLES[self.location]})"
+        else:
+            suffix = ""
         return f"{Path(self.source).name}{suffix}"
 
     def subset(self, index: np.ndarray) -> DataSet:

@@ -25,7 +25,8 @@ def parameter_table(result: Identification, keys: dict[str, Key]) -> pd.DataFram
         fitted = j in result.free
         if not fitted and name not in result.held:
             continue
-        key = keys.get(base_parameter(name)) if segment_index(name) in (None, 0) else None
+        base = base_parameter(name)
+        key = keys[base] if base in keys and segment_index(name) in (None, 0) else None
         initial, value = result.initial[j], result.value[j]
         rows.append(
             {
@@ -36,7 +37,7 @@ def parameter_table(result: Identification, keys: dict[str, Key]) -> pd.DataFram
                 "std_error": result.std_error[j],
                 "change_pct": 100.0 * (value - initial) / initial if initial else np.nan,
                 "status": "identified" if fitted else result.held[name],
-                "sources": "; ".join(result.sources.get(name, ())),
+                "sources": "; ".join(result.sources[name]) if name in result.sources else "",
             }
         )
     return pd.DataFrame(rows)
@@ -76,7 +77,7 @@ def file_changes(result: Identification, keys: dict[str, Key]) -> dict[Key, tupl
         name = result.names[j]
         if segment_index(name) not in (None, 0) or base_parameter(name) not in keys:
             continue
-        sources = ", ".join(result.sources.get(name, ())) or "data"
+        sources = ", ".join(result.sources[name]) if name in result.sources else "data"
         what = "low-velocity slope of the fitted map, " if segment_index(name) == 0 else ""
         comment = (
             f"identified: {what}± {result.std_error[j]:.4g} (1σ) from {sources}; "
