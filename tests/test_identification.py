@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.identification import (
+    DataKind,
+    DataSet,
     FitSettings,
     Loss,
     SuspensionModel,
@@ -20,6 +22,8 @@ from wheelload.estimators.identification import (
     piecewise_model,
     read_rig,
 )
+from wheelload.estimators.identification.model import TRAVEL, TRAVEL_RATE
+from wheelload.estimators.identification.regressors import prediction
 from wheelload.models import ModelParameters, suspension_function
 from wheelload.models.plant import damper_map_force
 from wheelload.studies.rig import RigSettings, rig_sweep, write_rig
@@ -163,7 +167,11 @@ def progressive_spring_model():
     springs = ca.vertcat(p.spring_front, p.spring_front, p.spring_rear, p.spring_rear)
     z = suspension_function()(d, v, p_vector) + 20.0 * springs * d**2
     function = ca.Function("suspension_progressive", [d, v, p_vector], [z], ["d", "v", "p"], ["z"])
-    return SuspensionModel(function=function, parameters={"p": ModelParameters.names()})
+    return SuspensionModel(
+        function=function,
+        parameters={"p": ModelParameters.names()},
+        channels={"d": TRAVEL, "v": TRAVEL_RATE},
+    )
 
 
 def test_a_changed_model_changes_the_identification(rig_sets, parameters):
@@ -176,8 +184,6 @@ def test_a_changed_model_changes_the_identification(rig_sets, parameters):
         np.isin(ModelParameters.names(), ["spring_front", "spring_rear"]), 1.1, 1.0
     )
     sets = []
-    from wheelload.estimators.identification.regressors import prediction
-
     for data in rig_sets:
         pred = prediction(variant, data)
         s = np.hstack([data.signals[c] for c in pred.columns])
@@ -188,3 +194,48 @@ def test_a_changed_model_changes_the_identification(rig_sets, parameters):
         j = ModelParameters.names().index(name)
         assert fitted.value_of(name) == pytest.approx(truth[j], rel=1e-6)
         assert abs(bundled.value_of(name) / truth[j] - 1) > 0.002
+
+
+def stacked_input_model():
+    """A variant in the layout of a stacked input vector ``u = [d, v, ax, ay, az, vx]`` with a
+    new linear term: a link load :math:`\\mp 800\\, a_y h` per side (``h = cg_height``)."""
+    u = ca.SX.sym("u", 12)
+    p_vector, p = ModelParameters.symbolic()
+    side = ca.DM([-1.0, 1.0, -1.0, 1.0])
+    z = suspension_function()(u[0:4], u[4:8], p_vector) + side * 800.0 * u[9] * p.cg_height
+    function = ca.Function("suspension_links", [u, p_vector], [z], ["u", "p"], ["z"])
+    return SuspensionModel(
+        function=function,
+        parameters={"p": ModelParameters.names()},
+        channels={"u": TRAVEL + TRAVEL_RATE + ("ax", "ay", "az", "vx")},
+    )
+
+
+def test_a_new_input_layout_and_term_flow_into_the_identification(rig_sets, parameters):
+    """Drive data made by the variant: its new parameter (and the rates) come back exactly;
+    the identification code is the same, only the model Function and its input names differ."""
+    variant = stacked_input_model()
+    rng = np.random.default_rng(5)
+    n = 3000
+    channels = {name: rng.normal(0.0, 0.01, (n, 1)) for name in variant.channel_names()}
+    channels["ay"] = rng.normal(0.0, 4.0, (n, 1))
+    names = ModelParameters.names()
+    truth = parameters.vector() * np.where(np.isin(names, ["cg_height"]), 1.3, 1.0)
+    drive = DataSet(
+        kind=DataKind.DRIVE,
+        source="synthetic",
+        t=np.arange(n) / 100.0,
+        signals=channels,
+        target=np.zeros((n, 4)),
+        rows=("fl", "fr", "rl", "rr"),
+    )
+    pred = prediction(variant, drive)
+    s = np.hstack([channels[c] for c in pred.columns])
+    drive = drive.with_target(np.asarray(pred.function.map(n)(s.T, truth)).T)
+    fitted = identify(variant, (*rig_sets, drive), parameters)
+    assert fitted.value_of("cg_height") == pytest.approx(truth[names.index("cg_height")], rel=1e-3)
+    assert fitted.sources["cg_height"] == ("synthetic",)
+    assert fitted.value_of("spring_rear") == pytest.approx(parameters.spring_rear, rel=0.03)
+    bundled = identify(default_model(), (*rig_sets, drive), parameters)
+    assert "cg_height" not in bundled.sources
+    assert bundled.value_of("cg_height") == parameters.cg_height

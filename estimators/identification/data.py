@@ -197,8 +197,15 @@ def read_rig(path: str | Path) -> tuple[DataSet, ...]:
     return tuple(sets)
 
 
-def read_drive(path: str | Path, inputs: tuple[tuple[str, int], ...]) -> DataSet:
-    """Read a drive log with reference loads for the model's signal ``inputs``."""
+def read_drive(
+    path: str | Path, channels: tuple[str, ...], optional: frozenset[str] = frozenset()
+) -> DataSet:
+    """Read a drive log with reference loads for the model's signal ``channels``.
+
+    A channel is taken from the validated log (travel rates derived when not
+    logged) or, failing that, from a column of that name; an ``optional``
+    channel the log lacks is 0.
+    """
     path = Path(path)
     source = str(path)
     if not path.exists():
@@ -222,18 +229,19 @@ def read_drive(path: str | Path, inputs: tuple[tuple[str, int], ...]) -> DataSet
     signals = signals_from_frame(
         frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]), source=source
     )
+    validated = signals.to_frame()
     table = {}
-    for name, size in inputs:
-        value = getattr(signals, name, None)
-        if value is None:
-            raise LogError(f"{source}: the suspension model needs signal '{name}', not in the log")
-        value = np.asarray(value, float).reshape(len(signals), -1)
-        if value.shape[1] != size:
-            raise LogError(
-                f"{source}: signal '{name}' has {value.shape[1]} columns, the model needs {size}"
-            )
-        table[name] = value
-    usable = np.all(np.concatenate([np.isfinite(v) for v in table.values()], axis=1), axis=1)
+    for name in channels:
+        if name in validated.columns:
+            values = validated[name].to_numpy(float)
+        elif name in frame.columns:
+            values = pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
+        elif name in optional:
+            values = np.zeros(len(frame))
+        else:
+            raise LogError(f"{source}: the suspension model needs channel '{name}', not in the log")
+        table[name] = values[:, None]
+    usable = np.all(np.hstack([np.isfinite(v) for v in table.values()]), axis=1)
     reference[~usable] = np.nan
     return DataSet(
         kind=DataKind.DRIVE,

@@ -1,22 +1,24 @@
-"""The suspension model under identification: a CasADi Function and its parameter entries.
+"""The suspension model under identification: a CasADi Function and the meaning of its inputs.
 
-Every input of the Function named in ``parameters`` is a parameter vector
-(entry names given); every other input is a signal (``d``, ``v`` and any
-further input the model takes, looked up by name in a log). Regressors are
-the Function's Jacobian with respect to the stacked parameters, so a change
-of the model in ``wheelload.models`` changes the identification with no
-other edit.
+Every input of the Function is one of: a parameter vector (``parameters``:
+entry names, the things fitted), a signal (``channels``: one log channel
+name per entry, e.g. ``d_fl``), or a constant (``constants``: numbers held
+fixed, e.g. term switches). Regressors are the Function's Jacobian with
+respect to the stacked parameters, and rigs and logs fill the signal entries
+by channel name, so a model change in ``wheelload.models`` (a new term, a
+new parameter, a stacked input vector) changes the identification with no
+edit here beyond describing the inputs in :func:`default_model`.
 
 Example
 -------
 >>> model = default_model()
->>> model.signal_inputs()
-(('d', 4), ('v', 4))
+>>> model.channel_names()[:2]
+('d_fl', 'd_fr')
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -28,46 +30,67 @@ from wheelload.models.suspension import (
 )
 
 SEGMENT_SEPARATOR = "_"
+WHEELS = ("fl", "fr", "rl", "rr")
+TRAVEL = tuple(f"d_{w}" for w in WHEELS)
+TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class SuspensionModel:
-    """A suspension Function ``z = f(signals..., parameters...)`` and its parameter names."""
+    """A suspension Function ``z[4] = f(inputs...)`` and what each of its inputs is."""
 
     function: ca.Function
-    parameters: dict[str, tuple[str, ...]]  # input name -> entry names
+    parameters: dict[str, tuple[str, ...]]  # input name -> parameter entry names
+    channels: dict[str, tuple[str, ...]]  # input name -> log channel name per entry
+    constants: dict[str, tuple[float, ...]] = field(default_factory=dict)  # input -> values
+    optional: frozenset[str] = frozenset()  # channels a log may lack (taken as 0)
 
     def __post_init__(self) -> None:
-        names = [self.function.name_in(i) for i in range(self.function.n_in())]
-        for block, entries in self.parameters.items():
-            if block not in names:
-                raise ValueError(f"model '{self.function.name()}' has no input '{block}'")
-            if self.function.size1_in(names.index(block)) != len(entries):
-                raise ValueError(f"input '{block}' of '{self.function.name()}' size mismatch")
-        if self.function.n_out() < 1 or self.function.size1_out(0) != 4:
-            raise ValueError(f"model '{self.function.name()}' must output 4 wheel loads")
+        f = self.function
+        for i in range(f.n_in()):
+            name, size = f.name_in(i), f.size1_in(i)
+            kinds = [
+                table[name]
+                for table in (self.parameters, self.channels, self.constants)
+                if name in table
+            ]
+            if len(kinds) != 1:
+                raise ValueError(
+                    f"model '{f.name()}': input '{name}' must be exactly one of parameters, "
+                    "channels or constants"
+                )
+            if len(kinds[0]) != size:
+                raise ValueError(f"model '{f.name()}': input '{name}' has {size} entries")
+        if f.n_out() < 1 or f.size1_out(0) != 4:
+            raise ValueError(f"model '{f.name()}' must output 4 wheel loads")
+
+    def _inputs(self, table: dict) -> tuple[str, ...]:
+        f = self.function
+        return tuple(f.name_in(i) for i in range(f.n_in()) if f.name_in(i) in table)
+
+    def blocks(self) -> tuple[str, ...]:
+        """Parameter inputs in the Function's input order."""
+        return self._inputs(self.parameters)
 
     def parameter_names(self) -> tuple[str, ...]:
         """All parameter entries, blocks in input order."""
         return tuple(name for block in self.blocks() for name in self.parameters[block])
 
-    def blocks(self) -> tuple[str, ...]:
-        """Parameter inputs in the Function's input order."""
-        f = self.function
-        return tuple(f.name_in(i) for i in range(f.n_in()) if f.name_in(i) in self.parameters)
+    def channel_names(self) -> tuple[str, ...]:
+        """All signal entries (log channel names), inputs in order."""
+        return tuple(n for block in self._inputs(self.channels) for n in self.channels[block])
 
-    def signal_inputs(self) -> tuple[tuple[str, int], ...]:
-        """``(name, size)`` of every non-parameter input, in input order."""
-        f = self.function
-        return tuple(
-            (f.name_in(i), f.size1_in(i))
-            for i in range(f.n_in())
-            if f.name_in(i) not in self.parameters
-        )
-
-    def loads(self, signals: dict[str, ca.SX], theta: ca.SX) -> ca.SX:
-        """The model's four loads with signal expressions and the stacked parameters."""
-        arguments = dict(signals)
+    def loads(self, channels: dict[str, ca.SX], theta: ca.SX) -> ca.SX:
+        """The four loads with an expression per channel (missing channels: 0) and the
+        stacked parameters ``theta``."""
+        unknown = sorted(set(channels) - set(self.channel_names()))
+        if unknown:
+            raise ValueError(f"model '{self.function.name()}' has no signal '{unknown[0]}'")
+        arguments = {}
+        for block, names in self.channels.items():
+            arguments[block] = ca.vertcat(*[channels[n] if n in channels else 0 for n in names])
+        for block, values in self.constants.items():
+            arguments[block] = ca.DM(list(values))
         start = 0
         for block in self.blocks():
             size = len(self.parameters[block])
@@ -106,7 +129,9 @@ def segment_index(name: str) -> int | None:
 def default_model() -> SuspensionModel:
     """The bundled suspension model (paper eq. 3-9) with the linear push/pull damper."""
     return SuspensionModel(
-        function=suspension_function(), parameters={"p": ModelParameters.names()}
+        function=suspension_function(),
+        parameters={"p": ModelParameters.names()},
+        channels={"d": TRAVEL, "v": TRAVEL_RATE},
     )
 
 
@@ -118,4 +143,5 @@ def piecewise_model(knots: tuple[float, ...]) -> SuspensionModel:
     return SuspensionModel(
         function=piecewise_damper_suspension_function(knots),
         parameters={"p": ModelParameters.names(), "damper": piecewise_damper_names(knots)},
+        channels={"d": TRAVEL, "v": TRAVEL_RATE},
     )

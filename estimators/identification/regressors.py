@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.identification.data import DataKind, DataSet
-from wheelload.estimators.identification.model import SuspensionModel
+from wheelload.estimators.identification.model import WHEELS, SuspensionModel
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -34,10 +34,6 @@ class Prediction:
     function: ca.Function  # (s[ns], theta[n_theta]) -> y[rows]
     jacobian: ca.Function  # (s, theta) -> dy/dtheta [rows x n_theta]
     columns: tuple[str, ...]  # data-set signal names stacked into s
-
-
-def _zero_signals(model: SuspensionModel) -> dict[str, ca.SX]:
-    return {name: ca.SX.zeros(size) for name, size in model.signal_inputs()}
 
 
 def _finish(name: str, s: ca.SX, theta: ca.SX, y: ca.SX, columns) -> Prediction:
@@ -52,28 +48,29 @@ def _theta(model: SuspensionModel) -> ca.SX:
     return ca.SX.sym("theta", len(model.parameter_names()))
 
 
+def _require(model: SuspensionModel, names: tuple[str, ...], what: str) -> None:
+    missing = [n for n in names if n not in model.channel_names()]
+    if missing:
+        raise ValueError(f"a {what} needs a model with signal '{missing[0]}'")
+
+
 def drive_prediction(model: SuspensionModel) -> Prediction:
-    """All four model loads from the log's signals."""
+    """All four model loads from the log's channels."""
     theta = _theta(model)
-    symbols = {name: ca.SX.sym(name, size) for name, size in model.signal_inputs()}
-    s = ca.vertcat(*symbols.values())
-    return _finish("drive", s, theta, model.loads(symbols, theta), symbols)
+    names = model.channel_names()
+    s = ca.SX.sym("s", len(names))
+    channels = {name: s[i] for i, name in enumerate(names)}
+    return _finish("drive", s, theta, model.loads(channels, theta), names)
 
 
 def corner_prediction(model: SuspensionModel, wheel: int) -> Prediction:
-    """Load change of one corner driven alone on a rig (bar not twisted)."""
+    """Load change of one corner driven alone on a rig (bar not twisted, other signals 0)."""
     theta = _theta(model)
     d, v = ca.SX.sym("d"), ca.SX.sym("v")
-    partner = wheel ^ 1
-    moved = _zero_signals(model)
-    if "d" not in moved or "v" not in moved:
-        raise ValueError("a corner rig needs a model with inputs 'd' and 'v'")
-    d4 = [0] * 4
-    d4[wheel] = d4[partner] = d
-    v4 = [0] * 4
-    v4[wheel] = v
-    moved["d"], moved["v"] = ca.vertcat(*d4), ca.vertcat(*v4)
-    y = model.loads(moved, theta)[wheel] - model.loads(_zero_signals(model), theta)[wheel]
+    name, partner = WHEELS[wheel], WHEELS[wheel ^ 1]
+    _require(model, (f"d_{name}", f"d_{partner}", f"v_{name}"), "corner rig")
+    moved = {f"d_{name}": d, f"d_{partner}": d, f"v_{name}": v}
+    y = model.loads(moved, theta)[wheel] - model.loads({}, theta)[wheel]
     return _finish(f"corner_rig_{wheel}", ca.vertcat(d, v), theta, y, ("d", "v"))
 
 
@@ -81,14 +78,11 @@ def bar_prediction(model: SuspensionModel, axle: int) -> Prediction:
     """Load the bar adds to the left wheel for a travel difference."""
     theta = _theta(model)
     left_d, right_d = ca.SX.sym("d_left"), ca.SX.sym("d_right")
-    left = 2 * axle
+    left, right = WHEELS[2 * axle], WHEELS[2 * axle + 1]
+    _require(model, (f"d_{left}", f"d_{right}"), "bar rig")
 
     def loads(d_right):
-        signals = _zero_signals(model)
-        d4 = [0] * 4
-        d4[left], d4[left + 1] = left_d, d_right
-        signals["d"] = ca.vertcat(*d4)
-        return model.loads(signals, theta)[left]
+        return model.loads({f"d_{left}": left_d, f"d_{right}": d_right}, theta)[2 * axle]
 
     y = loads(right_d) - loads(left_d)
     return _finish(f"bar_rig_{axle}", ca.vertcat(left_d, right_d), theta, y, ("d_left", "d_right"))
@@ -180,11 +174,17 @@ def _row_signals(data: DataSet, keep, sample, row):
     if data.kind is DataKind.ARB_RIG:
         left, right = signals["d_left"][sample, 0], signals["d_right"][sample, 0]
         return left, np.zeros(sample.size), left - right
-    d = signals["d"] if "d" in signals else np.full((len(keep), 4), np.nan)[keep]
-    v = signals["v"] if "v" in signals else np.full((len(keep), 4), np.nan)[keep]
-    wheel = np.arange(4)[row]
-    left = 2 * (wheel // 2)
-    return d[sample, wheel], v[sample, wheel], d[sample, left] - d[sample, left + 1]
+
+    def column(prefix: str) -> np.ndarray:
+        names = [f"{prefix}_{w}" for w in WHEELS]
+        if not all(name in signals for name in names):
+            return np.full((len(sample), 4), np.nan)
+        return np.hstack([signals[name] for name in names])[sample]
+
+    d, v = column("d"), column("v")
+    wheel = np.arange(len(sample)), np.asarray(row)
+    left = 2 * (wheel[1] // 2)
+    return d[wheel], v[wheel], d[wheel[0], left] - d[wheel[0], left + 1]
 
 
 def structure(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray):

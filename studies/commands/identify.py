@@ -108,7 +108,7 @@ def handle(args: argparse.Namespace) -> int:
     knots = _knots(args)
     model = piecewise_model(knots) if knots else default_model()
     sets = tuple(s for path in args.rig for s in read_rig(path))
-    sets += tuple(read_drive(path, model.signal_inputs()) for path in args.drive)
+    sets += tuple(read_drive(path, model.channel_names(), model.optional) for path in args.drive)
     keys = parameter_keys(table)
     bounds = lower_bounds(table, keys)
     settings = FitSettings(
