@@ -33,7 +33,7 @@ WHEELS = ("fl", "fr", "rl", "rr")
 
 @pytest.fixture(scope="module")
 def rig_sets(vehicle, tmp_path_factory):
-    corner, bar = rig_sweep(vehicle, RigSettings(duration=20.0))
+    corner, bar = rig_sweep(vehicle, RigSettings(duration=10.0))
     corner_path, bar_path = write_rig(corner, bar, tmp_path_factory.mktemp("rig") / "rig.csv")
     return read_rig(corner_path) + read_rig(bar_path)
 

@@ -78,7 +78,15 @@ def file_changes(result: Identification, keys: dict[str, Key]) -> dict[Key, tupl
         if segment_index(name) not in (None, 0) or base_parameter(name) not in keys:
             continue
         sources = ", ".join(result.sources[name]) if name in result.sources else "data"
-        what = "low-velocity slope of the fitted map, " if segment_index(name) == 0 else ""
+        what = ""
+        if segment_index(name) == 0:
+            stem = base_parameter(name)
+            slopes = [
+                f"{result.value[k]:.5g}"
+                for k, other in enumerate(result.names)
+                if segment_index(other) is not None and base_parameter(other) == stem
+            ]
+            what = f"low-velocity slope of the fitted map (segment slopes {', '.join(slopes)}), "
         comment = (
             f"identified: {what}± {result.std_error[j]:.4g} (1σ) from {sources}; "
             f"input {result.initial[j]:.6g}"
