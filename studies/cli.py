@@ -22,6 +22,7 @@ COMMANDS = (
     "wheelload.studies.commands.codegen",
     "wheelload.studies.commands.identify",
     "wheelload.studies.commands.tune",
+    "wheelload.studies.commands.identify_study",
 )
 
 

@@ -7,14 +7,14 @@ the tuned file's ±2σ coverage on its own tuning log is the calibration
 target 95 % to one point.
 """
 
-import re
-
 import numpy as np
+import pandas as pd
 import pytest
 
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
+from wheelload.studies.identification_study import StudySettings, wrong_vehicle_text
 from wheelload.studies.metrics import pooled_metrics
 
 
@@ -27,31 +27,10 @@ def folder(tmp_path_factory):
     return path
 
 
-def scaled(text, section, key, factor):
-    out, current = [], None
-    for line in text.splitlines():
-        header = re.match(r"\[(.*)\]", line)
-        current = header.group(1) if header else current
-        match = re.match(rf"^{key} = ([0-9.e+-]+)(.*)$", line)
-        if match and current == section:
-            line = f"{key} = {float(match.group(1)) * factor!r}{match.group(2)}"
-        out.append(line)
-    return "\n".join(out) + "\n"
-
-
 @pytest.fixture(scope="module")
 def wrong_file(folder):
-    text = example_vehicle_path().read_text()
-    for section in ("suspension.front", "suspension.rear"):
-        for key, factor in (
-            ("spring_rate", 0.8),
-            ("damper_push", 1.3),
-            ("damper_pull", 1.3),
-            ("arb_rate", 0.7),
-        ):
-            text = scaled(text, section, key, factor)
     path = folder / "wrong.toml"
-    path.write_text(text)
+    path.write_text(wrong_vehicle_text(example_vehicle_path().read_text(), StudySettings()))
     return path
 
 
@@ -84,20 +63,16 @@ def test_identify_writes_a_file_that_vehicle_and_estimate_accept(folder, wrong_f
     assert wrong_file.read_bytes() == before
 
 
-def test_wrong_file_identified_from_one_log_matches_the_true_file_elsewhere(folder, wrong_file):
-    out = folder / "from_drive.toml"
-    drive = str(folder / "accel-in-turn.csv")
-    assert (
-        main(["identify", "--vehicle", str(wrong_file), "--out", str(out), "--drive", drive]) == 0
-    )
-    other = read_log(folder / "slope-20.csv")
-    rmse = {
-        name: pooled_metrics(TwoStageKF(load_vehicle(path)).run(other).loads, other.reference)[
-            "RMSE"
-        ]
-        for name, path in (("true", example_vehicle_path()), ("wrong", wrong_file), ("id", out))
-    }
-    assert rmse["id"] <= 1.05 * rmse["true"], rmse
+def test_study_wrong_file_identified_from_one_log_matches_the_true_file_elsewhere(folder, capsys):
+    """identify-study --quick reuses the module's plant logs (same names, same settings)."""
+    assert main(["identify-study", "--quick", "--out", str(folder)]) == 0
+    assert "KF pooled RMSE" in capsys.readouterr().out
+    table = pd.read_csv(folder / "identification.csv").set_index("scenario")
+    assert set(table.index) == {"iso-dlc", "slope-20"}
+    assert (table["rmse_identified"] <= 1.05 * table["rmse_true"]).all()
+    assert (table["rmse_wrong"] > 1.05 * table["rmse_true"]).all()
+    tuning = pd.read_csv(folder / "tuning.csv").set_index("log")
+    assert 90.0 <= tuning.loc["slope-20", "coverage_tuned_pct"] <= 98.0
 
 
 def test_straight_line_log_warns_about_the_bars(folder, capsys):
