@@ -127,7 +127,7 @@ def kernel_function(
         inputs += [p_in, tuning_in]
     else:
         p_in, tuning_in = ca.DM(p), ca.DM(tuning)
-    x_next, P_next, std, residual, used, _ = step(x, unpacked(P), u, valid, dt, p_in, tuning_in)
+    x_next, P_next, std, residual, used = step(x, unpacked(P), u, valid, dt, p_in, tuning_in)[:5]
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,

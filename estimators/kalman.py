@@ -13,6 +13,8 @@ Example
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 
 
@@ -100,12 +102,24 @@ def scalar_update(x, P, z, h, r, valid=1):
     that CasADi does not cancel :math:`S K - b` to zero, which would turn the
     Joseph form into the short form :math:`P - b K^\top`.
     """
+    x, P, _, _, _ = gated_scalar_update(x, P, z, h, r, valid)
+    return x, P
+
+
+def gated_scalar_update(x, P, z, h, r, valid=1, gate=None):
+    r""":func:`scalar_update` that also returns the innovation, its variance and the use.
+
+    ``gate(y, S) -> 0 | 1`` (symbolic), if given, multiplies ``valid``: a
+    row whose innovation :math:`y = z - h x` is implausible under
+    :math:`S = h P h^\top + r` is skipped exactly. Returns ``(x, P, y, S, use)``.
+    """
     n = x.shape[0]
     b = ca.mtimes(P, h.T)
     S = ca.mtimes(h, b) + r
-    masked_gain = valid / S
-    K = [b[j] * masked_gain for j in range(n)]
     y = z - ca.mtimes(h, x)
+    use = valid if gate is None else valid * gate(y, S)
+    masked_gain = use / S
+    K = [b[j] * masked_gain for j in range(n)]
     t = [S * K[k] - b[k] for k in range(n)]
     entries = {}
     for j in range(n):
@@ -114,7 +128,7 @@ def scalar_update(x, P, z, h, r, valid=1):
     P_new = ca.vertcat(
         *[ca.horzcat(*[entries[min(j, k), max(j, k)] for k in range(n)]) for j in range(n)]
     )
-    return x + ca.vertcat(*K) * y, P_new
+    return x + ca.vertcat(*K) * y, P_new, y, S, use
 
 
 def sequential_update(x, P, z, H, r, mask=None):
@@ -125,9 +139,28 @@ def sequential_update(x, P, z, H, r, mask=None):
     Estimation*, §6.1, sequential Kalman filtering); this
     form needs no matrix inverse and about a third of the operations.
     """
+    x, P, _, _, _ = sequential_update_innovations(x, P, z, H, r, mask)
+    return x, P
+
+
+def sequential_update_innovations(x, P, z, H, r, mask=None, gate=None):
+    r"""As :func:`sequential_update`, also returning each row's pre-update innovation.
+
+    Row :math:`i` sees the state after rows :math:`0..i-1`: its innovation
+    :math:`y_i = z_i - H_i x` and variance :math:`S_i = H_i P H_i^\top + r_i`
+    are those of the sequential filter, so :math:`y_i / \sqrt{S_i}` is
+    standard normal under the model. ``gate(i, y, S) -> 0 | 1`` (symbolic)
+    may veto a row on its innovation; a vetoed row is skipped exactly.
+    Returns ``(x, P, y, S, use)`` with ``use = mask * gate`` per row.
+    """
     m = H.shape[0]
     if mask is None:
         mask = ca.DM.ones(m)
+    ys, Ss, uses = [], [], []
     for i in range(m):
-        x, P = scalar_update(x, P, z[i], H[i, :], r[i], mask[i])
-    return x, P
+        row_gate = None if gate is None else functools.partial(gate, i)
+        x, P, y, S, use = gated_scalar_update(x, P, z[i], H[i, :], r[i], mask[i], row_gate)
+        ys.append(y)
+        Ss.append(S)
+        uses.append(use)
+    return x, P, ca.vertcat(*ys), ca.vertcat(*Ss), ca.vertcat(*uses)

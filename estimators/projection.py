@@ -63,11 +63,18 @@ def project(x, P, A, b, W_inv, mask=None):
 
 
 def projection_update(weighting: Weighting):
-    """The second filter stage ``(x, P, b, A, r_c, mask) -> (x, P)``: project, ignore ``r_c``."""
+    """The second filter stage ``(x, P, b, A, r_c, mask) -> (x, P, y, S, use)``.
+
+    Projects and ignores ``r_c``; ``y = b - A x`` and ``S = diag(A P A^T)``
+    are the rows' residuals and variances before the projection.
+    """
 
     def constraint_update(x, P, b, A, r_c, mask):
         W_inv = P if weighting is Weighting.MAXIMUM_PROBABILITY else ca.DM.eye(x.shape[0])
-        return project(x, P, A, b, W_inv, mask)
+        y = b - ca.mtimes(A, x)
+        S = ca.diag(ca.mtimes([A, P, A.T]))
+        x_new, P_new = project(x, P, A, b, W_inv, mask)
+        return x_new, P_new, y, S, mask
 
     return constraint_update
 

@@ -25,9 +25,10 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+import pandas as pd
 
 from wheelload.estimators.compiled import CompiledLoop
-from wheelload.estimators.kalman import predict, sequential_update, upper
+from wheelload.estimators.kalman import predict, sequential_update_innovations, upper
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
@@ -88,12 +89,19 @@ def interval_is_valid(dt):
 
 
 def step_expressions(
-    suspension: ca.Function, equilibrium: ca.Function, *, constraint_update=sequential_update
+    suspension: ca.Function,
+    equilibrium: ca.Function,
+    *,
+    constraint_update=sequential_update_innovations,
 ):
     """Symbolic inputs and outputs of one filter step built from the model Functions.
 
-    ``constraint_update(x, P, b, A, r_c, mask) -> (x, P)`` is the second stage;
-    the default is the soft-constraint Kalman update (eq. 23-25).
+    ``constraint_update(x, P, b, A, r_c, mask) -> (x, P, y, S, use)`` is the
+    second stage; the default is the soft-constraint Kalman update (eq.
+    23-25), one row at a time. Outputs ``innovation`` and
+    ``innovation_variance`` (7 each, update order: suspension FL, FR, RL, RR,
+    then vertical, pitch, roll) are each row's pre-update innovation and its
+    variance S; both are 0 for a row whose inputs are missing.
     """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", 4, 4)
@@ -119,19 +127,26 @@ def step_expressions(
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
     x_pred, P_pred = predict(x, upper(P), Q)
-    x_s, P_s = sequential_update(x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s)
-    x_new, P_new = constraint_update(x_s, P_s, b, A, rc, mask_c)
+    x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
+        x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s
+    )
+    x_new, P_new, y_c, S_c, use_c = constraint_update(x_s, P_s, b, A, rc, mask_c)
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
-    used = ca.vertcat(mask_s, mask_c)
+    used = ca.vertcat(use_s, use_c)
+    available = ca.vertcat(mask_s, mask_c)
+    innovation = ca.vertcat(y_s, y_c) * available
+    innovation_variance = ca.vertcat(S_s, S_c) * available
     inputs = [x, P, u_raw, valid, dt, p, tuning]
-    outputs = [x_new, P_new, std, residual, used, z]
+    outputs = [x_new, P_new, std, residual, used, z, innovation, innovation_variance]
     return inputs, outputs
 
 
 STEP_INPUT_NAMES = ["x", "P", "u", "u_valid", "dt", "p", "tuning"]
-STEP_OUTPUT_NAMES = ["x_next", "P_next", "std", "residual", "used", "z"]
+STEP_OUTPUT_NAMES = [
+    "x_next", "P_next", "std", "residual", "used", "z", "innovation", "innovation_variance",
+]  # fmt: skip
 
 
 def step_function(
@@ -139,7 +154,7 @@ def step_function(
     equilibrium: ca.Function | None = None,
     name: str = STEP_NAME,
     *,
-    constraint_update=sequential_update,
+    constraint_update=sequential_update_innovations,
 ) -> ca.Function:
     """The filter step as a CasADi Function (model Functions default to ``wheelload.models``)."""
     inputs, outputs = step_expressions(
@@ -148,6 +163,38 @@ def step_function(
         constraint_update=constraint_update,
     )
     return ca.Function(name, inputs, outputs, STEP_INPUT_NAMES, STEP_OUTPUT_NAMES)
+
+
+#: The seven update rows in update order (innovation outputs).
+UPDATE_ROWS = (
+    "suspension_fl", "suspension_fr", "suspension_rl", "suspension_rr",
+    "vertical", "pitch", "roll",
+)  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Innovations:
+    """Pre-update innovations of the seven update rows of ``n`` samples (:data:`UPDATE_ROWS`).
+
+    ``innovation`` :math:`y` [N, N, N m], ``variance`` :math:`S` [its unit^2],
+    both 0 where the row's inputs are missing; ``used`` is True where the
+    row updated the state.
+    """
+
+    t: np.ndarray  # (n,)
+    innovation: np.ndarray  # (n, 7)
+    variance: np.ndarray  # (n, 7)
+    used: np.ndarray  # (n, 7) bool
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Columns ``t, innovation_<row>.., variance_<row>.., used_<row>..``."""
+        columns = {"t": self.t}
+        columns.update(
+            {f"innovation_{r}": self.innovation[:, i] for i, r in enumerate(UPDATE_ROWS)}
+        )
+        columns.update({f"variance_{r}": self.variance[:, i] for i, r in enumerate(UPDATE_ROWS)})
+        columns.update({f"used_{r}": self.used[:, i] for i, r in enumerate(UPDATE_ROWS)})
+        return pd.DataFrame(columns)
 
 
 @dataclass(frozen=True)
@@ -237,9 +284,9 @@ class TwoStageKF:
                 self.tuning,
             ]
         )
-        x, P, std, residual, used, _ = np.split(
+        x, P, std, residual, used = np.split(
             np.asarray(self._flat_step(flat)).ravel(), self._flat_splits
-        )
+        )[:5]
         flags = flags_from_used(used.reshape(7, 1))
         if not 0.0 < dt < MAX_INTERVAL:
             flags |= StepFlag.STEP_REJECTED
@@ -275,7 +322,7 @@ class TwoStageKF:
         self, signals: Signals, state: FilterState | None = None
     ) -> tuple[Estimate, np.ndarray]:
         """As :meth:`run`, also returning the posterior covariances, shape (n, 4, 4)."""
-        return self._run(signals, state, with_covariance=True)
+        return self._run(signals, state, with_covariance=True)[:2]
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
@@ -288,7 +335,7 @@ class TwoStageKF:
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = sample_intervals(signals.t)[:, None]
-        _, history, (std, residual, used, _) = self._loop(
+        _, history, (std, residual, used, _, innovation, variance) = self._loop(
             [state.x, state.P],
             [self.p, self.tuning],
             [u, valid, dt],
@@ -302,7 +349,23 @@ class TwoStageKF:
             flags=flags_from_used(used.T),
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
-        return estimate, covariances
+        innovations = Innovations(
+            t=signals.t.copy(), innovation=innovation, variance=variance, used=used > 0.5
+        )
+        return estimate, covariances, innovations
+
+    def run_innovations(
+        self, signals: Signals, state: FilterState | None = None
+    ) -> tuple[Estimate, Innovations]:
+        """As :meth:`run`, also returning every update row's innovation and its variance.
+
+        The innovations of the sequential filter are independent standard
+        normals under the model once divided by :math:`\\sqrt{S}`, so the log
+        likelihood of the tuning is :math:`-\tfrac12 \\sum (\\log 2\\pi S + y^2 / S)`
+        over the rows used (Mehra 1970).
+        """
+        estimate, _, innovations = self._run(signals, state, with_covariance=False)
+        return estimate, innovations
 
 
 def sample_intervals(t: np.ndarray) -> np.ndarray:

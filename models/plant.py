@@ -39,7 +39,7 @@ import casadi as ca
 
 from wheelload.models.build_folder import jit_options
 from wheelload.models.mass_properties import static_loads
-from wheelload.models.plant_params import DamperMap, Plant
+from wheelload.models.plant_params import DamperMap, Plant, Stops
 from wheelload.models.road_surface import RoadSurface, road_lookup
 from wheelload.models.suspension import anti_roll_bar_forces
 from wheelload.models.tyre import tyre_forces
@@ -165,6 +165,25 @@ def stop_force(d, bump_gap, rebound_gap, linear_rate, progressive_rate):
     )
 
 
+def corner_suspension_force(corner: Corner, stops: Stops, d, dd, arb):
+    r"""Vertical force the suspension of one corner passes to the body [N].
+
+    .. math:: F_s = F_{pre} + k d + F_{dam}(\dot d) + F_{arb} + F_{stop}(d)
+
+    Preload, spring, damper map, the bar's share ``arb`` and the stops;
+    also driven on its own by the component rig (``studies/rig.py``).
+    """
+    return (
+        corner.preload
+        + corner.spring * d
+        + damper_map_force(dd, corner.damper)
+        + arb
+        + stop_force(
+            d, corner.bump_gap, stops.rebound_gap, stops.linear_rate, stops.progressive_rate
+        )
+    )
+
+
 def _rotation(phi, theta, psi):
     """Body-to-path rotation :math:`R_z(\\psi) R_y(\\theta) R_x(\\phi)`."""
     cf, sf = ca.cos(phi), ca.sin(phi)
@@ -245,15 +264,7 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
             tyre.relaxation_length_x
         )
         alpha_dot = (-vy_w - ca.fabs(vx_w) * alpha[i]) / tyre.relaxation_length_y
-        f_s = (
-            c.preload
-            + c.spring * d[i]
-            + damper_map_force(dd[i], c.damper)
-            + arb[i]
-            + stop_force(
-                d[i], c.bump_gap, stops.rebound_gap, stops.linear_rate, stops.progressive_rate
-            )
-        )
+        f_s = corner_suspension_force(c, stops, d[i], dd[i], arb[i])
         tyre_vectors.append(force)
         contacts.append(r_w - gap * normal)
         centres.append(r_w)

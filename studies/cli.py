@@ -23,6 +23,9 @@ COMMANDS = (
     "wheelload.studies.commands.mhe",
     "wheelload.studies.commands.codegen",
     "wheelload.studies.commands.weigh",
+    "wheelload.studies.commands.identify",
+    "wheelload.studies.commands.tune",
+    "wheelload.studies.commands.identify_study",
 )
 
 

@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import argparse
 
-from wheelload.models.vehicle import example_vehicle_path
+from wheelload.models.vehicle import example_vehicle_path, load_vehicle
+from wheelload.studies.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.roads import ISO_CLASSES
 from wheelload.studies.scenario_log import write_log
 from wheelload.studies.scenario_plot import plot_scenario
 from wheelload.studies.scenario_runner import run_scenario
 from wheelload.studies.scenarios import SCENARIOS, Options
+
+RIG_SWEEP = "rig-sweep"
 
 
 def register(subparsers) -> None:
@@ -23,11 +26,18 @@ def register(subparsers) -> None:
     )
     parser.add_argument(
         "name",
-        choices=sorted(SCENARIOS),
+        choices=[*sorted(SCENARIOS), RIG_SWEEP],
         metavar="NAME",
-        help="scenario: " + ", ".join(sorted(SCENARIOS)),
+        help="scenario: "
+        + ", ".join(sorted(SCENARIOS))
+        + f"; or {RIG_SWEEP}: component-rig sweeps of the plant's suspension force elements",
     )
-    parser.add_argument("--out", required=True, help="log file (.csv or .parquet)")
+    parser.add_argument(
+        "--out",
+        required=True,
+        help=f"log file (.csv or .parquet); for {RIG_SWEEP} the corner-rig CSV (the bar-rig "
+        "file is written beside it as <stem>_arb.csv)",
+    )
     parser.add_argument("--plot", help="save a figure (PNG) of the run")
     parser.add_argument("--vehicle", default=None, help="vehicle file (default: bundled)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
@@ -61,6 +71,8 @@ def register(subparsers) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     vehicle = args.vehicle or example_vehicle_path()
+    if args.name == RIG_SWEEP:
+        return _rig(args, vehicle)
     if (args.grade or args.bank) and args.name != "standstill":
         raise ValueError("--grade and --bank apply to the standstill scenario only")
     options = Options(roughness=args.roughness, seed=args.seed, grade=args.grade, bank=args.bank)
@@ -80,5 +92,19 @@ def handle(args: argparse.Namespace) -> int:
         f"{args.name}: {len(result.log)} samples, {info['duration_s']:.1f} s simulated in "
         f"{result.truth.wall_time:.2f} s (+{result.truth.build_time:.1f} s build); "
         f"log {args.out}, metadata {sidecar}"
+    )
+    return 0
+
+
+def _rig(args: argparse.Namespace, vehicle) -> int:
+    if args.noise != 1.0 or args.roughness or args.plot:
+        raise ValueError(f"--noise, --roughness and --plot do not apply to {RIG_SWEEP}")
+    settings = RigSettings(seed=args.seed, rate=args.rate)
+    corner, bar = rig_sweep(load_vehicle(vehicle), settings)
+    paths = write_rig(corner, bar, args.out)
+    print(
+        f"{RIG_SWEEP}: {len(corner)} corner-rig and {len(bar)} bar-rig samples "
+        f"({settings.duration:.0f} s per corner and axle at {settings.rate:.0f} Hz); "
+        f"files {paths[0]}, {paths[1]}"
     )
     return 0

@@ -1,0 +1,28 @@
+"""Identification of the suspension maps and tuning of the filter from rig data and drive logs.
+
+Regressors are Jacobians of the model Functions in ``wheelload.models``
+(never a second copy of the equations); the tuning maximises the likelihood
+of the filter's own innovations.
+"""
+
+from wheelload.estimators.identification.data import DataKind, DataSet, read_drive, read_rig
+from wheelload.estimators.identification.fit import FitSettings, Identification, Loss, identify
+from wheelload.estimators.identification.model import (
+    SuspensionModel,
+    default_model,
+    piecewise_model,
+)
+
+__all__ = [
+    "DataKind",
+    "DataSet",
+    "FitSettings",
+    "Identification",
+    "Loss",
+    "SuspensionModel",
+    "default_model",
+    "identify",
+    "piecewise_model",
+    "read_drive",
+    "read_rig",
+]

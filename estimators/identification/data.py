@@ -1,0 +1,253 @@
+"""Identification data: component-rig CSV files and drive logs with reference loads.
+
+Corner rig file (spring + damper unit of one corner): columns ``d`` [m,
+compression from static], ``v`` [m/s, > 0 in compression], ``force`` [N,
+change of the wheel load from static, > 0 pushes the wheel down]; optional
+``t`` [s]. The corner (``fl``, ``fr``, ``rl``, ``rr``) is a column
+``corner`` (one file may hold several) or a header line ``# corner = fl``.
+
+Anti-roll-bar rig file: columns ``d_left``, ``d_right`` [m], ``force`` [N,
+load the bar adds to the left wheel; the right wheel gets the opposite];
+optional ``t``. The axle (``front``, ``rear``) is a column ``axle`` or a
+header line ``# axle = front``.
+
+Drive log: the log format of :mod:`wheelload.estimators.signals`, with
+reference loads ``fz_fl .. fz_rr`` for any subset of the wheels (a missing
+column or a blank cell: no reference there).
+
+Example
+-------
+>>> sets = read_rig("rig_corner.csv") + (read_drive("drive.csv"),)
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from wheelload.estimators.signals import LogError, signals_from_frame
+
+WHEELS = ("fl", "fr", "rl", "rr")
+AXLES = ("front", "rear")
+CORNER_COLUMNS = ("d", "v", "force")
+ARB_COLUMNS = ("d_left", "d_right", "force")
+HEADER_KEY = re.compile(r"^#\s*(\w+)\s*=\s*(\S+)\s*$")
+
+
+class DataKind(enum.Enum):
+    CORNER_RIG = "corner rig"
+    ARB_RIG = "anti-roll-bar rig"
+    DRIVE = "drive log"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class DataSet:
+    """One block of identification data.
+
+    ``signals`` maps a model signal input (drive logs) or a rig column to
+    its samples, shape (n, size); ``target`` holds the measured force per
+    model row (n, rows), NaN where there is none; ``rows`` names the model
+    rows (wheel names), ``location`` is the corner index (corner rig) or
+    axle index (bar rig), unused for drive logs.
+    """
+
+    kind: DataKind
+    source: str
+    t: np.ndarray
+    signals: dict[str, np.ndarray]
+    target: np.ndarray
+    rows: tuple[str, ...]
+    location: int = -1
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def label(self) -> str:
+        if self.kind is DataKind.CORNER_RIG:
+            suffix = f" ({WHEELS[self.location]})"
+        elif self.kind is DataKind.ARB_RIG:
+            suffix = f" ({AXLES[self.location]})"
+        else:
+            suffix = ""
+        return f"{Path(self.source).name}{suffix}"
+
+    def subset(self, index: np.ndarray) -> DataSet:
+        """The samples at ``index`` (e.g. a shorter record for a convergence test)."""
+        return DataSet(
+            kind=self.kind,
+            source=self.source,
+            t=self.t[index],
+            signals={k: v[index] for k, v in self.signals.items()},
+            target=self.target[index],
+            rows=self.rows,
+            location=self.location,
+        )
+
+    def with_target(self, target: np.ndarray) -> DataSet:
+        """The same samples with another target (e.g. outliers injected)."""
+        return DataSet(
+            kind=self.kind,
+            source=self.source,
+            t=self.t,
+            signals=self.signals,
+            target=np.asarray(target, float).reshape(self.target.shape),
+            rows=self.rows,
+            location=self.location,
+        )
+
+
+def _header_keys(path: Path) -> dict[str, str]:
+    keys = {}
+    with path.open(encoding="utf-8") as stream:
+        for line in stream:
+            if not line.startswith("#"):
+                break
+            match = HEADER_KEY.match(line.strip())
+            if match:
+                keys[match.group(1).lower()] = match.group(2).strip().lower()
+    return keys
+
+
+def _numeric(frame: pd.DataFrame, name: str, source: str) -> np.ndarray:
+    values = pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise LogError(
+            f"{source}: column '{name}' is not a finite number at row {bad[0]}: "
+            f"{frame[name].iloc[bad[0]]!r} (remove or fix the row)"
+        )
+    return values
+
+
+def _groups(frame: pd.DataFrame, path: Path, key: str, choices: tuple[str, ...]):
+    """Row indices per location, from a column ``key`` or the header key ``# key = ...``."""
+    source = str(path)
+    if key in frame.columns:
+        labels = frame[key].astype(str).str.strip().str.lower().to_numpy()
+        unknown = sorted(set(labels) - set(choices))
+        if unknown:
+            row = int(np.flatnonzero(labels == unknown[0])[0])
+            raise LogError(
+                f"{source}: column '{key}' has '{unknown[0]}' at row {row}: "
+                f"use one of {', '.join(choices)}"
+            )
+        return [(choices.index(c), np.flatnonzero(labels == c)) for c in choices if c in labels]
+    header = _header_keys(path)
+    if key not in header:
+        raise LogError(
+            f"{source}: which {key} is it? add a column '{key}' or a first line "
+            f"'# {key} = {choices[0]}' ({', '.join(choices)})"
+        )
+    if header[key] not in choices:
+        raise LogError(
+            f"{source}: header key '{key} = {header[key]}': use one of {', '.join(choices)}"
+        )
+    return [(choices.index(header[key]), np.arange(len(frame)))]
+
+
+def _time(frame: pd.DataFrame, source: str) -> np.ndarray:
+    if "t" in frame.columns:
+        return _numeric(frame, "t", source)
+    return np.arange(len(frame), dtype=float)
+
+
+def read_rig(path: str | Path) -> tuple[DataSet, ...]:
+    """Read a corner or anti-roll-bar rig CSV (see module docstring) into data sets."""
+    path = Path(path)
+    source = str(path)
+    if not path.exists():
+        raise LogError(f"{source}: no such rig file")
+    try:
+        frame = pd.read_csv(path, comment="#")
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as error:
+        raise LogError(f"{source}: cannot be read: {error}") from None
+    frame = frame.rename(columns=lambda name: str(name).strip())
+    if set(ARB_COLUMNS) <= set(frame.columns):
+        kind, columns, key, choices = DataKind.ARB_RIG, ARB_COLUMNS, "axle", AXLES
+    elif set(CORNER_COLUMNS) <= set(frame.columns):
+        kind, columns, key, choices = DataKind.CORNER_RIG, CORNER_COLUMNS, "corner", WHEELS
+    else:
+        raise LogError(
+            f"{source}: a rig file needs columns {', '.join(CORNER_COLUMNS)} (corner) or "
+            f"{', '.join(ARB_COLUMNS)} (anti-roll bar); has {', '.join(map(str, frame.columns))}"
+        )
+    if len(frame) < 2:
+        raise LogError(f"{source}: needs at least 2 rows, has {len(frame)}")
+    values = {name: _numeric(frame, name, source) for name in columns}
+    t = _time(frame, source)
+    sets = []
+    for location, index in _groups(frame, path, key, choices):
+        row = WHEELS[location] if kind is DataKind.CORNER_RIG else WHEELS[2 * location]
+        sets.append(
+            DataSet(
+                kind=kind,
+                source=source,
+                t=t[index],
+                signals={name: values[name][index, None] for name in columns[:2]},
+                target=values["force"][index, None],
+                rows=(row,),
+                location=location,
+            )
+        )
+    return tuple(sets)
+
+
+def read_drive(
+    path: str | Path, channels: tuple[str, ...], optional: frozenset[str] = frozenset()
+) -> DataSet:
+    """Read a drive log with reference loads for the model's signal ``channels``.
+
+    A channel is taken from the validated log (travel rates derived when not
+    logged) or, failing that, from a column of that name; an ``optional``
+    channel the log lacks is 0.
+    """
+    path = Path(path)
+    source = str(path)
+    if not path.exists():
+        raise LogError(f"{source}: no such log file")
+    suffix = path.suffix.lower()
+    try:
+        frame = pd.read_csv(path, comment="#") if suffix == ".csv" else pd.read_parquet(path)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, ValueError) as error:
+        raise LogError(f"{source}: cannot be read: {error}") from None
+    frame = frame.rename(columns=lambda name: str(name).strip())
+    reference = np.full((len(frame), 4), np.nan)
+    for i, wheel in enumerate(WHEELS):
+        name = f"fz_{wheel}"
+        if name in frame.columns:
+            reference[:, i] = pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
+    if not np.isfinite(reference).any():
+        raise LogError(
+            f"{source}: no reference loads: give at least one of "
+            + ", ".join(f"fz_{w}" for w in WHEELS)
+        )
+    signals = signals_from_frame(
+        frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]), source=source
+    )
+    validated = signals.to_frame()
+    table = {}
+    for name in channels:
+        if name in validated.columns:
+            values = validated[name].to_numpy(float)
+        elif name in frame.columns:
+            values = pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
+        elif name in optional:
+            values = np.zeros(len(frame))
+        else:
+            raise LogError(f"{source}: the suspension model needs channel '{name}', not in the log")
+        table[name] = values[:, None]
+    usable = np.all(np.hstack([np.isfinite(v) for v in table.values()]), axis=1)
+    reference[~usable] = np.nan
+    return DataSet(
+        kind=DataKind.DRIVE,
+        source=source,
+        t=signals.t,
+        signals=table,
+        target=reference,
+        rows=WHEELS,
+    )

@@ -1,0 +1,242 @@
+r"""Predictions and regressors of each data kind, built from the suspension model Function.
+
+With the model :math:`z = f(s, \theta)` (four wheel loads from the signals
+:math:`s` and the stacked parameters :math:`\theta`):
+
+- drive log: :math:`\hat y = f(s, \theta)` per wheel with a reference load;
+- corner rig, wheel i with partner j on its axle:
+  :math:`\hat y = f_i(d_i = d_j = d,\ v_i = v) - f_i(0, 0)` (the partner moves
+  with it, so the bar is not twisted; other signals are zero on a rig);
+- bar rig, axle with wheels L, R:
+  :math:`\hat y = f_L(d_L, d_R) - f_L(d_L, d_L)` (everything but the coupling
+  between the wheels cancels).
+
+The regressor of a parameter is :math:`\partial \hat y / \partial \theta`,
+the CasADi Jacobian of these expressions; no equation is written here.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.identification.data import DataKind, DataSet
+from wheelload.estimators.identification.model import WHEELS, SuspensionModel
+
+
+@dataclass(frozen=True, kw_only=True)
+class Prediction:
+    """``y = function(s, theta)`` of one data kind, its sample layout and its Jacobian."""
+
+    function: ca.Function  # (s[ns], theta[n_theta]) -> y[rows]
+    jacobian: ca.Function  # (s, theta) -> dy/dtheta [rows x n_theta]
+    columns: tuple[str, ...]  # data-set signal names stacked into s
+
+
+def _finish(name: str, s: ca.SX, theta: ca.SX, y: ca.SX, columns) -> Prediction:
+    function = ca.Function(name, [s, theta], [y], ["s", "theta"], ["y"])
+    jacobian = ca.Function(
+        f"{name}_jacobian", [s, theta], [ca.jacobian(y, theta)], ["s", "theta"], ["J"]
+    )
+    return Prediction(function=function, jacobian=jacobian, columns=tuple(columns))
+
+
+def _theta(model: SuspensionModel) -> ca.SX:
+    return ca.SX.sym("theta", len(model.parameter_names()))
+
+
+def _require(model: SuspensionModel, names: tuple[str, ...], what: str) -> None:
+    missing = [n for n in names if n not in model.channel_names()]
+    if missing:
+        raise ValueError(f"a {what} needs a model with signal '{missing[0]}'")
+
+
+def drive_prediction(model: SuspensionModel) -> Prediction:
+    """All four model loads from the log's channels."""
+    theta = _theta(model)
+    names = model.channel_names()
+    s = ca.SX.sym("s", len(names))
+    channels = {name: s[i] for i, name in enumerate(names)}
+    return _finish("drive", s, theta, model.loads(channels, theta), names)
+
+
+def corner_prediction(model: SuspensionModel, wheel: int) -> Prediction:
+    """Load change of one corner driven alone on a rig (bar not twisted, other signals 0)."""
+    theta = _theta(model)
+    d, v = ca.SX.sym("d"), ca.SX.sym("v")
+    name, partner = WHEELS[wheel], WHEELS[wheel ^ 1]
+    _require(model, (f"d_{name}", f"d_{partner}", f"v_{name}"), "corner rig")
+    moved = {f"d_{name}": d, f"d_{partner}": d, f"v_{name}": v}
+    y = model.loads(moved, theta)[wheel] - model.loads({}, theta)[wheel]
+    return _finish(f"corner_rig_{wheel}", ca.vertcat(d, v), theta, y, ("d", "v"))
+
+
+def bar_prediction(model: SuspensionModel, axle: int) -> Prediction:
+    """Load the bar adds to the left wheel for a travel difference."""
+    theta = _theta(model)
+    left_d, right_d = ca.SX.sym("d_left"), ca.SX.sym("d_right")
+    left, right = WHEELS[2 * axle], WHEELS[2 * axle + 1]
+    _require(model, (f"d_{left}", f"d_{right}"), "bar rig")
+
+    def loads(d_right):
+        return model.loads({f"d_{left}": left_d, f"d_{right}": d_right}, theta)[2 * axle]
+
+    y = loads(right_d) - loads(left_d)
+    return _finish(f"bar_rig_{axle}", ca.vertcat(left_d, right_d), theta, y, ("d_left", "d_right"))
+
+
+@functools.lru_cache(maxsize=64)
+def _prediction(model: SuspensionModel, kind: DataKind, location: int) -> Prediction:
+    if kind is DataKind.DRIVE:
+        return drive_prediction(model)
+    if kind is DataKind.CORNER_RIG:
+        return corner_prediction(model, location)
+    return bar_prediction(model, location)
+
+
+def prediction(model: SuspensionModel, data: DataSet) -> Prediction:
+    """The :class:`Prediction` for a data set."""
+    return _prediction(model, data.kind, data.location)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Rows:
+    """The stacked regression rows of all data sets at one parameter point."""
+
+    y: np.ndarray  # (N,) measured
+    y_hat: np.ndarray  # (N,) predicted
+    J: np.ndarray  # (N, n_theta) regressors
+    group: np.ndarray  # (N,) data-set index
+    wheel: np.ndarray  # (N,) wheel name per row
+    t: np.ndarray  # (N,) time of the sample
+    travel: np.ndarray  # (N,) travel of the row's wheel [m] (bar rig: left wheel)
+    rate: np.ndarray  # (N,) travel rate of the row's wheel [m/s]
+    difference: np.ndarray  # (N,) left minus right travel of the row's axle [m]
+
+
+def evaluate(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray) -> Rows:
+    """Predictions and regressors of every used sample (finite target) at ``theta``."""
+    parts = []
+    for index, data in enumerate(sets):
+        pred = prediction(model, data)
+        s = np.hstack([data.signals[name] for name in pred.columns])
+        rows = np.isfinite(data.target)
+        keep = rows.any(axis=1)
+        s = s[keep]
+        n = s.shape[0]
+        if n == 0:
+            continue
+        y_hat = np.asarray(pred.function.map(n)(s.T, theta)).T  # (n, rows)
+        jac = np.asarray(pred.jacobian.map(n)(s.T, theta))  # (rows, n * n_theta)
+        jac = jac.reshape(jac.shape[0], n, len(theta)).transpose(1, 0, 2)  # (n, rows, n_theta)
+        mask = rows[keep]
+        sample, row = np.nonzero(mask)
+        travel, rate, difference = _row_signals(data, keep, sample, row)
+        parts.append(
+            (
+                data.target[keep][sample, row],
+                y_hat[sample, row],
+                jac[sample, row, :],
+                np.full(sample.size, index),
+                np.asarray(data.rows)[row],
+                data.t[keep][sample],
+                travel,
+                rate,
+                difference,
+            )
+        )
+    if not parts:
+        raise ValueError("no data sample with a measured force or reference load")
+    y, y_hat, J, group, wheel, t, travel, rate, difference = (
+        np.concatenate(items) for items in zip(*parts)
+    )
+    return Rows(
+        y=y,
+        y_hat=y_hat,
+        J=J,
+        group=group,
+        wheel=wheel,
+        t=t,
+        travel=travel,
+        rate=rate,
+        difference=difference,
+    )
+
+
+def _row_signals(data: DataSet, keep, sample, row):
+    """Travel, rate and axle travel difference of each row, for the report's figures."""
+    signals = {name: value[keep] for name, value in data.signals.items()}
+    if data.kind is DataKind.CORNER_RIG:
+        return signals["d"][sample, 0], signals["v"][sample, 0], np.zeros(sample.size)
+    if data.kind is DataKind.ARB_RIG:
+        left, right = signals["d_left"][sample, 0], signals["d_right"][sample, 0]
+        return left, np.zeros(sample.size), left - right
+
+    def column(prefix: str) -> np.ndarray:
+        names = [f"{prefix}_{w}" for w in WHEELS]
+        if not all(name in signals for name in names):
+            return np.full((len(sample), 4), np.nan)
+        return np.hstack([signals[name] for name in names])[sample]
+
+    d, v = column("d"), column("v")
+    wheel = np.arange(len(sample)), np.asarray(row)
+    left = 2 * (wheel[1] // 2)
+    return d[wheel], v[wheel], d[wheel[0], left] - d[wheel[0], left + 1]
+
+
+def structure(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray):
+    """Which parameters the kinds of data in ``sets`` can see, and the symbolic Jacobians.
+
+    ``visible[j]`` is true when the Jacobian column of parameter ``j`` is
+    nonzero for some kind at random signal values (a rig difference that
+    cancels a parameter exactly leaves it invisible); ``symbolic`` holds the
+    SX Jacobian expression and the parameter symbol of each kind.
+    """
+    seen = {}
+    for data in sets:
+        seen[(data.kind, data.location)] = prediction(model, data)
+    visible = np.zeros(len(theta), bool)
+    symbolic = []
+    rng = np.random.default_rng(0)
+    for pred in seen.values():
+        s, symbol = pred.function.sx_in()
+        count = 256  # random signs, magnitudes 1e-3 to 1e2 (SI): past any map knot
+        probe = rng.choice([-1.0, 1.0], (s.shape[0], count)) * 10.0 ** rng.uniform(
+            -3.0, 2.0, (s.shape[0], count)
+        )
+        jac = np.asarray(pred.jacobian.map(count)(probe, theta))
+        visible |= np.abs(jac.reshape(jac.shape[0], count, len(theta))).max(axis=(0, 1)) > 0
+        y = pred.function.call([s, symbol])[0]
+        symbolic.append((ca.jacobian(y, symbol), symbol))
+    return visible, symbolic
+
+
+def linear_free_set(
+    model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray, fixed: frozenset[str]
+) -> tuple[list[int], list[int]]:
+    """Parameters to fit, and those held because the model is not linear in them jointly.
+
+    Greedy in layout order: a parameter the data depend on joins the free
+    set when the Jacobian with respect to the free set stays independent of
+    the free set (the prediction stays linear in it); e.g. the bar rate joins
+    and its ratio, which multiplies it, is held.
+    """
+    depends, symbolic = structure(model, sets, theta)
+    names = model.parameter_names()
+    free: list[int] = []
+    nonlinear: list[int] = []
+    for j, name in enumerate(names):
+        if not depends[j] or name in fixed:
+            continue
+        trial = [*free, j]
+        linear = True
+        for J, theta in symbolic:
+            block = J[:, trial]
+            if ca.depends_on(block, theta[trial]):
+                linear = False
+                break
+        (free if linear else nonlinear).append(j)
+    return free, nonlinear

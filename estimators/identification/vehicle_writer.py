@@ -1,0 +1,110 @@
+"""Write a changed copy of a vehicle file: new values with a comment, the rest kept verbatim.
+
+The input is never overwritten; an existing output is refused unless
+``force``; the text goes to a temporary file in the target folder, is read
+back by the vehicle-file reader, and is then renamed into place.
+
+Example
+-------
+>>> text = set_values(source_text, {("suspension", "front", "spring_rate"): (61200.0, "± 150")})
+>>> write_vehicle_text(text, "new.toml", inputs=("old.toml",), force=False)
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from pathlib import Path
+
+from wheelload.models import load_vehicle
+
+Key = tuple[str, ...]
+TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")
+ASSIGNMENT = re.compile(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)([^#]*?)(\s*)(#.*)?$")
+
+
+def _format(value) -> str:
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_format(v) for v in value) + "]"
+    return repr(float(f"{float(value):.6g}"))
+
+
+def set_values(text: str, changes: dict[Key, tuple[object, str]]) -> str:
+    """``text`` with each key's value replaced and its comment set (old comment kept above)."""
+    lines = text.splitlines()
+    table: tuple[str, ...] = ()
+    done = set()
+    out = []
+    for line in lines:
+        header = TABLE.match(line)
+        if header:
+            table = tuple(part.strip() for part in header.group(1).split("."))
+            out.append(line)
+            continue
+        match = ASSIGNMENT.match(line)
+        key = (*table, match.group(2)) if match else None
+        if key in changes:
+            value, comment = changes[key]
+            indent, name, equals, _, _, old = match.groups()
+            if old:
+                out.append(f"{indent}# (input file) {old.lstrip('# ').rstrip()}")
+            out.append(f"{indent}{name}{equals}{_format(value)}  # {comment}")
+            done.add(key)
+        else:
+            out.append(line)
+    missing = [key for key in changes if key not in done]
+    if missing:
+        raise ValueError(f"key '{'.'.join(missing[0])}' not found in the vehicle file")
+    return "\n".join(out) + "\n"
+
+
+def prepend_comment(text: str, comment: str) -> str:
+    """``text`` with comment lines added at the top."""
+    return "".join(f"# {line}\n".replace("#  \n", "#\n") for line in comment.splitlines()) + text
+
+
+def check_output_path(path: str | Path, inputs: tuple[str | Path, ...], force: bool) -> Path:
+    """The output path, or an error: never an input, never an existing file without ``force``."""
+    path = Path(path)
+    for source in inputs:
+        if Path(source).exists() and path.exists() and os.path.samefile(source, path):
+            raise ValueError(f"--out {path} is an input file: choose another name")
+        if Path(source).resolve() == path.resolve():
+            raise ValueError(f"--out {path} is an input file: choose another name")
+    if path.exists() and not force:
+        raise ValueError(f"{path} exists: choose another --out or add --force")
+    if path.suffix.lower() != ".toml":
+        raise ValueError(f"--out {path}: a vehicle file must end in .toml")
+    return path
+
+
+def write_text_atomically(text: str, path: Path) -> None:
+    """Write ``text`` to a temporary file beside ``path`` and rename it into place."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(name, path)
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
+
+
+def write_vehicle_text(
+    text: str, path: str | Path, *, inputs: tuple[str | Path, ...], force: bool
+) -> Path:
+    """Validate ``text`` as a vehicle file and write it to ``path`` (see module docstring)."""
+    path = check_output_path(path, inputs, force)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        load_vehicle(name)
+        os.replace(name, path)
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
+    return path

@@ -1,0 +1,169 @@
+"""``wheelload identify``: fit the suspension maps of a vehicle file to rig data and drive logs.
+
+Writes a new vehicle file (a copy of ``--vehicle`` with the identified values,
+each with its standard error and data source in a comment) and, with
+``--report DIR``, a Markdown report, CSV tables and figures. Rig and log
+formats: ``wheelload.estimators.identification.data``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tomllib
+from pathlib import Path
+
+from wheelload.estimators.identification import (
+    FitSettings,
+    Loss,
+    default_model,
+    identify,
+    piecewise_model,
+    read_drive,
+    read_rig,
+)
+from wheelload.estimators.identification.file_keys import lower_bounds, parameter_keys
+from wheelload.estimators.identification.model import base_parameter
+from wheelload.estimators.identification.report import (
+    correlation_table,
+    file_changes,
+    markdown_report,
+    parameter_table,
+    rmse_table,
+)
+from wheelload.estimators.identification.vehicle_writer import (
+    check_output_path,
+    prepend_comment,
+    set_values,
+    write_text_atomically,
+    write_vehicle_text,
+)
+from wheelload.models import ModelParameters, load_vehicle
+
+REPORT_FILES = (
+    "report.md",
+    "parameters.csv",
+    "rmse.csv",
+    "correlation.csv",
+    "maps.png",
+    "residuals.png",
+)
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "identify",
+        help="identify spring, damper and anti-roll-bar maps from rig data and drive logs",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
+    parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
+    parser.add_argument("--report", metavar="DIR", help="write report.md, CSV tables and figures")
+    parser.add_argument("--rig", action="append", default=[], metavar="CSV", help="rig file")
+    parser.add_argument(
+        "--drive", action="append", default=[], metavar="LOG", help="drive log with fz_* columns"
+    )
+    parser.add_argument(
+        "--robust", choices=("huber", "soft-l1"), help="robust loss instead of least squares"
+    )
+    parser.add_argument("--damper", choices=("linear", "piecewise"), default="linear")
+    parser.add_argument(
+        "--knots", help="inner velocity knots of the piecewise damper [m/s], e.g. 0.1,0.3"
+    )
+    parser.add_argument("--fix", default="", help="parameters held at the file value, NAME,...")
+    parser.add_argument(
+        "--precision",
+        type=float,
+        default=0.25,
+        help="hold a parameter whose 1σ relative precision is worse than this (default 0.25)",
+    )
+    parser.add_argument("--force", action="store_true", help="replace existing output files")
+    parser.set_defaults(handler=handle)
+
+
+def _knots(args: argparse.Namespace) -> tuple[float, ...]:
+    if args.damper == "linear":
+        if args.knots:
+            raise ValueError("--knots needs --damper piecewise")
+        return ()
+    if not args.knots:
+        raise ValueError("--damper piecewise needs --knots V1,V2,... (m/s)")
+    try:
+        return tuple(float(k) for k in args.knots.split(","))
+    except ValueError:
+        raise ValueError(f"--knots '{args.knots}': give numbers in m/s, e.g. 0.1,0.3") from None
+
+
+def handle(args: argparse.Namespace) -> int:
+    vehicle_path = Path(args.vehicle)
+    vehicle = load_vehicle(vehicle_path)
+    text = vehicle_path.read_text(encoding="utf-8")
+    table = tomllib.loads(text)
+    inputs = (vehicle_path, *map(Path, args.rig), *map(Path, args.drive))
+    out = check_output_path(args.out, inputs, args.force)
+    report = Path(args.report) if args.report else None
+    if report is not None and not args.force:
+        existing = [name for name in REPORT_FILES if (report / name).exists()]
+        if existing:
+            raise ValueError(f"{report / existing[0]} exists: choose another --report or --force")
+    knots = _knots(args)
+    model = piecewise_model(knots) if knots else default_model()
+    sets = tuple(s for path in args.rig for s in read_rig(path))
+    sets += tuple(read_drive(path, model.channel_names(), model.optional) for path in args.drive)
+    keys = parameter_keys(table)
+    bounds = lower_bounds(table, keys)
+    settings = FitSettings(
+        loss=Loss(args.robust) if args.robust else Loss.LINEAR,
+        fixed=frozenset(name.strip() for name in args.fix.split(",") if name.strip()),
+        precision=args.precision,
+        lower={
+            name: bounds[base_parameter(name)]
+            for name in model.parameter_names()
+            if base_parameter(name) in bounds
+        },
+    )
+    result = identify(model, sets, ModelParameters.from_vehicle(vehicle), settings)
+    changes = file_changes(result, keys)
+    header = (
+        f"Identified by `wheelload identify` from {vehicle_path.name} with "
+        + ", ".join(data.label() for data in sets)
+        + f" ({result.loss.value} loss). Changed keys carry an 'identified' comment.\n"
+    )
+    new_text = prepend_comment(set_values(text, changes), header) if changes else text
+    write_vehicle_text(new_text, out, inputs=inputs, force=args.force)
+    params = parameter_table(result, keys)
+    print(f"identified {len(result.free)} parameters from {len(sets)} data sets:")
+    print(params.drop(columns=["sources"]).to_string(index=False, float_format="%.5g"))
+    for warning in result.warnings:
+        print(f"warning: {warning}")
+    print(f"vehicle file written to {out}")
+    if report is not None:
+        _write_report(result, keys, report, vehicle_path, out)
+    return 0
+
+
+def _write_report(result, keys, report: Path, vehicle_path: Path, out: Path) -> None:
+    from wheelload.studies.identification_plots import plot_maps, plot_residuals
+
+    report.mkdir(parents=True, exist_ok=True)
+    tables = {
+        "parameters.csv": parameter_table(result, keys),
+        "rmse.csv": rmse_table(result),
+        "correlation.csv": correlation_table(result),
+    }
+    for name, frame in tables.items():
+        write_text_atomically(
+            frame.to_csv(index=name == "correlation.csv", float_format="%.9g"), report / name
+        )
+    figures = [plot_maps(result, report / "maps.png")]
+    residuals = plot_residuals(result, report / "residuals.png")
+    if residuals is not None:
+        figures.append(residuals)
+    text = markdown_report(
+        result,
+        keys,
+        vehicle=str(vehicle_path),
+        output=str(out),
+        figures=tuple(str(f) for f in figures),
+    )
+    write_text_atomically(text, report / "report.md")
+    print(f"report written to {report / 'report.md'}")

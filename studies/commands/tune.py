@@ -1,0 +1,118 @@
+"""``wheelload tune LOG ... --vehicle FILE --out NEW.toml``: fit the filter's noise densities.
+
+Maximum likelihood of the filter's innovations (prediction-error method); with
+reference loads ``fz_*`` in every log also the RMSE-minimising tuning and a
+±2σ coverage calibration (``wheelload.estimators.identification.tuning``).
+The new file is a copy of ``--vehicle`` with a new ``[filter]`` section.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from wheelload.estimators import read_log
+from wheelload.estimators.identification.tuning import NIS_BAND, FilterRuns, tune
+from wheelload.estimators.identification.vehicle_writer import (
+    check_output_path,
+    prepend_comment,
+    set_values,
+    write_vehicle_text,
+)
+from wheelload.estimators.two_stage import TUNING, UPDATE_ROWS, tuning_vector
+from wheelload.models import load_vehicle
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "tune",
+        help="fit the filter's noise densities to logs (innovation likelihood)",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
+    parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
+    parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
+    parser.add_argument(
+        "--evaluate",
+        nargs="+",
+        default=[],
+        metavar="LOG",
+        help="logs not used for tuning, with reference loads: print the before/after table",
+    )
+    parser.set_defaults(handler=handle)
+
+
+def _row(name: str, values: np.ndarray) -> str:
+    return f"{name:>22}" + "".join(f"{v:12.4g}" for v in values)
+
+
+def handle(args: argparse.Namespace) -> int:
+    vehicle_path = Path(args.vehicle)
+    inputs = (vehicle_path, *map(Path, args.logs))
+    out = check_output_path(args.out, inputs, args.force)
+    vehicle = load_vehicle(vehicle_path)
+    logs = tuple(read_log(path) for path in args.logs)
+    references = all(signals.reference is not None for signals in logs)
+    runs = FilterRuns(vehicle, logs)
+    result = tune(runs, tuning_vector(vehicle), references=references)
+    print(f"{'':>22}" + "".join(f"{name[:11]:>12}" for name in TUNING))
+    print(_row("input file", result.initial))
+    print(_row("max. likelihood", result.likelihood))
+    if result.rmse is not None:
+        print(_row("min. RMSE", result.rmse))
+        print(_row(f"written (x{result.scale:.3g})", result.tuned))
+    lo, hi = NIS_BAND
+    print(f"consistency on the tuning logs (NIS = y^2/S, 95 % band {lo:.3g}..{hi:.3g}):")
+    for label, tuning in (("input", result.initial), ("tuned", result.tuned)):
+        check = runs.consistency(tuning)
+        nis = ", ".join(
+            f"{row} {m:.2f} ({100 * b:.0f} %)"
+            for row, m, b in zip(UPDATE_ROWS, check.nis_mean, check.nis_in_band)
+        )
+        extra = (
+            f"; ±2σ coverage {100 * check.coverage:.1f} %, pooled RMSE {check.rmse:.1f} N"
+            if references
+            else ""
+        )
+        print(f"  {label}: mean NIS (share in band) {nis}{extra}")
+    tuned = result.tuned
+    note = (
+        f"maximum likelihood of the innovations of {', '.join(Path(p).name for p in args.logs)}"
+        + (f", scaled x{result.scale:.3g} to 95 % ±2σ coverage" if references else "")
+    )
+    changes = {
+        ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
+        ("filter", "suspension_noise_density"): (tuned[1], "tuned (see above)"),
+        ("filter", "constraint_noise_density"): (list(tuned[2:5]), "tuned (see above)"),
+    }
+    text = vehicle_path.read_text(encoding="utf-8")
+    header = f"Filter tuned by `wheelload tune` from {vehicle_path.name}: {note}.\n"
+    write_vehicle_text(
+        prepend_comment(set_values(text, changes), header), out, inputs=inputs, force=args.force
+    )
+    print(f"vehicle file written to {out}")
+    if args.evaluate:
+        print(evaluation_table(vehicle, tuple(read_log(p) for p in args.evaluate), result))
+    return 0
+
+
+def evaluation_table(vehicle, logs, result) -> str:
+    """Per-log and pooled ±2σ coverage and RMSE of the input and the tuned filter."""
+    if any(signals.reference is None for signals in logs):
+        raise ValueError("--evaluate needs logs with reference loads fz_*")
+    lines = [
+        "held-out logs: ±2σ coverage [%] and pooled RMSE [N], input file -> tuned",
+        f"{'log':>28}{'cov in':>9}{'cov tuned':>11}{'RMSE in':>10}{'RMSE tuned':>12}",
+    ]
+    groups = [(Path(s.source).name, (s,)) for s in logs] + [("pooled", logs)]
+    for name, group in groups:
+        runs = FilterRuns(vehicle, group)
+        before, after = runs.consistency(result.initial), runs.consistency(result.tuned)
+        lines.append(
+            f"{name:>28}{100 * before.coverage:9.1f}{100 * after.coverage:11.1f}"
+            f"{before.rmse:10.1f}{after.rmse:12.1f}"
+        )
+    return "\n".join(lines)
