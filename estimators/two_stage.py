@@ -31,6 +31,7 @@ from wheelload.estimators.kalman import predict, sequential_update, upper
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
+from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 
 #: Order of the per-sample input vector ``u``.
 INPUTS = (
@@ -121,6 +122,12 @@ def step_expressions(
     x_pred, P_pred = predict(x, upper(P), Q)
     x_s, P_s = sequential_update(x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s)
     x_new, P_new = constraint_update(x_s, P_s, b, A, rc, mask_c)
+    # No travel row at all (IMU-only): the weak roll-split row observes the warp.
+    mask_split = dt_ok * (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
+    r_split = SPLIT_NOISE_RATIO * rc[2:3]
+    x_new, P_new = sequential_update(
+        x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
+    )
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
@@ -295,7 +302,7 @@ class TwoStageKF:
             loads=history[0],
             std=std,
             residual=residual,
-            flags=flags_from_used(used.T),
+            flags=flags_from_used(used.T) | signals.input_flags(),
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
         return estimate, covariances
