@@ -38,7 +38,7 @@ def read_mdf_channels(path: Path, names: list[str]) -> dict[str, Channel]:
             if name not in mdf.channels_db:
                 raise ChannelMapError(
                     f"{path}: no channel '{name}'; the file has "
-                    f"{', '.join(sorted(mdf.channels_db)[:30])}"
+                    f"{', '.join(mdf_channel_names(path)[:30])}"
                 )
             if len(mdf.channels_db[name]) > 1:
                 raise ChannelMapError(
