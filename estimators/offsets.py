@@ -116,9 +116,7 @@ def check_still_period(
     unloaded = ModelParameters.from_vehicle(vehicle, np.zeros(4)).vector()
     travel_part = np.asarray(suspension_function()(mean_travel, np.zeros(4), unloaded)).ravel()
     target = static_loads(vehicle) if static is None else np.asarray(static, float)
-    reason = (
-        f"still period 0-{duration:g} s (speed <= {speed:.2g} m/s; " + "; ".join(reasons) + ")"
-    )
+    reason = f"still period 0-{duration:g} s (speed <= {speed:.2g} m/s; " + "; ".join(reasons) + ")"
     return StillPeriod(static=target - travel_part, reason=reason)
 
 

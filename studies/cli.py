@@ -16,6 +16,7 @@ from importlib.metadata import version
 COMMANDS = (
     "wheelload.studies.commands.vehicle",
     "wheelload.studies.commands.estimate",
+    "wheelload.studies.commands.channels",
     "wheelload.studies.commands.bench",
     "wheelload.studies.commands.simulate",
     "wheelload.studies.commands.mhe",

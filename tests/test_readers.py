@@ -67,7 +67,8 @@ def _source_channels():
         "IMU_GyrZ": 10.0 * np.sin(0.5 * t_imu),
     }
     travel = {
-        f"Damper_{w.upper()}": 8.0 * np.sin(2.0 * np.pi * 1.3 * t_travel + i) for i, w in enumerate(WHEELS)
+        f"Damper_{w.upper()}": 8.0 * np.sin(2.0 * np.pi * 1.3 * t_travel + i)
+        for i, w in enumerate(WHEELS)
     }
     can = {"VehSpd_CAN": 80.0 + 5.0 * np.sin(t_can)}
     return (t_imu, imu), (t_travel, travel), (t_can, can)
@@ -169,7 +170,7 @@ def test_a_can_dropout_longer_than_the_gap_is_missing_not_held():
         (('unit = "mm"', 'unit = "furlong"', 1), r"unknown unit 'furlong'"),
         (('unit = "km/h"', 'unit = "mm"', 1), r"unit 'mm' is a length, the channel needs a speed"),
         (("sign = -1", "sign = 2", 1), r"key 'channels.ay.sign' must be 1 or -1"),
-        (('[channels.vx]', '[channels.speed]', 1), r"unknown channel 'channels.speed'"),
+        (("[channels.vx]", "[channels.speed]", 1), r"unknown channel 'channels.speed'"),
         (('source = "IMU_GyrZ"', 'source = "Gyro_Z"', 1), r"drive.mf4: no channel 'Gyro_Z'"),
     ],
 )
