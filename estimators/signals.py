@@ -4,7 +4,7 @@ Columns (SI units): ``t`` [s], ``ax ay`` [m/s^2, specific force in the body
 frame], optional ``az`` [m/s^2, gravity included], optional ``vx`` [m/s],
 optional ``wx wy wz`` [rad/s], optional ``d_fl d_fr d_rl d_rr`` [m,
 compression], optional ``v_fl v_fr v_rl v_rr`` [m/s], optional reference
-loads ``fz_fl fz_fr fz_rl fz_rr`` [N], optional wheel speeds ``ws_fl ..``
+loads ``fz_fl fz_fr fz_rl fz_rr`` [N] (any of them), optional wheel speeds ``ws_fl ..``
 [m/s]. CSV and Parquet logs with these column names are read as they are;
 any other log (MDF4, CarMaker ERG, other names or units) through a channel
 map (``estimators/readers``), ``read_log(path, channels=MAP)``.
@@ -235,10 +235,14 @@ def signals_from_frame(
             )
         return values
 
-    def group(names: tuple[str, ...]) -> np.ndarray | None:
+    def group(names: tuple[str, ...], partial: bool = False) -> np.ndarray | None:
         present = [name for name in names if name in frame.columns]
         if not present:
             return None
+        if partial:  # a missing column is a channel with no sample
+            return np.column_stack(
+                [column(n) if n in frame.columns else np.full(len(frame), np.nan) for n in names]
+            )
         if len(present) != len(names):
             missing = [name for name in names if name not in frame.columns]
             raise LogError(
@@ -286,7 +290,7 @@ def signals_from_frame(
         d=d,
         v=v,
         rates=group(RATES),
-        reference=group(REFERENCE),
+        reference=group(REFERENCE, partial=True),
         velocities_derived=derived,
         source=source,
         az_assumed=az_assumed,

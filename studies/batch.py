@@ -94,7 +94,7 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     """Read one log, set the static loads, run the two-stage KF."""
     vehicle = _vehicle(settings.vehicle)
     signals = read_log(path, channels=settings.channels)
-    notes = [f"sensor set: {signals.mode()}"]
+    notes = []
     static = None
     if settings.corner_weights is not None:
         static = corner_weight_loads(settings.corner_weights)

@@ -46,8 +46,13 @@ def plot_estimate(estimate: Estimate, signals: Signals, path: str | Path, title:
         for i, ax in enumerate(axes[2]):
             for j in (i * 2, i * 2 + 1):
                 ax.plot(t, error[:, j], lw=0.8, label=f"{WHEEL_NAMES[j]}")
-            rms = np.sqrt(np.nanmean(error[:, 2 * i : 2 * i + 2] ** 2))
-            ax.set_title(f"error, {'front' if i == 0 else 'rear'} axle (RMS {rms:.0f} N)")
+            axle = error[:, 2 * i : 2 * i + 2]
+            rms = (
+                f"RMS {np.sqrt(np.nanmean(axle**2)):.0f} N"
+                if np.isfinite(axle).any()
+                else "no reference"
+            )
+            ax.set_title(f"error, {'front' if i == 0 else 'rear'} axle ({rms})")
             ax.set_ylabel("error [N]")
             ax.legend(loc="best", fontsize=8)
             ax.grid(alpha=0.3)

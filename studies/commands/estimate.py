@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals
+from wheelload.estimators import Estimate, Signals, StepFlag
 from wheelload.models import example_vehicle_path
 from wheelload.studies.batch import (
     SUMMARY_NAME,
@@ -142,6 +142,21 @@ def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Name
     return 1 if failed else 0
 
 
+def row_use(estimate: Estimate) -> str:
+    """Share of samples in which each suspension row and the roll-split row were used.
+
+    A suspension row needs both travel sensors of its axle (the anti-roll bar
+    couples them); the roll-split row is used when no suspension row is.
+    """
+    bits = [StepFlag.SUSPENSION_FL_SKIPPED, StepFlag.SUSPENSION_FR_SKIPPED,
+            StepFlag.SUSPENSION_RL_SKIPPED, StepFlag.SUSPENSION_RR_SKIPPED]  # fmt: skip
+    skipped = np.array([(estimate.flags & bit) != 0 for bit in bits])
+    rejected = (estimate.flags & StepFlag.STEP_REJECTED) != 0
+    split = skipped.all(axis=0) & ~rejected
+    shares = ", ".join(f"{w} {100 * (1 - s.mean()):.0f} %" for w, s in zip(WHEELS, skipped))
+    return f"suspension rows used: {shares}; roll-split row used: {100 * split.mean():.0f} %"
+
+
 def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     """A per-wheel text summary, with the paper's metrics where reference loads exist.
 
@@ -166,6 +181,8 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
             f"{estimate.std[:, i].mean():12.0f}"
         )
     flagged = int(np.count_nonzero(estimate.flags))
+    lines.append(f"sensor set: {signals.mode()}")
+    lines.append(row_use(estimate))
     lines.append(f"samples with a status bit set (skipped update or assumed input): {flagged}")
     if signals.reference is not None:
         try:
