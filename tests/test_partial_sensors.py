@@ -42,7 +42,8 @@ MODES = [
      StepFlag.AZ_ASSUMED_G),
     ("no vx", lambda f: f.drop(columns=["vx"]), "aerodynamic terms off", 200.0, 60.0,
      StepFlag.AERO_OFF_NO_SPEED),
-    ("vx from wheels", lambda f: f.drop(columns=["vx"]).assign(ws_rl=f.vx * 1.01, ws_rr=f.vx * 0.99),
+    ("vx from wheels", lambda f: f.drop(columns=["vx"]).assign(ws_rl=f.vx * 1.01,
+                                                                ws_rr=f.vx * 0.99),
      "mean of the wheel speeds", 200.0, 40.0, StepFlag.SPEED_FROM_WHEELS),
 ]  # fmt: skip
 
