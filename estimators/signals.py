@@ -226,6 +226,8 @@ def signals_from_frame(
             raise LogError(
                 f"{source}: column '{name}' has type {kind}: give plain numbers in SI units"
             )  # fmt: skip
+        if pd.api.types.is_numeric_dtype(kind):
+            return frame[name].to_numpy(dtype=float, na_value=np.nan)  # nothing to coerce
         values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
         bad = np.flatnonzero(np.isnan(values) & frame[name].notna().to_numpy())
         if bad.size:

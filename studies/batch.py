@@ -90,6 +90,16 @@ def _vehicle(path: Path) -> Vehicle:
     return load_vehicle(path)
 
 
+@functools.lru_cache(maxsize=8)
+def _filter(vehicle: Path, static: tuple[float, ...] | None) -> TwoStageKF:
+    """A filter whose compiled loop is built, cached per process."""
+    kf = TwoStageKF(_vehicle(vehicle), static=None if static is None else np.array(static),
+                    step=_step())  # fmt: skip
+    kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
+                   d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
+    return kf
+
+
 def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     """Read one log, set the static loads, run the two-stage KF."""
     vehicle = _vehicle(settings.vehicle)
@@ -105,9 +115,9 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
         )
         static = still.static
         notes.append(still.reason)
+    key = None if static is None else tuple(float(f) for f in static)
     with _lock:  # build (or load) the compiled loop once per process, not per thread
-        kf = TwoStageKF(vehicle, static=static, step=_step())
-        kf.run(signals.slice(0, 2))
+        kf = _filter(settings.vehicle, key)
     estimate = kf.run(signals)
     warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
     return LogResult(
@@ -174,6 +184,20 @@ def process_log(path: Path, settings: EstimateSettings, folder: Path | None) -> 
         return {"log": str(path), "error": str(error)}
 
 
+def process_logs(paths: list[Path], settings: EstimateSettings, folder: Path | None) -> list[dict]:
+    """:func:`process_log` over a chunk of logs (one task on a worker)."""
+    return [process_log(path, settings, folder) for path in paths]
+
+
+def chunks(paths: list[Path], workers: int) -> list[list[Path]]:
+    """About :data:`CHUNKS_PER_WORKER` chunks per worker: few tasks, balanced load."""
+    size = max(1, -(-len(paths) // (CHUNKS_PER_WORKER * workers)))
+    return [paths[i : i + size] for i in range(0, len(paths), size)]
+
+
+CHUNKS_PER_WORKER = 8
+
+
 def run_logs(
     paths: list[Path],
     settings: EstimateSettings,
@@ -183,7 +207,11 @@ def run_logs(
     dask_address: str | None = None,
     progress: bool = True,
 ) -> pd.DataFrame:
-    """The summary table of many logs (module docstring); rows sorted by log path."""
+    """The summary table of many logs (module docstring); rows sorted by log path.
+
+    Logs go to the workers in chunks (:func:`chunks`), so that the cost of a
+    task is small beside the logs it carries.
+    """
     from tqdm import tqdm
 
     bar = tqdm(total=len(paths), unit="log", disable=not progress or None)
@@ -193,16 +221,21 @@ def run_logs(
         from distributed import as_completed as dask_completed
 
         with Client(dask_address) as client:
-            futures = [client.submit(process_log, p, settings, folder, pure=False) for p in paths]
+            threads = max(1, sum(client.nthreads().values()))
+            futures = [client.submit(process_logs, chunk, settings, folder, pure=False)
+                       for chunk in chunks(paths, threads)]  # fmt: skip
             for future in dask_completed(futures):
-                rows.append(future.result())
-                bar.update()
+                done = future.result()
+                rows += done
+                bar.update(len(done))
     elif workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [pool.submit(process_log, p, settings, folder) for p in paths]
+            futures = [pool.submit(process_logs, chunk, settings, folder)
+                       for chunk in chunks(paths, workers)]  # fmt: skip
             for future in as_completed(futures):
-                rows.append(future.result())
-                bar.update()
+                done = future.result()
+                rows += done
+                bar.update(len(done))
     else:
         for path in paths:
             rows.append(process_log(path, settings, folder))
