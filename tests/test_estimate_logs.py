@@ -123,3 +123,21 @@ def test_a_bad_log_in_a_fleet_is_a_row_with_its_error(tmp_path, example):
     table = run_logs(expand_logs([str(tmp_path)]), settings, None, progress=False)
     assert table.loc[0, "error"].endswith("bad.csv: missing column 'ax'")
     assert table.loc[1, "error"] == "" and table.loc[1, "samples"] == 200
+
+
+def test_still_period_reason_and_corner_weights_on_the_command_line(tmp_path, capsys, vehicle):
+    from wheelload.studies.synthetic import rest, synthetic_log
+
+    signals = synthetic_log(vehicle, rest(duration=3.0), seed=2)
+    frame = signals.to_frame()
+    rng = np.random.default_rng(1)
+    frame[["ax", "ay"]] += 0.5 * rng.standard_normal((len(frame), 2))  # a noisy IMU at rest
+    log = tmp_path / "rest.csv"
+    frame.to_csv(log, index=False)
+    argv = ["estimate", str(log), "--vehicle", VEHICLE, "--still-period", "1.0"]
+    assert main([*argv, "--still-noise", "0"]) == 2
+    assert "channel 'ax' varies" in capsys.readouterr().err
+    assert main([*argv, "--corner-weights", "430,430,370,370"]) == 0
+    text = capsys.readouterr().out
+    assert "still period 0-1 s" in text and "from its sample differences" in text
+    assert "static loads from corner weights 430,430,370,370 kg" in text

@@ -197,3 +197,21 @@ def test_template_is_a_valid_map(tmp_path):
     assert channel_map.channels["ay"].sign == -1.0
     assert channel_map.channels["vx"].method is Method.HOLD
     assert channel_map.channels["d_rl"].motion_ratio == 0.75
+
+
+def test_estimate_and_channels_commands_read_through_the_map(tmp_path, channel_map, capsys):
+    from wheelload.models import example_vehicle_path
+    from wheelload.studies.cli import main
+
+    mdf = _write_mdf(tmp_path / "drive.mf4")
+    assert main(["channels", "--list", str(mdf)]) == 0
+    assert "Damper_FL" in capsys.readouterr().out
+    assert main(["channels", str(channel_map), "--log", str(mdf)]) == 0
+    assert "2001 samples at 1000.0 Hz; four travel sensors" in capsys.readouterr().out
+    out = tmp_path / "est.csv"
+    vehicle = str(example_vehicle_path())
+    argv = ["estimate", str(mdf), "--vehicle", vehicle, "--channels", str(channel_map)]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert np.isfinite(pd.read_csv(out)["fz_rr"]).all()
+    assert main(["estimate", str(mdf), "--vehicle", vehicle]) == 2  # no map: names not ours
+    assert "no channel named 'ax' (give a channel map, --channels)" in capsys.readouterr().err
