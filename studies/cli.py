@@ -17,6 +17,7 @@ COMMANDS = (
     "wheelload.studies.commands.vehicle",
     "wheelload.studies.commands.estimate",
     "wheelload.studies.commands.channels",
+    "wheelload.studies.commands.sensor_sets",
     "wheelload.studies.commands.bench",
     "wheelload.studies.commands.simulate",
     "wheelload.studies.commands.mhe",

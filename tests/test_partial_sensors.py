@@ -98,3 +98,14 @@ def test_imu_only_front_lateral_transfer_with_the_right_split(vehicle, plant_log
     assert abs(default - split) < 0.01
     # ... and the row matters: a split 0.15 off misses the front transfer by more than 15 %.
     assert _front_difference_error(vehicle, plant_log, split - 0.15) > 0.15
+
+
+def test_sensor_sets_command_prints_every_mode_and_the_sweep(capsys):
+    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.sensor_sets import MODES
+
+    assert main(["sensor-sets", str(example_log_path()), "--splits", "0.4"]) == 0
+    text = capsys.readouterr().out
+    assert all(name in text for name in MODES)
+    assert "False" not in text  # every mode finite
+    assert "roll split: default 0.4892 (springs and bars)" in text
