@@ -215,3 +215,31 @@ def test_estimate_and_channels_commands_read_through_the_map(tmp_path, channel_m
     assert np.isfinite(pd.read_csv(out)["fz_rr"]).all()
     assert main(["estimate", str(mdf), "--vehicle", vehicle]) == 2  # no map: names not ours
     assert "no channel named 'ax' (give a channel map, --channels)" in capsys.readouterr().err
+
+
+def test_erg_with_mixed_types_padding_and_big_endian(tmp_path):
+    from wheelload.estimators.readers.erg import HEADER, read_erg_channels
+
+    dtype = np.dtype([("Time", ">f8"), ("Car.ax", ">f4"), ("pad", "V4"), ("Count", ">i2")])
+    records = np.zeros(3, dtype=dtype)
+    records["Time"] = [0.0, 0.01, 0.02]
+    records["Car.ax"] = [0.5, -1.25, 2.0]  # exact in float32
+    records["Count"] = [1, -2, 3]
+    path = tmp_path / "run.erg"
+    path.write_bytes(HEADER + records.tobytes())
+    (tmp_path / "run.erg.info").write_text(
+        "#INFOFILE1.1\nFile.Format = erg\nFile.ByteOrder = BigEndian\n"
+        "File.At.1.Name = Time\nFile.At.1.Type = Double\n"
+        "File.At.2.Name = Car.ax\nFile.At.2.Type = Float\n"
+        "File.At.3.Name = pad\nFile.At.3.Type = 4 Bytes\n"
+        "File.At.4.Name = Count\nFile.At.4.Type = Short\n"
+        "Quantity.Car.ax.Unit = m/s^2\n"
+    )
+    channels = read_erg_channels(path, ["Car.ax", "Count"])
+    np.testing.assert_array_equal(channels["Car.ax"].values, [0.5, -1.25, 2.0])
+    np.testing.assert_array_equal(channels["Count"].values, [1, -2, 3])
+    np.testing.assert_array_equal(channels["Count"].t, [0.0, 0.01, 0.02])
+    assert channels["Car.ax"].unit == "m/s^2" and channels["Count"].unit == ""
+    path.write_bytes(HEADER + records.tobytes()[:-3])  # truncated
+    with pytest.raises(ValueError, match="51 data bytes is not a whole number of 18-byte records"):
+        read_erg_channels(path, ["Car.ax"])
