@@ -243,3 +243,36 @@ def test_erg_with_mixed_types_padding_and_big_endian(tmp_path):
     path.write_bytes(HEADER + records.tobytes()[:-3])  # truncated
     with pytest.raises(ValueError, match="51 data bytes is not a whole number of 18-byte records"):
         read_erg_channels(path, ["Car.ax"])
+
+
+def test_csv_with_its_own_names_and_units_through_a_map(tmp_path):
+    # A Formula Student style CSV: time in ms, acceleration in g with y pointing right,
+    # damper potentiometers in mm (motion ratio 0.8), no az, no vx, no body rates.
+    from wheelload.studies.commands.estimate import example_log_path
+
+    si = pd.read_csv(example_log_path())
+    raw = pd.DataFrame({
+        "Time_ms": si["t"] * 1000.0,
+        "AccX_g": si["ax"] / GRAVITY,
+        "AccY_g": -si["ay"] / GRAVITY,
+        **{f"Pot_{w.upper()}": si[f"d_{w}"] * 1000.0 * 0.8 for w in WHEELS},
+    })  # fmt: skip
+    log = tmp_path / "fs.csv"
+    raw.to_csv(log, index=False, float_format="%.17g")
+    channel_map = tmp_path / "fs.toml"
+    channel_map.write_text(
+        '[time]\nsource = "Time_ms"\nunit = "ms"\n'
+        '[channels.ax]\nsource = "AccX_g"\nunit = "g"\n'
+        '[channels.ay]\nsource = "AccY_g"\nunit = "g"\nsign = -1\n'
+        + "".join(
+            f'[channels.d_{w}]\nsource = "Pot_{w.upper()}"\nunit = "mm"\nmotion_ratio = 0.8\n'
+            for w in WHEELS
+        )  # fmt: skip
+    )
+    signals = read_log(log, channels=channel_map)
+    np.testing.assert_allclose(signals.t, si["t"], rtol=1e-12)
+    np.testing.assert_allclose(signals.acc[:, :2], si[["ax", "ay"]], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(signals.d, si[[f"d_{w}" for w in WHEELS]], rtol=0, atol=1e-9)
+    assert signals.az_assumed and signals.mode() == (
+        "four travel sensors; no az: g assumed; vx: none (aerodynamic terms off)"
+    )
