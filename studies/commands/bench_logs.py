@@ -4,13 +4,15 @@ Writes ``--logs`` short plant logs (windows of ``--samples`` samples of the
 bundled plant log, each starting elsewhere) into a temporary folder and runs
 ``wheelload estimate`` on them serially (1 worker), on local processes
 (``--workers``) and on a ``distributed.LocalCluster`` of the same size;
-prints samples per second (min / median / max of ``--repeat`` runs), the
-ratio to the serial run, and whether each summary equals the serial one.
+prints samples per second (min / median / max of ``--repeat`` runs, the
+variants run in turn so that each meets the same machine load), the ratio to
+the serial run, and whether each summary equals the serial one.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import statistics
 import tempfile
 import time
@@ -45,15 +47,6 @@ def _write_logs(folder: Path, count: int, samples: int) -> list[Path]:
     return expand_logs([str(folder)])
 
 
-def _time(runs: int, call) -> tuple[list[float], pd.DataFrame]:
-    times, table = [], None
-    for _ in range(runs):
-        start = time.perf_counter()
-        table = call()
-        times.append(time.perf_counter() - start)
-    return times, table
-
-
 def _line(label: str, samples: int, times: list[float], serial: float | None, same: str) -> str:
     rates = sorted(samples / t for t in times)
     median = statistics.median(rates)
@@ -64,37 +57,39 @@ def _line(label: str, samples: int, times: list[float], serial: float | None, sa
 
 def run(args: argparse.Namespace) -> int:
     settings = EstimateSettings(vehicle=example_vehicle_path())
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as folder, contextlib.ExitStack() as stack:
         paths = _write_logs(Path(folder), args.logs, args.samples)
         total = args.logs * args.samples
+        variants = {"serial (1 worker)": {}}
+        for workers in args.workers:
+            variants[f"local processes ({workers})"] = {"workers": workers}
+            if not args.no_dask:
+                from distributed import LocalCluster
+
+                cluster = stack.enter_context(LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True,
+                    dashboard_address=None))  # fmt: skip
+                variants[f"dask LocalCluster ({workers})"] = {
+                    "dask_address": cluster.scheduler_address
+                }
+        for options in variants.values():  # warm up: imports and the compiled loop
+            run_logs(paths[: 4 * args.workers[-1]], settings, None, progress=False, **options)
+        times: dict[str, list[float]] = {name: [] for name in variants}
+        tables = {}
+        for _ in range(args.repeat):  # round robin: every variant meets the same load
+            for name, options in variants.items():
+                start = time.perf_counter()
+                tables[name] = run_logs(paths, settings, None, progress=False, **options)
+                times[name].append(time.perf_counter() - start)
+        serial_name = next(iter(variants))
+        serial_rate = statistics.median(total / t for t in times[serial_name])
         print(f"{args.logs} logs x {args.samples} samples (windows of the bundled plant log); "
-              f"samples/s over {args.repeat} runs")  # fmt: skip
+              f"samples/s over {args.repeat} runs, run in turn")  # fmt: skip
         print(f"{'run':28s} {'min':>10s} {'median':>10s} {'max':>10s} {'x serial':>8s} "
               f"{'same':>8s}")  # fmt: skip
-        run_logs(paths[:2], settings, None, progress=False)  # build the compiled loop once
-        times, serial = _time(args.repeat, lambda: run_logs(paths, settings, None, progress=False))
-        serial_rate = statistics.median(total / t for t in times)
-        print(_line("serial (1 worker)", total, times, None, "-"))
-        for workers in args.workers:
-            times, table = _time(args.repeat, lambda w=workers: run_logs(
-                paths, settings, None, workers=w, progress=False))  # fmt: skip
-            same = "yes" if table.equals(serial) else "NO"
-            print(_line(f"local processes ({workers})", total, times, serial_rate, same))
-            if args.no_dask:
-                continue
-            from distributed import LocalCluster
-
-            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster:  # fmt: skip
-                run_logs(
-                    paths[: 2 * workers],
-                    settings,
-                    None,
-                    dask_address=cluster.scheduler_address,
-                    progress=False,
-                )  # warm up
-                times, table = _time(args.repeat, lambda a=cluster.scheduler_address: run_logs(
-                    paths, settings, None, dask_address=a, progress=False))  # fmt: skip
-            same = "yes" if table.equals(serial) else "NO"
-            print(_line(f"dask LocalCluster ({workers})", total, times, serial_rate, same))
+        for name in variants:
+            same = "-" if name == serial_name else (
+                "yes" if tables[name].equals(tables[serial_name]) else "NO")  # fmt: skip
+            ratio = None if name == serial_name else serial_rate
+            print(_line(name, total, times[name], ratio, same))
     return 0
