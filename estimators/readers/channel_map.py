@@ -179,10 +179,9 @@ def _channel(name: str, table: dict, where: str) -> ChannelSpec:
           {"source", "unit"}, prefix, where)  # fmt: skip
     unit = _string(table, "unit", prefix, where)
     try:
-        kind_factor = unit_factor(unit, TARGETS[name], f"{where}: key '{prefix}unit'")
+        unit_factor(unit, TARGETS[name], f"{where}: key '{prefix}unit'")
     except UnitError as error:
         raise ChannelMapError(str(error)) from None
-    del kind_factor
     sign = 1.0
     if "sign" in table:
         sign = _number(table, "sign", prefix, where, positive=False)
