@@ -49,6 +49,11 @@ class StepFlag(enum.IntFlag):
         """The seven update flags in the order of the filter's ``used`` output."""
         return tuple(cls)[:7]
 
+    @classmethod
+    def skipped_mask(cls) -> int:
+        """Bits of a sample whose update was skipped or whose step was rejected."""
+        return int(sum(cls.update_flags())) | int(cls.STEP_REJECTED)
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Estimate:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
+from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.readers import SUFFIXES
 from wheelload.estimators.two_stage import step_function
@@ -154,7 +154,7 @@ def summary_row(path: Path, result: LogResult) -> dict:
         row[f"mean_fz_{wheel}"] = float(estimate.loads[:, i].mean())
     for i, wheel in enumerate(WHEELS):
         row[f"mean_std_{wheel}"] = float(estimate.std[:, i].mean())
-    row["flagged_samples"] = int(np.count_nonzero(estimate.flags))
+    row["skipped_samples"] = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
     row["negative_samples"] = int((estimate.loads < 0).any(axis=1).sum())
     row["min_fz"] = float(estimate.loads.min())
     row["rmse_pooled"] = np.nan

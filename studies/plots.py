@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from wheelload.estimators import Estimate, Signals  # noqa: E402
+from wheelload.estimators import Estimate, Signals, StepFlag  # noqa: E402
 
 WHEEL_NAMES = ("front left", "front right", "rear left", "rear right")
 
@@ -25,7 +25,7 @@ def plot_estimate(estimate: Estimate, signals: Signals, path: str | Path, title:
         3, 2, figsize=(12, 9), sharex=True, gridspec_kw={"height_ratios": [2, 2, 1.3]}
     )
     t = estimate.t
-    flagged = estimate.flags != 0
+    flagged = (estimate.flags & StepFlag.skipped_mask()) != 0
     for i, ax in enumerate(axes[:2].ravel()):
         load = estimate.loads[:, i] / 1000.0
         band = 2.0 * estimate.std[:, i] / 1000.0

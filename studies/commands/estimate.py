@@ -180,10 +180,13 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
             f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} "
             f"{estimate.std[:, i].mean():12.0f}"
         )
-    flagged = int(np.count_nonzero(estimate.flags))
+    skipped = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
+    assumed = int(np.count_nonzero(estimate.flags & ~StepFlag.skipped_mask()))
     lines.append(f"sensor set: {signals.mode()}")
     lines.append(row_use(estimate))
-    lines.append(f"samples with a status bit set (skipped update or assumed input): {flagged}")
+    lines.append(f"samples with a skipped update (missing input): {skipped}")
+    if assumed:
+        lines.append(f"samples with an assumed input (status bits 20-22): {assumed}")
     if signals.reference is not None:
         try:
             table = wheel_metrics(estimate.loads, signals.reference, source=signals.source)
