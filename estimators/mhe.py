@@ -158,7 +158,7 @@ class MheEstimate(Estimate):
 
     def to_pandas(self):
         frame = super().to_pandas()
-        frame["status"] = self.status
+        frame["solver_status"] = self.status
         frame["iterations"] = self.iterations
         frame["fallback"] = self.fallback
         frame["solve_time"] = self.solve_time

@@ -1,9 +1,15 @@
-"""Estimator output: loads, standard deviations, constraint residuals and flags."""
+"""Estimator output: loads, standard deviations, constraint residuals and status bits.
+
+The per-sample :class:`StepFlag` bits are written in the column ``status``
+(files written before it was renamed have ``flags``; :func:`read_estimates`
+reads both).
+"""
 
 from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -14,6 +20,10 @@ RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 
 class StepFlag(enum.IntFlag):
     """Per-sample status bits: which updates were skipped for missing inputs.
+
+    ``AZ_ASSUMED_G``: the log has no ``az``; :math:`a_z = g` was assumed.
+    ``AERO_OFF_NO_SPEED``: no ``vx`` and no wheel speeds; aerodynamic terms off.
+    ``SPEED_FROM_WHEELS``: ``vx`` is the mean of the logged wheel speeds.
 
     ``STEP_REJECTED``: the sample interval is not a positive finite number
     (``TwoStageKF.step`` and the generated C), or, in C only, the step's
@@ -29,11 +39,20 @@ class StepFlag(enum.IntFlag):
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
     STEP_REJECTED = 128
+    # Bits 20-23: inputs the log did not have (estimators/signals.py).
+    AZ_ASSUMED_G = 1 << 20
+    AERO_OFF_NO_SPEED = 1 << 21
+    SPEED_FROM_WHEELS = 1 << 22
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
         """The seven update flags in the order of the filter's ``used`` output."""
         return tuple(cls)[:7]
+
+    @classmethod
+    def skipped_mask(cls) -> int:
+        """Bits of a sample whose update was skipped or whose step was rejected."""
+        return int(sum(cls.update_flags())) | int(cls.STEP_REJECTED)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -58,11 +77,30 @@ class Estimate:
         return len(self.t)
 
     def to_pandas(self) -> pd.DataFrame:
-        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_vertical.., flags``."""
+        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., status`` (flag bits)."""
         columns = {"t": self.t}
         columns.update({f"fz_{w}": self.loads[:, i] for i, w in enumerate(WHEELS)})
         if self.has_std:
             columns.update({f"fz_std_{w}": self.std[:, i] for i, w in enumerate(WHEELS)})
         columns.update({name: self.residual[:, i] for i, name in enumerate(RESIDUALS)})
-        columns["flags"] = self.flags
+        columns[STATUS] = self.flags
         return pd.DataFrame(columns)
+
+
+STATUS = "status"
+OLD_STATUS = "flags"  # the column's name before it collided with ``DataFrame.flags``
+
+
+def read_estimates(path: str | Path) -> pd.DataFrame:
+    """Read an estimates CSV or Parquet file; an old ``flags`` column is renamed ``status``."""
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such estimates file")
+    frame = (
+        pd.read_parquet(path) if path.suffix.lower() in (".parquet", ".pq") else pd.read_csv(path)
+    )
+    if OLD_STATUS in frame.columns and STATUS not in frame.columns:
+        frame = frame.rename(columns={OLD_STATUS: STATUS})
+    if STATUS not in frame.columns:
+        raise ValueError(f"{path}: no column '{STATUS}': not a wheelload estimates file")
+    return frame

@@ -1,9 +1,20 @@
-"""Logged signals: read a CSV or Parquet log into a validated :class:`Signals` set.
+"""Logged signals: read a log into a validated :class:`Signals` set.
 
-Columns (SI units): ``t`` [s], ``vx`` [m/s], ``ax ay az`` [m/s^2, specific
-force in the body frame, gravity included], optional ``wx wy wz`` [rad/s],
-``d_fl d_fr d_rl d_rr`` [m, compression], optional ``v_fl v_fr v_rl v_rr``
-[m/s], optional reference loads ``fz_fl fz_fr fz_rl fz_rr`` [N].
+Columns (SI units): ``t`` [s], ``ax ay`` [m/s^2, specific force in the body
+frame], optional ``az`` [m/s^2, gravity included], optional ``vx`` [m/s],
+optional ``wx wy wz`` [rad/s], optional ``d_fl d_fr d_rl d_rr`` [m,
+compression], optional ``v_fl v_fr v_rl v_rr`` [m/s], optional reference
+loads ``fz_fl fz_fr fz_rl fz_rr`` [N] (any of them), optional wheel speeds ``ws_fl ..``
+[m/s]. CSV and Parquet logs with these column names are read as they are;
+any other log (MDF4, CarMaker ERG, other names or units) through a channel
+map (``estimators/readers``), ``read_log(path, channels=MAP)``.
+
+Partial sensor sets (:class:`TravelSensors`, named in summaries): without
+travel columns (or with a travel column empty) the suspension updates of
+those corners are skipped (IMU-only when none is left); without ``az``,
+:math:`a_z = g` is assumed (flag ``AZ_ASSUMED_G``); without ``vx`` it is the
+mean of the wheel speeds (``SPEED_FROM_WHEELS``) or, without those, zero, so
+that the aerodynamic terms are off (``AERO_OFF_NO_SPEED``).
 
 Missing suspension velocities are derived by a causal first-order filtered
 differentiator, :math:`H(s) = \\omega_c s / (s + \\omega_c)` with
@@ -19,6 +30,7 @@ Example
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,12 +38,16 @@ import numpy as np
 import pandas as pd
 from scipy import signal as sp_signal
 
+from wheelload.estimators.result import StepFlag
+from wheelload.models.vehicle import GRAVITY
+
 WHEELS = ("fl", "fr", "rl", "rr")
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 REFERENCE = tuple(f"fz_{w}" for w in WHEELS)
+WHEEL_SPEED = tuple(f"ws_{w}" for w in WHEELS)
 RATES = ("wx", "wy", "wz")
-REQUIRED = ("t", "vx", "ax", "ay", "az", *TRAVEL)
+REQUIRED = ("t", "ax", "ay")
 
 VELOCITY_CUTOFF = 20.0  # Hz, differentiator corner frequency
 MAX_SAMPLE_INTERVAL = 0.5  # s, longest median sample interval taken as seconds
@@ -39,6 +55,24 @@ MAX_SAMPLE_INTERVAL = 0.5  # s, longest median sample interval taken as seconds
 
 class LogError(ValueError):
     """A log that cannot be used: names the file, the column and the row."""
+
+
+class TravelSensors(enum.Enum):
+    """Which suspension travel sensors a log has (a sensor with no finite sample is absent)."""
+
+    ALL = "four travel sensors"
+    DEAD_CORNER = "three travel sensors (one corner dead)"
+    TWO = "two travel sensors"
+    ONE = "one travel sensor"
+    NONE = "no travel sensors (IMU-only)"
+
+
+class SpeedSource(enum.Enum):
+    """Where ``vx`` comes from."""
+
+    LOGGED = "logged"
+    WHEEL_SPEEDS = "mean of the wheel speeds"
+    NONE = "none (aerodynamic terms off)"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -54,6 +88,8 @@ class Signals:
     reference: np.ndarray | None = None  # (n, 4) fz
     velocities_derived: bool = False
     source: str = "<memory>"
+    az_assumed: bool = False
+    speed_source: SpeedSource = SpeedSource.LOGGED
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
@@ -69,6 +105,41 @@ class Signals:
 
     def __len__(self) -> int:
         return len(self.t)
+
+    @property
+    def travel_present(self) -> np.ndarray:
+        """(4,) True for each corner whose travel channel has a finite sample."""
+        return np.any(np.isfinite(self.d), axis=0)
+
+    @property
+    def travel_sensors(self) -> TravelSensors:
+        """The travel sensor set (see :class:`TravelSensors`)."""
+        count = int(self.travel_present.sum())
+        return (TravelSensors.NONE, TravelSensors.ONE, TravelSensors.TWO,
+                TravelSensors.DEAD_CORNER, TravelSensors.ALL)[count]  # fmt: skip
+
+    def mode(self) -> str:
+        """The sensor set in words, for summaries."""
+        parts = [self.travel_sensors.value]
+        if 0 < self.travel_present.sum() < 4:
+            missing = [w.upper() for w, ok in zip(WHEELS, self.travel_present) if not ok]
+            parts[0] += f", missing {' '.join(missing)}"
+        if self.az_assumed:
+            parts.append("no az: g assumed")
+        if self.speed_source is not SpeedSource.LOGGED:
+            parts.append(f"vx: {self.speed_source.value}")
+        return "; ".join(parts)
+
+    def input_flags(self) -> np.ndarray:
+        """(n,) :class:`StepFlag` bits of inputs the log did not have."""
+        bits = 0
+        if self.az_assumed:
+            bits |= StepFlag.AZ_ASSUMED_G
+        if self.speed_source is SpeedSource.WHEEL_SPEEDS:
+            bits |= StepFlag.SPEED_FROM_WHEELS
+        if self.speed_source is SpeedSource.NONE:
+            bits |= StepFlag.AERO_OFF_NO_SPEED
+        return np.full(len(self.t), int(bits), dtype=np.int64)
 
     @property
     def sample_rate(self) -> float:
@@ -103,23 +174,35 @@ class Signals:
             reference=cut(self.reference),
             velocities_derived=self.velocities_derived,
             source=self.source,
+            az_assumed=self.az_assumed,
+            speed_source=self.speed_source,
         )
 
 
-def read_log(path: str | Path, velocity_cutoff: float = VELOCITY_CUTOFF) -> Signals:
-    """Read a ``.csv`` or ``.parquet`` log and validate it (see module docstring)."""
+def read_log(
+    path: str | Path,
+    velocity_cutoff: float = VELOCITY_CUTOFF,
+    *,
+    channels: str | Path | None = None,
+) -> Signals:
+    """Read a log (CSV, Parquet, MDF4, ERG) and validate it (see module docstring).
+
+    ``channels`` is a channel-map TOML file (``wheelload channels --template``);
+    without it the log's channels must be named as ours, in SI units.
+    """
+    from wheelload.estimators.readers import ChannelMapError, load_channel_map, read_frame
+
     path = Path(path)
     if not path.exists():
         raise LogError(f"{path}: no such log file")
-    suffix = path.suffix.lower()
     try:
-        if suffix == ".csv":
-            frame = pd.read_csv(path, comment="#")
-        elif suffix in (".parquet", ".pq"):
-            frame = pd.read_parquet(path)
-        else:
-            raise LogError(f"{path}: unknown log format '{suffix}' (use .csv or .parquet)")
+        channel_map = load_channel_map(channels) if channels is not None else None
+        frame = read_frame(path, channel_map)
+    except ChannelMapError as error:
+        raise LogError(str(error)) from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as error:
+        raise LogError(f"{path}: cannot be read: {error}") from None
+    except ValueError as error:  # pandas: a column named in a map is not in the file
         raise LogError(f"{path}: cannot be read: {error}") from None
     return signals_from_frame(frame, source=str(path), velocity_cutoff=velocity_cutoff)
 
@@ -143,6 +226,8 @@ def signals_from_frame(
             raise LogError(
                 f"{source}: column '{name}' has type {kind}: give plain numbers in SI units"
             )  # fmt: skip
+        if pd.api.types.is_numeric_dtype(kind):
+            return frame[name].to_numpy(dtype=float, na_value=np.nan)  # nothing to coerce
         values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
         bad = np.flatnonzero(np.isnan(values) & frame[name].notna().to_numpy())
         if bad.size:
@@ -152,10 +237,14 @@ def signals_from_frame(
             )
         return values
 
-    def group(names: tuple[str, ...]) -> np.ndarray | None:
+    def group(names: tuple[str, ...], partial: bool = False) -> np.ndarray | None:
         present = [name for name in names if name in frame.columns]
         if not present:
             return None
+        if partial:  # a missing column is a channel with no sample
+            return np.column_stack(
+                [column(n) if n in frame.columns else np.full(len(frame), np.nan) for n in names]
+            )
         if len(present) != len(names):
             missing = [name for name in names if name not in frame.columns]
             raise LogError(
@@ -172,24 +261,42 @@ def signals_from_frame(
             f"{source}: column 't' advances by {step:.4g} per sample: more than "
             f"{MAX_SAMPLE_INTERVAL} s, it looks like milliseconds (give seconds)"
         )
-    acc = np.column_stack([column(name) for name in ("ax", "ay", "az")])
+    missing = np.full((t.size, 4), np.nan)
+    az_assumed = "az" not in frame.columns
+    az = np.full(t.size, GRAVITY) if az_assumed else column("az")
+    acc = np.column_stack([column("ax"), column("ay"), az])
     d = group(TRAVEL)
+    d = missing if d is None else d
     v = group(TRAVEL_RATE)
-    signals_vx = column("vx")
-    _check_units(acc, d, v, signals_vx, source)
-    derived = v is None
+    if "vx" in frame.columns:
+        speed, speed_source = column("vx"), SpeedSource.LOGGED
+    elif any(name in frame.columns for name in WHEEL_SPEED):
+        wheels = np.column_stack([column(n) for n in WHEEL_SPEED if n in frame.columns])
+        finite = np.isfinite(wheels)
+        count = finite.sum(axis=1)
+        total = np.where(finite, wheels, 0.0).sum(axis=1)
+        speed = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        speed_source = SpeedSource.WHEEL_SPEEDS
+    else:
+        speed, speed_source = np.zeros(t.size), SpeedSource.NONE
+    _check_units(acc, d, v, speed, source)
+    derived = v is None and bool(np.isfinite(d).any())
     if derived:
         v = derive_velocities(t, d, velocity_cutoff, source)
+    elif v is None:
+        v = missing.copy()
     return Signals(
         t=t,
-        vx=signals_vx,
+        vx=speed,
         acc=acc,
         d=d,
         v=v,
         rates=group(RATES),
-        reference=group(REFERENCE),
+        reference=group(REFERENCE, partial=True),
         velocities_derived=derived,
         source=source,
+        az_assumed=az_assumed,
+        speed_source=speed_source,
     )
 
 
@@ -253,6 +360,8 @@ def derive_velocities(
     """
     dt = np.diff(t)
     median = float(np.median(dt))
+    if not np.isfinite(d).any():
+        return np.full(d.shape, np.nan)
     if np.max(np.abs(dt - median)) > 0.05 * median:
         raise LogError(
             f"{source}: time stamps are not uniform enough to derive suspension velocities; "

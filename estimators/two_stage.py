@@ -28,10 +28,16 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators.compiled import CompiledLoop
-from wheelload.estimators.kalman import predict, sequential_update_innovations, upper
+from wheelload.estimators.kalman import (
+    predict,
+    sequential_update,
+    sequential_update_innovations,
+    upper,
+)
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
+from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 
 #: Order of the per-sample input vector ``u``.
 INPUTS = (
@@ -131,6 +137,12 @@ def step_expressions(
         x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s
     )
     x_new, P_new, y_c, S_c, use_c = constraint_update(x_s, P_s, b, A, rc, mask_c)
+    # No travel row at all (IMU-only): the weak roll-split row observes the warp.
+    mask_split = dt_ok * (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
+    r_split = SPLIT_NOISE_RATIO * rc[2:3]
+    x_new, P_new = sequential_update(
+        x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
+    )
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
@@ -346,7 +358,7 @@ class TwoStageKF:
             loads=history[0],
             std=std,
             residual=residual,
-            flags=flags_from_used(used.T),
+            flags=flags_from_used(used.T) | signals.input_flags(),
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
         innovations = Innovations(

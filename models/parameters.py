@@ -8,7 +8,7 @@ Example
 -------
 >>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
 >>> p.vector().shape
-(26,)
+(27,)
 """
 
 from __future__ import annotations
@@ -58,6 +58,7 @@ class ModelParameters:
     static_fr: Any
     static_rl: Any
     static_rr: Any
+    roll_split_front: Any  # front share of the lateral load transfer (models/roll_split.py)
 
     @staticmethod
     def names() -> tuple[str, ...]:
@@ -78,7 +79,7 @@ class ModelParameters:
             raise ValueError(f"static loads must be 4 finite values, got {static}")
         front, rear = vehicle.suspension.front, vehicle.suspension.rear
         aero = vehicle.aero
-        return cls(
+        parameters = cls(
             mass=vehicle.mass.total,
             lf=centre.lf,
             lr=centre.lr,
@@ -105,7 +106,14 @@ class ModelParameters:
             static_fr=float(static[1]),
             static_rl=float(static[2]),
             static_rr=float(static[3]),
+            roll_split_front=vehicle.suspension.roll_split_front,
         )
+        if vehicle.suspension.roll_split_front is not None:
+            return parameters
+        from wheelload.models.roll_split import roll_stiffness_share_front
+
+        share = roll_stiffness_share_front(parameters)
+        return dataclasses.replace(parameters, roll_split_front=share)
 
     def vector(self) -> np.ndarray:
         """The numeric parameter vector in layout order."""

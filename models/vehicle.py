@@ -122,9 +122,14 @@ class AxleSuspension:
 class Suspension:
     front: AxleSuspension
     rear: AxleSuspension
+    # Front share of the lateral load transfer (models/roll_split.py); default:
+    # the front share of the springs' and bars' roll stiffness.
+    roll_split_front: float | None = None
 
     def _check(self) -> None:
-        pass
+        split = self.roll_split_front
+        if split is not None and not 0.0 < split < 1.0:
+            raise _KeyError("roll_split_front", f"must be between 0 and 1, got {split}")
 
 
 @dataclass(frozen=True, kw_only=True)

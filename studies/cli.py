@@ -18,6 +18,8 @@ COMMANDS = (
     "wheelload.studies.commands.estimate",
     "wheelload.studies.commands.methods",
     "wheelload.studies.commands.compare",
+    "wheelload.studies.commands.channels",
+    "wheelload.studies.commands.sensor_sets",
     "wheelload.studies.commands.bench",
     "wheelload.studies.commands.simulate",
     "wheelload.studies.commands.mhe",

@@ -5,7 +5,9 @@
           RMSE_{\\%,i} = 100\\, RMSE_i / \\overline{F^{ref}_{z,i}}
 
 P95 is the 95th percentile of :math:`|e|`, Max its maximum; the pooled row
-pools all wheels and samples (eq. 31-34).
+pools all wheels and samples (eq. 31-34). Only wheels with a reference (a
+reference column with a finite value) are scored: a log with references on
+the front wheels only is scored on FL and FR, per wheel and pooled over them.
 
 Example
 -------
@@ -33,11 +35,14 @@ def _row(errors: np.ndarray, mean_reference: float) -> list[float]:
     ]
 
 
-def wheel_metrics(estimate: np.ndarray, reference: np.ndarray) -> pd.DataFrame:
+def wheel_metrics(
+    estimate: np.ndarray, reference: np.ndarray, source: str = "estimate"
+) -> pd.DataFrame:
     """Per-wheel and pooled RMSE [N], RMSE [%], P95 [N], Max [N] (eq. 27-34).
 
-    Samples where either array is not finite are left out (the count is in
-    the ``samples`` column).
+    Rows: the wheels with a reference, then ``pooled``. Samples where an
+    estimate or reference of those wheels is not finite are left out (the
+    count is in the ``samples`` column). ``source`` names the log in errors.
     """
     estimate = np.asarray(estimate, float)
     reference = np.asarray(reference, float)
@@ -45,14 +50,22 @@ def wheel_metrics(estimate: np.ndarray, reference: np.ndarray) -> pd.DataFrame:
         raise ValueError(
             f"estimate {estimate.shape} and reference {reference.shape} must both be (n, 4)"
         )
+    wheels = np.flatnonzero(np.any(np.isfinite(reference), axis=0))
+    if wheels.size == 0:
+        raise ValueError(f"{source}: no wheel has a finite reference load")
+    estimate, reference = estimate[:, wheels], reference[:, wheels]
+    names = [WHEELS[i] for i in wheels]
     keep = np.all(np.isfinite(estimate) & np.isfinite(reference), axis=1)
     if not keep.any():
-        raise ValueError("no sample has both a finite estimate and a finite reference")
+        raise ValueError(
+            f"{source}: no sample has a finite estimate and reference on all of "
+            f"{', '.join(n.upper() for n in names)} (the wheels with a reference)"
+        )
     errors = estimate[keep] - reference[keep]
     means = reference[keep].mean(axis=0)
-    rows = [_row(errors[:, i], means[i]) for i in range(4)]
+    rows = [_row(errors[:, i], means[i]) for i in range(len(names))]
     rows.append(_row(errors.ravel(), float(means.mean())))
-    table = pd.DataFrame(rows, index=[*WHEELS, "pooled"], columns=COLUMNS)
+    table = pd.DataFrame(rows, index=[*names, "pooled"], columns=COLUMNS)
     table["samples"] = int(keep.sum())
     return table
 

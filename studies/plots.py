@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from wheelload.estimators import Estimate, Signals  # noqa: E402
+from wheelload.estimators import Estimate, Signals, StepFlag  # noqa: E402
 
 WHEEL_NAMES = ("front left", "front right", "rear left", "rear right")
 
@@ -25,7 +25,7 @@ def plot_estimate(estimate: Estimate, signals: Signals, path: str | Path, title:
         3, 2, figsize=(12, 9), sharex=True, gridspec_kw={"height_ratios": [2, 2, 1.3]}
     )
     t = estimate.t
-    flagged = estimate.flags != 0
+    flagged = (estimate.flags & StepFlag.skipped_mask()) != 0
     for i, ax in enumerate(axes[:2].ravel()):
         load = estimate.loads[:, i] / 1000.0
         band = 2.0 * estimate.std[:, i] / 1000.0
@@ -46,8 +46,13 @@ def plot_estimate(estimate: Estimate, signals: Signals, path: str | Path, title:
         for i, ax in enumerate(axes[2]):
             for j in (i * 2, i * 2 + 1):
                 ax.plot(t, error[:, j], lw=0.8, label=f"{WHEEL_NAMES[j]}")
-            rms = np.sqrt(np.nanmean(error[:, 2 * i : 2 * i + 2] ** 2))
-            ax.set_title(f"error, {'front' if i == 0 else 'rear'} axle (RMS {rms:.0f} N)")
+            axle = error[:, 2 * i : 2 * i + 2]
+            rms = (
+                f"RMS {np.sqrt(np.nanmean(axle**2)):.0f} N"
+                if np.isfinite(axle).any()
+                else "no reference"
+            )
+            ax.set_title(f"error, {'front' if i == 0 else 'rear'} axle ({rms})")
             ax.set_ylabel("error [N]")
             ax.legend(loc="best", fontsize=8)
             ax.grid(alpha=0.3)

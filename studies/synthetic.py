@@ -28,6 +28,7 @@ from wheelload.models import (
     equilibrium_function,
     suspension_function,
 )
+from wheelload.models.roll_split import roll_split_function
 
 Profile = Callable[[np.ndarray], np.ndarray]
 
@@ -93,32 +94,18 @@ def travel_stiffness(vehicle: Vehicle) -> np.ndarray:
 
 
 def roll_share_front(vehicle: Vehicle) -> float:
-    """Front share :math:`K_f / (K_f + K_r)` of the roll stiffness of the suspension model.
-
-    A roll angle :math:`\\varphi` compresses an axle's wheels by
-    :math:`\\pm \\varphi T/2`; the axle's roll moment is :math:`T/2 (F_L - F_R)`.
-    """
-    J = travel_stiffness(vehicle)
-    g = vehicle.geometry
-    stiffness = []
-    for wheels, track in (((0, 1), g.track_front), ((2, 3), g.track_rear)):
-        roll = np.zeros(4)
-        roll[list(wheels)] = [0.5 * track, -0.5 * track]  # travel per radian of roll
-        loads = J @ roll
-        stiffness.append(0.5 * track * (loads[wheels[0]] - loads[wheels[1]]))
-    return stiffness[0] / sum(stiffness)
+    """Front share of the lateral load transfer: the model's (models/roll_split.py)."""
+    return float(ModelParameters.from_vehicle(vehicle).roll_split_front)
 
 
 def reference_loads(vehicle: Vehicle, acc: np.ndarray, vx: np.ndarray) -> np.ndarray:
     """Loads (n, 4) satisfying :math:`A x = b` with the roll moment shared by roll stiffness."""
     p = ModelParameters.from_vehicle(vehicle).vector()
-    share = roll_share_front(vehicle)
     n = len(vx)
     A, b = equilibrium_function().map(n)(acc.T, vx[None, :], p)
     A = np.asarray(A)[:, :4]
     b = np.asarray(b).T
-    roll_front, roll_rear = A[2, :2], A[2, 2:]
-    split = np.concatenate([(1.0 - share) * roll_front, -share * roll_rear])
+    split = np.asarray(roll_split_function()(p)).reshape(1, 4)
     system = np.vstack([A, split])
     rhs = np.column_stack([b, np.zeros(n)])
     return np.linalg.solve(system, rhs.T).T

@@ -16,7 +16,7 @@ def test_estimate_on_the_bundled_example(tmp_path, capsys):
     estimates = pd.read_csv(out)
     assert len(estimates) == 1353
     assert np.isfinite(estimates.to_numpy()).all()
-    assert {"fz_fl", "fz_std_rr", "residual_roll", "flags"} <= set(estimates.columns)
+    assert {"fz_fl", "fz_std_rr", "residual_roll", "status"} <= set(estimates.columns)
     assert plot.stat().st_size > 20_000
 
 

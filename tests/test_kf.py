@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kalman import update
-from wheelload.estimators.offsets import still_period_static_loads
+from wheelload.estimators.offsets import check_still_period, still_period_static_loads
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import static_loads
 from wheelload.studies.numpy_kf import joint_filter
@@ -200,3 +200,38 @@ def test_an_invalid_interval_is_rejected_and_the_state_held(vehicle, drive, dt):
     np.testing.assert_array_equal(held.P, state.P)
     assert estimate.flags[0] == 255  # every update skipped, step rejected (as the C step)
     assert np.isfinite(estimate.loads).all() and np.isfinite(estimate.std).all()
+
+
+def test_a_noisy_imu_at_rest_is_a_still_period(vehicle):
+    # A car at rest whose IMU noise is 0.5 m/s^2 (1 sigma): the noise, estimated from the
+    # sample differences (white noise: within ~10 % over 100 samples), is taken out of the
+    # spread; a 1 m/s^2, 0.5 Hz sway of the same noise is still rejected.
+    signals = synthetic_log(vehicle, rest(duration=2.0), noise=NOISE, seed=3)
+    rng = np.random.default_rng(4)
+    noisy = signals.acc + np.column_stack([0.5 * rng.standard_normal((len(signals), 2)),
+                                           np.zeros(len(signals))])  # fmt: skip
+    still = type(signals)(t=signals.t, vx=signals.vx, acc=noisy, d=signals.d, v=signals.v)
+    with pytest.raises(ValueError, match="channel 'ax'"):
+        check_still_period(still, vehicle, 1.0, noise=0.0)  # the old check: noise is motion
+    accepted = check_still_period(still, vehicle, 1.0)
+    assert "sensor noise" in accepted.reason and "from its sample differences" in accepted.reason
+    sway = noisy.copy()
+    sway[:, 0] += 1.0 * np.sqrt(2) * np.sin(2 * np.pi * 0.5 * signals.t)
+    moving = type(signals)(t=signals.t, vx=signals.vx, acc=sway, d=signals.d, v=signals.v)
+    with pytest.raises(ValueError, match="channel 'ax' varies"):
+        check_still_period(moving, vehicle, 1.9)
+
+
+def test_corner_weights_are_the_static_loads(vehicle):
+    from wheelload.estimators.offsets import corner_weight_loads
+
+    loads = corner_weight_loads("400, 410,380,390")
+    np.testing.assert_allclose(loads, np.array([400, 410, 380, 390]) * 9.80665, rtol=1e-12)
+    with pytest.raises(ValueError, match="four positive numbers"):
+        corner_weight_loads("400,410,380")
+    signals = synthetic_log(vehicle, rest(duration=3.0), noise=NOISE, seed=5)
+    static = check_still_period(signals, vehicle, 1.0, static=loads).static
+    estimate = TwoStageKF(vehicle, static=static).run(signals)
+    # At rest, the equilibrium's total (m g) and the scale readings' total differ by 40 kg
+    # here; the estimate stays within the two (tolerance: that difference per wheel).
+    assert np.abs(estimate.loads[-50:].mean(axis=0) - loads).max() < 40 * 9.81

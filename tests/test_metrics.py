@@ -27,3 +27,21 @@ def test_non_finite_samples_are_left_out_and_counted():
     table = wheel_metrics(estimate, reference)
     assert table.loc["pooled", "samples"] == 2
     assert table.loc["pooled", "RMSE"] == pytest.approx(5.0)
+
+
+def test_wheels_without_a_reference_are_left_out():
+    reference = np.full((5, 4), np.nan)
+    reference[:, :2] = [3000.0, 4000.0]  # front wheels only
+    estimate = np.full((5, 4), 3500.0)
+    estimate[:, 0] = 3000.0 + np.array([10.0, -10.0, 10.0, -10.0, 10.0])
+    table = wheel_metrics(estimate, reference)
+    assert list(table.index) == ["fl", "fr", "pooled"]
+    assert table.loc["fl", "RMSE"] == pytest.approx(10.0)
+    assert table.loc["fr", "RMSE"] == pytest.approx(500.0)
+    assert table.loc["pooled", "RMSE"] == pytest.approx(np.sqrt((100.0 + 500.0**2) / 2))
+    assert table.loc["pooled", "samples"] == 5
+
+
+def test_no_reference_at_all_names_the_log():
+    with pytest.raises(ValueError, match=r"drive.csv: no wheel has a finite reference"):
+        wheel_metrics(np.ones((3, 4)), np.full((3, 4), np.nan), source="drive.csv")

@@ -97,7 +97,7 @@ def test_iteration_cap_falls_back_to_the_kf_and_flags_it(vehicle, drive):
     assert np.array_equal(mhe.fallback, capped)
     np.testing.assert_array_equal(mhe.loads[capped], kf.loads[capped])
     frame = mhe.to_pandas()
-    assert {"status", "iterations", "fallback", "solve_time"} <= set(frame.columns)
+    assert {"status", "solver_status", "iterations", "fallback", "solve_time"} <= set(frame.columns)
 
 
 def test_settings_reject_bad_values():

@@ -37,7 +37,7 @@ def write(tmp_path, data):
 
 def test_missing_column_is_named(tmp_path, signals):
     path = write(tmp_path, frame(signals).drop(columns=["d_rl"]))
-    with pytest.raises(LogError, match=r"drive\.csv: missing column 'd_rl'"):
+    with pytest.raises(LogError, match=r"drive\.csv: has column 'd_fl' but not 'd_rl'"):
         read_log(path)
 
 

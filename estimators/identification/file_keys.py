@@ -1,7 +1,8 @@
 """Where each model parameter lives in the vehicle file, and its bounds, found from the file.
 
 A key maps to a model parameter when changing the key by ``delta`` changes
-exactly that parameter, by the same ``delta`` (``ModelParameters.from_vehicle``
+exactly one parameter by the same ``delta`` (parameters derived from it may
+move too) (``ModelParameters.from_vehicle``
 decides; nothing is listed by hand). A parameter's lower bound is 0 when the
 vehicle file's own validation rejects a negative value for its key.
 
@@ -65,9 +66,10 @@ def parameter_keys(table: dict) -> dict[str, Key]:
             ).vector()
         except VehicleFileError:
             continue
-        changed = np.flatnonzero(np.abs(moved - base) > 1e-12 * np.maximum(np.abs(base), 1.0))
-        if changed.size == 1 and np.isclose(moved[changed[0]] - base[changed[0]], delta):
-            keys[names[changed[0]]] = key
+        # Derived parameters (e.g. a default computed from the rates) may move too.
+        matched = np.flatnonzero(np.isclose(moved - base, delta, rtol=1e-9, atol=0.0))
+        if matched.size == 1:
+            keys[names[matched[0]]] = key
     return keys
 
 

@@ -10,7 +10,7 @@
  * any order: t, vx, ax, ay, az, d_fl, d_fr, d_rl, d_rr and the travel rates
  * v_fl, v_fr, v_rl, v_rr. Unlike wheelload's Python reader, this example
  * does not derive missing travel rates: the v_* columns are required.
- * Writes t, fz_*, fz_std_*, residual_*, flags as CSV (stdout by default).
+ * Writes t, fz_*, fz_std_*, residual_*, status as CSV (stdout by default).
  * The interval before a sample is t[k] - t[k-1]; the first sample uses
  * t[1] - t[0], as wheelload's Python filter does.
  *
@@ -342,7 +342,7 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
         return 2;
     }
     fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
-                 "residual_vertical,residual_pitch,residual_roll,flags\n");
+                 "residual_vertical,residual_pitch,residual_roll,status\n");
     ${prefix}_step(&state, params, &first[0], (${prefix}_real)(t - t_previous), &estimate);
     write_row(out, t_previous, &estimate);
     do {

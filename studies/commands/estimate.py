@@ -1,4 +1,10 @@
-"""``wheelload estimate``: run an estimator (default: the two-stage KF) on a log."""
+"""``wheelload estimate``: run an estimator (default: the two-stage KF) on one log or many.
+
+One log: a summary on screen, ``--out`` estimates CSV, ``--plot`` figure.
+Many logs (a folder, a glob, or several names): ``--out FOLDER`` gets one
+``LOG.estimates.csv`` per log and ``summary.csv``; logs run on ``--workers``
+local processes or on a Dask cluster (``--dask ADDRESS``), with a progress bar.
+"""
 
 from __future__ import annotations
 
@@ -8,10 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
-from wheelload.estimators.offsets import still_period_static_loads
-from wheelload.estimators.registry import build, method
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.estimators import Estimate, Signals, StepFlag
+from wheelload.estimators.registry import method
+from wheelload.models import example_vehicle_path
+from wheelload.studies.batch import (
+    SUMMARY_NAME,
+    EstimateSettings,
+    estimate_log,
+    expand_logs,
+    run_logs,
+    write_new,
+)
 from wheelload.studies.metrics import wheel_metrics
 
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -24,9 +37,12 @@ def example_log_path() -> Path:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "estimate", help="estimate the four wheel loads of a log (default: the two-stage KF)"
+        "estimate",
+        help="estimate the four wheel loads of a log (or many); default: the two-stage KF",
     )
-    parser.add_argument("log", nargs="?", help="log file (.csv or .parquet)")
+    parser.add_argument(
+        "log", nargs="*", help="log file(s), folder(s) or glob(s): .csv .parquet .mf4 .erg"
+    )
     parser.add_argument("--vehicle", help="vehicle TOML file")
     parser.add_argument(
         "--example",
@@ -36,51 +52,124 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--method", default="kf", help="estimator name (see `wheelload methods`; default kf)"
     )
-    parser.add_argument("--out", help="write the estimates to this CSV file")
-    parser.add_argument("--plot", help="save a figure of the estimates to this PNG file")
+    parser.add_argument("--channels", help="channel map TOML (wheelload channels --template)")
+    parser.add_argument(
+        "--out", help="one log: write the estimates to this CSV; many: into this folder"
+    )
+    parser.add_argument("--plot", help="one log: save a figure of the estimates to this PNG")
     parser.add_argument(
         "--still-period",
         type=float,
         metavar="SECONDS",
         help="zero the travel sensors over the first SECONDS of the log (vehicle at rest)",
     )
+    parser.add_argument(
+        "--still-noise",
+        type=float,
+        metavar="M_S2",
+        help="accelerometer noise (1 sigma) for the still-period check; default: from the data",
+    )
+    parser.add_argument(
+        "--corner-weights",
+        metavar="FL,FR,RL,RR",
+        help="measured corner weights [kg] (scale readings) as the static loads",
+    )
+    parser.add_argument("--workers", type=int, default=1, help="local processes for many logs")
+    parser.add_argument("--dask", metavar="ADDRESS", help="run many logs on this Dask scheduler")
     parser.set_defaults(handler=run)
+
+
+def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
+    return EstimateSettings(
+        vehicle=vehicle_path,
+        method=method(args.method).name,
+        channels=Path(args.channels) if args.channels else None,
+        still_period=args.still_period,
+        still_noise=args.still_noise,
+        corner_weights=args.corner_weights,
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     if args.example:
-        log_path = Path(args.log) if args.log else example_log_path()
+        logs = args.log or [str(example_log_path())]
         vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
     else:
         if not args.log or not args.vehicle:
             raise ValueError("give a LOG and --vehicle FILE, or --example")
-        log_path, vehicle_path = Path(args.log), Path(args.vehicle)
-    info = method(args.method)
-    if args.still_period and info.name != "kf":
-        raise ValueError(f"--still-period applies to --method kf only, not {info.name!r}")
-    vehicle = load_vehicle(vehicle_path)
-    signals = read_log(log_path)
-    if args.still_period:
-        static = still_period_static_loads(signals, vehicle, args.still_period)
-        estimator = TwoStageKF(vehicle, static=static)
-    else:
-        estimator = build(info.name, vehicle)
-    estimate = estimator.run(signals)
-    print(f"method {info.name}: {info.description}")
-    print(summary(estimate, signals, vehicle.name))
+        logs, vehicle_path = args.log, Path(args.vehicle)
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    settings = _settings(args, vehicle_path)
+    paths = expand_logs(logs)
+    single = len(paths) == 1 and Path(logs[0]).is_file() and len(logs) == 1
+    if single:
+        return _run_one(paths[0], settings, args)
+    return _run_many(paths, settings, args)
+
+
+def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> int:
+    result = estimate_log(path, settings)
+    estimate, signals = result.estimate, result.signals
     if args.out:
-        estimate.to_pandas().to_csv(args.out, index=False)
-        print(f"estimates written to {args.out}")
+        write_new(estimate.to_pandas(), Path(args.out))
     if args.plot:
         from wheelload.studies.plots import plot_estimate
 
-        plot_estimate(estimate, signals, args.plot, title=f"{log_path.name} — {vehicle.name}")
+        plot_estimate(estimate, signals, args.plot, title=f"{path.name} — {result.vehicle.name}")
+    print(f"method {settings.method}: {method(settings.method).description}")
+    print(summary(estimate, signals, result.vehicle.name))
+    for note in result.notes:
+        print(note)
+    for warning in result.warnings:
+        print(f"warning: {warning}")
+    if args.out:
+        print(f"estimates written to {args.out}")
+    if args.plot:
         print(f"figure written to {args.plot}")
     return 0
 
 
+def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Namespace) -> int:
+    if args.plot:
+        raise ValueError("--plot is for one log; with many logs give --out FOLDER")
+    folder = Path(args.out) if args.out else None
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+    table = run_logs(paths, settings, folder, workers=args.workers, dask_address=args.dask)
+    columns = ["log", "samples", "mode", "mean_fz_fl", "mean_fz_rr", "min_fz", "rmse_pooled"]
+    shown = table[[c for c in columns + ["error"] if c in table.columns]]
+    print(shown.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
+    if folder is not None:
+        write_new(table, folder / SUMMARY_NAME)
+        print(f"{len(paths)} logs: estimates and {SUMMARY_NAME} written to {folder}")
+    failed = int((table["error"] != "").sum()) if "error" in table.columns else 0
+    if failed:
+        print(f"{failed} of {len(paths)} logs failed (see the error column)")
+    return 1 if failed else 0
+
+
+def row_use(estimate: Estimate) -> str:
+    """Share of samples in which each suspension row and the roll-split row were used.
+
+    A suspension row needs both travel sensors of its axle (the anti-roll bar
+    couples them); the roll-split row is used when no suspension row is.
+    """
+    bits = [StepFlag.SUSPENSION_FL_SKIPPED, StepFlag.SUSPENSION_FR_SKIPPED,
+            StepFlag.SUSPENSION_RL_SKIPPED, StepFlag.SUSPENSION_RR_SKIPPED]  # fmt: skip
+    skipped = np.array([(estimate.flags & bit) != 0 for bit in bits])
+    rejected = (estimate.flags & StepFlag.STEP_REJECTED) != 0
+    split = skipped.all(axis=0) & ~rejected
+    shares = ", ".join(f"{w} {100 * (1 - s.mean()):.0f} %" for w, s in zip(WHEELS, skipped))
+    return f"suspension rows used: {shares}; roll-split row used: {100 * split.mean():.0f} %"
+
+
 def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
-    """A per-wheel text summary, with the paper's metrics where reference loads exist."""
+    """A per-wheel text summary, with the paper's metrics where reference loads exist.
+
+    A metrics problem is reported in the text, never raised: the estimates
+    stand on their own.
+    """
     n = len(estimate)
     lines = [
         f"{signals.source}: {n} samples, {signals.t[-1] - signals.t[0]:.2f} s at "
@@ -96,10 +185,19 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
         load = estimate.loads[:, i]
         std = f"{estimate.std[:, i].mean():12.0f}" if estimate.has_std else f"{'n/a':>12}"
         lines.append(f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} {std}")
-    flagged = int(np.count_nonzero(estimate.flags))
-    lines.append(f"samples with a skipped update (missing input): {flagged}")
+    skipped = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
+    assumed = int(np.count_nonzero(estimate.flags & ~StepFlag.skipped_mask()))
+    lines.append(f"sensor set: {signals.mode()}")
+    lines.append(row_use(estimate))
+    lines.append(f"samples with a skipped update (missing input): {skipped}")
+    if assumed:
+        lines.append(f"samples with an assumed input (status bits 20-22): {assumed}")
     if signals.reference is not None:
-        table = wheel_metrics(estimate.loads, signals.reference)
+        try:
+            table = wheel_metrics(estimate.loads, signals.reference, source=signals.source)
+        except ValueError as error:
+            lines.append(f"no error metrics: {error}")
+            return "\n".join(lines)
         lines.append("error against the log's reference loads (Siegloff & Choi eq. 26-34):")
         lines.append(f"{'':>8}{'RMSE [N]':>10}{'RMSE [%]':>10}{'P95 [N]':>10}{'Max [N]':>10}")
         for name, row in table.iterrows():

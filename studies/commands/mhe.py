@@ -30,6 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study = subparsers.add_parser("study", help="run a comparison study and print its table")
     study.add_argument("name", choices=["mhe-vs-kf"], help="mhe-vs-kf: KF, projection KF, MHE")
     study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
+    study.add_argument("--channels", help="channel map TOML for --logs (wheelload channels)")
     study.add_argument(
         "--scenarios",
         nargs="*",
@@ -77,12 +78,14 @@ def run_study(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     vehicle = load_vehicle(vehicle_path)
     paths = [Path(p) for p in args.logs]
+    given = set(paths)
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
             paths += _simulate(args.scenarios, Path(folder), vehicle_path)
         if not paths:
             raise ValueError("give --logs or --scenarios")
-        logs = [read_log(path) for path in paths]
+        logs = [read_log(path, channels=args.channels if path in given else None)
+                for path in paths]  # fmt: skip
     table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
     from wheelload.studies.mhe_vs_kf import plot_accuracy_against_time
 

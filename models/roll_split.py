@@ -1,0 +1,61 @@
+r"""Front/rear split of the lateral load transfer: one weak model row.
+
+The three equilibrium rows (eq. 15-17) fix the total load, the pitch moment
+and the total roll moment, not how the roll moment is shared between the
+axles: the "warp" direction :math:`[1/T_f, -1/T_f, -1/T_r, 1/T_r]` of the
+four loads is theirs to leave free. The travel sensors observe it; without
+them (IMU-only) the filter needs this row. With :math:`\lambda` the front
+share of the lateral load transfer,
+
+.. math:: (1 - \lambda)\,\tfrac{T_f}{2} (F_{FL} - F_{FR})
+          - \lambda\,\tfrac{T_r}{2} (F_{RL} - F_{RR}) = 0 ,
+
+i.e. the front axle carries :math:`\lambda` of the roll moment. Its physical
+default is the front share of the suspension's roll stiffness,
+:math:`\lambda = K_f / (K_f + K_r)` with :math:`K = (T/2)\,\partial (F_L -
+F_R)/\partial\varphi`, taken from the suspension model's own Jacobian
+(springs and anti-roll bars); the vehicle file's
+``suspension.roll_split_front`` overrides it (a measured split includes
+roll-centre and unsprung-mass transfer, which that default leaves out).
+
+The row is soft: its noise density is :data:`SPLIT_NOISE_RATIO` times the
+roll row's, for the same unmodelled roll dynamics plus the error of
+:math:`\lambda`.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from wheelload.models.parameters import ModelParameters
+from wheelload.models.suspension import suspension_loads
+
+SPLIT_NOISE_RATIO = 4.0  # split-row noise density / roll-row noise density (sigma x 2)
+
+
+def roll_split_row(p: ModelParameters) -> ca.SX:
+    """The 1x4 row :math:`h` of :math:`h x = 0` (module docstring)."""
+    share = p.roll_split_front
+    half_f, half_r = 0.5 * p.track_front, 0.5 * p.track_rear
+    return ca.horzcat((1 - share) * half_f, -(1 - share) * half_f, -share * half_r, share * half_r)
+
+
+def roll_split_function(name: str = "roll_split") -> ca.Function:
+    """``name(p) -> h[1x4]`` as a CasADi Function."""
+    p_vector, p = ModelParameters.symbolic()
+    return ca.Function(name, [p_vector], [roll_split_row(p)], ["p"], ["h"])
+
+
+def roll_stiffness_share_front(p: ModelParameters) -> float:
+    """Front share of the roll stiffness of the suspension model (springs and bars)."""
+    d = ca.SX.sym("d", 4)
+    jacobian = ca.Function("J", [d], [ca.jacobian(suspension_loads(d, ca.DM.zeros(4), p), d)])
+    J = np.asarray(jacobian(np.zeros(4)))
+    stiffness = []
+    for (left, right), track in (((0, 1), p.track_front), ((2, 3), p.track_rear)):
+        roll = np.zeros(4)
+        roll[[left, right]] = [0.5 * track, -0.5 * track]  # travel per radian of roll
+        loads = J @ roll
+        stiffness.append(0.5 * track * (loads[left] - loads[right]))
+    return float(stiffness[0] / sum(stiffness))

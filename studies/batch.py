@@ -1,0 +1,258 @@
+"""Many logs: estimate each, write one output per log and one summary table.
+
+Logs are given as files, folders (every log file inside, not recursive) or
+glob patterns. :func:`run_logs` processes them serially, on local worker
+processes, or on an existing Dask cluster, with a progress bar; the summary
+rows are sorted by log path, so every way gives the same table.
+
+Example
+-------
+>>> table = run_logs(expand_logs(["fleet/"]), settings, workers=2)
+"""
+
+from __future__ import annotations
+
+import functools
+import glob
+import threading
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
+from wheelload.estimators.offsets import check_still_period, corner_weight_loads
+from wheelload.estimators.readers import SUFFIXES
+from wheelload.estimators.registry import build
+from wheelload.estimators.two_stage import step_function
+from wheelload.models import Vehicle, load_vehicle
+from wheelload.studies.log_warnings import load_warnings, signal_warnings
+from wheelload.studies.metrics import wheel_metrics
+
+WHEELS = ("fl", "fr", "rl", "rr")
+SUMMARY_NAME = "summary.csv"
+
+
+@dataclass(frozen=True, kw_only=True)
+class EstimateSettings:
+    """How each log is estimated (the command line's options)."""
+
+    vehicle: Path
+    method: str = "kf"
+    channels: Path | None = None
+    still_period: float | None = None
+    still_noise: float | None = None
+    corner_weights: str | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class LogResult:
+    """One log's signals, estimate and the lines to tell the user."""
+
+    signals: Signals
+    estimate: Estimate
+    vehicle: Vehicle
+    notes: tuple[str, ...]
+    warnings: tuple[str, ...]
+
+
+def expand_logs(patterns: list[str]) -> list[Path]:
+    """Log files named by files, folders or glob patterns, sorted, without repeats."""
+    found: list[Path] = []
+    for pattern in patterns:
+        path = Path(pattern)
+        if path.is_dir():
+            matches = [p for p in sorted(path.iterdir()) if p.suffix.lower() in SUFFIXES]
+            if not matches:
+                raise ValueError(f"{path}: folder has no log file ({', '.join(SUFFIXES)})")
+        elif path.exists():
+            matches = [path]
+        elif glob.has_magic(pattern):
+            matches = [Path(p) for p in sorted(glob.glob(pattern)) if Path(p).is_file()]
+            if not matches:
+                raise ValueError(f"{pattern}: no file matches")
+        else:
+            raise ValueError(f"{path}: no such log file")
+        found += matches
+    return sorted(dict.fromkeys(found))
+
+
+_lock = threading.Lock()
+
+
+@functools.lru_cache(maxsize=1)
+def _step():
+    return step_function()
+
+
+@functools.lru_cache(maxsize=4)
+def _vehicle(path: Path) -> Vehicle:
+    return load_vehicle(path)
+
+
+@functools.lru_cache(maxsize=8)
+def _filter(vehicle: Path, static: tuple[float, ...] | None) -> TwoStageKF:
+    """A filter whose compiled loop is built, cached per process."""
+    kf = TwoStageKF(_vehicle(vehicle), static=None if static is None else np.array(static),
+                    step=_step())  # fmt: skip
+    kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
+                   d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
+    return kf
+
+
+def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
+    """Read one log, set the static loads, run the chosen estimator (default: the two-stage KF)."""
+    vehicle = _vehicle(settings.vehicle)
+    signals = read_log(path, channels=settings.channels)
+    notes = []
+    static = None
+    if settings.corner_weights is not None:
+        static = corner_weight_loads(settings.corner_weights)
+        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
+    if settings.still_period:
+        still = check_still_period(
+            signals, vehicle, settings.still_period, static=static, noise=settings.still_noise
+        )
+        static = still.static
+        notes.append(still.reason)
+    if settings.method == "kf":
+        key = None if static is None else tuple(float(f) for f in static)
+        with _lock:  # build (or load) the compiled loop once per process, not per thread
+            estimator = _filter(settings.vehicle, key)
+    elif static is not None:
+        raise ValueError(
+            "--still-period and --corner-weights apply to --method kf only, "
+            f"not {settings.method!r}"
+        )
+    else:
+        estimator = build(settings.method, vehicle)
+    estimate = estimator.run(signals)
+    warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
+    return LogResult(
+        signals=signals, estimate=estimate, vehicle=vehicle, notes=tuple(notes),
+        warnings=tuple(warnings),
+    )  # fmt: skip
+
+
+def output_path(log: Path, folder: Path) -> Path:
+    """``FOLDER/LOGNAME.estimates.csv``."""
+    return folder / f"{log.name}.estimates.csv"
+
+
+def write_new(frame: pd.DataFrame, path: Path) -> None:
+    """Write a CSV to a temporary file beside ``path`` and rename; never overwrite."""
+    if path.exists():
+        raise ValueError(f"{path}: exists; remove it or choose another output")
+    temporary = path.with_name(f".{path.name}.partial")
+    frame.to_csv(temporary, index=False)
+    temporary.replace(path)
+
+
+def summary_row(path: Path, result: LogResult) -> dict:
+    """One row of the summary table."""
+    estimate, signals = result.estimate, result.signals
+    row: dict = {
+        "log": str(path),
+        "samples": len(signals),
+        "duration_s": float(signals.t[-1] - signals.t[0]),
+        "rate_hz": signals.sample_rate,
+        "mode": signals.mode(),
+    }
+    for i, wheel in enumerate(WHEELS):
+        row[f"mean_fz_{wheel}"] = float(estimate.loads[:, i].mean())
+    for i, wheel in enumerate(WHEELS):
+        row[f"mean_std_{wheel}"] = float(estimate.std[:, i].mean())
+    row["skipped_samples"] = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
+    row["negative_samples"] = int((estimate.loads < 0).any(axis=1).sum())
+    row["min_fz"] = float(estimate.loads.min())
+    row["rmse_pooled"] = np.nan
+    if signals.reference is not None and np.isfinite(signals.reference).any():
+        try:
+            table = wheel_metrics(estimate.loads, signals.reference, source=str(path))
+            row["rmse_pooled"] = float(table.loc["pooled", "RMSE"])
+        except ValueError:
+            pass  # the row keeps NaN: no sample to score
+    row["warnings"] = len(result.warnings)
+    row["error"] = ""
+    return row
+
+
+def process_log(path: Path, settings: EstimateSettings, folder: Path | None) -> dict:
+    """Estimate one log, write its output into ``folder``; its summary row.
+
+    A log that cannot be used gives a row with its one-line error, so one bad
+    file does not stop a fleet.
+    """
+    try:
+        result = estimate_log(path, settings)
+        if folder is not None:
+            write_new(result.estimate.to_pandas(), output_path(path, folder))
+        return summary_row(path, result)
+    except (ValueError, FileNotFoundError) as error:
+        return {"log": str(path), "error": str(error)}
+
+
+def process_logs(paths: list[Path], settings: EstimateSettings, folder: Path | None) -> list[dict]:
+    """:func:`process_log` over a chunk of logs (one task on a worker)."""
+    return [process_log(path, settings, folder) for path in paths]
+
+
+def chunks(paths: list[Path], workers: int) -> list[list[Path]]:
+    """About :data:`CHUNKS_PER_WORKER` chunks per worker: few tasks, balanced load."""
+    size = max(1, -(-len(paths) // (CHUNKS_PER_WORKER * workers)))
+    return [paths[i : i + size] for i in range(0, len(paths), size)]
+
+
+CHUNKS_PER_WORKER = 8
+
+
+def run_logs(
+    paths: list[Path],
+    settings: EstimateSettings,
+    folder: Path | None,
+    *,
+    workers: int = 1,
+    dask_address: str | None = None,
+    progress: bool = True,
+) -> pd.DataFrame:
+    """The summary table of many logs (module docstring); rows sorted by log path.
+
+    Logs go to the workers in chunks (:func:`chunks`), so that the cost of a
+    task is small beside the logs it carries.
+    """
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(paths), unit="log", disable=not progress or None)
+    rows = []
+    if dask_address is not None:
+        from distributed import Client
+        from distributed import as_completed as dask_completed
+
+        with Client(dask_address) as client:
+            threads = max(1, sum(client.nthreads().values()))
+            futures = [client.submit(process_logs, chunk, settings, folder, pure=False)
+                       for chunk in chunks(paths, threads)]  # fmt: skip
+            for future in dask_completed(futures):
+                done = future.result()
+                rows += done
+                bar.update(len(done))
+    elif workers > 1:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futures = [pool.submit(process_logs, chunk, settings, folder)
+                       for chunk in chunks(paths, workers)]  # fmt: skip
+            for future in as_completed(futures):
+                done = future.result()
+                rows += done
+                bar.update(len(done))
+    else:
+        for path in paths:
+            rows.append(process_log(path, settings, folder))
+            bar.update()
+    bar.close()
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    table = pd.DataFrame(rows, columns=columns).sort_values("log", ignore_index=True)
+    if "error" in table.columns:
+        table["error"] = table["error"].fillna("")
+    return table

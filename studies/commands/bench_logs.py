@@ -1,0 +1,95 @@
+"""``wheelload bench logs``: throughput of many logs, serial, local processes and Dask.
+
+Writes ``--logs`` short plant logs (windows of ``--samples`` samples of the
+bundled plant log, each starting elsewhere) into a temporary folder and runs
+``wheelload estimate`` on them serially (1 worker), on local processes
+(``--workers``) and on a ``distributed.LocalCluster`` of the same size;
+prints samples per second (min / median / max of ``--repeat`` runs, the
+variants run in turn so that each meets the same machine load), the ratio to
+the serial run, and whether each summary equals the serial one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from wheelload.models import example_vehicle_path
+from wheelload.studies.batch import EstimateSettings, expand_logs, run_logs
+
+
+def register_bench(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("logs", help="many logs: serial, local processes, Dask")
+    parser.add_argument("--logs", type=int, default=200, help="number of logs (default 200)")
+    parser.add_argument("--samples", type=int, default=300, help="samples per log (default 300)")
+    parser.add_argument("--workers", type=int, nargs="+", default=[2], help="worker counts")
+    parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3)")
+    parser.add_argument("--no-dask", action="store_true", help="skip the Dask LocalCluster")
+    parser.set_defaults(handler=run)
+
+
+def _write_logs(folder: Path, count: int, samples: int) -> list[Path]:
+    from wheelload.studies.commands.estimate import example_log_path
+
+    source = pd.read_csv(example_log_path())
+    span = len(source) - samples
+    if span < 1:
+        raise ValueError(f"--samples must be below {len(source)}")
+    for k in range(count):
+        start = (k * 37) % span
+        source.iloc[start : start + samples].to_csv(folder / f"log{k:04d}.csv", index=False)
+    return expand_logs([str(folder)])
+
+
+def _line(label: str, samples: int, times: list[float], serial: float | None, same: str) -> str:
+    rates = sorted(samples / t for t in times)
+    median = statistics.median(rates)
+    ratio = f"{median / serial:5.2f}" if serial else f"{1.0:5.2f}"
+    return (f"{label:28s} {rates[0]:10.0f} {median:10.0f} {rates[-1]:10.0f} {ratio:>8s} "
+            f"{same:>8s}")  # fmt: skip
+
+
+def run(args: argparse.Namespace) -> int:
+    settings = EstimateSettings(vehicle=example_vehicle_path())
+    with tempfile.TemporaryDirectory() as folder, contextlib.ExitStack() as stack:
+        paths = _write_logs(Path(folder), args.logs, args.samples)
+        total = args.logs * args.samples
+        variants = {"serial (1 worker)": {}}
+        for workers in args.workers:
+            variants[f"local processes ({workers})"] = {"workers": workers}
+            if not args.no_dask:
+                from distributed import LocalCluster
+
+                cluster = stack.enter_context(LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True,
+                    dashboard_address=None))  # fmt: skip
+                variants[f"dask LocalCluster ({workers})"] = {
+                    "dask_address": cluster.scheduler_address
+                }
+        for options in variants.values():  # warm up: imports and the compiled loop
+            run_logs(paths[: 4 * args.workers[-1]], settings, None, progress=False, **options)
+        times: dict[str, list[float]] = {name: [] for name in variants}
+        tables = {}
+        for _ in range(args.repeat):  # round robin: every variant meets the same load
+            for name, options in variants.items():
+                start = time.perf_counter()
+                tables[name] = run_logs(paths, settings, None, progress=False, **options)
+                times[name].append(time.perf_counter() - start)
+        serial_name = next(iter(variants))
+        serial_rate = statistics.median(total / t for t in times[serial_name])
+        print(f"{args.logs} logs x {args.samples} samples (windows of the bundled plant log); "
+              f"samples/s over {args.repeat} runs, run in turn")  # fmt: skip
+        print(f"{'run':28s} {'min':>10s} {'median':>10s} {'max':>10s} {'x serial':>8s} "
+              f"{'same':>8s}")  # fmt: skip
+        for name in variants:
+            same = "-" if name == serial_name else (
+                "yes" if tables[name].equals(tables[serial_name]) else "NO")  # fmt: skip
+            ratio = None if name == serial_name else serial_rate
+            print(_line(name, total, times[name], ratio, same))
+    return 0

@@ -1,0 +1,44 @@
+"""``wheelload sensor-sets LOG``: the partial sensor sets on one log with reference loads."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import pandas as pd
+
+from wheelload.estimators import TwoStageKF
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.batch import expand_logs
+from wheelload.studies.sensor_sets import reference_split, sensor_set_table, split_sweep
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "sensor-sets", help="partial sensor sets and the roll-split sweep on a log"
+    )
+    parser.add_argument("log", help="log (CSV or Parquet) with all channels and reference loads")
+    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    parser.add_argument(
+        "--splits", type=float, nargs="+", default=[0.3, 0.4, 0.45, 0.55, 0.6, 0.7],
+        help="roll_split_front values for the IMU-only sweep (the default split is added)",
+    )  # fmt: skip
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    (path,) = expand_logs([args.log])
+    frame = pd.read_parquet(path) if path.suffix != ".csv" else pd.read_csv(path, comment="#")
+    table = sensor_set_table(frame, vehicle, Path(path).name)
+    print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
+    default = float(TwoStageKF(vehicle).parameters.roll_split_front)
+    truth = reference_split(frame, vehicle)
+    print(f"\nroll split: default {default:.4f} (springs and bars), the log's own {truth:.4f}")
+    splits = sorted({*args.splits, round(default, 4), round(truth, 4)})
+    print(
+        split_sweep(frame, vehicle, splits).to_string(
+            index=False, float_format=lambda v: f"{v:.4g}"
+        )
+    )
+    return 0
