@@ -34,6 +34,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.output_files import write_text
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.two_stage import STEP_NAME, TUNING, step_function, tuning_vector
 from wheelload.models import WHEELS, ModelParameters, load_vehicle
@@ -271,7 +272,7 @@ def generate(
         "Makefile": out_dir / "Makefile",
     }
     for template, target in targets.items():
-        target.write_text(_template(template).substitute(values), encoding="utf-8")
+        write_text(target, _template(template).substitute(values), replace=True)
     return GeneratedLibrary(*targets.values(), kernel=kernel)
 
 

@@ -42,6 +42,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, FileNotFoundError) as error:
         print(f"wheelload {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:  # e.g. a disk full or a folder made read-only while running
+        where = f"{error.filename}: " if error.filename else ""
+        print(
+            f"wheelload {args.command}: error: {where}{error.strerror or error}: "
+            "check the path, its permissions and the free space",
+            file=sys.stderr,
+        )
+        return 2
 
 
 if __name__ == "__main__":

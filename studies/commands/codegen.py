@@ -16,6 +16,7 @@ from pathlib import Path
 from wheelload.estimators.c_emitter import Precision
 from wheelload.estimators.codegen import CodegenOptions, ParamMode, generate
 from wheelload.estimators.mhe import Constraint, MheSettings
+from wheelload.estimators.output_files import check_output_folder
 from wheelload.models import example_vehicle_path, load_vehicle
 
 
@@ -51,7 +52,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="kf: two-stage KF (default); mhe: moving-horizon estimator on OSQP",
     )
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    parser.add_argument("--out", required=True, help="output folder (created if missing)")
+    parser.add_argument(
+        "--out", required=True, help="output folder: new or empty (created if missing)"
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="write into a folder that is not empty, replacing files of the same name",
+    )
     kf = parser.add_argument_group("kf only")
     kf.add_argument("--precision", choices=[p.value for p in Precision], help="default double")
     kf.add_argument(
@@ -84,6 +92,7 @@ def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estima
 def run(args: argparse.Namespace) -> int:
     estimator = Estimator(args.estimator)
     vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    check_output_folder(Path(args.out), [vehicle_path], force=args.force)
     if estimator is Estimator.MHE:
         return _run_mhe(args, vehicle_path)
     values = _options(args, KF_OPTIONS, MHE_OPTIONS, estimator)

@@ -10,6 +10,13 @@ import numpy as np
 
 from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
 from wheelload.estimators.offsets import still_period_static_loads
+from wheelload.estimators.output_files import (
+    TableFormat,
+    atomic_write,
+    check_figure_suffix,
+    check_outputs,
+    table_format,
+)
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
 
@@ -32,8 +39,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="use the bundled example log and vehicle (sports car)",
     )
-    parser.add_argument("--out", help="write the estimates to this CSV file")
-    parser.add_argument("--plot", help="save a figure of the estimates to this PNG file")
+    parser.add_argument("--out", help="write the estimates to this .csv or .parquet file")
+    parser.add_argument("--plot", help="save a figure of the estimates (.png, .pdf, .svg)")
+    parser.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
     parser.add_argument(
         "--still-period",
         type=float,
@@ -51,6 +61,12 @@ def run(args: argparse.Namespace) -> int:
         if not args.log or not args.vehicle:
             raise ValueError("give a LOG and --vehicle FILE, or --example")
         log_path, vehicle_path = Path(args.log), Path(args.vehicle)
+    outputs = [Path(p) for p in (args.out, args.plot) if p]
+    if args.out:
+        table_format(Path(args.out))
+    if args.plot:
+        check_figure_suffix(Path(args.plot))
+    check_outputs(outputs, [log_path, vehicle_path], force=args.force)
     vehicle = load_vehicle(vehicle_path)
     signals = read_log(log_path)
     static = (
@@ -61,14 +77,25 @@ def run(args: argparse.Namespace) -> int:
     estimate = TwoStageKF(vehicle, static=static).run(signals)
     print(summary(estimate, signals, vehicle.name))
     if args.out:
-        estimate.to_pandas().to_csv(args.out, index=False)
+        write_table(estimate, Path(args.out), replace=args.force)
         print(f"estimates written to {args.out}")
     if args.plot:
         from wheelload.studies.plots import plot_estimate
 
-        plot_estimate(estimate, signals, args.plot, title=f"{log_path.name} — {vehicle.name}")
+        with atomic_write(Path(args.plot), replace=args.force) as temporary:
+            plot_estimate(estimate, signals, temporary, title=f"{log_path.name} — {vehicle.name}")
         print(f"figure written to {args.plot}")
     return 0
+
+
+def write_table(estimate: Estimate, path: Path, *, replace: bool) -> None:
+    """Write the estimates as CSV or Parquet, by ``path``'s suffix, atomically."""
+    frame = estimate.to_pandas()
+    with atomic_write(path, replace=replace) as temporary:
+        if table_format(path) is TableFormat.PARQUET:
+            frame.to_parquet(temporary, index=False)
+        else:
+            frame.to_csv(temporary, index=False)
 
 
 def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:

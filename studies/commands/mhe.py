@@ -19,6 +19,7 @@ import numpy as np
 
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf, step_times
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
@@ -39,6 +40,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     study.add_argument("--horizons", type=int, nargs="+", default=list(HORIZONS))
     study.add_argument("--out", default="mhe-vs-kf", help="output prefix for .csv and .png")
+    study.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
     study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     study.set_defaults(handler=run_study)
 
@@ -77,6 +81,9 @@ def run_study(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     vehicle = load_vehicle(vehicle_path)
     paths = [Path(p) for p in args.logs]
+    out = Path(args.out)
+    outputs = [out.with_suffix(".csv"), out.with_suffix(".png")]
+    check_outputs(outputs, [*paths, vehicle_path], force=args.force)
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
             paths += _simulate(args.scenarios, Path(folder), vehicle_path)
@@ -86,9 +93,10 @@ def run_study(args: argparse.Namespace) -> int:
     table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
     from wheelload.studies.mhe_vs_kf import plot_accuracy_against_time
 
-    out = Path(args.out)
-    table.to_csv(out.with_suffix(".csv"))
-    plot_accuracy_against_time(table, out.with_suffix(".png"))
+    with atomic_write(outputs[0], replace=args.force) as temporary:
+        table.to_csv(temporary)
+    with atomic_write(outputs[1], replace=args.force) as temporary:
+        plot_accuracy_against_time(table, temporary)
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
     print(table.to_string(float_format=lambda v: f"{v:.1f}"))
     print(f"written {out.with_suffix('.csv')} and {out.with_suffix('.png')}")

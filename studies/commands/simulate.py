@@ -6,10 +6,12 @@ The wall time of every scenario is printed by ``wheelload bench scenarios``.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
+from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.vehicle import example_vehicle_path
 from wheelload.studies.roads import ISO_CLASSES
-from wheelload.studies.scenario_log import write_log
+from wheelload.studies.scenario_log import metadata_path, write_log
 from wheelload.studies.scenario_plot import plot_scenario
 from wheelload.studies.scenario_runner import run_scenario
 from wheelload.studies.scenarios import SCENARIOS, Options
@@ -28,7 +30,10 @@ def register(subparsers) -> None:
         help="scenario: " + ", ".join(sorted(SCENARIOS)),
     )
     parser.add_argument("--out", required=True, help="log file (.csv or .parquet)")
-    parser.add_argument("--plot", help="save a figure (PNG) of the run")
+    parser.add_argument("--plot", help="save a figure (.png, .pdf, .svg) of the run")
+    parser.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
     parser.add_argument("--vehicle", default=None, help="vehicle file (default: bundled)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
     parser.add_argument(
@@ -52,6 +57,13 @@ def register(subparsers) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     vehicle = args.vehicle or example_vehicle_path()
+    out = Path(args.out)
+    table_format(out)
+    outputs = [out, metadata_path(out)]
+    if args.plot:
+        check_figure_suffix(Path(args.plot))
+        outputs.append(Path(args.plot))
+    check_outputs(outputs, [Path(vehicle)], force=args.force)
     options = Options(roughness=args.roughness, seed=args.seed)
     result = run_scenario(
         args.name,
@@ -61,9 +73,10 @@ def handle(args: argparse.Namespace) -> int:
         output_rate=args.rate,
         internal_rate=args.internal_rate,
     )
-    sidecar = write_log(result.log, args.out, result.metadata)
+    sidecar = write_log(result.log, out, result.metadata, replace=args.force)
     if args.plot:
-        plot_scenario(result.truth.frame, args.plot, f"{args.name} ({result.metadata['vehicle']})")
+        title = f"{args.name} ({result.metadata['vehicle']})"
+        plot_scenario(result.truth.frame, args.plot, title, replace=args.force)
     info = result.metadata["summary"]
     print(
         f"{args.name}: {len(result.log)} samples, {info['duration_s']:.1f} s simulated in "
