@@ -26,6 +26,8 @@ import numpy as np
 import pandas as pd
 from scipy import signal as sp_signal
 
+from wheelload.estimators.log_checks import check_wiring, duplicate_columns, raise_for_wiring
+
 WHEELS = ("fl", "fr", "rl", "rr")
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
@@ -106,8 +108,13 @@ class Signals:
         )
 
 
-def read_log(path: str | Path, velocity_cutoff: float = VELOCITY_CUTOFF) -> Signals:
-    """Read a ``.csv`` or ``.parquet`` log and validate it (see module docstring)."""
+def read_log(
+    path: str | Path, velocity_cutoff: float = VELOCITY_CUTOFF, *, wiring_checks: bool = True
+) -> Signals:
+    """Read a ``.csv`` or ``.parquet`` log and validate it (see module docstring).
+
+    ``wiring_checks``: run :mod:`wheelload.estimators.log_checks` (signs, units, wiring).
+    """
     path = Path(path)
     if not path.exists():
         raise LogError(f"{path}: no such log file")
@@ -119,15 +126,30 @@ def read_log(path: str | Path, velocity_cutoff: float = VELOCITY_CUTOFF) -> Sign
             frame = pd.read_parquet(path)
         else:
             raise LogError(f"{path}: unknown log format '{suffix}' (use .csv or .parquet)")
+    except UnicodeDecodeError as error:
+        raise LogError(
+            f"{path}: is not UTF-8 text (byte {error.start}): save the log as UTF-8 CSV"
+        ) from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as error:
         raise LogError(f"{path}: cannot be read: {error}") from None
-    return signals_from_frame(frame, source=str(path), velocity_cutoff=velocity_cutoff)
+    return signals_from_frame(
+        frame, source=str(path), velocity_cutoff=velocity_cutoff, wiring_checks=wiring_checks
+    )
 
 
 def signals_from_frame(
-    frame: pd.DataFrame, source: str = "<frame>", velocity_cutoff: float = VELOCITY_CUTOFF
+    frame: pd.DataFrame,
+    source: str = "<frame>",
+    velocity_cutoff: float = VELOCITY_CUTOFF,
+    *,
+    wiring_checks: bool = True,
 ) -> Signals:
     """Validate a DataFrame with the log's columns and build :class:`Signals`."""
+    duplicate = duplicate_columns(frame.columns)
+    if duplicate is not None:
+        raise LogError(
+            f"{source}: column '{duplicate}' appears twice: keep one (which copy is meant?)"
+        )
     frame = frame.rename(columns=lambda name: str(name).strip())
     for name in REQUIRED:
         if name not in frame.columns:
@@ -177,6 +199,8 @@ def signals_from_frame(
     v = group(TRAVEL_RATE)
     signals_vx = column("vx")
     _check_units(acc, d, v, signals_vx, source)
+    if wiring_checks:
+        raise_for_wiring(check_wiring(t, signals_vx, acc, d, group(RATES)), source)
     derived = v is None
     if derived:
         v = derive_velocities(t, d, velocity_cutoff, source)

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
+from wheelload.estimators.log_checks import check_wiring, describe
 from wheelload.estimators.offsets import still_period_static_loads
 from wheelload.estimators.output_files import (
     TableFormat,
@@ -45,6 +46,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--force", action="store_true", help="replace existing output files (never an input)"
     )
     parser.add_argument(
+        "--skip-wiring-checks",
+        action="store_true",
+        help="accept a log whose signs, units or wiring look wrong (see log_checks)",
+    )
+    parser.add_argument(
         "--still-period",
         type=float,
         metavar="SECONDS",
@@ -68,7 +74,9 @@ def run(args: argparse.Namespace) -> int:
         check_figure_suffix(Path(args.plot))
     check_outputs(outputs, [log_path, vehicle_path], force=args.force)
     vehicle = load_vehicle(vehicle_path)
-    signals = read_log(log_path)
+    signals = read_log(log_path, wiring_checks=not args.skip_wiring_checks)
+    if not args.skip_wiring_checks:
+        print(describe(check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)))
     static = (
         still_period_static_loads(signals, vehicle, args.still_period)
         if args.still_period

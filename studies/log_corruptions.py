@@ -1,0 +1,106 @@
+"""The wiring and unit mistakes a log can carry, applied to a clean log frame.
+
+Each corruption maps a frame with the log columns (``t vx ax ay az wx wy wz
+d_* ...``) to a corrupted copy; :func:`wiring_margins` runs
+:func:`wheelload.estimators.log_checks.check_wiring` on clean and corrupted
+logs and prints each check's statistic (the margins of the checks):
+
+    python -m wheelload.studies.log_corruptions LOG.csv [LOG.csv ...]
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from wheelload.estimators.log_checks import WiringReport, check_wiring
+from wheelload.models.vehicle import GRAVITY
+
+TRAVEL = ("d_fl", "d_fr", "d_rl", "d_rr")
+RATES = ("v_fl", "v_fr", "v_rl", "v_rr")
+
+
+def _scaled(column: str, factor: float) -> Callable[[pd.DataFrame], pd.DataFrame]:
+    return lambda frame: frame.assign(**{column: frame[column] * factor})
+
+
+def _swapped(pairs: tuple[tuple[str, str], ...]) -> Callable[[pd.DataFrame], pd.DataFrame]:
+    def corrupt(frame: pd.DataFrame) -> pd.DataFrame:
+        mapping = {}
+        for a, b in pairs:
+            for prefix in ("d_", "v_"):
+                mapping[prefix + a], mapping[prefix + b] = prefix + b, prefix + a
+        return frame.rename(columns=mapping)[list(frame.columns)]
+
+    return corrupt
+
+
+def _travel_sign(wheels: tuple[str, ...]) -> Callable[[pd.DataFrame], pd.DataFrame]:
+    columns = [f"{p}_{w}" for w in wheels for p in ("d", "v")]
+    return lambda frame: frame.assign(**{c: -frame[c] for c in columns})
+
+
+def _without_rates(frame: pd.DataFrame) -> pd.DataFrame:
+    return frame.drop(columns=[c for c in ("wx", "wy", "wz") if c in frame.columns])
+
+
+CORRUPTIONS: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
+    "vx in km/h": _scaled("vx", 3.6),
+    "vx in mph": _scaled("vx", 2.23694),
+    "ay in g": _scaled("ay", 1.0 / GRAVITY),
+    "ax in g": _scaled("ax", 1.0 / GRAVITY),
+    "ay sign": _scaled("ay", -1.0),
+    "ax sign": _scaled("ax", -1.0),
+    "wz in deg/s": _scaled("wz", 180.0 / np.pi),
+    "travel sign": _travel_sign(("fl", "fr", "rl", "rr")),
+    "d_fl sign": _travel_sign(("fl",)),
+    "d_rr sign": _travel_sign(("rr",)),
+    "left/right swapped": _swapped((("fl", "fr"), ("rl", "rr"))),
+    "front left/right swapped": _swapped((("fl", "fr"),)),
+    "front/rear swapped": _swapped((("fl", "rl"), ("fr", "rr"))),
+    "no wz, ay sign": lambda frame: _without_rates(_scaled("ay", -1.0)(frame)),
+    "no wz, ay in g": lambda frame: _without_rates(_scaled("ay", 1.0 / GRAVITY)(frame)),
+}
+
+
+def report_of(frame: pd.DataFrame) -> WiringReport:
+    """:func:`check_wiring` on a log frame's columns."""
+    rates = frame[["wx", "wy", "wz"]].to_numpy() if "wz" in frame.columns else None
+    return check_wiring(
+        frame["t"].to_numpy(),
+        frame["vx"].to_numpy(),
+        frame[["ax", "ay", "az"]].to_numpy(),
+        frame[list(TRAVEL)].to_numpy(),
+        rates,
+    )
+
+
+def wiring_margins(paths: list[Path]) -> pd.DataFrame:
+    """One row per log and corruption: caught or not, the diagnosis, every statistic."""
+    rows = []
+    for path in paths:
+        frame = pd.read_csv(path) if path.suffix == ".csv" else pd.read_parquet(path)
+        for name, corrupt in {"clean": lambda f: f, **CORRUPTIONS}.items():
+            report = report_of(corrupt(frame))
+            row = {"log": path.stem, "case": name, "caught": bool(report.diagnosis),
+                   "diagnosis": report.diagnosis}  # fmt: skip
+            row.update({check.name: check.statistic for check in report.checks})
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def main(argv: list[str]) -> int:
+    table = wiring_margins([Path(p) for p in argv])
+    pd.set_option("display.width", 250, "display.max_columns", 40, "display.max_colwidth", 90)
+    print(table[["log", "case", "caught", "diagnosis"]].to_string(index=False))
+    statistics = table.drop(columns=["caught", "diagnosis"]).set_index(["log", "case"])
+    print(statistics.round(3).to_string())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
