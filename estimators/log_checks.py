@@ -139,8 +139,9 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
     K = np.asarray(ca.Function("K", [d], [ca.jacobian(z, d)])(np.zeros(4)))
     acc = ca.SX.sym("acc", 3)
     A, b = equilibrium_function()(acc, 0.0, p)
-    B = np.asarray(ca.Function("B", [acc], [ca.jacobian(b, acc)])(np.zeros(3)))
-    system = np.vstack([np.asarray(A) @ K, [1.0, -1.0, -1.0, 1.0]])
+    A, B = (np.asarray(ca.Function("AB", [acc], [A, ca.jacobian(b, acc)])(np.zeros(3))[k])
+            for k in range(2))  # fmt: skip
+    system = np.vstack([A @ K, [1.0, -1.0, -1.0, 1.0]])
     return np.linalg.solve(system, np.vstack([B, np.zeros((1, 3))]))
 
 

@@ -71,8 +71,13 @@ def check_folder(folder: Path, path: Path) -> None:
     """``path``'s folder must exist and be writable, or an :class:`OutputError`."""
     if not folder.is_dir():
         raise OutputError(f"{path}: folder '{folder}' does not exist: create it first")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise OutputError(f"{path}: folder '{folder}' is not writable: choose another folder")
+    try:  # a real probe: permissions, read-only mounts, and root alike
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as error:
+        raise OutputError(
+            f"{path}: cannot write in folder '{folder}' ({error.strerror}): choose another folder"
+        ) from None
 
 
 def check_outputs(outputs: Sequence[Path], inputs: Sequence[Path], *, force: bool) -> None:

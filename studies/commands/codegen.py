@@ -18,6 +18,7 @@ from wheelload.estimators.codegen import CodegenOptions, ParamMode, generate
 from wheelload.estimators.mhe import Constraint, MheSettings
 from wheelload.estimators.output_files import check_output_folder
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 
 
 class Estimator(enum.Enum):
@@ -77,6 +78,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     mhe.add_argument("--bounded", action="store_const", const=True, help="bounds 0 <= Fz")
     mhe.add_argument("--dt", type=float, help="the fixed sample interval [s] (default 0.01)")
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
@@ -101,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         params=ParamMode(values["params"]),
         prefix=values["prefix"],
     )
-    library = generate(vehicle_path, args.out, options)
+    library = generate(vehicle_path, args.out, options, allow_unusual=args.allow_unusual)
     for path in (library.header, library.source, library.example, library.selftest):
         print(path)
     print(
@@ -120,6 +122,7 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
         constraint=Constraint(values["constraint"]),
         bounded=values["bounded"],
     )
-    folder = generate_mhe(load_vehicle(vehicle_path), settings, Path(args.out), dt=values["dt"])
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
+    folder = generate_mhe(vehicle, settings, Path(args.out), dt=values["dt"])
     print(f"written the embedded {settings.label()} (dt = {values['dt']} s) to {folder}")
     return 0

@@ -19,6 +19,7 @@ from wheelload.estimators.output_files import (
     table_format,
 )
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.metrics import wheel_metrics
 
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -56,6 +57,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="zero the travel sensors over the first SECONDS of the log (vehicle at rest)",
     )
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
@@ -73,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         check_figure_suffix(Path(args.plot))
     check_outputs(outputs, [log_path, vehicle_path], force=args.force)
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     signals = read_log(log_path, wiring_checks=not args.skip_wiring_checks)
     if not args.skip_wiring_checks:
         print(describe(check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)))

@@ -21,6 +21,7 @@ from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.estimators.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf, step_times
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -47,6 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--skip-wiring-checks", action="store_true", help="accept logs whose wiring looks wrong"
     )
     study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_allow_unusual(study)
     study.set_defaults(handler=run_study)
 
 
@@ -57,10 +59,13 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")
     bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_allow_unusual(bench)
     bench.set_defaults(handler=run_bench)
 
 
-def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
+def _simulate(
+    names: list[str], folder: Path, vehicle_path: Path, allow_unusual: bool
+) -> list[Path]:
     """Simulate the scenarios on the plant with the study's vehicle; the log paths."""
     from wheelload.studies.scenario_log import write_log
     from wheelload.studies.scenario_runner import run_scenario
@@ -72,7 +77,7 @@ def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
         raise ValueError(f"unknown scenario '{unknown[0]}'; choose from {', '.join(SCENARIOS)}")
     paths = []
     for name in names:
-        result = run_scenario(name, vehicle_path)
+        result = run_scenario(name, vehicle_path, allow_unusual=allow_unusual)
         path = folder / f"{name}.parquet"
         write_log(result.log, path, result.metadata)
         print(f"{name}: {len(result.log)} samples simulated")
@@ -82,14 +87,14 @@ def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
 
 def run_study(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     paths = [Path(p) for p in args.logs]
     out = Path(args.out)
     outputs = [out.with_suffix(".csv"), out.with_suffix(".png")]
     check_outputs(outputs, [*paths, vehicle_path], force=args.force)
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
-            paths += _simulate(args.scenarios, Path(folder), vehicle_path)
+            paths += _simulate(args.scenarios, Path(folder), vehicle_path, args.allow_unusual)
         if not paths:
             raise ValueError("give --logs or --scenarios")
         logs = [read_log(path, wiring_checks=not args.skip_wiring_checks) for path in paths]
@@ -107,7 +112,7 @@ def run_study(args: argparse.Namespace) -> int:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path(), allow_unusual=args.allow_unusual)
     duration = args.samples / 100.0
     signals = synthetic_log(vehicle, slalom(duration=duration), noise=SensorNoise(
         acceleration=0.05, travel=0.0003), spring_error=0.08)  # fmt: skip

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.vehicle import example_vehicle_path
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.roads import ISO_CLASSES
 from wheelload.studies.scenario_log import metadata_path, write_log
 from wheelload.studies.scenario_plot import plot_scenario
@@ -52,6 +53,7 @@ def register(subparsers) -> None:
         default=None,
         help="ISO 8608 road class (default: smooth road)",
     )
+    add_allow_unusual(parser)
     parser.set_defaults(handler=handle)
 
 
@@ -72,6 +74,7 @@ def handle(args: argparse.Namespace) -> int:
         noise=args.noise,
         output_rate=args.rate,
         internal_rate=args.internal_rate,
+        allow_unusual=args.allow_unusual,
     )
     sidecar = write_log(result.log, out, result.metadata, replace=args.force)
     if args.plot:
