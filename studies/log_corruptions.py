@@ -21,7 +21,12 @@ from wheelload.estimators.log_checks import WiringReport, check_wiring
 from wheelload.models.vehicle import GRAVITY
 
 TRAVEL = ("d_fl", "d_fr", "d_rl", "d_rr")
-RATES = ("v_fl", "v_fr", "v_rl", "v_rr")
+#: The bundled scenarios short enough to simulate in the test suite (a few
+#: seconds each); hockenheim and nordschleife are run by the command above.
+SHORT_SCENARIOS = (
+    "iso-dlc", "brake-in-turn", "accel-in-turn", "bounce-sweep", "slope-20",
+    "chicane-bank-30", "chicane-incline-20", "wheel-lift",
+)  # fmt: skip
 
 
 def _scaled(column: str, factor: float) -> Callable[[pd.DataFrame], pd.DataFrame]:

@@ -70,11 +70,11 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("give a LOG and --vehicle FILE, or --example")
         log_path, vehicle_path = Path(args.log), Path(args.vehicle)
     outputs = [Path(p) for p in (args.out, args.plot) if p]
+    check_outputs(outputs, [log_path, vehicle_path], force=args.force)
     if args.out:
         table_format(Path(args.out))
     if args.plot:
         check_figure_suffix(Path(args.plot))
-    check_outputs(outputs, [log_path, vehicle_path], force=args.force)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     signals = read_log(log_path, wiring_checks=not args.skip_wiring_checks)
     if not args.skip_wiring_checks:

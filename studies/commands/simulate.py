@@ -60,12 +60,11 @@ def register(subparsers) -> None:
 def handle(args: argparse.Namespace) -> int:
     vehicle = args.vehicle or example_vehicle_path()
     out = Path(args.out)
+    outputs = [out, metadata_path(out), *([Path(args.plot)] if args.plot else [])]
+    check_outputs(outputs, [Path(vehicle)], force=args.force)
     table_format(out)
-    outputs = [out, metadata_path(out)]
     if args.plot:
         check_figure_suffix(Path(args.plot))
-        outputs.append(Path(args.plot))
-    check_outputs(outputs, [Path(vehicle)], force=args.force)
     options = Options(roughness=args.roughness, seed=args.seed)
     result = run_scenario(
         args.name,
