@@ -186,13 +186,13 @@ def _sign(value: float) -> int:
 
 
 def _unit_of(ratio: float) -> str | None:
-    """'ok', a unit name from :data:`UNIT_FACTORS`, or None (no known factor)."""
+    """'ok', the nearest unit of :data:`UNIT_FACTORS` within the tolerance, or None."""
     if not ratio > 0.0:
         return None
-    for unit, factor in {"ok": 1.0, **UNIT_FACTORS}.items():
-        if abs(math.log(ratio / factor)) < UNIT_TOLERANCE:
-            return unit
-    return None
+    distance = {unit: abs(math.log(ratio / factor))
+                for unit, factor in {"ok": 1.0, **UNIT_FACTORS}.items()}  # fmt: skip
+    unit = min(distance, key=distance.__getitem__)
+    return unit if distance[unit] < UNIT_TOLERANCE else None
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.log_checks import WiringReport, check_wiring
+from wheelload.estimators.log_checks import Outcome, WiringReport, check_wiring
 from wheelload.models.vehicle import GRAVITY
 
 TRAVEL = ("d_fl", "d_fr", "d_rl", "d_rr")
@@ -85,7 +85,7 @@ def report_of(frame: pd.DataFrame) -> WiringReport:
 
 
 def wiring_margins(paths: list[Path]) -> pd.DataFrame:
-    """One row per log and corruption: caught or not, the diagnosis, every statistic."""
+    """One row per log and corruption: caught or not, the diagnosis, every decided statistic."""
     rows = []
     for path in paths:
         frame = pd.read_csv(path) if path.suffix == ".csv" else pd.read_parquet(path)
@@ -93,17 +93,42 @@ def wiring_margins(paths: list[Path]) -> pd.DataFrame:
             report = report_of(corrupt(frame))
             row = {"log": path.stem, "case": name, "caught": bool(report.diagnosis),
                    "diagnosis": report.diagnosis}  # fmt: skip
-            row.update({check.name: check.statistic for check in report.checks})
+            row.update({c.name: np.nan if c.outcome is Outcome.UNDECIDED else c.statistic
+                        for c in report.checks})  # fmt: skip
             rows.append(row)
     return pd.DataFrame(rows)
 
 
+def margins(table: pd.DataFrame) -> pd.DataFrame:
+    """Per case: logs caught, and the decisive statistics' extremes over the logs.
+
+    ``sign min`` is the smallest decided sign agreement (partial correlation
+    times the expected sign: fails below -0.3); ``lon``/``lat`` are the
+    kinematic ratios dvx/dt : ax and vx wz : ay (1 when right); ``roll`` the
+    left-right travel difference per m/s^2 of ay without a yaw rate (fails
+    above 0.03 m).
+    """
+    signs = [c for c in table.columns if c.startswith("d_")]
+    rows = []
+    for case, group in table.groupby("case", sort=False):
+        agreement = group[signs]
+        row = {"case": case, "caught": f"{int(group['caught'].sum())}/{len(group)}",
+               "sign min": agreement.min(axis=1).min(),
+               "sign max": agreement.max(axis=1).max()}  # fmt: skip
+        for name, column in (("lon", "dvx/dt against ax"), ("lat", "vx wz against ay"),
+                             ("roll", "roll travel per ay")):  # fmt: skip
+            values = group[column].dropna() if column in group else pd.Series(dtype=float)
+            row[f"{name} min"] = values.min() if len(values) else np.nan
+            row[f"{name} max"] = values.max() if len(values) else np.nan
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("case")
+
+
 def main(argv: list[str]) -> int:
     table = wiring_margins([Path(p) for p in argv])
-    pd.set_option("display.width", 250, "display.max_columns", 40, "display.max_colwidth", 90)
+    pd.set_option("display.width", 250, "display.max_columns", 40, "display.max_colwidth", 200)
     print(table[["log", "case", "caught", "diagnosis"]].to_string(index=False))
-    statistics = table.drop(columns=["caught", "diagnosis"]).set_index(["log", "case"])
-    print(statistics.round(3).to_string())
+    print(margins(table).round(3).to_string())
     return 0
 
 
