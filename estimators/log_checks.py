@@ -1,7 +1,8 @@
 r"""Sign, unit and wiring checks of a log, from the correlations the physics demands.
 
-Over the first :data:`WINDOW` seconds of motion, every channel is low-passed
-(:data:`CUTOFF`, zero phase: the quasi-static body response) and compared
+Over the first :data:`WINDOW` seconds of motion, every channel is cleared of
+isolated spikes (running median) and low-passed (:data:`CUTOFF`, zero phase:
+the quasi-static body response), then compared
 with what the rigid-body equilibrium and the kinematics require:
 
 - suspension travel against the specific force (partial correlations, each
@@ -49,6 +50,7 @@ WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
 MOVING = 2.0  # m/s
 CUTOFF = 1.0  # Hz, quasi-static body response
 RATE = 10.0  # Hz, after low-pass and decimation
+MEDIAN_WINDOW = 3  # samples: a running median first removes isolated spikes
 MIN_STD = {"ax": 0.5, "ay": 0.5, "az": 0.15}  # m/s^2 low-passed, to decide
 SIGN_THRESHOLD = 0.3  # |partial correlation| below which a sign is not decided
 KINEMATIC_CORRELATION = 0.8  # |correlation| needed to take a kinematic ratio
@@ -164,7 +166,8 @@ def _quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, n
         filled = _fill(values)
         if filled is None or filled.size <= 3 * max(len(a), len(b)):
             continue
-        result[name] = sp_signal.filtfilt(b, a, filled)[::step]
+        despiked = sp_signal.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
+        result[name] = sp_signal.filtfilt(b, a, despiked)[::step]
     result["t"] = t[::step]
     return result
 

@@ -72,6 +72,59 @@ CORRUPTIONS: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
 }
 
 
+def _from(frame: pd.DataFrame, share: float = 0.2) -> np.ndarray:
+    """Rows from ``share`` of the log on."""
+    return np.arange(len(frame)) >= int(share * len(frame))
+
+
+def _stuck(frame: pd.DataFrame) -> pd.DataFrame:
+    rows = _from(frame)
+    return frame.assign(d_fl=np.where(rows, frame["d_fl"].to_numpy()[rows][0], frame["d_fl"]))
+
+
+def _drifting(frame: pd.DataFrame) -> pd.DataFrame:
+    t = frame["t"].to_numpy()
+    start = t[_from(frame)][0]
+    return frame.assign(d_fl=frame["d_fl"] + 0.001 * np.clip(t - start, 0.0, None))
+
+
+def _dead(frame: pd.DataFrame) -> pd.DataFrame:
+    rows = _from(frame)
+    return frame.assign(d_fl=np.where(rows, np.nan, frame["d_fl"]),
+                        v_fl=np.where(rows, np.nan, frame["v_fl"]))  # fmt: skip
+
+
+def _dropout(frame: pd.DataFrame) -> pd.DataFrame:
+    t = frame["t"].to_numpy()
+    start = t[_from(frame)][0]
+    gap = (t > start) & (t < start + 2.0)
+    columns = ["ax", "ay", "az", *TRAVEL]
+    return frame.assign(**{c: np.where(gap, np.nan, frame[c]) for c in columns})
+
+
+def _spikes(frame: pd.DataFrame) -> pd.DataFrame:
+    rng = np.random.default_rng(0)
+    size = {"vx": 30.0, "ax": 50.0, "ay": 100.0, "az": 50.0}
+    changed = {}
+    for column in ("vx", "ax", "ay", "az", *TRAVEL):
+        values = frame[column].to_numpy().copy()
+        values[rng.choice(len(values), 5, replace=False)] += size.get(column, 0.2)
+        changed[column] = values
+    return frame.assign(**changed)
+
+
+#: Sensor faults (issue 8's fault-injection set): not wiring mistakes, so the
+#: checks at load must let them through to the filter's fault detection.
+FAULTS: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
+    "stuck d_fl": _stuck,
+    "d_fl drifting 1 mm/s": _drifting,
+    "dead d_fl": _dead,
+    "ay bias 0.5 m/s^2": lambda frame: frame.assign(ay=frame["ay"] + 0.5),
+    "2 s dropout": _dropout,
+    "single-sample spikes": _spikes,
+}
+
+
 def report_of(frame: pd.DataFrame) -> WiringReport:
     """:func:`check_wiring` on a log frame's columns."""
     rates = frame[["wx", "wy", "wz"]].to_numpy() if "wz" in frame.columns else None

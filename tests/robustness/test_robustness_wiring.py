@@ -13,7 +13,7 @@ import pytest
 from wheelload.estimators.log_checks import EXPECTED_SIGNS, travel_response
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
-from wheelload.studies.log_corruptions import CORRUPTIONS, SHORT_SCENARIOS, report_of
+from wheelload.studies.log_corruptions import CORRUPTIONS, FAULTS, SHORT_SCENARIOS, report_of
 
 #: Corruption -> what the one-line error must say, on a log with braking in a turn.
 EXPECTED = {
@@ -99,6 +99,15 @@ def test_clean_margins(scenario_logs):
         ratios = [v for name, v in passed.items() if name in KINEMATIC]
         assert min(signs, default=1.0) > 0.45, (scenario, signs)
         assert all(0.85 < r < 1.2 for r in ratios), (scenario, ratios)
+
+
+@pytest.mark.parametrize("scenario", ["brake-in-turn", "iso-dlc", "wheel-lift"])
+def test_sensor_faults_are_not_taken_for_wiring_mistakes(scenario_logs, scenario):
+    """Stuck, drifting, dead sensors, a bias, a dropout, spikes: left to fault detection."""
+    frame = pd.read_csv(scenario_logs[scenario])
+    for name, fault in FAULTS.items():
+        report = report_of(fault(frame))
+        assert report.diagnosis == "", (name, report.diagnosis)
 
 
 def test_duplicate_column_is_an_error(user_files, capsys, tmp_path):
