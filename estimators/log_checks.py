@@ -286,145 +286,143 @@ def check_wiring(
     rates: np.ndarray | None = None,
 ) -> WiringReport:
     """Run every check on the first :data:`WINDOW` s of motion (see module docstring)."""
-    moving = np.flatnonzero(np.abs(np.nan_to_num(vx)) > MOVING)
-    checks: list[Check] = []
-    if moving.size < 2:
-        note = f"the vehicle never exceeds {MOVING} m/s"
-        return WiringReport(checks=(Check(name="motion", statistic=0.0,
-                            outcome=Outcome.UNDECIDED, note=note),), diagnosis="")  # fmt: skip
-    start = moving[0]
-    stop = int(np.searchsorted(t, t[start] + WINDOW))
+    window = _motion_window(t, vx)
+    if window is None:
+        note = f"less than 4 s above {MOVING} m/s"
+        return WiringReport(checks=(_undecided("motion", note),), diagnosis="")
     channels = {"vx": vx, "ax": acc[:, 0], "ay": acc[:, 1], "az": acc[:, 2]}
     channels.update({f"d_{w}": d[:, k] for k, w in enumerate(WHEELS)})
     if rates is not None:
         channels["wz"] = rates[:, 2]
-    window = {name: values[start:stop] for name, values in channels.items()}
-    if stop - start < 4 * RATE:
-        note = "less than 4 s of motion"
-        return WiringReport(checks=(Check(name="motion", statistic=0.0,
-                            outcome=Outcome.UNDECIDED, note=note),), diagnosis="")  # fmt: skip
-    q = _quasi_static(t[start:stop], window)
-    excited = {axis: axis in q and float(np.std(q[axis])) > MIN_STD[axis] for axis in MIN_STD}
+    q = _quasi_static(t[window], {name: values[window] for name, values in channels.items()})
+    travel, observed = _travel_checks(q)
+    kinematic, signs, ratios = _kinematic_checks(q)
+    roll, roll_mistakes = _roll_gain(q)
+    mistakes = []
+    if any(s < 0 for s in [*sum(observed.values(), []), *signs.values()]):
+        mistakes.append(_explain(observed, signs["lateral"], signs["longitudinal"]))
+    mistakes += _unit_mistakes(ratios) + roll_mistakes
+    return WiringReport(checks=(*travel, *kinematic, *roll), diagnosis="; and ".join(mistakes))
 
-    # Travel against the specific force: per wheel and axis, agreement = sign * partial corr.
-    observed: dict[str, list[int]] = {axis: [0, 0, 0, 0] for axis in MIN_STD}
+
+def _motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
+    """The first :data:`WINDOW` s from the first sample above :data:`MOVING`, or None."""
+    moving = np.flatnonzero(np.abs(np.nan_to_num(vx)) > MOVING)
+    if moving.size == 0:
+        return None
+    start = int(moving[0])
+    stop = int(np.searchsorted(t, t[start] + WINDOW))
+    return slice(start, stop) if t[stop - 1] - t[start] >= 4.0 else None
+
+
+def _undecided(name: str, note: str, statistic: float = math.nan) -> Check:
+    return Check(name=name, statistic=statistic, outcome=Outcome.UNDECIDED, note=note)
+
+
+def _travel_checks(q: dict[str, np.ndarray]) -> tuple[list[Check], dict[str, list[int]]]:
+    """Per wheel and axis: agreement = expected sign x partial correlation; observed signs."""
+    checks = []
+    observed = {axis: [0, 0, 0, 0] for axis in MIN_STD}
     axes = [axis for axis in MIN_STD if axis in q]
-    regressors = np.column_stack([q[axis] for axis in axes]) if axes else None
+    if not axes:
+        return checks, observed
+    regressors = np.column_stack([q[axis] for axis in axes])
+    note = "partial correlation times the expected sign"
     for k, wheel in enumerate(WHEELS):
         name = f"d_{wheel}"
-        if name not in q or regressors is None:
+        if name not in q:
             continue
-        partial = _partial_correlations(q[name], regressors)
-        for axis, value in zip(axes, partial):
+        for axis, value in zip(axes, _partial_correlations(q[name], regressors)):
             agreement = float(EXPECTED_SIGNS[axis][k] * value)
             check = f"{name} against {axis}"
-            if not excited[axis]:
-                checks.append(Check(name=check, statistic=agreement, outcome=Outcome.UNDECIDED,
-                                    note=f"{axis} varies too little"))  # fmt: skip
+            if not np.std(q[axis]) > MIN_STD[axis]:
+                checks.append(_undecided(check, f"{axis} varies too little", agreement))
                 continue
             observed[axis][k] = _sign(agreement)
-            outcome = Outcome.FAILED if observed[axis][k] < 0 else Outcome.PASSED
             if observed[axis][k] == 0:
-                outcome = Outcome.UNDECIDED
-            checks.append(Check(name=check, statistic=agreement, outcome=outcome,
-                                note="partial correlation times the expected sign"))  # fmt: skip
-
-    # Kinematics: dvx/dt = ax, vx wz = ay.
-    lateral = longitudinal = 0
-    units: list[str] = []
-    ratios: dict[str, float] = {}
-    if "vx" in q:
-        dv = np.gradient(q["vx"], q["t"])
-        if max(np.std(dv), np.std(q["ax"])) > MIN_STD["ax"]:
-            longitudinal, ratio = _kinematic(checks, "dvx/dt against ax", dv, q["ax"])
-            if longitudinal:
-                ratios["longitudinal"] = ratio
-        else:
-            checks.append(_undecided("dvx/dt against ax", "ax varies too little"))
-    if "wz" in q and "vx" in q:
-        turn = q["vx"] * q["wz"]
-        if max(np.std(turn), np.std(q["ay"])) > MIN_STD["ay"]:
-            lateral, ratio = _kinematic(checks, "vx wz against ay", turn, q["ay"])
-            if lateral:
-                ratios["lateral"] = ratio
-        else:
-            checks.append(_undecided("vx wz against ay", "ay varies too little"))
-    else:
-        checks.append(_undecided("vx wz against ay", "no yaw rate wz in the log"))
-    units = _unit_mistakes(ratios)
-    if "wz" not in q and all(f"d_{w}" in q for w in WHEELS):
-        units += _roll_gain(checks, q)
-    signs_wrong = any(s < 0 for s in sum(observed.values(), [])) or lateral < 0 or longitudinal < 0
-    parts = [_explain(observed, lateral, longitudinal)] if signs_wrong else []
-    return WiringReport(checks=tuple(checks), diagnosis="; and ".join(parts + units))
+                checks.append(_undecided(check, "weak correlation", agreement))
+                continue
+            outcome = Outcome.FAILED if observed[axis][k] < 0 else Outcome.PASSED
+            checks.append(Check(name=check, statistic=agreement, outcome=outcome, note=note))
+    return checks, observed
 
 
-def _undecided(name: str, note: str) -> Check:
-    return Check(name=name, statistic=math.nan, outcome=Outcome.UNDECIDED, note=note)
+def _kinematic_checks(
+    q: dict[str, np.ndarray],
+) -> tuple[list[Check], dict[str, int], dict[str, float]]:
+    """dvx/dt = ax and vx wz = ay: checks, signs (0 undecided) and ratios (decided only)."""
+    checks, signs, ratios = [], {"longitudinal": 0, "lateral": 0}, {}
+    relations = {"longitudinal": ("dvx/dt against ax", "ax"),
+                 "lateral": ("vx wz against ay", "ay")}  # fmt: skip
+    for key, (name, axis) in relations.items():
+        missing = [c for c in ("vx", "wz" if key == "lateral" else "vx") if c not in q]
+        if missing:
+            checks.append(_undecided(name, f"no {missing[0]} in the log"))
+            continue
+        y = np.gradient(q["vx"], q["t"]) if key == "longitudinal" else q["vx"] * q["wz"]
+        if not max(np.std(y), np.std(q[axis])) > MIN_STD[axis]:
+            checks.append(_undecided(name, f"{axis} varies too little"))
+            continue
+        correlation = float(np.corrcoef(y, q[axis])[0, 1])
+        if not abs(correlation) >= KINEMATIC_CORRELATION:
+            note = "correlation too weak (grade, bank or slip)"
+            checks.append(_undecided(name, note, correlation))
+            continue
+        signs[key] = int(np.sign(correlation))
+        ratios[key] = float(np.std(y) / np.std(q[axis]))
+        right = signs[key] > 0 and _unit_of(ratios[key]) == "ok"
+        checks.append(Check(name=name, statistic=signs[key] * ratios[key],
+                            outcome=Outcome.PASSED if right else Outcome.FAILED,
+                            note="signed ratio std(left) / std(right), 1 expected"))  # fmt: skip
+    return checks, signs, ratios
 
 
-def _roll_gain(checks: list[Check], q: dict[str, np.ndarray]) -> list[str]:
+def _roll_gain(q: dict[str, np.ndarray]) -> tuple[list[Check], list[str]]:
     """Without a yaw rate: ay in g if the roll travel per unit ay exceeds MAX_ROLL_TRAVEL."""
+    name = "roll travel per ay"
+    if "wz" in q or not all(f"d_{w}" in q for w in WHEELS):
+        return [], []
     roll = 0.5 * (q["d_fr"] + q["d_rr"] - q["d_fl"] - q["d_rl"])
     correlation = float(np.corrcoef(roll, q["ay"])[0, 1])
     if not (np.std(roll) > MIN_ROLL_TRAVEL and abs(correlation) > KINEMATIC_CORRELATION):
-        checks.append(_undecided("roll travel per ay", "too little roll"))
-        return []
+        return [_undecided(name, "too little roll")], []
     gain = float(np.std(roll) / np.std(q["ay"]))
     failed = gain > MAX_ROLL_TRAVEL
-    checks.append(Check(name="roll travel per ay", statistic=gain,
-                        outcome=Outcome.FAILED if failed else Outcome.PASSED,
-                        note="m of left-right travel difference per m/s^2"))  # fmt: skip
+    check = Check(name=name, statistic=gain, outcome=Outcome.FAILED if failed else Outcome.PASSED,
+                  note="m of left-right travel difference per m/s^2")  # fmt: skip
     if not failed:
-        return []
-    return [
+        return [check], []
+    return [check], [
         f"column 'ay' looks like g (the left-right travel difference grows by "
         f"{1000 * gain:.0f} mm per unit of ay, more than {1000 * MAX_ROLL_TRAVEL:.0f}"
         " mm per m/s^2 of any road car): give m/s^2"
     ]
 
 
-def _kinematic(checks: list[Check], name: str, y: np.ndarray, x: np.ndarray) -> tuple[int, float]:
-    """Sign (0 if undecided) and ratio std(y)/std(x) of a kinematic relation y = x."""
-    correlation = float(np.corrcoef(y, x)[0, 1])
-    if not abs(correlation) >= KINEMATIC_CORRELATION:
-        checks.append(Check(name=name, statistic=correlation, outcome=Outcome.UNDECIDED,
-                            note="correlation too weak (grade, bank or slip)"))  # fmt: skip
-        return 0, math.nan
-    sign = int(np.sign(correlation))
-    ratio = float(np.std(y) / np.std(x))
-    checks.append(Check(name=name, statistic=sign * ratio,
-                        outcome=Outcome.PASSED if sign > 0 else Outcome.FAILED,
-                        note="signed ratio std(left) / std(right), 1 expected"))  # fmt: skip
-    return sign, ratio
-
-
 def _unit_mistakes(ratios: dict[str, float]) -> list[str]:
     """Unit mistakes named by the kinematic ratios (see module docstring)."""
-    lon = _unit_of(ratios["longitudinal"]) if "longitudinal" in ratios else None
-    lat = _unit_of(ratios["lateral"]) if "lateral" in ratios else None
+    units = {key: _unit_of(ratio) for key, ratio in ratios.items()}
+    lon, lat = units.get("longitudinal"), units.get("lateral")
+    measured = {"longitudinal": "dvx/dt : ax", "lateral": "vx wz : ay"}
     found = []
-    if lon in ("km/h", "mph") or (lon is None and lat in ("km/h", "mph")):
-        unit = lon if lon in ("km/h", "mph") else lat
-        found.append(f"column 'vx' looks like {unit} (dvx/dt and vx wz are "
-                     f"{UNIT_FACTORS[unit]:.3g} x ax and ay): give m/s")  # fmt: skip
-    elif lat in ("km/h", "mph") and lon == "ok":
+    speed = [key for key, unit in units.items() if unit in ("km/h", "mph")]
+    if speed and not (lon == "ok" and lat in ("km/h", "mph")):
+        unit = units[speed[0]]
+        shown = ", ".join(f"{measured[key]} = {ratios[key]:.3g}" for key in speed)
+        found.append(f"column 'vx' looks like {unit} ({shown}): give m/s")
+    elif speed:
         found.append(f"vx wz is {ratios['lateral']:.3g} x ay while dvx/dt matches ax: "
                      "check the units of ay and wz")  # fmt: skip
-    if lon == "g":
-        found.append(f"column 'ax' looks like g (dvx/dt is {ratios['longitudinal']:.3g} x ax): "
-                     "give m/s^2")  # fmt: skip
-    if lat == "g":
-        found.append(f"column 'ay' looks like g (vx wz is {ratios['lateral']:.3g} x ay): "
-                     "give m/s^2")  # fmt: skip
-    if lat == "deg/s":
-        found.append(f"column 'wz' looks like deg/s (vx wz is {ratios['lateral']:.3g} x ay): "
-                     "give rad/s")  # fmt: skip
-    for key, unit in (("longitudinal", lon), ("lateral", lat)):
-        if key in ratios and unit is None:
-            found.append(f"{'dvx/dt' if key == 'longitudinal' else 'vx wz'} is "
-                         f"{ratios[key]:.3g} x {'ax' if key == 'longitudinal' else 'ay'}, "
-                         "not 1: check the units of vx, ax, ay and wz")  # fmt: skip
+    for key, unit, column in (("longitudinal", "g", "ax"), ("lateral", "g", "ay"),
+                              ("lateral", "deg/s", "wz")):  # fmt: skip
+        if units.get(key) == unit:
+            fix = "rad/s" if unit == "deg/s" else "m/s^2"
+            found.append(f"column '{column}' looks like {unit} ({measured[key]} = "
+                         f"{ratios[key]:.3g}): give {fix}")  # fmt: skip
+    for key, unit in units.items():
+        if unit is None:
+            found.append(f"{measured[key]} = {ratios[key]:.3g}, not 1: check the units of "
+                         "vx, ax, ay and wz")  # fmt: skip
     return found
 
 
