@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
-from wheelload.estimators.log_checks import check_wiring, describe
+from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.offsets import still_period_static_loads
 from wheelload.estimators.output_files import (
     TableFormat,
@@ -76,9 +76,11 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         check_figure_suffix(Path(args.plot))
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    signals = read_log(log_path, wiring_checks=not args.skip_wiring_checks)
+    signals = read_log(log_path, wiring_checks=False)
     if not args.skip_wiring_checks:
-        print(describe(check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)))
+        report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
+        raise_for_wiring(report, signals.source)
+        print(describe(report))
     static = (
         still_period_static_loads(signals, vehicle, args.still_period)
         if args.still_period
