@@ -34,9 +34,10 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.output_files import write_text
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.two_stage import STEP_NAME, TUNING, step_function, tuning_vector
-from wheelload.models import WHEELS, ModelParameters, load_vehicle
+from wheelload.models import WHEELS, ModelParameters, Vehicle, load_vehicle
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -147,9 +148,12 @@ def _template(name: str) -> string.Template:
 
 
 def _substitutions(
-    vehicle_path: Path, options: CodegenOptions, step: ca.Function, kernel: ca.Function
+    vehicle_path: Path,
+    vehicle: Vehicle,
+    options: CodegenOptions,
+    step: ca.Function,
+    kernel: ca.Function,
 ) -> dict[str, str]:
-    vehicle = load_vehicle(vehicle_path)
     parameters = ModelParameters.from_vehicle(vehicle)
     p, tuning = parameters.vector(), tuning_vector(vehicle)
     values = dict(zip(calibration_names(), [*p, *tuning, vehicle.filter.initial_std]))
@@ -242,25 +246,27 @@ def generate(
     out_dir: str | Path,
     options: CodegenOptions | None = None,
     step: ca.Function | None = None,
+    *,
+    allow_unusual: bool = False,
 ) -> GeneratedLibrary:
     """Write the C library for a vehicle file; ``step`` defaults to :func:`step_function`.
 
     ``step`` may be built with alternative model Functions
     (``step_function(suspension=..., equilibrium=...)``); the emitted C
-    follows it.
+    follows it. ``allow_unusual``: accept a vehicle outside the physical ranges.
     """
     options = options or CodegenOptions()
     vehicle_path = Path(vehicle_path)
     out_dir = Path(out_dir)
     step = step or step_function(name=STEP_NAME)
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=allow_unusual)
     kernel = kernel_function(
         step,
         options.params,
         ModelParameters.from_vehicle(vehicle).vector(),
         tuning_vector(vehicle),
     )
-    values = _substitutions(vehicle_path, options, step, kernel)
+    values = _substitutions(vehicle_path, vehicle, options, step, kernel)
     out_dir.mkdir(parents=True, exist_ok=True)
     prefix = options.prefix
     targets = {
@@ -271,7 +277,7 @@ def generate(
         "Makefile": out_dir / "Makefile",
     }
     for template, target in targets.items():
-        target.write_text(_template(template).substitute(values), encoding="utf-8")
+        write_text(target, _template(template).substitute(values), replace=True)
     return GeneratedLibrary(*targets.values(), kernel=kernel)
 
 

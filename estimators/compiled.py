@@ -85,10 +85,19 @@ def _loop_source(
 
 
 def _shared_library(source: str, name: str) -> ctypes.CDLL:
-    """Compile ``source`` once (cached by its hash) and load it."""
+    """Compile ``source`` once (cached by its hash) and load it.
+
+    A cached library that does not load (truncated, empty, corrupt) is
+    removed and built again.
+    """
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
     folder = build_folder()
     library = folder / f"{name}_{digest}.so"
+    if library.exists():
+        try:
+            return ctypes.CDLL(str(library))
+        except OSError:
+            library.unlink(missing_ok=True)
     if not library.exists():
         handle, c_name = tempfile.mkstemp(suffix=".c", prefix=f"{name}_", dir=folder)
         c_file = Path(c_name)

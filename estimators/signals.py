@@ -38,6 +38,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal as sp_signal
 
+from wheelload.estimators.log_checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
 from wheelload.models.vehicle import GRAVITY
 
@@ -184,11 +185,13 @@ def read_log(
     velocity_cutoff: float = VELOCITY_CUTOFF,
     *,
     channels: str | Path | None = None,
+    wiring_checks: bool = True,
 ) -> Signals:
     """Read a log (CSV, Parquet, MDF4, ERG) and validate it (see module docstring).
 
     ``channels`` is a channel-map TOML file (``wheelload channels --template``);
     without it the log's channels must be named as ours, in SI units.
+    ``wiring_checks``: run :mod:`wheelload.estimators.log_checks` (signs, units, wiring).
     """
     from wheelload.estimators.readers import ChannelMapError, load_channel_map, read_frame
 
@@ -200,17 +203,32 @@ def read_log(
         frame = read_frame(path, channel_map)
     except ChannelMapError as error:
         raise LogError(str(error)) from None
+    except UnicodeDecodeError as error:
+        raise LogError(
+            f"{path}: is not UTF-8 text (byte {error.start}): save the log as UTF-8 CSV"
+        ) from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as error:
         raise LogError(f"{path}: cannot be read: {error}") from None
     except ValueError as error:  # pandas: a column named in a map is not in the file
         raise LogError(f"{path}: cannot be read: {error}") from None
-    return signals_from_frame(frame, source=str(path), velocity_cutoff=velocity_cutoff)
+    return signals_from_frame(
+        frame, source=str(path), velocity_cutoff=velocity_cutoff, wiring_checks=wiring_checks
+    )
 
 
 def signals_from_frame(
-    frame: pd.DataFrame, source: str = "<frame>", velocity_cutoff: float = VELOCITY_CUTOFF
+    frame: pd.DataFrame,
+    source: str = "<frame>",
+    velocity_cutoff: float = VELOCITY_CUTOFF,
+    *,
+    wiring_checks: bool = True,
 ) -> Signals:
     """Validate a DataFrame with the log's columns and build :class:`Signals`."""
+    duplicate = duplicate_columns(frame.columns)
+    if duplicate is not None:
+        raise LogError(
+            f"{source}: column '{duplicate}' appears twice: keep one (which copy is meant?)"
+        )
     frame = frame.rename(columns=lambda name: str(name).strip())
     for name in REQUIRED:
         if name not in frame.columns:
@@ -280,6 +298,8 @@ def signals_from_frame(
     else:
         speed, speed_source = np.zeros(t.size), SpeedSource.NONE
     _check_units(acc, d, v, speed, source)
+    if wiring_checks:
+        raise_for_wiring(check_wiring(t, speed, acc, d, group(RATES)), source)
     derived = v is None and bool(np.isfinite(d).any())
     if derived:
         v = derive_velocities(t, d, velocity_cutoff, source)

@@ -250,20 +250,40 @@ def vehicle_from_dict(table: dict) -> Vehicle:
     return vehicle  # type: ignore[return-value]
 
 
-def load_vehicle(path: str | Path) -> Vehicle:
-    """Read a vehicle TOML file; errors name the file and the offending key."""
+def load_vehicle(path: str | Path, *, allow_unusual: bool = False) -> Vehicle:
+    """Read a vehicle TOML file; errors name the file and the offending key.
+
+    Values outside the physical ranges of :mod:`wheelload.models.plausibility`
+    are refused unless ``allow_unusual``.
+    """
     path = Path(path)
     try:
         with path.open("rb") as stream:
             table = tomllib.load(stream)
     except FileNotFoundError:
         raise VehicleFileError(f"{path}: no such vehicle file") from None
+    except UnicodeDecodeError as error:
+        raise VehicleFileError(
+            f"{path}: is not UTF-8 text (byte {error.start}): save the vehicle file as UTF-8"
+        ) from None
     except tomllib.TOMLDecodeError as error:
         raise VehicleFileError(f"{path}: not valid TOML: {error}") from None
+    except IsADirectoryError:
+        raise VehicleFileError(f"{path}: is a folder: give a vehicle TOML file") from None
     try:
-        return vehicle_from_dict(table)
+        vehicle = vehicle_from_dict(table)
     except VehicleFileError as error:
         raise VehicleFileError(f"{path}: {error}") from None
+    from wheelload.models.plausibility import check_vehicle_ranges  # uses this module
+
+    violations = [] if allow_unusual else check_vehicle_ranges(vehicle)
+    if violations:
+        raise VehicleFileError(
+            f"{path}: "
+            + "; ".join(str(v) for v in violations)
+            + "; correct the file, or give --allow-unusual for a special vehicle"
+        )
+    return vehicle
 
 
 def example_vehicle_path() -> Path:

@@ -23,7 +23,9 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
+from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
+from wheelload.estimators.output_files import TableFormat, atomic_write, table_format
 from wheelload.estimators.readers import SUFFIXES
 from wheelload.estimators.registry import build
 from wheelload.estimators.two_stage import step_function
@@ -45,6 +47,8 @@ class EstimateSettings:
     still_period: float | None = None
     still_noise: float | None = None
     corner_weights: str | None = None
+    allow_unusual: bool = False
+    wiring_checks: bool = True
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -88,15 +92,15 @@ def _step():
 
 
 @functools.lru_cache(maxsize=4)
-def _vehicle(path: Path) -> Vehicle:
-    return load_vehicle(path)
+def _vehicle(path: Path, allow_unusual: bool = False) -> Vehicle:
+    return load_vehicle(path, allow_unusual=allow_unusual)
 
 
 @functools.lru_cache(maxsize=8)
-def _filter(vehicle: Path, static: tuple[float, ...] | None) -> TwoStageKF:
+def _filter(vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None) -> TwoStageKF:
     """A filter whose compiled loop is built, cached per process."""
-    kf = TwoStageKF(_vehicle(vehicle), static=None if static is None else np.array(static),
-                    step=_step())  # fmt: skip
+    initial = None if static is None else np.array(static)
+    kf = TwoStageKF(_vehicle(vehicle, allow_unusual), static=initial, step=_step())
     kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
                    d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
     return kf
@@ -104,9 +108,13 @@ def _filter(vehicle: Path, static: tuple[float, ...] | None) -> TwoStageKF:
 
 def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     """Read one log, set the static loads, run the chosen estimator (default: the two-stage KF)."""
-    vehicle = _vehicle(settings.vehicle)
-    signals = read_log(path, channels=settings.channels)
+    vehicle = _vehicle(settings.vehicle, settings.allow_unusual)
+    signals = read_log(path, channels=settings.channels, wiring_checks=False)
     notes = []
+    if settings.wiring_checks:
+        report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
+        raise_for_wiring(report, signals.source)
+        notes.append(describe(report))
     static = None
     if settings.corner_weights is not None:
         static = corner_weight_loads(settings.corner_weights)
@@ -120,7 +128,7 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     if settings.method == "kf":
         key = None if static is None else tuple(float(f) for f in static)
         with _lock:  # build (or load) the compiled loop once per process, not per thread
-            estimator = _filter(settings.vehicle, key)
+            estimator = _filter(settings.vehicle, settings.allow_unusual, key)
     elif static is not None:
         raise ValueError(
             "--still-period and --corner-weights apply to --method kf only, "
@@ -141,13 +149,16 @@ def output_path(log: Path, folder: Path) -> Path:
     return folder / f"{log.name}.estimates.csv"
 
 
-def write_new(frame: pd.DataFrame, path: Path) -> None:
-    """Write a CSV to a temporary file beside ``path`` and rename; never overwrite."""
-    if path.exists():
-        raise ValueError(f"{path}: exists; remove it or choose another output")
-    temporary = path.with_name(f".{path.name}.partial")
-    frame.to_csv(temporary, index=False)
-    temporary.replace(path)
+def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> None:
+    """Write a table as CSV or Parquet, by ``path``'s suffix, through a temporary file.
+
+    An existing file is replaced only with ``replace`` (``--force``).
+    """
+    with atomic_write(path, replace=replace) as temporary:
+        if table_format(path) is TableFormat.PARQUET:
+            frame.to_parquet(temporary, index=False)
+        else:
+            frame.to_csv(temporary, index=False)
 
 
 def summary_row(path: Path, result: LogResult) -> dict:
@@ -179,7 +190,9 @@ def summary_row(path: Path, result: LogResult) -> dict:
     return row
 
 
-def process_log(path: Path, settings: EstimateSettings, folder: Path | None) -> dict:
+def process_log(
+    path: Path, settings: EstimateSettings, folder: Path | None, force: bool = False
+) -> dict:
     """Estimate one log, write its output into ``folder``; its summary row.
 
     A log that cannot be used gives a row with its one-line error, so one bad
@@ -188,15 +201,17 @@ def process_log(path: Path, settings: EstimateSettings, folder: Path | None) -> 
     try:
         result = estimate_log(path, settings)
         if folder is not None:
-            write_new(result.estimate.to_pandas(), output_path(path, folder))
+            write_table(result.estimate.to_pandas(), output_path(path, folder), replace=force)
         return summary_row(path, result)
     except (ValueError, FileNotFoundError) as error:
         return {"log": str(path), "error": str(error)}
 
 
-def process_logs(paths: list[Path], settings: EstimateSettings, folder: Path | None) -> list[dict]:
+def process_logs(
+    paths: list[Path], settings: EstimateSettings, folder: Path | None, force: bool = False
+) -> list[dict]:
     """:func:`process_log` over a chunk of logs (one task on a worker)."""
-    return [process_log(path, settings, folder) for path in paths]
+    return [process_log(path, settings, folder, force) for path in paths]
 
 
 def chunks(paths: list[Path], workers: int) -> list[list[Path]]:
@@ -216,6 +231,7 @@ def run_logs(
     workers: int = 1,
     dask_address: str | None = None,
     progress: bool = True,
+    force: bool = False,
 ) -> pd.DataFrame:
     """The summary table of many logs (module docstring); rows sorted by log path.
 
@@ -232,7 +248,7 @@ def run_logs(
 
         with Client(dask_address) as client:
             threads = max(1, sum(client.nthreads().values()))
-            futures = [client.submit(process_logs, chunk, settings, folder, pure=False)
+            futures = [client.submit(process_logs, chunk, settings, folder, force, pure=False)
                        for chunk in chunks(paths, threads)]  # fmt: skip
             for future in dask_completed(futures):
                 done = future.result()
@@ -240,7 +256,7 @@ def run_logs(
                 bar.update(len(done))
     elif workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [pool.submit(process_logs, chunk, settings, folder)
+            futures = [pool.submit(process_logs, chunk, settings, folder, force)
                        for chunk in chunks(paths, workers)]  # fmt: skip
             for future in as_completed(futures):
                 done = future.result()
@@ -248,7 +264,7 @@ def run_logs(
                 bar.update(len(done))
     else:
         for path in paths:
-            rows.append(process_log(path, settings, folder))
+            rows.append(process_log(path, settings, folder, force))
             bar.update()
     bar.close()
     columns = list(dict.fromkeys(key for row in rows for key in row))

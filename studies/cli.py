@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 from importlib.metadata import version
@@ -49,6 +50,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError) as error:
         print(f"wheelload {args.command}: error: {error}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # output piped into a command that stopped reading (head)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    except OSError as error:  # e.g. a disk full or a folder made read-only while running
+        where = f"{error.filename}: " if error.filename else ""
+        print(
+            f"wheelload {args.command}: error: {where}{error.strerror or error}: "
+            "check the path, its permissions and the free space",
+            file=sys.stderr,
+        )
         return 2
 
 

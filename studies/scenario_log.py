@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from wheelload.estimators.output_files import atomic_write, write_text
 from wheelload.models.vehicle import WHEELS
 
 LOG_COLUMNS = (
@@ -34,8 +35,14 @@ def metadata_path(log: str | Path) -> Path:
     return log.with_name(log.name + ".meta.json")
 
 
-def write_log(frame: pd.DataFrame, path: str | Path, metadata: dict) -> Path:
-    """Write the log columns of ``frame`` to ``path`` and the metadata sidecar; return its path."""
+def write_log(
+    frame: pd.DataFrame, path: str | Path, metadata: dict, *, replace: bool = False
+) -> Path:
+    """Write the log columns of ``frame`` to ``path`` and the metadata sidecar; return its path.
+
+    Both files are written to a temporary file and renamed into place; an
+    existing file is replaced only with ``replace``.
+    """
     path = Path(path)
     if path.suffix.lower() not in SUFFIXES:
         raise ValueError(f"log file '{path}' must end in one of {', '.join(SUFFIXES)}")
@@ -44,10 +51,11 @@ def write_log(frame: pd.DataFrame, path: str | Path, metadata: dict) -> Path:
         raise ValueError(f"log frame lacks column '{missing[0]}'")
     path.parent.mkdir(parents=True, exist_ok=True)
     log = frame.loc[:, list(LOG_COLUMNS)]
-    if path.suffix.lower() == ".csv":
-        log.to_csv(path, index=False, float_format="%.9g")
-    else:
-        log.to_parquet(path, index=False)
+    with atomic_write(path, replace=replace) as temporary:
+        if path.suffix.lower() == ".csv":
+            log.to_csv(temporary, index=False, float_format="%.9g")
+        else:
+            log.to_parquet(temporary, index=False)
     sidecar = metadata_path(path)
-    sidecar.write_text(json.dumps(metadata, indent=2, sort_keys=True) + "\n", encoding="utf-8")
+    write_text(sidecar, json.dumps(metadata, indent=2, sort_keys=True) + "\n", replace=replace)
     return sidecar

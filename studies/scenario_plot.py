@@ -6,10 +6,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from wheelload.estimators.output_files import atomic_write
 from wheelload.models.vehicle import WHEELS
 
 
-def plot_scenario(frame: pd.DataFrame, path: str | Path, title: str) -> Path:
+def plot_scenario(
+    frame: pd.DataFrame, path: str | Path, title: str, *, replace: bool = False
+) -> Path:
     """Save a figure (speed; ax, ay; Fz per wheel; lateral offset) of a truth frame to ``path``.
 
     The offset panel needs the path columns ``n target half_width`` of the truth.
@@ -43,6 +46,7 @@ def plot_scenario(frame: pd.DataFrame, path: str | Path, title: str) -> Path:
     fig.suptitle(title)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    with atomic_write(path, replace=replace) as temporary:
+        fig.savefig(temporary, dpi=110)
     plt.close(fig)
     return path

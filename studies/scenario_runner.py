@@ -50,10 +50,11 @@ def run_scenario(
     noise: float = 1.0,
     output_rate: float = 100.0,
     internal_rate: float = 1000.0,
+    allow_unusual: bool = False,
 ) -> ScenarioResult:
     """Simulate scenario ``name`` with the vehicle file at ``vehicle_path``."""
     options = Options() if options is None else options
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=allow_unusual)
     run = scenario_run(name, vehicle, options)
     truth = simulate(vehicle, run, internal_rate=internal_rate, output_rate=output_rate)
     rng = np.random.default_rng(np.random.SeedSequence([options.seed, 1]))

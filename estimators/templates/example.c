@@ -29,8 +29,16 @@
  * An error is reported on stderr with the data row, counted from 1 at the
  * first row after the header (wheelload's Python reader counts from 0),
  * the line of the file, the column and the text; the exit status is then 2
- * and a partly written ESTIMATES.csv is removed.
+ * and ESTIMATES.csv is left as it was.
+ *
+ * ESTIMATES.csv is never the log itself (same name, or the same file by
+ * device and inode through a link): that is refused with exit status 2.
+ * It is written to a temporary file in its folder and renamed into place
+ * once complete, so an existing ESTIMATES.csv is replaced only by a whole
+ * result. (POSIX: stat, mkstemp, fchmod.)
  */
+#define _POSIX_C_SOURCE 200809L
+
 #include "${prefix}.h"
 
 #include <float.h>
@@ -38,6 +46,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
 
 #define MAX_LINE 16384
 #define MAX_COLUMNS 256
@@ -327,6 +338,40 @@ static int override(${prefix}_params *params, const char *assignment)
 
 static char line[MAX_LINE];
 
+/* 1 if the file path names is the open log (same device and inode). */
+static int is_log(FILE *log, const char *path)
+{
+    struct stat a, b;
+    if (fstat(fileno(log), &a) != 0 || stat(path, &b) != 0) {
+        return 0;
+    }
+    return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
+
+/* Open a temporary file beside path (path + ".XXXXXX") for writing, with the
+ * permissions a new file gets; its name is left in temporary. */
+static FILE *open_temporary(const char *path, char *temporary, size_t size)
+{
+    int fd;
+    mode_t mask;
+    FILE *out;
+    if ((size_t)snprintf(temporary, size, "%s.XXXXXX", path) >= size) {
+        return NULL;
+    }
+    fd = mkstemp(temporary);
+    if (fd < 0) {
+        return NULL;
+    }
+    mask = umask(0);
+    umask(mask);
+    if (fchmod(fd, (mode_t)(0666 & ~mask)) != 0 || (out = fdopen(fd, "w")) == NULL) {
+        close(fd);
+        remove(temporary);
+        return NULL;
+    }
+    return out;
+}
+
 /* Filter the rows of log after the first two (already read) and write the
  * estimates; 0, or 2 on an error (reported). */
 static int run(log_reader *log, int n_columns, const int *column, const double *t_first,
@@ -364,6 +409,7 @@ int main(int argc, char **argv)
     ${prefix}_input first[2];
     ${prefix}_params params;
     log_reader log;
+    static char temporary[4096];
 
     if (argc < 2) {
         fprintf(stderr,
@@ -430,10 +476,20 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    out = (argc >= 3 && strcmp(argv[2], "-") != 0) ? fopen(argv[2], "w") : stdout;
-    if (out == NULL) {
-        fprintf(stderr, "%s: cannot write\n", argv[2]);
-        return 2;
+    if (argc >= 3 && strcmp(argv[2], "-") != 0) {
+        if (strcmp(argv[2], argv[1]) == 0 || is_log(log.file, argv[2])) {
+            fprintf(stderr, "%s: is the input log: choose another output file\n", argv[2]);
+            fclose(log.file);
+            return 2;
+        }
+        out = open_temporary(argv[2], temporary, sizeof temporary);
+        if (out == NULL) {
+            fprintf(stderr, "%s: cannot write a file in its folder\n", argv[2]);
+            fclose(log.file);
+            return 2;
+        }
+    } else {
+        out = stdout;
     }
     status = run(&log, n_columns, column, t_first, first, out, &params);
     fclose(log.file);
@@ -447,8 +503,12 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s: write error\n", argv[2]);
             status = 2;
         }
+        if (status == 0 && rename(temporary, argv[2]) != 0) {
+            fprintf(stderr, "%s: cannot rename the finished temporary file to it\n", argv[2]);
+            status = 2;
+        }
         if (status != 0) {
-            remove(argv[2]);
+            remove(temporary);
         }
     }
     return status;

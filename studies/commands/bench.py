@@ -15,6 +15,7 @@ import numpy as np
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.numpy_kf import joint_filter
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -40,6 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="samples for the per-sample Python loops (default 2e4)",
     )
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
     for module in BENCHMARKS:
         importlib.import_module(module).register_bench(benchmarks)
@@ -63,7 +65,7 @@ def _tile(signals, n):
 
 
 def run(args: argparse.Namespace) -> int:
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path(), allow_unusual=args.allow_unusual)
     base = synthetic_log(
         vehicle,
         slalom(duration=30.0),

@@ -25,6 +25,7 @@ from wheelload.estimators.c_emitter import Precision, operation_counts
 from wheelload.estimators.codegen import CodegenOptions, build_program, generate
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.numpy_kf import pseudo_measurements
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -43,12 +44,25 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
     parser.add_argument("--repeats", type=int, default=51, help="C repeats (median taken)")
     parser.add_argument("--python-samples", type=int, default=2000, help="Python steps timed")
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
-def c_step_ns(vehicle_path: Path, precision: Precision, folder: Path, samples: int, repeats: int):
+def c_step_ns(
+    vehicle_path: Path,
+    precision: Precision,
+    folder: Path,
+    samples: int,
+    repeats: int,
+    allow_unusual: bool = False,
+):
     """Median and minimum ns per step of the library's self-test benchmark, and the library."""
-    library = generate(vehicle_path, folder / precision.value, CodegenOptions(precision=precision))
+    library = generate(
+        vehicle_path,
+        folder / precision.value,
+        CodegenOptions(precision=precision),
+        allow_unusual=allow_unusual,
+    )
     binary = build_program(library, library.selftest, folder / precision.value / "selftest")
     out = subprocess.run(
         [str(binary), "bench", str(samples), str(repeats)], capture_output=True, text=True,
@@ -122,13 +136,23 @@ def cpu_mhz() -> float | None:
 
 def run(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     with tempfile.TemporaryDirectory(prefix="wheelload_bench_") as folder:
         c_double, c_double_min, library = c_step_ns(
-            vehicle_path, Precision.DOUBLE, Path(folder), args.samples, args.repeats
+            vehicle_path,
+            Precision.DOUBLE,
+            Path(folder),
+            args.samples,
+            args.repeats,
+            args.allow_unusual,
         )
         c_float, c_float_min, _ = c_step_ns(
-            vehicle_path, Precision.FLOAT, Path(folder), args.samples, args.repeats
+            vehicle_path,
+            Precision.FLOAT,
+            Path(folder),
+            args.samples,
+            args.repeats,
+            args.allow_unusual,
         )
     kf = TwoStageKF(vehicle)
     signals = synthetic_log(

@@ -16,7 +16,9 @@ from pathlib import Path
 from wheelload.estimators.c_emitter import Precision
 from wheelload.estimators.codegen import CodegenOptions, ParamMode, generate
 from wheelload.estimators.mhe import Constraint, MheSettings
+from wheelload.estimators.output_files import check_output_folder
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 
 
 class Estimator(enum.Enum):
@@ -51,7 +53,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="kf: two-stage KF (default); mhe: moving-horizon estimator on OSQP",
     )
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    parser.add_argument("--out", required=True, help="output folder (created if missing)")
+    parser.add_argument(
+        "--out", required=True, help="output folder: new or empty (created if missing)"
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="write into a folder that is not empty, replacing files of the same name",
+    )
     kf = parser.add_argument_group("kf only")
     kf.add_argument("--precision", choices=[p.value for p in Precision], help="default double")
     kf.add_argument(
@@ -69,6 +78,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     mhe.add_argument("--bounded", action="store_const", const=True, help="bounds 0 <= Fz")
     mhe.add_argument("--dt", type=float, help="the fixed sample interval [s] (default 0.01)")
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
@@ -84,6 +94,7 @@ def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estima
 def run(args: argparse.Namespace) -> int:
     estimator = Estimator(args.estimator)
     vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    check_output_folder(Path(args.out), [vehicle_path], force=args.force)
     if estimator is Estimator.MHE:
         return _run_mhe(args, vehicle_path)
     values = _options(args, KF_OPTIONS, MHE_OPTIONS, estimator)
@@ -92,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         params=ParamMode(values["params"]),
         prefix=values["prefix"],
     )
-    library = generate(vehicle_path, args.out, options)
+    library = generate(vehicle_path, args.out, options, allow_unusual=args.allow_unusual)
     for path in (library.header, library.source, library.example, library.selftest):
         print(path)
     print(
@@ -111,6 +122,7 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
         constraint=Constraint(values["constraint"]),
         bounded=values["bounded"],
     )
-    folder = generate_mhe(load_vehicle(vehicle_path), settings, Path(args.out), dt=values["dt"])
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
+    folder = generate_mhe(vehicle, settings, Path(args.out), dt=values["dt"])
     print(f"written the embedded {settings.label()} (dt = {values['dt']} s) to {folder}")
     return 0

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals, StepFlag
+from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
 from wheelload.models import example_vehicle_path
 from wheelload.studies.batch import (
@@ -23,8 +24,9 @@ from wheelload.studies.batch import (
     estimate_log,
     expand_logs,
     run_logs,
-    write_new,
+    write_table,
 )
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.metrics import wheel_metrics
 
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -54,9 +56,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--channels", help="channel map TOML (wheelload channels --template)")
     parser.add_argument(
-        "--out", help="one log: write the estimates to this CSV; many: into this folder"
+        "--out",
+        help="one log: write the estimates to this .csv or .parquet; many: into this folder",
     )
-    parser.add_argument("--plot", help="one log: save a figure of the estimates to this PNG")
+    parser.add_argument("--plot", help="one log: save a figure of the estimates (.png .pdf .svg)")
+    parser.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
+    parser.add_argument(
+        "--skip-wiring-checks",
+        action="store_true",
+        help="accept a log whose signs, units or wiring look wrong (see log_checks)",
+    )
     parser.add_argument(
         "--still-period",
         type=float,
@@ -76,6 +87,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--workers", type=int, default=1, help="local processes for many logs")
     parser.add_argument("--dask", metavar="ADDRESS", help="run many logs on this Dask scheduler")
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
@@ -87,6 +99,8 @@ def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
         still_period=args.still_period,
         still_noise=args.still_noise,
         corner_weights=args.corner_weights,
+        allow_unusual=args.allow_unusual,
+        wiring_checks=not args.skip_wiring_checks,
     )
 
 
@@ -109,14 +123,24 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> int:
+    outputs = [Path(p) for p in (args.out, args.plot) if p]
+    inputs = [path, settings.vehicle, *([settings.channels] if settings.channels else [])]
+    check_outputs(outputs, inputs, force=args.force)
+    if args.out:
+        table_format(Path(args.out))
+    if args.plot:
+        check_figure_suffix(Path(args.plot))
     result = estimate_log(path, settings)
     estimate, signals = result.estimate, result.signals
     if args.out:
-        write_new(estimate.to_pandas(), Path(args.out))
+        write_table(estimate.to_pandas(), Path(args.out), replace=args.force)
     if args.plot:
+        from wheelload.estimators.output_files import atomic_write
         from wheelload.studies.plots import plot_estimate
 
-        plot_estimate(estimate, signals, args.plot, title=f"{path.name} — {result.vehicle.name}")
+        title = f"{path.name} — {result.vehicle.name}"
+        with atomic_write(Path(args.plot), replace=args.force) as temporary:
+            plot_estimate(estimate, signals, temporary, title=title)
     print(f"method {settings.method}: {method(settings.method).description}")
     print(summary(estimate, signals, result.vehicle.name))
     for note in result.notes:
@@ -136,12 +160,16 @@ def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Name
     folder = Path(args.out) if args.out else None
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
-    table = run_logs(paths, settings, folder, workers=args.workers, dask_address=args.dask)
+    if folder is not None and folder.resolve() in {p.parent.resolve() for p in paths}:
+        raise ValueError(f"{folder}: holds the input logs: write the estimates into another folder")
+    table = run_logs(
+        paths, settings, folder, workers=args.workers, dask_address=args.dask, force=args.force
+    )
     columns = ["log", "samples", "mode", "mean_fz_fl", "mean_fz_rr", "min_fz", "rmse_pooled"]
     shown = table[[c for c in columns + ["error"] if c in table.columns]]
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     if folder is not None:
-        write_new(table, folder / SUMMARY_NAME)
+        write_table(table, folder / SUMMARY_NAME, replace=args.force)
         print(f"{len(paths)} logs: estimates and {SUMMARY_NAME} written to {folder}")
     failed = int((table["error"] != "").sum()) if "error" in table.columns else 0
     if failed:

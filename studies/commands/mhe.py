@@ -19,7 +19,9 @@ import numpy as np
 
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf, step_times
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -40,7 +42,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     study.add_argument("--horizons", type=int, nargs="+", default=list(HORIZONS))
     study.add_argument("--out", default="mhe-vs-kf", help="output prefix for .csv and .png")
+    study.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
+    study.add_argument(
+        "--skip-wiring-checks", action="store_true", help="accept logs whose wiring looks wrong"
+    )
     study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_allow_unusual(study)
     study.set_defaults(handler=run_study)
 
 
@@ -51,10 +60,13 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")
     bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_allow_unusual(bench)
     bench.set_defaults(handler=run_bench)
 
 
-def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
+def _simulate(
+    names: list[str], folder: Path, vehicle_path: Path, allow_unusual: bool
+) -> list[Path]:
     """Simulate the scenarios on the plant with the study's vehicle; the log paths."""
     from wheelload.studies.scenario_log import write_log
     from wheelload.studies.scenario_runner import run_scenario
@@ -66,7 +78,7 @@ def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
         raise ValueError(f"unknown scenario '{unknown[0]}'; choose from {', '.join(SCENARIOS)}")
     paths = []
     for name in names:
-        result = run_scenario(name, vehicle_path)
+        result = run_scenario(name, vehicle_path, allow_unusual=allow_unusual)
         path = folder / f"{name}.parquet"
         write_log(result.log, path, result.metadata)
         print(f"{name}: {len(result.log)} samples simulated")
@@ -76,22 +88,32 @@ def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
 
 def run_study(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     paths = [Path(p) for p in args.logs]
     given = set(paths)
+    out = Path(args.out)
+    outputs = [out.with_suffix(".csv"), out.with_suffix(".png")]
+    check_outputs(outputs, [*paths, vehicle_path], force=args.force)
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
-            paths += _simulate(args.scenarios, Path(folder), vehicle_path)
+            paths += _simulate(args.scenarios, Path(folder), vehicle_path, args.allow_unusual)
         if not paths:
             raise ValueError("give --logs or --scenarios")
-        logs = [read_log(path, channels=args.channels if path in given else None)
-                for path in paths]  # fmt: skip
+        logs = [
+            read_log(
+                path,
+                channels=args.channels if path in given else None,
+                wiring_checks=not args.skip_wiring_checks,
+            )
+            for path in paths
+        ]
     table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
     from wheelload.studies.mhe_vs_kf import plot_accuracy_against_time
 
-    out = Path(args.out)
-    table.to_csv(out.with_suffix(".csv"))
-    plot_accuracy_against_time(table, out.with_suffix(".png"))
+    with atomic_write(outputs[0], replace=args.force) as temporary:
+        table.to_csv(temporary)
+    with atomic_write(outputs[1], replace=args.force) as temporary:
+        plot_accuracy_against_time(table, temporary)
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
     print(table.to_string(float_format=lambda v: f"{v:.1f}"))
     print(f"written {out.with_suffix('.csv')} and {out.with_suffix('.png')}")
@@ -99,7 +121,7 @@ def run_study(args: argparse.Namespace) -> int:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    vehicle = load_vehicle(args.vehicle or example_vehicle_path(), allow_unusual=args.allow_unusual)
     duration = args.samples / 100.0
     signals = synthetic_log(vehicle, slalom(duration=duration), noise=SensorNoise(
         acceleration=0.05, travel=0.0003), spring_error=0.08)  # fmt: skip

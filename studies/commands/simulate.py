@@ -6,11 +6,14 @@ The wall time of every scenario is printed by ``wheelload bench scenarios``.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
+from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.vehicle import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.roads import ISO_CLASSES
-from wheelload.studies.scenario_log import write_log
+from wheelload.studies.scenario_log import metadata_path, write_log
 from wheelload.studies.scenario_plot import plot_scenario
 from wheelload.studies.scenario_runner import run_scenario
 from wheelload.studies.scenarios import SCENARIOS, Options
@@ -38,7 +41,10 @@ def register(subparsers) -> None:
         help=f"log file (.csv or .parquet); for {RIG_SWEEP} the corner-rig CSV (the bar-rig "
         "file is written beside it as <stem>_arb.csv)",
     )
-    parser.add_argument("--plot", help="save a figure (PNG) of the run")
+    parser.add_argument("--plot", help="save a figure (.png, .pdf, .svg) of the run")
+    parser.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
     parser.add_argument("--vehicle", default=None, help="vehicle file (default: bundled)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
     parser.add_argument(
@@ -66,6 +72,7 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--bank", type=float, default=0.0, help="standstill: road bank, rise over run, left up > 0"
     )
+    add_allow_unusual(parser)
     parser.set_defaults(handler=handle)
 
 
@@ -73,6 +80,12 @@ def handle(args: argparse.Namespace) -> int:
     vehicle = args.vehicle or example_vehicle_path()
     if args.name == RIG_SWEEP:
         return _rig(args, vehicle)
+    out = Path(args.out)
+    outputs = [out, metadata_path(out), *([Path(args.plot)] if args.plot else [])]
+    check_outputs(outputs, [Path(vehicle)], force=args.force)
+    table_format(out)
+    if args.plot:
+        check_figure_suffix(Path(args.plot))
     if (args.grade or args.bank) and args.name != "standstill":
         raise ValueError("--grade and --bank apply to the standstill scenario only")
     options = Options(roughness=args.roughness, seed=args.seed, grade=args.grade, bank=args.bank)
@@ -83,10 +96,12 @@ def handle(args: argparse.Namespace) -> int:
         noise=args.noise,
         output_rate=args.rate,
         internal_rate=args.internal_rate,
+        allow_unusual=args.allow_unusual,
     )
-    sidecar = write_log(result.log, args.out, result.metadata)
+    sidecar = write_log(result.log, out, result.metadata, replace=args.force)
     if args.plot:
-        plot_scenario(result.truth.frame, args.plot, f"{args.name} ({result.metadata['vehicle']})")
+        title = f"{args.name} ({result.metadata['vehicle']})"
+        plot_scenario(result.truth.frame, args.plot, title, replace=args.force)
     info = result.metadata["summary"]
     print(
         f"{args.name}: {len(result.log)} samples, {info['duration_s']:.1f} s simulated in "

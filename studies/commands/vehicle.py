@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from wheelload.models import load_vehicle, static_loads, vehicle_mass_centre, vehicle_template
+from wheelload.studies.commands.options import add_allow_unusual
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -14,6 +15,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--template", action="store_true", help="print a commented template")
     group.add_argument("file", nargs="?", help="vehicle TOML file to check and summarise")
+    add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
@@ -21,7 +23,7 @@ def run(args: argparse.Namespace) -> int:
     if args.template:
         print(vehicle_template(), end="")
         return 0
-    vehicle = load_vehicle(args.file)
+    vehicle = load_vehicle(args.file, allow_unusual=args.allow_unusual)
     centre = vehicle_mass_centre(vehicle)
     loads = static_loads(vehicle)
     print(f"{args.file}: valid vehicle '{vehicle.name}'")

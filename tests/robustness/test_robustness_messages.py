@@ -1,0 +1,84 @@
+"""Item 7: every error a user can cause is one line naming the file and the fix."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from wheelload.studies.cli import main
+
+
+def one_line_error(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+def test_output_into_a_missing_folder(user_files, capsys, tmp_path):
+    log, vehicle = user_files
+    out = tmp_path / "no" / "such" / "loads.csv"
+    assert main(["estimate", str(log), "--vehicle", str(vehicle), "--out", str(out)]) == 2
+    assert f"folder '{out.parent}' does not exist" in one_line_error(capsys)
+
+
+def read_only_folder(tmp_path) -> Path:
+    """A folder this process cannot create files in (root ignores permission bits)."""
+    if os.geteuid() == 0:
+        return Path("/proc")
+    folder = tmp_path / "locked"
+    folder.mkdir(mode=0o555)
+    return folder
+
+
+@pytest.mark.parametrize("option", ["--out", "--plot"])
+def test_output_into_a_read_only_folder(user_files, capsys, tmp_path, option):
+    log, vehicle = user_files
+    out = read_only_folder(tmp_path) / ("loads.csv" if option == "--out" else "loads.png")
+    assert main(["estimate", str(log), "--vehicle", str(vehicle), option, str(out)]) == 2
+    assert "cannot write in folder" in one_line_error(capsys)
+
+
+def test_a_log_that_is_not_utf8_is_named(user_files, capsys):
+    log, vehicle = user_files
+    data = log.read_bytes().replace(b"t,vx", b"t\xff\xfe,vx", 1)
+    log.write_bytes(data)
+    assert main(["estimate", str(log), "--vehicle", str(vehicle)]) == 2
+    err = one_line_error(capsys)
+    assert f"{log}: is not UTF-8 text" in err and "save the log as UTF-8" in err
+
+
+def test_a_vehicle_file_that_is_not_utf8_is_named(user_files, capsys):
+    log, vehicle = user_files
+    vehicle.write_bytes(vehicle.read_bytes().replace(b"sports_car", b"sp\xe9rts_car", 1))
+    assert main(["vehicle", str(vehicle)]) == 2
+    err = one_line_error(capsys)
+    assert f"{vehicle}: is not UTF-8 text" in err and "save the vehicle file as UTF-8" in err
+
+
+def test_a_folder_given_as_vehicle_file(tmp_path, capsys):
+    assert main(["vehicle", str(tmp_path)]) == 2
+    assert "is a folder" in one_line_error(capsys)
+
+
+def test_a_corrupt_cached_library_is_rebuilt(tmp_path):
+    """An empty cached library in the build folder is rebuilt, not a traceback.
+
+    Runs in a child process with its own temporary folder (so its own build
+    folder): the cache of other processes is never touched.
+    """
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    command = [sys.executable, "-m", "wheelload.studies.cli", "estimate", "--example"]
+    first = subprocess.run(command, capture_output=True, text=True, env=env)
+    assert first.returncode == 0, first.stderr
+    build = tmp_path / f"wheelload-build-{os.getuid()}"
+    libraries = sorted(build.glob("*.so"))
+    assert libraries
+    for library in libraries:
+        library.unlink()
+        library.write_bytes(b"")  # a new, empty file where the library was
+    second = subprocess.run(command, capture_output=True, text=True, env=env)
+    assert second.returncode == 0, second.stderr
+    assert second.stdout == first.stdout
+    assert all(library.stat().st_size > 1000 for library in libraries)
