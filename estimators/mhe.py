@@ -43,6 +43,12 @@ tolerance) takes the Kalman estimate, clipped to the bounds, and is marked
 in :attr:`MheEstimate.fallback`. Bounds hold exactly: the solver's
 violations, once checked to be within tolerance, are clipped.
 
+A log's first sample (``state.k == 0``) sets the solver up afresh, so a run
+is a function of its log and start state alone. A window in which no sample
+has a data term (every input missing) is not solved: its minimiser is the
+last estimate carried by the random walk, taken in closed form, so the
+estimate is held without drift while the filter's :math:`\sigma` grows.
+
 Example
 -------
 >>> mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, bounded=True))
@@ -381,17 +387,30 @@ class MovingHorizonEstimator:
         N = self.settings.horizon
         j0 = max(0, N - 1 - state.k)
         prior = state.history[0]
-        Px = _hessian_values(window, j0, self.null, self.hard)
-        q = _linear(window, j0, prior, self.null, self.hard)
+        if state.k == 0:  # a new log: a fresh solver, so a run depends on its log alone
+            self.workspace = _Workspace(self.settings, self.width)
         x_warm = np.concatenate([state.x[w:], state.x[-w:]])
         y_warm = np.concatenate([state.y[w:], state.y[-w:]]) if state.y.size else state.y
-        bounds = (window["lower"].ravel(), window["upper"].ravel()) if state.y.size else None
-        result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
-        status, iterations = int(result.info.status_val), int(result.info.iter)
+        rho = state.rho
         x = None
-        if status == SOLVED:
-            x_warm, y_warm = np.array(result.x), np.array(result.y)
+        if not np.any(window["H"][j0:]):
+            # No sample in the window has a data term: the minimiser is the prior carried by
+            # the random walk, in closed form (the QP is ill-conditioned there). Without data
+            # since sample k-N, the last estimate is that prior carried forward (equal in exact
+            # arithmetic) and is taken, so no solver rounding cycles with period N.
+            last = state.history[-1]
+            x_warm = _prior_solution(window, j0, last, self.null, self.hard, x_warm, w)
+            status, iterations = SOLVED, 0
             x = self._loads(x_warm[-w:], window)
+        else:
+            Px = _hessian_values(window, j0, self.null, self.hard)
+            q = _linear(window, j0, prior, self.null, self.hard)
+            bounds = (window["lower"].ravel(), window["upper"].ravel()) if state.y.size else None
+            result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
+            status, iterations = int(result.info.status_val), int(result.info.iter)
+            if status == SOLVED:
+                x_warm, y_warm = np.array(result.x), np.array(result.y)
+                x = self._loads(x_warm[-w:], window)
         failed = x is None
         if failed:
             x = np.clip(terms.kf.x, *self.load_bounds)
@@ -478,6 +497,33 @@ def _arrival_weights(P: np.ndarray, q_dt: np.ndarray, cost: float) -> np.ndarray
     r""":math:`c s^2 (P + q\,dt\,I)^{-1}`, symmetrised, for each of the stacked ``P``."""
     W = np.linalg.inv(P + q_dt[:, None, None] * np.eye(4))
     return cost * LOAD_SCALE**2 * 0.5 * (W + W.transpose(0, 2, 1))
+
+
+def _prior_solution(
+    window: dict, j0: int, prior: np.ndarray, null: np.ndarray, hard: bool, x: np.ndarray, w: int
+) -> np.ndarray:
+    r"""The window's minimiser when no sample has a data term: the prior, carried unchanged.
+
+    Soft: :math:`x_j = \bar x` for every sample from :math:`j_0`. Hard:
+    :math:`\omega_{j_0} = n^\top \Pi^{-1}(\bar x - \bar x_{j_0}) / n^\top \Pi^{-1} n`,
+    then the random walk's increments in the warp direction are zero:
+    :math:`\omega_j = \omega_{j-1} - n^\top(\bar x_j - \bar x_{j-1})`. Each is clipped
+    to its bounds (interval ends) afterwards. Samples before :math:`j_0` keep the warm start
+    ``x``.
+    """
+    solution = x.copy().reshape(-1, w)
+    if hard:
+        W = window["arrival"][j0]
+        xp = window["xp"]
+        omega = float(null @ W @ (prior - xp[j0]) / (null @ W @ null)) / LOAD_SCALE
+        for j in range(j0, len(xp)):
+            if j > j0:
+                omega -= float(null @ (xp[j] - xp[j - 1])) / LOAD_SCALE
+            solution[j, 0] = omega
+    else:
+        solution[j0:] = prior / LOAD_SCALE
+    solution[j0:] = np.clip(solution[j0:], window["lower"][j0:], window["upper"][j0:])
+    return solution.ravel()
 
 
 def _shift(window: np.ndarray, newest) -> np.ndarray:
