@@ -273,6 +273,15 @@ class TwoStageKF:
         """As :meth:`run`, also returning the posterior covariances, shape (n, 4, 4)."""
         return self._run(signals, state, with_covariance=True)
 
+    def smooth(self, signals: Signals, state: FilterState | None = None) -> Estimate:
+        """Rauch–Tung–Striebel smoothed loads of a whole log (``estimators/smoother.py``)."""
+        from wheelload.estimators.smoother import rts_smooth
+
+        filtered, covariances = self.run_with_covariance(signals, state)
+        A, _ = equilibrium_function()(np.zeros(3), 0.0, self.p)
+        dt = sample_intervals(signals.t)
+        return rts_smooth(filtered, covariances, dt, self._step, self.p, self.tuning, A)
+
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
         """This filter's step looped over a log in C (state x, P carried)."""

@@ -35,6 +35,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", help="write the estimates to this CSV file")
     parser.add_argument("--plot", help="save a figure of the estimates to this PNG file")
     parser.add_argument(
+        "--smooth",
+        action="store_true",
+        help="offline: Rauch-Tung-Striebel smoothed loads (uses the whole log, not causal)",
+    )
+    parser.add_argument(
         "--still-period",
         type=float,
         metavar="SECONDS",
@@ -58,7 +63,8 @@ def run(args: argparse.Namespace) -> int:
         if args.still_period
         else None
     )
-    estimate = TwoStageKF(vehicle, static=static).run(signals)
+    kf = TwoStageKF(vehicle, static=static)
+    estimate = kf.smooth(signals) if args.smooth else kf.run(signals)
     print(summary(estimate, signals, vehicle.name))
     if args.out:
         estimate.to_pandas().to_csv(args.out, index=False)
