@@ -258,6 +258,7 @@ class MheState:
     rho: float  # OSQP's step size after the last solve
     kfx: np.ndarray  # (N, 4) the filter's estimates of the window's samples (lagged fallback)
     samples: tuple = ()  # extended window: the WindowSample of each sample
+    local: tuple = ()  # extended window: each sample's (H, g) of its data rows
     beta: np.ndarray = field(default_factory=lambda: np.zeros(0))  # bias estimate
     beta_info: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # its information
 
@@ -409,6 +410,7 @@ class MovingHorizonEstimator:
         )  # fmt: skip
         return dict(
             samples=(inert,) * self.settings.horizon,
+            local=(qp.local_terms(inert),) * self.settings.horizon,
             x=np.zeros(qp.n),
             y=np.zeros(qp.n),
             beta=np.zeros(self.beta_std.size),
@@ -583,6 +585,7 @@ class MovingHorizonEstimator:
             link=link / (c * LOAD_SCALE**2), lower=terms.lower, upper=terms.upper,
         )  # fmt: skip
         samples = state.samples[1:] + (sample,)
+        local = state.local[1:] + (qp.local_terms(sample),)
         arrivals = _shift(state.arrival, arrival)
         kfx = _shift(state.kfx, terms.kf.x)
         j0 = max(0, N - 1 - state.k)
@@ -615,7 +618,7 @@ class MovingHorizonEstimator:
                 arrivals[j0] / (c * LOAD_SCALE**2),
                 beta,
                 info,
-                np.ones(N),
+                local,
                 c,
             )
             low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
@@ -623,7 +626,7 @@ class MovingHorizonEstimator:
             status, iterations = int(result.info.status_val), int(result.info.iter)
             if status == SOLVED:
                 x_warm, y_warm = np.array(result.x), np.array(result.y)
-        state = replace(state, samples=samples, x=x_warm, y=y_warm, kfx=kfx)
+        state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)
         if status == SOLVED:
             x = self._checked(x_warm[qp.y(N - 1)], sample.lower, sample.upper, sample.xp)
         failed = x is None

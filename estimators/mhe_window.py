@@ -162,6 +162,13 @@ class WindowQP:
         self.n = self.N * self.width + n_bias
         self.X = 1000.0 * (null[:, None] if hard else np.eye(4))  # x = xp + X y
         self.solver_settings = solver
+        self.pinv = np.linalg.pinv(A)
+        beta = np.arange(self.N * self.width, self.n)
+        self.columns = [
+            np.concatenate([np.arange(j * self.width, (j + 1) * self.width), beta])
+            for j in range(self.N)
+        ]
+        self.blocks = [np.ix_(c, c) for c in self.columns]
         upper_pattern = np.triu(self._structure()) != 0
         self.rows, self.cols = np.nonzero(upper_pattern.T)  # CSC order: by column, then row
         self.cols, self.rows = self.rows, self.cols
@@ -207,50 +214,65 @@ class WindowQP:
             lower=np.zeros(self.w), upper=np.ones(self.w),
         )  # fmt: skip
         total = np.zeros((self.n, self.n))
+        local = [self.local_terms(one)] * self.N
         for j0 in range(self.N):
             H, _ = self.assemble([one] * self.N, j0, np.ones(4), np.ones((4, 4)),
                                  np.ones(self.n_bias), np.ones((self.n_bias, self.n_bias)),
-                                 np.ones(self.N), 1.0)  # fmt: skip
+                                 local, 1.0)  # fmt: skip
             total += np.abs(H)
         return total + np.eye(self.n)
 
-    def assemble(self, window, j0, prior, arrival, beta_prior, beta_info, kf_weights, cost):
+    def local_terms(self, sample: WindowSample) -> tuple[np.ndarray, np.ndarray]:
+        """One sample's data rows as (H, g) over its own block and the bias (physical units).
+
+        Computed once when the sample enters the window; :meth:`assemble`
+        adds it at the sample's place.
+        """
+        size = self.width + self.n_bias
+        H = np.zeros((size, size))
+        g = np.zeros(size)
+        y = np.arange(self.w)
+        beta = np.arange(self.width, size)
+        nd = 3 if self.travel_bias else 0
+        # suspension rows: rho = ls (z - xp - X y - Jd delta)
+        Ms = np.zeros((4, self.w + self.n_bias))
+        Ms[:, : self.w] = -self.X
+        if nd:
+            Ms[:, self.w : self.w + nd] = -sample.Jd @ self.travel_basis * TRAVEL_UNIT
+        if self.hard and self.n_bias > nd:  # x = A^+ (b - Ba beta_a) + n omega
+            Ms[:, self.w + nd :] = self.pinv @ (sample.Ba * (sample.lc > 0)[:, None])
+        Ms *= sample.ls[:, None]
+        rs = -sample.ls * (sample.z - sample.xp)
+        self._rows(H, g, y, beta, Ms, rs, self.suspension, self.aux(0, 0))
+        if not self.hard:  # equilibrium rows: rho = lc (b - Ba beta_a - A X y)
+            Mc = np.zeros((3, self.w + self.n_bias))
+            Mc[:, : self.w] = -self.A @ self.X
+            if self.n_bias > nd:
+                Mc[:, self.w + nd :] = -sample.Ba
+            Mc *= sample.lc[:, None]
+            rc = -sample.lc * sample.b
+            self._rows(H, g, y, beta, Mc, rc, self.constraint, self.aux(0, 1))
+        return H, g
+
+    def assemble(self, window, j0, prior, arrival, beta_prior, beta_info, local, cost):
         """Dense Hessian and linear term of the window (physical costs times ``cost``).
 
-        ``arrival`` is :math:`\\Pi^{-1}` [1/N^2]; ``beta_info`` :math:`\\Pi_\\beta^{-1}`;
-        ``kf_weights`` is 1 for samples that take part (0: inert padding before the log).
+        ``arrival`` is :math:`\\Pi^{-1}` [1/N^2]; ``beta_info`` :math:`\\Pi_\beta^{-1}`;
+        ``local`` each sample's :meth:`local_terms`.
         """
         H = np.zeros((self.n, self.n))
         g = np.zeros(self.n)
         beta = np.arange(self.beta.start, self.beta.stop)
-        nd = 3 if self.travel_bias else 0
         for j, sample in enumerate(window):
             y = np.arange(self.y(j).start, self.y(j).stop)
-            if j < j0 or kf_weights[j] == 0:
+            if j < j0:
                 H[y, y] += 1.0 / cost  # inert: unit diagonal after scaling
                 continue
-            # suspension rows: rho = ls (z - xp - X y - Jd delta)
-            Ms = np.zeros((4, self.w + self.n_bias))
-            Ms[:, : self.w] = -self.X
-            if nd:
-                Ms[:, self.w : self.w + nd] = -sample.Jd @ self.travel_basis * TRAVEL_UNIT
-            if self.hard and self.n_bias > nd:  # x = A^+ (b - Ba beta_a) + n omega
-                pinv = np.linalg.pinv(self.A)
-                Ms[:, self.w + nd :] = pinv @ (sample.Ba * (sample.lc > 0)[:, None])
-            Ms *= sample.ls[:, None]
-            rs = -sample.ls * (sample.z - sample.xp)
-            self._rows(H, g, y, beta, Ms, rs, self.suspension, self.aux(j, 0))
-            if not self.hard:  # equilibrium rows: rho = lc (b - Ba beta_a - A X y)
-                Mc = np.zeros((3, self.w + self.n_bias))
-                Mc[:, : self.w] = -self.A @ self.X
-                if self.n_bias > nd:
-                    Mc[:, self.w + nd :] = -sample.Ba
-                Mc *= sample.lc[:, None]
-                rc = -sample.lc * sample.b
-                self._rows(H, g, y, beta, Mc, rc, self.constraint, self.aux(j, 1))
+            Hl, gl = local[j]
+            H[self.blocks[j]] += Hl
+            g[self.columns[j]] += gl
             if j == j0:
-                columns = y
-                self._add(H, g, columns, self.X, prior - sample.xp, arrival)
+                self._add(H, g, y, self.X, prior - sample.xp, arrival)
             elif sample.link > 0:
                 before = np.arange(self.y(j - 1).start, self.y(j - 1).stop)
                 M = np.hstack([self.X, -self.X])
@@ -323,7 +345,7 @@ class WindowQP:
         if nd:
             Ms[:, self.w : self.w + nd] = -sample.Jd @ self.travel_basis * TRAVEL_UNIT
         if self.hard and self.n_bias > nd:
-            Ms[:, self.w + nd :] = np.linalg.pinv(self.A) @ (sample.Ba * (sample.lc > 0)[:, None])
+            Ms[:, self.w + nd :] = self.pinv @ (sample.Ba * (sample.lc > 0)[:, None])
         M.append(Ms * sample.ls[:, None])
         weights.append(effective_weights(self.suspension, rho_s))
         if not self.hard:

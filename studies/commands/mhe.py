@@ -173,6 +173,26 @@ def run_bench(args: argparse.Namespace) -> int:
                       f"{np.percentile(times, 99):10.1f} {median / kf_step:10.2f}")  # fmt: skip
                 if c_available:
                     _bench_c(vehicle, settings, signals, kf_step)
+        for candidate in robust_candidates(horizon):
+            if candidate.settings is None or not (
+                candidate.settings.extended or candidate.settings.lag
+            ):
+                continue
+            estimate = MovingHorizonEstimator(vehicle, candidate.settings).run(signals)
+            times = estimate.solve_time * 1e6
+            median = float(np.median(times))
+            print(f"{candidate.name + ' Python':38s} {median:10.1f} "
+                  f"{np.percentile(times, 99):10.1f} {median / kf_step:10.2f}")  # fmt: skip
+        if c_available:
+            print(f"{'(robust losses, bias states: no C yet)':38s}")
+    kf.smooth(signals.slice(0, 10))  # builds the compiled backward pass once
+    smooth = []
+    for _ in range(5):
+        start = time.perf_counter()
+        kf.smooth(signals)
+        smooth.append((time.perf_counter() - start) / len(signals) * 1e6)
+    print(f"{'KF + RTS smoother (compiled, amortised)':38s} {np.median(smooth):10.2f} "
+          f"{'':>10s} (min {min(smooth):.2f}, max {max(smooth):.2f})")  # fmt: skip
     return 0
 
 
