@@ -15,7 +15,11 @@ masks) are dropped from the sample's terms and reported in ``flags``.
 Limits, against the Python MHE:
 
 - steady-state arrival cost only (:attr:`Arrival.STEADY_STATE`), from tables;
-- a fixed sample interval, baked in at generation (cost scale, weights);
+- the cost scale and the steady-state arrival weight at the nominal interval
+  given at generation (as Python's at its log's median interval); each
+  sample's own interval sets its weights and random-walk link, and a
+  non-positive or non-finite interval holds the estimate (flags 255), as in
+  Python;
 - hard constraints with a missing equilibrium input take :math:`A x` of the
   previous MHE estimate for that row, where Python takes the Kalman
   estimate of the same sample (there is no filter in the C);
@@ -62,7 +66,7 @@ from wheelload.estimators.mhe import (
 from wheelload.estimators.mhe_terms import LOAD_SCALE, TERMS_NAME
 from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import input_matrix
+from wheelload.estimators.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
 from wheelload.models import Vehicle
 
 
@@ -105,7 +109,9 @@ def generate_mhe(
     mhe = MovingHorizonEstimator(vehicle, settings)
     N, width = settings.horizon, mhe.width
     state = mhe.initial_state(dt)
-    first = mhe._arrival(state, mhe.filter.initial_state().P[None], np.array([dt]))[0]
+    P0 = mhe.filter.initial_state().P
+    if not np.allclose(P0, P0[0, 0] * np.eye(4), rtol=0, atol=0):
+        raise ValueError("the embedded MHE needs an isotropic initial covariance")
     with quiet_stdout():  # OSQP reports the files it writes
         mhe.workspace.solver.codegen(str(folder / "osqp"), prefix="wheelload_mhe_",
                                      parameters="matrices", force_rewrite=True,
@@ -125,11 +131,12 @@ def generate_mhe(
         f"#define SZ_ARG {function.sz_arg()}\n#define SZ_RES {function.sz_res()}\n",
         f"#define SZ_IW {function.sz_iw()}\n#define SZ_W {function.sz_w()}\n",
         f"#define LOAD_SCALE {LOAD_SCALE!r}\n#define DT {float(dt)!r}\n",
+        f"#define Q_DENSITY {float(mhe.tuning[0])!r}\n#define P0_VAR {float(P0[0, 0])!r}\n",
+        f"#define MAX_INTERVAL {float(MAX_INTERVAL)!r}\n",
         f"#define COST {float(state.cost)!r}\n#define RHO0 {float(settings.solver.rho)!r}\n",
         f"#define LOW_LOAD {float(max(low, -1e30))!r}\n",
         f"#define HIGH_LOAD {float(min(high, 1e30))!r}\n",
         _array("ORDER", order, "int"),
-        _array("ARRIVAL_FIRST", first),
         _array("ARRIVAL_STEADY", state.steady),
         _array("P_VECTOR", mhe.p),
         _array("TUNING", mhe.tuning),
@@ -154,6 +161,7 @@ static double HIST[N][4];
 static OSQPFloat XW[NX], YW[NY], Q[NX], L[NX + 1], U[NX + 1], PX[NNZ]; /* OSQP's type */
 static double VALUES[N * W * W + (N - 1) * W]; /* diagonal blocks, then couplings */
 static long K = 0;
+static double ARRIVAL_FIRST[16]; /* c s^2 (P0 + q dt_0 I)^-1 of the log's first interval */
 
 void wheelload_mhe_reset(void) {
     K = 0;
@@ -207,11 +215,25 @@ static int hessian(int j0, const double *arrival) {
     return changed;
 }
 
-/* One sample u[12] (non-finite entries: missing; the terms they feed are dropped).
-   Returns OSQP's status (1 = solved); loads[4] keeps the previous estimate on failure;
-   flags: the skipped updates as in the KF (bit i: suspension FL..RR, vertical, pitch, roll). */
-int wheelload_mhe_step(const double *u, double *loads, int *iterations, unsigned *flags) {
-    double u0[12], valid[12], dt = DT, cost = COST;
+/* One sample u[12] (non-finite entries: missing; the terms they feed are dropped) after the
+   interval dt [s] (0 < dt < MAX_INTERVAL, else nothing is solved: the last estimate is held,
+   status 0, flags 255). Returns OSQP's status (1 = solved); loads[4] keeps the previous
+   estimate on failure; flags: the skipped updates as in the KF (bit i: suspension FL..RR,
+   vertical, pitch, roll; bit 7: interval rejected). */
+int wheelload_mhe_step(const double *u, double dt, double *loads, int *iterations,
+                       unsigned *flags) {
+    double u0[12], valid[12], cost = COST;
+    if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
+        memcpy(loads, HIST[N - 1], sizeof(double) * 4);
+        *iterations = 0;
+        *flags = 255u;
+        return 0;
+    }
+    if (K == 0) {
+        memset(ARRIVAL_FIRST, 0, sizeof ARRIVAL_FIRST);
+        for (int r = 0; r < 4; ++r)
+            ARRIVAL_FIRST[r * 5] = cost * LOAD_SCALE * LOAD_SCALE / (P0_VAR + Q_DENSITY * dt);
+    }
     for (int i = 0; i < 12; ++i) {
         valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
         u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
@@ -297,14 +319,16 @@ int wheelload_mhe_step(const double *u, double *loads, int *iterations, unsigned
     return status;
 }
 
-/* A whole log (u: n x 12, row-major); wall time per sample in seconds. */
-void wheelload_mhe_run(int n, const double *u, double *loads, int *status, int *iterations,
-                       unsigned *flags, double *seconds) {
+/* A whole log (u: n x 12, row-major; dt: the interval before each sample); wall time per
+   sample in seconds. */
+void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, int *status,
+                       int *iterations, unsigned *flags, double *seconds) {
     wheelload_mhe_reset();
     for (int k = 0; k < n; ++k) {
         struct timespec start, stop;
         clock_gettime(CLOCK_MONOTONIC, &start);
-        status[k] = wheelload_mhe_step(u + 12 * k, loads + 4 * k, iterations + k, flags + k);
+        status[k] = wheelload_mhe_step(u + 12 * k, dt[k], loads + 4 * k, iterations + k,
+                                       flags + k);
         clock_gettime(CLOCK_MONOTONIC, &stop);
         seconds[k] = (stop.tv_sec - start.tv_sec) + 1e-9 * (stop.tv_nsec - start.tv_nsec);
     }
@@ -330,6 +354,7 @@ class CompiledMhe:
 
     def run(self, signals: Signals) -> EmbeddedResult:
         u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
+        dt = np.ascontiguousarray(sample_intervals(signals.t), dtype=float)
         n = len(signals)
         loads = np.zeros((n, 4))
         status = np.zeros(n, dtype=np.int32)
@@ -341,7 +366,8 @@ class CompiledMhe:
             return array.ctypes.data_as(ctypes.POINTER(kind))
 
         self._lib.wheelload_mhe_run(
-            ctypes.c_int(n), pointer(u, ctypes.c_double), pointer(loads, ctypes.c_double),
+            ctypes.c_int(n), pointer(u, ctypes.c_double), pointer(dt, ctypes.c_double),
+            pointer(loads, ctypes.c_double),
             pointer(status, ctypes.c_int), pointer(iterations, ctypes.c_int),
             pointer(flags, ctypes.c_uint), pointer(seconds, ctypes.c_double),
         )  # fmt: skip
@@ -373,13 +399,15 @@ def build_mhe_library(
 
 MAIN = r"""
 /* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
-   Each row: the 12 inputs d_fl..d_rr, v_fl..v_rr, ax, ay, az, vx ('nan' = missing).
+   Each row: the interval dt [s] before the sample, then the 12 inputs d_fl..d_rr, v_fl..v_rr,
+   ax, ay, az, vx ('nan' = missing).
    Output CSV: fz_fl, fz_fr, fz_rl, fz_rr, status, iterations, flags; exit 2 on bad use. */
 #include <stdio.h>
 #include "osqp.h"
 
 void wheelload_mhe_reset(void);
-int wheelload_mhe_step(const double *u, double *loads, int *iterations, unsigned *flags);
+int wheelload_mhe_step(const double *u, double dt, double *loads, int *iterations,
+                       unsigned *flags);
 
 int main(int argc, char **argv) {
     if (argc != 3) {
@@ -399,15 +427,15 @@ int main(int argc, char **argv) {
     }
     fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,status,iterations,flags,osqp_float_bytes\n");
     wheelload_mhe_reset();
-    double u[12], loads[4];
+    double row[13], loads[4];
     for (;;) {
         int i;
-        for (i = 0; i < 12; ++i)
-            if (fscanf(in, "%lf", &u[i]) != 1) break;
-        if (i < 12) break;
+        for (i = 0; i < 13; ++i)
+            if (fscanf(in, "%lf", &row[i]) != 1) break;
+        if (i < 13) break;
         int iterations;
         unsigned flags;
-        int status = wheelload_mhe_step(u, loads, &iterations, &flags);
+        int status = wheelload_mhe_step(row + 1, row[0], loads, &iterations, &flags);
         fprintf(out, "%.9g,%.9g,%.9g,%.9g,%d,%d,%u,%d\n", loads[0], loads[1], loads[2],
                 loads[3], status, iterations, flags, (int)sizeof(OSQPFloat));
     }
@@ -462,7 +490,7 @@ def build_mhe_program(
 
 
 def write_inputs(signals: Signals, path: Path) -> Path:
-    """The log's inputs as text rows for :data:`MAIN` (17 significant digits, 'nan' missing)."""
-    u = input_matrix(signals).T
-    np.savetxt(path, u, fmt="%.17g")
+    """The log's intervals and inputs as text rows for :data:`MAIN` (17 digits, 'nan' missing)."""
+    rows = np.column_stack([sample_intervals(signals.t), input_matrix(signals).T])
+    np.savetxt(path, rows, fmt="%.17g")
     return path
