@@ -186,6 +186,7 @@ def robust_candidates(horizon: int = 10, quick: bool = False) -> list[Candidate]
     """The KF, its RTS smoother and the MHE with the settings a KF cannot express."""
     l1 = ResidualLoss(kind=Loss.L1)
     huber = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
+    tight = ResidualLoss(kind=Loss.HUBER, threshold=0.2)
     lag = min(5, horizon - 1)
     rows = [
         Candidate(name="two-stage KF", settings=None),
@@ -205,6 +206,10 @@ def robust_candidates(horizon: int = 10, quick: bool = False) -> list[Candidate]
         Candidate(
             name=f"MHE N={horizon} Huber 0.5σ (susp)",
             settings=MheSettings(horizon=horizon, suspension_loss=huber),
+        ),
+        Candidate(
+            name=f"MHE N={horizon} Huber 0.2σ (susp+eq)",
+            settings=MheSettings(horizon=horizon, suspension_loss=tight, constraint_loss=tight),
         ),
         Candidate(
             name=f"MHE N={horizon} travel offsets",
