@@ -132,3 +132,23 @@ def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle):
     clean_error = pooled_rmse(mhe.run(signals).loads, signals.reference)
     # on the clean log it costs nothing: measured 25.2 N against the KF's 25.5 N
     assert clean_error < 1.05 * pooled_rmse(kf.run(signals).loads, signals.reference)
+
+
+def test_step_equals_run_for_the_extended_window(vehicle, drive):
+    from wheelload.estimators import Sample
+    from wheelload.estimators.two_stage import sample_intervals
+
+    signals = drive.slice(0, 40)
+    settings = MheSettings(
+        horizon=6, suspension_loss=HUBER, constraint_loss=HUBER, bias_states=BiasStates.TRAVEL
+    )
+    mhe = MovingHorizonEstimator(vehicle, settings)
+    whole = mhe.run(signals)
+    dt = sample_intervals(signals.t)
+    state = mhe.initial_state(float(np.median(dt)))
+    for k in range(len(signals)):
+        sample = Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=float(signals.vx[k]))
+        state, one = mhe.step(state, sample, float(dt[k]))
+        # filter compiled in run, CasADi in step: rounding, within the solver tolerance
+        np.testing.assert_allclose(one.loads[0], whole.loads[k], rtol=0, atol=1e-2)
+        np.testing.assert_allclose(one.bias[0], whole.bias[k], rtol=0, atol=1e-6)
