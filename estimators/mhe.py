@@ -43,6 +43,12 @@ tolerance) takes the Kalman estimate, clipped to the bounds, and is marked
 in :attr:`MheEstimate.fallback`. Bounds hold exactly: the solver's
 violations, once checked to be within tolerance, are clipped.
 
+A log's first sample (``state.k == 0``) sets the solver up afresh, so a run
+is a function of its log and start state alone. A window in which no sample
+has a data term (every input missing) is not solved: its minimiser is the
+last estimate carried by the random walk, taken in closed form, so the
+estimate is held without drift while the filter's :math:`\sigma` grows.
+
 Example
 -------
 >>> mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, bounded=True))
@@ -62,7 +68,21 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
-from wheelload.estimators.mhe_terms import LOAD_SCALE, Constraint, terms_function
+from wheelload.estimators.mhe_terms import (
+    LOAD_SCALE,
+    Constraint,
+    residual_function,
+    terms_function,
+)
+from wheelload.estimators.mhe_window import (
+    BiasStates,
+    Loss,
+    ResidualLoss,
+    WindowQP,
+    WindowSample,
+    bias_scales,
+    travel_basis,
+)
 from wheelload.estimators.projection import ProjectionKF, Weighting
 from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.result import Estimate
@@ -81,7 +101,10 @@ from wheelload.models import Vehicle, equilibrium_function
 __all__ = [
     "LOAD_SCALE",
     "Arrival",
+    "BiasStates",
     "Constraint",
+    "Loss",
+    "ResidualLoss",
     "MheEstimate",
     "MheSettings",
     "MheState",
@@ -130,6 +153,10 @@ class MheSettings:
     max_load: float = math.inf  # N, upper bound when ``bounded``
     arrival: Arrival = Arrival.KALMAN
     solver: SolverSettings = field(default_factory=SolverSettings)
+    suspension_loss: ResidualLoss = field(default_factory=ResidualLoss)
+    constraint_loss: ResidualLoss = field(default_factory=ResidualLoss)  # soft only
+    bias_states: BiasStates = BiasStates.NONE
+    lag: int = 0  # samples: the output is the window's estimate of sample k - lag
 
     def __post_init__(self) -> None:
         if not isinstance(self.horizon, int) or self.horizon < 1:
@@ -140,11 +167,44 @@ class MheSettings:
             raise TypeError(f"arrival must be an Arrival, got {self.arrival!r}")
         if not self.max_load > 0:
             raise ValueError(f"max_load must be > 0, got {self.max_load}")
+        for name in ("suspension_loss", "constraint_loss"):
+            if not isinstance(getattr(self, name), ResidualLoss):
+                raise TypeError(f"{name} must be a ResidualLoss, got {getattr(self, name)!r}")
+        if not isinstance(self.bias_states, BiasStates):
+            raise TypeError(f"bias_states must be BiasStates, got {self.bias_states!r}")
+        if not isinstance(self.lag, int) or not 0 <= self.lag < self.horizon:
+            raise ValueError(f"lag must be an integer in [0, horizon), got {self.lag!r}")
+        hard = self.constraint is Constraint.HARD
+        if hard and BiasStates.ACCELERATION in self.bias_states:
+            raise ValueError(
+                "acceleration bias states need the soft constraint (hard: the bounds would "
+                "move with the bias); use constraint=Constraint.SOFT"
+            )
+        if hard and self.constraint_loss.robust:
+            raise ValueError("a hard constraint has no residual: constraint_loss must be quadratic")
+
+    @property
+    def extended(self) -> bool:
+        """True when the window needs auxiliary or bias variables (:mod:`mhe_window`)."""
+        return (
+            self.suspension_loss.robust
+            or self.constraint_loss.robust
+            or self.bias_states != BiasStates.NONE
+        )
 
     def label(self) -> str:
         bounds = ", bounded" if self.bounded else ""
         arrival = ", steady arrival" if self.arrival is Arrival.STEADY_STATE else ""
-        return f"MHE N={self.horizon} ({self.constraint.value}{bounds}{arrival})"
+        extra = ""
+        if self.suspension_loss.robust:
+            extra += f", susp {self.suspension_loss.label()}"
+        if self.constraint_loss.robust:
+            extra += f", eq {self.constraint_loss.label()}"
+        if self.bias_states != BiasStates.NONE:
+            extra += f", {self.bias_states.label()}"
+        if self.lag:
+            extra += f", lag {self.lag}"
+        return f"MHE N={self.horizon} ({self.constraint.value}{bounds}{arrival}{extra})"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -155,6 +215,8 @@ class MheEstimate(Estimate):
     iterations: np.ndarray  # (n,) ADMM iterations
     fallback: np.ndarray  # (n,) True where the Kalman estimate was used
     solve_time: np.ndarray  # (n,) s, wall time of the sample's QP update and solve
+    lag: int = 0  # row i holds the estimate of sample i made when sample i + lag arrived
+    bias: np.ndarray | None = None  # (n, nb) bias states: travel offsets [m], then ax, ay
 
     def to_pandas(self):
         frame = super().to_pandas()
@@ -162,6 +224,10 @@ class MheEstimate(Estimate):
         frame["iterations"] = self.iterations
         frame["fallback"] = self.fallback
         frame["solve_time"] = self.solve_time
+        frame["lag"] = self.lag
+        if self.bias is not None:
+            for i in range(self.bias.shape[1]):
+                frame[f"bias_{i}"] = self.bias[:, i]
         return frame
 
 
@@ -190,6 +256,11 @@ class MheState:
     x: np.ndarray  # (N w,) primal warm start (the last solution)
     y: np.ndarray  # (m,) dual warm start
     rho: float  # OSQP's step size after the last solve
+    kfx: np.ndarray  # (N, 4) the filter's estimates of the window's samples (lagged fallback)
+    samples: tuple = ()  # extended window: the WindowSample of each sample
+    local: tuple = ()  # extended window: each sample's (H, g) of its data rows
+    beta: np.ndarray = field(default_factory=lambda: np.zeros(0))  # bias estimate
+    beta_info: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # its information
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,6 +277,7 @@ class _SampleTerms:
     used: np.ndarray
     kf: FilterState  # the filter's state after the sample
     std: np.ndarray  # the filter's standard deviations
+    rows: tuple | None = None  # extended window: (z, Jd, Ba, ls, lc) of residual_function
 
 
 class MovingHorizonEstimator:
@@ -253,6 +325,20 @@ class MovingHorizonEstimator:
             upper_load=self.load_bounds[1],
         )
         self.workspace = _Workspace(s, self.width)
+        if s.extended:
+            std, self.beta_bound, self.beta_density = bias_scales(s.bias_states, vehicle)
+            travel = BiasStates.TRAVEL in s.bias_states
+            self.residuals = residual_function()
+            u0 = np.zeros(12)
+            Jd = np.asarray(self.residuals(u0, np.ones(12), 0.01, self.p, self.tuning)[1])
+            self.travel_basis = travel_basis(Jd, self.null)
+            self.beta_std = std
+            self.window_qp = WindowQP(
+                horizon=s.horizon, hard=self.hard, A=self.A, null=self.null,
+                suspension=s.suspension_loss, constraint=s.constraint_loss,
+                n_bias=std.size, travel_basis=self.travel_basis if travel else None,
+                solver=s.solver,
+            )  # fmt: skip
 
     # -- set-up ------------------------------------------------------------------------------
 
@@ -292,7 +378,7 @@ class MovingHorizonEstimator:
         else:
             steady = np.zeros((4, 4))
         x0 = np.array(self.filter.parameters.static(), dtype=float)
-        return MheState(
+        state = MheState(
             k=0,
             cost=cost,
             steady=steady,
@@ -309,6 +395,26 @@ class MovingHorizonEstimator:
             x=np.zeros(N * w),
             y=np.zeros(N * w if self.settings.bounded else 0),
             rho=self.settings.solver.rho,
+            kfx=np.tile(x0, (N, 1)),
+        )
+        if self.settings.extended:
+            state = replace(state, **self._initial_extended(x0))
+        return state
+
+    def _initial_extended(self, x0: np.ndarray) -> dict:
+        """The extended window's inert samples, warm start and bias prior."""
+        qp, w = self.window_qp, self.width
+        inert = WindowSample(
+            z=x0, Jd=np.zeros((4, 4)), b=np.zeros(3), Ba=np.zeros((3, 2)), ls=np.zeros(4),
+            lc=np.zeros(3), xp=np.zeros(4), link=0.0, lower=np.zeros(w), upper=np.zeros(w),
+        )  # fmt: skip
+        return dict(
+            samples=(inert,) * self.settings.horizon,
+            local=(qp.local_terms(inert),) * self.settings.horizon,
+            x=np.zeros(qp.n),
+            y=np.zeros(qp.n),
+            beta=np.zeros(self.beta_std.size),
+            beta_info=np.diag(1.0 / self.beta_std**2),
         )
 
     # -- per sample --------------------------------------------------------------------------
@@ -330,10 +436,20 @@ class MovingHorizonEstimator:
             valid, dt, kf.x, self.p, self.tuning, state.cost,
         )  # fmt: skip
         H, g, link, xp, lower, upper, b, used = (np.asarray(o).ravel() for o in out)
-        terms = _SampleTerms(H, g, float(link[0]), xp, lower, upper, b, used, kf, estimate.std[0])
+        rows = None
+        if self.settings.extended:
+            rows = tuple(
+                np.asarray(o)
+                for o in self.residuals(np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0),
+                                        valid, dt, self.p, self.tuning)
+            )  # fmt: skip
+            rows = (rows[0].ravel(), rows[1], rows[2], rows[3].ravel(), rows[4].ravel())
+        terms = _SampleTerms(
+            H, g, float(link[0]), xp, lower, upper, b, used, kf, estimate.std[0], rows
+        )
         arrival = self._arrival(state, state.kf.P[None], np.array([dt]))[0]
         state, report = self._advance(state, terms, arrival)
-        return state, _estimate(np.array([np.nan]), [report], self.A)
+        return state, _estimate(np.array([np.nan]), [report], self.A, lag=self.settings.lag)
 
     def _rejected(self, state: MheState, sample: Sample, dt: float) -> MheEstimate:
         """The held estimate of a sample whose interval is rejected."""
@@ -364,6 +480,8 @@ class MovingHorizonEstimator:
 
     def _advance(self, state: MheState, terms: _SampleTerms, arrival: np.ndarray):
         """Push one sample's terms into the window, solve, and return the state and report."""
+        if self.settings.extended:
+            return self._advance_extended(state, terms, arrival)
         start = time.perf_counter()
         link = terms.link if state.k > 0 else 0.0  # the log's first sample: the arrival instead
         drift = link / LOAD_SCALE * float(self.null @ (terms.xp - state.xp[-1]))
@@ -381,20 +499,34 @@ class MovingHorizonEstimator:
         N = self.settings.horizon
         j0 = max(0, N - 1 - state.k)
         prior = state.history[0]
-        Px = _hessian_values(window, j0, self.null, self.hard)
-        q = _linear(window, j0, prior, self.null, self.hard)
+        if state.k == 0:  # a new log: a fresh solver, so a run depends on its log alone
+            self.workspace = _Workspace(self.settings, self.width)
         x_warm = np.concatenate([state.x[w:], state.x[-w:]])
         y_warm = np.concatenate([state.y[w:], state.y[-w:]]) if state.y.size else state.y
-        bounds = (window["lower"].ravel(), window["upper"].ravel()) if state.y.size else None
-        result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
-        status, iterations = int(result.info.status_val), int(result.info.iter)
+        rho = state.rho
         x = None
-        if status == SOLVED:
-            x_warm, y_warm = np.array(result.x), np.array(result.y)
+        if not np.any(window["H"][j0:]):
+            # No sample in the window has a data term: the minimiser is the prior carried by
+            # the random walk, in closed form (the QP is ill-conditioned there). Without data
+            # since sample k-N, the last estimate is that prior carried forward (equal in exact
+            # arithmetic) and is taken, so no solver rounding cycles with period N.
+            last = state.history[-1]
+            x_warm = _prior_solution(window, j0, last, self.null, self.hard, x_warm, w)
+            status, iterations = SOLVED, 0
             x = self._loads(x_warm[-w:], window)
+        else:
+            Px = _hessian_values(window, j0, self.null, self.hard)
+            q = _linear(window, j0, prior, self.null, self.hard)
+            bounds = (window["lower"].ravel(), window["upper"].ravel()) if state.y.size else None
+            result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
+            status, iterations = int(result.info.status_val), int(result.info.iter)
+            if status == SOLVED:
+                x_warm, y_warm = np.array(result.x), np.array(result.y)
+                x = self._loads(x_warm[-w:], window)
         failed = x is None
         if failed:
             x = np.clip(terms.kf.x, *self.load_bounds)
+        kfx = _shift(state.kfx, terms.kf.x)
         state = replace(
             state,
             k=state.k + 1,
@@ -403,10 +535,146 @@ class MovingHorizonEstimator:
             x=x_warm,
             y=y_warm,
             rho=rho,
+            kfx=kfx,
             **window,
         )
-        report = (x, terms, status, iterations, failed, time.perf_counter() - start)
+        lagged = (
+            x
+            if self.settings.lag == 0 or failed
+            else self.window_loads(state, N - 1 - self.settings.lag)
+        )
+        report = (lagged, terms, status, iterations, failed, time.perf_counter() - start, None)
         return state, report
+
+    def window_loads(self, state: MheState, j: int) -> np.ndarray:
+        """The loads [N] of window sample ``j`` (0 oldest) in the state's last solution.
+
+        A value outside its bounds by more than the tolerance gives the
+        filter's estimate of that sample, clipped.
+        """
+        if self.settings.extended:
+            qp = self.window_qp
+            block = state.x[qp.y(j)]
+            sample = state.samples[j]
+            x = self._checked(block, sample.lower, sample.upper, sample.xp)
+        else:
+            w = self.width
+            block = state.x[j * w : (j + 1) * w]
+            x = self._checked(block, state.lower[j], state.upper[j], state.xp[j])
+        return np.clip(state.kfx[j], *self.load_bounds) if x is None else x
+
+    def _checked(self, block, lower, upper, xp) -> np.ndarray | None:
+        """Loads [N] from one sample's QP variables, or None if out of bounds."""
+        eps = (self.settings.solver.eps_abs, self.settings.solver.eps_rel)
+        clipped = _clip_checked(block, lower, upper, eps)
+        if clipped is None:
+            return None
+        if not self.hard:
+            return clipped * LOAD_SCALE
+        x = xp + self.null * (clipped[0] * LOAD_SCALE)
+        return _clip_checked(x, *self.load_bounds, (1e-9, 1e-12))
+
+    def _advance_extended(self, state: MheState, terms: _SampleTerms, arrival: np.ndarray):
+        """:meth:`_advance` for the window with robust losses and bias states."""
+        start = time.perf_counter()
+        qp, N, w, c = self.window_qp, self.settings.horizon, self.width, state.cost
+        z, Jd, Ba, ls, lc = terms.rows
+        link = terms.link if state.k > 0 else 0.0
+        sample = WindowSample(
+            z=z, Jd=Jd, b=terms.b, Ba=Ba, ls=ls, lc=lc, xp=terms.xp,
+            link=link / (c * LOAD_SCALE**2), lower=terms.lower, upper=terms.upper,
+        )  # fmt: skip
+        samples = state.samples[1:] + (sample,)
+        local = state.local[1:] + (qp.local_terms(sample),)
+        arrivals = _shift(state.arrival, arrival)
+        kfx = _shift(state.kfx, terms.kf.x)
+        j0 = max(0, N - 1 - state.k)
+        if state.k == 0:
+            qp.setup()
+        width = qp.width
+        shifted = np.concatenate([state.x[width : N * width], state.x[(N - 1) * width : N * width]])
+        x_warm = np.concatenate([shifted, state.x[N * width :]])
+        shifted = np.concatenate([state.y[width : N * width], state.y[(N - 1) * width : N * width]])
+        y_warm = np.concatenate([shifted, state.y[N * width :]])
+        beta, info = state.beta, state.beta_info
+        x = None
+        if not any(np.any(s.ls) or np.any(s.lc) for s in samples[j0:]):
+            # no data in the window: hold, as in the plain window (see _advance)
+            loads = x_warm[: N * width].reshape(N, width)[:, :w].ravel()
+            window = dict(arrival=arrivals, xp=np.array([s.xp for s in samples]),
+                          lower=np.array([s.lower for s in samples]),
+                          upper=np.array([s.upper for s in samples]))  # fmt: skip
+            loads = _prior_solution(window, j0, state.history[-1], self.null, self.hard, loads, w)
+            blocks = x_warm[: N * width].reshape(N, width).copy()
+            blocks[:, :w] = loads.reshape(N, w)
+            blocks[:, w:] = 0.0
+            x_warm = np.concatenate([blocks.ravel(), beta])
+            status, iterations = SOLVED, 0
+        else:
+            H, g = qp.assemble(
+                samples,
+                j0,
+                state.history[0],
+                arrivals[j0] / (c * LOAD_SCALE**2),
+                beta,
+                info,
+                local,
+                c,
+            )
+            low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
+            result = qp.solve(H, g, low, high, x_warm, y_warm)
+            status, iterations = int(result.info.status_val), int(result.info.iter)
+            if status == SOLVED:
+                x_warm, y_warm = np.array(result.x), np.array(result.y)
+        state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)
+        if status == SOLVED:
+            x = self._checked(x_warm[qp.y(N - 1)], sample.lower, sample.upper, sample.xp)
+        failed = x is None
+        if failed:
+            x = np.clip(terms.kf.x, *self.load_bounds)
+        else:
+            beta = np.clip(x_warm[qp.beta], -self.beta_bound, self.beta_bound)
+            if state.k >= N - 1 and beta.size:  # the oldest sample leaves the window next
+                info = info + self._leaving_information(state, x_warm)
+        if beta.size:
+            dt = 1.0 / (self.tuning[0] * max(sample.link, 1e-300)) if sample.link else 0.0
+            info = np.linalg.inv(np.linalg.inv(info) + np.diag(self.beta_density * dt))
+        state = replace(
+            state,
+            k=state.k + 1,
+            kf=terms.kf,
+            history=_shift(state.history, x),
+            rho=state.rho,
+            arrival=arrivals,
+            beta=beta,
+            beta_info=0.5 * (info + info.T),
+        )
+        lag = self.settings.lag
+        lagged = x if lag == 0 or failed else self.window_loads(state, N - 1 - lag)
+        report = (lagged, terms, status, iterations, failed, time.perf_counter() - start,
+                  self.bias_report(beta))  # fmt: skip
+        return state, report
+
+    def bias_report(self, beta: np.ndarray) -> np.ndarray:
+        """Bias states in reporting units: travel offsets FL..RR [m], then ax, ay [m/s^2]."""
+        if BiasStates.TRAVEL not in self.settings.bias_states:
+            return beta
+        offsets = self.travel_basis @ beta[:3] * 1e-3
+        return np.concatenate([offsets, beta[3:]])
+
+    def _leaving_information(self, state: MheState, v: np.ndarray) -> np.ndarray:
+        """Bias information of the window's oldest sample at the solution ``v``."""
+        qp = self.window_qp
+        s = state.samples[0]
+        y = v[qp.y(0)]
+        beta = v[qp.beta]
+        x = s.xp + qp.X @ y
+        nd = 3 if qp.travel_bias else 0
+        delta = qp.travel_basis @ beta[:nd] * 1e-3 if nd else np.zeros(4)
+        beta_a = beta[nd:] if beta.size > nd else np.zeros(2)
+        rho_s = s.ls * (s.z - (s.Jd @ delta) - x)
+        rho_c = s.lc * (s.b - s.Ba @ beta_a - self.A @ x)
+        return qp.bias_information(s, rho_s, rho_c)
 
     def _loads(self, last: np.ndarray, window: dict) -> np.ndarray | None:
         """The newest sample's loads [N] from its QP variables, or None if out of bounds."""
@@ -441,6 +709,14 @@ class MovingHorizonEstimator:
             u, valid, dt[None], fallback.loads.T, self.p, self.tuning, state.cost
         )
         H, g, link, xp, lower, upper, b, used = (np.asarray(o).T for o in out)
+        rows = [None] * n
+        if self.settings.extended:
+            z, Jd, Ba, ls, lc = (np.asarray(o) for o in self.residuals.map(n)(
+                u, valid, dt[None], self.p, self.tuning))  # fmt: skip
+            rows = [
+                (z[:, k], Jd[:, 4 * k : 4 * k + 4], Ba[:, 2 * k : 2 * k + 2], ls[:, k], lc[:, k])
+                for k in range(n)
+            ]
         previous = np.concatenate([state.kf.P[None], covariances[:-1]])
         arrival = self._arrival(state, previous, dt)
         reports = []
@@ -448,17 +724,24 @@ class MovingHorizonEstimator:
             kf = FilterState(fallback.loads[k], covariances[k])
             terms = _SampleTerms(
                 H[k], g[k], float(link[k, 0]), xp[k], lower[k], upper[k], b[k], used[k], kf,
-                fallback.std[k],
+                fallback.std[k], rows[k],
             )  # fmt: skip
             state, report = self._advance(state, terms, arrival[k])
             reports.append(report)
-        return _estimate(signals.t.copy(), reports, self.A)
+        lag = self.settings.lag
+        if lag:  # row i: the estimate of sample i; the log's last samples from its last window
+            N = self.settings.horizon
+            tail = [self.window_loads(state, N - lag + m) for m in range(min(lag, n))]
+            lagged = [r[0] for r in reports[lag:]] + tail[max(0, lag - n) :]
+            reports = [(x, *r[1:]) for x, r in zip(lagged, reports)]
+        return _estimate(signals.t.copy(), reports, self.A, lag=lag)
 
 
-def _estimate(t: np.ndarray, reports: list, A: np.ndarray) -> MheEstimate:
+def _estimate(t: np.ndarray, reports: list, A: np.ndarray, lag: int = 0) -> MheEstimate:
     """The :class:`MheEstimate` of the reports of :meth:`MovingHorizonEstimator._advance`."""
     loads = np.array([r[0] for r in reports]).reshape(-1, 4)
     terms = [r[1] for r in reports]
+    bias = None if reports[0][6] is None else np.array([r[6] for r in reports])
     b = np.array([s.b for s in terms]).reshape(-1, 3)
     used = np.array([s.used for s in terms]).reshape(-1, 7)
     return MheEstimate(
@@ -471,6 +754,8 @@ def _estimate(t: np.ndarray, reports: list, A: np.ndarray) -> MheEstimate:
         iterations=np.array([r[3] for r in reports], dtype=np.int64),
         fallback=np.array([r[4] for r in reports], dtype=bool),
         solve_time=np.array([r[5] for r in reports], dtype=float),
+        lag=lag,
+        bias=bias,
     )
 
 
@@ -478,6 +763,33 @@ def _arrival_weights(P: np.ndarray, q_dt: np.ndarray, cost: float) -> np.ndarray
     r""":math:`c s^2 (P + q\,dt\,I)^{-1}`, symmetrised, for each of the stacked ``P``."""
     W = np.linalg.inv(P + q_dt[:, None, None] * np.eye(4))
     return cost * LOAD_SCALE**2 * 0.5 * (W + W.transpose(0, 2, 1))
+
+
+def _prior_solution(
+    window: dict, j0: int, prior: np.ndarray, null: np.ndarray, hard: bool, x: np.ndarray, w: int
+) -> np.ndarray:
+    r"""The window's minimiser when no sample has a data term: the prior, carried unchanged.
+
+    Soft: :math:`x_j = \bar x` for every sample from :math:`j_0`. Hard:
+    :math:`\omega_{j_0} = n^\top \Pi^{-1}(\bar x - \bar x_{j_0}) / n^\top \Pi^{-1} n`,
+    then the random walk's increments in the warp direction are zero:
+    :math:`\omega_j = \omega_{j-1} - n^\top(\bar x_j - \bar x_{j-1})`. Each is clipped
+    to its bounds (interval ends) afterwards. Samples before :math:`j_0` keep the warm start
+    ``x``.
+    """
+    solution = x.copy().reshape(-1, w)
+    if hard:
+        W = window["arrival"][j0]
+        xp = window["xp"]
+        omega = float(null @ W @ (prior - xp[j0]) / (null @ W @ null)) / LOAD_SCALE
+        for j in range(j0, len(xp)):
+            if j > j0:
+                omega -= float(null @ (xp[j] - xp[j - 1])) / LOAD_SCALE
+            solution[j, 0] = omega
+    else:
+        solution[j0:] = prior / LOAD_SCALE
+    solution[j0:] = np.clip(solution[j0:], window["lower"][j0:], window["upper"][j0:])
+    return solution.ravel()
 
 
 def _shift(window: np.ndarray, newest) -> np.ndarray:

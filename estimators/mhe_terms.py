@@ -135,3 +135,40 @@ def terms_function(
     inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
     dense = [ca.densify(ca.SX(output)) for output in outputs]  # C reads every entry
     return ca.Function(TERMS_NAME, inputs, dense, TERMS_INPUTS, TERMS_OUTPUTS)
+
+
+RESIDUAL_NAME = "wheelload_mhe_residual_rows"
+
+
+def residual_function(
+    suspension: ca.Function | None = None, equilibrium: ca.Function | None = None
+) -> ca.Function:
+    r"""``wheelload_mhe_residual_rows(u, u_valid, dt, p, tuning) -> (z, Jd, Ba, ls, lc)``.
+
+    The pseudo-measurement :math:`z` [N], its Jacobian :math:`J_d = \partial z /
+    \partial d`, the Jacobian :math:`B_a = \partial b / \partial (a_x, a_y)` of the
+    equilibrium right-hand side, and the rows' square-root weights
+    :math:`\sqrt{m\,dt/r}` (masked like the filter's updates) used by the
+    robust and bias-state window (:mod:`wheelload.estimators.mhe_window`).
+    """
+    suspension = suspension or suspension_function()
+    equilibrium = equilibrium or equilibrium_function()
+    u_raw = ca.SX.sym("u", len(INPUTS))
+    valid = ca.SX.sym("u_valid", len(INPUTS))
+    dt = ca.SX.sym("dt")
+    p = ca.SX.sym("p", len(ModelParameters.names()))
+    tuning = ca.SX.sym("tuning", len(TUNING))
+    u = _sanitise(u_raw, valid)
+    d, acc = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+    z = suspension(u[0:4], u[4:8], p)
+    Jd = ca.substitute(ca.jacobian(suspension(d, u[4:8], p), d), d, u[0:4])
+    _, b_sym = equilibrium(acc, u[11], p)
+    Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, u[8:11])
+    _, b = equilibrium(u[8:11], u[11], p)
+    ls = ca.sqrt(_dependency_mask(z, u_raw, valid) * dt / tuning[1])
+    lc = ca.sqrt(_dependency_mask(b, u_raw, valid) * dt / tuning[2:5])
+    outputs = [ca.densify(ca.SX(o)) for o in (z, Jd, Ba, ls, lc)]
+    return ca.Function(
+        RESIDUAL_NAME, [u_raw, valid, dt, p, tuning], outputs,
+        ["u", "u_valid", "dt", "p", "tuning"], ["z", "Jd", "Ba", "ls", "lc"],
+    )  # fmt: skip

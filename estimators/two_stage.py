@@ -137,8 +137,10 @@ def step_expressions(
         x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s
     )
     x_new, P_new, y_c, S_c, use_c = constraint_update(x_s, P_s, b, A, rc, mask_c)
-    # No travel row at all (IMU-only): the weak roll-split row observes the warp.
-    mask_split = dt_ok * (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
+    # No travel row at all (IMU-only): the weak roll-split row observes the warp, beside
+    # the roll moment it splits (with no data at all the step is a pure prediction).
+    no_travel = (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
+    mask_split = dt_ok * no_travel * mask_c[2]
     r_split = SPLIT_NOISE_RATIO * rc[2:3]
     x_new, P_new = sequential_update(
         x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
@@ -335,6 +337,15 @@ class TwoStageKF:
     ) -> tuple[Estimate, np.ndarray]:
         """As :meth:`run`, also returning the posterior covariances, shape (n, 4, 4)."""
         return self._run(signals, state, with_covariance=True)[:2]
+
+    def smooth(self, signals: Signals, state: FilterState | None = None) -> Estimate:
+        """Rauch–Tung–Striebel smoothed loads of a whole log (``estimators/smoother.py``)."""
+        from wheelload.estimators.smoother import rts_smooth
+
+        filtered, covariances = self.run_with_covariance(signals, state)
+        A, _ = equilibrium_function()(np.zeros(3), 0.0, self.p)
+        dt = sample_intervals(signals.t)
+        return rts_smooth(filtered, covariances, dt, self._step, self.p, self.tuning, A)
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:

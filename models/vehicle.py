@@ -133,11 +133,28 @@ class Suspension:
 
 
 @dataclass(frozen=True, kw_only=True)
+class BiasTuning:
+    """Slow sensor errors as MHE states: start std, bound, random-walk density."""
+
+    travel_offset_std: float = 0.004  # m
+    travel_offset_bound: float = 0.015  # m
+    travel_offset_density: float = 1e-9  # m^2/s
+    acceleration_bias_std: float = 0.3  # m/s^2
+    acceleration_bias_bound: float = 1.5  # m/s^2
+    acceleration_bias_density: float = 1e-5  # (m/s^2)^2/s
+
+    def _check(self) -> None:
+        for field in dataclasses.fields(self):
+            _positive(self, field.name)
+
+
+@dataclass(frozen=True, kw_only=True)
 class FilterTuning:
     process_noise_density: float  # N^2/s:  Q = q dt I
     suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
     constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt
     initial_std: float  # N
+    bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
 
     def _check(self) -> None:
         _positive(self, "process_noise_density")

@@ -49,6 +49,7 @@ class EstimateSettings:
     corner_weights: str | None = None
     allow_unusual: bool = False
     wiring_checks: bool = True
+    smooth: bool = False  # offline RTS smoother over the KF (kf only)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -134,9 +135,15 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
             "--still-period and --corner-weights apply to --method kf only, "
             f"not {settings.method!r}"
         )
+    elif settings.smooth:
+        raise ValueError(f"--smooth applies to --method kf only, not {settings.method!r}")
     else:
         estimator = build(settings.method, vehicle)
-    estimate = estimator.run(signals)
+    if settings.smooth:
+        estimate = estimator.smooth(signals)
+        notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")
+    else:
+        estimate = estimator.run(signals)
     warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
     return LogResult(
         signals=signals, estimate=estimate, vehicle=vehicle, notes=tuple(notes),

@@ -12,6 +12,10 @@ the filters, the wall time of the per-sample :meth:`step` call on the first
 ``timing_samples`` samples of each log (their whole-log ``run`` is a compiled
 loop, reported separately as ``run us``).
 
+:func:`robust_sweep` compares instead what a filter cannot do: robust
+losses, bias states and lagged output of the MHE, and the KF's offline RTS
+smoother, on clean and faulted logs (:mod:`wheelload.studies.faults`).
+
 Example
 -------
 >>> table = mhe_vs_kf([read_log("iso-dlc.csv")], load_vehicle(example_vehicle_path()))
@@ -27,10 +31,19 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import Sample, Signals, TwoStageKF
-from wheelload.estimators.mhe import Arrival, Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.mhe import (
+    Arrival,
+    BiasStates,
+    Constraint,
+    Loss,
+    MheSettings,
+    MovingHorizonEstimator,
+    ResidualLoss,
+)
 from wheelload.estimators.projection import ProjectionKF, Weighting
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import Vehicle
+from wheelload.studies.faults import Fault, inject
 from wheelload.studies.metrics import pooled_metrics
 
 HORIZONS = (1, 5, 10, 20, 50)
@@ -155,3 +168,112 @@ def plot_accuracy_against_time(table: pd.DataFrame, path: str | Path) -> Path:
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
+
+
+# -- the sweep of the settings a filter cannot have -----------------------------------------
+
+
+@dataclass(frozen=True, kw_only=True)
+class Candidate:
+    """One row of the robust sweep: a name and how it estimates a log."""
+
+    name: str
+    settings: MheSettings | None  # None: a filter (see ``offline``)
+    offline: bool = False  # filter only: the RTS smoother instead of the filter
+
+
+def robust_candidates(horizon: int = 10, quick: bool = False) -> list[Candidate]:
+    """The KF, its RTS smoother and the MHE with the settings a KF cannot express."""
+    l1 = ResidualLoss(kind=Loss.L1)
+    huber = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
+    tight = ResidualLoss(kind=Loss.HUBER, threshold=0.2)
+    lag = min(5, horizon - 1)
+    rows = [
+        Candidate(name="two-stage KF", settings=None),
+        Candidate(name="two-stage KF + RTS (offline)", settings=None, offline=True),
+        Candidate(
+            name=f"MHE N={horizon} lag {lag}", settings=MheSettings(horizon=horizon, lag=lag)
+        ),
+        Candidate(
+            name=f"MHE N={horizon} L1 (susp+eq)",
+            settings=MheSettings(horizon=horizon, suspension_loss=l1, constraint_loss=l1),
+        ),
+    ]
+    if quick:
+        return rows
+    return rows + [
+        Candidate(name=f"MHE N={horizon} quadratic", settings=MheSettings(horizon=horizon)),
+        Candidate(
+            name=f"MHE N={horizon} Huber 0.5σ (susp)",
+            settings=MheSettings(horizon=horizon, suspension_loss=huber),
+        ),
+        Candidate(
+            name=f"MHE N={horizon} Huber 0.2σ (susp+eq)",
+            settings=MheSettings(horizon=horizon, suspension_loss=tight, constraint_loss=tight),
+        ),
+        Candidate(
+            name=f"MHE N={horizon} travel offsets",
+            settings=MheSettings(horizon=horizon, bias_states=BiasStates.TRAVEL),
+        ),
+        Candidate(
+            name=f"MHE N={horizon} ax/ay biases",
+            settings=MheSettings(horizon=horizon, bias_states=BiasStates.ACCELERATION),
+        ),
+        Candidate(
+            name=f"MHE N={horizon} L1 + travel offsets",
+            settings=MheSettings(
+                horizon=horizon,
+                suspension_loss=l1,
+                constraint_loss=l1,
+                bias_states=BiasStates.TRAVEL,
+            ),
+        ),  # fmt: skip
+    ]
+
+
+def robust_sweep(
+    logs: list[Signals],
+    vehicle: Vehicle,
+    faults: tuple[Fault, ...] = tuple(Fault),
+    candidates: list[Candidate] | None = None,
+) -> pd.DataFrame:
+    """Pooled RMSE [N] of each candidate on each fault (columns), over all logs.
+
+    Each log is faulted by :func:`wheelload.studies.faults.inject`; the
+    reference loads stay those of the clean log. Also: the MHE's median time
+    per sample [us] and its fallbacks, summed over faults.
+    """
+    for signals in logs:
+        if signals.reference is None:
+            raise ValueError(f"{signals.source}: the log has no reference loads (fz_* columns)")
+    candidates = candidates or robust_candidates()
+    reference = np.vstack([signals.reference for signals in logs])
+    kf = TwoStageKF(vehicle)
+    rows = []
+    for candidate in candidates:
+        mhe = MovingHorizonEstimator(vehicle, candidate.settings) if candidate.settings else None
+        row: dict = {"estimator": candidate.name}
+        times, fallback = [], 0
+        for fault in faults:
+            loads = []
+            for signals in logs:
+                faulty = inject(signals, fault)
+                if mhe is None:
+                    estimate = kf.smooth(faulty) if candidate.offline else kf.run(faulty)
+                else:
+                    estimate = mhe.run(faulty)
+                    times.append(estimate.solve_time)
+                    fallback += int(estimate.fallback.sum())
+                loads.append(estimate.loads)
+            row[fault.value] = pooled_metrics(np.vstack(loads), reference)["RMSE"]
+        row["median us"] = float(np.median(np.concatenate(times)) * 1e6) if times else np.nan
+        row["fallback"] = fallback
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("estimator")
+
+
+def against_kf(table: pd.DataFrame, faults: tuple[Fault, ...]) -> pd.DataFrame:
+    """Each RMSE as a percentage change against the two-stage KF's on the same fault."""
+    columns = [fault.value for fault in faults]
+    kf = table.loc["two-stage KF", columns]
+    return (100.0 * (table[columns] / kf - 1.0)).round(1)

@@ -36,12 +36,14 @@ def test_codegen_command_names_a_bad_prefix(tmp_path, capsys):
 def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
     out = tmp_path / "mhe"
     argv = ["codegen", "--estimator", "mhe", "--out", str(out), "--horizon", "5",
-            "--constraint", "hard", "--bounded", "--dt", "0.005"]  # fmt: skip
+            "--constraint", "hard", "--bounded", "--dt", "0.005",
+            "--precision", "float"]  # fmt: skip
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "MHE N=5 (hard, bounded)" in printed and "dt = 0.005 s" in printed
     assert {"wheelload_mhe.c", "wheelload_mhe_terms.c", "osqp"} <= {p.name for p in out.iterdir()}
     assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
+    assert "#define OSQP_USE_FLOAT" in (out / "osqp" / "osqp_configure.h").read_text()
 
 
 def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):

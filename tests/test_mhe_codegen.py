@@ -54,3 +54,19 @@ def test_generated_c_drops_the_terms_of_missing_inputs_like_python(
     assert c.flags[55] != 0
     # as above: the same iterations, a tenth of the solver tolerance scaled to newtons
     np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+
+
+def test_generated_c_takes_each_samples_interval_like_python(vehicle, wheel_lift, tmp_path):
+    """Jittered time stamps (±30 %): each sample's weights and link from its own interval."""
+    rng = np.random.default_rng(2)
+    dt = 0.01 * (1.0 + 0.3 * rng.uniform(-1.0, 1.0, len(wheel_lift)))
+    t = wheel_lift.t[0] + np.cumsum(dt)
+    signals = dataclasses.replace(wheel_lift, t=t)
+    settings = MheSettings(horizon=8, bounded=True, arrival=Arrival.STEADY_STATE)
+    c = build_mhe_library(vehicle, settings, tmp_path, dt=float(np.median(dt))).run(signals)
+    python = MovingHorizonEstimator(vehicle, settings).run(signals)
+    np.testing.assert_array_equal(c.status, python.status)
+    assert np.all(c.status == 1)
+    np.testing.assert_array_equal(c.flags, python.flags)
+    # the same iterations: a tenth of the solver tolerance scaled to newtons, as above
+    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)

@@ -30,7 +30,6 @@ class Estimator(enum.Enum):
 
 #: Options of one estimator only, with their defaults (None on the parser, to see what was given).
 KF_OPTIONS = {
-    "precision": Precision.DOUBLE.value,
     "params": ParamMode.RUNTIME.value,
     "prefix": "wheelload_kf",
 }
@@ -61,8 +60,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         action="store_true",
         help="write into a folder that is not empty, replacing files of the same name",
     )
+    parser.add_argument(
+        "--precision",
+        choices=[p.value for p in Precision],
+        default=Precision.DOUBLE.value,
+        help="double (default) or float: kf: the whole library; mhe: OSQP's OSQPFloat",
+    )
     kf = parser.add_argument_group("kf only")
-    kf.add_argument("--precision", choices=[p.value for p in Precision], help="default double")
     kf.add_argument(
         "--params",
         choices=[m.value for m in ParamMode],
@@ -99,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         return _run_mhe(args, vehicle_path)
     values = _options(args, KF_OPTIONS, MHE_OPTIONS, estimator)
     options = CodegenOptions(
-        precision=Precision(values["precision"]),
+        precision=Precision(args.precision),
         params=ParamMode(values["params"]),
         prefix=values["prefix"],
     )
@@ -122,7 +126,11 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
         constraint=Constraint(values["constraint"]),
         bounded=values["bounded"],
     )
+    precision = Precision(args.precision)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    folder = generate_mhe(vehicle, settings, Path(args.out), dt=values["dt"])
-    print(f"written the embedded {settings.label()} (dt = {values['dt']} s) to {folder}")
+    folder = generate_mhe(vehicle, settings, Path(args.out), dt=values["dt"], precision=precision)
+    print(
+        f"written the embedded {settings.label()} (dt = {values['dt']} s, "
+        f"OSQP in {precision.value}) to {folder}"
+    )
     return 0

@@ -69,6 +69,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="accept a log whose signs, units or wiring look wrong (see log_checks)",
     )
     parser.add_argument(
+        "--smooth",
+        action="store_true",
+        help="offline: Rauch-Tung-Striebel smoothed loads (uses the whole log, not causal)",
+    )
+    parser.add_argument(
         "--still-period",
         type=float,
         metavar="SECONDS",
@@ -101,6 +106,7 @@ def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
         corner_weights=args.corner_weights,
         allow_unusual=args.allow_unusual,
         wiring_checks=not args.skip_wiring_checks,
+        smooth=args.smooth,
     )
 
 

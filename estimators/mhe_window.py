@@ -1,0 +1,370 @@
+r"""The MHE window with robust losses and bias states: one QP, set up once with fixed sparsity.
+
+Each residual row :math:`i` of sample :math:`j` in units of its standard
+deviation, :math:`\rho = \sqrt{w}\,r` (:math:`w = dt/r`, masked as in the
+filter), costs
+
+.. math::
+    \text{quadratic: } \tfrac12 \rho^2, \qquad
+    \text{Huber}_\delta: \min_{e} \tfrac12 (\rho - e)^2 + \delta |e|, \qquad
+    \text{L1: } \min_e \tfrac{1}{2\varepsilon}(\rho - e)^2 + |e|
+
+with the auxiliary :math:`e = e^+ - e^-`, :math:`e^\pm \ge 0` (Huber 1964; the
+auxiliary-variable QP of Mangasarian & Musicant 2000). L1 is realised with a
+quadratic core of width :math:`\varepsilon` = :data:`L1_CORE` σ: it equals
+:math:`|\rho| - \varepsilon/2` outside the core. Losses are chosen per
+residual group (suspension rows, equilibrium rows).
+
+Bias states :math:`\beta` are constant over the window and enter the
+residuals linearly (the models are linear in travel and specific force, so
+this is exact): travel offsets :math:`\delta` shift the pseudo-measurement,
+:math:`z(d - \delta) = z(d) - J_d\,\delta`, and ax/ay biases shift the
+equilibrium right-hand side, :math:`b(a - \beta_a) = b(a) - B_a \beta_a`, with
+:math:`J_d, B_a` the model Functions' Jacobians. Their arrival cost is
+:math:`\|\beta - \bar\beta\|^2_{\Pi_\beta^{-1}}` with :math:`\bar\beta` the
+previous window's estimate and the information :math:`\Pi_\beta^{-1}` carried
+as in a filter: it loses :math:`q_\beta\,dt` of variance per sample (random
+walk) and gains the bias information of each sample that leaves the window
+(its rows' Schur complement with the sample's loads eliminated, with the
+loss's effective weights). Bounds :math:`|\beta| \le \beta_{max}` hold in the QP.
+
+The QP (variables in kN, :math:`e` in σ, travel offsets in mm, accelerations
+in m/s²) is assembled densely per sample and loaded into OSQP at the fixed
+upper-triangular pattern found at set-up; the constraints are the identity
+(bounds on every variable).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import osqp
+import scipy.sparse as sp
+
+from wheelload.estimators.quiet import quiet_stdout
+
+L1_CORE = 0.05  # σ, width of the quadratic core that realises the L1 loss
+TRAVEL_UNIT = 1e-3  # m: travel offsets are QP variables in mm
+
+
+class Loss(enum.Enum):
+    """Penalty on one residual group."""
+
+    QUADRATIC = "quadratic"
+    HUBER = "huber"
+    L1 = "l1"
+
+
+@dataclass(frozen=True, kw_only=True)
+class ResidualLoss:
+    """The loss of a residual group; ``threshold`` [σ] is Huber's corner."""
+
+    kind: Loss = Loss.QUADRATIC
+    threshold: float = 2.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.kind, Loss):
+            raise TypeError(f"kind must be a Loss, got {self.kind!r}")
+        if not (math.isfinite(self.threshold) and self.threshold > 0):
+            raise ValueError(f"threshold must be a positive number of sigma, got {self.threshold}")
+
+    @property
+    def robust(self) -> bool:
+        return self.kind is not Loss.QUADRATIC
+
+    def weights(self) -> tuple[float, float]:
+        """(kappa, mu): the cost kappa/2 (rho - e)^2 + mu |e| that realises the loss."""
+        if self.kind is Loss.HUBER:
+            return 1.0, self.threshold
+        return 1.0 / L1_CORE, 1.0
+
+    def label(self) -> str:
+        if self.kind is Loss.HUBER:
+            return f"huber {self.threshold:g}σ"
+        return self.kind.value
+
+
+class BiasStates(enum.Flag):
+    """Slow sensor errors estimated as states."""
+
+    NONE = 0
+    TRAVEL = enum.auto()  # offsets of the four travel sensors [m]
+    ACCELERATION = enum.auto()  # ax, ay biases [m/s^2]
+
+    def label(self) -> str:
+        names = [name for name, flag in (("travel", BiasStates.TRAVEL),
+                 ("ax/ay", BiasStates.ACCELERATION)) if flag in self]  # fmt: skip
+        return "+".join(names) + " bias" if names else ""
+
+
+def bias_scales(bias: BiasStates, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Initial std, bound and random-walk density of each bias variable (QP units)."""
+    tuning = vehicle.filter.bias
+    std, bound, density = [], [], []
+    if BiasStates.TRAVEL in bias:  # three observable combinations (see travel_basis)
+        std += [tuning.travel_offset_std / TRAVEL_UNIT] * 3
+        bound += [tuning.travel_offset_bound / TRAVEL_UNIT] * 3
+        density += [tuning.travel_offset_density / TRAVEL_UNIT**2] * 3
+    if BiasStates.ACCELERATION in bias:
+        std += [tuning.acceleration_bias_std] * 2
+        bound += [tuning.acceleration_bias_bound] * 2
+        density += [tuning.acceleration_bias_density] * 2
+    return np.array(std), np.array(bound), np.array(density)
+
+
+def travel_basis(Jd: np.ndarray, null: np.ndarray) -> np.ndarray:
+    r"""Orthonormal basis :math:`T` (4 x 3) of the travel offsets the window can observe.
+
+    An offset pattern whose load shift :math:`J_d\,\delta` lies along the warp
+    vector :math:`n` (the equilibrium's null space) is absorbed by the loads'
+    warp mode and cannot be told from a true warp load; offsets are
+    estimated as :math:`\delta = T\gamma` with :math:`n^\top J_d T = 0`. A
+    left-right symmetric offset (ride height) lies in the span; a single
+    corner's offset is recovered as its projection onto it.
+    """
+    _, _, Vt = np.linalg.svd((null @ Jd)[None, :])
+    return Vt[1:].T
+
+
+@dataclass(frozen=True, eq=False)
+class WindowSample:
+    """What one sample contributes (physical units; ``ls, lc`` are the rows' sqrt weights)."""
+
+    z: np.ndarray  # (4,) pseudo-measurement [N]
+    Jd: np.ndarray  # (4, 4) dz/dd [N/m]
+    b: np.ndarray  # (3,) equilibrium right-hand side
+    Ba: np.ndarray  # (3, 2) db/d(ax, ay)
+    ls: np.ndarray  # (4,) sqrt(mask dt / r_s) [1/N]
+    lc: np.ndarray  # (3,) sqrt(mask dt / r_c)
+    xp: np.ndarray  # (4,) hard: A^+ b [N]; soft: zeros
+    link: float  # 1/(q dt) [1/N^2]; 0 for the log's first sample
+    lower: np.ndarray  # (w,) bounds of the load variables (kN or warp kN)
+    upper: np.ndarray  # (w,)
+
+
+class WindowQP:
+    """Layout, dense assembly and the OSQP workspace of the extended window."""
+
+    def __init__(self, *, horizon: int, hard: bool, A: np.ndarray, null: np.ndarray,
+                 suspension: ResidualLoss, constraint: ResidualLoss, n_bias: int,
+                 travel_basis: np.ndarray | None, solver) -> None:  # fmt: skip
+        self.N, self.hard, self.A, self.null = horizon, hard, A, null
+        self.suspension, self.constraint = suspension, constraint
+        self.w = 1 if hard else 4
+        self.ns = 4 if suspension.robust else 0  # auxiliary pairs per sample
+        self.nc = 3 if (constraint.robust and not hard) else 0
+        self.width = self.w + 2 * self.ns + 2 * self.nc
+        self.n_bias, self.travel_bias = n_bias, travel_basis is not None
+        self.travel_basis = travel_basis if travel_basis is not None else np.zeros((4, 0))
+        self.n = self.N * self.width + n_bias
+        self.X = 1000.0 * (null[:, None] if hard else np.eye(4))  # x = xp + X y
+        self.solver_settings = solver
+        self.pinv = np.linalg.pinv(A)
+        beta = np.arange(self.N * self.width, self.n)
+        self.columns = [
+            np.concatenate([np.arange(j * self.width, (j + 1) * self.width), beta])
+            for j in range(self.N)
+        ]
+        self.blocks = [np.ix_(c, c) for c in self.columns]
+        upper_pattern = np.triu(self._structure()) != 0
+        self.rows, self.cols = np.nonzero(upper_pattern.T)  # CSC order: by column, then row
+        self.cols, self.rows = self.rows, self.cols
+        self.setup()
+
+    def setup(self) -> None:
+        """A fresh OSQP workspace with the fixed pattern."""
+        s = self.solver_settings
+        placeholder = (self.rows == self.cols).astype(float)  # identity values: convex
+        P = sp.csc_matrix((placeholder, (self.rows, self.cols)), shape=(self.n, self.n))
+        P.sort_indices()
+        if P.nnz != self.rows.size:
+            raise RuntimeError("the window's Hessian pattern lost entries")
+        self.order = np.lexsort((self.rows, self.cols))
+        self.solver = osqp.OSQP()
+        self.solver.setup(
+            P, np.zeros(self.n), sp.identity(self.n, format="csc"),
+            -np.ones(self.n), np.ones(self.n),
+            verbose=False, eps_abs=s.eps_abs, eps_rel=s.eps_rel, max_iter=s.max_iter,
+            polishing=s.polish, check_termination=s.check_termination,
+            adaptive_rho_interval=s.adaptive_rho_interval, rho=s.rho, warm_starting=True,
+        )  # fmt: skip
+
+    def y(self, j: int) -> slice:
+        start = j * self.width
+        return slice(start, start + self.w)
+
+    def aux(self, j: int, group: int) -> tuple[slice, slice]:
+        """(e+, e-) of the suspension (0) or equilibrium (1) group of sample ``j``."""
+        start = j * self.width + self.w + (0 if group == 0 else 2 * self.ns)
+        size = self.ns if group == 0 else self.nc
+        return slice(start, start + size), slice(start + size, start + 2 * size)
+
+    @property
+    def beta(self) -> slice:
+        return slice(self.N * self.width, self.n)
+
+    def _structure(self) -> np.ndarray:
+        """Every entry that can be non-zero (assembled with all-one data, arrival everywhere)."""
+        one = WindowSample(
+            z=np.ones(4), Jd=np.ones((4, 4)), b=np.ones(3), Ba=np.ones((3, 2)),
+            ls=np.ones(4), lc=np.ones(3), xp=np.ones(4), link=1.0,
+            lower=np.zeros(self.w), upper=np.ones(self.w),
+        )  # fmt: skip
+        total = np.zeros((self.n, self.n))
+        local = [self.local_terms(one)] * self.N
+        for j0 in range(self.N):
+            H, _ = self.assemble([one] * self.N, j0, np.ones(4), np.ones((4, 4)),
+                                 np.ones(self.n_bias), np.ones((self.n_bias, self.n_bias)),
+                                 local, 1.0)  # fmt: skip
+            total += np.abs(H)
+        return total + np.eye(self.n)
+
+    def local_terms(self, sample: WindowSample) -> tuple[np.ndarray, np.ndarray]:
+        """One sample's data rows as (H, g) over its own block and the bias (physical units).
+
+        Computed once when the sample enters the window; :meth:`assemble`
+        adds it at the sample's place.
+        """
+        size = self.width + self.n_bias
+        H = np.zeros((size, size))
+        g = np.zeros(size)
+        y = np.arange(self.w)
+        beta = np.arange(self.width, size)
+        nd = 3 if self.travel_bias else 0
+        # suspension rows: rho = ls (z - xp - X y - Jd delta)
+        Ms = np.zeros((4, self.w + self.n_bias))
+        Ms[:, : self.w] = -self.X
+        if nd:
+            Ms[:, self.w : self.w + nd] = -sample.Jd @ self.travel_basis * TRAVEL_UNIT
+        if self.hard and self.n_bias > nd:  # x = A^+ (b - Ba beta_a) + n omega
+            Ms[:, self.w + nd :] = self.pinv @ (sample.Ba * (sample.lc > 0)[:, None])
+        Ms *= sample.ls[:, None]
+        rs = -sample.ls * (sample.z - sample.xp)
+        self._rows(H, g, y, beta, Ms, rs, self.suspension, self.aux(0, 0))
+        if not self.hard:  # equilibrium rows: rho = lc (b - Ba beta_a - A X y)
+            Mc = np.zeros((3, self.w + self.n_bias))
+            Mc[:, : self.w] = -self.A @ self.X
+            if self.n_bias > nd:
+                Mc[:, self.w + nd :] = -sample.Ba
+            Mc *= sample.lc[:, None]
+            rc = -sample.lc * sample.b
+            self._rows(H, g, y, beta, Mc, rc, self.constraint, self.aux(0, 1))
+        return H, g
+
+    def assemble(self, window, j0, prior, arrival, beta_prior, beta_info, local, cost):
+        """Dense Hessian and linear term of the window (physical costs times ``cost``).
+
+        ``arrival`` is :math:`\\Pi^{-1}` [1/N^2]; ``beta_info`` :math:`\\Pi_\beta^{-1}`;
+        ``local`` each sample's :meth:`local_terms`.
+        """
+        H = np.zeros((self.n, self.n))
+        g = np.zeros(self.n)
+        beta = np.arange(self.beta.start, self.beta.stop)
+        for j, sample in enumerate(window):
+            y = np.arange(self.y(j).start, self.y(j).stop)
+            if j < j0:
+                H[y, y] += 1.0 / cost  # inert: unit diagonal after scaling
+                continue
+            Hl, gl = local[j]
+            H[self.blocks[j]] += Hl
+            g[self.columns[j]] += gl
+            if j == j0:
+                self._add(H, g, y, self.X, prior - sample.xp, arrival)
+            elif sample.link > 0:
+                before = np.arange(self.y(j - 1).start, self.y(j - 1).stop)
+                M = np.hstack([self.X, -self.X])
+                r = -(sample.xp - window[j - 1].xp)
+                self._add(H, g, np.concatenate([y, before]), M, r, sample.link)
+        if self.n_bias:
+            self._add(H, g, beta, np.eye(self.n_bias), beta_prior, beta_info)
+        return cost * H, cost * g
+
+    def _add(self, H, g, columns, M, r, weight):
+        """Add 1/2 ||M v[columns] - r||^2_W to (H, g); ``weight`` scalar, vector or matrix."""
+        W = np.asarray(weight, dtype=float)
+        if W.ndim < 2:
+            W = np.diag(np.broadcast_to(W, (M.shape[0],)))
+        MW = M.T @ W
+        H[np.ix_(columns, columns)] += MW @ M
+        g[columns] -= MW @ r
+
+    def _rows(self, H, g, y, beta, M, r, loss: ResidualLoss, aux) -> None:
+        """One group's rows with its loss; M acts on [y, beta]."""
+        columns = np.concatenate([y, beta])
+        if not loss.robust or (self.hard and aux[0].stop == aux[0].start):
+            self._add(H, g, columns, M, r, 1.0)
+            return
+        kappa, mu = loss.weights()
+        plus, minus = aux
+        k = M.shape[0]
+        full = np.hstack([M, -np.eye(k), np.eye(k)])
+        columns = np.concatenate([columns, np.arange(plus.start, plus.stop),
+                                  np.arange(minus.start, minus.stop)])  # fmt: skip
+        self._add(H, g, columns, full, r, kappa)
+        g[plus] += mu
+        g[minus] += mu
+
+    def bounds(self, window, j0, beta_bound) -> tuple[np.ndarray, np.ndarray]:
+        low = np.zeros(self.n)
+        high = np.zeros(self.n)
+        for j, sample in enumerate(window):
+            y = self.y(j)
+            if j < j0:
+                continue  # inert: pinned at 0
+            low[y], high[y] = sample.lower, sample.upper
+            for group in (0, 1):
+                plus, minus = self.aux(j, group)
+                high[plus] = high[minus] = np.inf
+        low[self.beta], high[self.beta] = -beta_bound, beta_bound
+        return np.maximum(low, -osqp.constant("OSQP_INFTY")), np.minimum(
+            high, osqp.constant("OSQP_INFTY")
+        )
+
+    def solve(self, H, g, low, high, x, y):
+        """Load values at the fixed pattern, warm-start and solve."""
+        self.solver.update(Px=H[self.rows, self.cols][self.order], q=g, l=low, u=high)
+        self.solver.warm_start(x=x, y=y)
+        if self.solver_settings.polish:
+            with quiet_stdout():
+                return self.solver.solve(raise_error=False)
+        return self.solver.solve(raise_error=False)
+
+    def bias_information(self, sample: WindowSample, rho_s, rho_c) -> np.ndarray:
+        """The bias information of one sample with its loads eliminated (Schur complement).
+
+        Rows take the loss's effective weight at the solution's residuals
+        (Huber: min(1, delta/|rho|)), so an outlier adds little.
+        """
+        nd = 3 if self.travel_bias else 0
+        M, weights = [], []
+        Ms = np.zeros((4, self.w + self.n_bias))
+        Ms[:, : self.w] = -self.X
+        if nd:
+            Ms[:, self.w : self.w + nd] = -sample.Jd @ self.travel_basis * TRAVEL_UNIT
+        if self.hard and self.n_bias > nd:
+            Ms[:, self.w + nd :] = self.pinv @ (sample.Ba * (sample.lc > 0)[:, None])
+        M.append(Ms * sample.ls[:, None])
+        weights.append(effective_weights(self.suspension, rho_s))
+        if not self.hard:
+            Mc = np.zeros((3, self.w + self.n_bias))
+            Mc[:, : self.w] = -self.A @ self.X
+            if self.n_bias > nd:
+                Mc[:, self.w + nd :] = -sample.Ba
+            M.append(Mc * sample.lc[:, None])
+            weights.append(effective_weights(self.constraint, rho_c))
+        M = np.vstack(M)
+        F = M.T @ (np.concatenate(weights)[:, None] * M)
+        Fyy, Fyb, Fbb = F[: self.w, : self.w], F[: self.w, self.w :], F[self.w :, self.w :]
+        return Fbb - Fyb.T @ np.linalg.solve(Fyy + 1e-12 * np.eye(self.w), Fyb)
+
+
+def effective_weights(loss: ResidualLoss, rho: np.ndarray) -> np.ndarray:
+    """Effective quadratic weight of each row at residual ``rho`` [σ] (IRLS weight)."""
+    if not loss.robust:
+        return np.ones_like(rho)
+    corner = loss.threshold if loss.kind is Loss.HUBER else L1_CORE
+    scale = 1.0 if loss.kind is Loss.HUBER else 1.0 / L1_CORE
+    return scale * np.minimum(1.0, corner / np.maximum(np.abs(rho), 1e-12))
