@@ -32,6 +32,7 @@ INPUTS = (
     "ax", "ay", "az", "vx", "wx", "wy", "wz",
 )  # fmt: skip
 PER_SAMPLE = ("u", "u_valid", "dt")
+CHUNK = 20_000  # samples per call of the compiled loop
 
 
 def sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
@@ -126,17 +127,41 @@ class CompiledMethod:
     def _loop(self) -> CompiledLoop:
         return CompiledLoop(self._step_function, self._n_accum, PER_SAMPLE + self.interval_names)
 
+    def run_loop(
+        self, signals: Signals, record: tuple[int, ...] = ()
+    ) -> tuple[list[np.ndarray | None], list[np.ndarray]]:
+        """The compiled loop over a log in chunks of :data:`CHUNK` samples, state carried.
+
+        Returns the history of the carried outputs in ``record`` (others None)
+        and the per-sample outputs. Chunks bound the memory of the per-sample
+        inputs (a 14 x 14 transition per sample for the road-angle KF).
+        """
+        u_all = input_matrix(signals)
+        dt_all = sample_intervals(signals.t)
+        state = list(self.initial_state())
+        histories: list[list[np.ndarray]] = [[] for _ in range(self._n_accum)]
+        outputs: list[list[np.ndarray]] = []
+        for start in range(0, len(signals), CHUNK):
+            u = u_all[start : start + CHUNK]
+            valid = np.isfinite(u).astype(float)
+            u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
+            dt = dt_all[start : start + CHUNK]
+            final, history, out = self._loop(
+                state,
+                list(self._fixed),
+                [u, valid, dt[:, None], *self.interval_inputs(dt)],
+                record=record,
+            )
+            state = [f.reshape(a.shape, order="F") for f, a in zip(final, self._initial)]
+            for i in record:
+                histories[i].append(history[i])
+            outputs.append(out)
+        joined = [np.concatenate(h) if i in record else None for i, h in enumerate(histories)]
+        return joined, [np.concatenate(parts) for parts in zip(*outputs)]
+
     def run(self, signals: Signals) -> Estimate:
         """A whole log in compiled code from a fresh initial state (same numbers as ``step``)."""
-        u = input_matrix(signals)
-        valid = np.isfinite(u).astype(float)
-        u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
-        dt = sample_intervals(signals.t)
-        _, _, (loads, std, residual, flags) = self._loop(
-            list(self.initial_state()),
-            list(self._fixed),
-            [u, valid, dt[:, None], *self.interval_inputs(dt)],
-        )
+        _, (loads, std, residual, flags) = self.run_loop(signals)
         return Estimate(
             t=signals.t.copy(),
             loads=loads,

@@ -20,12 +20,16 @@ gravity from motion in the road-frame specific force (§II-A, eq. 2):
           \sin\beta = \frac{a_{yr} - v_x \omega_z}{g \cos\gamma}
 
 with :math:`\dot v_x` from a filtered derivative of the speed and
-:math:`\omega_z` the yaw rate (zero without rates). The lateral slip
-acceleration :math:`\dot v_y` is not measured (it reaches 1.8 m/s^2, 10 deg
-of bank, in the banked chicane); it averages out over a manoeuvre, so the
-bank is low-passed by two first-order stages of 2.5 s, the grade (whose
-motion term :math:`\dot v_x` is measured) by one of 1 s. Both filters start
-at the first sample's value.
+:math:`\omega_z` the yaw rate (zero without rates). These are the slopes of
+the road plane along and across the vehicle's heading: when the heading
+swings across a banked road (the banked chicane's weave turns it by up to
+19 deg), the slope under the car swings too (+-5.6 deg there), and the
+lateral slip acceleration :math:`\dot v_y`, which is not measured, reaches
+1.8 m/s^2. Both average out over a manoeuvre, so the bank is low-passed by
+two first-order stages of 2.5 s and returns the road's own bank; the grade,
+whose motion term :math:`\dot v_x` is measured, by one stage of 1 s (it
+follows a change of grade within about 3 s). Both filters start at the first
+sample's value.
 
 The step is one CasADi Function (sequential scalar updates, Joseph form, a
 skipped row for a missing input); ``run`` loops it in compiled C.
@@ -44,7 +48,6 @@ from wheelload.estimators.family.compiled_method import (
     INPUTS,
     CompiledMethod,
     flag_sum,
-    input_matrix,
     interval_ok,
     sanitise,
 )
@@ -52,7 +55,7 @@ from wheelload.estimators.kalman import sequential_update
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import MAX_INTERVAL, sample_intervals
+from wheelload.estimators.two_stage import MAX_INTERVAL
 from wheelload.models import (
     GRAVITY,
     ModelParameters,
@@ -248,16 +251,7 @@ class RoadAngleKF(CompiledMethod):
 
     def run_with_road_angles(self, signals: Signals) -> tuple[Estimate, np.ndarray]:
         """The estimate and the road grade and bank [rad] of every sample, shape (n, 2)."""
-        u = input_matrix(signals)
-        valid = np.isfinite(u).astype(float)
-        u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
-        dt = sample_intervals(signals.t)
-        _, history, (loads, std, residual, flags) = self._loop(
-            list(self.initial_state()),
-            list(self._fixed),
-            [u, valid, dt[:, None], *self.interval_inputs(dt)],
-            record=(2,),
-        )
+        history, (loads, std, residual, flags) = self.run_loop(signals, record=(2,))
         estimate = Estimate(
             t=signals.t.copy(),
             loads=loads,
