@@ -20,6 +20,8 @@ import numpy as np
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.experiments import catalog as experiments
+from wheelload.studies.experiments import command as experiment_command
 from wheelload.studies.mhe_vs_kf import HORIZONS, StudySettings, mhe_vs_kf, step_times
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -28,7 +30,11 @@ STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     study = subparsers.add_parser("study", help="run a comparison study and print its table")
-    study.add_argument("name", choices=["mhe-vs-kf"], help="mhe-vs-kf: KF, projection KF, MHE")
+    study.add_argument(
+        "name",
+        choices=["mhe-vs-kf", *experiments.NAMES],
+        help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
+    )
     study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
     study.add_argument(
         "--scenarios",
@@ -38,8 +44,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         + ", ".join(STUDY_SCENARIOS) + ", those that exist)",
     )  # fmt: skip
     study.add_argument("--horizons", type=int, nargs="+", default=list(HORIZONS))
-    study.add_argument("--out", default="mhe-vs-kf", help="output prefix for .csv and .png")
+    study.add_argument(
+        "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
+    )
     study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    experiment_command.add_arguments(study)
     study.set_defaults(handler=run_study)
 
 
@@ -74,6 +83,8 @@ def _simulate(names: list[str], folder: Path, vehicle_path: Path) -> list[Path]:
 
 
 def run_study(args: argparse.Namespace) -> int:
+    if args.name != "mhe-vs-kf":
+        return experiment_command.run(args)
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     vehicle = load_vehicle(vehicle_path)
     paths = [Path(p) for p in args.logs]
@@ -86,7 +97,7 @@ def run_study(args: argparse.Namespace) -> int:
     table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
     from wheelload.studies.mhe_vs_kf import plot_accuracy_against_time
 
-    out = Path(args.out)
+    out = Path(args.out or "mhe-vs-kf")
     table.to_csv(out.with_suffix(".csv"))
     plot_accuracy_against_time(table, out.with_suffix(".png"))
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
