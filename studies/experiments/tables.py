@@ -11,7 +11,7 @@ WHEELS = ("fl", "fr", "rl", "rr")
 UNITS = {"RMSE": "RMSE [N]", "RMSE %": "RMSE [%]", "P95": "P95 [N]", "Max": "Max [N]"}
 
 
-def markdown(frame: pd.DataFrame, digits: int = 1) -> str:
+def markdown(frame: pd.DataFrame, digits: int = 2) -> str:
     """A DataFrame as a GitHub Markdown table (index as the first columns)."""
     frame = frame.reset_index()
     head = "| " + " | ".join(str(c) for c in frame.columns) + " |"
@@ -45,7 +45,7 @@ def beside_paper(metrics: dict[str, pd.DataFrame], paper: pd.DataFrame) -> pd.Da
                 continue
             ours = metrics[name]
             cells = {
-                w.upper(): f"{ours.loc[w, column]:.1f} ({paper.loc[(column, name), w]:.1f})"
+                w.upper(): f"{ours.loc[w, column]:.2f} ({paper.loc[(column, name), w]:.2f})"
                 for w in WHEELS
             }
             rows.append({"metric": UNITS[column], "method": name, **cells})
