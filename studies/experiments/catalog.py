@@ -14,7 +14,7 @@ from wheelload.studies.experiments import (
     monte_carlo,
     vehicles,
 )
-from wheelload.studies.experiments.common import Section
+from wheelload.studies.experiments.common import Section, simulate, truth_spec
 from wheelload.studies.experiments.context import Context
 
 STUDIES: dict[str, Callable[[Context], Section]] = {
@@ -41,10 +41,23 @@ text under each table says so.
 """
 
 
+def plant_runs(context: Context) -> list:
+    """Every plant run of ``all``, simulated together first so that they run in parallel."""
+    specs = [truth_spec(context, name) for name in ("nordschleife", "hockenheim", "iso-dlc")]
+    for path in vehicles.vehicle_files(context.settings.vehicles_folder):
+        text = path.read_text(encoding="utf-8")
+        specs.append(truth_spec(context, vehicles.SCENARIO, vehicle_text=text))
+    return list(dict.fromkeys(specs))
+
+
 def run_study(name: str, context: Context) -> list[Section]:
     """Run one study (or all) and write its Markdown; the sections."""
     names = list(STUDIES) if name == "all" else [name]
     sections, times = [], {}
+    if name == "all":
+        start = time.perf_counter()
+        simulate(context, plant_runs(context))
+        times["plant runs"] = time.perf_counter() - start
     for study in names:
         start = time.perf_counter()
         sections.append(STUDIES[study](context))
