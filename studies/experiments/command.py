@@ -38,6 +38,8 @@ def run(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     if not vehicle_path.is_file():
         raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")
+    if args.dask is not None:
+        _check_scheduler(args.dask)
     settings = Settings(
         vehicle_path=vehicle_path,
         vehicles_folder=example_vehicle_path().parent,
@@ -57,3 +59,16 @@ def run(args: argparse.Namespace) -> int:
         f"{time.perf_counter() - start:.1f} s; {len(outputs.written)} files in {out}"
     )
     return 0
+
+
+def _check_scheduler(address: str) -> None:
+    """A one-line error when no Dask scheduler answers at ``address``."""
+    from distributed import Client
+
+    try:
+        Client(address, timeout=10).close()
+    except (OSError, TimeoutError, ValueError) as error:
+        raise ValueError(
+            f"--dask {address}: no Dask scheduler answers ({type(error).__name__}); "
+            "start one (dask scheduler) or give its address as tcp://HOST:PORT"
+        ) from None

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators.registry import methods
+from wheelload.studies.experiments.cache import cache_key
 from wheelload.studies.experiments.context import Context
 from wheelload.studies.experiments.runner import Job
 from wheelload.studies.experiments.units import (
@@ -59,8 +60,10 @@ def trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialRe
     simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
     jobs, owners = [], []
     for i, spec in enumerate(specs):
+        truth_key = cache_key(TRUTH, spec.truth)
         for name in spec.methods:
-            jobs.append(Job(kind=TRIAL, function=run_trial, spec=replace(spec, methods=(name,))))
+            single = replace(spec, methods=(name,), truth_key=truth_key)
+            jobs.append(Job(kind=TRIAL, function=run_trial, spec=single))
             owners.append(i)
     parts = context.runner.run(jobs, label)
     merged: list[list[TrialResult]] = [[] for _ in specs]

@@ -24,7 +24,7 @@ import pandas as pd
 from wheelload.estimators.registry import build
 from wheelload.estimators.signals import signals_from_frame
 from wheelload.models.vehicle import Vehicle, vehicle_from_dict
-from wheelload.studies.experiments.cache import ResultCache, cache_key
+from wheelload.studies.experiments.cache import ResultCache
 from wheelload.studies.metrics import wheel_metrics
 from wheelload.studies.scenario_runner import run_scenario
 from wheelload.studies.scenarios import Options
@@ -55,6 +55,7 @@ class TrialSpec:
     seed: int = 0  # measurement seed
     window: tuple[float, float] | None = None  # scored samples, t in [start, end] s
     keep_estimates: bool = False  # keep the loads for figures
+    truth_key: str = ""  # cache key of ``truth``, set by the process that plans the jobs
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -91,8 +92,14 @@ def _vehicle(text: str) -> Vehicle:
 
 
 def measured(spec: TrialSpec, folder: Path) -> pd.DataFrame:
-    """The measured log: the sensor models on the cached truth (run it first)."""
-    truth = _truth(str(folder), cache_key(TRUTH, spec.truth))
+    """The measured log: the sensor models on the cached truth (run it first).
+
+    The truth's key comes with the spec: a worker never hashes the code itself (its files
+    may differ from those of the process that planned the run).
+    """
+    if not spec.truth_key:
+        raise ValueError("TrialSpec.truth_key is not set: plan trials with common.trials()")
+    truth = _truth(str(folder), spec.truth_key)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 1]))
     return measure(truth, spec.noise, rng)
 
