@@ -17,6 +17,13 @@ QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode
 QUICK_TRIALS = 2  # Monte Carlo trials per noise scale in --quick mode
 
 
+def _readable(path: str) -> None:
+    """Give a temporary file the permissions of a new file (mkstemp makes it 0600)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
+
+
 @dataclass(frozen=True, kw_only=True)
 class Settings:
     """A study's inputs: the plant's (and the estimators') vehicle file and the mode."""
@@ -60,6 +67,7 @@ class Outputs:
         os.close(handle)
         try:
             figure.savefig(temporary, dpi=110)
+            _readable(temporary)
             Path(temporary).replace(path)
         finally:
             Path(temporary).unlink(missing_ok=True)
@@ -71,6 +79,7 @@ class Outputs:
         try:
             with os.fdopen(handle, "wb") as stream:
                 stream.write(data)
+            _readable(temporary)
             Path(temporary).replace(path)
         finally:
             Path(temporary).unlink(missing_ok=True)

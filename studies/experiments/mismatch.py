@@ -70,7 +70,7 @@ def run(context: Context) -> Section:
             f"## Parameter mismatch on the {SCENARIO} lap (pooled RMSE [N])",
             "Each column: the estimators' vehicle file with one parameter group off by "
             f"{ERROR:.0%}; the plant keeps the true file. No paper gives this table.",
-            markdown(table.T, digits=1),
+            markdown(table.T.rename_axis("case"), digits=1),
             "**Robustness**, worst-case growth of pooled RMSE over the true file (worst case): "
             + ranking
             + ".",
