@@ -74,7 +74,8 @@ def test_ablation_quick_on_a_local_dask_cluster(tmp_path):
         runner = Runner(cache=ResultCache(folder=cache), dask_address=cluster.scheduler_address,
                         progress=False)  # fmt: skip
         outputs = Outputs(folder=tmp_path)
-        run_study("ablation", Context(settings=_settings(), runner=runner, outputs=outputs))
+        with runner:
+            run_study("ablation", Context(settings=_settings(), runner=runner, outputs=outputs))
     cases = len(ablation_variants(_settings().vehicle_text))
     # The trials find the plant run that the study simulated first in the cache.
     assert (runner.computed, runner.cached) == (1 + cases, 1)

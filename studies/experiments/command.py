@@ -53,7 +53,8 @@ def run(args: argparse.Namespace) -> int:
     )
     outputs = Outputs(folder=out, force=args.force)
     start = time.perf_counter()
-    run_study(args.name, Context(settings=settings, runner=runner, outputs=outputs))
+    with runner:
+        run_study(args.name, Context(settings=settings, runner=runner, outputs=outputs))
     print(
         f"study {args.name}: {runner.computed} jobs computed, {runner.cached} from the cache, "
         f"{time.perf_counter() - start:.1f} s; {len(outputs.written)} files in {out}"

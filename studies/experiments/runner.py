@@ -53,6 +53,24 @@ class Runner:
     progress: bool = True
     computed: int = field(default=0, init=False)
     cached: int = field(default=0, init=False)
+    _pool: ProcessPoolExecutor | None = field(default=None, init=False, repr=False)
+    _client: Any = field(default=None, init=False, repr=False)
+
+    def __enter__(self) -> Runner:
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop the local processes and the Dask client (kept between :meth:`run` calls, so
+        their imports and compiled methods are paid once per study command)."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+        if self._client is not None:
+            self._client.close()
+            self._client = None
 
     def run(self, jobs: list[Job], label: str) -> list[Any]:
         """The results of ``jobs`` in order; only jobs not in the cache are computed."""
@@ -78,20 +96,22 @@ class Runner:
             for key, job in todo.items():
                 yield key, _execute(job, folder)
         else:
-            context = multiprocessing.get_context("forkserver")
-            with ProcessPoolExecutor(max_workers=self.workers, mp_context=context) as pool:
-                futures = {pool.submit(_execute, job, folder): key for key, job in todo.items()}
-                for future in as_completed(futures):
-                    yield futures[future], future.result()
+            if self._pool is None:
+                context = multiprocessing.get_context("forkserver")
+                self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
+            futures = {self._pool.submit(_execute, job, folder): key for key, job in todo.items()}
+            for future in as_completed(futures):
+                yield futures[future], future.result()
 
     def _dask(self, todo: dict[str, Job], folder: Path):
         from distributed import Client
         from distributed import as_completed as dask_completed
 
-        with Client(self.dask_address) as client:
-            futures = {
-                client.submit(_execute, job, folder, key=f"wheelload-{key}", pure=False): key
-                for key, job in todo.items()
-            }
-            for future in dask_completed(list(futures)):
-                yield futures[future], future.result()
+        if self._client is None:
+            self._client = Client(self.dask_address)
+        futures = {
+            self._client.submit(_execute, job, folder, key=f"wheelload-{key}"): key
+            for key, job in todo.items()
+        }
+        for future in dask_completed(list(futures)):
+            yield futures[future], future.result()
