@@ -22,6 +22,8 @@ from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstim
 from wheelload.estimators.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.experiments import catalog as experiments
+from wheelload.studies.experiments import command as experiment_command
 from wheelload.studies.faults import Fault
 from wheelload.studies.mhe_vs_kf import (
     HORIZONS,
@@ -39,7 +41,11 @@ STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     study = subparsers.add_parser("study", help="run a comparison study and print its table")
-    study.add_argument("name", choices=["mhe-vs-kf"], help="mhe-vs-kf: KF, projection KF, MHE")
+    study.add_argument(
+        "name",
+        choices=["mhe-vs-kf", *experiments.NAMES],
+        help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
+    )
     study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
     study.add_argument("--channels", help="channel map TOML for --logs (wheelload channels)")
     study.add_argument(
@@ -65,12 +71,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     study.add_argument("--horizon", type=int, default=10, help="robust sweep: window length")
     study.add_argument(
-        "--quick", action="store_true", help="robust sweep: KF, RTS, lagged and L1 MHE only"
+        "--quick",
+        action="store_true",
+        help="short segments, few trials; mhe-vs-kf robust sweep: KF, RTS, lagged and L1 MHE only",
     )
     study.add_argument(
         "--horizons", type=int, nargs="+", default=list(HORIZONS), help="equivalence sweep"
     )
-    study.add_argument("--out", default="mhe-vs-kf", help="output prefix for .csv and .png")
+    study.add_argument(
+        "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
+    )
     study.add_argument(
         "--force", action="store_true", help="replace existing output files (never an input)"
     )
@@ -79,6 +89,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     add_allow_unusual(study)
+    experiment_command.add_arguments(study)
     study.set_defaults(handler=run_study)
 
 
@@ -116,11 +127,13 @@ def _simulate(
 
 
 def run_study(args: argparse.Namespace) -> int:
+    if args.name != "mhe-vs-kf":
+        return experiment_command.run(args)
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     paths = [Path(p) for p in args.logs]
     given = set(paths)
-    out = Path(args.out)
+    out = Path(args.out or "mhe-vs-kf")
     second = (
         out.with_name(out.name + "-vs-kf.csv")
         if args.sweep == "robust"
@@ -164,7 +177,7 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     candidates = robust_candidates(args.horizon, quick=args.quick)
     table = robust_sweep(logs, vehicle, faults, candidates)
     change = against_kf(table, faults)
-    out = Path(args.out)
+    out = Path(args.out or "mhe-vs-kf")
     for frame, path in (
         (table, out.with_suffix(".csv")),
         (change, out.with_name(out.name + "-vs-kf.csv")),

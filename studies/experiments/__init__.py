@@ -1,0 +1,1 @@
+"""The paper's experiments and their extensions, one module per study (``wheelload study``)."""

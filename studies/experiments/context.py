@@ -1,0 +1,93 @@
+"""What every study is given: its settings, the shared runner and a guarded output folder.
+
+Outputs never replace an existing file without ``force``; each is written to
+a temporary file in the output folder and renamed.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from wheelload.studies.experiments.runner import Runner
+
+QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode
+QUICK_TRIALS = 2  # Monte Carlo trials per noise scale in --quick mode
+
+
+def _readable(path: str) -> None:
+    """Give a temporary file the permissions of a new file (mkstemp makes it 0600)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Settings:
+    """A study's inputs: the plant's (and the estimators') vehicle file and the mode."""
+
+    vehicle_path: Path
+    vehicles_folder: Path  # every *.toml here is a bundled vehicle (study `vehicles`)
+    quick: bool = False
+
+    @property
+    def vehicle_text(self) -> str:
+        return Path(self.vehicle_path).read_text(encoding="utf-8")
+
+    @property
+    def shorten(self) -> float:
+        return QUICK_SHORTEN if self.quick else 1.0
+
+
+@dataclass(kw_only=True)
+class Outputs:
+    """The output folder; remembers what it wrote."""
+
+    folder: Path
+    force: bool = False
+    written: list[Path] = field(default_factory=list)
+
+    def path(self, name: str) -> Path:
+        """The target path of ``name``, refused if it exists and ``force`` is not given."""
+        path = Path(self.folder) / name
+        if path.exists() and not self.force:
+            raise ValueError(f"{path}: exists; give --force to replace it")
+        return path
+
+    def write_text(self, name: str, text: str) -> Path:
+        path = self.path(name)
+        self._replace(path, text.encode("utf-8"))
+        return path
+
+    def save_figure(self, figure, name: str) -> Path:
+        path = self.path(name)
+        handle, temporary = tempfile.mkstemp(suffix=".png", prefix=".", dir=self.folder)
+        os.close(handle)
+        try:
+            figure.savefig(temporary, dpi=110)
+            _readable(temporary)
+            Path(temporary).replace(path)
+        finally:
+            Path(temporary).unlink(missing_ok=True)
+        self.written.append(path)
+        return path
+
+    def _replace(self, path: Path, data: bytes) -> None:
+        handle, temporary = tempfile.mkstemp(suffix=".tmp", prefix=".", dir=self.folder)
+        try:
+            with os.fdopen(handle, "wb") as stream:
+                stream.write(data)
+            _readable(temporary)
+            Path(temporary).replace(path)
+        finally:
+            Path(temporary).unlink(missing_ok=True)
+        self.written.append(path)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Context:
+    settings: Settings
+    runner: Runner
+    outputs: Outputs
