@@ -34,8 +34,17 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.guard import FAULT_CHANNELS
 from wheelload.estimators.result import StepFlag
-from wheelload.estimators.two_stage import STEP_NAME, TUNING, step_function, tuning_vector
+from wheelload.estimators.two_stage import (
+    DEFAULT_SAMPLE_INTERVAL,
+    STEP_INPUT_NAMES,
+    STEP_NAME,
+    STEP_OUTPUT_NAMES,
+    TUNING,
+    step_function,
+    tuning_vector,
+)
 from wheelload.models import WHEELS, ModelParameters, load_vehicle
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
@@ -63,8 +72,11 @@ class CodegenOptions:
     precision: Precision = Precision.DOUBLE
     params: ParamMode = ParamMode.RUNTIME
     prefix: str = "wheelload_kf"
+    sample_interval: float = DEFAULT_SAMPLE_INTERVAL  # s, the logger's nominal interval
 
     def __post_init__(self) -> None:
+        if not 0.0 < self.sample_interval < 1e6:
+            raise ValueError(f"sample interval must be > 0 s, got {self.sample_interval}")
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.prefix):
             raise ValueError(f"prefix '{self.prefix}' is not a C identifier")
 
@@ -112,29 +124,38 @@ def kernel_function(
 ) -> ca.Function:
     """The step on symmetric storage, without the outputs the C library does not use.
 
-    ``kernel(x, P[10], u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10], std,
-    residual, used)``; with :attr:`ParamMode.BAKED` the numeric ``p`` and
-    ``tuning`` are substituted so that CasADi folds the constants.
+    ``kernel(x, P[10], m, u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10],
+    m_next, std, residual, used, status, fault_statistic, fault)``; with
+    :attr:`ParamMode.BAKED` the numeric ``p`` and ``tuning`` are substituted
+    so that CasADi folds the constants.
     """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", len(PACKED))
-    u = ca.SX.sym("u", step.size1_in(2))
-    valid = ca.SX.sym("u_valid", step.size1_in(3))
+    m = ca.SX.sym("m", step.nnz_in(STEP_INPUT_NAMES.index("m")))
+    u = ca.SX.sym("u", step.nnz_in(STEP_INPUT_NAMES.index("u")))
+    valid = ca.SX.sym("u_valid", step.nnz_in(STEP_INPUT_NAMES.index("u_valid")))
     dt = ca.SX.sym("dt")
-    inputs = [x, P, u, valid, dt]
+    inputs = [x, P, m, u, valid, dt]
     if mode is ParamMode.RUNTIME:
         p_in, tuning_in = ca.SX.sym("p", p.size), ca.SX.sym("tuning", tuning.size)
         inputs += [p_in, tuning_in]
     else:
         p_in, tuning_in = ca.DM(p), ca.DM(tuning)
-    x_next, P_next, std, residual, used = step(x, unpacked(P), u, valid, dt, p_in, tuning_in)[:5]
+    named = dict(zip(STEP_OUTPUT_NAMES, step(x, unpacked(P), m, u, valid, dt, p_in, tuning_in)))
+    named["P_next"] = packed(named["P_next"])
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        [x_next, packed(P_next), std, residual, used],
-        ["x", "P", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
-        ["x_next", "P_next", "std", "residual", "used"],
+        [named[name] for name in KERNEL_OUTPUTS],
+        ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
+        list(KERNEL_OUTPUTS),
     )
+
+
+#: Outputs of the C kernel, in order.
+KERNEL_OUTPUTS = (
+    "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
+)  # fmt: skip
 
 
 def _sha256(data: bytes) -> str:
@@ -151,7 +172,7 @@ def _substitutions(
 ) -> dict[str, str]:
     vehicle = load_vehicle(vehicle_path)
     parameters = ModelParameters.from_vehicle(vehicle)
-    p, tuning = parameters.vector(), tuning_vector(vehicle)
+    p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
     values = dict(zip(calibration_names(), [*p, *tuning, vehicle.filter.initial_std]))
     precision, prefix = options.precision, options.prefix
     real = precision.value
@@ -161,7 +182,7 @@ def _substitutions(
     def param(name: str) -> str:
         return f"params->{name}" if runtime else literal(values[name], precision)
 
-    inputs = ["x[{}]", "P[{}]", "u[{}]", "u_valid[{}]", "dt"]
+    inputs = ["x[{}]", "P[{}]", "m[{}]", "u[{}]", "u_valid[{}]", "dt"]
     if runtime:
         inputs += [
             [f"params->{n}" for n in ModelParameters.names()],
@@ -170,7 +191,7 @@ def _substitutions(
     body = emit_statements(
         kernel,
         inputs,
-        ["x_next[{}]", "P_next[{}]", "std[{}]", "residual[{}]", "used[{}]"],
+        [f"{name}[{{}}]" for name in KERNEL_OUTPUTS],
         precision,
         f"{prefix}_real",
     )
@@ -216,6 +237,11 @@ def _substitutions(
         "param_checks": "\n".join(checks),
         "flag_defines": "\n".join(flags),
         "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),
+        "guard_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.guard_flags()),
+        "n_monitor": str(kernel.nnz_in(2)),
+        "n_status": str(kernel.nnz_out(KERNEL_OUTPUTS.index("status"))),
+        "n_faults": str(len(FAULT_CHANNELS)),
+        "fault_channels": ", ".join(FAULT_CHANNELS),
         "kernel_params_doc": ", p, tuning" if runtime else " (vehicle and tuning baked in)",
         "kernel_params_arg": f", const {prefix}_params *params" if runtime else "",
         "kernel_params_call": ", params" if runtime else "",
@@ -258,7 +284,7 @@ def generate(
         step,
         options.params,
         ModelParameters.from_vehicle(vehicle).vector(),
-        tuning_vector(vehicle),
+        tuning_vector(vehicle, options.sample_interval),
     )
     values = _substitutions(vehicle_path, options, step, kernel)
     out_dir.mkdir(parents=True, exist_ok=True)

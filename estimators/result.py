@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -13,7 +13,7 @@ RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 
 
 class StepFlag(enum.IntFlag):
-    """Per-sample status bits: which updates were skipped for missing inputs.
+    """Per-sample status bits: which updates were skipped, and why.
 
     ``STEP_REJECTED``: the sample interval is not a positive finite number
     (``TwoStageKF.step`` and the generated C), or, in C only, the step's
@@ -29,11 +29,34 @@ class StepFlag(enum.IntFlag):
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
     STEP_REJECTED = 128
+    # Guards (estimators/guard.py), bits 8-15, in the order of the step's ``status`` output.
+    INNOVATION_GATED = 1 << 8  # an update row skipped: y^2 > gate * S
+    GATE_RELEASED = 1 << 9  # a row taken after gate_release_time of rejections
+    TRAVEL_IMPLAUSIBLE = 1 << 10  # a travel or travel rate out of range: treated as missing
+    ACCELERATION_IMPLAUSIBLE = 1 << 11  # |a| above max_acceleration: treated as missing
+    SPEED_IMPLAUSIBLE = 1 << 12  # |vx| above max_speed: treated as missing
+    TRAVEL_FAULT = 1 << 13  # a travel channel isolated as faulty: dropped
+    IMU_FAULT = 1 << 14  # an accelerometer axis isolated as faulty: dropped
+    COVARIANCE_LIMITED = 1 << 15  # the covariance floor or ceiling acted
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
         """The seven update flags in the order of the filter's ``used`` output."""
         return tuple(cls)[:7]
+
+    @classmethod
+    def guard_flags(cls) -> tuple[StepFlag, ...]:
+        """The eight guard flags in the order of the filter's ``status`` output."""
+        return tuple(flag for flag in cls if 1 << 8 <= flag.value < 1 << 16)
+
+
+FAULT_COLUMNS = ("channel", "start", "end", "statistic")
+
+
+def faults_frame(rows: list[dict] | None = None) -> pd.DataFrame:
+    """The ``faults`` table: channel, start [s], end [s], peak test statistic (>= 1)."""
+    frame = pd.DataFrame(rows or [], columns=list(FAULT_COLUMNS))
+    return frame.astype({"channel": str, "start": float, "end": float, "statistic": float})
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -48,6 +71,7 @@ class Estimate:
     std: np.ndarray  # (n, 4) N
     residual: np.ndarray  # (n, 3)
     flags: np.ndarray  # (n,) StepFlag bits
+    faults: pd.DataFrame = field(default_factory=faults_frame)  # isolated sensor faults
 
     def __len__(self) -> int:
         return len(self.t)

@@ -136,7 +136,8 @@ def test_changed_damper_model_changes_the_c(vehicle, tmp_path_factory, log_path)
     variant = step_function(suspension=quadratic_damper_suspension())
     base = generated(tmp_path_factory, Precision.DOUBLE, ParamMode.RUNTIME, name="base")
     other = generated(tmp_path_factory, Precision.DOUBLE, ParamMode.RUNTIME, variant, "variant")
-    assert "fabs(" in other.source.read_text() and "fabs(" not in base.source.read_text()
+    # The quadratic damper adds fabs(v) terms (the guards' range checks use fabs too).
+    assert other.source.read_text().count("fabs(") > base.source.read_text().count("fabs(")
     c = run_example(other, log_path)
     expected = TwoStageKF(vehicle, step=variant).run(read_log(log_path)).to_pandas()
     default = TwoStageKF(vehicle).run(read_log(log_path)).to_pandas()
@@ -245,5 +246,5 @@ def test_bad_inputs_skip_updates_and_bad_intervals_hold_the_state(tmp_path_facto
     loads, flags = c[:, :4], c[:, 4].astype(int)
     assert len(c) == 200 and np.isfinite(loads).all()
     assert flags[50] == StepFlag.VERTICAL_SKIPPED
-    assert flags[120] == sum(StepFlag)
+    assert flags[120] == StepFlag.STEP_REJECTED | sum(StepFlag.update_flags())
     np.testing.assert_array_equal(loads[120], loads[119])
