@@ -158,6 +158,17 @@ KERNEL_OUTPUTS = (
 )  # fmt: skip
 
 
+def representable(values: np.ndarray, precision: Precision) -> np.ndarray:
+    """``values`` saturated to the largest finite number of ``precision``.
+
+    A calibration value beyond the float range (e.g. a process noise density
+    of 1e300) becomes ``FLT_MAX``; the step's covariance ceiling then acts
+    as it would on the double value.
+    """
+    largest = np.finfo(np.float32 if precision is Precision.FLOAT else np.float64).max
+    return np.clip(np.asarray(values, float), -float(largest), float(largest))
+
+
 def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -173,7 +184,12 @@ def _substitutions(
     vehicle = load_vehicle(vehicle_path)
     parameters = ModelParameters.from_vehicle(vehicle)
     p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
-    values = dict(zip(calibration_names(), [*p, *tuning, vehicle.filter.initial_std]))
+    values = dict(
+        zip(
+            calibration_names(),
+            representable(np.array([*p, *tuning, vehicle.filter.initial_std]), options.precision),
+        )
+    )
     precision, prefix = options.precision, options.prefix
     real = precision.value
     runtime = options.params is ParamMode.RUNTIME
@@ -283,8 +299,8 @@ def generate(
     kernel = kernel_function(
         step,
         options.params,
-        ModelParameters.from_vehicle(vehicle).vector(),
-        tuning_vector(vehicle, options.sample_interval),
+        representable(ModelParameters.from_vehicle(vehicle).vector(), options.precision),
+        representable(tuning_vector(vehicle, options.sample_interval), options.precision),
     )
     values = _substitutions(vehicle_path, options, step, kernel)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -5,8 +5,8 @@ Everything here builds CasADi expressions inside the symbolic filter step
 step, the compiled loop and the generated C share one implementation.
 
 - **Plausibility** (input ranges from the vehicle): :math:`|a| \le a_{max}`,
-  :math:`|v_x| \le v_{max}`, :math:`|d_i| \le m g / k_i` (the travel whose
-  spring force would carry the whole vehicle), :math:`|\dot d_i| \le \dot
+  :math:`|v_x| \le v_{max}`, :math:`|d_i| \le c\,m g / k_i` (``c = 1``: the
+  travel whose spring force would carry the whole vehicle), :math:`|\dot d_i| \le \dot
   d_{max}`. An implausible input is treated as missing.
 - **Innovation gate** (per update row): the row is skipped when
   :math:`y^2 > \gamma S` (normalised innovation squared, :math:`\chi^2_1`),
@@ -21,8 +21,9 @@ step, the compiled loop and the generated C share one implementation.
   corner moves is *stuck*; the parity residual :math:`r = b - A z` of the raw
   suspension loads, low-pass filtered, is matched against the signature of
   each channel (a travel fault :math:`f` in corner :math:`i` gives
-  :math:`r = -A_{:,i} f`; an accelerometer bias :math:`g` gives
-  :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
+  :math:`r = -A (\partial z / \partial d_i) f`, through the anti-roll bar
+  also in the other wheel of the axle; an accelerometer bias :math:`g`
+  gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
   its signature explains ``isolation_fraction`` of the residual energy and
   its estimated fault exceeds the limit for ``fault_confirm_time``
   (generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
@@ -47,15 +48,16 @@ FAULT_CHANNELS = ("d_fl", "d_fr", "d_rl", "d_rr", "ax", "ay", "az")
 class GuardSettings:
     """Thresholds of the guards (all > 0); defaults tested on the bundled scenarios."""
 
-    innovation_gate: float = 25.0  # chi^2_1 threshold on y^2 / S (5 sigma)
-    gate_release_time: float = 0.1  # s of consecutive rejections after which a row is taken
+    innovation_gate: float = 9.0  # chi^2_1 threshold on y^2 / S (3 sigma)
+    gate_release_time: float = 0.5  # s of consecutive rejections after which a row is taken
     max_acceleration: float = 3.0  # g, |ax|, |ay|, |az|
     max_speed: float = 120.0  # m/s, |vx|
     max_travel_rate: float = 5.0  # m/s, |v|
+    travel_range: float = 1.0  # |d| <= travel_range * m g / k: spring force of the whole weight
     covariance_floor: float = 1.0  # N, smallest standard deviation kept
     stuck_time: float = 0.25  # s without change while another corner moves
     parity_time_constant: float = 1.0  # s, low-pass of the parity residual
-    travel_fault_load: float = 300.0  # N, smallest travel fault isolated (as load)
+    travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated
     acceleration_fault: float = 1.2  # m/s^2, smallest accelerometer fault isolated
     isolation_fraction: float = 0.9  # share of residual energy one channel must explain
     fault_confirm_time: float = 0.2  # s a parity fault must persist
@@ -100,7 +102,7 @@ def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca
     """1 per input of ``u`` (:data:`~wheelload.estimators.two_stage.INPUTS` order) in range."""
     weight = mass * GRAVITY
     springs = [spring_front, spring_front, spring_rear, spring_rear]
-    travel = [ca.fabs(u[i]) <= weight / springs[i] for i in range(4)]
+    travel = [ca.fabs(u[i]) <= g.travel_range * weight / springs[i] for i in range(4)]
     rate = [ca.fabs(u[4 + i]) <= g.max_travel_rate for i in range(4)]
     acc = [ca.fabs(u[8 + i]) <= g.max_acceleration * GRAVITY for i in range(3)]
     return ca.vertcat(*travel, *rate, *acc, ca.fabs(u[11]) <= g.max_speed)
@@ -143,13 +145,16 @@ class MonitorOutput:
     fault: ca.SX  # (7,) 1 while a channel is isolated
 
 
-def monitor(m, u, valid, z, A, B, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
+def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
     r"""One sample of the fault monitor (see module docstring).
 
     ``valid`` (12): inputs finite and plausible; ``z`` (4) raw suspension
-    loads; ``A``, ``b`` the equilibrium; ``B = \partial b / \partial a``
-    (3 x 3); ``dt`` 0 for a rejected step; ``r_c`` the constraint noise
-    densities (the residual metric :math:`W = \mathrm{diag}(1/r_c)`).
+    loads; ``A``, ``b`` the equilibrium; ``signatures`` (3 x 7): the change
+    of :math:`b - A z` per unit fault of each channel, :math:`-A\,\partial
+    z / \partial d` for the travels [per m] and :math:`\partial b /
+    \partial a` for the accelerometer [per m/s^2]; ``dt`` 0 for a rejected
+    step; ``r_c`` the constraint noise densities (the residual metric
+    :math:`W = \mathrm{diag}(1/r_c)`).
     """
     d = u[0:4]
     d_prev, frozen, rbar = m[_D_PREV], m[_FROZEN], m[_RBAR]
@@ -175,10 +180,9 @@ def monitor(m, u, valid, z, A, B, b, dt, r_c, g: GuardSettings) -> MonitorOutput
     alpha = all_valid * dt / (g.parity_time_constant + dt)
     r = b - ca.mtimes(A, z)
     rbar_next = rbar + alpha * (r - rbar)
-    signatures = ca.horzcat(-A, B)
     w = 1 / r_c
     energy = ca.sum1(w * rbar_next * rbar_next)
-    limits = [g.travel_fault_load] * 4 + [g.acceleration_fault] * 3
+    limits = [g.travel_fault] * 4 + [g.acceleration_fault] * 3
     statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
     for j in range(7):
         s = signatures[:, j]

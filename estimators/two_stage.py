@@ -164,10 +164,14 @@ def step_expressions(
     A, b = equilibrium(acc, vx, p)
 
     # Fault monitor: an isolated channel is dropped like a missing one.
-    acc_sym = ca.SX.sym("acc", 3)
+    # Fault signatures in the parity space from the models' Jacobians: a travel
+    # fault moves b - A z by -A dz/dd, an accelerometer fault by db/da.
+    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+    Jd = ca.substitute(ca.jacobian(suspension(d_sym, v, p), d_sym), d_sym, d)
     B = ca.substitute(ca.jacobian(equilibrium(acc_sym, vx, p)[1], acc_sym), acc_sym, acc)
+    signatures = ca.horzcat(-ca.mtimes(A, Jd), B)
     rc_density = tuning[2:5]
-    watch = guard.monitor(m, u, valid_plausible, z, A, B, b, dt_used, rc_density, settings)
+    watch = guard.monitor(m, u, valid_plausible, z, A, signatures, b, dt_used, rc_density, settings)
     channel_ok = watch.channel_ok
     drop = ca.vertcat(*[channel_ok[i] for i in range(4)] * 2, channel_ok[4:7], 1)
     valid = valid_plausible * drop
