@@ -15,18 +15,16 @@ import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.guard import GRAVITY, GuardSettings
-from wheelload.estimators.signals import signals_from_frame
 from wheelload.estimators.two_stage import nominal_interval, sample_intervals
-from wheelload.models import equilibrium_function, example_vehicle_path, suspension_function
+from wheelload.models import equilibrium_function, suspension_function
 from wheelload.studies.fault_injection import GUARDS_OFF, pooled_rmse
-from wheelload.studies.scenario_runner import run_scenario
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())
 
 
 @pytest.fixture(scope="module")
-def dlc():
-    return signals_from_frame(run_scenario("iso-dlc", example_vehicle_path()).log, source="dlc")
+def dlc(plant_log):
+    return plant_log("iso-dlc")
 
 
 def with_values(signals, row, **values):

@@ -22,6 +22,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench_codegen",
     "wheelload.studies.commands.mhe",
     "wheelload.studies.scenario_bench",
+    "wheelload.studies.fault_injection",
 )
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
+from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.offsets import still_period_static_loads
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
@@ -71,6 +71,21 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def guard_lines(estimate: Estimate) -> list[str]:
+    """Summary lines of the guards: gated and implausible samples, isolated sensor faults."""
+    lines = []
+    counts = {flag: int(np.count_nonzero(estimate.flags & flag)) for flag in StepFlag.guard_flags()}
+    named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in counts.items() if n)
+    if named:
+        lines.append(f"samples flagged by the guards: {named}")
+    for fault in estimate.faults.itertuples():
+        lines.append(
+            f"sensor fault: {fault.channel} from {fault.start:.2f} s to {fault.end:.2f} s "
+            f"(test statistic {fault.statistic:.1f}); the channel was left out of the updates"
+        )
+    return lines
+
+
 def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     """A per-wheel text summary, with the paper's metrics where reference loads exist."""
     n = len(estimate)
@@ -90,8 +105,9 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
             f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} "
             f"{estimate.std[:, i].mean():12.0f}"
         )
-    flagged = int(np.count_nonzero(estimate.flags))
-    lines.append(f"samples with a skipped update (missing input): {flagged}")
+    flagged = int(np.count_nonzero(estimate.flags & sum(StepFlag.update_flags())))
+    lines.append(f"samples with a skipped update (missing or guarded input): {flagged}")
+    lines.extend(guard_lines(estimate))
     if signals.reference is not None:
         table = wheel_metrics(estimate.loads, signals.reference)
         lines.append("error against the log's reference loads (Siegloff & Choi eq. 26-34):")
