@@ -19,7 +19,8 @@ the filter of the previous release: the step is the same otherwise), the
 detection delay of the faulted channel, and the false alarms per hour of
 the fault monitor on the clean logs of every bundled scenario.
 
-Command: ``wheelload bench faults`` (``--quick``: iso-dlc and brake-in-turn only).
+Command: ``wheelload bench faults`` (``--quick``: iso-dlc and brake-in-turn only;
+``--seeds N``: the clean logs with N seeds of road and sensors).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.stats import chi2
 
 from wheelload.estimators import Signals, TwoStageKF
 from wheelload.estimators.guard import GuardSettings
@@ -39,7 +41,7 @@ from wheelload.estimators.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
 from wheelload.studies.scenario_runner import run_scenario
-from wheelload.studies.scenarios import SCENARIOS
+from wheelload.studies.scenarios import SCENARIOS, Options
 
 FAULT_SCENARIOS = ("iso-dlc", "hockenheim", "brake-in-turn")
 ONSET = 0.2  # fraction of the log before a fault starts
@@ -136,8 +138,8 @@ FAULTS = (
 
 
 def scenario_signals(name: str, seed: int = 0) -> Signals:
-    """The measured log of a bundled scenario with the bundled vehicle."""
-    result = run_scenario(name, example_vehicle_path())
+    """The measured log of a bundled scenario with the bundled vehicle (``seed``: road, sensors)."""
+    result = run_scenario(name, example_vehicle_path(), options=Options(seed=seed))
     return signals_from_frame(result.log, source=name)
 
 
@@ -184,22 +186,24 @@ def fault_table(scenarios=FAULT_SCENARIOS, seed: int = 0) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def false_alarms(scenarios=tuple(SCENARIOS)) -> pd.DataFrame:
-    """Fault-monitor isolations on the clean log of each scenario, and per hour overall."""
+def false_alarms(scenarios=tuple(SCENARIOS), seeds=(0,)) -> pd.DataFrame:
+    """Fault-monitor isolations on the clean log of each scenario and seed."""
     vehicle = load_vehicle(example_vehicle_path())
     kf = TwoStageKF(vehicle)
     rows = []
-    for scenario in scenarios:
-        signals = scenario_signals(scenario)
-        estimate = kf.run(signals)
-        rows.append(
-            {
-                "scenario": scenario,
-                "duration_s": float(signals.t[-1] - signals.t[0]),
-                "alarms": len(estimate.faults),
-                "channels": ",".join(estimate.faults["channel"]) or "-",
-            }
-        )
+    for seed in seeds:
+        for scenario in scenarios:
+            signals = scenario_signals(scenario, seed)
+            estimate = kf.run(signals)
+            rows.append(
+                {
+                    "scenario": scenario,
+                    "seed": seed,
+                    "duration_s": float(signals.t[-1] - signals.t[0]),
+                    "alarms": len(estimate.faults),
+                    "channels": ",".join(estimate.faults["channel"]) or "-",
+                }
+            )
     return pd.DataFrame(rows)
 
 
@@ -209,6 +213,12 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--quick", action="store_true", help="iso-dlc and brake-in-turn only, no laps"
+    )
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        default=1,
+        help="clean logs simulated with this many seeds for the false alarms (default 1)",
     )
     parser.set_defaults(handler=run)
 
@@ -220,13 +230,16 @@ def run(args: argparse.Namespace) -> int:
     print("Fault injection (faults from 20 % of each log; RMSE pooled over the wheels):")
     print(table.to_string(index=False, float_format=lambda x: f"{x:.1f}"))
     clean = ("iso-dlc", "brake-in-turn", "wheel-lift") if args.quick else tuple(SCENARIOS)
-    alarms = false_alarms(clean)
+    alarms = false_alarms(clean, tuple(range(args.seeds)))
     hours = alarms["duration_s"].sum() / 3600.0
+    count = int(alarms["alarms"].sum())
     print("\nFalse alarms of the fault monitor on the clean logs:")
     print(alarms.to_string(index=False, float_format=lambda x: f"{x:.1f}"))
+    # Exact one-sided 95 % Poisson bound on the rate: chi^2_{0.95}(2 (count + 1)) / 2.
+    bound = chi2.ppf(0.95, 2 * (count + 1)) / 2 / hours
     print(
-        f"total {int(alarms['alarms'].sum())} in {hours * 60:.1f} min: "
-        f"{alarms['alarms'].sum() / hours:.2f} per hour"
+        f"total {count} in {hours * 60:.1f} min: {count / hours:.2f} per hour "
+        f"(95 % upper bound {bound:.1f} per hour)"
     )
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
