@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -53,10 +53,14 @@ class StepFlag(enum.IntFlag):
 FAULT_COLUMNS = ("channel", "start", "end", "statistic")
 
 
-def faults_frame(rows: list[dict] | None = None) -> pd.DataFrame:
-    """The ``faults`` table: channel, start [s], end [s], peak test statistic (>= 1)."""
-    frame = pd.DataFrame(rows or [], columns=list(FAULT_COLUMNS))
-    return frame.astype({"channel": str, "start": float, "end": float, "statistic": float})
+@dataclass(frozen=True, kw_only=True)
+class SensorFault:
+    """An isolated sensor fault: channel, first and last flagged time [s], peak statistic."""
+
+    channel: str
+    start: float
+    end: float
+    statistic: float
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -71,7 +75,20 @@ class Estimate:
     std: np.ndarray  # (n, 4) N
     residual: np.ndarray  # (n, 3)
     flags: np.ndarray  # (n,) StepFlag bits
-    faults: pd.DataFrame = field(default_factory=faults_frame)  # isolated sensor faults
+    sensor_faults: tuple[SensorFault, ...] = ()  # isolated sensor faults, in time order
+
+    @property
+    def faults(self) -> pd.DataFrame:
+        """The ``faults`` table: ``channel, start, end, statistic``, one row per fault."""
+        return pd.DataFrame(
+            {
+                "channel": pd.Series([f.channel for f in self.sensor_faults], dtype=object),
+                "start": pd.Series([f.start for f in self.sensor_faults], dtype=float),
+                "end": pd.Series([f.end for f in self.sensor_faults], dtype=float),
+                "statistic": pd.Series([f.statistic for f in self.sensor_faults], dtype=float),
+            },
+            columns=list(FAULT_COLUMNS),
+        )
 
     def __len__(self) -> int:
         return len(self.t)

@@ -31,7 +31,7 @@ from wheelload.estimators import guard
 from wheelload.estimators.compiled import CompiledLoop
 from wheelload.estimators.guard import DEFAULT_GUARD, GuardSettings
 from wheelload.estimators.kalman import predict, sequential_update_innovations, upper
-from wheelload.estimators.result import Estimate, StepFlag, faults_frame
+from wheelload.estimators.result import Estimate, SensorFault, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
 
@@ -510,7 +510,7 @@ class TwoStageKF:
             std=named["std"],
             residual=named["residual"],
             flags=flags_from_outputs(used.T, named["status"].T),
-            faults=fault_table(signals.t, named["fault"], named["fault_statistic"]),
+            sensor_faults=sensor_faults(signals.t, named["fault"], named["fault_statistic"]),
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
         innovations = Innovations(
@@ -535,8 +535,10 @@ class TwoStageKF:
         return estimate, innovations
 
 
-def fault_table(t: np.ndarray, fault: np.ndarray, statistic: np.ndarray) -> pd.DataFrame:
-    """One row per isolated fault: ``channel, start, end`` [s] and the peak ``statistic``.
+def sensor_faults(
+    t: np.ndarray, fault: np.ndarray, statistic: np.ndarray
+) -> tuple[SensorFault, ...]:
+    """One record per isolated fault: ``channel, start, end`` [s] and the peak ``statistic``.
 
     ``fault`` and ``statistic`` are the step outputs, shape (n, 7), channels
     :data:`~wheelload.estimators.guard.FAULT_CHANNELS`; ``end`` is the time of
@@ -549,14 +551,14 @@ def fault_table(t: np.ndarray, fault: np.ndarray, statistic: np.ndarray) -> pd.D
         ends = np.flatnonzero(~on[1:] & on[:-1])
         for start, end in zip(starts, ends, strict=True):
             rows.append(
-                {
-                    "channel": channel,
-                    "start": float(t[start]),
-                    "end": float(t[end - 1]),
-                    "statistic": float(np.max(statistic[start:end, j])),
-                }
+                SensorFault(
+                    channel=channel,
+                    start=float(t[start]),
+                    end=float(t[end - 1]),
+                    statistic=float(np.max(statistic[start:end, j])),
+                )
             )
-    return faults_frame(rows)
+    return tuple(sorted(rows, key=lambda fault: fault.start))
 
 
 def sample_intervals(t: np.ndarray) -> np.ndarray:

@@ -78,7 +78,7 @@ def guard_lines(estimate: Estimate) -> list[str]:
     named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in counts.items() if n)
     if named:
         lines.append(f"samples flagged by the guards: {named}")
-    for fault in estimate.faults.itertuples():
+    for fault in estimate.sensor_faults:
         lines.append(
             f"sensor fault: {fault.channel} from {fault.start:.2f} s to {fault.end:.2f} s "
             f"(test statistic {fault.statistic:.1f}); the channel was left out of the updates"
