@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import casadi as ca
 
@@ -83,13 +84,9 @@ class GuardSettings:
 DEFAULT_GUARD = GuardSettings()
 
 
-def unpack(vector: ca.SX) -> GuardSettings:
-    """Symbolic settings from the guard part of the tuning vector (no validation)."""
-    values = {name: vector[k] for k, name in enumerate(GuardSettings.names())}
-    settings = object.__new__(GuardSettings)
-    for name, value in values.items():
-        object.__setattr__(settings, name, value)
-    return settings
+def unpack(vector: ca.SX) -> SimpleNamespace:
+    """The settings as symbols, by name, from the guard part of the tuning vector."""
+    return SimpleNamespace(**{name: vector[k] for k, name in enumerate(GuardSettings.names())})
 
 
 # Layout of the monitor state ``m``.
@@ -222,7 +219,7 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     )
 
 
-def gate_rows(m_reject, dt, g: GuardSettings):
+def gate_rows(m_reject, g: GuardSettings):
     """The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions."""
     record = {}
 

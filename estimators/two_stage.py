@@ -6,7 +6,10 @@ first update with the suspension pseudo-measurement :math:`z = x + v_s`
 constraint :math:`b = A x + w_c` (eq. 17, 23-25). Joseph form throughout.
 
 Tuning is per second (white-noise densities): :math:`Q = q\\,dt\\,I`,
-:math:`R_s = r_s/dt\\,I`, :math:`R_c = \\mathrm{diag}(r_c)/dt`.
+:math:`R_s = r_s/\\Delta t_{nom}\\,I`, :math:`R_c = \\mathrm{diag}(r_c)/\\Delta t_{nom}` with the
+log's nominal (median) interval, so that a gap grows the covariance and never
+shrinks the measurement noise. Guards (plausibility, innovation gate, fault
+monitor, covariance limits) act inside the step: :mod:`wheelload.estimators.guard`.
 
 The per-sample step is one CasADi Function built from the model Functions in
 ``wheelload.models``; :meth:`TwoStageKF.run` maps it over a log in compiled
@@ -187,7 +190,7 @@ def step_expressions(
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
     reject = m[guard.reject_slice()]
-    gate, record = guard.gate_rows(reject, dt_used, settings)
+    gate, record = guard.gate_rows(reject, settings)
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = guard.limit_covariance(P_pred, settings.covariance_floor, ceiling)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(

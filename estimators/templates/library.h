@@ -13,6 +13,10 @@
  * Depends on libm only. No dynamic allocation, no recursion, no I/O, no
  * mutable globals: every filter instance is one ${prefix}_state.
  *
+ * The measurement noise is set by the params field sample_interval, the
+ * logger's nominal interval [s] (not the interval of each step, so that a gap
+ * grows the covariance): set it to the logger's rate.
+ *
  * Units SI (N, m, s, m/s^2). Wheel order FL, FR, RL, RR. Body frame ISO 8855
  * (x forward, y left, z up); ax, ay, az are specific force including gravity
  * (az is about +9.81 at rest); d > 0 in compression, v = dd/dt.
