@@ -99,10 +99,28 @@ def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca
     """1 per input of ``u`` (:data:`~wheelload.estimators.two_stage.INPUTS` order) in range."""
     weight = mass * GRAVITY
     springs = [spring_front, spring_front, spring_rear, spring_rear]
-    travel = [ca.fabs(u[i]) <= g.travel_range * weight / springs[i] for i in range(4)]
+    travel = [ca.fabs(u[i]) * springs[i] <= g.travel_range * weight for i in range(4)]
     rate = [ca.fabs(u[4 + i]) <= g.max_travel_rate for i in range(4)]
     acc = [ca.fabs(u[8 + i]) <= g.max_acceleration * GRAVITY for i in range(3)]
     return ca.vertcat(*travel, *rate, *acc, ca.fabs(u[11]) <= g.max_speed)
+
+
+def floor_covariance(P: ca.SX, floor_std) -> tuple[ca.SX, ca.SX]:
+    r"""``P`` with its diagonal at least :math:`\sigma_{floor}^2`; and 1 if changed.
+
+    After an update the variances only fall, so the ceiling of the
+    prediction still holds; rounding can still take a variance below zero.
+    """
+    n = P.shape[0]
+    floor = floor_std * floor_std
+    rows = [
+        ca.horzcat(*[ca.fmax(P[i, i], floor) if i == j else P[i, j] for j in range(n)])
+        for i in range(n)
+    ]
+    changed = 0
+    for i in range(n):
+        changed = ca.logic_or(changed, P[i, i] < floor)
+    return ca.vertcat(*rows), changed
 
 
 def limit_covariance(P: ca.SX, floor_std, ceiling) -> tuple[ca.SX, ca.SX]:
@@ -177,25 +195,27 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     alpha = all_valid * dt / (g.parity_time_constant + dt)
     r = b - ca.mtimes(A, z)
     rbar_next = rbar + alpha * (r - rbar)
-    w = 1 / r_c
+    # W = diag(1/r_c) up to a scale (the tests are scale-free): the products of the
+    # other two densities, so that no division is repeated at every use.
+    w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
     energy = ca.sum1(w * rbar_next * rbar_next)
     limits = [g.travel_fault] * 4 + [g.acceleration_fault] * 3
+    inverse_limits = [1 / g.travel_fault] * 4 + [1 / g.acceleration_fault] * 3
+    inverse_stuck_time = 1 / g.stuck_time
     statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
     for j in range(7):
         s = signatures[:, j]
         norm = ca.sum1(w * s * s)
         projection = ca.sum1(w * s * rbar_next)
         magnitude = projection / norm
-        explained = projection * projection / norm
-        candidate = ca.logic_and(
-            ca.fabs(magnitude) > limits[j], explained > g.isolation_fraction * energy
-        )
+        isolated = projection * magnitude > g.isolation_fraction * energy
+        candidate = ca.logic_and(ca.fabs(magnitude) > limits[j], isolated)
         persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)
         parity_fault = persist_j >= g.fault_confirm_time
-        level = ca.fabs(magnitude) / limits[j] * (explained > g.isolation_fraction * energy)
+        level = ca.fabs(magnitude) * inverse_limits[j] * isolated
         if j < 4:
             now = ca.logic_or(stuck[j], parity_fault)
-            level = ca.fmax(level, frozen_next[j] / g.stuck_time * stuck[j])
+            level = ca.fmax(level, frozen_next[j] * inverse_stuck_time * stuck[j])
         else:
             now = parity_fault
         clear_j = ca.if_else(now, 0, clear[j] + dt)
