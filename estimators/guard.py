@@ -207,7 +207,8 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         s = signatures[:, j]
         norm = ca.sum1(w * s * s)
         projection = ca.sum1(w * s * rbar_next)
-        magnitude = projection / norm
+        # A channel without signature (norm 0) can never be isolated; no 0/0.
+        magnitude = projection / ca.if_else(norm > 0, norm, 1) * (norm > 0)
         isolated = projection * magnitude > g.isolation_fraction * energy
         candidate = ca.logic_and(ca.fabs(magnitude) > limits[j], isolated)
         persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)

@@ -169,10 +169,9 @@ def step_expressions(
     # Fault monitor: an isolated channel is dropped like a missing one.
     # Fault signatures in the parity space from the models' Jacobians: a travel
     # fault moves b - A z by -A dz/dd, an accelerometer fault by db/da.
-    # (Derivatives through the sanitising selects: exact where the inputs are valid,
-    # and the monitor uses the parity only then.)
-    Jd = ca.jacobian(z, u_raw)[:, 0:4]
-    B = ca.jacobian(b, u_raw)[:, 8:11]
+    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+    Jd = ca.substitute(ca.jacobian(suspension(d_sym, v, p), d_sym), d_sym, d)
+    B = ca.substitute(ca.jacobian(equilibrium(acc_sym, vx, p)[1], acc_sym), acc_sym, acc)
     signatures = ca.horzcat(-ca.mtimes(A, Jd), B)
     rc_density = tuning[2:5]
     watch = guard.monitor(m, u, valid_plausible, z, A, signatures, b, dt_used, rc_density, settings)

@@ -169,3 +169,16 @@ def test_guard_settings_reject_bad_values():
         GuardSettings(innovation_gate=0.0)
     with pytest.raises(ValueError, match="isolation_fraction"):
         GuardSettings(isolation_fraction=1.5)
+
+
+def test_monitor_state_stays_finite_with_missing_and_implausible_inputs(vehicle, dlc):
+    """Every channel missing or absurd in turn: the carried monitor state stays finite."""
+    kf = TwoStageKF(vehicle)
+    state = kf.initial_state()
+    for k, value in enumerate([np.nan, np.inf, 1e30, -1e30, 0.0] * 12):
+        u = np.concatenate([dlc.d[k], dlc.v[k], dlc.acc[k], [dlc.vx[k]]])
+        u[k % 12] = value
+        sample = Sample(d=u[0:4], v=u[4:8], acc=u[8:11], vx=u[11])
+        state, estimate = kf.step(state, sample, 0.01)
+        assert np.isfinite(state.m).all() and np.isfinite(state.x).all()
+        assert np.isfinite(state.P).all()
