@@ -67,7 +67,8 @@ class GuardSettings:
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
-            if not (isinstance(value, int | float) and 0.0 < value < float("inf")):
+            number = isinstance(value, int | float) and not isinstance(value, bool)
+            if not (number and 0.0 < value < float("inf")):
                 raise ValueError(f"guard setting {field.name} must be > 0 and finite, got {value}")
         if self.isolation_fraction >= 1.0:
             raise ValueError("guard setting isolation_fraction must be below 1")
@@ -269,4 +270,5 @@ def with_reject_times(m_next: ca.SX, times: ca.SX) -> ca.SX:
 
 
 def reject_slice() -> slice:
+    """Where the rows' consecutive rejection times sit in the monitor state."""
     return _REJECT
