@@ -228,6 +228,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios = ("iso-dlc", "brake-in-turn") if args.quick else FAULT_SCENARIOS
     table = fault_table(scenarios)
     print("Fault injection (faults from 20 % of each log; RMSE pooled over the wheels):")
+    table["delay_s"] = [f"{x:.2f}" if np.isfinite(x) else "-" for x in table["delay_s"]]
     print(table.to_string(index=False, float_format=lambda x: f"{x:.1f}"))
     clean = ("iso-dlc", "brake-in-turn", "wheel-lift") if args.quick else tuple(SCENARIOS)
     alarms = false_alarms(clean, tuple(range(args.seeds)))
