@@ -34,9 +34,18 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.guard import FAULT_CHANNELS
 from wheelload.estimators.output_files import write_text
 from wheelload.estimators.result import StepFlag
-from wheelload.estimators.two_stage import STEP_NAME, TUNING, step_function, tuning_vector
+from wheelload.estimators.two_stage import (
+    DEFAULT_SAMPLE_INTERVAL,
+    STEP_INPUT_NAMES,
+    STEP_NAME,
+    STEP_OUTPUT_NAMES,
+    TUNING,
+    step_function,
+    tuning_vector,
+)
 from wheelload.models import WHEELS, ModelParameters, Vehicle, load_vehicle
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
@@ -64,8 +73,11 @@ class CodegenOptions:
     precision: Precision = Precision.DOUBLE
     params: ParamMode = ParamMode.RUNTIME
     prefix: str = "wheelload_kf"
+    sample_interval: float = DEFAULT_SAMPLE_INTERVAL  # s, the logger's nominal interval
 
     def __post_init__(self) -> None:
+        if not 0.0 < self.sample_interval < 1e6:
+            raise ValueError(f"sample interval must be > 0 s, got {self.sample_interval}")
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.prefix):
             raise ValueError(f"prefix '{self.prefix}' is not a C identifier")
 
@@ -113,29 +125,49 @@ def kernel_function(
 ) -> ca.Function:
     """The step on symmetric storage, without the outputs the C library does not use.
 
-    ``kernel(x, P[10], u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10], std,
-    residual, used)``; with :attr:`ParamMode.BAKED` the numeric ``p`` and
-    ``tuning`` are substituted so that CasADi folds the constants.
+    ``kernel(x, P[10], m, u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10],
+    m_next, std, residual, used, status, fault_statistic, fault)``; with
+    :attr:`ParamMode.BAKED` the numeric ``p`` and ``tuning`` are substituted
+    so that CasADi folds the constants.
     """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", len(PACKED))
-    u = ca.SX.sym("u", step.size1_in(2))
-    valid = ca.SX.sym("u_valid", step.size1_in(3))
+    m = ca.SX.sym("m", step.nnz_in(STEP_INPUT_NAMES.index("m")))
+    u = ca.SX.sym("u", step.nnz_in(STEP_INPUT_NAMES.index("u")))
+    valid = ca.SX.sym("u_valid", step.nnz_in(STEP_INPUT_NAMES.index("u_valid")))
     dt = ca.SX.sym("dt")
-    inputs = [x, P, u, valid, dt]
+    inputs = [x, P, m, u, valid, dt]
     if mode is ParamMode.RUNTIME:
         p_in, tuning_in = ca.SX.sym("p", p.size), ca.SX.sym("tuning", tuning.size)
         inputs += [p_in, tuning_in]
     else:
         p_in, tuning_in = ca.DM(p), ca.DM(tuning)
-    x_next, P_next, std, residual, used = step(x, unpacked(P), u, valid, dt, p_in, tuning_in)[:5]
+    named = dict(zip(STEP_OUTPUT_NAMES, step(x, unpacked(P), m, u, valid, dt, p_in, tuning_in)))
+    named["P_next"] = packed(named["P_next"])
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        [x_next, packed(P_next), std, residual, used],
-        ["x", "P", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
-        ["x_next", "P_next", "std", "residual", "used"],
+        [named[name] for name in KERNEL_OUTPUTS],
+        ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
+        list(KERNEL_OUTPUTS),
     )
+
+
+#: Outputs of the C kernel, in order.
+KERNEL_OUTPUTS = (
+    "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
+)  # fmt: skip
+
+
+def representable(values: np.ndarray, precision: Precision) -> np.ndarray:
+    """``values`` saturated to the largest finite number of ``precision``.
+
+    A calibration value beyond the float range (e.g. a process noise density
+    of 1e300) becomes ``FLT_MAX``; the step's covariance ceiling then acts
+    as it would on the double value.
+    """
+    largest = np.finfo(np.float32 if precision is Precision.FLOAT else np.float64).max
+    return np.clip(np.asarray(values, float), -float(largest), float(largest))
 
 
 def _sha256(data: bytes) -> str:
@@ -155,8 +187,13 @@ def _substitutions(
     kernel: ca.Function,
 ) -> dict[str, str]:
     parameters = ModelParameters.from_vehicle(vehicle)
-    p, tuning = parameters.vector(), tuning_vector(vehicle)
-    values = dict(zip(calibration_names(), [*p, *tuning, vehicle.filter.initial_std]))
+    p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
+    values = dict(
+        zip(
+            calibration_names(),
+            representable(np.array([*p, *tuning, vehicle.filter.initial_std]), options.precision),
+        )
+    )
     precision, prefix = options.precision, options.prefix
     real = precision.value
     runtime = options.params is ParamMode.RUNTIME
@@ -165,7 +202,7 @@ def _substitutions(
     def param(name: str) -> str:
         return f"params->{name}" if runtime else literal(values[name], precision)
 
-    inputs = ["x[{}]", "P[{}]", "u[{}]", "u_valid[{}]", "dt"]
+    inputs = ["x[{}]", "P[{}]", "m[{}]", "u[{}]", "u_valid[{}]", "dt"]
     if runtime:
         inputs += [
             [f"params->{n}" for n in ModelParameters.names()],
@@ -174,7 +211,7 @@ def _substitutions(
     body = emit_statements(
         kernel,
         inputs,
-        ["x_next[{}]", "P_next[{}]", "std[{}]", "residual[{}]", "used[{}]"],
+        [f"{name}[{{}}]" for name in KERNEL_OUTPUTS],
         precision,
         f"{prefix}_real",
     )
@@ -220,6 +257,11 @@ def _substitutions(
         "param_checks": "\n".join(checks),
         "flag_defines": "\n".join(flags),
         "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),
+        "guard_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.guard_flags()),
+        "n_monitor": str(kernel.nnz_in(2)),
+        "n_status": str(kernel.nnz_out(KERNEL_OUTPUTS.index("status"))),
+        "n_faults": str(len(FAULT_CHANNELS)),
+        "fault_channels": ", ".join(FAULT_CHANNELS),
         "kernel_params_doc": ", p, tuning" if runtime else " (vehicle and tuning baked in)",
         "kernel_params_arg": f", const {prefix}_params *params" if runtime else "",
         "kernel_params_call": ", params" if runtime else "",
@@ -263,8 +305,8 @@ def generate(
     kernel = kernel_function(
         step,
         options.params,
-        ModelParameters.from_vehicle(vehicle).vector(),
-        tuning_vector(vehicle),
+        representable(ModelParameters.from_vehicle(vehicle).vector(), options.precision),
+        representable(tuning_vector(vehicle, options.sample_interval), options.precision),
     )
     values = _substitutions(vehicle_path, vehicle, options, step, kernel)
     out_dir.mkdir(parents=True, exist_ok=True)

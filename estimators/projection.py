@@ -63,16 +63,19 @@ def project(x, P, A, b, W_inv, mask=None):
 
 
 def projection_update(weighting: Weighting):
-    """The second filter stage ``(x, P, b, A, r_c, mask) -> (x, P, y, S, use)``.
+    """The second filter stage ``(x, P, b, A, r_c, mask, gate) -> (x, P, y, S, use)``.
 
     Projects and ignores ``r_c``; ``y = b - A x`` and ``S = diag(A P A^T)``
-    are the rows' residuals and variances before the projection.
+    are the rows' residuals and variances before the projection, and
+    ``gate(i, y_i, S_i)`` may leave row ``i`` out of it.
     """
 
-    def constraint_update(x, P, b, A, r_c, mask):
+    def constraint_update(x, P, b, A, r_c, mask, gate=None):
         W_inv = P if weighting is Weighting.MAXIMUM_PROBABILITY else ca.DM.eye(x.shape[0])
         y = b - ca.mtimes(A, x)
         S = ca.diag(ca.mtimes([A, P, A.T]))
+        if gate is not None:
+            mask = ca.vertcat(*[mask[i] * gate(i, y[i], S[i]) for i in range(A.shape[0])])
         x_new, P_new = project(x, P, A, b, W_inv, mask)
         return x_new, P_new, y, S, mask
 
@@ -114,7 +117,6 @@ class ProjectionKF(TwoStageKF):
     ) -> None:
         if not isinstance(weighting, Weighting):
             raise TypeError(f"weighting must be a Weighting, got {weighting!r}")
-        super().__init__(vehicle, static=static)
+        super().__init__(vehicle, static=static, step=projection_step_function(weighting))
         self.weighting = weighting
         self.name = f"projection KF ({weighting.value})"
-        self._step = projection_step_function(weighting)

@@ -19,7 +19,7 @@ RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 
 
 class StepFlag(enum.IntFlag):
-    """Per-sample status bits: which updates were skipped for missing inputs.
+    """Per-sample status bits: which updates were skipped, and why.
 
     ``AZ_ASSUMED_G``: the log has no ``az``; :math:`a_z = g` was assumed.
     ``AERO_OFF_NO_SPEED``: no ``vx`` and no wheel speeds; aerodynamic terms off.
@@ -39,6 +39,15 @@ class StepFlag(enum.IntFlag):
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
     STEP_REJECTED = 128
+    # Guards (estimators/guard.py), bits 8-15, in the order of the step's ``status`` output.
+    INNOVATION_GATED = 1 << 8  # an update row skipped: y^2 > gate * S
+    GATE_RELEASED = 1 << 9  # a row taken after gate_release_time of rejections
+    TRAVEL_IMPLAUSIBLE = 1 << 10  # a travel or travel rate out of range: treated as missing
+    ACCELERATION_IMPLAUSIBLE = 1 << 11  # |a| above max_acceleration: treated as missing
+    SPEED_IMPLAUSIBLE = 1 << 12  # |vx| above max_speed: treated as missing
+    TRAVEL_FAULT = 1 << 13  # a travel channel isolated as faulty: dropped
+    IMU_FAULT = 1 << 14  # an accelerometer axis isolated as faulty: dropped
+    COVARIANCE_LIMITED = 1 << 15  # the covariance floor or ceiling acted
     # Bits 20-23: inputs the log did not have (estimators/signals.py).
     AZ_ASSUMED_G = 1 << 20
     AERO_OFF_NO_SPEED = 1 << 21
@@ -53,6 +62,29 @@ class StepFlag(enum.IntFlag):
     def skipped_mask(cls) -> int:
         """Bits of a sample whose update was skipped or whose step was rejected."""
         return int(sum(cls.update_flags())) | int(cls.STEP_REJECTED)
+
+    @classmethod
+    def assumed_mask(cls) -> int:
+        """Bits of a sample whose input was assumed or derived (the log did not have it)."""
+        return int(cls.AZ_ASSUMED_G | cls.AERO_OFF_NO_SPEED | cls.SPEED_FROM_WHEELS)
+
+    @classmethod
+    def guard_flags(cls) -> tuple[StepFlag, ...]:
+        """The eight guard flags in the order of the filter's ``status`` output."""
+        return tuple(flag for flag in cls if 1 << 8 <= flag.value < 1 << 16)
+
+
+FAULT_COLUMNS = ("channel", "start", "end", "statistic")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorFault:
+    """An isolated sensor fault: channel, first and last flagged time [s], peak statistic."""
+
+    channel: str
+    start: float
+    end: float
+    statistic: float
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -72,6 +104,20 @@ class Estimate:
     residual: np.ndarray  # (n, 3)
     flags: np.ndarray  # (n,) StepFlag bits
     has_std: bool = True
+    sensor_faults: tuple[SensorFault, ...] = ()  # isolated sensor faults, in time order
+
+    @property
+    def faults(self) -> pd.DataFrame:
+        """The ``faults`` table: ``channel, start, end, statistic``, one row per fault."""
+        return pd.DataFrame(
+            {
+                "channel": pd.Series([f.channel for f in self.sensor_faults], dtype=object),
+                "start": pd.Series([f.start for f in self.sensor_faults], dtype=float),
+                "end": pd.Series([f.end for f in self.sensor_faults], dtype=float),
+                "statistic": pd.Series([f.statistic for f in self.sensor_faults], dtype=float),
+            },
+            columns=list(FAULT_COLUMNS),
+        )
 
     def __len__(self) -> int:
         return len(self.t)

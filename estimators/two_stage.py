@@ -6,7 +6,10 @@ first update with the suspension pseudo-measurement :math:`z = x + v_s`
 constraint :math:`b = A x + w_c` (eq. 17, 23-25). Joseph form throughout.
 
 Tuning is per second (white-noise densities): :math:`Q = q\\,dt\\,I`,
-:math:`R_s = r_s/dt\\,I`, :math:`R_c = \\mathrm{diag}(r_c)/dt`.
+:math:`R_s = r_s/\\Delta t_{nom}\\,I`, :math:`R_c = \\mathrm{diag}(r_c)/\\Delta t_{nom}` with the
+log's nominal (median) interval, so that a gap grows the covariance and never
+shrinks the measurement noise. Guards (plausibility, innovation gate, fault
+monitor, covariance limits) act inside the step: :mod:`wheelload.estimators.guard`.
 
 The per-sample step is one CasADi Function built from the model Functions in
 ``wheelload.models``; :meth:`TwoStageKF.run` maps it over a log in compiled
@@ -21,20 +24,22 @@ Example
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 import pandas as pd
 
+from wheelload.estimators import guard
 from wheelload.estimators.compiled import CompiledLoop
+from wheelload.estimators.guard import DEFAULT_GUARD, GuardSettings
 from wheelload.estimators.kalman import (
     predict,
     sequential_update,
     sequential_update_innovations,
     upper,
 )
-from wheelload.estimators.result import Estimate, StepFlag
+from wheelload.estimators.result import Estimate, SensorFault, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
@@ -52,20 +57,54 @@ TUNING = (
     "constraint_noise_vertical",
     "constraint_noise_pitch",
     "constraint_noise_roll",
+    "sample_interval",
+    *GuardSettings.names(),
 )
+#: The filter's noise densities: the first entries of the tuning vector (vehicle file [filter]).
+NOISE_DENSITIES = TUNING[:5]
 STEP_NAME = "wheelload_kf_step"
+#: Nominal sample interval [s] where no log gives one (100 Hz).
+DEFAULT_SAMPLE_INTERVAL = 0.01
+_SAMPLE_INTERVAL = TUNING.index("sample_interval")
+_GUARD_START = _SAMPLE_INTERVAL + 1
+_P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 
 
-def tuning_vector(vehicle: Vehicle) -> np.ndarray:
-    """The filter tuning of a vehicle file in :data:`TUNING` order."""
+def tuning_vector(
+    vehicle: Vehicle,
+    sample_interval: float = DEFAULT_SAMPLE_INTERVAL,
+    settings: GuardSettings = DEFAULT_GUARD,
+) -> np.ndarray:
+    r"""The filter tuning in :data:`TUNING` order: the vehicle file's, interval, guards.
+
+    ``sample_interval`` is the log's nominal interval [s]: the measurement
+    noise is :math:`R = r / \Delta t_{nominal}` whatever the gap before a
+    sample.
+    """
     tuning = vehicle.filter
+    if not 0.0 < sample_interval < MAX_INTERVAL:
+        raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
     return np.array(
         [
             tuning.process_noise_density,
             tuning.suspension_noise_density,
             *tuning.constraint_noise_density,
+            sample_interval,
+            *settings.vector(),
         ]
     )
+
+
+def noise_densities(vehicle: Vehicle) -> np.ndarray:
+    """The vehicle file's noise densities in :data:`NOISE_DENSITIES` order."""
+    return tuning_vector(vehicle)[: len(NOISE_DENSITIES)]
+
+
+def nominal_interval(t: np.ndarray) -> float:
+    """Median of the positive finite sample intervals of a log (default if none)."""
+    dt = np.diff(np.asarray(t, float))
+    dt = dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)]
+    return float(np.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL
 
 
 def _dependency_mask(outputs: ca.SX, inputs: ca.SX, valid: ca.SX) -> ca.SX:
@@ -102,41 +141,77 @@ def step_expressions(
 ):
     """Symbolic inputs and outputs of one filter step built from the model Functions.
 
-    ``constraint_update(x, P, b, A, r_c, mask) -> (x, P, y, S, use)`` is the
-    second stage; the default is the soft-constraint Kalman update (eq.
-    23-25), one row at a time. Outputs ``innovation`` and
+    ``constraint_update(x, P, b, A, r_c, mask, gate) -> (x, P, y, S, use)``
+    is the second stage; the default is the soft-constraint Kalman update
+    (eq. 23-25), one row at a time. Outputs ``innovation`` and
     ``innovation_variance`` (7 each, update order: suspension FL, FR, RL, RR,
     then vertical, pitch, roll) are each row's pre-update innovation and its
-    variance S; both are 0 for a row whose inputs are missing.
+    variance S; both are 0 for a row whose inputs are missing. The guards of
+    :mod:`wheelload.estimators.guard` (plausibility, innovation gate, fault
+    monitor with state ``m``, covariance limits) act on the masks of the
+    updates, so a guarded row changes neither x nor P.
     """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", 4, 4)
+    m = ca.SX.sym("m", guard.MONITOR_SIZE)
     u_raw = ca.SX.sym("u", len(INPUTS))
-    valid = ca.SX.sym("u_valid", len(INPUTS))
+    valid_raw = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
     p = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
+    settings = guard.unpack(tuning[_GUARD_START:])
+    dt_nominal = tuning[_SAMPLE_INTERVAL]
 
-    u = _sanitise(u_raw, valid)
-    d, v, acc, vx = u[0:4], u[4:8], u[8:11], u[11]
-    z = suspension(d, v, p)
-    A, b = equilibrium(acc, vx, p)
     # A non-positive or non-finite interval skips the whole step: the state is held.
     dt_ok = interval_is_valid(dt)
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
+    dt_used = dt_safe * dt_ok
+
+    # Missing or implausible inputs are replaced by zero and skip the updates they feed.
+    u_finite = _sanitise(u_raw, valid_raw)
+    in_range = guard.plausible(
+        u_finite, p[_P_INDEX["mass"]], p[_P_INDEX["spring_front"]], p[_P_INDEX["spring_rear"]],
+        settings,
+    )  # fmt: skip
+    valid_plausible = valid_raw * in_range
+    u = _sanitise(u_raw, valid_plausible)
+    d, v, acc, vx = u[0:4], u[4:8], u[8:11], u[11]
+    z = suspension(d, v, p)
+    A, b = equilibrium(acc, vx, p)
+
+    # Fault monitor: an isolated channel is dropped like a missing one.
+    # Fault signatures in the parity space from the models' Jacobians: a travel
+    # fault moves b - A z by -A dz/dd, an accelerometer fault by db/da.
+    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+    Jd = ca.substitute(ca.jacobian(suspension(d_sym, v, p), d_sym), d_sym, d)
+    B = ca.substitute(ca.jacobian(equilibrium(acc_sym, vx, p)[1], acc_sym), acc_sym, acc)
+    signatures = ca.horzcat(-ca.mtimes(A, Jd), B)
+    rc_density = tuning[2:5]
+    watch = guard.monitor(m, u, valid_plausible, z, A, signatures, b, dt_used, rc_density, settings)
+    channel_ok = watch.channel_ok
+    drop = ca.vertcat(*[channel_ok[i] for i in range(4)] * 2, channel_ok[4:7], 1)
+    valid = valid_plausible * drop
     mask_s = _dependency_mask(z, u_raw, valid) * dt_ok
     mask_c = _dependency_mask(b, u_raw, valid) * dt_ok
 
-    Q = tuning[0] * dt_safe * dt_ok * ca.DM.eye(4)
-    rs = ca.repmat(tuning[1] / dt_safe, 4, 1)
-    rc = tuning[2:5] / dt_safe
+    # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
+    weight = p[_P_INDEX["mass"]] * guard.GRAVITY
+    ceiling = weight * weight
+    Q = ca.fmin(tuning[0] * dt_used, ceiling) * ca.DM.eye(4)
+    rs = ca.repmat(tuning[1] / dt_nominal, 4, 1)
+    rc = rc_density / dt_nominal
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
+    reject = m[guard.reject_slice()]
+    gate, record = guard.gate_rows(reject, settings)
     x_pred, P_pred = predict(x, upper(P), Q)
+    P_pred, limited_pred = guard.limit_covariance(P_pred, settings.covariance_floor, ceiling)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
-        x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s
+        x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s, gate
     )
-    x_new, P_new, y_c, S_c, use_c = constraint_update(x_s, P_s, b, A, rc, mask_c)
+    x_new, P_new, y_c, S_c, use_c = constraint_update(
+        x_s, P_s, b, A, rc, mask_c, lambda i, y, S: gate(4 + i, y, S)
+    )
     # No travel row at all (IMU-only): the weak roll-split row observes the warp, beside
     # the roll moment it splits (with no data at all the step is a pure prediction).
     no_travel = (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
@@ -145,6 +220,7 @@ def step_expressions(
     x_new, P_new = sequential_update(
         x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
     )
+    P_new, limited_new = guard.floor_covariance(P_new, settings.covariance_floor)
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
@@ -152,15 +228,52 @@ def step_expressions(
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
-    inputs = [x, P, u_raw, valid, dt, p, tuning]
-    outputs = [x_new, P_new, std, residual, used, z, innovation, innovation_variance]
+    m_next = guard.with_reject_times(
+        watch.m_next, guard.reject_times(reject, record, available, dt_used)
+    )
+    status = _status(
+        record, available, valid_raw, in_range, watch.fault,
+        ca.logic_or(limited_pred, limited_new),
+    )  # fmt: skip
+    inputs = [x, P, m, u_raw, valid_raw, dt, p, tuning]
+    outputs = [
+        x_new, P_new, m_next, std, residual, used, z, innovation, innovation_variance,
+        status, watch.statistic, watch.fault,
+    ]  # fmt: skip
     return inputs, outputs
 
 
-STEP_INPUT_NAMES = ["x", "P", "u", "u_valid", "dt", "p", "tuning"]
+def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
+    """Indicators of the guard flags (:data:`GUARD_FLAGS` order)."""
+
+    def any_of(values):
+        result = 0
+        for value in values:
+            result = ca.logic_or(result, value)
+        return result
+
+    gated = [available[i] * (1 - ca.logic_or(*record[i])) for i in range(7)]
+    released = [available[i] * (1 - record[i][0]) * record[i][1] for i in range(7)]
+    implausible = [valid_raw[i] * (1 - in_range[i]) for i in range(len(INPUTS))]
+    return ca.vertcat(
+        any_of(gated),
+        any_of(released),
+        any_of(implausible[0:8]),
+        any_of(implausible[8:11]),
+        implausible[11],
+        any_of([fault[i] for i in range(4)]),
+        any_of([fault[i] for i in range(4, 7)]),
+        limited,
+    )
+
+
+STEP_INPUT_NAMES = ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"]
 STEP_OUTPUT_NAMES = [
-    "x_next", "P_next", "std", "residual", "used", "z", "innovation", "innovation_variance",
+    "x_next", "P_next", "m_next", "std", "residual", "used", "z", "innovation",
+    "innovation_variance", "status", "fault_statistic", "fault",
 ]  # fmt: skip
+#: The step's carried state: x, P and the monitor m.
+N_CARRIED = 3
 
 
 def step_function(
@@ -177,6 +290,34 @@ def step_function(
         constraint_update=constraint_update,
     )
     return ca.Function(name, inputs, outputs, STEP_INPUT_NAMES, STEP_OUTPUT_NAMES)
+
+
+def without_monitor(step: ca.Function) -> ca.Function:
+    """``step`` for callers that carry only x and P: the monitor starts empty every call.
+
+    ``(x, P, u, u_valid, dt, p, tuning) -> (x_next, P_next, std, residual,
+    used, z, innovation, innovation_variance)``.
+    """
+    inputs = step.sx_in()
+    named = dict(
+        zip(
+            STEP_OUTPUT_NAMES,
+            step.call([*inputs[:2], ca.DM.zeros(step.sparsity_in(2)), *inputs[3:]]),
+        )
+    )
+    kept = [
+        name
+        for name in STEP_OUTPUT_NAMES
+        if name not in ("m_next", "status", "fault_statistic", "fault")
+    ]
+    names_in = [name for name in STEP_INPUT_NAMES if name != "m"]
+    return ca.Function(
+        f"{step.name()}_xp",
+        [*inputs[:2], *inputs[3:]],
+        [named[name] for name in kept],
+        names_in,
+        kept,
+    )
 
 
 #: The seven update rows in update order (innovation outputs).
@@ -213,10 +354,11 @@ class Innovations:
 
 @dataclass(frozen=True)
 class FilterState:
-    """Explicit filter state: loads ``x`` [N] and covariance ``P`` [N^2]."""
+    """Explicit filter state: loads ``x`` [N], covariance ``P`` [N^2], fault monitor ``m``."""
 
     x: np.ndarray
     P: np.ndarray
+    m: np.ndarray = field(default_factory=lambda: np.zeros(guard.MONITOR_SIZE))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -248,6 +390,13 @@ def flags_from_used(used: np.ndarray) -> np.ndarray:
     return (skipped * bits[:, None]).sum(axis=0).astype(np.int64)
 
 
+def flags_from_outputs(used: np.ndarray, status: np.ndarray) -> np.ndarray:
+    """Per-sample flags from the ``used`` (7 x n) and ``status`` (8 x n) outputs."""
+    bits = np.array([flag.value for flag in StepFlag.guard_flags()])
+    guarded = ((status > 0.5) * bits[:, None]).sum(axis=0).astype(np.int64)
+    return flags_from_used(used) | guarded
+
+
 class TwoStageKF:
     """Two-stage physics-constrained Kalman filter for the four wheel loads.
 
@@ -271,37 +420,61 @@ class TwoStageKF:
         *,
         static: np.ndarray | None = None,
         step: ca.Function | None = None,
+        guard_settings: GuardSettings = DEFAULT_GUARD,
+        sample_interval: float | None = None,
     ) -> None:
         self.vehicle = vehicle
         self.parameters = ModelParameters.from_vehicle(vehicle, static)
         self.p = self.parameters.vector()
-        self.tuning = tuning_vector(vehicle)
-        self._step = step or step_function()
+        self.guard_settings = guard_settings
+        self.sample_interval = sample_interval
+        self.tuning = tuning_vector(
+            vehicle, sample_interval or DEFAULT_SAMPLE_INTERVAL, guard_settings
+        )
+        self.step_function = step or step_function()
+        self._step = without_monitor(self.step_function)
+
+    def tuning_for(self, sample_interval: float) -> np.ndarray:
+        """:attr:`tuning` with the nominal interval ``sample_interval`` [s]."""
+        if not 0.0 < sample_interval < MAX_INTERVAL:
+            raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
+        tuning = np.array(self.tuning, float)
+        tuning[_SAMPLE_INTERVAL] = sample_interval
+        return tuning
 
     def initial_state(self) -> FilterState:
-        """Static loads with covariance ``initial_std^2 I``."""
+        """Static loads with covariance ``initial_std^2 I`` (at most ``(m g)^2``)."""
         x0 = np.array(self.parameters.static(), dtype=float)
-        return FilterState(x0, self.vehicle.filter.initial_std**2 * np.eye(4))
+        weight = self.parameters.mass * guard.GRAVITY
+        variance = min(self.vehicle.filter.initial_std, weight) ** 2
+        return FilterState(x0, variance * np.eye(4))
 
     def step(self, state: FilterState, sample: Sample, dt: float) -> tuple[FilterState, Estimate]:
-        """One prediction and both updates; returns the new state and the estimate."""
+        """One prediction and both updates; returns the new state and the estimate.
+
+        The measurement noise uses the ``sample_interval`` given to the
+        constructor; without one, ``dt`` itself (a gap then shrinks it).
+        """
         u = sample.vector()
         valid = np.isfinite(u).astype(float)
+        nominal = self.sample_interval or (dt if 0.0 < dt < MAX_INTERVAL else None)
+        tuning = self.tuning if nominal is None else self.tuning_for(nominal)
         flat = np.concatenate(
             [
                 state.x,
                 np.ravel(state.P, order="F"),
-                np.nan_to_num(u),
+                state.m,
+                np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0),
                 valid,
                 [dt],
                 self.p,
-                self.tuning,
+                tuning,
             ]
         )
-        x, P, std, residual, used = np.split(
-            np.asarray(self._flat_step(flat)).ravel(), self._flat_splits
-        )[:5]
-        flags = flags_from_used(used.reshape(7, 1))
+        out = np.split(np.asarray(self._flat_step(flat)).ravel(), self._flat_splits)
+        x, P, m, std, residual, used = out[:6]
+        status = out[STEP_OUTPUT_NAMES.index("status")]
+        flags = flags_from_outputs(used.reshape(7, 1), status.reshape(-1, 1))
         if not 0.0 < dt < MAX_INTERVAL:
             flags |= StepFlag.STEP_REJECTED
         estimate = Estimate(
@@ -311,25 +484,30 @@ class TwoStageKF:
             residual=residual.reshape(1, 3),
             flags=flags,
         )
-        return FilterState(x, P.reshape(4, 4, order="F")), estimate
+        return FilterState(x, P.reshape(4, 4, order="F"), m), estimate
 
     @functools.cached_property
     def _flat_step(self) -> ca.Function:
         """The step with inputs and outputs stacked into one vector each (one cheap call)."""
-        inputs = self._step.sx_in()
-        outputs = self._step.call(inputs)
+        inputs = self.step_function.sx_in()
+        outputs = self.step_function.call(inputs)
         return ca.Function(
-            f"{self._step.name()}_flat",
+            f"{self.step_function.name()}_flat",
             [ca.vertcat(*[ca.vec(i) for i in inputs])],
             [ca.vertcat(*[ca.vec(o) for o in outputs])],
         )
 
     @functools.cached_property
     def _flat_splits(self) -> np.ndarray:
-        return np.cumsum([self._step.nnz_out(i) for i in range(self._step.n_out())])[:-1]
+        step = self.step_function
+        return np.cumsum([step.nnz_out(i) for i in range(step.n_out())])[:-1]
 
     def run(self, signals: Signals, state: FilterState | None = None) -> Estimate:
-        """Filter a whole log in compiled code; same numbers as repeated :meth:`step`."""
+        """Filter a whole log in compiled code; same numbers as repeated :meth:`step`.
+
+        The nominal interval is the constructor's ``sample_interval`` or the
+        log's median interval.
+        """
         return self._run(signals, state, with_covariance=False)[0]
 
     def run_with_covariance(
@@ -349,8 +527,8 @@ class TwoStageKF:
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
-        """This filter's step looped over a log in C (state x, P carried)."""
-        return CompiledLoop(self._step, 2, ("u", "u_valid", "dt"))
+        """This filter's step looped over a log in C (state x, P, m carried)."""
+        return CompiledLoop(self.step_function, N_CARRIED, ("u", "u_valid", "dt"))
 
     def _run(self, signals: Signals, state: FilterState | None, with_covariance: bool):
         state = state or self.initial_state()
@@ -358,37 +536,70 @@ class TwoStageKF:
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = sample_intervals(signals.t)[:, None]
-        _, history, (std, residual, used, _, innovation, variance) = self._loop(
-            [state.x, state.P],
-            [self.p, self.tuning],
+        tuning = self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        _, history, outputs = self._loop(
+            [state.x, state.P, state.m],
+            [self.p, tuning],
             [u, valid, dt],
             record=(0, 1) if with_covariance else (0,),
         )
+        named = dict(zip(STEP_OUTPUT_NAMES[N_CARRIED:], outputs, strict=True))
+        used = named["used"]
         estimate = Estimate(
             t=signals.t.copy(),
             loads=history[0],
-            std=std,
-            residual=residual,
-            flags=flags_from_used(used.T) | signals.input_flags(),
+            std=named["std"],
+            residual=named["residual"],
+            flags=flags_from_outputs(used.T, named["status"].T) | signals.input_flags(),
+            sensor_faults=sensor_faults(signals.t, named["fault"], named["fault_statistic"]),
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
         innovations = Innovations(
-            t=signals.t.copy(), innovation=innovation, variance=variance, used=used > 0.5
+            t=signals.t.copy(),
+            innovation=named["innovation"],
+            variance=named["innovation_variance"],
+            used=used > 0.5,
         )
         return estimate, covariances, innovations
 
     def run_innovations(
         self, signals: Signals, state: FilterState | None = None
     ) -> tuple[Estimate, Innovations]:
-        """As :meth:`run`, also returning every update row's innovation and its variance.
+        r"""As :meth:`run`, also returning every update row's innovation and its variance.
 
         The innovations of the sequential filter are independent standard
-        normals under the model once divided by :math:`\\sqrt{S}`, so the log
-        likelihood of the tuning is :math:`-\tfrac12 \\sum (\\log 2\\pi S + y^2 / S)`
+        normals under the model once divided by :math:`\sqrt{S}`, so the log
+        likelihood of the tuning is :math:`-\tfrac12 \sum (\log 2\pi S + y^2 / S)`
         over the rows used (Mehra 1970).
         """
         estimate, _, innovations = self._run(signals, state, with_covariance=False)
         return estimate, innovations
+
+
+def sensor_faults(
+    t: np.ndarray, fault: np.ndarray, statistic: np.ndarray
+) -> tuple[SensorFault, ...]:
+    """One record per isolated fault: ``channel, start, end`` [s] and the peak ``statistic``.
+
+    ``fault`` and ``statistic`` are the step outputs, shape (n, 7), channels
+    :data:`~wheelload.estimators.guard.FAULT_CHANNELS`; ``end`` is the time of
+    the last flagged sample.
+    """
+    rows = []
+    for j, channel in enumerate(guard.FAULT_CHANNELS):
+        on = np.concatenate([[False], fault[:, j] > 0.5, [False]])
+        starts = np.flatnonzero(on[1:] & ~on[:-1])
+        ends = np.flatnonzero(~on[1:] & on[:-1])
+        for start, end in zip(starts, ends, strict=True):
+            rows.append(
+                SensorFault(
+                    channel=channel,
+                    start=float(t[start]),
+                    end=float(t[end - 1]),
+                    statistic=float(np.max(statistic[start:end, j])),
+                )
+            )
+    return tuple(sorted(rows, key=lambda fault: fault.start))
 
 
 def sample_intervals(t: np.ndarray) -> np.ndarray:

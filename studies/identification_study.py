@@ -30,7 +30,7 @@ from wheelload.estimators.identification.fit import FitSettings
 from wheelload.estimators.identification.report import file_changes
 from wheelload.estimators.identification.tuning import FilterRuns, tune
 from wheelload.estimators.identification.vehicle_writer import set_values
-from wheelload.estimators.two_stage import tuning_vector
+from wheelload.estimators.two_stage import noise_densities
 from wheelload.models import (
     ModelParameters,
     Vehicle,
@@ -135,7 +135,7 @@ def run_study(settings: StudySettings, folder: Path) -> tuple[pd.DataFrame, pd.D
 
     truth = vehicles["true"]
     runs = FilterRuns(truth, (read_log(logs[settings.tune_on]),))
-    result = tune(runs, tuning_vector(truth), references=True)
+    result = tune(runs, noise_densities(truth), references=True)
     held_out = [n for n in settings.scenarios if n != settings.tune_on]
     rows = []
     groups = [(n, (read_log(logs[n]),)) for n in held_out]

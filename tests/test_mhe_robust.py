@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import TwoStageKF
+from wheelload.estimators.guard import GUARDS_OFF
 from wheelload.estimators.mhe import (
     BiasStates,
     Constraint,
@@ -50,10 +51,11 @@ def test_robust_window_rejects_travel_spikes_the_kf_follows(vehicle, drive):
     spikes = rng.choice(np.arange(20, len(drive)), size=12, replace=False)
     d[spikes, rng.integers(0, 4, size=12)] += 0.03  # 30 mm single-sample spikes
     faulty = dataclasses.replace(drive, d=d)
-    kf = TwoStageKF(vehicle).run(faulty)
+    # the plain KF: without the guards (innovation gate, fault monitor) of estimators/guard.py
+    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(faulty)
     settings = MheSettings(horizon=10, suspension_loss=HUBER, constraint_loss=HUBER)
     mhe = MovingHorizonEstimator(vehicle, settings).run(faulty)
-    clean = TwoStageKF(vehicle).run(drive)
+    clean = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(drive)
     kf_error = pooled_rmse(kf.loads, drive.reference)
     mhe_error = pooled_rmse(mhe.loads, drive.reference)
     assert not mhe.fallback.any()
@@ -82,7 +84,7 @@ def test_bias_states_recover_a_4_mm_front_ride_height_offset(vehicle):
     # sample estimate by up to 1 mm; the bound states what holds (1 mm)
     np.testing.assert_allclose(last_second, [0.004, 0.004, 0.0, 0.0], rtol=0, atol=0.001)
     assert np.abs(offsets[100:] - [0.004, 0.004, 0.0, 0.0]).max() < 0.002  # from 1 s on
-    kf = TwoStageKF(vehicle).run(faulty)
+    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(faulty)  # the plain KF
     assert pooled_rmse(mhe.loads, signals.reference) < 0.85 * pooled_rmse(
         kf.loads, signals.reference
     )
@@ -124,7 +126,8 @@ def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle):
     mhe = MovingHorizonEstimator(
         vehicle, MheSettings(horizon=10, suspension_loss=tight, constraint_loss=tight)
     )
-    kf = TwoStageKF(vehicle)
+    # against the plain KF; the guarded KF (fault monitor) isolates the stuck sensor itself
+    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
     stuck = inject(signals, Fault.STUCK)
     robust_error = pooled_rmse(mhe.run(stuck).loads, signals.reference)
     kf_error = pooled_rmse(kf.run(stuck).loads, signals.reference)

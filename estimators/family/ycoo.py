@@ -166,7 +166,10 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
     rejected = 1 - ok
     acc_missing = 1 - valid[8] * valid[9] * valid[10] * valid[11]
     flags = flag_sum(
-        [(ca.fmax(1 - valid[i], rejected), flag) for i, flag in enumerate(StepFlag)][:4]
+        [
+            (ca.fmax(1 - valid[i], rejected), flag)
+            for i, flag in enumerate(StepFlag.update_flags()[:4])
+        ]
         + [
             (ca.fmax(1 - valid[10], rejected), StepFlag.VERTICAL_SKIPPED),
             (ca.fmax(acc_missing, rejected), StepFlag.PITCH_SKIPPED),

@@ -33,7 +33,12 @@ import numpy as np
 from scipy import optimize, stats
 
 from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import TUNING, UPDATE_ROWS, TwoStageKF, step_function
+from wheelload.estimators.two_stage import (
+    NOISE_DENSITIES,
+    UPDATE_ROWS,
+    TwoStageKF,
+    step_function,
+)
 from wheelload.models.vehicle import FilterTuning, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out of the objective (initial covariance)
@@ -43,7 +48,7 @@ NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of 
 
 
 def with_tuning(vehicle: Vehicle, tuning: np.ndarray) -> Vehicle:
-    """The vehicle with its ``[filter]`` noise densities replaced (:data:`TUNING` order)."""
+    """The vehicle with its ``[filter]`` noise densities replaced (``NOISE_DENSITIES`` order)."""
     tuning = np.asarray(tuning, float)
     return vehicle.replace(
         filter=FilterTuning(
@@ -75,10 +80,15 @@ class FilterRuns:
         self.logs = logs
         self._step = step_function()
         self._kf = TwoStageKF(vehicle, step=self._step)
+        self._base = self._kf.tuning.copy()
 
     def run(self, tuning: np.ndarray):
-        """Estimates and innovations of every log with ``tuning``."""
-        self._kf.tuning = np.asarray(tuning, float)
+        """Estimates and innovations of every log with the noise densities ``tuning``
+        (:data:`NOISE_DENSITIES` order; interval and guards as the filter's own)."""
+        densities = np.asarray(tuning, float)
+        if densities.shape != (len(NOISE_DENSITIES),):
+            raise ValueError(f"give the {len(NOISE_DENSITIES)} noise densities {NOISE_DENSITIES}")
+        self._kf.tuning = np.concatenate([densities, self._base[len(NOISE_DENSITIES) :]])
         return [self._kf.run_innovations(signals) for signals in self.logs]
 
     def negative_log_likelihood(self, tuning: np.ndarray) -> float:
@@ -148,7 +158,7 @@ class FilterRuns:
 
 @dataclass(frozen=True, kw_only=True)
 class TuningResult:
-    initial: np.ndarray  # TUNING order
+    initial: np.ndarray  # NOISE_DENSITIES order
     likelihood: np.ndarray  # maximum-likelihood tuning
     rmse: np.ndarray | None  # RMSE-minimising tuning (with reference loads)
     scale: float  # calibration factor applied to ``likelihood`` (1 without references)
@@ -189,4 +199,4 @@ def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: i
     )
 
 
-__all__ = ["TUNING", "UPDATE_ROWS", "Consistency", "FilterRuns", "TuningResult", "tune"]
+__all__ = ["NOISE_DENSITIES", "UPDATE_ROWS", "Consistency", "FilterRuns", "TuningResult", "tune"]

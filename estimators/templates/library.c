@@ -29,16 +29,22 @@ ${param_cases}
 }
 
 static const uint32_t update_flags[7] = {${update_flags}};
+static const uint32_t guard_flags[${n_status}] = {${guard_flags}};
 
 /* The filter step of CasADi Function ${step_name}: inputs x, P (symmetric
- * storage), u, u_valid, dt${kernel_params_doc}; outputs x_next, P_next, std,
- * residual, used. ${kernel_flops} arithmetic operations. */
+ * storage), m (monitor), u, u_valid, dt${kernel_params_doc}; outputs x_next,
+ * P_next, m_next, std, residual, used, status, fault_statistic, fault.
+ * ${kernel_flops} arithmetic operations. */
 static void ${prefix}_kernel(const ${prefix}_real x[4], const ${prefix}_real P[10],
+                             const ${prefix}_real m[${PREFIX}_N_MONITOR],
                              const ${prefix}_real u[12], const ${prefix}_real u_valid[12],
                              ${prefix}_real dt${kernel_params_arg},
                              ${prefix}_real x_next[4], ${prefix}_real P_next[10],
+                             ${prefix}_real m_next[${PREFIX}_N_MONITOR],
                              ${prefix}_real std[4], ${prefix}_real residual[3],
-                             ${prefix}_real used[7])
+                             ${prefix}_real used[7], ${prefix}_real status[${n_status}],
+                             ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS],
+                             ${prefix}_real fault[${PREFIX}_N_FAULT_CHANNELS])
 {
 ${kernel_body}
 }
@@ -69,6 +75,9 @@ ${static_loads}
     for (k = 0; k < 10; ++k) {
         state->P[k] = ZERO;
     }
+    for (k = 0; k < ${PREFIX}_N_MONITOR; ++k) {
+        state->monitor[k] = ZERO;
+    }
     state->P[0] = variance;
     state->P[4] = variance;
     state->P[7] = variance;
@@ -81,7 +90,9 @@ uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
 {
     static const int diagonal[4] = {0, 4, 7, 9};
     ${prefix}_real u[12], u_valid[12], x_next[4], P_next[10], std[4], residual[3], used[7];
-    uint32_t flags = 0u;
+    ${prefix}_real m_next[${PREFIX}_N_MONITOR], status[${n_status}];
+    ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS], fault[${PREFIX}_N_FAULT_CHANNELS];
+    uint32_t flags = 0u, faults = 0u;
     int accepted = 0;
     int k;
 ${unused_params}
@@ -100,10 +111,12 @@ ${unused_params}
         }
     }
     if (isfinite(dt) && dt > ZERO) {
-        ${prefix}_kernel(state->x, state->P, u, u_valid, dt${kernel_params_call},
-                         x_next, P_next, std, residual, used);
+        ${prefix}_kernel(state->x, state->P, state->monitor, u, u_valid, dt${kernel_params_call},
+                         x_next, P_next, m_next, std, residual, used, status, fault_statistic,
+                         fault);
         accepted = all_finite(x_next, 4) && all_finite(P_next, 10) && all_finite(std, 4)
-                   && all_finite(residual, 3);
+                   && all_finite(residual, 3) && all_finite(m_next, ${PREFIX}_N_MONITOR)
+                   && all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS);
         for (k = 0; k < 4; ++k) {
             accepted = accepted && P_next[diagonal[k]] > ZERO;
         }
@@ -115,9 +128,22 @@ ${unused_params}
         for (k = 0; k < 10; ++k) {
             state->P[k] = P_next[k];
         }
+        for (k = 0; k < ${PREFIX}_N_MONITOR; ++k) {
+            state->monitor[k] = m_next[k];
+        }
         for (k = 0; k < 7; ++k) {
             if (used[k] < HALF) {
                 flags |= update_flags[k];
+            }
+        }
+        for (k = 0; k < ${n_status}; ++k) {
+            if (status[k] > HALF) {
+                flags |= guard_flags[k];
+            }
+        }
+        for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
+            if (fault[k] > HALF) {
+                faults |= 1u << k;
             }
         }
     } else {
@@ -126,6 +152,9 @@ ${unused_params}
         }
         for (k = 0; k < 3; ++k) {
             residual[k] = ZERO;
+        }
+        for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
+            fault_statistic[k] = ZERO;
         }
         for (k = 0; k < 7; ++k) {
             flags |= update_flags[k];
@@ -139,6 +168,10 @@ ${unused_params}
     for (k = 0; k < 3; ++k) {
         output->residual[k] = residual[k];
     }
+    for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
+        output->fault_statistic[k] = fault_statistic[k];
+    }
+    output->faults = faults;
     output->flags = flags;
     return flags;
 }

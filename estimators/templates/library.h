@@ -13,6 +13,10 @@
  * Depends on libm only. No dynamic allocation, no recursion, no I/O, no
  * mutable globals: every filter instance is one ${prefix}_state.
  *
+ * The measurement noise is set by the params field sample_interval, the
+ * logger's nominal interval [s] (not the interval of each step, so that a gap
+ * grows the covariance): set it to the logger's rate.
+ *
  * Units SI (N, m, s, m/s^2). Wheel order FL, FR, RL, RR. Body frame ISO 8855
  * (x forward, y left, z up); ax, ay, az are specific force including gravity
  * (az is about +9.81 at rest); d > 0 in compression, v = dd/dt.
@@ -49,10 +53,17 @@ typedef ${real} ${prefix}_real;
 /* A literal of the library's precision: ${PREFIX}_REAL_C(0.5). */
 #define ${PREFIX}_REAL_C(x) ${real_c}
 
-/* Filter state: loads x [N] and covariance P [N^2] in symmetric storage. */
+#define ${PREFIX}_N_MONITOR ${n_monitor}
+/* Channels the fault monitor isolates (bit k of ${prefix}_output.faults):
+ * ${fault_channels}. */
+#define ${PREFIX}_N_FAULT_CHANNELS ${n_faults}
+
+/* Filter state: loads x [N], covariance P [N^2] in symmetric storage, and the
+ * fault monitor and innovation-gate timers (opaque). */
 typedef struct {
     ${prefix}_real x[4];
     ${prefix}_real P[10];
+    ${prefix}_real monitor[${PREFIX}_N_MONITOR];
 } ${prefix}_state;
 
 /* One sample of the signals. A non-finite value skips the updates it feeds. */
@@ -70,6 +81,8 @@ typedef struct {
     ${prefix}_real loads[4];    /* wheel loads [N] */
     ${prefix}_real std[4];      /* standard deviations [N] */
     ${prefix}_real residual[3]; /* b - A x: vertical [N], pitch [N m], roll [N m] */
+    ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS]; /* >= 1: test fires */
+    uint32_t faults;            /* bit k: fault channel k isolated and dropped */
     uint32_t flags;             /* ${PREFIX}_FLAG_* bits */
 } ${prefix}_output;
 
@@ -97,9 +110,12 @@ int ${prefix}_init(${prefix}_state *state, const ${prefix}_params *params);
 void ${prefix}_reset(${prefix}_state *state, const ${prefix}_params *params);
 
 /* One prediction over dt [s] and both updates (suspension, equilibrium).
- * A non-finite input skips the updates that depend on it; a non-finite or
- * non-positive dt, or a step whose result would not be finite, is rejected
- * and the state held. Returns output->flags. */
+ * A non-finite or implausible input skips the updates that depend on it, as
+ * does an update whose normalised innovation fails the gate or a channel the
+ * fault monitor isolates (each with its flag); the covariance is kept between
+ * its floor and ceiling. A non-finite or non-positive dt, or a step whose
+ * result would not be finite, is rejected and the state held. Returns
+ * output->flags. */
 uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
                         const ${prefix}_input *input, ${prefix}_real dt,
                         ${prefix}_output *output);

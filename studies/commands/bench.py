@@ -24,6 +24,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.mhe",
     "wheelload.studies.scenario_bench",
     "wheelload.studies.commands.bench_logs",
+    "wheelload.studies.fault_injection",
 )
 
 

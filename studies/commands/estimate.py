@@ -198,6 +198,21 @@ def row_use(estimate: Estimate) -> str:
     return f"suspension rows used: {shares}; roll-split row used: {100 * split.mean():.0f} %"
 
 
+def guard_lines(estimate: Estimate) -> list[str]:
+    """Summary lines of the guards: gated and implausible samples, isolated sensor faults."""
+    lines = []
+    counts = {flag: int(np.count_nonzero(estimate.flags & flag)) for flag in StepFlag.guard_flags()}
+    named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in counts.items() if n)
+    if named:
+        lines.append(f"samples flagged by the guards: {named}")
+    for fault in estimate.sensor_faults:
+        lines.append(
+            f"sensor fault: {fault.channel} from {fault.start:.2f} s to {fault.end:.2f} s "
+            f"(test statistic {fault.statistic:.1f}); the channel was left out of the updates"
+        )
+    return lines
+
+
 def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     """A per-wheel text summary, with the paper's metrics where reference loads exist.
 
@@ -220,12 +235,13 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
         std = f"{estimate.std[:, i].mean():12.0f}" if estimate.has_std else f"{'n/a':>12}"
         lines.append(f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} {std}")
     skipped = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
-    assumed = int(np.count_nonzero(estimate.flags & ~StepFlag.skipped_mask()))
+    assumed = int(np.count_nonzero(estimate.flags & StepFlag.assumed_mask()))
     lines.append(f"sensor set: {signals.mode()}")
     lines.append(row_use(estimate))
-    lines.append(f"samples with a skipped update (missing input): {skipped}")
+    lines.append(f"samples with a skipped update (missing or guarded input): {skipped}")
     if assumed:
         lines.append(f"samples with an assumed input (status bits 20-22): {assumed}")
+    lines.extend(guard_lines(estimate))
     if signals.reference is not None:
         try:
             table = wheel_metrics(estimate.loads, signals.reference, source=signals.source)

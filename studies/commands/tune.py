@@ -21,7 +21,7 @@ from wheelload.estimators.identification.vehicle_writer import (
     set_values,
     write_vehicle_text,
 )
-from wheelload.estimators.two_stage import TUNING, UPDATE_ROWS, tuning_vector
+from wheelload.estimators.two_stage import NOISE_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
 
 
@@ -57,8 +57,8 @@ def handle(args: argparse.Namespace) -> int:
     logs = tuple(read_log(path) for path in args.logs)
     references = all(signals.reference is not None for signals in logs)
     runs = FilterRuns(vehicle, logs)
-    result = tune(runs, tuning_vector(vehicle), references=references)
-    print(f"{'':>22}" + "".join(f"{name[:11]:>12}" for name in TUNING))
+    result = tune(runs, noise_densities(vehicle), references=references)
+    print(f"{'':>22}" + "".join(f"{name[:11]:>12}" for name in NOISE_DENSITIES))
     print(_row("input file", result.initial))
     print(_row("max. likelihood", result.likelihood))
     if result.rmse is not None:

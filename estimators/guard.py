@@ -1,0 +1,288 @@
+r"""Guards of the filter step: plausibility, innovation gate, covariance limits, fault monitor.
+
+Everything here builds CasADi expressions inside the symbolic filter step
+(:func:`wheelload.estimators.two_stage.step_expressions`), so the Python
+step, the compiled loop and the generated C share one implementation.
+
+- **Plausibility** (input ranges from the vehicle): :math:`|a| \le a_{max}`,
+  :math:`|v_x| \le v_{max}`, :math:`|d_i| \le c\,m g / k_i` (``c = 1``: the
+  travel whose spring force would carry the whole vehicle), :math:`|\dot d_i| \le \dot
+  d_{max}`. An implausible input is treated as missing.
+- **Innovation gate** (per update row): the row is skipped when
+  :math:`y^2 > \gamma S` (normalised innovation squared, :math:`\chi^2_1`),
+  unless the row has been rejected for ``gate_release_time`` in a row: then
+  it is taken (no lock-out after a real step change or a long gap).
+- **Covariance limits**: the diagonal of :math:`P` is kept within
+  :math:`[\sigma_{floor}^2, (m g)^2]`; the ceiling scales row and column
+  (:math:`D P D`, positive semidefinite preserved), the floor adds to the
+  diagonal.
+- **Fault monitor** (detection and isolation, carried as state ``m``): a
+  travel channel that does not change for ``stuck_time`` while another
+  corner moves is *stuck*; the parity residual :math:`r = b - A z` of the raw
+  suspension loads, low-pass filtered, is matched against the signature of
+  each channel (a travel fault :math:`f` in corner :math:`i` gives
+  :math:`r = -A (\partial z / \partial d_i) f`, through the anti-roll bar
+  also in the other wheel of the axle; an accelerometer bias :math:`g`
+  gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
+  its signature explains ``isolation_fraction`` of the residual energy and
+  its estimated fault exceeds the limit for ``fault_confirm_time``
+  (generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
+  Engineering Systems*, 1998, ch. 5). An isolated channel is dropped from
+  the updates until it has been clean for ``fault_clear_time``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from types import SimpleNamespace
+
+import casadi as ca
+
+GRAVITY = 9.80665  # m/s^2
+
+#: Channels the fault monitor can isolate, in its output order.
+FAULT_CHANNELS = ("d_fl", "d_fr", "d_rl", "d_rr", "ax", "ay", "az")
+
+
+@dataclass(frozen=True, kw_only=True)
+class GuardSettings:
+    """Thresholds of the guards (all > 0); defaults tested on the bundled scenarios."""
+
+    innovation_gate: float = 9.0  # chi^2_1 threshold on y^2 / S (3 sigma)
+    gate_release_time: float = 0.5  # s of consecutive rejections after which a row is taken
+    max_acceleration: float = 3.0  # g, |ax|, |ay|, |az|
+    max_speed: float = 120.0  # m/s, |vx|
+    max_travel_rate: float = 5.0  # m/s, |v|
+    travel_range: float = 1.0  # |d| <= travel_range * m g / k: spring force of the whole weight
+    covariance_floor: float = 1.0  # N, smallest standard deviation kept
+    stuck_time: float = 0.25  # s without change while another corner moves
+    parity_time_constant: float = 1.0  # s, low-pass of the parity residual
+    travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated
+    acceleration_fault: float = 1.2  # m/s^2, smallest accelerometer fault isolated
+    isolation_fraction: float = 0.9  # share of residual energy one channel must explain
+    fault_confirm_time: float = 0.2  # s a parity fault must persist
+    fault_clear_time: float = 1.0  # s clean before an isolated channel is taken back
+
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            number = isinstance(value, int | float) and not isinstance(value, bool)
+            if not (number and 0.0 < value < float("inf")):
+                raise ValueError(f"guard setting {field.name} must be > 0 and finite, got {value}")
+        if self.isolation_fraction >= 1.0:
+            raise ValueError("guard setting isolation_fraction must be below 1")
+
+    @staticmethod
+    def names() -> tuple[str, ...]:
+        return tuple(f.name for f in dataclasses.fields(GuardSettings))
+
+    def vector(self) -> list[float]:
+        return [float(getattr(self, name)) for name in self.names()]
+
+
+#: The default thresholds.
+DEFAULT_GUARD = GuardSettings()
+
+#: Guards out of reach: the filter as it was before the guards.
+GUARDS_OFF = GuardSettings(
+    innovation_gate=1e300,
+    gate_release_time=1e300,
+    max_acceleration=1e300,
+    max_speed=1e300,
+    max_travel_rate=1e300,
+    travel_range=1e300,
+    covariance_floor=1e-12,
+    stuck_time=1e300,
+    travel_fault=1e300,
+    acceleration_fault=1e300,
+)
+
+
+def unpack(vector: ca.SX) -> SimpleNamespace:
+    """The settings as symbols, by name, from the guard part of the tuning vector."""
+    return SimpleNamespace(**{name: vector[k] for k, name in enumerate(GuardSettings.names())})
+
+
+# Layout of the monitor state ``m``.
+_D_PREV, _FROZEN, _RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
+_PERSIST, _CLEAR, _FAULT, _REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
+MONITOR_SIZE = 39
+
+
+def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
+    """1 per input of ``u`` (:data:`~wheelload.estimators.two_stage.INPUTS` order) in range."""
+    weight = mass * GRAVITY
+    springs = [spring_front, spring_front, spring_rear, spring_rear]
+    travel = [ca.fabs(u[i]) * springs[i] <= g.travel_range * weight for i in range(4)]
+    rate = [ca.fabs(u[4 + i]) <= g.max_travel_rate for i in range(4)]
+    acc = [ca.fabs(u[8 + i]) <= g.max_acceleration * GRAVITY for i in range(3)]
+    return ca.vertcat(*travel, *rate, *acc, ca.fabs(u[11]) <= g.max_speed)
+
+
+def floor_covariance(P: ca.SX, floor_std) -> tuple[ca.SX, ca.SX]:
+    r"""``P`` with its diagonal at least :math:`\sigma_{floor}^2`; and 1 if changed.
+
+    After an update the variances only fall, so the ceiling of the
+    prediction still holds; rounding can still take a variance below zero.
+    """
+    n = P.shape[0]
+    floor = floor_std * floor_std
+    rows = [
+        ca.horzcat(*[ca.fmax(P[i, i], floor) if i == j else P[i, j] for j in range(n)])
+        for i in range(n)
+    ]
+    changed = 0
+    for i in range(n):
+        changed = ca.logic_or(changed, P[i, i] < floor)
+    return ca.vertcat(*rows), changed
+
+
+def limit_covariance(P: ca.SX, floor_std, ceiling) -> tuple[ca.SX, ca.SX]:
+    r"""``P`` with its diagonal in :math:`[\sigma_{floor}^2, \mathrm{ceiling}]`; and 1 if changed.
+
+    Off-diagonal entries are scaled by :math:`s_i s_j`,
+    :math:`s_i = \sqrt{\mathrm{ceiling} / P_{ii}}` where the ceiling binds
+    (an infinite variance gives :math:`s_i = 0`, never NaN).
+    """
+    n = P.shape[0]
+    floor = floor_std * floor_std
+    over = [P[i, i] > ceiling for i in range(n)]
+    under = [P[i, i] < floor for i in range(n)]
+    scale = [ca.if_else(over[i], ca.sqrt(ceiling / P[i, i]), 1) for i in range(n)]
+    rows = []
+    for i in range(n):
+        row = []
+        for j in range(n):
+            if i == j:
+                row.append(ca.fmin(ca.fmax(P[i, i], floor), ceiling))
+            else:
+                row.append(P[i, j] * scale[i] * scale[j])
+        rows.append(ca.horzcat(*row))
+    changed = 0
+    for i in range(n):
+        changed = ca.logic_or(changed, ca.logic_or(over[i], under[i]))
+    return ca.vertcat(*rows), changed
+
+
+@dataclass(frozen=True)
+class MonitorOutput:
+    """Symbolic results of :func:`monitor`."""
+
+    m_next: ca.SX  # next monitor state
+    channel_ok: ca.SX  # (7,) 0 for an isolated channel (FAULT_CHANNELS order)
+    statistic: ca.SX  # (7,) test statistic, >= 1 where the channel's test fires
+    fault: ca.SX  # (7,) 1 while a channel is isolated
+
+
+def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
+    r"""One sample of the fault monitor (see module docstring).
+
+    ``valid`` (12): inputs finite and plausible; ``z`` (4) raw suspension
+    loads; ``A``, ``b`` the equilibrium; ``signatures`` (3 x 7): the change
+    of :math:`b - A z` per unit fault of each channel, :math:`-A\,\partial
+    z / \partial d` for the travels [per m] and :math:`\partial b /
+    \partial a` for the accelerometer [per m/s^2]; ``dt`` 0 for a rejected
+    step; ``r_c`` the constraint noise densities (the residual metric
+    :math:`W = \mathrm{diag}(1/r_c)`).
+    """
+    d = u[0:4]
+    d_prev, frozen, rbar = m[_D_PREV], m[_FROZEN], m[_RBAR]
+    persist, clear, fault = m[_PERSIST], m[_CLEAR], m[_FAULT]
+    # Stuck / dead travel channels: no change at all while another corner moves.
+    d_valid = [valid[i] * (dt > 0) for i in range(4)]
+    changed = [d_valid[i] * (d[i] != d_prev[i]) for i in range(4)]
+    frozen_next = ca.vertcat(
+        *[ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * dt) for i in range(4)]
+    )
+    d_prev_next = ca.vertcat(*[ca.if_else(d_valid[i], d[i], d_prev[i]) for i in range(4)])
+    stuck = []
+    for i in range(4):
+        others_moving = 0
+        for j in range(4):
+            if j != i:
+                others_moving = ca.logic_or(others_moving, frozen_next[j] < 0.5 * g.stuck_time)
+        stuck.append(ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving))
+    # Parity residual of the raw suspension loads, low-pass filtered.
+    all_valid = 1
+    for i in range(12):
+        all_valid = all_valid * valid[i]
+    alpha = all_valid * dt / (g.parity_time_constant + dt)
+    r = b - ca.mtimes(A, z)
+    rbar_next = rbar + alpha * (r - rbar)
+    # W = diag(1/r_c) up to a scale (the tests are scale-free): the products of the
+    # other two densities, so that no division is repeated at every use.
+    w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
+    energy = ca.sum1(w * rbar_next * rbar_next)
+    limits = [g.travel_fault] * 4 + [g.acceleration_fault] * 3
+    inverse_limits = [1 / g.travel_fault] * 4 + [1 / g.acceleration_fault] * 3
+    inverse_stuck_time = 1 / g.stuck_time
+    statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
+    for j in range(7):
+        s = signatures[:, j]
+        norm = ca.sum1(w * s * s)
+        projection = ca.sum1(w * s * rbar_next)
+        # A channel without signature (norm 0) can never be isolated; no 0/0.
+        magnitude = projection / ca.if_else(norm > 0, norm, 1) * (norm > 0)
+        isolated = projection * magnitude > g.isolation_fraction * energy
+        candidate = ca.logic_and(ca.fabs(magnitude) > limits[j], isolated)
+        persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)
+        parity_fault = persist_j >= g.fault_confirm_time
+        level = ca.fabs(magnitude) * inverse_limits[j] * isolated
+        if j < 4:
+            now = ca.logic_or(stuck[j], parity_fault)
+            level = ca.fmax(level, frozen_next[j] * inverse_stuck_time * stuck[j])
+        else:
+            now = parity_fault
+        clear_j = ca.if_else(now, 0, clear[j] + dt)
+        fault_j = ca.logic_or(now, ca.logic_and(fault[j], clear_j < g.fault_clear_time))
+        statistic.append(level)
+        persist_next.append(persist_j)
+        clear_next.append(clear_j)
+        fault_next.append(fault_j)
+        active.append(1 - fault_j)
+    m_next = ca.vertcat(
+        d_prev_next,
+        frozen_next,
+        rbar_next,
+        *persist_next,
+        *clear_next,
+        *fault_next,
+        m[_REJECT],
+    )
+    return MonitorOutput(
+        m_next, ca.vertcat(*active), ca.vertcat(*statistic), ca.vertcat(*fault_next)
+    )
+
+
+def gate_rows(m_reject, g: GuardSettings):
+    """The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions."""
+    record = {}
+
+    def gate(i, y, S):
+        passes = y * y <= g.innovation_gate * S
+        released = m_reject[i] >= g.gate_release_time
+        record[i] = (passes, released)
+        return ca.logic_or(passes, released)
+
+    return gate, record
+
+
+def reject_times(m_reject, record, available, dt) -> ca.SX:
+    """Consecutive rejection time of each row after this sample (0 once taken or absent)."""
+    times = []
+    for i in range(len(record)):
+        passes, released = record[i]
+        rejected = available[i] * (1 - ca.logic_or(passes, released))
+        times.append(ca.if_else(rejected, m_reject[i] + dt, 0))
+    return ca.vertcat(*times)
+
+
+def with_reject_times(m_next: ca.SX, times: ca.SX) -> ca.SX:
+    """The monitor state with the rows' rejection times replaced."""
+    return ca.vertcat(m_next[0 : _REJECT.start], times)
+
+
+def reject_slice() -> slice:
+    """Where the rows' consecutive rejection times sit in the monitor state."""
+    return _REJECT
