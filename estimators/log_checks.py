@@ -53,6 +53,7 @@ RATE = 10.0  # Hz, after low-pass and decimation
 MEDIAN_WINDOW = 3  # samples: a running median first removes isolated spikes
 MIN_STD = {"ax": 0.5, "ay": 0.5, "az": 0.15}  # m/s^2 low-passed, to decide
 SIGN_THRESHOLD = 0.3  # |partial correlation| below which a sign is not decided
+SIGNIFICANCE = 2.5  # standard errors a partial correlation must reach on a short log
 KINEMATIC_CORRELATION = 0.8  # |correlation| needed to take a kinematic ratio
 MAX_ROLL_TRAVEL = 0.03  # m per m/s^2: 11 deg/g of roll on a 1.5 m track
 MIN_ROLL_TRAVEL = 0.002  # m, std of the left-right travel difference needed to decide
@@ -170,6 +171,15 @@ def _quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, n
         result[name] = sp_signal.filtfilt(b, a, despiked)[::step]
     result["t"] = t[::step]
     return result
+
+
+def _decisive_correlation(t: np.ndarray) -> float:
+    r"""Smallest :math:`|r|` taken as a decided sign: :data:`SIGN_THRESHOLD`, or more on a
+    short log, :math:`2.5/\sqrt{n - 3}` with :math:`n = 2 f_c T` independent samples of
+    the :data:`CUTOFF` low-passed channels over :math:`T` seconds (a 4 s log decides nothing
+    on chance correlations)."""
+    independent = 2.0 * CUTOFF * float(t[-1] - t[0]) - 3.0
+    return max(SIGN_THRESHOLD, SIGNIFICANCE / math.sqrt(max(independent, 1.0)))
 
 
 def _partial_correlations(y: np.ndarray, regressors: np.ndarray) -> np.ndarray:
@@ -328,6 +338,7 @@ def _travel_checks(q: dict[str, np.ndarray]) -> tuple[list[Check], dict[str, lis
         return checks, observed
     regressors = np.column_stack([q[axis] for axis in axes])
     note = "partial correlation times the expected sign"
+    threshold = _decisive_correlation(q["t"])
     for k, wheel in enumerate(WHEELS):
         name = f"d_{wheel}"
         if name not in q:
@@ -338,9 +349,9 @@ def _travel_checks(q: dict[str, np.ndarray]) -> tuple[list[Check], dict[str, lis
             if not np.std(q[axis]) > MIN_STD[axis]:
                 checks.append(_undecided(check, f"{axis} varies too little", agreement))
                 continue
-            observed[axis][k] = _sign(agreement)
+            observed[axis][k] = _sign(agreement) if abs(agreement) >= threshold else 0
             if observed[axis][k] == 0:
-                checks.append(_undecided(check, "weak correlation", agreement))
+                checks.append(_undecided(check, f"correlation below {threshold:.2f}", agreement))
                 continue
             outcome = Outcome.FAILED if observed[axis][k] < 0 else Outcome.PASSED
             checks.append(Check(name=check, statistic=agreement, outcome=outcome, note=note))

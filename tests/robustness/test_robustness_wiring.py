@@ -140,3 +140,26 @@ def test_signs_follow_from_the_model_and_the_plant(scenario_logs):
     measured = np.polyfit(frame["ay"], roll, 1)[0]
     model = 0.5 * (response[1, 1] + response[3, 1] - response[0, 1] - response[2, 1])
     assert measured == pytest.approx(model, rel=0.10)
+
+
+def test_short_log_decides_no_sign_on_chance_correlations():
+    """A 4.3 s log (a short quick-study segment of the Nordschleife was refused for d_fl
+    against az): 1 Hz low-passed channels give about 9 independent samples, so chance
+    correlations reach 0.4; the decisive |r| grows as 2.5 / sqrt(n - 3) on short logs."""
+    from wheelload.estimators.log_checks import Outcome, check_wiring
+
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 4.3, 0.01)
+    chance = 0
+    for _ in range(20):
+        walk = np.cumsum(rng.normal(size=(t.size, 7)), axis=0) * 0.05  # slow, unrelated
+        acc = walk[:, :3] + [0.0, 0.0, 9.81]
+        d = walk[:, 3:] * 0.01
+        report = check_wiring(t, np.full(t.size, 20.0), acc, d)
+        travel = [c for c in report.checks if c.name.startswith("d_")]
+        assert not any(c.outcome is Outcome.FAILED for c in travel)
+        # what the old fixed threshold (0.3) would have refused: past the variation test
+        chance += sum(
+            c.note.startswith("correlation below") and c.statistic <= -0.3 for c in travel
+        )
+    assert chance > 0
