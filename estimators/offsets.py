@@ -13,7 +13,14 @@ from __future__ import annotations
 import numpy as np
 
 from wheelload.estimators.signals import Signals
-from wheelload.models import ModelParameters, Vehicle, static_loads, suspension_function
+from wheelload.models import (
+    GATES,
+    INPUTS,
+    ModelParameters,
+    Vehicle,
+    static_loads,
+    suspension_function,
+)
 
 STILL_SPEED = 0.2  # m/s, largest speed counted as standing still
 STILL_ACCELERATION_STD = 0.3  # m/s^2, largest ax/ay standard deviation at rest
@@ -47,5 +54,7 @@ def still_period_static_loads(signals: Signals, vehicle: Vehicle, duration: floa
     if not np.all(np.isfinite(mean_travel)):
         raise ValueError(f"{signals.source}: a travel channel has no sample in the still period")
     unloaded = ModelParameters.from_vehicle(vehicle, np.zeros(4)).vector()
-    travel_part = np.asarray(suspension_function()(mean_travel, np.zeros(4), unloaded)).ravel()
+    u = np.zeros(len(INPUTS))
+    u[: len(mean_travel)] = mean_travel  # d_fl .. d_rr lead INPUTS; at rest, every term off
+    travel_part = np.asarray(suspension_function()(u, np.zeros(len(GATES)), unloaded)).ravel()
     return static_loads(vehicle) - travel_part

@@ -29,11 +29,30 @@ class StepFlag(enum.IntFlag):
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
     STEP_REJECTED = 128
+    # Bits 16-19: a model term (wheelload.models.terms) switched on in the
+    # vehicle file was dropped for this sample because an input it needs is
+    # missing (the updates themselves went ahead without it).
+    BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
+    UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
+    ROAD_FRAME_DROPPED = 1 << 18  # a travel sensor missing: body attitude unknown
+    IMU_LEVER_ARM_DROPPED = 1 << 19  # no body rates or their derivative
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
-        """The seven update flags in the order of the filter's ``used`` output."""
-        return tuple(cls)[:7]
+        """The flags in the order of the filter's ``used`` output.
+
+        Seven updates (suspension FL..RR, vertical, pitch, roll), then the four
+        droppable terms in ``wheelload.models.DROPPABLE`` order.
+        """
+        return (*tuple(cls)[:7], *_TERM_FLAGS)
+
+
+_TERM_FLAGS = (
+    StepFlag.BODY_INERTIA_DROPPED,
+    StepFlag.UNSPRUNG_INERTIA_DROPPED,
+    StepFlag.ROAD_FRAME_DROPPED,
+    StepFlag.IMU_LEVER_ARM_DROPPED,
+)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

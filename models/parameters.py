@@ -8,7 +8,7 @@ Example
 -------
 >>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
 >>> p.vector().shape
-(26,)
+(60,)
 """
 
 from __future__ import annotations
@@ -58,6 +58,42 @@ class ModelParameters:
     static_fr: Any
     static_rl: Any
     static_rr: Any
+    # Beyond the paper (wheelload.models.terms): sprung body, tyres, links, stops, IMU.
+    sprung_mass: Any
+    sprung_cg_height: Any
+    inertia_xx: Any
+    inertia_yy: Any
+    unsprung_front: Any  # kg, one corner
+    unsprung_rear: Any
+    tyre_rate_front: Any
+    tyre_rate_rear: Any
+    roll_centre_front: Any
+    roll_centre_rear: Any
+    anti_brake_front: Any
+    anti_brake_rear: Any
+    anti_drive_front: Any
+    anti_drive_rear: Any
+    bump_gap_front: Any
+    bump_gap_rear: Any
+    rebound_gap_front: Any
+    rebound_gap_rear: Any
+    stop_rate_front: Any
+    stop_rate_rear: Any
+    stop_progressive_front: Any
+    stop_progressive_rear: Any
+    imu_x: Any  # m, IMU relative to the sprung CG
+    imu_y: Any
+    imu_z: Any
+    imu_roll: Any  # rad, sensor axes in the body axes
+    imu_pitch: Any
+    imu_yaw: Any
+    # Switches, 1.0 on / 0.0 off ([model] section): runtime values in the generated C.
+    term_road_frame: Any
+    term_body_inertia: Any
+    term_geometric_transfer: Any
+    term_stops: Any
+    term_unsprung_inertia: Any
+    term_imu_lever_arm: Any
 
     @staticmethod
     def names() -> tuple[str, ...]:
@@ -72,6 +108,7 @@ class ModelParameters:
     @classmethod
     def from_vehicle(cls, vehicle: Vehicle, static: np.ndarray | None = None) -> ModelParameters:
         """Numeric parameters; ``static`` overrides the static wheel loads [N]."""
+        terms = dataclasses.asdict(vehicle.model)
         centre = vehicle_mass_centre(vehicle)
         static = static_loads(vehicle) if static is None else np.asarray(static, float)
         if static.shape != (4,) or not np.all(np.isfinite(static)):
@@ -105,6 +142,35 @@ class ModelParameters:
             static_fr=float(static[1]),
             static_rl=float(static[2]),
             static_rr=float(static[3]),
+            sprung_mass=vehicle.mass.sprung,
+            sprung_cg_height=vehicle.geometry.cg_height,
+            inertia_xx=vehicle.mass.inertia[0],
+            inertia_yy=vehicle.mass.inertia[1],
+            unsprung_front=0.5 * vehicle.mass.unsprung_front,
+            unsprung_rear=0.5 * vehicle.mass.unsprung_rear,
+            tyre_rate_front=vehicle.tyres.vertical_stiffness_front,
+            tyre_rate_rear=vehicle.tyres.vertical_stiffness_rear,
+            roll_centre_front=front.roll_centre_height,
+            roll_centre_rear=rear.roll_centre_height,
+            anti_brake_front=front.anti_pitch_brake,
+            anti_brake_rear=rear.anti_pitch_brake,
+            anti_drive_front=front.anti_pitch_drive,
+            anti_drive_rear=rear.anti_pitch_drive,
+            bump_gap_front=front.bump_gap,
+            bump_gap_rear=rear.bump_gap,
+            rebound_gap_front=front.rebound_gap,
+            rebound_gap_rear=rear.rebound_gap,
+            stop_rate_front=front.stop_rate,
+            stop_rate_rear=rear.stop_rate,
+            stop_progressive_front=front.stop_progressive_rate,
+            stop_progressive_rear=rear.stop_progressive_rate,
+            imu_x=vehicle.geometry.imu_position[0],
+            imu_y=vehicle.geometry.imu_position[1],
+            imu_z=vehicle.geometry.imu_position[2],
+            imu_roll=vehicle.geometry.imu_orientation[0],
+            imu_pitch=vehicle.geometry.imu_orientation[1],
+            imu_yaw=vehicle.geometry.imu_orientation[2],
+            **{f"term_{key}": float(value) for key, value in terms.items()},
         )
 
     def vector(self) -> np.ndarray:

@@ -1,6 +1,7 @@
-"""Suspension pseudo-measurement of the wheel loads (Siegloff & Choi §II-B, eq. 3-9).
+r"""Suspension pseudo-measurement of the wheel loads (Siegloff & Choi §II-B, eq. 3-9).
 
 .. math:: F_{z,i} = F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i
+    + g_s F^{stop}_i + g_g F^{link}_i + g_u m_{u,a} (a_{hub,i} - g)
 
 Signs in ISO 8855 with compression ``d > 0`` and ``v = dd/dt > 0`` in bump:
 the spring and the damper push the wheel down harder when compressed, and the
@@ -8,61 +9,102 @@ anti-roll bar adds load to the more compressed wheel of an axle. (The paper's
 eq. 6 prints the opposite sign; a stabiliser bar twisted by a left-side bump
 pushes the left wheel down and lifts the right, so ``F_L = +k_arb eta``.)
 
+Terms beyond the paper, each times its gate (``wheelload.models.terms``):
+
+- stops: :func:`~wheelload.models.suspension_elements.stop_force` per axle;
+- geometric (link) load transfer, quasi-static, driven by the specific force
+  :math:`\tilde f` at the CG (road axes when ``road_frame`` is on): the
+  lateral tyre force of an axle :math:`F_{y,f} = m \tilde f_y l_r / l`
+  reaches the body at the roll centre, so :math:`\mp F_{y,a} h_{rc,a} / T_a`
+  goes to the left/right tyre through the links (corner-based paper eq. 18,
+  the :math:`h_{RC}` part); of the rigid longitudinal transfer
+  :math:`\mp h F_x / l` per axle (:math:`F_x = m \tilde f_x + D`) the links
+  carry the anti-pitch share :math:`\epsilon_a` (brake share when
+  :math:`F_x < 0`, drive share otherwise);
+- unsprung inertia: a hub accelerometer (specific force along body z,
+  :math:`+g` at rest) gives the unsprung mass's load :math:`m_u a_{hub}`;
+  its static part is already in :math:`F_{z,i,0}`.
+
 Example
 -------
 >>> f = suspension_function()
->>> z = f([0.01, 0, 0, 0], [0, 0, 0, 0], ModelParameters.from_vehicle(vehicle).vector())
+>>> z = f(u, gates, ModelParameters.from_vehicle(vehicle).vector())
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.equilibrium import aero_forces
+from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
+from wheelload.models.suspension_elements import (
+    anti_roll_bar_forces,
+    damper_force,
+    stop_force,
+)
+from wheelload.models.terms import GATES, gate, road_motion
+from wheelload.models.vehicle import GRAVITY
+
+__all__ = ["anti_roll_bar_forces", "damper_force", "stop_force", "suspension_function"]
 
 
-def damper_force(v, c_push, c_pull):
-    r"""Asymmetric piecewise-linear damper (eq. 5): :math:`c_{push} v` for
-    :math:`v \ge 0`, :math:`c_{pull} v` otherwise."""
-    return ca.if_else(v >= 0, c_push * v, c_pull * v)
-
-
-def anti_roll_bar_forces(d_left, d_right, rate, ratio):
-    r"""Anti-roll-bar loads on the left and right wheel (eq. 6-8, sign corrected).
-
-    .. math:: \eta = \gamma (d_L - d_R), \quad F_L = +k_{arb}\eta, \quad F_R = -k_{arb}\eta
-    """
-    eta = ratio * (d_left - d_right)
-    return rate * eta, -rate * eta
-
-
-def suspension_loads(d, v, p: ModelParameters) -> ca.SX:
-    """Pseudo-measured wheel loads FL, FR, RL, RR from travel ``d`` and rate ``v`` (eq. 9)."""
+def link_loads(f_road, vx, p: ModelParameters) -> list:
+    """Load through the links per corner FL, FR, RL, RR (roll centre, anti-pitch) [N]."""
+    wheelbase = p.lf + p.lr
+    _, drag = aero_forces(vx, p)
+    force_y = p.mass * f_road[1]
+    force_x = p.mass * f_road[0] + drag
+    braking = force_x < 0
     axles = (
-        (
-            p.spring_front,
-            p.damper_push_front,
-            p.damper_pull_front,
-            p.arb_rate_front,
-            p.arb_ratio_front,
-        ),
-        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear, p.arb_ratio_rear),
+        (p.lr, p.roll_centre_front, p.track_front, p.anti_brake_front, p.anti_drive_front, -1),
+        (p.lf, p.roll_centre_rear, p.track_rear, p.anti_brake_rear, p.anti_drive_rear, 1),
     )
+    loads = []
+    for arm, height, track, anti_brake, anti_drive, sign in axles:
+        lateral = force_y * arm / wheelbase * height / track
+        share = ca.if_else(braking, anti_brake, anti_drive)
+        longitudinal = 0.5 * share * sign * p.cg_height * force_x / wheelbase
+        loads += [longitudinal - lateral, longitudinal + lateral]
+    return loads
+
+
+def suspension_loads(u, gates, p: ModelParameters) -> ca.SX:
+    """Pseudo-measured wheel loads FL, FR, RL, RR from the inputs ``u`` (eq. 9 + terms)."""
+    inputs = ModelInputs.unpack(u)
+    d, v = inputs.d, inputs.v
+    f_road = road_motion(inputs, gates, p)[0]
+    links = link_loads(f_road, inputs.vx, p)
+    axles = (
+        (p.spring_front, p.damper_push_front, p.damper_pull_front, p.arb_rate_front,
+         p.arb_ratio_front, p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front,
+         p.stop_progressive_front, p.unsprung_front),
+        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear,
+         p.arb_ratio_rear, p.bump_gap_rear, p.rebound_gap_rear, p.stop_rate_rear,
+         p.stop_progressive_rear, p.unsprung_rear),
+    )  # fmt: skip
     static = p.static()
     loads = []
-    for axle, (spring, push, pull, arb_rate, arb_ratio) in enumerate(axles):
+    for axle, values in enumerate(axles):
+        spring, push, pull, arb_rate, arb_ratio, bump, rebound, k1, k2, unsprung = values
         left, right = 2 * axle, 2 * axle + 1
         arb = anti_roll_bar_forces(d[left], d[right], arb_rate, arb_ratio)
         for side, wheel in enumerate((left, right)):
-            loads.append(
-                static[wheel] + spring * d[wheel] + damper_force(v[wheel], push, pull) + arb[side]
-            )
+            load = static[wheel] + spring * d[wheel] + damper_force(v[wheel], push, pull)
+            load += arb[side]
+            load += gate(gates, "stops") * stop_force(d[wheel], bump, rebound, k1, k2)
+            load += gate(gates, "geometric_transfer") * links[wheel]
+            hub = inputs.hub[wheel] - GRAVITY
+            load += gate(gates, f"unsprung_{('fl', 'fr', 'rl', 'rr')[wheel]}") * unsprung * hub
+            loads.append(load)
     return ca.vertcat(*loads)
 
 
 def suspension_function(name: str = "suspension_load") -> ca.Function:
-    """``name(d[4], v[4], p) -> z[4]``: the suspension pseudo-measurement as a CasADi Function."""
-    d = ca.SX.sym("d", 4)
-    v = ca.SX.sym("v", 4)
+    """``name(u, gates, p) -> z[4]``: the suspension pseudo-measurement as a CasADi Function."""
+    u = ca.SX.sym("u", len(INPUTS))
+    gates = ca.SX.sym("gates", len(GATES))
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(name, [d, v, p_vector], [suspension_loads(d, v, p)], ["d", "v", "p"], ["z"])
+    return ca.Function(
+        name, [u, gates, p_vector], [suspension_loads(u, gates, p)], ["u", "gates", "p"], ["z"]
+    )

@@ -22,12 +22,15 @@ import numpy as np
 
 from wheelload.estimators.signals import Signals, derive_velocities
 from wheelload.models import (
+    GATES,
     GRAVITY,
+    INPUTS,
     ModelParameters,
     Vehicle,
     equilibrium_function,
     suspension_function,
 )
+from wheelload.models.inputs import input_vector
 
 Profile = Callable[[np.ndarray], np.ndarray]
 
@@ -88,7 +91,8 @@ def travel_stiffness(vehicle: Vehicle) -> np.ndarray:
     """:math:`J = \\partial z / \\partial d` (4 x 4) of the suspension model at rest, in N/m."""
     d = ca.SX.sym("d", 4)
     p = ModelParameters.from_vehicle(vehicle).vector()
-    z = suspension_function()(d, ca.DM.zeros(4), p)
+    u = ca.vertcat(d, ca.DM.zeros(len(INPUTS) - 4))  # at rest; the travel leads INPUTS
+    z = suspension_function()(u, ca.DM.zeros(len(GATES)), p)
     return np.asarray(ca.Function("J", [d], [ca.jacobian(z, d)])(np.zeros(4)))
 
 
@@ -114,7 +118,9 @@ def reference_loads(vehicle: Vehicle, acc: np.ndarray, vx: np.ndarray) -> np.nda
     p = ModelParameters.from_vehicle(vehicle).vector()
     share = roll_share_front(vehicle)
     n = len(vx)
-    A, b = equilibrium_function().map(n)(acc.T, vx[None, :], p)
+    u = np.nan_to_num(input_vector(d=np.zeros((n, 4)), acc=acc, vx=vx))
+    # The paper's model (every term off): a synthetic log is quasi-static.
+    A, b = equilibrium_function().map(n)(u, np.zeros(len(GATES)), p)
     A = np.asarray(A)[:, :4]
     b = np.asarray(b).T
     roll_front, roll_rear = A[2, :2], A[2, 2:]

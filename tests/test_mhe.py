@@ -16,7 +16,8 @@ from wheelload.estimators.mhe import (
 )
 from wheelload.estimators.projection import ProjectionKF
 from wheelload.estimators.two_stage import sample_intervals
-from wheelload.models import ModelParameters, equilibrium_function
+from wheelload.models import ModelParameters
+from wheelload.studies.numpy_kf import pseudo_measurements
 from wheelload.studies.synthetic import SensorNoise, slalom, steady_cornering, synthetic_log
 
 NOISE = SensorNoise(acceleration=0.05, travel=0.0003)
@@ -37,8 +38,7 @@ def wheel_lift(vehicle):
 
 def right_hand_sides(vehicle, signals):
     p = ModelParameters.from_vehicle(vehicle).vector()
-    _, b = equilibrium_function().map(len(signals))(signals.acc.T, signals.vx[None, :], p)
-    return np.asarray(b).T
+    return pseudo_measurements(signals, p)[2]  # b with the vehicle's model terms
 
 
 def test_one_sample_soft_window_with_kalman_arrival_is_the_kf(vehicle, drive):
