@@ -34,8 +34,10 @@ class StepFlag(enum.IntFlag):
     # missing (the updates themselves went ahead without it).
     BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
     UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
-    ROAD_FRAME_DROPPED = 1 << 18  # a travel sensor missing: body attitude unknown
-    IMU_LEVER_ARM_DROPPED = 1 << 19  # no body rates or their derivative
+    ROAD_FRAME_OR_LINKS_DROPPED = (
+        1 << 18
+    )  # road frame or link loads: a travel, IMU axis or vx missing
+    IMU_TERMS_DROPPED = 1 << 19  # lever arm (no rates) or mounting (an IMU axis missing)
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
@@ -50,8 +52,8 @@ class StepFlag(enum.IntFlag):
 _TERM_FLAGS = (
     StepFlag.BODY_INERTIA_DROPPED,
     StepFlag.UNSPRUNG_INERTIA_DROPPED,
-    StepFlag.ROAD_FRAME_DROPPED,
-    StepFlag.IMU_LEVER_ARM_DROPPED,
+    StepFlag.ROAD_FRAME_OR_LINKS_DROPPED,
+    StepFlag.IMU_TERMS_DROPPED,
 )
 
 

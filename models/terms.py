@@ -21,7 +21,8 @@ Terms (what each adds, and where):
 - ``unsprung_inertia`` (suspension, vertical row): :math:`m_u (a_{hub} - g)`.
 - ``imu_lever_arm``: specific force moved from the IMU to the sprung CG.
 
-The IMU mounting orientation is always applied (zero angles: identity).
+The IMU mounting orientation (``imu_orientation``) is applied whenever an
+angle is non-zero (gate ``imu_mounting``, no switch).
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
     HUB_ACCELERATION,
+    SPECIFIC_FORCE,
+    SPEED,
     TRAVEL,
     ModelInputs,
     input_index,
@@ -50,10 +53,14 @@ GATES = (
     "unsprung_rl",
     "unsprung_rr",
     "imu_lever_arm",
+    "imu_mounting",
 )
 #: Terms that can be dropped for a missing input, in the order of the ``dropped``
-#: output (StepFlag bits 16-19).
-DROPPABLE = ("body_inertia", "unsprung_inertia", "road_frame", "imu_lever_arm")
+#: output (StepFlag bits 16-19): body inertia (no rate derivatives); unsprung
+#: inertia (a hub accelerometer); road frame or link loads (a travel sensor,
+#: an accelerometer axis or the speed); IMU lever arm or mounting (no rates,
+#: or an accelerometer axis of a tilted IMU).
+DROPPABLE = ("body_inertia", "unsprung_inertia", "road_frame_or_links", "imu_lever_arm_or_mounting")
 
 
 def _all_valid(valid, names) -> ca.SX:
@@ -71,22 +78,29 @@ def term_gates(valid, p: ModelParameters) -> tuple[ca.SX, ca.SX]:
     """
     rates_ok = _all_valid(valid, BODY_RATES + BODY_RATE_DERIVATIVES)
     inertia_ok = _all_valid(valid, BODY_RATE_DERIVATIVES[:2])
-    travel_ok = _all_valid(valid, TRAVEL)
+    acc_ok = _all_valid(valid, SPECIFIC_FORCE)
+    travel_ok = _all_valid(valid, TRAVEL) * acc_ok
+    links_ok = acc_ok * _all_valid(valid, SPEED)
     hub_ok = [_all_valid(valid, (name,)) for name in HUB_ACCELERATION]
+    mounted = ca.logic_or(ca.logic_or(p.imu_roll != 0, p.imu_pitch != 0), p.imu_yaw != 0)
     gates = ca.vertcat(
         p.term_road_frame * travel_ok,
         p.term_body_inertia * inertia_ok,
-        p.term_geometric_transfer,
+        p.term_geometric_transfer * links_ok,
         p.term_stops,
         *[p.term_unsprung_inertia * ok for ok in hub_ok],
         p.term_imu_lever_arm * rates_ok,
+        mounted * acc_ok,
     )
     hub_all = hub_ok[0] * hub_ok[1] * hub_ok[2] * hub_ok[3]
+    road_or_links = ca.fmax(p.term_road_frame * (1 - travel_ok),
+                            p.term_geometric_transfer * (1 - links_ok))  # fmt: skip
+    imu = ca.fmax(p.term_imu_lever_arm * (1 - rates_ok), mounted * (1 - acc_ok))
     dropped = ca.vertcat(
         p.term_body_inertia * (1 - inertia_ok),
         p.term_unsprung_inertia * (1 - hub_all),
-        p.term_road_frame * (1 - travel_ok),
-        p.term_imu_lever_arm * (1 - rates_ok),
+        road_or_links,
+        imu,
     )
     return gates, dropped
 
@@ -122,12 +136,14 @@ def rotation_z(angle) -> ca.SX:
     return ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
 
 
-def mounting_rotation(p: ModelParameters) -> ca.SX:
+def mounting_rotation(p: ModelParameters, on=1) -> ca.SX:
     r"""Sensor-to-body rotation :math:`R_z(\psi_m) R_y(\theta_m) R_x(\phi_m)`.
 
-    A vector measured in the sensor axes is :math:`R v` in the body axes.
+    A vector measured in the sensor axes is :math:`R v` in the body axes. With
+    ``on`` = 0 (a level IMU, or a missing accelerometer axis) the identity, so
+    that a level IMU's axes do not mix and a missing axis skips only its rows.
     """
-    return rotation_z(p.imu_yaw) @ rotation_y(p.imu_pitch) @ rotation_x(p.imu_roll)
+    return rotation_z(on * p.imu_yaw) @ rotation_y(on * p.imu_pitch) @ rotation_x(on * p.imu_roll)
 
 
 def body_motion(inputs: ModelInputs, gates, p: ModelParameters):
@@ -139,7 +155,7 @@ def body_motion(inputs: ModelInputs, gates, p: ModelParameters):
     with :math:`R` the mounting rotation and :math:`r` the IMU position
     relative to the sprung CG; the lever-arm part carries its gate.
     """
-    R = mounting_rotation(p)
+    R = mounting_rotation(p, gate(gates, "imu_mounting"))
     f = R @ inputs.acc
     omega = R @ inputs.rates
     omega_dot = R @ inputs.rate_dots

@@ -21,6 +21,7 @@ from wheelload.models import (
     Vehicle,
     equilibrium_function,
     gates_function,
+    suspension_function,
 )
 
 ROWS = ("vertical", "pitch", "roll")
@@ -56,3 +57,17 @@ def residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> dict[str, float]:
     """RMS of each row's residual [N, N m, N m]."""
     residual = equilibrium_residuals(vehicle, frame)
     return dict(zip(ROWS, np.sqrt(np.mean(residual**2, axis=0)).tolist(), strict=True))
+
+
+def suspension_residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> float:
+    """Pooled RMS [N] of the pseudo-measurement :math:`z(u)` against the reference loads."""
+    signals = signals_from_frame(frame, source="<plant>")
+    if signals.reference is None:
+        raise ValueError("the frame has no reference loads fz_fl .. fz_rr")
+    n = len(signals)
+    p = ModelParameters.from_vehicle(vehicle).vector()
+    u = input_matrix(signals)
+    valid = np.isfinite(u).astype(float)
+    gates = np.asarray(gates_function().map(n)(valid, p)[0])
+    z = np.asarray(suspension_function().map(n)(np.nan_to_num(u), gates, p)).T
+    return float(np.sqrt(np.mean((z - signals.reference) ** 2)))

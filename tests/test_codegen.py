@@ -264,10 +264,9 @@ def test_bad_inputs_skip_updates_and_bad_intervals_hold_the_state(tmp_path_facto
     c = np.loadtxt(result.stdout.splitlines())
     loads, flags = c[:, :4], c[:, 4].astype(int)
     assert len(c) == 200 and np.isfinite(loads).all()
-    # The IMU mounting rotation (symbolic: a runtime parameter) and the road
-    # frame mix the axes, so a missing az skips all three equilibrium rows;
-    # the suspension rows go ahead.
-    rows_skipped = StepFlag.VERTICAL_SKIPPED | StepFlag.PITCH_SKIPPED | StepFlag.ROLL_SKIPPED
-    assert flags[50] & 0xFF == rows_skipped
+    # A missing az skips the vertical row; the road frame and link loads, which
+    # need every axis, are dropped for the sample and flagged.
+    assert flags[50] & 0xFF == StepFlag.VERTICAL_SKIPPED
+    assert flags[50] & StepFlag.ROAD_FRAME_OR_LINKS_DROPPED
     assert flags[120] == sum(StepFlag)
     np.testing.assert_array_equal(loads[120], loads[119])

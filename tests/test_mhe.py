@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.mhe import (
     Arrival,
     Constraint,
@@ -17,6 +17,7 @@ from wheelload.estimators.mhe import (
 from wheelload.estimators.projection import ProjectionKF
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import ModelParameters
+from wheelload.studies.equilibrium_residuals import paper_model
 from wheelload.studies.numpy_kf import pseudo_measurements
 from wheelload.studies.synthetic import SensorNoise, slalom, steady_cornering, synthetic_log
 
@@ -79,6 +80,9 @@ def test_hard_window_satisfies_equilibrium_on_every_sample(vehicle, wheel_lift, 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
 def test_bounds_keep_every_load_at_or_above_zero(vehicle, wheel_lift, constraint):
+    # The synthetic log obeys the paper's model exactly; the terms beyond it
+    # (road frame, link loads) would be a model mismatch here.
+    vehicle = paper_model(vehicle)
     assert TwoStageKF(vehicle).run(wheel_lift).loads.min() < -50.0  # the KF reports lift-off
     settings = MheSettings(horizon=10, constraint=constraint, bounded=True, max_load=2.0e4)
     mhe = MovingHorizonEstimator(vehicle, settings).run(wheel_lift)
@@ -153,7 +157,7 @@ def test_invalid_interval_holds_the_estimate_and_solving_goes_on(vehicle, drive,
     held_state, held = mhe.step(state, samples[1], dt)
     assert held_state is state  # nothing solved, nothing changed
     np.testing.assert_array_equal(held.loads, first.loads)
-    assert held.flags[0] == 255 and held.status[0] == 0
+    assert held.flags[0] == sum(StepFlag) and held.status[0] == 0
     assert np.isfinite(held.residual).all() and np.isfinite(held.std).all()
     for sample in samples[2:]:
         held_state, estimate = mhe.step(held_state, sample, 0.01)
