@@ -20,6 +20,7 @@ COMMANDS = (
     "wheelload.studies.commands.simulate",
     "wheelload.studies.commands.mhe",
     "wheelload.studies.commands.codegen",
+    "wheelload.studies.commands.ablation",
 )
 
 

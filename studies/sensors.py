@@ -28,8 +28,10 @@ consistent with the noisy ``d``.
 Hub accelerometers (``az_fl .. az_rr``, the wheel accelerometers of
 semi-active damping systems; no datasheet is available to the project, so
 the figures are assumed for a ±50 g MEMS part): noise density 1 mg/√Hz,
-bandwidth 1 kHz, turn-on bias 50 mg (1 sigma), bias instability 1 mg, the
-same channel model as the IMU's. Written only when the truth has them.
+bandwidth 1 kHz, bias instability 1 mg, and a residual turn-on bias of 5 mg
+(1 sigma) after the zeroing at standstill such systems do (the IMU's
+assumption too); the same channel model as the IMU's. Written only when the
+truth has them.
 """
 
 from __future__ import annotations
@@ -62,7 +64,7 @@ class ImuModel:
 class HubAccelerometerModel:
     noise_density: float = 1000.0 * MICRO_G  # m/s^2/sqrt(Hz)
     bandwidth: float = 1000.0  # Hz
-    bias: float = 50000.0 * MICRO_G  # m/s^2, 1 sigma turn-on bias
+    bias: float = 5000.0 * MICRO_G  # m/s^2, 1 sigma residual bias after zeroing
     bias_instability: float = 1000.0 * MICRO_G  # m/s^2
     instability_time: float = 100.0  # s
 

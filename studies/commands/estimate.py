@@ -10,6 +10,7 @@ import numpy as np
 
 from wheelload.estimators import Estimate, Signals, TwoStageKF, read_log
 from wheelload.estimators.offsets import still_period_static_loads
+from wheelload.estimators.result import StepFlag
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
 
@@ -90,8 +91,14 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
             f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} "
             f"{estimate.std[:, i].mean():12.0f}"
         )
-    flagged = int(np.count_nonzero(estimate.flags))
+    updates = sum(StepFlag.update_flags()[:7]) | StepFlag.STEP_REJECTED
+    flagged = int(np.count_nonzero(estimate.flags & updates))
     lines.append(f"samples with a skipped update (missing input): {flagged}")
+    for flag in StepFlag.update_flags()[7:]:
+        dropped = int(np.count_nonzero(estimate.flags & flag))
+        if dropped:
+            name = str(flag.name).lower().replace("_", " ")
+            lines.append(f"samples with a model term dropped ({name}): {dropped}")
     if signals.reference is not None:
         table = wheel_metrics(estimate.loads, signals.reference)
         lines.append("error against the log's reference loads (Siegloff & Choi eq. 26-34):")
