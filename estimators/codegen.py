@@ -132,7 +132,7 @@ def kernel_function(
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        [x_next, packed(P_next), std, residual, used],
+        ca.cse([x_next, packed(P_next), std, residual, used]),
         ["x", "P", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
         ["x_next", "P_next", "std", "residual", "used"],
     )

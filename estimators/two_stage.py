@@ -172,6 +172,8 @@ def step_function(
         equilibrium or equilibrium_function(),
         constraint_update=constraint_update,
     )
+    # The suspension and equilibrium share the body motion and attitude: one copy.
+    outputs = ca.cse(outputs)
     return ca.Function(name, inputs, outputs, STEP_INPUT_NAMES, STEP_OUTPUT_NAMES)
 
 

@@ -40,8 +40,8 @@ h_{rc,r}) / l`; the unsprung masses stay with the wheels). Small-angle
 assumptions: :math:`\phi, \theta` from travel differences over the tracks
 and wheelbase (first order), the moment arms to first order in the angles,
 the lift and drag along road axes; the rotation of :math:`f` itself is
-exact. To first order in :math:`\phi` the roll row is then the same as in
-body axes when :math:`h_{rc} = 0` (the rotated :math:`f_y` loses
+accurate to 1e-7 (Taylor sine and cosine). To first order in :math:`\phi`
+the roll row is then the same as in body axes when :math:`h_{rc} = 0` (the rotated :math:`f_y` loses
 :math:`g\phi`, the displaced CG gives it back); the vertical row gains the
 :math:`f_y \sin\phi` and :math:`f_x \sin\theta` parts the body-axis
 :math:`f_z` misses.

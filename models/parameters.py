@@ -8,7 +8,7 @@ Example
 -------
 >>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
 >>> p.vector().shape
-(60,)
+(66,)
 """
 
 from __future__ import annotations
@@ -22,6 +22,16 @@ import numpy as np
 
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.vehicle import Vehicle
+
+
+def mounting_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    r"""Sensor-to-body rotation :math:`R_z(\psi) R_y(\theta) R_x(\phi)` of a mounted IMU."""
+    cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
+                              np.cos(yaw), np.sin(yaw))  # fmt: skip
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -84,9 +94,18 @@ class ModelParameters:
     imu_x: Any  # m, IMU relative to the sprung CG
     imu_y: Any
     imu_z: Any
-    imu_roll: Any  # rad, sensor axes in the body axes
-    imu_pitch: Any
-    imu_yaw: Any
+    # Sensor-to-body rotation of the IMU axes, row by row, from [geometry]
+    # imu_orientation (R_z(yaw) R_y(pitch) R_x(roll)): a matrix, not angles,
+    # so that no step evaluates a trigonometric function for it.
+    imu_r11: Any
+    imu_r12: Any
+    imu_r13: Any
+    imu_r21: Any
+    imu_r22: Any
+    imu_r23: Any
+    imu_r31: Any
+    imu_r32: Any
+    imu_r33: Any
     # Switches, 1.0 on / 0.0 off ([model] section): runtime values in the generated C.
     term_road_frame: Any
     term_body_inertia: Any
@@ -109,6 +128,7 @@ class ModelParameters:
     def from_vehicle(cls, vehicle: Vehicle, static: np.ndarray | None = None) -> ModelParameters:
         """Numeric parameters; ``static`` overrides the static wheel loads [N]."""
         terms = dataclasses.asdict(vehicle.model)
+        mounting = mounting_matrix(*vehicle.geometry.imu_orientation)
         centre = vehicle_mass_centre(vehicle)
         static = static_loads(vehicle) if static is None else np.asarray(static, float)
         if static.shape != (4,) or not np.all(np.isfinite(static)):
@@ -167,11 +187,15 @@ class ModelParameters:
             imu_x=vehicle.geometry.imu_position[0],
             imu_y=vehicle.geometry.imu_position[1],
             imu_z=vehicle.geometry.imu_position[2],
-            imu_roll=vehicle.geometry.imu_orientation[0],
-            imu_pitch=vehicle.geometry.imu_orientation[1],
-            imu_yaw=vehicle.geometry.imu_orientation[2],
+            **{f"imu_r{i + 1}{j + 1}": float(mounting[i, j]) for i in range(3) for j in range(3)},
             **{f"term_{key}": float(value) for key, value in terms.items()},
         )
+
+    def imu_rotation(self) -> ca.SX:
+        """The sensor-to-body rotation of the IMU as a 3 x 3 matrix."""
+        names = [f"imu_r{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)]
+        rows = [[getattr(self, names[3 * i + j]) for j in range(3)] for i in range(3)]
+        return ca.vertcat(*[ca.horzcat(*row) for row in rows])
 
     def vector(self) -> np.ndarray:
         """The numeric parameter vector in layout order."""

@@ -82,7 +82,11 @@ def term_gates(valid, p: ModelParameters) -> tuple[ca.SX, ca.SX]:
     travel_ok = _all_valid(valid, TRAVEL) * acc_ok
     links_ok = acc_ok * _all_valid(valid, SPEED)
     hub_ok = [_all_valid(valid, (name,)) for name in HUB_ACCELERATION]
-    mounted = ca.logic_or(ca.logic_or(p.imu_roll != 0, p.imu_pitch != 0), p.imu_yaw != 0)
+    R = p.imu_rotation()
+    mounted = 0
+    for i in range(3):
+        for j in range(3):
+            mounted = ca.logic_or(mounted, R[i, j] != (1.0 if i == j else 0.0))
     gates = ca.vertcat(
         p.term_road_frame * travel_ok,
         p.term_body_inertia * inertia_ok,
@@ -137,13 +141,35 @@ def rotation_z(angle) -> ca.SX:
 
 
 def mounting_rotation(p: ModelParameters, on=1) -> ca.SX:
-    r"""Sensor-to-body rotation :math:`R_z(\psi_m) R_y(\theta_m) R_x(\phi_m)`.
+    r"""Sensor-to-body rotation :math:`R_z(\psi_m) R_y(\theta_m) R_x(\phi_m)` (from ``p``).
 
     A vector measured in the sensor axes is :math:`R v` in the body axes. With
     ``on`` = 0 (a level IMU, or a missing accelerometer axis) the identity, so
     that a level IMU's axes do not mix and a missing axis skips only its rows.
     """
-    return rotation_z(on * p.imu_yaw) @ rotation_y(on * p.imu_pitch) @ rotation_x(on * p.imu_roll)
+    eye = ca.DM.eye(3)
+    return eye + on * (p.imu_rotation() - eye)
+
+
+def small_sin(angle):
+    r""":math:`\sin a \approx a - a^3/6` (error below 1e-7 for :math:`|a| < 0.1` rad)."""
+    return angle * (1 - angle * angle / 6)
+
+
+def small_cos(angle):
+    r""":math:`\cos a \approx 1 - a^2/2 + a^4/24` (error below 1e-8 for :math:`|a| < 0.1`)."""
+    square = angle * angle
+    return 1 - square / 2 + square * square / 24
+
+
+def small_rotation_x(angle) -> ca.SX:
+    c, s = small_cos(angle), small_sin(angle)
+    return ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c, -s), ca.horzcat(0, s, c))
+
+
+def small_rotation_y(angle) -> ca.SX:
+    c, s = small_cos(angle), small_sin(angle)
+    return ca.vertcat(ca.horzcat(c, 0, s), ca.horzcat(0, 1, 0), ca.horzcat(-s, 0, c))
 
 
 def body_motion(inputs: ModelInputs, gates, p: ModelParameters):
@@ -213,12 +239,14 @@ def road_motion(inputs: ModelInputs, gates, p: ModelParameters):
 
     .. math:: \tilde f = R_y(\theta) R_x(\phi) f_{CG}
 
-    (the corner-based paper's :math:`\tilde a` terms, exact in the angles);
+    (the corner-based paper's :math:`\tilde a` terms; sine and cosine by
+    their Taylor polynomials, :func:`small_sin`, :func:`small_cos`: body
+    angles stay below 0.1 rad, and a step evaluates no trigonometric function);
     with the ``road_frame`` gate off, :math:`\phi = \theta = e_{CG} = 0`.
     Returns ``(f_road, omega, omega_dot, phi, theta, heave)``.
     """
     f, omega, omega_dot = body_motion(inputs, gates, p)
     on = gate(gates, "road_frame")
     phi, theta, heave = (on * value for value in body_attitude(inputs.d, p))
-    f_road = rotation_y(theta) @ rotation_x(phi) @ f
+    f_road = small_rotation_y(theta) @ small_rotation_x(phi) @ f
     return f_road, omega, omega_dot, phi, theta, heave
