@@ -277,6 +277,15 @@ def _build(cls: type, table: dict, prefix: str) -> object:
     unknown = sorted(set(table) - set(fields))
     if unknown:
         raise VehicleFileError(f"unknown key '{prefix}{unknown[0]}'")
+    sections = [
+        name
+        for name, field in fields.items()
+        if dataclasses.is_dataclass(hints[name])
+        and field.default is dataclasses.MISSING
+        and name not in table
+    ]
+    if sections:  # a whole missing section first: the usual sign of an older file
+        raise VehicleFileError(f"missing section [{prefix}{sections[0]}]{TEMPLATE_HINT}")
     values = {}
     for name, field in fields.items():
         if name not in table:

@@ -192,6 +192,7 @@ def test_old_vehicle_file_without_model_section_is_rejected(vehicle):
 
     table = tomllib.loads(example_vehicle_path().read_text())
     del table["model"]
+    del table["mass"]["inertia"]  # an old file lacks new keys too: the section is named first
     with pytest.raises(VehicleFileError, match=r"missing section \[model\].*--template"):
         vehicle_from_dict(table)
     table = tomllib.loads(example_vehicle_path().read_text())
