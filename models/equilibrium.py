@@ -49,7 +49,8 @@ the roll row is then the same as in body axes when :math:`h_{rc} = 0` (the rotat
 Body inertia (gate ``body_inertia``): the sprung body's angular acceleration
 about its principal axes; gyroscopic terms :math:`(I_{zz} - I_{yy}) q r` are
 left out. Unsprung inertia (hub accelerometers): the vertical row takes
-:math:`\sum m_{u,i} (a_{hub,i} - f_z)`, the unsprung masses' own heave.
+:math:`\sum m_{u,i} (a_{hub,i} - f_{z,body})`, the unsprung masses' own heave
+(both along the body's z axis, so that body roll does not leak into it).
 """
 
 from __future__ import annotations
@@ -58,7 +59,7 @@ import casadi as ca
 
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.terms import GATES, gate, road_motion
+from wheelload.models.terms import GATES, body_motion, gate, road_motion
 
 WHEEL_NAMES = ("fl", "fr", "rl", "rr")
 
@@ -83,6 +84,7 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     """Right-hand side from the inputs ``u`` (eq. 16 and the terms above)."""
     inputs = ModelInputs.unpack(u)
     f, _, omega_dot, phi, theta, heave = road_motion(inputs, gates, p)
+    f_body = body_motion(inputs, gates, p)[0]  # the hub accelerometers read along body z
     lift, drag = aero_forces(inputs.vx, p)
     m = p.mass
     sprung_share = p.sprung_mass / m
@@ -94,7 +96,7 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     heave_force = 0
     for wheel, name in enumerate(WHEEL_NAMES):
         on = gate(gates, f"unsprung_{name}")
-        heave_force += on * unsprung[wheel] * (inputs.hub[wheel] - f[2])
+        heave_force += on * unsprung[wheel] * (inputs.hub[wheel] - f_body[2])
     total = m * f[2] - lift + heave_force
     inertia = gate(gates, "body_inertia")
     return ca.vertcat(
