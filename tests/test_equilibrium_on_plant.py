@@ -7,12 +7,12 @@ lever arm, hub accelerometers) the residual must fall against the paper's
 model, row by row, on both bundled vehicles. Measured on clean logs (RMS,
 paper -> terms, N / N m / N m; `python -m wheelload.studies.equilibrium_table`):
 
-sports car  brake-in-turn  68 -> 10,  189 -> 36,  55 -> 39
-            iso-dlc        64 -> 9,     5 -> 11,  57 -> 33
-            hockenheim*   209 -> 33,  223 -> 69,  54 -> 58
-suv         brake-in-turn 361 -> 44,  663 -> 109, 248 -> 170
-            iso-dlc       451 -> 60,  109 -> 133, 548 -> 183
-            hockenheim*   596 -> 76,  951 -> 217, 276 -> 186
+sports car  brake-in-turn  68 -> 4,   189 -> 36,  55 -> 39
+            iso-dlc        64 -> 2,     5 -> 11,  57 -> 33
+            hockenheim*   209 -> 13,  223 -> 69,  54 -> 59
+suv         brake-in-turn 361 -> 15,  663 -> 109, 248 -> 170
+            iso-dlc       451 -> 20,  109 -> 133, 548 -> 184
+            hockenheim*   596 -> 28,  951 -> 218, 276 -> 187
 
 (* the first 15 % of the lap; the test drives the first 5 %.)
 """
@@ -57,9 +57,9 @@ def test_plant_residual_falls_with_the_model_terms(car, name):
     paper = residual_rms(paper_model(vehicle), frame)
     terms = residual_rms(vehicle, frame)
     weight = vehicle.mass.total * GRAVITY
-    # vertical: the road-frame rotation and hub accelerometers take out >= 70 %
-    assert terms["vertical"] < 0.3 * paper["vertical"]
-    assert terms["vertical"] < 0.006 * weight
+    # vertical: the road-frame rotation and hub accelerometers take out >= 80 %
+    assert terms["vertical"] < 0.2 * paper["vertical"]
+    assert terms["vertical"] < 0.003 * weight
     for row in ("pitch", "roll"):
         if paper[row] > QUIET_ROW:
             assert terms[row] < paper[row], (row, paper, terms)
