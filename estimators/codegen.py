@@ -37,7 +37,15 @@ from wheelload.estimators.c_emitter import Precision, emit_statements, flop_coun
 from wheelload.estimators.output_files import write_text
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.two_stage import STEP_NAME, TUNING, step_function, tuning_vector
-from wheelload.models import WHEELS, ModelParameters, Vehicle, load_vehicle
+from wheelload.models import (
+    INPUTS,
+    OPTIONAL_INPUTS,
+    WHEELS,
+    ModelParameters,
+    Vehicle,
+    load_vehicle,
+)
+from wheelload.models.inputs import input_description
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -132,7 +140,7 @@ def kernel_function(
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        [x_next, packed(P_next), std, residual, used],
+        ca.cse([x_next, packed(P_next), std, residual, used]),
         ["x", "P", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
         ["x_next", "P_next", "std", "residual", "used"],
     )
@@ -219,6 +227,17 @@ def _substitutions(
         ),
         "param_checks": "\n".join(checks),
         "flag_defines": "\n".join(flags),
+        "n_inputs": str(len(INPUTS)),
+        "n_used": str(len(StepFlag.update_flags())),
+        "input_fields": "\n".join(
+            f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
+        ),
+        "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
+        "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
+        "input_cases": "\n".join(
+            f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)
+        ),
+        "input_copy": "\n".join(f"    u[{k}] = input->{name};" for k, name in enumerate(INPUTS)),
         "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),
         "kernel_params_doc": ", p, tuning" if runtime else " (vehicle and tuning baked in)",
         "kernel_params_arg": f", const {prefix}_params *params" if runtime else "",

@@ -43,7 +43,12 @@ import casadi as ca
 import numpy as np
 from scipy import signal as sp_signal
 
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
+from wheelload.models import (
+    ModelParameters,
+    Vehicle,
+    paper_equilibrium_function,
+    travel_function,
+)
 
 WHEELS = ("fl", "fr", "rl", "rr")
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
@@ -137,10 +142,10 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
     """
     p = ModelParameters.from_vehicle(vehicle).vector()
     d = ca.SX.sym("d", 4)
-    z = suspension_function()(d, ca.DM.zeros(4), p)
+    z = travel_function()(d, ca.DM.zeros(4), p)
     K = np.asarray(ca.Function("K", [d], [ca.jacobian(z, d)])(np.zeros(4)))
     acc = ca.SX.sym("acc", 3)
-    A, b = equilibrium_function()(acc, 0.0, p)
+    A, b = paper_equilibrium_function()(acc, 0.0, p)
     A, B = (np.asarray(ca.Function("AB", [acc], [A, ca.jacobian(b, acc)])(np.zeros(3))[k])
             for k in range(2))  # fmt: skip
     system = np.vstack([A @ K, [1.0, -1.0, -1.0, 1.0]])

@@ -65,7 +65,7 @@ import scipy.sparse as sp
 from wheelload.estimators.mhe_terms import LOAD_SCALE, Constraint, terms_function
 from wheelload.estimators.projection import ProjectionKF, Weighting
 from wheelload.estimators.quiet import quiet_stdout
-from wheelload.estimators.result import Estimate
+from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import (
     MAX_INTERVAL,
@@ -76,7 +76,7 @@ from wheelload.estimators.two_stage import (
     input_matrix,
     sample_intervals,
 )
-from wheelload.models import Vehicle, equilibrium_function
+from wheelload.models import GATES, INPUTS, Vehicle, equilibrium_function
 
 __all__ = [
     "LOAD_SCALE",
@@ -239,7 +239,7 @@ class MovingHorizonEstimator:
         )
         self.p = self.filter.p
         self.tuning = self.filter.tuning
-        A, _ = equilibrium_function()(np.zeros(3), 0.0, self.p)
+        A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)
         self.A = np.asarray(A)
         self.null = _null_vector(self.A)
         self.pinv = np.linalg.pinv(self.A)
@@ -265,9 +265,9 @@ class MovingHorizonEstimator:
         """Fixed point of the filter covariance recursion at interval ``dt``, inputs all valid."""
         step = self.filter._step
         P = self.filter.initial_state().P
-        u = np.zeros(12)
-        u[10] = 9.81
-        valid = np.ones(12)
+        u = np.zeros(len(INPUTS))
+        u[INPUTS.index("az")] = 9.81
+        valid = np.ones(len(INPUTS))
         for _ in range(samples):
             P_next = np.asarray(step(np.zeros(4), P, u, valid, dt, self.p, self.tuning)[1])
             if np.max(np.abs(P_next - P)) <= 1e-13 * np.max(np.abs(P)):
@@ -460,7 +460,7 @@ def _estimate(t: np.ndarray, reports: list, A: np.ndarray) -> MheEstimate:
     loads = np.array([r[0] for r in reports]).reshape(-1, 4)
     terms = [r[1] for r in reports]
     b = np.array([s.b for s in terms]).reshape(-1, 3)
-    used = np.array([s.used for s in terms]).reshape(-1, 7)
+    used = np.array([s.used for s in terms]).reshape(-1, len(StepFlag.update_flags()))
     return MheEstimate(
         t=t,
         loads=loads,

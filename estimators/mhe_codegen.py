@@ -49,9 +49,10 @@ from wheelload.estimators.mhe import (
 )
 from wheelload.estimators.mhe_terms import LOAD_SCALE, TERMS_NAME
 from wheelload.estimators.quiet import quiet_stdout
+from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import input_matrix
-from wheelload.models import Vehicle
+from wheelload.models import INPUTS, Vehicle
 
 
 def _array(name: str, values, kind: str = "double") -> str:
@@ -99,6 +100,10 @@ def generate_mhe(vehicle: Vehicle, settings: MheSettings, folder: Path, dt: floa
         f"#define COST {float(state.cost)!r}\n#define RHO0 {float(settings.solver.rho)!r}\n",
         f"#define LOW_LOAD {float(max(low, -1e30))!r}\n",
         f"#define HIGH_LOAD {float(min(high, 1e30))!r}\n",
+        f"#define N_INPUTS {len(INPUTS)}\n#define N_USED {len(StepFlag.update_flags())}\n",
+        "static const unsigned UPDATE_FLAGS[N_USED] = {"
+        + ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags())
+        + "};\n",
         _array("ORDER", order, "int"),
         _array("ARRIVAL_FIRST", first),
         _array("ARRIVAL_STEADY", state.steady),
@@ -177,23 +182,23 @@ static int hessian(int j0, const double *arrival) {
     return changed;
 }
 
-/* One sample u[12] (non-finite entries: missing; the terms they feed are dropped).
+/* One sample u[N_INPUTS] (non-finite entries: missing; the terms they feed are dropped).
    Returns OSQP's status (1 = solved); loads[4] keeps the previous estimate on failure;
-   flags: the skipped updates as in the KF (bit i: suspension FL..RR, vertical, pitch, roll). */
+   flags: the skipped updates and dropped model terms as in the KF (StepFlag). */
 int wheelload_mhe_step(const double *u, double *loads, int *iterations, unsigned *flags) {
-    double u0[12], valid[12], dt = DT, cost = COST;
-    for (int i = 0; i < 12; ++i) {
+    double u0[N_INPUTS], valid[N_INPUTS], dt = DT, cost = COST;
+    for (int i = 0; i < N_INPUTS; ++i) {
         valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
         u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
     }
-    double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[7];
+    double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[N_USED];
     const double *arg[SZ_ARG] = {u0, valid, &dt, HIST[N - 1], P_VECTOR, TUNING, &cost};
     double *res[SZ_RES] = {h, g, &link, xp, lo, hi, b, used};
     casadi_int iw[SZ_IW + 1];
     double w[SZ_W + 1];
     wheelload_mhe_terms(arg, res, iw, w, 0);
     *flags = 0;
-    for (int i = 0; i < 7; ++i) *flags |= used[i] < 0.5 ? 1u << i : 0u;
+    for (int i = 0; i < N_USED; ++i) *flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
     if (K == 0) link = 0.0; /* the log's first sample: the arrival cost instead */
     double drift = 0.0;
 #if HARD
@@ -267,14 +272,14 @@ int wheelload_mhe_step(const double *u, double *loads, int *iterations, unsigned
     return status;
 }
 
-/* A whole log (u: n x 12, row-major); wall time per sample in seconds. */
+/* A whole log (u: n x N_INPUTS, row-major); wall time per sample in seconds. */
 void wheelload_mhe_run(int n, const double *u, double *loads, int *status, int *iterations,
                        unsigned *flags, double *seconds) {
     wheelload_mhe_reset();
     for (int k = 0; k < n; ++k) {
         struct timespec start, stop;
         clock_gettime(CLOCK_MONOTONIC, &start);
-        status[k] = wheelload_mhe_step(u + 12 * k, loads + 4 * k, iterations + k, flags + k);
+        status[k] = wheelload_mhe_step(u + N_INPUTS * k, loads + 4 * k, iterations + k, flags + k);
         clock_gettime(CLOCK_MONOTONIC, &stop);
         seconds[k] = (stop.tv_sec - start.tv_sec) + 1e-9 * (stop.tv_nsec - start.tv_nsec);
     }

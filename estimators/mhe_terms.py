@@ -34,7 +34,7 @@ import enum
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.two_stage import INPUTS, TUNING, _dependency_mask, _sanitise
+from wheelload.estimators.two_stage import INPUTS, TUNING, model_rows
 from wheelload.models import ModelParameters, equilibrium_function, suspension_function
 
 TERMS_NAME = "wheelload_mhe_terms"
@@ -82,7 +82,8 @@ def terms_function(
     vehicle's equilibrium matrix; ``lower_load``/``upper_load`` [N] the load
     bounds (infinite when unbounded); ``x_ref`` [N] the loads whose
     :math:`A x` stands in for equilibrium rows with missing inputs (hard
-    only). ``used`` is the 7 masks (4 suspension, 3 equilibrium rows).
+    only). ``used`` is the 7 masks (4 suspension, 3 equilibrium rows), then 1 - the
+    4 dropped-term indicators (``StepFlag.update_flags`` order).
     """
     if not isinstance(constraint, Constraint):
         raise TypeError(f"constraint must be a Constraint, got {constraint!r}")
@@ -96,11 +97,7 @@ def terms_function(
     tuning = ca.SX.sym("tuning", len(TUNING))
     cost = ca.SX.sym("cost")
 
-    u = _sanitise(u_raw, valid)
-    z = suspension(u[0:4], u[4:8], p)
-    A, b = equilibrium(u[8:11], u[11], p)
-    mask_s = _dependency_mask(z, u_raw, valid)
-    mask_c = _dependency_mask(b, u_raw, valid)
+    z, A, b, mask_s, mask_c, dropped = model_rows(suspension, equilibrium, u_raw, valid, p)
     w_s = mask_s * dt / tuning[1]
     w_c = mask_c * dt / tuning[2:5]
     link = cost * LOAD_SCALE**2 / (tuning[0] * dt)
@@ -130,7 +127,7 @@ def terms_function(
         lower / LOAD_SCALE,
         upper / LOAD_SCALE,
         b,
-        ca.vertcat(mask_s, mask_c),
+        ca.vertcat(mask_s, mask_c, 1 - dropped),
     ]
     inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
     dense = [ca.densify(ca.SX(output)) for output in outputs]  # C reads every entry

@@ -39,6 +39,15 @@ class StepFlag(enum.IntFlag):
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
     STEP_REJECTED = 128
+    # Bits 16-19: a model term (wheelload.models.terms) switched on in the
+    # vehicle file was dropped for this sample because an input it needs is
+    # missing (the updates themselves went ahead without it).
+    BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
+    UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
+    ROAD_FRAME_OR_LINKS_DROPPED = (
+        1 << 18
+    )  # road frame or link loads: a travel, IMU axis or vx missing
+    IMU_TERMS_DROPPED = 1 << 19  # lever arm (no rates) or mounting (an IMU axis missing)
     # Bits 20-23: inputs the log did not have (estimators/signals.py).
     AZ_ASSUMED_G = 1 << 20
     AERO_OFF_NO_SPEED = 1 << 21
@@ -46,13 +55,29 @@ class StepFlag(enum.IntFlag):
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
-        """The seven update flags in the order of the filter's ``used`` output."""
-        return tuple(cls)[:7]
+        """The flags in the order of the filter's ``used`` output.
+
+        Seven updates (suspension FL..RR, vertical, pitch, roll), then the four
+        droppable terms in ``wheelload.models.DROPPABLE`` order.
+        """
+        return (*tuple(cls)[:7], *_TERM_FLAGS)
 
     @classmethod
     def skipped_mask(cls) -> int:
-        """Bits of a sample whose update was skipped or whose step was rejected."""
-        return int(sum(cls.update_flags())) | int(cls.STEP_REJECTED)
+        """Bits of a sample whose update was skipped or whose step was rejected.
+
+        The seven update bits and STEP_REJECTED; a dropped model term (bits
+        16-19) or an assumed input (bits 20-22) is not a skipped update.
+        """
+        return int(sum(tuple(cls)[:7])) | int(cls.STEP_REJECTED)
+
+
+_TERM_FLAGS = (
+    StepFlag.BODY_INERTIA_DROPPED,
+    StepFlag.UNSPRUNG_INERTIA_DROPPED,
+    StepFlag.ROAD_FRAME_OR_LINKS_DROPPED,
+    StepFlag.IMU_TERMS_DROPPED,
+)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

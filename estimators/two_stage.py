@@ -35,16 +35,18 @@ from wheelload.estimators.kalman import (
     upper,
 )
 from wheelload.estimators.result import Estimate, StepFlag
-from wheelload.estimators.signals import Signals
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
+from wheelload.estimators.signals import Signals, rate_derivatives
+from wheelload.models import (
+    INPUTS,
+    OPTIONAL_INPUTS,
+    ModelParameters,
+    Vehicle,
+    equilibrium_function,
+    gates_function,
+    suspension_function,
+)
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 
-#: Order of the per-sample input vector ``u``.
-INPUTS = (
-    "d_fl", "d_fr", "d_rl", "d_rr",
-    "v_fl", "v_fr", "v_rl", "v_rr",
-    "ax", "ay", "az", "vx",
-)  # fmt: skip
 #: Order of the tuning vector.
 TUNING = (
     "process_noise_density",
@@ -81,6 +83,13 @@ def _dependency_mask(outputs: ca.SX, inputs: ca.SX, valid: ca.SX) -> ca.SX:
     return ca.vertcat(*masks)
 
 
+def _required(valid: ca.SX) -> ca.SX:
+    """Validity of the inputs an update cannot do without (optional inputs count as valid)."""
+    return ca.vertcat(
+        *[1 if name in OPTIONAL_INPUTS else valid[i] for i, name in enumerate(INPUTS)]
+    )
+
+
 def _sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
     """Replace invalid inputs by zero so that no NaN or Inf enters the arithmetic."""
     return ca.vertcat(*[ca.if_else(valid[i], u[i], 0) for i in range(u.shape[0])])
@@ -92,6 +101,25 @@ MAX_INTERVAL = 1e6  # s, longest sample interval taken as valid
 def interval_is_valid(dt):
     """1 where the sample interval is finite and positive (NaN compares false)."""
     return ca.logic_and(dt > 0, dt < MAX_INTERVAL)
+
+
+def model_rows(suspension: ca.Function, equilibrium: ca.Function, u_raw, valid, p):
+    """Pseudo-measurement, equilibrium and their masks from raw inputs and validity.
+
+    Returns ``(z, A, b, mask_s, mask_c, dropped)``. An update needs the inputs
+    of the paper's model (every term gated off: the Jacobian sparsity of the
+    rows with zero gates); a term whose optional input is missing is gated off
+    for the sample instead, and ``dropped`` (``wheelload.models.DROPPABLE``
+    order) says which.
+    """
+    u = _sanitise(u_raw, valid)
+    gates, dropped = gates_function()(valid, p)
+    z = suspension(u, gates, p)
+    A, b = equilibrium(u, gates, p)
+    paper = ca.DM.zeros(gates.shape)
+    mask_s = _dependency_mask(suspension(u, paper, p), u_raw, _required(valid))
+    mask_c = _dependency_mask(equilibrium(u, paper, p)[1], u_raw, _required(valid))
+    return z, A, b, mask_s, mask_c, dropped
 
 
 def step_expressions(
@@ -117,15 +145,12 @@ def step_expressions(
     p = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
 
-    u = _sanitise(u_raw, valid)
-    d, v, acc, vx = u[0:4], u[4:8], u[8:11], u[11]
-    z = suspension(d, v, p)
-    A, b = equilibrium(acc, vx, p)
+    z, A, b, mask_s, mask_c, dropped = model_rows(suspension, equilibrium, u_raw, valid, p)
     # A non-positive or non-finite interval skips the whole step: the state is held.
     dt_ok = interval_is_valid(dt)
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
-    mask_s = _dependency_mask(z, u_raw, valid) * dt_ok
-    mask_c = _dependency_mask(b, u_raw, valid) * dt_ok
+    mask_s = mask_s * dt_ok
+    mask_c = mask_c * dt_ok
 
     Q = tuning[0] * dt_safe * dt_ok * ca.DM.eye(4)
     rs = ca.repmat(tuning[1] / dt_safe, 4, 1)
@@ -146,7 +171,7 @@ def step_expressions(
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
-    used = ca.vertcat(use_s, use_c)
+    used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
@@ -174,6 +199,8 @@ def step_function(
         equilibrium or equilibrium_function(),
         constraint_update=constraint_update,
     )
+    # The suspension and equilibrium share the body motion and attitude: one copy.
+    outputs = ca.cse(outputs)
     return ca.Function(name, inputs, outputs, STEP_INPUT_NAMES, STEP_OUTPUT_NAMES)
 
 
@@ -221,7 +248,9 @@ class FilterState:
 class Sample:
     """One sample of the signals used by the filter (SI units).
 
-    ``rates`` is optional and not part of :meth:`vector` (the KF does not use it).
+    ``rates`` (wx wy wz), ``rate_dots`` (their derivative) and ``hub``
+    (az_fl .. az_rr) are optional; an absent group is missing (NaN) in
+    :meth:`vector`, which drops the terms that need it.
     """
 
     d: np.ndarray  # (4,) travel
@@ -229,20 +258,60 @@ class Sample:
     acc: np.ndarray  # (3,) ax, ay, az specific force
     vx: float
     rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
+    rate_dots: np.ndarray | None = None  # (3,) their derivative [rad/s^2], if logged
+    hub: np.ndarray | None = None  # (4,) az_fl..az_rr hub specific force, if logged
 
     def vector(self) -> np.ndarray:
-        return np.concatenate([self.d, self.v, self.acc, [self.vx]]).astype(float)
+        def given(values: np.ndarray | None, size: int) -> np.ndarray:
+            return np.full(size, np.nan) if values is None else np.asarray(values, float)
+
+        return np.concatenate(
+            [
+                self.d,
+                self.v,
+                self.acc,
+                [self.vx],
+                given(self.rates, 3),
+                given(self.rate_dots, 3),
+                given(self.hub, 4),
+            ]
+        ).astype(float)
 
 
 def input_matrix(signals: Signals) -> np.ndarray:
-    """The per-sample inputs of a log in :data:`INPUTS` order, shape (12, n)."""
-    return np.vstack([signals.d.T, signals.v.T, signals.acc.T, signals.vx[None, :]])
+    """The per-sample inputs of a log in :data:`INPUTS` order, shape (len(INPUTS), n).
+
+    Optional channels the log lacks are NaN (their terms are dropped).
+    """
+    n = len(signals)
+
+    def optional(values: np.ndarray | None, width: int) -> np.ndarray:
+        return np.full((width, n), np.nan) if values is None else values.T
+
+    rows = np.vstack(
+        [
+            signals.d.T,
+            signals.v.T,
+            signals.acc.T,
+            signals.vx[None, :],
+            optional(signals.rates, 3),
+            rate_derivatives(signals).T,
+            optional(signals.hub, 4),
+        ]
+    )
+    if rows.shape[0] != len(INPUTS):
+        raise RuntimeError(f"input_matrix builds {rows.shape[0]} rows for {len(INPUTS)} INPUTS")
+    return rows
 
 
 def flags_from_used(used: np.ndarray) -> np.ndarray:
-    """Per-sample :class:`StepFlag` bits from the ``used`` output (7 x n)."""
+    """Per-sample :class:`StepFlag` bits from the ``used`` output (7 + 4 dropped terms x n).
+
+    A ``used`` of only the seven update rows (a method without model terms)
+    gives their bits only.
+    """
     skipped = used < 0.5
-    bits = np.array([flag.value for flag in StepFlag.update_flags()])
+    bits = np.array([flag.value for flag in StepFlag.update_flags()[: used.shape[0]]])
     return (skipped * bits[:, None]).sum(axis=0).astype(np.int64)
 
 
@@ -299,7 +368,7 @@ class TwoStageKF:
         x, P, std, residual, used = np.split(
             np.asarray(self._flat_step(flat)).ravel(), self._flat_splits
         )[:5]
-        flags = flags_from_used(used.reshape(7, 1))
+        flags = flags_from_used(used.reshape(-1, 1))
         if not 0.0 < dt < MAX_INTERVAL:
             flags |= StepFlag.STEP_REJECTED
         estimate = Estimate(
@@ -362,7 +431,7 @@ class TwoStageKF:
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
         innovations = Innovations(
-            t=signals.t.copy(), innovation=innovation, variance=variance, used=used > 0.5
+            t=signals.t.copy(), innovation=innovation, variance=variance, used=used[:, :7] > 0.5
         )
         return estimate, covariances, innovations
 

@@ -214,12 +214,18 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
         std = f"{estimate.std[:, i].mean():12.0f}" if estimate.has_std else f"{'n/a':>12}"
         lines.append(f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} {std}")
     skipped = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
-    assumed = int(np.count_nonzero(estimate.flags & ~StepFlag.skipped_mask()))
+    input_bits = StepFlag.AZ_ASSUMED_G | StepFlag.AERO_OFF_NO_SPEED | StepFlag.SPEED_FROM_WHEELS
+    assumed = int(np.count_nonzero(estimate.flags & input_bits))
     lines.append(f"sensor set: {signals.mode()}")
     lines.append(row_use(estimate))
     lines.append(f"samples with a skipped update (missing input): {skipped}")
     if assumed:
         lines.append(f"samples with an assumed input (status bits 20-22): {assumed}")
+    for flag in StepFlag.update_flags()[7:]:
+        dropped = int(np.count_nonzero(estimate.flags & flag))
+        if dropped:
+            name = str(flag.name).lower().replace("_", " ")
+            lines.append(f"samples with a model term dropped ({name}): {dropped}")
     if signals.reference is not None:
         try:
             table = wheel_metrics(estimate.loads, signals.reference, source=signals.source)
