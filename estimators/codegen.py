@@ -46,7 +46,15 @@ from wheelload.estimators.two_stage import (
     step_function,
     tuning_vector,
 )
-from wheelload.models import WHEELS, ModelParameters, Vehicle, load_vehicle
+from wheelload.models import (
+    INPUTS,
+    OPTIONAL_INPUTS,
+    WHEELS,
+    ModelParameters,
+    Vehicle,
+    load_vehicle,
+)
+from wheelload.models.inputs import input_description
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -147,7 +155,7 @@ def kernel_function(
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        [named[name] for name in KERNEL_OUTPUTS],
+        ca.cse([named[name] for name in KERNEL_OUTPUTS]),
         ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
         list(KERNEL_OUTPUTS),
     )
@@ -256,6 +264,17 @@ def _substitutions(
         ),
         "param_checks": "\n".join(checks),
         "flag_defines": "\n".join(flags),
+        "n_inputs": str(len(INPUTS)),
+        "n_used": str(len(StepFlag.update_flags())),
+        "input_fields": "\n".join(
+            f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
+        ),
+        "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
+        "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
+        "input_cases": "\n".join(
+            f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)
+        ),
+        "input_copy": "\n".join(f"    u[{k}] = input->{name};" for k, name in enumerate(INPUTS)),
         "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),
         "guard_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.guard_flags()),
         "n_monitor": str(kernel.nnz_in(2)),

@@ -39,7 +39,17 @@ from types import SimpleNamespace
 
 import casadi as ca
 
+from wheelload.models.inputs import (
+    HUB_ACCELERATION,
+    INPUTS,
+    SPECIFIC_FORCE,
+    TRAVEL,
+    TRAVEL_RATE,
+)
+
 GRAVITY = 9.80665  # m/s^2
+#: Largest plausible hub (unsprung mass) specific force [m/s^2]: 50 g.
+MAX_HUB_ACCELERATION = 50.0 * GRAVITY
 
 #: Channels the fault monitor can isolate, in its output order.
 FAULT_CHANNELS = ("d_fl", "d_fr", "d_rl", "d_rr", "ax", "ay", "az")
@@ -111,13 +121,27 @@ MONITOR_SIZE = 39
 
 
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
-    """1 per input of ``u`` (:data:`~wheelload.estimators.two_stage.INPUTS` order) in range."""
+    r"""1 per input of ``u`` (:data:`~wheelload.models.INPUTS` order) in range.
+
+    Travels, travel rates, the IMU's specific force and ``vx`` from the settings;
+    hub accelerations :math:`|a_{hub}| \le` :data:`MAX_HUB_ACCELERATION`; body
+    rates and their derivatives are passed through (always 1).
+    """
     weight = mass * GRAVITY
     springs = [spring_front, spring_front, spring_rear, spring_rear]
-    travel = [ca.fabs(u[i]) * springs[i] <= g.travel_range * weight for i in range(4)]
-    rate = [ca.fabs(u[4 + i]) <= g.max_travel_rate for i in range(4)]
-    acc = [ca.fabs(u[8 + i]) <= g.max_acceleration * GRAVITY for i in range(3)]
-    return ca.vertcat(*travel, *rate, *acc, ca.fabs(u[11]) <= g.max_speed)
+    ok = [1] * len(INPUTS)
+    for i, name in enumerate(TRAVEL):
+        ok[INPUTS.index(name)] = ca.fabs(u[INPUTS.index(name)]) * springs[i] <= (
+            g.travel_range * weight
+        )
+    for name in TRAVEL_RATE:
+        ok[INPUTS.index(name)] = ca.fabs(u[INPUTS.index(name)]) <= g.max_travel_rate
+    for name in SPECIFIC_FORCE:
+        ok[INPUTS.index(name)] = ca.fabs(u[INPUTS.index(name)]) <= g.max_acceleration * GRAVITY
+    ok[INPUTS.index("vx")] = ca.fabs(u[INPUTS.index("vx")]) <= g.max_speed
+    for name in HUB_ACCELERATION:
+        ok[INPUTS.index(name)] = ca.fabs(u[INPUTS.index(name)]) <= MAX_HUB_ACCELERATION
+    return ca.vertcat(*ok)
 
 
 def floor_covariance(P: ca.SX, floor_std) -> tuple[ca.SX, ca.SX]:
@@ -178,19 +202,19 @@ class MonitorOutput:
 def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
     r"""One sample of the fault monitor (see module docstring).
 
-    ``valid`` (12): inputs finite and plausible; ``z`` (4) raw suspension
-    loads; ``A``, ``b`` the equilibrium; ``signatures`` (3 x 7): the change
+    ``valid`` (:data:`~wheelload.models.INPUTS`): inputs finite and plausible;
+    ``z`` (4) raw suspension loads; ``A``, ``b`` the equilibrium; ``signatures`` (3 x 7): the change
     of :math:`b - A z` per unit fault of each channel, :math:`-A\,\partial
     z / \partial d` for the travels [per m] and :math:`\partial b /
     \partial a` for the accelerometer [per m/s^2]; ``dt`` 0 for a rejected
     step; ``r_c`` the constraint noise densities (the residual metric
     :math:`W = \mathrm{diag}(1/r_c)`).
     """
-    d = u[0:4]
+    d = ca.vertcat(*[u[INPUTS.index(name)] for name in TRAVEL])
     d_prev, frozen, rbar = m[_D_PREV], m[_FROZEN], m[_RBAR]
     persist, clear, fault = m[_PERSIST], m[_CLEAR], m[_FAULT]
     # Stuck / dead travel channels: no change at all while another corner moves.
-    d_valid = [valid[i] * (dt > 0) for i in range(4)]
+    d_valid = [valid[INPUTS.index(name)] * (dt > 0) for name in TRAVEL]
     changed = [d_valid[i] * (d[i] != d_prev[i]) for i in range(4)]
     frozen_next = ca.vertcat(
         *[ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * dt) for i in range(4)]
@@ -205,8 +229,8 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         stuck.append(ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving))
     # Parity residual of the raw suspension loads, low-pass filtered.
     all_valid = 1
-    for i in range(12):
-        all_valid = all_valid * valid[i]
+    for name in TRAVEL + TRAVEL_RATE + SPECIFIC_FORCE + ("vx",):
+        all_valid = all_valid * valid[INPUTS.index(name)]
     alpha = all_valid * dt / (g.parity_time_constant + dt)
     r = b - ca.mtimes(A, z)
     rbar_next = rbar + alpha * (r - rbar)

@@ -43,7 +43,16 @@ import casadi as ca
 import numpy as np
 from scipy import signal as sp_signal
 
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
+from wheelload.models import (
+    GRAVITY,
+    INPUTS,
+    ModelParameters,
+    Vehicle,
+    equilibrium_function,
+    gates_function,
+    suspension_function,
+)
+from wheelload.models.inputs import TRAVEL, input_index
 
 WHEELS = ("fl", "fr", "rl", "rr")
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
@@ -131,21 +140,28 @@ def duplicate_columns(names: Sequence[str]) -> str | None:
 def travel_response(vehicle: Vehicle) -> np.ndarray:
     r"""Quasi-static travel per unit specific force, (4 wheels) x (ax, ay, az), in m/(m/s^2).
 
-    The load change :math:`\Delta F = K \Delta d` (suspension Jacobian
-    :math:`K = \partial z/\partial d`) must satisfy the equilibrium
-    :math:`A \Delta F = \partial b / \partial a`; with a rigid body (no warp,
-    :math:`d_{FL} - d_{FR} - d_{RL} + d_{RR} = 0`) that fixes :math:`\Delta d`.
+    The pseudo-measured loads :math:`z(d, a)` (the vehicle's model terms: the
+    links carry :math:`L = \partial z/\partial a` past the springs) must
+    satisfy the equilibrium :math:`A z = b(d, a)`; linearised at rest
+    (:math:`a = (0, 0, g)`), :math:`(A K - \partial b/\partial d)\,\Delta d =
+    (\partial b/\partial a - A L)\,\Delta a` with :math:`K = \partial z /
+    \partial d`; with a rigid body (no warp, :math:`d_{FL} - d_{FR} - d_{RL} +
+    d_{RR} = 0`) that fixes :math:`\Delta d`.
     """
     p = ModelParameters.from_vehicle(vehicle).vector()
-    d = ca.SX.sym("d", 4)
-    z = suspension_function()(d, ca.DM.zeros(4), p)
-    K = np.asarray(ca.Function("K", [d], [ca.jacobian(z, d)])(np.zeros(4)))
-    acc = ca.SX.sym("acc", 3)
-    A, b = equilibrium_function()(acc, 0.0, p)
-    A, B = (np.asarray(ca.Function("AB", [acc], [A, ca.jacobian(b, acc)])(np.zeros(3))[k])
-            for k in range(2))  # fmt: skip
-    system = np.vstack([A @ K, [1.0, -1.0, -1.0, 1.0]])
-    return np.linalg.solve(system, np.vstack([B, np.zeros((1, 3))]))
+    u = ca.SX.sym("u", len(INPUTS))
+    gates = np.asarray(gates_function()(np.ones(len(INPUTS)), p)[0]).ravel()
+    z = suspension_function()(u, gates, p)
+    A, b = equilibrium_function()(u, gates, p)
+    travel, acc = input_index(TRAVEL), input_index(("ax", "ay", "az"))
+    rest = np.zeros(len(INPUTS))
+    rest[INPUTS.index("az")] = GRAVITY
+    rest[list(input_index(("az_fl", "az_fr", "az_rl", "az_rr")))] = GRAVITY
+    jacobians = ca.Function("J", [u], [A, ca.jacobian(z, u), ca.jacobian(b, u)])(rest)
+    A, Z, Bu = (np.asarray(m) for m in jacobians)
+    K, L = Z[:, travel], Z[:, acc]
+    system = np.vstack([A @ K - Bu[:, travel], [1.0, -1.0, -1.0, 1.0]])
+    return np.linalg.solve(system, np.vstack([Bu[:, acc] - A @ L, np.zeros((1, 3))]))
 
 
 def _fill(values: np.ndarray) -> np.ndarray | None:

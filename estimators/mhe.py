@@ -85,7 +85,7 @@ from wheelload.estimators.mhe_window import (
 )
 from wheelload.estimators.projection import ProjectionKF, Weighting
 from wheelload.estimators.quiet import quiet_stdout
-from wheelload.estimators.result import Estimate
+from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import (
     MAX_INTERVAL,
@@ -96,7 +96,7 @@ from wheelload.estimators.two_stage import (
     input_matrix,
     sample_intervals,
 )
-from wheelload.models import Vehicle, equilibrium_function
+from wheelload.models import GATES, INPUTS, Vehicle, equilibrium_function
 
 __all__ = [
     "LOAD_SCALE",
@@ -311,7 +311,7 @@ class MovingHorizonEstimator:
         )
         self.p = self.filter.p
         self.tuning = self.filter.tuning
-        A, _ = equilibrium_function()(np.zeros(3), 0.0, self.p)
+        A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)
         self.A = np.asarray(A)
         self.null = _null_vector(self.A)
         self.pinv = np.linalg.pinv(self.A)
@@ -329,8 +329,8 @@ class MovingHorizonEstimator:
             std, self.beta_bound, self.beta_density = bias_scales(s.bias_states, vehicle)
             travel = BiasStates.TRAVEL in s.bias_states
             self.residuals = residual_function()
-            u0 = np.zeros(12)
-            Jd = np.asarray(self.residuals(u0, np.ones(12), 0.01, self.p, self.tuning)[1])
+            u0 = np.zeros(len(INPUTS))
+            Jd = np.asarray(self.residuals(u0, np.ones(len(INPUTS)), 0.01, self.p, self.tuning)[1])
             self.travel_basis = travel_basis(Jd, self.null)
             self.beta_std = std
             self.window_qp = WindowQP(
@@ -351,9 +351,9 @@ class MovingHorizonEstimator:
         """Fixed point of the filter covariance recursion at interval ``dt``, inputs all valid."""
         step = self.filter._step
         P = self.filter.initial_state().P
-        u = np.zeros(12)
-        u[10] = 9.81
-        valid = np.ones(12)
+        u = np.zeros(len(INPUTS))
+        u[INPUTS.index("az")] = 9.81
+        valid = np.ones(len(INPUTS))
         for _ in range(samples):
             P_next = np.asarray(step(np.zeros(4), P, u, valid, dt, self.p, self.tuning)[1])
             if np.max(np.abs(P_next - P)) <= 1e-13 * np.max(np.abs(P)):
@@ -743,7 +743,7 @@ def _estimate(t: np.ndarray, reports: list, A: np.ndarray, lag: int = 0) -> MheE
     terms = [r[1] for r in reports]
     bias = None if reports[0][6] is None else np.array([r[6] for r in reports])
     b = np.array([s.b for s in terms]).reshape(-1, 3)
-    used = np.array([s.used for s in terms]).reshape(-1, 7)
+    used = np.array([s.used for s in terms]).reshape(-1, len(StepFlag.update_flags()))
     return MheEstimate(
         t=t,
         loads=loads,

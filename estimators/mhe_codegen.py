@@ -65,9 +65,10 @@ from wheelload.estimators.mhe import (
 )
 from wheelload.estimators.mhe_terms import LOAD_SCALE, TERMS_NAME
 from wheelload.estimators.quiet import quiet_stdout
+from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
-from wheelload.models import Vehicle
+from wheelload.models import INPUTS, Vehicle
 
 
 def _array(name: str, values, kind: str = "double") -> str:
@@ -136,6 +137,10 @@ def generate_mhe(
         f"#define COST {float(state.cost)!r}\n#define RHO0 {float(settings.solver.rho)!r}\n",
         f"#define LOW_LOAD {float(max(low, -1e30))!r}\n",
         f"#define HIGH_LOAD {float(min(high, 1e30))!r}\n",
+        f"#define N_INPUTS {len(INPUTS)}\n#define N_USED {len(StepFlag.update_flags())}\n",
+        "static const unsigned UPDATE_FLAGS[N_USED] = {"
+        + ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags())
+        + "};\n",
         _array("ORDER", order, "int"),
         _array("ARRIVAL_STEADY", state.steady),
         _array("P_VECTOR", mhe.p),
@@ -215,14 +220,14 @@ static int hessian(int j0, const double *arrival) {
     return changed;
 }
 
-/* One sample u[12] (non-finite entries: missing; the terms they feed are dropped) after the
+/* One sample u[N_INPUTS] (non-finite entries: missing; the terms they feed are dropped) after the
    interval dt [s] (0 < dt < MAX_INTERVAL, else nothing is solved: the last estimate is held,
    status 0, flags 255). Returns OSQP's status (1 = solved); loads[4] keeps the previous
-   estimate on failure; flags: the skipped updates as in the KF (bit i: suspension FL..RR,
-   vertical, pitch, roll; bit 7: interval rejected). */
+   estimate on failure; flags: the skipped updates and dropped model terms as in the KF
+   (StepFlag; 255: interval rejected). */
 int wheelload_mhe_step(const double *u, double dt, double *loads, int *iterations,
                        unsigned *flags) {
-    double u0[12], valid[12], cost = COST;
+    double u0[N_INPUTS], valid[N_INPUTS], cost = COST;
     if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
         memcpy(loads, HIST[N - 1], sizeof(double) * 4);
         *iterations = 0;
@@ -234,18 +239,18 @@ int wheelload_mhe_step(const double *u, double dt, double *loads, int *iteration
         for (int r = 0; r < 4; ++r)
             ARRIVAL_FIRST[r * 5] = cost * LOAD_SCALE * LOAD_SCALE / (P0_VAR + Q_DENSITY * dt);
     }
-    for (int i = 0; i < 12; ++i) {
+    for (int i = 0; i < N_INPUTS; ++i) {
         valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
         u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
     }
-    double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[7];
+    double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[N_USED];
     const double *arg[SZ_ARG] = {u0, valid, &dt, HIST[N - 1], P_VECTOR, TUNING, &cost};
     double *res[SZ_RES] = {h, g, &link, xp, lo, hi, b, used};
     casadi_int iw[SZ_IW + 1];
     double w[SZ_W + 1];
     wheelload_mhe_terms(arg, res, iw, w, 0);
     *flags = 0;
-    for (int i = 0; i < 7; ++i) *flags |= used[i] < 0.5 ? 1u << i : 0u;
+    for (int i = 0; i < N_USED; ++i) *flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
     if (K == 0) link = 0.0; /* the log's first sample: the arrival cost instead */
     double drift = 0.0;
 #if HARD
@@ -319,7 +324,7 @@ int wheelload_mhe_step(const double *u, double dt, double *loads, int *iteration
     return status;
 }
 
-/* A whole log (u: n x 12, row-major; dt: the interval before each sample); wall time per
+/* A whole log (u: n x N_INPUTS, row-major; dt: the interval before each sample); wall time per
    sample in seconds. */
 void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, int *status,
                        int *iterations, unsigned *flags, double *seconds) {
@@ -327,7 +332,7 @@ void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, 
     for (int k = 0; k < n; ++k) {
         struct timespec start, stop;
         clock_gettime(CLOCK_MONOTONIC, &start);
-        status[k] = wheelload_mhe_step(u + 12 * k, dt[k], loads + 4 * k, iterations + k,
+        status[k] = wheelload_mhe_step(u + N_INPUTS * k, dt[k], loads + 4 * k, iterations + k,
                                        flags + k);
         clock_gettime(CLOCK_MONOTONIC, &stop);
         seconds[k] = (stop.tv_sec - start.tv_sec) + 1e-9 * (stop.tv_nsec - start.tv_nsec);
@@ -399,11 +404,15 @@ def build_mhe_library(
 
 MAIN = r"""
 /* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
-   Each row: the interval dt [s] before the sample, then the 12 inputs d_fl..d_rr, v_fl..v_rr,
-   ax, ay, az, vx ('nan' = missing).
+   Each row: the interval dt [s] before the sample, then the ROW_SIZE - 1 inputs in
+   wheelload.models.INPUTS order ('nan' = missing).
    Output CSV: fz_fl, fz_fr, fz_rl, fz_rr, status, iterations, flags; exit 2 on bad use. */
 #include <stdio.h>
 #include "osqp.h"
+
+#ifndef ROW_SIZE
+#error "ROW_SIZE (1 + number of inputs) must be defined"
+#endif
 
 void wheelload_mhe_reset(void);
 int wheelload_mhe_step(const double *u, double dt, double *loads, int *iterations,
@@ -427,12 +436,12 @@ int main(int argc, char **argv) {
     }
     fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,status,iterations,flags,osqp_float_bytes\n");
     wheelload_mhe_reset();
-    double row[13], loads[4];
+    double row[ROW_SIZE], loads[4];
     for (;;) {
         int i;
-        for (i = 0; i < 13; ++i)
+        for (i = 0; i < ROW_SIZE; ++i)
             if (fscanf(in, "%lf", &row[i]) != 1) break;
-        if (i < 13) break;
+        if (i < ROW_SIZE) break;
         int iterations;
         unsigned flags;
         int status = wheelload_mhe_step(row + 1, row[0], loads, &iterations, &flags);
@@ -479,7 +488,7 @@ def build_mhe_program(
     """
     folder = generate_mhe(vehicle, settings, Path(folder), dt, precision)
     main = folder / "wheelload_mhe_main.c"
-    main.write_text(MAIN)
+    main.write_text(f"#define ROW_SIZE {1 + len(INPUTS)}\n" + MAIN)
     binary = folder / "wheelload_mhe"
     command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
                str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip

@@ -34,8 +34,14 @@ import enum
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.two_stage import INPUTS, TUNING, _dependency_mask, _sanitise
-from wheelload.models import ModelParameters, equilibrium_function, suspension_function
+from wheelload.estimators.two_stage import INPUTS, TUNING, _replace, _sanitise, model_rows
+from wheelload.models import (
+    ModelParameters,
+    equilibrium_function,
+    gates_function,
+    suspension_function,
+)
+from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, input_index
 
 TERMS_NAME = "wheelload_mhe_terms"
 LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
@@ -82,7 +88,8 @@ def terms_function(
     vehicle's equilibrium matrix; ``lower_load``/``upper_load`` [N] the load
     bounds (infinite when unbounded); ``x_ref`` [N] the loads whose
     :math:`A x` stands in for equilibrium rows with missing inputs (hard
-    only). ``used`` is the 7 masks (4 suspension, 3 equilibrium rows).
+    only). ``used`` is the 7 masks (4 suspension, 3 equilibrium rows), then 1 - the
+    4 dropped-term indicators (``StepFlag.update_flags`` order).
     """
     if not isinstance(constraint, Constraint):
         raise TypeError(f"constraint must be a Constraint, got {constraint!r}")
@@ -96,11 +103,7 @@ def terms_function(
     tuning = ca.SX.sym("tuning", len(TUNING))
     cost = ca.SX.sym("cost")
 
-    u = _sanitise(u_raw, valid)
-    z = suspension(u[0:4], u[4:8], p)
-    A, b = equilibrium(u[8:11], u[11], p)
-    mask_s = _dependency_mask(z, u_raw, valid)
-    mask_c = _dependency_mask(b, u_raw, valid)
+    z, A, b, mask_s, mask_c, dropped = model_rows(suspension, equilibrium, u_raw, valid, p)
     w_s = mask_s * dt / tuning[1]
     w_c = mask_c * dt / tuning[2:5]
     link = cost * LOAD_SCALE**2 / (tuning[0] * dt)
@@ -130,7 +133,7 @@ def terms_function(
         lower / LOAD_SCALE,
         upper / LOAD_SCALE,
         b,
-        ca.vertcat(mask_s, mask_c),
+        ca.vertcat(mask_s, mask_c, 1 - dropped),
     ]
     inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
     dense = [ca.densify(ca.SX(output)) for output in outputs]  # C reads every entry
@@ -158,15 +161,18 @@ def residual_function(
     dt = ca.SX.sym("dt")
     p = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
+    z, _, b, mask_s, mask_c, _ = model_rows(suspension, equilibrium, u_raw, valid, p)
+    gates, _ = gates_function()(valid, p)
     u = _sanitise(u_raw, valid)
     d, acc = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
-    z = suspension(u[0:4], u[4:8], p)
-    Jd = ca.substitute(ca.jacobian(suspension(d, u[4:8], p), d), d, u[0:4])
-    _, b_sym = equilibrium(acc, u[11], p)
-    Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, u[8:11])
-    _, b = equilibrium(u[8:11], u[11], p)
-    ls = ca.sqrt(_dependency_mask(z, u_raw, valid) * dt / tuning[1])
-    lc = ca.sqrt(_dependency_mask(b, u_raw, valid) * dt / tuning[2:5])
+    travel, axes = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
+    d_now = ca.vertcat(*[u[k] for k in travel])
+    acc_now = ca.vertcat(*[u[k] for k in axes])
+    Jd = ca.substitute(ca.jacobian(suspension(_replace(u, travel, d), gates, p), d), d, d_now)
+    b_sym = equilibrium(_replace(u, axes, acc), gates, p)[1]
+    Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, acc_now)
+    ls = ca.sqrt(mask_s * dt / tuning[1])
+    lc = ca.sqrt(mask_c * dt / tuning[2:5])
     outputs = [ca.densify(ca.SX(o)) for o in (z, Jd, Ba, ls, lc)]
     return ca.Function(
         RESIDUAL_NAME, [u_raw, valid, dt, p, tuning], outputs,

@@ -24,7 +24,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.estimators.signals import Signals
-from wheelload.models import GRAVITY, ModelParameters, Vehicle, static_loads, suspension_function
+from wheelload.models import (
+    GATES,
+    GRAVITY,
+    INPUTS,
+    ModelParameters,
+    Vehicle,
+    static_loads,
+    suspension_function,
+)
 
 STILL_SPEED = 0.2  # m/s, largest speed counted as standing still
 STILL_MOTION_STD = 0.3  # m/s^2, largest ax/ay motion (noise removed) at rest
@@ -114,7 +122,9 @@ def check_still_period(
         raise ValueError(f"{signals.source}: a travel channel has no sample in the still period")
     mean_travel = np.where(present, mean_travel, 0.0)
     unloaded = ModelParameters.from_vehicle(vehicle, np.zeros(4)).vector()
-    travel_part = np.asarray(suspension_function()(mean_travel, np.zeros(4), unloaded)).ravel()
+    u = np.zeros(len(INPUTS))
+    u[: len(mean_travel)] = mean_travel  # d_fl .. d_rr lead INPUTS; at rest, every term off
+    travel_part = np.asarray(suspension_function()(u, np.zeros(len(GATES)), unloaded)).ravel()
     target = static_loads(vehicle) if static is None else np.asarray(static, float)
     reason = f"still period 0-{duration:g} s (speed <= {speed:.2g} m/s; " + "; ".join(reasons) + ")"
     return StillPeriod(static=target - travel_part, reason=reason)

@@ -38,7 +38,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from wheelload.estimators.result import Estimate
-from wheelload.estimators.signals import Signals
+from wheelload.estimators.signals import Signals, rate_derivatives
 from wheelload.estimators.two_stage import Sample, sample_intervals
 
 
@@ -62,7 +62,9 @@ class Estimator(Protocol):
 
 
 def samples(signals: Signals) -> Iterator[Sample]:
-    """The log's samples in order, with the body rates where the log has them."""
+    """The log's samples in order, with the body rates, their (causal, filtered)
+    derivative and the hub accelerometers where the log has them."""
+    rate_dots = rate_derivatives(signals) if signals.rates is not None else signals.rate_dots
     for k in range(len(signals)):
         yield Sample(
             d=signals.d[k],
@@ -70,6 +72,8 @@ def samples(signals: Signals) -> Iterator[Sample]:
             acc=signals.acc[k],
             vx=float(signals.vx[k]),
             rates=None if signals.rates is None else signals.rates[k],
+            rate_dots=None if rate_dots is None else rate_dots[k],
+            hub=None if signals.hub is None else signals.hub[k],
         )
 
 

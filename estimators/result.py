@@ -48,6 +48,15 @@ class StepFlag(enum.IntFlag):
     TRAVEL_FAULT = 1 << 13  # a travel channel isolated as faulty: dropped
     IMU_FAULT = 1 << 14  # an accelerometer axis isolated as faulty: dropped
     COVARIANCE_LIMITED = 1 << 15  # the covariance floor or ceiling acted
+    # Bits 16-19: a model term (wheelload.models.terms) switched on in the
+    # vehicle file was dropped for this sample because an input it needs is
+    # missing (the updates themselves went ahead without it).
+    BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
+    UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
+    ROAD_FRAME_OR_LINKS_DROPPED = (
+        1 << 18
+    )  # road frame or link loads: a travel, IMU axis or vx missing
+    IMU_TERMS_DROPPED = 1 << 19  # lever arm (no rates) or mounting (an IMU axis missing)
     # Bits 20-23: inputs the log did not have (estimators/signals.py).
     AZ_ASSUMED_G = 1 << 20
     AERO_OFF_NO_SPEED = 1 << 21
@@ -55,13 +64,21 @@ class StepFlag(enum.IntFlag):
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
-        """The seven update flags in the order of the filter's ``used`` output."""
-        return tuple(cls)[:7]
+        """The flags in the order of the filter's ``used`` output.
+
+        Seven updates (suspension FL..RR, vertical, pitch, roll), then the four
+        droppable terms in ``wheelload.models.DROPPABLE`` order.
+        """
+        return (*tuple(cls)[:7], *_TERM_FLAGS)
 
     @classmethod
     def skipped_mask(cls) -> int:
-        """Bits of a sample whose update was skipped or whose step was rejected."""
-        return int(sum(cls.update_flags())) | int(cls.STEP_REJECTED)
+        """Bits of a sample whose update was skipped or whose step was rejected.
+
+        The seven update bits and STEP_REJECTED; a dropped model term (bits
+        16-19) or an assumed input (bits 20-22) is not a skipped update.
+        """
+        return int(sum(tuple(cls)[:7])) | int(cls.STEP_REJECTED)
 
     @classmethod
     def assumed_mask(cls) -> int:
@@ -72,6 +89,14 @@ class StepFlag(enum.IntFlag):
     def guard_flags(cls) -> tuple[StepFlag, ...]:
         """The eight guard flags in the order of the filter's ``status`` output."""
         return tuple(flag for flag in cls if 1 << 8 <= flag.value < 1 << 16)
+
+
+_TERM_FLAGS = (
+    StepFlag.BODY_INERTIA_DROPPED,
+    StepFlag.UNSPRUNG_INERTIA_DROPPED,
+    StepFlag.ROAD_FRAME_OR_LINKS_DROPPED,
+    StepFlag.IMU_TERMS_DROPPED,
+)
 
 
 FAULT_COLUMNS = ("channel", "start", "end", "statistic")

@@ -2,19 +2,23 @@
 
 Columns (SI units): ``t`` [s], ``ax ay`` [m/s^2, specific force in the body
 frame], optional ``az`` [m/s^2, gravity included], optional ``vx`` [m/s],
-optional ``wx wy wz`` [rad/s], optional ``d_fl d_fr d_rl d_rr`` [m,
-compression], optional ``v_fl v_fr v_rl v_rr`` [m/s], optional reference
-loads ``fz_fl fz_fr fz_rl fz_rr`` [N] (any of them), optional wheel speeds ``ws_fl ..``
-[m/s]. CSV and Parquet logs with these column names are read as they are;
-any other log (MDF4, CarMaker ERG, other names or units) through a channel
-map (``estimators/readers``), ``read_log(path, channels=MAP)``.
+optional ``wx wy wz`` [rad/s] and their derivative ``wx_dot wy_dot wz_dot``
+[rad/s^2, else derived by :func:`rate_derivatives` where needed], optional
+``d_fl d_fr d_rl d_rr`` [m, compression], optional ``v_fl v_fr v_rl v_rr``
+[m/s], optional hub accelerometers ``az_fl az_fr az_rl az_rr`` [m/s^2,
+specific force along the body z axis, +9.81 at rest], optional reference
+loads ``fz_fl fz_fr fz_rl fz_rr`` [N] (any of them), optional wheel speeds
+``ws_fl ..`` [m/s]. CSV and Parquet logs with these column names are read as
+they are; any other log (MDF4, CarMaker ERG, other names or units) through a
+channel map (``estimators/readers``), ``read_log(path, channels=MAP)``.
 
 Partial sensor sets (:class:`TravelSensors`, named in summaries): without
 travel columns (or with a travel column empty) the suspension updates of
 those corners are skipped (IMU-only when none is left); without ``az``,
 :math:`a_z = g` is assumed (flag ``AZ_ASSUMED_G``); without ``vx`` it is the
 mean of the wheel speeds (``SPEED_FROM_WHEELS``) or, without those, zero, so
-that the aerodynamic terms are off (``AERO_OFF_NO_SPEED``).
+that the aerodynamic terms are off (``AERO_OFF_NO_SPEED``). A model term whose
+optional input is missing is dropped for that sample (flag bits 16-19).
 
 Missing suspension velocities are derived by a causal first-order filtered
 differentiator, :math:`H(s) = \\omega_c s / (s + \\omega_c)` with
@@ -48,6 +52,8 @@ TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 REFERENCE = tuple(f"fz_{w}" for w in WHEELS)
 WHEEL_SPEED = tuple(f"ws_{w}" for w in WHEELS)
 RATES = ("wx", "wy", "wz")
+HUB = tuple(f"az_{w}" for w in WHEELS)
+RATE_DERIVATIVES = ("wx_dot", "wy_dot", "wz_dot")
 REQUIRED = ("t", "ax", "ay")
 
 VELOCITY_CUTOFF = 20.0  # Hz, differentiator corner frequency
@@ -87,6 +93,8 @@ class Signals:
     v: np.ndarray  # (n, 4)
     rates: np.ndarray | None = None  # (n, 3) wx, wy, wz
     reference: np.ndarray | None = None  # (n, 4) fz
+    hub: np.ndarray | None = None  # (n, 4) hub specific force along body z
+    rate_dots: np.ndarray | None = None  # (n, 3) logged derivative of wx, wy, wz
     velocities_derived: bool = False
     source: str = "<memory>"
     az_assumed: bool = False
@@ -95,7 +103,8 @@ class Signals:
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
         shapes = {"t": (n,), "vx": (n,), "acc": (n, 3), "d": (n, 4), "v": (n, 4),
-                  "rates": (n, 3), "reference": (n, 4)}  # fmt: skip
+                  "rates": (n, 3), "reference": (n, 4), "hub": (n, 4),
+                  "rate_dots": (n, 3)}  # fmt: skip
         for name, shape in shapes.items():
             value = getattr(self, name)
             if value is not None and np.shape(value) != shape:
@@ -155,6 +164,10 @@ class Signals:
             columns.update(zip(RATES, self.rates.T))
         columns.update(zip(TRAVEL, self.d.T))
         columns.update(zip(TRAVEL_RATE, self.v.T))
+        if self.rate_dots is not None:
+            columns.update(zip(RATE_DERIVATIVES, self.rate_dots.T))
+        if self.hub is not None:
+            columns.update(zip(HUB, self.hub.T))
         if self.reference is not None:
             columns.update(zip(REFERENCE, self.reference.T))
         return pd.DataFrame(columns)
@@ -173,6 +186,8 @@ class Signals:
             v=self.v[start:stop],
             rates=cut(self.rates),
             reference=cut(self.reference),
+            hub=cut(self.hub),
+            rate_dots=cut(self.rate_dots),
             velocities_derived=self.velocities_derived,
             source=self.source,
             az_assumed=self.az_assumed,
@@ -313,6 +328,8 @@ def signals_from_frame(
         v=v,
         rates=group(RATES),
         reference=group(REFERENCE, partial=True),
+        hub=group(HUB),
+        rate_dots=group(RATE_DERIVATIVES),
         velocities_derived=derived,
         source=source,
         az_assumed=az_assumed,
@@ -420,3 +437,21 @@ def write_log(signals: Signals, path: str | Path) -> None:
         frame.to_parquet(path, index=False)
     else:
         raise LogError(f"{path}: unknown log format '{path.suffix}' (use .csv or .parquet)")
+
+
+def rate_derivatives(signals: Signals, cutoff: float = VELOCITY_CUTOFF) -> np.ndarray:
+    r"""Causal filtered derivative of the body rates ``wx wy wz``, shape (n, 3) [rad/s^2].
+
+    The logged ``wx_dot wy_dot wz_dot`` when present, else the same
+    differentiator as :func:`derive_velocities`. All NaN where the log has no
+    rates or its time stamps are too irregular to differentiate: the terms
+    that need them are then dropped and flagged, not guessed.
+    """
+    if signals.rate_dots is not None:
+        return signals.rate_dots
+    if signals.rates is None:
+        return np.full((len(signals), 3), np.nan)
+    try:
+        return derive_velocities(signals.t, signals.rates, cutoff, signals.source)
+    except LogError:
+        return np.full((len(signals), 3), np.nan)

@@ -40,16 +40,26 @@ from wheelload.estimators.kalman import (
     upper,
 )
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
-from wheelload.estimators.signals import Signals
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function, suspension_function
+from wheelload.estimators.signals import Signals, rate_derivatives
+from wheelload.models import (
+    GATES,
+    INPUTS,
+    OPTIONAL_INPUTS,
+    ModelParameters,
+    Vehicle,
+    equilibrium_function,
+    gates_function,
+    suspension_function,
+)
+from wheelload.models.inputs import (
+    HUB_ACCELERATION,
+    SPECIFIC_FORCE,
+    TRAVEL,
+    TRAVEL_RATE,
+    input_index,
+)
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 
-#: Order of the per-sample input vector ``u``.
-INPUTS = (
-    "d_fl", "d_fr", "d_rl", "d_rr",
-    "v_fl", "v_fr", "v_rl", "v_rr",
-    "ax", "ay", "az", "vx",
-)  # fmt: skip
 #: Order of the tuning vector.
 TUNING = (
     "process_noise_density",
@@ -120,6 +130,13 @@ def _dependency_mask(outputs: ca.SX, inputs: ca.SX, valid: ca.SX) -> ca.SX:
     return ca.vertcat(*masks)
 
 
+def _required(valid: ca.SX) -> ca.SX:
+    """Validity of the inputs an update cannot do without (optional inputs count as valid)."""
+    return ca.vertcat(
+        *[1 if name in OPTIONAL_INPUTS else valid[i] for i, name in enumerate(INPUTS)]
+    )
+
+
 def _sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
     """Replace invalid inputs by zero so that no NaN or Inf enters the arithmetic."""
     return ca.vertcat(*[ca.if_else(valid[i], u[i], 0) for i in range(u.shape[0])])
@@ -131,6 +148,60 @@ MAX_INTERVAL = 1e6  # s, longest sample interval taken as valid
 def interval_is_valid(dt):
     """1 where the sample interval is finite and positive (NaN compares false)."""
     return ca.logic_and(dt > 0, dt < MAX_INTERVAL)
+
+
+_TRAVEL_INDEX = input_index(TRAVEL)
+_RATE_INDEX = input_index(TRAVEL_RATE)
+_ACC_INDEX = input_index(SPECIFIC_FORCE)
+_HUB_INDEX = input_index(HUB_ACCELERATION)
+
+
+def _replace(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
+    """``u`` with the entries at ``index`` replaced by ``values``."""
+    entries = [u[k] for k in range(u.shape[0])]
+    for j, k in enumerate(index):
+        entries[k] = values[j]
+    return ca.vertcat(*entries)
+
+
+def _channel_drop(channel_ok: ca.SX) -> ca.SX:
+    """Validity factor per input from the fault monitor's channels (d_fl..d_rr, ax, ay, az).
+
+    A travel channel drops its travel and travel rate; an accelerometer axis drops
+    that axis; every other input is kept.
+    """
+    factors = [1] * len(INPUTS)
+    for i in range(4):
+        factors[_TRAVEL_INDEX[i]] = channel_ok[i]
+        factors[_RATE_INDEX[i]] = channel_ok[i]
+    for j in range(3):
+        factors[_ACC_INDEX[j]] = channel_ok[4 + j]
+    return ca.vertcat(*factors)
+
+
+def model_rows(suspension: ca.Function, equilibrium: ca.Function, u_raw, valid, p):
+    """Pseudo-measurement, equilibrium and their masks from raw inputs and validity.
+
+    Returns ``(z, A, b, mask_s, mask_c, dropped)``. An update needs the inputs
+    of the paper's model (every term gated off: the Jacobian sparsity of the
+    rows with zero gates); a term whose optional input is missing is gated off
+    for the sample instead, and ``dropped`` (``wheelload.models.DROPPABLE``
+    order) says which.
+    """
+    u = _sanitise(u_raw, valid)
+    gates, dropped = gates_function()(valid, p)
+    z = suspension(u, gates, p)
+    A, b = equilibrium(u, gates, p)
+    mask_s, mask_c = row_masks(suspension, equilibrium, u, u_raw, valid, p)
+    return z, A, b, mask_s, mask_c, dropped
+
+
+def row_masks(suspension: ca.Function, equilibrium: ca.Function, u, u_raw, valid, p):
+    """``(mask_s, mask_c)``: 1 for each row whose paper-model inputs are all valid."""
+    paper = ca.DM.zeros(gates_function().size_out(0))
+    mask_s = _dependency_mask(suspension(u, paper, p), u_raw, _required(valid))
+    mask_c = _dependency_mask(equilibrium(u, paper, p)[1], u_raw, _required(valid))
+    return mask_s, mask_c
 
 
 def step_expressions(
@@ -167,7 +238,8 @@ def step_expressions(
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
     dt_used = dt_safe * dt_ok
 
-    # Missing or implausible inputs are replaced by zero and skip the updates they feed.
+    # Missing or implausible inputs are replaced by zero and skip the updates they feed
+    # (or drop the model terms they feed, for the optional inputs).
     u_finite = _sanitise(u_raw, valid_raw)
     in_range = guard.plausible(
         u_finite, p[_P_INDEX["mass"]], p[_P_INDEX["spring_front"]], p[_P_INDEX["spring_rear"]],
@@ -175,24 +247,30 @@ def step_expressions(
     )  # fmt: skip
     valid_plausible = valid_raw * in_range
     u = _sanitise(u_raw, valid_plausible)
-    d, v, acc, vx = u[0:4], u[4:8], u[8:11], u[11]
-    z = suspension(d, v, p)
-    A, b = equilibrium(acc, vx, p)
+    # Model terms whose optional input is missing or implausible are gated off for the
+    # sample (``dropped``).
+    z, A, b, _, _, dropped = model_rows(suspension, equilibrium, u_raw, valid_plausible, p)
 
     # Fault monitor: an isolated channel is dropped like a missing one.
     # Fault signatures in the parity space from the models' Jacobians: a travel
     # fault moves b - A z by -A dz/dd, an accelerometer fault by db/da.
+    gates, _ = gates_function()(valid_plausible, p)
     d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
-    Jd = ca.substitute(ca.jacobian(suspension(d_sym, v, p), d_sym), d_sym, d)
-    B = ca.substitute(ca.jacobian(equilibrium(acc_sym, vx, p)[1], acc_sym), acc_sym, acc)
+    u_d = _replace(u, _TRAVEL_INDEX, d_sym)
+    u_acc = _replace(u, _ACC_INDEX, acc_sym)
+    d_now = ca.vertcat(*[u[k] for k in _TRAVEL_INDEX])
+    acc_now = ca.vertcat(*[u[k] for k in _ACC_INDEX])
+    Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
+    B = ca.substitute(ca.jacobian(equilibrium(u_acc, gates, p)[1], acc_sym), acc_sym, acc_now)
     signatures = ca.horzcat(-ca.mtimes(A, Jd), B)
     rc_density = tuning[2:5]
     watch = guard.monitor(m, u, valid_plausible, z, A, signatures, b, dt_used, rc_density, settings)
-    channel_ok = watch.channel_ok
-    drop = ca.vertcat(*[channel_ok[i] for i in range(4)] * 2, channel_ok[4:7], 1)
-    valid = valid_plausible * drop
-    mask_s = _dependency_mask(z, u_raw, valid) * dt_ok
-    mask_c = _dependency_mask(b, u_raw, valid) * dt_ok
+    valid = valid_plausible * _channel_drop(watch.channel_ok)
+    # The updates the channels left after the guards feed (an isolated channel's rows are
+    # skipped; the model terms keep their inputs, as for the monitor).
+    mask_s, mask_c = row_masks(suspension, equilibrium, u, u_raw, valid, p)
+    mask_s = mask_s * dt_ok
+    mask_c = mask_c * dt_ok
 
     # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
     weight = p[_P_INDEX["mass"]] * guard.GRAVITY
@@ -224,7 +302,7 @@ def step_expressions(
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
-    used = ca.vertcat(use_s, use_c)
+    used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
@@ -258,9 +336,9 @@ def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
     return ca.vertcat(
         any_of(gated),
         any_of(released),
-        any_of(implausible[0:8]),
-        any_of(implausible[8:11]),
-        implausible[11],
+        any_of([implausible[k] for k in _TRAVEL_INDEX + _RATE_INDEX]),
+        any_of([implausible[k] for k in _ACC_INDEX + _HUB_INDEX]),
+        implausible[INPUTS.index("vx")],
         any_of([fault[i] for i in range(4)]),
         any_of([fault[i] for i in range(4, 7)]),
         limited,
@@ -289,6 +367,8 @@ def step_function(
         equilibrium or equilibrium_function(),
         constraint_update=constraint_update,
     )
+    # The suspension and equilibrium share the body motion and attitude: one copy.
+    outputs = ca.cse(outputs)
     return ca.Function(name, inputs, outputs, STEP_INPUT_NAMES, STEP_OUTPUT_NAMES)
 
 
@@ -365,7 +445,9 @@ class FilterState:
 class Sample:
     """One sample of the signals used by the filter (SI units).
 
-    ``rates`` is optional and not part of :meth:`vector` (the KF does not use it).
+    ``rates`` (wx wy wz), ``rate_dots`` (their derivative) and ``hub``
+    (az_fl .. az_rr) are optional; an absent group is missing (NaN) in
+    :meth:`vector`, which drops the terms that need it.
     """
 
     d: np.ndarray  # (4,) travel
@@ -373,20 +455,60 @@ class Sample:
     acc: np.ndarray  # (3,) ax, ay, az specific force
     vx: float
     rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
+    rate_dots: np.ndarray | None = None  # (3,) their derivative [rad/s^2], if logged
+    hub: np.ndarray | None = None  # (4,) az_fl..az_rr hub specific force, if logged
 
     def vector(self) -> np.ndarray:
-        return np.concatenate([self.d, self.v, self.acc, [self.vx]]).astype(float)
+        def given(values: np.ndarray | None, size: int) -> np.ndarray:
+            return np.full(size, np.nan) if values is None else np.asarray(values, float)
+
+        return np.concatenate(
+            [
+                self.d,
+                self.v,
+                self.acc,
+                [self.vx],
+                given(self.rates, 3),
+                given(self.rate_dots, 3),
+                given(self.hub, 4),
+            ]
+        ).astype(float)
 
 
 def input_matrix(signals: Signals) -> np.ndarray:
-    """The per-sample inputs of a log in :data:`INPUTS` order, shape (12, n)."""
-    return np.vstack([signals.d.T, signals.v.T, signals.acc.T, signals.vx[None, :]])
+    """The per-sample inputs of a log in :data:`INPUTS` order, shape (len(INPUTS), n).
+
+    Optional channels the log lacks are NaN (their terms are dropped).
+    """
+    n = len(signals)
+
+    def optional(values: np.ndarray | None, width: int) -> np.ndarray:
+        return np.full((width, n), np.nan) if values is None else values.T
+
+    rows = np.vstack(
+        [
+            signals.d.T,
+            signals.v.T,
+            signals.acc.T,
+            signals.vx[None, :],
+            optional(signals.rates, 3),
+            rate_derivatives(signals).T,
+            optional(signals.hub, 4),
+        ]
+    )
+    if rows.shape[0] != len(INPUTS):
+        raise RuntimeError(f"input_matrix builds {rows.shape[0]} rows for {len(INPUTS)} INPUTS")
+    return rows
 
 
 def flags_from_used(used: np.ndarray) -> np.ndarray:
-    """Per-sample :class:`StepFlag` bits from the ``used`` output (7 x n)."""
+    """Per-sample :class:`StepFlag` bits from the ``used`` output (7 + 4 dropped terms x n).
+
+    A ``used`` of only the seven update rows (a method without model terms)
+    gives their bits only.
+    """
     skipped = used < 0.5
-    bits = np.array([flag.value for flag in StepFlag.update_flags()])
+    bits = np.array([flag.value for flag in StepFlag.update_flags()[: used.shape[0]]])
     return (skipped * bits[:, None]).sum(axis=0).astype(np.int64)
 
 
@@ -474,7 +596,7 @@ class TwoStageKF:
         out = np.split(np.asarray(self._flat_step(flat)).ravel(), self._flat_splits)
         x, P, m, std, residual, used = out[:6]
         status = out[STEP_OUTPUT_NAMES.index("status")]
-        flags = flags_from_outputs(used.reshape(7, 1), status.reshape(-1, 1))
+        flags = flags_from_outputs(used.reshape(-1, 1), status.reshape(-1, 1))
         if not 0.0 < dt < MAX_INTERVAL:
             flags |= StepFlag.STEP_REJECTED
         estimate = Estimate(
@@ -521,7 +643,7 @@ class TwoStageKF:
         from wheelload.estimators.smoother import rts_smooth
 
         filtered, covariances = self.run_with_covariance(signals, state)
-        A, _ = equilibrium_function()(np.zeros(3), 0.0, self.p)
+        A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)
         dt = sample_intervals(signals.t)
         return rts_smooth(filtered, covariances, dt, self._step, self.p, self.tuning, A)
 
@@ -558,7 +680,7 @@ class TwoStageKF:
             t=signals.t.copy(),
             innovation=named["innovation"],
             variance=named["innovation_variance"],
-            used=used > 0.5,
+            used=used[:, :7] > 0.5,
         )
         return estimate, covariances, innovations
 

@@ -1,12 +1,15 @@
 """Vehicle physics, written once, symbolically in CasADi."""
 
-from wheelload.models.equilibrium import equilibrium_function
+from wheelload.models.equilibrium import equilibrium_function, paper_equilibrium_function
+from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
 from wheelload.models.mass_properties import MassCentre, static_loads, vehicle_mass_centre
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import suspension_function
+from wheelload.models.suspension import suspension_function, travel_function
+from wheelload.models.terms import DROPPABLE, GATES, gates_function
 from wheelload.models.vehicle import (
     GRAVITY,
     WHEELS,
+    ModelTerms,
     Vehicle,
     VehicleFileError,
     example_vehicle_path,
@@ -16,17 +19,25 @@ from wheelload.models.vehicle import (
 )
 
 __all__ = [
+    "DROPPABLE",
+    "GATES",
     "GRAVITY",
+    "INPUTS",
+    "OPTIONAL_INPUTS",
     "WHEELS",
     "MassCentre",
     "ModelParameters",
+    "ModelTerms",
     "Vehicle",
     "VehicleFileError",
     "equilibrium_function",
     "example_vehicle_path",
+    "gates_function",
     "load_vehicle",
+    "paper_equilibrium_function",
     "static_loads",
     "suspension_function",
+    "travel_function",
     "vehicle_from_dict",
     "vehicle_mass_centre",
     "vehicle_template",

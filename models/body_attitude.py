@@ -40,9 +40,13 @@ def attitude_from_travel(d, track_front, track_rear, wheelbase):
     return roll, pitch
 
 
-def road_frame(acc, roll, pitch):
-    r"""Specific force in the road frame, :math:`R_y(\theta) R_x(\phi) a` (eq. 4-5)."""
-    c_r, s_r, c_p, s_p = ca.cos(roll), ca.sin(roll), ca.cos(pitch), ca.sin(pitch)
+def road_frame(acc, roll, pitch, sine=ca.sin, cosine=ca.cos):
+    r"""Specific force in the road frame, :math:`R_y(\theta) R_x(\phi) a` (eq. 4-5).
+
+    ``sine`` and ``cosine`` may be replaced by polynomials (the model terms use
+    their Taylor polynomials so that a generated step has no trigonometry).
+    """
+    c_r, s_r, c_p, s_p = cosine(roll), sine(roll), cosine(pitch), sine(pitch)
     rx = ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c_r, -s_r), ca.horzcat(0, s_r, c_r))
     ry = ca.vertcat(ca.horzcat(c_p, 0, s_p), ca.horzcat(0, 1, 0), ca.horzcat(-s_p, 0, c_p))
     return ca.mtimes(ry, ca.mtimes(rx, acc))

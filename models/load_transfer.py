@@ -41,9 +41,9 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.body_attitude import attitude_from_travel, road_frame
-from wheelload.models.equilibrium import equilibrium_matrix, equilibrium_vector
+from wheelload.models.equilibrium import equilibrium_matrix, paper_equilibrium_vector
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import suspension_loads
+from wheelload.models.suspension import travel_loads
 
 
 def body_attitude(d, p: ModelParameters):
@@ -69,7 +69,7 @@ def algebraic_loads(acc, p: ModelParameters):
 def suspension_stiffness(p: ModelParameters) -> ca.SX:
     """:math:`K = \\partial z / \\partial d` of the suspension model (springs, anti-roll bars)."""
     d = ca.SX.sym("d", 4)
-    z = suspension_loads(d, ca.SX.zeros(4), p)
+    z = travel_loads(d, ca.SX.zeros(4), p)
     K = ca.jacobian(z, d)
     # z is affine in d, so K does not depend on d: substitute to drop the symbol.
     return ca.substitute(K, d, ca.SX.zeros(4))
@@ -78,7 +78,7 @@ def suspension_stiffness(p: ModelParameters) -> ca.SX:
 def quasi_static_loads(acc, vx, p: ModelParameters):
     """Static loads moved onto :math:`A x = b` along the suspension stiffness (module docstring)."""
     A = equilibrium_matrix(p)
-    b = equilibrium_vector(acc, vx, p)
+    b = paper_equilibrium_vector(acc, vx, p)
     x0 = ca.vertcat(*p.static())
     K = suspension_stiffness(p)
     KAt = ca.mtimes(K, A.T)

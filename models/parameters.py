@@ -8,7 +8,7 @@ Example
 -------
 >>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
 >>> p.vector().shape
-(27,)
+(67,)
 """
 
 from __future__ import annotations
@@ -22,6 +22,16 @@ import numpy as np
 
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.vehicle import Vehicle
+
+
+def mounting_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    r"""Sensor-to-body rotation :math:`R_z(\psi) R_y(\theta) R_x(\phi)` of a mounted IMU."""
+    cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
+                              np.cos(yaw), np.sin(yaw))  # fmt: skip
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -59,6 +69,51 @@ class ModelParameters:
     static_rl: Any
     static_rr: Any
     roll_split_front: Any  # front share of the lateral load transfer (models/roll_split.py)
+    # Beyond the paper (wheelload.models.terms): sprung body, tyres, links, stops, IMU.
+    sprung_mass: Any
+    sprung_cg_height: Any
+    inertia_xx: Any
+    inertia_yy: Any
+    unsprung_front: Any  # kg, one corner
+    unsprung_rear: Any
+    tyre_rate_front: Any
+    tyre_rate_rear: Any
+    roll_centre_front: Any
+    roll_centre_rear: Any
+    anti_brake_front: Any
+    anti_brake_rear: Any
+    anti_drive_front: Any
+    anti_drive_rear: Any
+    bump_gap_front: Any
+    bump_gap_rear: Any
+    rebound_gap_front: Any
+    rebound_gap_rear: Any
+    stop_rate_front: Any
+    stop_rate_rear: Any
+    stop_progressive_front: Any
+    stop_progressive_rear: Any
+    imu_x: Any  # m, IMU relative to the sprung CG
+    imu_y: Any
+    imu_z: Any
+    # Sensor-to-body rotation of the IMU axes, row by row, from [geometry]
+    # imu_orientation (R_z(yaw) R_y(pitch) R_x(roll)): a matrix, not angles,
+    # so that no step evaluates a trigonometric function for it.
+    imu_r11: Any
+    imu_r12: Any
+    imu_r13: Any
+    imu_r21: Any
+    imu_r22: Any
+    imu_r23: Any
+    imu_r31: Any
+    imu_r32: Any
+    imu_r33: Any
+    # Switches, 1.0 on / 0.0 off ([model] section): runtime values in the generated C.
+    term_road_frame: Any
+    term_body_inertia: Any
+    term_geometric_transfer: Any
+    term_stops: Any
+    term_unsprung_inertia: Any
+    term_imu_lever_arm: Any
 
     @staticmethod
     def names() -> tuple[str, ...]:
@@ -73,6 +128,8 @@ class ModelParameters:
     @classmethod
     def from_vehicle(cls, vehicle: Vehicle, static: np.ndarray | None = None) -> ModelParameters:
         """Numeric parameters; ``static`` overrides the static wheel loads [N]."""
+        terms = dataclasses.asdict(vehicle.model)
+        mounting = mounting_matrix(*vehicle.geometry.imu_orientation)
         centre = vehicle_mass_centre(vehicle)
         static = static_loads(vehicle) if static is None else np.asarray(static, float)
         if static.shape != (4,) or not np.all(np.isfinite(static)):
@@ -107,13 +164,46 @@ class ModelParameters:
             static_rl=float(static[2]),
             static_rr=float(static[3]),
             roll_split_front=vehicle.suspension.roll_split_front,
+            sprung_mass=vehicle.mass.sprung,
+            sprung_cg_height=vehicle.geometry.cg_height,
+            inertia_xx=vehicle.mass.inertia[0],
+            inertia_yy=vehicle.mass.inertia[1],
+            unsprung_front=0.5 * vehicle.mass.unsprung_front,
+            unsprung_rear=0.5 * vehicle.mass.unsprung_rear,
+            tyre_rate_front=vehicle.tyres.vertical_stiffness_front,
+            tyre_rate_rear=vehicle.tyres.vertical_stiffness_rear,
+            roll_centre_front=front.roll_centre_height,
+            roll_centre_rear=rear.roll_centre_height,
+            anti_brake_front=front.anti_pitch_brake,
+            anti_brake_rear=rear.anti_pitch_brake,
+            anti_drive_front=front.anti_pitch_drive,
+            anti_drive_rear=rear.anti_pitch_drive,
+            bump_gap_front=front.bump_gap,
+            bump_gap_rear=rear.bump_gap,
+            rebound_gap_front=front.rebound_gap,
+            rebound_gap_rear=rear.rebound_gap,
+            stop_rate_front=front.stop_rate,
+            stop_rate_rear=rear.stop_rate,
+            stop_progressive_front=front.stop_progressive_rate,
+            stop_progressive_rear=rear.stop_progressive_rate,
+            imu_x=vehicle.geometry.imu_position[0],
+            imu_y=vehicle.geometry.imu_position[1],
+            imu_z=vehicle.geometry.imu_position[2],
+            **{f"imu_r{i + 1}{j + 1}": float(mounting[i, j]) for i in range(3) for j in range(3)},
+            **{f"term_{key}": float(value) for key, value in terms.items()},
         )
         if vehicle.suspension.roll_split_front is not None:
             return parameters
-        from wheelload.models.roll_split import roll_stiffness_share_front
+        from wheelload.models.roll_split import roll_split_default
 
-        share = roll_stiffness_share_front(parameters)
+        share = roll_split_default(parameters)
         return dataclasses.replace(parameters, roll_split_front=share)
+
+    def imu_rotation(self) -> ca.SX:
+        """The sensor-to-body rotation of the IMU as a 3 x 3 matrix."""
+        names = [f"imu_r{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)]
+        rows = [[getattr(self, names[3 * i + j]) for j in range(3)] for i in range(3)]
+        return ca.vertcat(*[ca.horzcat(*row) for row in rows])
 
     def vector(self) -> np.ndarray:
         """The numeric parameter vector in layout order."""

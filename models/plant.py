@@ -22,9 +22,22 @@ and contact point :math:`r_{P,i}`):
         + \ddot d_i) &= F_{t,i,z} + m_{u,i} g_{b,z} - F_{s,i}
 
 where :math:`C_i = (F_{t,i,x} + m_{u,i}(g_{b,x} - a_x),\ F_{t,i,y} +
-m_{u,i}(g_{b,y} - a_y),\ F_{s,i})` is the force a corner passes to the body
+m_{u,i}(g_{b,y} - a_y),\ F_{s,i} + J_i)` is the force a corner passes to the body
 (the suspension links carry the in-plane part, the spring, damper, bar and
-stops the vertical part; the unsprung masses move in-plane with the body CG).
+stops the vertical part :math:`F_{s,i}`; the unsprung masses move in-plane with
+the body CG). The links also carry a vertical (jacking) force
+
+.. math:: J_i = -F_{y,i} h_{rc,a} / y_i \mp F_{x,i} \tan\beta_{a}
+
+so that a tyre's lateral force reaches the body along the line through the
+axle's roll centre (height :math:`h_{rc,a}` above ground on the centre line)
+and its longitudinal force along the side-view anti-pitch line
+(:math:`-` front, :math:`+` rear); :math:`\tan\beta_a = \epsilon_a h / (l\,
+s_a)` with the vehicle file's anti-pitch share :math:`\epsilon_a` and the
+axle's brake or drive share :math:`s_a` (0 where the share is 0), so that the
+links carry :math:`\epsilon_a` of the axle's rigid load transfer as the
+estimators' model assumes (``wheelload.models.suspension``). The unsprung
+equation carries :math:`-J_i` with :math:`F_{s,i}`.
 The tyre force :math:`F_{t,i} = F_x e_x + F_y e_y + F_z n` acts along the
 local road normal and in the road plane; :math:`F_z = k_t \max(0, r_0 -
 \text{distance from wheel centre to road plane})`, so a tyre can leave the
@@ -38,10 +51,11 @@ from dataclasses import dataclass
 import casadi as ca
 
 from wheelload.models.build_folder import jit_options
-from wheelload.models.mass_properties import static_loads
-from wheelload.models.plant_params import DamperMap, Plant, Stops
+from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
+from wheelload.models.plant_params import DamperMap, Plant
 from wheelload.models.road_surface import RoadSurface, road_lookup
-from wheelload.models.suspension import anti_roll_bar_forces
+from wheelload.models.suspension_elements import anti_roll_bar_forces, stop_force
+from wheelload.models.terms import rotation_x, rotation_y, rotation_z
 from wheelload.models.tyre import tyre_forces
 from wheelload.models.vehicle import GRAVITY, Vehicle
 
@@ -63,6 +77,8 @@ OUTPUT_NAMES = (
     tuple(f"fz_{w}" for w in ("fl", "fr", "rl", "rr"))
     + ("ax", "ay", "az")  # specific force at the IMU, body axes
     + ("ax_cg", "ay_cg", "az_cg")  # kinematic acceleration of the sprung CG, body axes
+    + tuple(f"az_{w}" for w in ("fl", "fr", "rl", "rr"))  # hub specific force, body z
+    + ("wx", "wy", "wz")  # body rates in the IMU's sensor axes
 )
 STATE = {name: i for i, name in enumerate(STATE_NAMES)}
 OUTPUT = {name: i for i, name in enumerate(OUTPUT_NAMES)}
@@ -88,6 +104,12 @@ class Corner:
     spring: float  # N/m
     damper: DamperMap
     bump_gap: float  # m
+    rebound_gap: float  # m
+    stop_rate: float  # N/m
+    stop_progressive_rate: float  # N/m^2
+    roll_centre: float  # m, above ground
+    anti_brake: float  # -, tan(beta) of the side-view line when braking (F_x < 0)
+    anti_drive: float  # -, tan(beta) when driving (F_x > 0)
     spin_inertia: float  # kg m^2
     nominal_load: float  # N, tyre F_z0
     left: bool
@@ -105,9 +127,19 @@ def corners(vehicle: Vehicle) -> tuple[Corner, ...]:
     plant = vehicle_plant(vehicle)
     g, t, m, susp = vehicle.geometry, vehicle.tyres, vehicle.mass, vehicle.suspension
     loads = static_loads(vehicle)
+    centre = vehicle_mass_centre(vehicle)
+    rise = centre.height / (centre.lf + centre.lr)  # rigid transfer per unit F_x
+    drive = plant.driveline
+
+    def tan_beta(share_of_transfer: float, force_share: float) -> float:
+        return share_of_transfer * rise / force_share if force_share > 0 else 0.0
+
     result = []
     for i in range(4):
         front = i < 2
+        axle = susp.front if front else susp.rear
+        brake_share = drive.brake_share_front if front else 1.0 - drive.brake_share_front
+        drive_share = drive.drive_share_front if front else 1.0 - drive.drive_share_front
         left = i % 2 == 0
         radius = t.radius_front if front else t.radius_rear
         rate = t.vertical_stiffness_front if front else t.vertical_stiffness_rear
@@ -125,7 +157,13 @@ def corners(vehicle: Vehicle) -> tuple[Corner, ...]:
                 static_load=float(loads[i]),
                 spring=(susp.front if front else susp.rear).spring_rate,
                 damper=plant.dampers.front if front else plant.dampers.rear,
-                bump_gap=plant.stops.bump_gap_front if front else plant.stops.bump_gap_rear,
+                bump_gap=axle.bump_gap,
+                rebound_gap=axle.rebound_gap,
+                stop_rate=axle.stop_rate,
+                stop_progressive_rate=axle.stop_progressive_rate,
+                roll_centre=axle.roll_centre_height,
+                anti_brake=tan_beta(axle.anti_pitch_brake, brake_share),
+                anti_drive=tan_beta(axle.anti_pitch_drive, drive_share),
                 spin_inertia=(
                     plant.wheels.spin_inertia_front if front else plant.wheels.spin_inertia_rear
                 ),
@@ -156,22 +194,14 @@ def damper_map_force(v, damper: DamperMap):
     return ca.if_else(v >= 0, push, pull)
 
 
-def stop_force(d, bump_gap, rebound_gap, linear_rate, progressive_rate):
-    r"""Bump (> 0) and rebound (< 0) stop force: :math:`k_1 x + k_2 x^2` past each gap."""
-    bump = ca.fmax(d - bump_gap, 0.0)
-    rebound = ca.fmax(-d - rebound_gap, 0.0)
-    return (linear_rate * bump + progressive_rate * bump**2) - (
-        linear_rate * rebound + progressive_rate * rebound**2
-    )
-
-
-def corner_suspension_force(corner: Corner, stops: Stops, d, dd, arb):
+def corner_suspension_force(corner: Corner, d, dd, arb):
     r"""Vertical force the suspension of one corner passes to the body [N].
 
     .. math:: F_s = F_{pre} + k d + F_{dam}(\dot d) + F_{arb} + F_{stop}(d)
 
-    Preload, spring, damper map, the bar's share ``arb`` and the stops;
-    also driven on its own by the component rig (``studies/rig.py``).
+    Preload, spring, damper map, the bar's share ``arb`` and the corner's
+    stops (not the link force, which does not act through the spring-damper
+    unit); also driven on its own by the component rig (``studies/rig.py``).
     """
     return (
         corner.preload
@@ -179,7 +209,7 @@ def corner_suspension_force(corner: Corner, stops: Stops, d, dd, arb):
         + damper_map_force(dd, corner.damper)
         + arb
         + stop_force(
-            d, corner.bump_gap, stops.rebound_gap, stops.linear_rate, stops.progressive_rate
+            d, corner.bump_gap, corner.rebound_gap, corner.stop_rate, corner.stop_progressive_rate
         )
     )
 
@@ -215,13 +245,13 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
 
     m_s = vehicle.mass.sprung
     m = vehicle.mass.total
-    inertia = ca.DM(plant.body.inertia)  # principal axes
+    inertia = ca.DM(vehicle.mass.inertia)  # principal axes
     rot = _rotation(phi, theta, psi)
     g_body = rot.T @ ca.DM([0.0, 0.0, -GRAVITY])
     curvature = lookup(s)[3]
 
     items = corners(vehicle)
-    stops, tyre = plant.stops, plant.tyre
+    tyre = plant.tyre
     susp = vehicle.suspension
     arb = []
     for axle, setting in enumerate((susp.front, susp.rear)):
@@ -264,11 +294,16 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
             tyre.relaxation_length_x
         )
         alpha_dot = (-vy_w - ca.fabs(vx_w) * alpha[i]) / tyre.relaxation_length_y
-        f_s = corner_suspension_force(c, stops, d[i], dd[i], arb[i])
+        f_s = corner_suspension_force(c, d[i], dd[i], arb[i])
+        # Vertical force of the links: lateral force through the roll centre,
+        # longitudinal along the side-view anti-pitch line (module docstring).
+        sign = -1.0 if i < 2 else 1.0
+        tan_beta = ca.if_else(fx < 0, c.anti_brake, c.anti_drive)
+        jack = -fy * c.roll_centre / c.y + sign * fx * tan_beta
         tyre_vectors.append(force)
         contacts.append(r_w - gap * normal)
         centres.append(r_w)
-        susp_forces.append(f_s)
+        susp_forces.append(f_s + jack)
         fz_list.append(fz)
         wheel_terms.append((spin_acc, kappa_dot, alpha_dot))
 
@@ -322,7 +357,14 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
     )
     imu = ca.DM(vehicle.geometry.imu_position)
     imu_acc = acc + ca.cross(omega_dot, imu) + ca.cross(omega, ca.cross(omega, imu)) - g_body
-    y = ca.vertcat(ca.vertcat(*fz_list), imu_acc, acc)
+    roll, pitch, yaw = vehicle.geometry.imu_orientation
+    to_sensor = (rotation_z(yaw) @ rotation_y(pitch) @ rotation_x(roll)).T
+    hub = [
+        (tyre_vectors[i][2] - susp_forces[i]) / c.unsprung for i, c in enumerate(items)
+    ]  # m_u (a_hub - g_z) = F_t,z - F_s - J: the hub's specific force along body z
+    y = ca.vertcat(
+        ca.vertcat(*fz_list), to_sensor @ imu_acc, acc, ca.vertcat(*hub), to_sensor @ omega
+    )
     return x, inp, xdot, y
 
 

@@ -1,8 +1,8 @@
 """Plant-only vehicle parameters: the ``[plant]`` section of a vehicle file.
 
 These describe the ground-truth simulator (:mod:`wheelload.models.plant`) and
-never reach an estimator: body inertia, wheel spin inertia, the combined-slip
-tyre law, the measured damper maps, bump and rebound stops, driveline limits
+never reach an estimator: body width, wheel spin inertia, the combined-slip
+tyre law, the measured damper maps, driveline limits
 and the ISO 8608 road-roughness model. Every value carries its physical source
 in the vehicle file. SI units.
 """
@@ -11,20 +11,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from wheelload.models.vehicle import Vector3, _KeyError, _non_negative, _positive
+from wheelload.models.vehicle import _KeyError, _non_negative, _positive
 
 Pair = tuple[float, float]
 Quad = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True, kw_only=True)
-class BodyInertia:
-    inertia: Vector3  # kg m^2, (Ixx, Iyy, Izz) of the sprung body about its CG
+class Body:
     width: float  # m, body width (cone lanes of ISO 3888-1)
 
     def _check(self) -> None:
-        if min(self.inertia) <= 0.0:
-            raise _KeyError("inertia", f"must be > 0 on every axis, got {self.inertia}")
         _positive(self, "width")
 
 
@@ -112,22 +109,6 @@ class Dampers:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Stops:
-    r"""Progressive elastomer stops at the wheel: :math:`F = k_1 x + k_2 x^2`, x past the gap."""
-
-    bump_gap_front: float  # m, compression from static where the bump stop touches
-    bump_gap_rear: float  # m
-    rebound_gap: float  # m, extension from static where the rebound stop touches
-    linear_rate: float  # N/m, k_1
-    progressive_rate: float  # N/m^2, k_2
-
-    def _check(self) -> None:
-        for key in ("bump_gap_front", "bump_gap_rear", "rebound_gap", "linear_rate"):
-            _positive(self, key)
-        _non_negative(self, "progressive_rate")
-
-
-@dataclass(frozen=True, kw_only=True)
 class Driveline:
     max_power: float  # W, at the wheels
     drive_share_front: float  # -, share of drive torque on the front axle
@@ -164,11 +145,10 @@ class Roughness:
 class Plant:
     """Everything the ground-truth plant needs beyond the estimator parameters."""
 
-    body: BodyInertia
+    body: Body
     wheels: Wheels
     tyre: TyreForces
     dampers: Dampers
-    stops: Stops
     driveline: Driveline
     roughness: Roughness
 

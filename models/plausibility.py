@@ -177,6 +177,10 @@ def _cg_height(v: Vehicle) -> Range:
     return Range(0.1, track / (2 * 0.6), "static stability factor track / (2 h) >= 0.6")
 
 
+def _roll_centre(v: Vehicle) -> Range:
+    return Range(0.0, v.geometry.cg_height, "from the ground to the CG height")
+
+
 def _inertia(v: Vehicle) -> Range:
     return Range(0.04 * v.mass.sprung, 9.0 * v.mass.sprung,
                  "radius of gyration 0.2-3 m on the sprung mass")  # fmt: skip
@@ -215,7 +219,33 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "suspension.rear.arb_rate": _arb(1),
     "suspension.front.arb_ratio": _fixed(0.0, 3.0, "installation ratio of a bar"),
     "suspension.rear.arb_ratio": _fixed(0.0, 3.0, "installation ratio of a bar"),
-    "suspension.roll_split_front": _fixed(0.15, 0.85, "front share of the roll stiffness"),
+    "suspension.roll_split_front": _fixed(0.15, 0.85, "front share of the lateral load transfer"),
+    **{
+        f"suspension.{axle}.{key}": rule
+        for axle in ("front", "rear")
+        for key, rule in (
+            ("roll_centre_height", _roll_centre),
+            ("anti_pitch_brake", _fixed(0.0, 1.0, "a share of the rigid transfer (0-100 % anti)")),
+            ("anti_pitch_drive", _fixed(0.0, 1.0, "a share of the rigid transfer (0-100 % anti)")),
+            ("bump_gap", _fixed(0.003, 0.2, "bump-stop gaps of road cars")),
+            ("rebound_gap", _fixed(0.01, 0.3, "droop travel of road cars")),
+            ("stop_rate", _fixed(1e3, 1e7, "elastomer bump stops")),
+            ("stop_progressive_rate", _fixed(0.0, 1e9, "elastomer bump stops")),
+        )
+    },
+    "mass.inertia": _inertia,
+    "geometry.imu_orientation": _fixed(-math.pi, math.pi, "angles of the sensor axes [rad]"),
+    **{
+        f"model.{switch}": _fixed(0.0, 1.0, "a switch: false or true")
+        for switch in (
+            "road_frame",
+            "body_inertia",
+            "geometric_transfer",
+            "stops",
+            "unsprung_inertia",
+            "imu_lever_arm",
+        )
+    },
     "filter.process_noise_density": _process,
     "filter.suspension_noise_density": _sigma_density(
         lambda v: 1.0, lambda v: 10.0 * max(_wheel_loads(v)), "N"
@@ -232,7 +262,6 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.bias.acceleration_bias_density": _fixed(
         1e-12, 1.0, "accelerometer bias random walk, (m/s^2)^2/s"
     ),
-    "plant.body.inertia": _inertia,
     "plant.body.width": _body_width,
     "plant.wheels.spin_inertia_front": _spin(0),
     "plant.wheels.spin_inertia_rear": _spin(1),
@@ -257,11 +286,6 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "plant.dampers.rear.velocities": _fixed(0.01, 10.0, "damper test velocities"),
     "plant.dampers.rear.push": lambda v: Range(0.0, 10.0 * _weight(v), "up to 10 x the weight"),
     "plant.dampers.rear.pull": lambda v: Range(0.0, 10.0 * _weight(v), "up to 10 x the weight"),
-    "plant.stops.bump_gap_front": _fixed(0.003, 0.2, "bump-stop gaps of road cars"),
-    "plant.stops.bump_gap_rear": _fixed(0.003, 0.2, "bump-stop gaps of road cars"),
-    "plant.stops.rebound_gap": _fixed(0.01, 0.3, "droop travel of road cars"),
-    "plant.stops.linear_rate": _fixed(1e3, 1e7, "elastomer bump stops"),
-    "plant.stops.progressive_rate": _fixed(0.0, 1e9, "elastomer bump stops"),
     "plant.driveline.max_power": _fixed(5e3, 2e6, "5 kW to 2 MW at the wheels"),
     "plant.driveline.drive_share_front": _fixed(0.0, 1.0, "a share"),
     "plant.driveline.brake_share_front": _fixed(0.0, 1.0, "a share"),

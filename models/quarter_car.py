@@ -32,7 +32,7 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import suspension_loads
+from wheelload.models.suspension import travel_loads
 
 #: Order of the quarter-car parameter vector.
 QUARTER_CAR_PARAMETERS = ("sprung_mass", "unsprung_mass", "spring_rate", "damper_rate")
@@ -94,7 +94,7 @@ def tyre_loads(d, v, a_u, unsprung, p: ModelParameters):
     :math:`F_z = F_{susp}(d, v) + m_u a_u`, :math:`a_u` the unsprung vertical
     acceleration without gravity (the static load of the suspension model
     already holds the unsprung weight)."""
-    return suspension_loads(d, v, p) + unsprung * a_u
+    return travel_loads(d, v, p) + unsprung * a_u
 
 
 def tyre_load_function(name: str = "tyre_load") -> ca.Function:

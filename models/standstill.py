@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.models.equilibrium import equilibrium_function
+from wheelload.models.equilibrium import paper_equilibrium_function
 from wheelload.models.parameters import ModelParameters
 
 #: Order of the unknowns.
@@ -49,7 +49,7 @@ def standstill_residual_function(name: str = "standstill_residual") -> ca.Functi
     p_new = ca.vertcat(
         *[replaced[key] if key in replaced else p_vector[i] for i, key in enumerate(names)]
     )
-    A, b = equilibrium_function()(acc, 0.0, p_new)
+    A, b = paper_equilibrium_function()(acc, 0.0, p_new)
     offset = ca.vertcat(0, 0, theta[2] * ca.sum1(F))
     residual = ca.mtimes(A, F) - b - offset
     return ca.Function(

@@ -1,6 +1,7 @@
-"""Suspension pseudo-measurement of the wheel loads (Siegloff & Choi §II-B, eq. 3-9).
+r"""Suspension pseudo-measurement of the wheel loads (Siegloff & Choi §II-B, eq. 3-9).
 
 .. math:: F_{z,i} = F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i
+    + g_s F^{stop}_i + g_g F^{link}_i + g_u m_{u,a} (a_{hub,i} - g)
 
 Signs in ISO 8855 with compression ``d > 0`` and ``v = dd/dt > 0`` in bump:
 the spring and the damper push the wheel down harder when compressed, and the
@@ -8,97 +9,144 @@ anti-roll bar adds load to the more compressed wheel of an axle. (The paper's
 eq. 6 prints the opposite sign; a stabiliser bar twisted by a left-side bump
 pushes the left wheel down and lifts the right, so ``F_L = +k_arb eta``.)
 
+Terms beyond the paper, each times its gate (``wheelload.models.terms``):
+
+- stops: :func:`~wheelload.models.suspension_elements.stop_force` per axle;
+- geometric (link) load transfer, quasi-static, driven by the specific force
+  :math:`\tilde f` at the CG (road axes when ``road_frame`` is on): the
+  lateral tyre force of an axle :math:`F_{y,f} = m \tilde f_y l_r / l`
+  reaches the body at the roll centre, so :math:`\mp F_{y,a} h_{rc,a} / T_a`
+  goes to the left/right tyre through the links (corner-based paper eq. 18,
+  the :math:`h_{RC}` part); of the rigid longitudinal transfer
+  :math:`\mp h F_x / l` per axle (:math:`F_x = m \tilde f_x + D`) the links
+  carry the anti-pitch share :math:`\epsilon_a` (brake share when
+  :math:`F_x < 0`, drive share otherwise);
+- unsprung inertia: a hub accelerometer (specific force along body z,
+  :math:`+g` at rest) gives the unsprung mass's load :math:`m_u a_{hub}`;
+  its static part is already in :math:`F_{z,i,0}`.
+
 Example
 -------
 >>> f = suspension_function()
->>> z = f([0.01, 0, 0, 0], [0, 0, 0, 0], ModelParameters.from_vehicle(vehicle).vector())
+>>> z = f(u, gates, ModelParameters.from_vehicle(vehicle).vector())
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.equilibrium import aero_forces
+from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
+from wheelload.models.suspension_elements import (
+    anti_roll_bar_forces,
+    damper_force,
+    piecewise_damper_force,
+    stop_force,
+)
+from wheelload.models.terms import GATES, gate, road_motion
+from wheelload.models.vehicle import GRAVITY
+
+__all__ = [
+    "anti_roll_bar_forces",
+    "damper_force",
+    "piecewise_damper_force",
+    "stop_force",
+    "suspension_function",
+    "travel_function",
+    "travel_loads",
+]
 
 
-def damper_force(v, c_push, c_pull):
-    r"""Asymmetric piecewise-linear damper (eq. 5): :math:`c_{push} v` for
-    :math:`v \ge 0`, :math:`c_{pull} v` otherwise."""
-    return ca.if_else(v >= 0, c_push * v, c_pull * v)
+def travel_loads(d, v, p: ModelParameters, damper=None) -> ca.SX:
+    r"""Paper part of the pseudo-measurement FL, FR, RL, RR from travel ``d`` and rate ``v``.
 
-
-def piecewise_damper_force(v, knots, push_slopes, pull_slopes):
-    r"""Piecewise-linear damper map through (0, 0) with slopes between velocity knots.
-
-    .. math:: F(v) = \sum_j c_{push,j}\, \mathrm{clip}(v - v_{j-1}, 0, v_j - v_{j-1})
-              \ (v \ge 0), \qquad
-              F(v) = -\sum_j c_{pull,j}\, \mathrm{clip}(-v - v_{j-1}, 0, v_j - v_{j-1})
-              \ (v < 0)
-
-    with :math:`v_0 = 0` and the last segment unbounded; ``knots`` are the
-    inner velocities :math:`v_1 < v_2 < \dots` [m/s] and each slope list has
-    ``len(knots) + 1`` entries. Linear in the slopes; one slope per segment
-    gives the paper's eq. 5.
-    """
-    edges = [0.0, *knots]
-
-    def branch(speed, slopes):
-        force = 0
-        for j, slope in enumerate(slopes):
-            past = ca.fmax(speed - edges[j], 0)
-            width = edges[j + 1] - edges[j] if j + 1 < len(edges) else None
-            force = force + slope * (past if width is None else ca.fmin(past, width))
-        return force
-
-    return ca.if_else(v >= 0, branch(v, push_slopes), -branch(-v, pull_slopes))
-
-
-def anti_roll_bar_forces(d_left, d_right, rate, ratio):
-    r"""Anti-roll-bar loads on the left and right wheel (eq. 6-8, sign corrected).
-
-    .. math:: \eta = \gamma (d_L - d_R), \quad F_L = +k_{arb}\eta, \quad F_R = -k_{arb}\eta
-    """
-    eta = ratio * (d_left - d_right)
-    return rate * eta, -rate * eta
-
-
-def suspension_loads(d, v, p: ModelParameters, damper=None) -> ca.SX:
-    """Pseudo-measured wheel loads FL, FR, RL, RR from travel ``d`` and rate ``v`` (eq. 9).
+    .. math:: F_{z,i} = F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i \quad (eq. 9)
 
     ``damper(v, axle)`` replaces the linear push/pull damper of eq. 5 (axle 0
     front, 1 rear), e.g. a piecewise-linear map.
     """
     axles = (
-        (
-            p.spring_front,
-            p.damper_push_front,
-            p.damper_pull_front,
-            p.arb_rate_front,
-            p.arb_ratio_front,
-        ),
-        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear, p.arb_ratio_rear),
-    )
+        (p.spring_front, p.damper_push_front, p.damper_pull_front, p.arb_rate_front,
+         p.arb_ratio_front),
+        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear,
+         p.arb_ratio_rear),
+    )  # fmt: skip
     static = p.static()
     loads = []
     for axle, (spring, push, pull, arb_rate, arb_ratio) in enumerate(axles):
         left, right = 2 * axle, 2 * axle + 1
         arb = anti_roll_bar_forces(d[left], d[right], arb_rate, arb_ratio)
         for side, wheel in enumerate((left, right)):
-            loads.append(
-                static[wheel]
-                + spring * d[wheel]
-                + (damper_force(v[wheel], push, pull) if damper is None else damper(v[wheel], axle))
-                + arb[side]
-            )
+            force = damper_force(v[wheel], push, pull) if damper is None else damper(v[wheel], axle)
+            loads.append(static[wheel] + spring * d[wheel] + force + arb[side])
+    return ca.vertcat(*loads)
+
+
+def link_loads(f_road, vx, p: ModelParameters) -> list:
+    """Load through the links per corner FL, FR, RL, RR (roll centre, anti-pitch) [N]."""
+    wheelbase = p.lf + p.lr
+    _, drag = aero_forces(vx, p)
+    force_y = p.mass * f_road[1]
+    force_x = p.mass * f_road[0] + drag
+    braking = force_x < 0
+    axles = (
+        (p.lr, p.roll_centre_front, p.track_front, p.anti_brake_front, p.anti_drive_front, -1),
+        (p.lf, p.roll_centre_rear, p.track_rear, p.anti_brake_rear, p.anti_drive_rear, 1),
+    )
+    loads = []
+    for arm, height, track, anti_brake, anti_drive, sign in axles:
+        lateral = force_y * arm / wheelbase * height / track
+        share = ca.if_else(braking, anti_brake, anti_drive)
+        longitudinal = 0.5 * share * sign * p.cg_height * force_x / wheelbase
+        loads += [longitudinal - lateral, longitudinal + lateral]
+    return loads
+
+
+def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
+    """Pseudo-measured wheel loads FL, FR, RL, RR from the inputs ``u`` (eq. 9 + terms).
+
+    :func:`travel_loads` (``damper`` as there) plus each gated term.
+    """
+    inputs = ModelInputs.unpack(u)
+    d = inputs.d
+    f_road = road_motion(inputs, gates, p)[0]
+    links = link_loads(f_road, inputs.vx, p)
+    paper = travel_loads(d, inputs.v, p, damper)
+    axles = (
+        (p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front, p.stop_progressive_front,
+         p.unsprung_front),
+        (p.bump_gap_rear, p.rebound_gap_rear, p.stop_rate_rear, p.stop_progressive_rear,
+         p.unsprung_rear),
+    )  # fmt: skip
+    loads = []
+    for axle, (bump, rebound, k1, k2, unsprung) in enumerate(axles):
+        for wheel in (2 * axle, 2 * axle + 1):
+            load = paper[wheel]
+            load += gate(gates, "stops") * stop_force(d[wheel], bump, rebound, k1, k2)
+            load += gate(gates, "geometric_transfer") * links[wheel]
+            hub = inputs.hub[wheel] - GRAVITY
+            load += gate(gates, f"unsprung_{('fl', 'fr', 'rl', 'rr')[wheel]}") * unsprung * hub
+            loads.append(load)
     return ca.vertcat(*loads)
 
 
 def suspension_function(name: str = "suspension_load") -> ca.Function:
-    """``name(d[4], v[4], p) -> z[4]``: the suspension pseudo-measurement as a CasADi Function."""
+    """``name(u, gates, p) -> z[4]``: the suspension pseudo-measurement as a CasADi Function."""
+    u = ca.SX.sym("u", len(INPUTS))
+    gates = ca.SX.sym("gates", len(GATES))
+    p_vector, p = ModelParameters.symbolic()
+    return ca.Function(
+        name, [u, gates, p_vector], [suspension_loads(u, gates, p)], ["u", "gates", "p"], ["z"]
+    )
+
+
+def travel_function(name: str = "suspension_travel_load") -> ca.Function:
+    """``name(d[4], v[4], p) -> z[4]``: the paper's pseudo-measurement (eq. 9), no terms."""
     d = ca.SX.sym("d", 4)
     v = ca.SX.sym("v", 4)
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(name, [d, v, p_vector], [suspension_loads(d, v, p)], ["d", "v", "p"], ["z"])
+    return ca.Function(name, [d, v, p_vector], [travel_loads(d, v, p)], ["d", "v", "p"], ["z"])
 
 
 def piecewise_damper_names(knots) -> tuple[str, ...]:
@@ -114,7 +162,7 @@ def piecewise_damper_names(knots) -> tuple[str, ...]:
 def piecewise_damper_suspension_function(
     knots, name: str = "suspension_load_piecewise_damper"
 ) -> ca.Function:
-    """``name(d[4], v[4], p, damper) -> z[4]``: eq. 9 with the piecewise damper map.
+    """``name(u, gates, p, damper) -> z[4]``: :func:`suspension_function` with the damper map.
 
     ``damper`` holds the slopes in :func:`piecewise_damper_names` order; the
     linear push/pull entries of ``p`` are not used.
@@ -123,8 +171,8 @@ def piecewise_damper_suspension_function(
     if not knots or any(k <= 0 for k in knots) or list(knots) != sorted(set(knots)):
         raise ValueError(f"damper knots must be increasing and > 0 m/s, got {knots}")
     segments = len(knots) + 1
-    d = ca.SX.sym("d", 4)
-    v = ca.SX.sym("v", 4)
+    u = ca.SX.sym("u", len(INPUTS))
+    gates = ca.SX.sym("gates", len(GATES))
     slopes = ca.SX.sym("damper", 4 * segments)
     p_vector, p = ModelParameters.symbolic()
 
@@ -134,5 +182,7 @@ def piecewise_damper_suspension_function(
         pull = [slopes[base + segments + j] for j in range(segments)]
         return piecewise_damper_force(speed, knots, push, pull)
 
-    z = suspension_loads(d, v, p, damper)
-    return ca.Function(name, [d, v, p_vector, slopes], [z], ["d", "v", "p", "damper"], ["z"])
+    z = suspension_loads(u, gates, p, damper)
+    return ca.Function(
+        name, [u, gates, p_vector, slopes], [z], ["u", "gates", "p", "damper"], ["z"]
+    )

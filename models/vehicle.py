@@ -30,6 +30,13 @@ WHEELS = ("fl", "fr", "rl", "rr")
 TOTAL_MASS_TOLERANCE = 0.5  # kg, allowed |total - (sprung + unsprung)|
 
 
+#: Appended to a missing-key error: files written before a section or key existed.
+TEMPLATE_HINT = (
+    " (files older than this version lack it: print the commented template with "
+    "'wheelload vehicle --template' and copy the section with values for your car)"
+)
+
+
 class VehicleFileError(ValueError):
     """A vehicle file that cannot be read: names the file and the key."""
 
@@ -43,10 +50,13 @@ class Mass:
     sprung: float  # kg
     unsprung_front: float  # kg, both front corners together
     unsprung_rear: float  # kg, both rear corners together
+    inertia: Vector3  # kg m^2, (Ixx, Iyy, Izz) of the sprung body about its CG
 
     def _check(self) -> None:
         for key in ("total", "sprung", "unsprung_front", "unsprung_rear"):
             _positive(self, key)
+        if min(self.inertia) <= 0.0:
+            raise _KeyError("inertia", f"must be > 0 on every axis, got {self.inertia}")
         parts = self.sprung + self.unsprung_front + self.unsprung_rear
         # The equilibrium uses the total, the plant the parts: they must agree
         # to rounding, or every static load carries the difference.
@@ -66,6 +76,7 @@ class Geometry:
     track_rear: float  # m
     cg_height: float  # m, sprung CG above ground
     imu_position: Vector3  # m, relative to the sprung CG
+    imu_orientation: Vector3  # rad, roll, pitch, yaw of the sensor axes in the body axes
 
     def _check(self) -> None:
         for key in ("wheelbase", "lf", "lr", "track_front", "track_rear", "cg_height"):
@@ -111,11 +122,26 @@ class AxleSuspension:
     damper_pull: float  # N s/m, rebound (v < 0)
     arb_rate: float  # N/m, anti-roll bar
     arb_ratio: float  # -, gamma_arb of eq. (8)
+    roll_centre_height: float  # m, above ground at static ride height
+    anti_pitch_brake: float  # -, share of the axle's braking load transfer carried by links
+    anti_pitch_drive: float  # -, share of the axle's driving load transfer carried by links
+    bump_gap: float  # m, compression from static where the bump stop touches
+    rebound_gap: float  # m, extension from static where the rebound stop touches
+    stop_rate: float  # N/m, k_1 of the stops: F = k_1 x + k_2 x^2 past the gap
+    stop_progressive_rate: float  # N/m^2, k_2
 
     def _check(self) -> None:
         _positive(self, "spring_rate")
-        for key in ("damper_push", "damper_pull", "arb_rate", "arb_ratio"):
+        for key in (
+            "damper_push", "damper_pull", "arb_rate", "arb_ratio", "roll_centre_height",
+            "stop_progressive_rate",
+        ):  # fmt: skip
             _non_negative(self, key)
+        for key in ("bump_gap", "rebound_gap", "stop_rate"):
+            _positive(self, key)
+        for key in ("anti_pitch_brake", "anti_pitch_drive"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise _KeyError(key, f"must be in [0, 1], got {getattr(self, key)}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -123,7 +149,8 @@ class Suspension:
     front: AxleSuspension
     rear: AxleSuspension
     # Front share of the lateral load transfer (models/roll_split.py); default:
-    # the front share of the springs' and bars' roll stiffness.
+    # the front share of the springs' and bars' roll stiffness, with the
+    # roll-centre (link) moments when [model] geometric_transfer is on.
     roll_split_front: float | None = None
 
     def _check(self) -> None:
@@ -165,8 +192,26 @@ class FilterTuning:
 
 
 @dataclass(frozen=True, kw_only=True)
+class ModelTerms:
+    """Switches of the model terms beyond the paper (all false: the paper's model).
+
+    See ``wheelload.models.terms`` for what each term adds.
+    """
+
+    road_frame: bool  # equilibrium in the road frame (body roll/pitch from the travel)
+    body_inertia: bool  # I_xx p_dot, I_yy q_dot in the moment rows (needs body rates)
+    geometric_transfer: bool  # roll-centre and anti-pitch load through the links
+    stops: bool  # bump and rebound stops in the pseudo-measurement
+    unsprung_inertia: bool  # m_u a_hub per corner (needs hub accelerometers)
+    imu_lever_arm: bool  # specific force moved from the IMU to the CG (needs body rates)
+
+    def _check(self) -> None:
+        pass
+
+
+@dataclass(frozen=True, kw_only=True)
 class Vehicle:
-    """A vehicle: mass, geometry, tyres, aerodynamics, suspension, filter tuning."""
+    """A vehicle: mass, geometry, tyres, aerodynamics, suspension, model terms, filter tuning."""
 
     name: str
     description: str
@@ -175,6 +220,7 @@ class Vehicle:
     tyres: Tyres
     aero: Aero
     suspension: Suspension
+    model: ModelTerms
     filter: FilterTuning
     plant: Plant | None = None  # ground-truth simulator only (models/plant_params.py)
 
@@ -221,6 +267,10 @@ def _convert(value: object, kind: object, key: str) -> object:
         if not isinstance(value, str):
             raise VehicleFileError(f"key '{key}' must be a string, got {value!r}")
         return value
+    if kind is bool:
+        if not isinstance(value, bool):
+            raise VehicleFileError(f"key '{key}' must be true or false, got {value!r}")
+        return value
     if kind is float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise VehicleFileError(f"key '{key}' must be a number, got {value!r}")
@@ -250,12 +300,26 @@ def _build(cls: type, table: dict, prefix: str) -> object:
     unknown = sorted(set(table) - set(fields))
     if unknown:
         raise VehicleFileError(f"unknown key '{prefix}{unknown[0]}'")
+    sections = [
+        name
+        for name, field in fields.items()
+        if dataclasses.is_dataclass(hints[name])
+        and field.default is dataclasses.MISSING
+        and name not in table
+    ]
+    if sections:  # a whole missing section first: the usual sign of an older file
+        raise VehicleFileError(f"missing section [{prefix}{sections[0]}]{TEMPLATE_HINT}")
     values = {}
     for name, field in fields.items():
         if name not in table:
             if field.default is not dataclasses.MISSING:
                 continue
-            raise VehicleFileError(f"missing key '{prefix}{name}'")
+            what = (
+                f"section [{prefix}{name}]"
+                if dataclasses.is_dataclass(hints[name])
+                else f"key '{prefix}{name}'"
+            )
+            raise VehicleFileError(f"missing {what}{TEMPLATE_HINT}")
         values[name] = _convert(table[name], hints[name], f"{prefix}{name}")
     return cls(**values)
 

@@ -29,6 +29,7 @@ COMMANDS = (
     "wheelload.studies.commands.identify",
     "wheelload.studies.commands.tune",
     "wheelload.studies.commands.identify_study",
+    "wheelload.studies.commands.ablation",
 )
 
 

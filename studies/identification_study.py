@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import TwoStageKF, read_log
-from wheelload.estimators.identification import default_model, identify, read_drive
+from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
 from wheelload.estimators.identification.file_keys import lower_bounds, parameter_keys
 from wheelload.estimators.identification.fit import FitSettings
 from wheelload.estimators.identification.report import file_changes
@@ -99,6 +99,8 @@ def identified_text(text: str, log: Path) -> str:
     data = (read_drive(log, model.channel_names(), model.optional),)
     bounds = lower_bounds(table, keys)
     vehicle = load_vehicle_text(text)
+    # The terms the vehicle file switches on, where the log carries their inputs.
+    model = default_model(drive_gates(ModelParameters.from_vehicle(vehicle), data))
     result = identify(model, data, ModelParameters.from_vehicle(vehicle), FitSettings(lower=bounds))
     return set_values(text, file_changes(result, keys))
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import input_matrix, sample_intervals
-from wheelload.models import equilibrium_function, suspension_function
+from wheelload.models import equilibrium_function, gates_function, suspension_function
 
 
 def pseudo_measurements(
@@ -27,8 +27,11 @@ def pseudo_measurements(
     """z (n, 4), A (3, 4) and b (n, 3) of a whole log, mapped in CasADi."""
     n = len(signals)
     u = input_matrix(signals)
-    z = np.asarray(suspension_function().map(n)(u[0:4], u[4:8], p)).T
-    A, b = equilibrium_function().map(n)(u[8:11], u[11:12], p)
+    valid = np.isfinite(u).astype(float)
+    gates = np.asarray(gates_function().map(n)(valid, p)[0])
+    u = np.nan_to_num(u)
+    z = np.asarray(suspension_function().map(n)(u, gates, p)).T
+    A, b = equilibrium_function().map(n)(u, gates, p)
     return z, np.asarray(A)[:, :4], np.asarray(b).T
 
 

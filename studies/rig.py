@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 import pandas as pd
 
-from wheelload.models.plant import corner_suspension_force, corners, vehicle_plant
+from wheelload.models.plant import corner_suspension_force, corners
 from wheelload.models.suspension import anti_roll_bar_forces
 from wheelload.models.vehicle import WHEELS, Vehicle
 
@@ -57,11 +57,8 @@ def _sweep(settings: RigSettings) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def corner_force_function(vehicle: Vehicle, wheel: int) -> ca.Function:
     """``rig_corner(d, v) -> F``: the plant corner's force change from static [N]."""
     corner = corners(vehicle)[wheel]
-    stops = vehicle_plant(vehicle).stops
     d, v = ca.SX.sym("d"), ca.SX.sym("v")
-    force = corner_suspension_force(corner, stops, d, v, 0) - corner_suspension_force(
-        corner, stops, 0, 0, 0
-    )
+    force = corner_suspension_force(corner, d, v, 0) - corner_suspension_force(corner, 0, 0, 0)
     return ca.Function("rig_corner", [d, v], [force], ["d", "v"], ["F"])
 
 

@@ -1,6 +1,6 @@
 """Write a simulated log (CSV or Parquet by suffix) and its JSON metadata sidecar.
 
-Log columns (DESIGN.md): ``t vx ax ay az wx wy wz d_* v_* fz_*``; the
+Log columns (DESIGN.md): ``t vx ax ay az wx wy wz d_* v_* az_* fz_*``; the
 metadata ``LOG.meta.json`` records everything that produced the log.
 """
 
@@ -19,6 +19,7 @@ LOG_COLUMNS = (
     ("t", "vx", "ax", "ay", "az", "wx", "wy", "wz")
     + tuple(f"d_{w}" for w in WHEELS)
     + tuple(f"v_{w}" for w in WHEELS)
+    + tuple(f"az_{w}" for w in WHEELS)
     + tuple(f"fz_{w}" for w in WHEELS)
 )
 SUFFIXES = (".csv", ".parquet")

@@ -24,6 +24,14 @@ curve per sensor, repeatability 0.02 mm (1 sigma, assumed), 12-bit logger
 quantisation of the stroke (0.037 mm). The logged rate ``v`` is the true
 rate plus the backward difference of the displacement error, so ``v`` stays
 consistent with the noisy ``d``.
+
+Hub accelerometers (``az_fl .. az_rr``, the wheel accelerometers of
+semi-active damping systems; no datasheet is available to the project, so
+the figures are assumed for a ±50 g MEMS part): noise density 1 mg/√Hz,
+bandwidth 1 kHz, bias instability 1 mg, and a residual turn-on bias of 5 mg
+(1 sigma) after the zeroing at standstill such systems do (the IMU's
+assumption too); the same channel model as the IMU's. Written only when the
+truth has them.
 """
 
 from __future__ import annotations
@@ -53,6 +61,15 @@ class ImuModel:
 
 
 @dataclass(frozen=True, kw_only=True)
+class HubAccelerometerModel:
+    noise_density: float = 1000.0 * MICRO_G  # m/s^2/sqrt(Hz)
+    bandwidth: float = 1000.0  # Hz
+    bias: float = 5000.0 * MICRO_G  # m/s^2, 1 sigma residual bias after zeroing
+    bias_instability: float = 1000.0 * MICRO_G  # m/s^2
+    instability_time: float = 100.0  # s
+
+
+@dataclass(frozen=True, kw_only=True)
 class TravelSensorModel:
     full_scale: float = 0.150  # m, stroke
     linearity: float = 0.0025  # fraction of full scale
@@ -73,8 +90,12 @@ def measure(
     rng: np.random.Generator,
     imu: ImuModel = ImuModel(),
     travel: TravelSensorModel = TravelSensorModel(),
+    hub: HubAccelerometerModel = HubAccelerometerModel(),
 ) -> pd.DataFrame:
-    """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* fz_*``)."""
+    """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* az_* fz_*``).
+
+    The hub channels ``az_*`` are measured when ``truth`` has them.
+    """
     if scale < 0:
         raise ValueError(f"noise scale must be >= 0, got {scale}")
     dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
@@ -118,4 +139,18 @@ def measure(
         error = noisy - d
         log[f"d_{wheel}"] = noisy
         log[f"v_{wheel}"] = truth[f"v_{wheel}"].to_numpy() + np.diff(error, prepend=error[0]) / dt
+    for wheel in WHEELS:
+        if f"az_{wheel}" not in truth.columns:
+            continue
+        log[f"az_{wheel}"] = _imu_channel(
+            truth[f"az_{wheel}"].to_numpy(),
+            rng,
+            dt,
+            hub.noise_density,
+            hub.bandwidth,
+            hub.bias,
+            hub.bias_instability,
+            hub.instability_time,
+            scale,
+        )
     return log

@@ -116,11 +116,13 @@ def truth_frame(
     frame = {"t": dt * np.arange(1, len(states) + 1), "vx": states[:, STATE["u"]]}
     for axis in ("ax", "ay", "az"):
         frame[axis] = outputs[:, OUTPUT[axis]]
-    for axis, rate in (("wx", "p"), ("wy", "q"), ("wz", "r")):
-        frame[axis] = states[:, STATE[rate]]
+    for axis in ("wx", "wy", "wz"):  # IMU sensor axes
+        frame[axis] = outputs[:, OUTPUT[axis]]
     for prefix, state in (("d", "d"), ("v", "dd")):
         for wheel in WHEELS:
             frame[f"{prefix}_{wheel}"] = states[:, STATE[f"{state}_{wheel}"]]
+    for wheel in WHEELS:
+        frame[f"az_{wheel}"] = outputs[:, OUTPUT[f"az_{wheel}"]]
     for wheel in WHEELS:
         frame[f"fz_{wheel}"] = outputs[:, OUTPUT[f"fz_{wheel}"]]
     for key in ("s", "n", "psi", "phi", "theta", "z", "v"):

@@ -22,12 +22,15 @@ import numpy as np
 
 from wheelload.estimators.signals import Signals, derive_velocities
 from wheelload.models import (
+    GATES,
     GRAVITY,
+    INPUTS,
     ModelParameters,
     Vehicle,
     equilibrium_function,
     suspension_function,
 )
+from wheelload.models.inputs import input_vector
 from wheelload.models.roll_split import roll_split_function
 
 Profile = Callable[[np.ndarray], np.ndarray]
@@ -89,7 +92,8 @@ def travel_stiffness(vehicle: Vehicle) -> np.ndarray:
     """:math:`J = \\partial z / \\partial d` (4 x 4) of the suspension model at rest, in N/m."""
     d = ca.SX.sym("d", 4)
     p = ModelParameters.from_vehicle(vehicle).vector()
-    z = suspension_function()(d, ca.DM.zeros(4), p)
+    u = ca.vertcat(d, ca.DM.zeros(len(INPUTS) - 4))  # at rest; the travel leads INPUTS
+    z = suspension_function()(u, ca.DM.zeros(len(GATES)), p)
     return np.asarray(ca.Function("J", [d], [ca.jacobian(z, d)])(np.zeros(4)))
 
 
@@ -102,7 +106,9 @@ def reference_loads(vehicle: Vehicle, acc: np.ndarray, vx: np.ndarray) -> np.nda
     """Loads (n, 4) satisfying :math:`A x = b` with the roll moment shared by roll stiffness."""
     p = ModelParameters.from_vehicle(vehicle).vector()
     n = len(vx)
-    A, b = equilibrium_function().map(n)(acc.T, vx[None, :], p)
+    u = np.nan_to_num(input_vector(d=np.zeros((n, 4)), acc=acc, vx=vx))
+    # The paper's model (every term off): a synthetic log is quasi-static.
+    A, b = equilibrium_function().map(n)(u, np.zeros(len(GATES)), p)
     A = np.asarray(A)[:, :4]
     b = np.asarray(b).T
     split = np.asarray(roll_split_function()(p)).reshape(1, 4)

@@ -26,7 +26,7 @@ from wheelload.estimators.codegen import (
 )
 from wheelload.estimators.result import RESIDUALS, WHEELS
 from wheelload.estimators.two_stage import step_function
-from wheelload.models import example_vehicle_path, suspension_function
+from wheelload.models import INPUTS, example_vehicle_path, suspension_function
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 LOADS = [f"fz_{w}" for w in WHEELS]
@@ -45,9 +45,34 @@ def run_example(library, log_path):
     return pd.read_csv(out)
 
 
+def with_optional_channels(signals, rng):
+    """Body rates, their derivative and hub accelerometers, so that every model term runs.
+
+    Smooth signals of the slalom's frequencies (the C is compared with Python,
+    not with a plant); 2 % of their samples missing (the terms then drop).
+    """
+    t = signals.t
+    w = 2 * np.pi * 0.4
+    # Yaw rate of the slalom's own lateral acceleration (wz = ay / vx), so that
+    # the log passes the reader's wiring checks (vx wz : ay = 1).
+    yaw = signals.acc[:, 1] / signals.vx
+    rates = np.column_stack([-0.05 * np.cos(w * t), 0.02 * np.sin(w * t), yaw])
+    rate_dots = np.column_stack([0.05 * w * np.sin(w * t), 0.02 * w * np.cos(w * t),
+                                 np.gradient(yaw, t)])  # fmt: skip
+    hub = 9.81 + 3.0 * np.sin(2 * np.pi * 11.0 * t[:, None] + np.arange(4))
+    for array in (rates, rate_dots, hub):
+        rows = rng.choice(len(t), size=len(t) // 50, replace=False)
+        array[rows, rng.integers(array.shape[1], size=rows.size)] = np.nan
+    return dataclasses.replace(signals, rates=rates, rate_dots=rate_dots, hub=hub)
+
+
 @pytest.fixture(scope="module")
 def log_path(vehicle, tmp_path_factory):
-    """12 s slalom at 100 Hz with sensor noise and 2 % missing samples in random channels."""
+    """12 s slalom at 100 Hz with sensor noise and 2 % missing samples in random channels.
+
+    With body rates, their derivative and hub accelerometers, and a travel
+    into the bump stop, so that every model term of the vehicle file runs.
+    """
     signals = synthetic_log(
         vehicle,
         slalom(duration=12.0),
@@ -64,7 +89,9 @@ def log_path(vehicle, tmp_path_factory):
             vx[row] = np.nan
         else:
             target[row, channel % 4 if channel < 8 else channel - 8] = np.nan
+    d[300:310, 0] = 0.03 + 0.002 * np.arange(10)  # past the front bump-stop gap (26 mm)
     signals = dataclasses.replace(signals, d=d, v=v, acc=acc, vx=vx)
+    signals = with_optional_channels(signals, rng)
     path = tmp_path_factory.mktemp("log") / "drive.csv"
     write_log(signals, path)
     return path
@@ -126,10 +153,14 @@ def test_header_traces_the_vehicle_file_and_model(tmp_path_factory):
 
 def quadratic_damper_suspension():
     """A variant model: the bundled suspension plus a quadratic damper term 800 v|v|."""
-    d, v = ca.SX.sym("d", 4), ca.SX.sym("v", 4)
-    p = ca.SX.sym("p", suspension_function().size1_in(2))
-    z = suspension_function()(d, v, p) + 800.0 * v * ca.fabs(v)
-    return ca.Function("suspension_quadratic_damper", [d, v, p], [z], ["d", "v", "p"], ["z"])
+    base = suspension_function()
+    u, gates = ca.SX.sym("u", base.size1_in(0)), ca.SX.sym("gates", base.size1_in(1))
+    p = ca.SX.sym("p", base.size1_in(2))
+    v = u[INPUTS.index("v_fl") : INPUTS.index("v_rr") + 1]
+    z = base(u, gates, p) + 800.0 * v * ca.fabs(v)
+    return ca.Function(
+        "suspension_quadratic_damper", [u, gates, p], [z], ["u", "gates", "p"], ["z"]
+    )
 
 
 def test_changed_damper_model_changes_the_c(vehicle, tmp_path_factory, log_path):
@@ -185,30 +216,23 @@ STEP_DRIVER = r"""
 
 #include <stdio.h>
 
-/* Rows of dt and the 12 inputs (ax ay az vx d[4] v[4]) on stdin; loads and flags out. */
+/* Rows of dt and the inputs (order of wheelload_kf_input_names) on stdin; loads and flags out. */
 int main(void)
 {
     wheelload_kf_state state;
     wheelload_kf_output out;
     wheelload_kf_input in;
-    double dt, x[12];
+    double dt, x;
     int k;
     if (wheelload_kf_init(&state, &wheelload_kf_default_params) != 0) {
         return 1;
     }
     while (scanf("%lf", &dt) == 1) {
-        for (k = 0; k < 12; ++k) {
-            if (scanf("%lf", &x[k]) != 1) {
+        for (k = 0; k < WHEELLOAD_KF_N_INPUTS; ++k) {
+            if (scanf("%lf", &x) != 1) {
                 return 1;
             }
-        }
-        in.ax = (wheelload_kf_real)x[0];
-        in.ay = (wheelload_kf_real)x[1];
-        in.az = (wheelload_kf_real)x[2];
-        in.vx = (wheelload_kf_real)x[3];
-        for (k = 0; k < 4; ++k) {
-            in.d[k] = (wheelload_kf_real)x[4 + k];
-            in.v[k] = (wheelload_kf_real)x[8 + k];
+            *wheelload_kf_input_field(&in, k) = (wheelload_kf_real)x;
         }
         wheelload_kf_step(&state, &wheelload_kf_default_params, &in, (wheelload_kf_real)dt, &out);
         for (k = 0; k < 4; ++k) {
@@ -232,8 +256,7 @@ def test_bad_inputs_skip_updates_and_bad_intervals_hold_the_state(tmp_path_facto
     frame.loc[120, "t"] = frame.loc[119, "t"]
     t = frame["t"].to_numpy()
     dt = np.diff(t, prepend=2 * t[0] - t[1])  # the first interval is t[1] - t[0]
-    channels = ["ax", "ay", "az", "vx", *(f"d_{w}" for w in WHEELS), *(f"v_{w}" for w in WHEELS)]
-    rows = np.column_stack([dt, frame[channels].to_numpy()])
+    rows = np.column_stack([dt, frame[list(INPUTS)].to_numpy()])
     library = generated(tmp_path_factory, Precision.FLOAT, ParamMode.BAKED)
     driver = library.header.parent / "step_driver.c"
     driver.write_text(STEP_DRIVER)
@@ -245,6 +268,11 @@ def test_bad_inputs_skip_updates_and_bad_intervals_hold_the_state(tmp_path_facto
     c = np.loadtxt(result.stdout.splitlines())
     loads, flags = c[:, :4], c[:, 4].astype(int)
     assert len(c) == 200 and np.isfinite(loads).all()
-    assert flags[50] == StepFlag.VERTICAL_SKIPPED
+    # A missing az skips the vertical row; the road frame and link loads, which
+    # need every axis, are dropped for the sample and flagged.
+    assert flags[50] & 0xFF == StepFlag.VERTICAL_SKIPPED
+    assert flags[50] & StepFlag.ROAD_FRAME_OR_LINKS_DROPPED
+    # A rejected step sets every update and dropped-term bit (the input bits
+    # 20-22 are set by the Python reader only, never by the C).
     assert flags[120] == sum(StepFlag.update_flags()) | StepFlag.STEP_REJECTED
     np.testing.assert_array_equal(loads[120], loads[119])

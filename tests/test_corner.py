@@ -8,9 +8,9 @@ from wheelload.estimators.protocol import Estimator, samples, step_through
 from wheelload.estimators.signals import Signals, read_log
 from wheelload.models import (
     ModelParameters,
-    equilibrium_function,
     example_vehicle_path,
     load_vehicle,
+    paper_equilibrium_function,
 )
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.studies.commands.estimate import example_log_path
@@ -40,7 +40,7 @@ def test_settled_loads_meet_rigid_body_equilibrium_in_the_pitched_frame(ax):
     ]
     p = ModelParameters.from_vehicle(vehicle).vector()
     A, b = (np.asarray(m).ravel() if m.shape[1] == 1 else np.asarray(m) for m in
-            equilibrium_function()(rotated, 0.0, p))  # fmt: skip
+            paper_equilibrium_function()(rotated, 0.0, p))  # fmt: skip
     assert A @ loads == pytest.approx(b, abs=1e-6)  # N, N m
     assert loads[0] == pytest.approx(loads[1], abs=1e-9) and loads[2] == pytest.approx(loads[3])
 

@@ -1,36 +1,99 @@
-"""The estimators' equilibrium model (paper eq. 14-18) against the independent plant.
+"""The estimators' equilibrium model (paper eq. 14-18 and the issue 9 terms) against the plant.
 
 The plant integrates the full rigid-body and unsprung dynamics; its reference
-loads must satisfy the quasi-static :math:`A x = b` up to the inertia terms
-the model leaves out (body pitch/roll acceleration, unsprung heave), i.e. far
-better than a model with a wrong sign would. Measured on clean logs: residual
-RMS 76 / 216 / 63 (brake-in-turn) and 123 / 141 / 71 (slope-20) in N, N m,
-N m, against moment swings of 1134-1256 N m and a weight of 15.8 kN; the
-same log with the sign of the a_x term flipped gives a pitch residual of
-2393 N m (brake-in-turn).
+loads must satisfy the quasi-static :math:`A x = b` up to what the model
+leaves out. With the vehicle file's model terms (road frame, body inertia,
+lever arm, hub accelerometers) the residual must fall against the paper's
+model, row by row, on both bundled vehicles. Measured on clean logs (RMS,
+paper -> terms, N / N m / N m; `python -m wheelload.studies.equilibrium_table`):
+
+sports car  brake-in-turn  68 -> 4,   189 -> 36,  55 -> 39
+            iso-dlc        64 -> 2,     5 -> 11,  57 -> 33
+            hockenheim*   209 -> 13,  223 -> 69,  54 -> 59
+suv         brake-in-turn 361 -> 15,  663 -> 109, 248 -> 170
+            iso-dlc       451 -> 20,  109 -> 133, 548 -> 184
+            hockenheim*   596 -> 28,  951 -> 218, 276 -> 187
+
+(* the first 15 % of the lap; the test drives the first 5 %.)
 """
+
+import functools
 
 import numpy as np
 import pytest
 
-from wheelload.models import GRAVITY, ModelParameters, equilibrium_function
-from wheelload.studies.scenarios import scenario_run
+from wheelload.models import GRAVITY, load_vehicle
+from wheelload.models.vehicle import example_vehicle_path
+from wheelload.studies.equilibrium_residuals import (
+    paper_model,
+    residual_rms,
+    suspension_residual_rms,
+    with_terms,
+)
+from wheelload.studies.scenarios import Options, scenario_run
 from wheelload.studies.simulation import simulate
 
+VEHICLES = {
+    "sports_car": example_vehicle_path(),
+    "suv": example_vehicle_path().with_name("suv.toml"),
+}
+# A moment row the manoeuvre barely excites (paper residual below 150 N m,
+# 1 % of the weight at a 1 m arm) may rise a little: the body-rate derivative
+# is a filtered one and lags; allowed 30 N m.
+QUIET_ROW = 150.0
+QUIET_RISE = 30.0
 
-@pytest.mark.parametrize("name", ["brake-in-turn", "slope-20"])
-def test_plant_loads_satisfy_the_equilibrium_model(vehicle, name):
-    frame = simulate(vehicle, scenario_run(name, vehicle)).frame
-    acc = frame[["ax", "ay", "az"]].to_numpy()
-    loads = frame[["fz_fl", "fz_fr", "fz_rl", "fz_rr"]].to_numpy()
-    p = ModelParameters.from_vehicle(vehicle).vector()
-    A, b = equilibrium_function().map(len(frame))(acc.T, frame["vx"].to_numpy()[None, :], p)
-    A, b = np.asarray(A)[:, :4], np.asarray(b).T
-    residual = np.sqrt(np.mean((loads @ A.T - b) ** 2, axis=0))
-    swing = np.sqrt(np.mean((b - b.mean(axis=0)) ** 2, axis=0))
+
+@functools.cache
+def clean_log(car, name):
+    vehicle = load_vehicle(VEHICLES[car])
+    return vehicle, simulate(vehicle, scenario_run(name, vehicle, Options(shorten=0.05))).frame
+
+
+@pytest.mark.parametrize("car", sorted(VEHICLES))
+@pytest.mark.parametrize("name", ["brake-in-turn", "iso-dlc", "hockenheim"])
+def test_plant_residual_falls_with_the_model_terms(car, name):
+    vehicle, frame = clean_log(car, name)
+    paper = residual_rms(paper_model(vehicle), frame)
+    terms = residual_rms(vehicle, frame)
     weight = vehicle.mass.total * GRAVITY
-    assert residual[0] < 0.015 * weight  # vertical: unsprung heave and bump inertia, < 1.5 %
-    moving = swing[1:] > 500.0  # N m: the moment rows this manoeuvre really excites
-    assert moving.any()
-    # pitch and roll: the residual (inertia left out) stays below 35 % of the swing
-    assert np.all(residual[1:][moving] < 0.35 * swing[1:][moving])
+    # vertical: the road-frame rotation and hub accelerometers take out >= 80 %
+    assert terms["vertical"] < 0.2 * paper["vertical"]
+    assert terms["vertical"] < 0.003 * weight
+    for row in ("pitch", "roll"):
+        if paper[row] > QUIET_ROW:
+            assert terms[row] < paper[row], (row, paper, terms)
+        else:
+            assert terms[row] < paper[row] + QUIET_RISE, (row, paper, terms)
+
+
+def test_a_wrong_sign_is_caught():
+    """The check can fail: the paper's printed +m h a_x sign gives a large pitch residual."""
+    vehicle, frame = clean_log("sports_car", "brake-in-turn")
+    flipped = frame.assign(ax=-frame["ax"])
+    assert residual_rms(vehicle, flipped)["pitch"] > 5 * residual_rms(vehicle, frame)["pitch"]
+    assert np.isfinite(list(residual_rms(vehicle, frame).values())).all()
+
+
+@pytest.mark.parametrize("car", sorted(VEHICLES))
+def test_plant_pseudo_measurement_error_falls_with_link_loads(car):
+    """Roll-centre and anti-pitch link loads: the plant's links carry them.
+
+    Measured (pooled RMS of z - F_ref, clean brake-in-turn): sports car 88.8 ->
+    27.7 N, SUV 271.8 -> 132.3 N with the link loads alone.
+    """
+    vehicle, frame = clean_log(car, "brake-in-turn")
+    paper = suspension_residual_rms(paper_model(vehicle), frame)
+    links = suspension_residual_rms(
+        with_terms(paper_model(vehicle), geometric_transfer=True), frame
+    )
+    assert links < 0.6 * paper
+
+
+def test_kerb_strike_pseudo_measurement_falls_with_hub_accelerometers_and_stops():
+    """wheel-lift: the inner wheels hit a 6 cm kerb; unsprung inertia and stops matter."""
+    vehicle, frame = clean_log("sports_car", "wheel-lift")
+    links = with_terms(paper_model(vehicle), geometric_transfer=True)
+    without = suspension_residual_rms(links, frame)
+    hub = suspension_residual_rms(with_terms(links, unsprung_inertia=True, stops=True), frame)
+    assert hub < 0.7 * without

@@ -63,12 +63,15 @@ def test_warnings_a_user_acts_on(example):
     frame = example.copy()
     frame["t"] = frame["t"] * 100.0 / 77.0  # a 77 Hz log
     frame["d_rr"] = 0.0  # a dead sensor logged as zero
-    frame["v_fl"] = frame["v_fl"].abs()  # a speed magnitude
+    # A speed magnitude. v_fr: on the example log (plant with link loads, which
+    # take part of the load transfer past the springs) |v_fl| peaks at 0.048 m/s,
+    # below the 0.05 m/s a channel must reach to be judged; |v_fr| reaches 0.052.
+    frame["v_fr"] = frame["v_fr"].abs()
     found = signal_warnings(signals_from_frame(frame, source="fs.csv"))
     assert len(found) == 3
     assert "sample rate 77 Hz is below 100 Hz" in found[0]
     assert any("'d_rr' is flat at zero" in warning for warning in found)
-    assert any("'v_fl' is never negative" in warning for warning in found)
+    assert any("'v_fr' is never negative" in warning for warning in found)
     assert signal_warnings(signals_from_frame(example, source="ok.csv")) == []
 
 

@@ -18,7 +18,7 @@ from wheelload.estimators.protocol import step_through
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals, read_log
 from wheelload.estimators.two_stage import sample_intervals, tuning_vector
-from wheelload.models import GRAVITY, ModelParameters, equilibrium_function, static_loads
+from wheelload.models import GRAVITY, ModelParameters, paper_equilibrium_function, static_loads
 from wheelload.studies.commands.estimate import example_log_path
 
 
@@ -127,7 +127,7 @@ def test_constrained_observer_is_the_two_stage_filter_on_the_observer_output(veh
     constrained = ConstrainedQuarterCar(vehicle).run(example)
     p = ModelParameters.from_vehicle(vehicle).vector()
     n = len(example)
-    A, b = equilibrium_function().map(n)(example.acc.T, example.vx[None], p)
+    A, b = paper_equilibrium_function().map(n)(example.acc.T, example.vx[None], p)
     expected = numpy_two_stage(
         front, np.asarray(A)[:, :4], np.asarray(b).T, sample_intervals(example.t),
         tuning_vector(vehicle), static_loads(vehicle),
@@ -135,9 +135,13 @@ def test_constrained_observer_is_the_two_stage_filter_on_the_observer_output(veh
     )  # fmt: skip
     # Sequential vs joint update of one linear-Gaussian problem: rounding (1e-9 relative).
     np.testing.assert_allclose(constrained.loads, expected, rtol=1e-9)
-    # The soft equilibrium pulls the observer's loads towards A x = b.
+    # The soft equilibrium pulls the observer's loads towards A x = b. Bound 0.6
+    # (was 0.5): the example log now comes from the plant with link forces and
+    # body inertia, whose own loads leave a residual on the paper's rows (about
+    # 64 N vertical, 57 N m roll RMS on the lane change) that no filter on those
+    # rows removes; measured ratio 0.41 on the previous example log, 0.50 now.
     observer = QuarterCarObserver(vehicle).run(example)
-    assert rms(constrained.residual) < 0.5 * rms(observer.residual)
+    assert rms(constrained.residual) < 0.6 * rms(observer.residual)
 
 
 def linear_vehicle(vehicle, load_noise=None):

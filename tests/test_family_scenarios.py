@@ -36,6 +36,10 @@ def test_method_runs_on_plant_logs_with_finite_output(name, logs):
             assert np.all(np.isfinite(array)), f"{name} on {log}"
         assert not np.any(estimate.flags), f"{name} on {log}: no input is missing"
         # Sign or unit errors give tens of percent; the paper's own spread on Hockenheim
-        # (Table IV) is 1.9-10.9 % per wheel. Every method must stay inside 6 % pooled.
+        # (Table IV) is 1.9-10.9 % per wheel. Every method must stay inside 8 % pooled
+        # (was 6 %): the family methods use the paper's spring-only model, and the plant
+        # now passes part of the load transfer through roll centres and anti-pitch links,
+        # which that model lacks (measured on this stretch: 6.5-7.0 % for D, E, F, ycoo,
+        # umvf and road-angle; the two-stage KF with the model terms stays far below).
         pooled = wheel_metrics(estimate.loads, signals.reference).loc["pooled", "RMSE %"]
-        assert pooled < 6.0, f"{name} on {log}: pooled RMSE {pooled:.2f} %"
+        assert pooled < 8.0, f"{name} on {log}: pooled RMSE {pooled:.2f} %"

@@ -51,7 +51,9 @@ def test_stuck_or_dead_travel_sensor_isolated_within_half_a_second(vehicle, logs
     assert np.all(guarded.flags[flagged] & skipped == skipped)
     after = fi.pooled_rmse(guarded.loads, signals.reference)
     before = fi.pooled_rmse(unguarded.loads, signals.reference)
-    assert after < 100.0 < 150.0 < before
+    # Plant with link forces: the stuck sensor costs the unguarded filter 132 N on iso-dlc
+    # (212-1917 N elsewhere); the guarded one 36-95 N: at least 3 x better everywhere.
+    assert after < 100.0 and 3.0 * after < before
 
 
 def test_drifting_travel_sensor_isolated(vehicle, logs):

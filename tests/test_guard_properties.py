@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.guard import GRAVITY, GuardSettings
 from wheelload.estimators.two_stage import input_matrix, nominal_interval, sample_intervals
-from wheelload.models import equilibrium_function, suspension_function
+from wheelload.models import equilibrium_function, gates_function, suspension_function
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 N = 300
@@ -73,12 +73,15 @@ def in_range(vehicle, u):
     return ok | ~np.isfinite(u)  # a missing value is missing, not implausible
 
 
-def measurements(kf, u):
-    """z (n, 4), A (n, 3, 4), b (n, 3) of finite inputs (a missing input enters as 0, unused)."""
-    u = np.where(np.isfinite(u), u, 0.0).T
+def measurements(vehicle, kf, u):
+    """z (n, 4), A (n, 3, 4), b (n, 3); a missing or implausible input enters as 0 and
+    gates off the model terms it feeds, as in the filter (the rows it feeds are unused)."""
+    valid = (np.isfinite(u) & in_range(vehicle, np.where(np.isfinite(u), u, 0.0))).T
+    u = np.where(valid, u.T, 0.0)
     n = u.shape[1]
-    z = np.asarray(suspension_function().map(n)(u[0:4], u[4:8], kf.p)).T
-    A, b = equilibrium_function().map(n)(u[8:11], u[11:12], kf.p)
+    gates = gates_function().map(n)(valid.astype(float), kf.p)[0]
+    z = np.asarray(suspension_function().map(n)(u, gates, kf.p)).T
+    A, b = equilibrium_function().map(n)(u, gates, kf.p)
     return z, np.asarray(A).reshape(3, n, 4).transpose(1, 0, 2), np.asarray(b).T
 
 
@@ -118,7 +121,7 @@ def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(vehicle, ba
     assert not np.any(flags & StepFlag.STEP_REJECTED)
     # Each sample's state is the numpy step with exactly the used rows.
     dt, nominal = sample_intervals(signals.t), nominal_interval(signals.t)
-    z, A, b = measurements(kf, u)
+    z, A, b = measurements(vehicle, kf, u)
     skipped = [flag.value for flag in StepFlag.update_flags()]
     for k in range(1, len(signals)):
         rows = [i for i in range(7) if not flags[k] & skipped[i]]

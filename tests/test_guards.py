@@ -15,8 +15,8 @@ import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.guard import GRAVITY, GuardSettings
-from wheelload.estimators.two_stage import nominal_interval, sample_intervals
-from wheelload.models import equilibrium_function, suspension_function
+from wheelload.estimators.two_stage import input_matrix, nominal_interval, sample_intervals
+from wheelload.models import equilibrium_function, gates_function, suspension_function
 from wheelload.studies.fault_injection import GUARDS_OFF, pooled_rmse
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())
@@ -70,9 +70,11 @@ def test_implausible_sample_is_skipped_exactly_and_flagged(vehicle, dlc, values,
 
 def reference_step(kf, x, P, signals, k, dt, rows):
     """Independent numpy step: predict, then the scalar updates of ``rows`` only (0-6)."""
-    u = np.concatenate([signals.d[k], signals.v[k], signals.acc[k], [signals.vx[k]]])
-    z = np.asarray(suspension_function()(u[0:4], u[4:8], kf.p)).ravel()
-    A, b = (np.asarray(a) for a in equilibrium_function()(u[8:11], u[11], kf.p))
+    u_raw = input_matrix(signals)[:, k]
+    u, valid = np.nan_to_num(u_raw), np.isfinite(u_raw).astype(float)
+    gates = gates_function()(valid, kf.p)[0]
+    z = np.asarray(suspension_function()(u, gates, kf.p)).ravel()
+    A, b = (np.asarray(a) for a in equilibrium_function()(u, gates, kf.p))
     nominal = nominal_interval(signals.t)
     q, r_s, r_c = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
     H = np.vstack([np.eye(4), A])

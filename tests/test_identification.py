@@ -24,7 +24,7 @@ from wheelload.estimators.identification import (
 )
 from wheelload.estimators.identification.model import TRAVEL, TRAVEL_RATE
 from wheelload.estimators.identification.regressors import prediction
-from wheelload.models import ModelParameters, suspension_function
+from wheelload.models import ModelParameters, travel_function
 from wheelload.models.plant import damper_map_force
 from wheelload.studies.rig import RigSettings, rig_sweep, write_rig
 
@@ -165,7 +165,7 @@ def progressive_spring_model():
     d, v = ca.SX.sym("d", 4), ca.SX.sym("v", 4)
     p_vector, p = ModelParameters.symbolic()
     springs = ca.vertcat(p.spring_front, p.spring_front, p.spring_rear, p.spring_rear)
-    z = suspension_function()(d, v, p_vector) + 20.0 * springs * d**2
+    z = travel_function()(d, v, p_vector) + 20.0 * springs * d**2
     function = ca.Function("suspension_progressive", [d, v, p_vector], [z], ["d", "v", "p"], ["z"])
     return SuspensionModel(
         function=function,
@@ -202,7 +202,7 @@ def stacked_input_model():
     u = ca.SX.sym("u", 12)
     p_vector, p = ModelParameters.symbolic()
     side = ca.DM([-1.0, 1.0, -1.0, 1.0])
-    z = suspension_function()(u[0:4], u[4:8], p_vector) + side * 800.0 * u[9] * p.cg_height
+    z = travel_function()(u[0:4], u[4:8], p_vector) + side * 800.0 * u[9] * p.cg_height
     function = ca.Function("suspension_links", [u, p_vector], [z], ["u", "p"], ["z"])
     return SuspensionModel(
         function=function,

@@ -114,19 +114,25 @@ def test_tuning_holds_across_sample_rates(vehicle):
 def test_missing_samples_skip_their_updates_and_never_emit_nan(vehicle, drive):
     d, acc, vx = drive.d.copy(), drive.acc.copy(), drive.vx.copy()
     d[100:110, 0] = np.nan  # FL travel: FL and FR (anti-roll bar) pseudo-measurements
-    acc[200:205, 2] = np.inf  # az: vertical row only
+    acc[200:205, 2] = np.inf  # az: vertical row only (level IMU; road frame dropped)
     vx[300:303] = np.nan  # speed feeds lift and drag: vertical and pitch rows
     broken = type(drive)(t=drive.t, vx=vx, acc=acc, d=d, v=drive.v, source="broken")
     estimate = TwoStageKF(vehicle).run(broken)
     assert np.isfinite(estimate.loads).all() and np.isfinite(estimate.std).all()
     assert np.isfinite(estimate.residual[np.isfinite(vx) & np.isfinite(acc).all(axis=1)]).all()
     F = StepFlag
-    assert (estimate.flags[100:110] == F.SUSPENSION_FL_SKIPPED | F.SUSPENSION_FR_SKIPPED).all()
-    assert (estimate.flags[200:205] == F.VERTICAL_SKIPPED).all()
-    assert (estimate.flags[300:303] == F.VERTICAL_SKIPPED | F.PITCH_SKIPPED).all()
+    updates = estimate.flags & 0xFF  # skipped updates; bits 16-19 flag dropped model terms
+    assert (updates[100:110] == F.SUSPENSION_FL_SKIPPED | F.SUSPENSION_FR_SKIPPED).all()
+    assert (updates[200:205] == F.VERTICAL_SKIPPED).all()
+    assert (updates[300:303] == F.VERTICAL_SKIPPED | F.PITCH_SKIPPED).all()
     untouched = np.ones(len(drive), bool)
     untouched[[*range(100, 110), *range(200, 205), *range(300, 303)]] = False
-    assert (estimate.flags[untouched] == 0).all()
+    assert (updates[untouched] == 0).all()
+    # the synthetic log has no body rates or hub accelerometers: those terms drop everywhere
+    always = F.BODY_INERTIA_DROPPED | F.UNSPRUNG_INERTIA_DROPPED | F.IMU_TERMS_DROPPED
+    assert (estimate.flags[untouched] == always).all()
+    attitude = estimate.flags & F.ROAD_FRAME_OR_LINKS_DROPPED
+    assert attitude[100:110].all() and attitude[200:205].all() and attitude[300:303].all()
 
 
 def test_skipped_row_changes_nothing():
@@ -198,7 +204,9 @@ def test_an_invalid_interval_is_rejected_and_the_state_held(vehicle, drive, dt):
     held, estimate = kf.step(state, sample, dt)
     np.testing.assert_array_equal(held.x, state.x)
     np.testing.assert_array_equal(held.P, state.P)
-    assert estimate.flags[0] == 255  # every update skipped, step rejected (as the C step)
+    # Every update and dropped-term flag set, step rejected (as the C step); the
+    # input bits 20-22 belong to the log, not to the step.
+    assert estimate.flags[0] == sum(StepFlag.update_flags()) | StepFlag.STEP_REJECTED
     assert np.isfinite(estimate.loads).all() and np.isfinite(estimate.std).all()
 
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.projection import ProjectionKF, Weighting, project
 from wheelload.estimators.two_stage import sample_intervals
-from wheelload.models import ModelParameters, equilibrium_function
+from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 NOISE = SensorNoise(acceleration=0.05, travel=0.0003)
@@ -23,7 +23,8 @@ def drive(vehicle):
 
 
 def equilibrium_matrix(vehicle):
-    A, _ = equilibrium_function()(np.zeros(3), 0.0, ModelParameters.from_vehicle(vehicle).vector())
+    p = ModelParameters.from_vehicle(vehicle).vector()
+    A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), p)
     return np.asarray(A)
 
 

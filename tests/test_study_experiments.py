@@ -1,5 +1,6 @@
 """``wheelload study`` experiments in --quick mode: the runner, its cache and Dask, end to end."""
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -121,10 +122,16 @@ def test_vehicle_variants_edit_only_their_keys():
     assert len(cases) == 11
     heavy = next(v for v in cases if v.label == "mass +20 %").apply(text)
     assert np.isclose(value(heavy, "mass", "sprung"), 1.2 * value(text, "mass", "sprung"))
-    # The model-fidelity switches become ablation cases when the file has a [model] section.
-    switches = model_switches(text + "\n[model]\nroad_frame = false\nbody_inertia = true\n")
-    assert [v.label for v in switches] == ["model road_frame on", "model body_inertia off"]
-    assert model_switches(text) == [] or "[model]" in text
+    # The model-fidelity switches become ablation cases: each of the [model] section flipped.
+    switches = model_switches(text)
+    assert [v.label for v in switches] == [
+        f"model {key} off"
+        for key in ("road_frame", "body_inertia", "geometric_transfer", "stops",
+                    "unsprung_inertia", "imu_lever_arm")
+    ]  # fmt: skip
+    assert tomllib.loads(switches[0].apply(text))["model"]["road_frame"] is False
+    without = text.replace("[model]", "[switches]")  # no [model] section: no cases
+    assert model_switches(without) == []
 
 
 def test_cache_key_follows_the_vehicle_bytes():

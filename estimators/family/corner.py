@@ -42,7 +42,12 @@ from wheelload.estimators.family.compiled_method import (
 )
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import StepFlag
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function, vehicle_mass_centre
+from wheelload.models import (
+    ModelParameters,
+    Vehicle,
+    paper_equilibrium_function,
+    vehicle_mass_centre,
+)
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.models.corner_loads import corner_load_function
 
@@ -99,7 +104,7 @@ def step_function(vehicle: Vehicle, settings: CornerSettings) -> ca.Function:
     new_angles = ca.if_else(ok, ca.if_else(acc_ok, with_acc, only_rates), angles)
     loads = corner_load_function()(acc, new_angles[0], new_angles[1], cp)
     loads = ca.if_else(ca.logic_and(ok, acc_ok), loads, held)
-    A_eq, b_eq = equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
     residual = ca.if_else(acc_ok * valid[11], b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - acc_ok, rejected)

@@ -32,7 +32,7 @@ from wheelload.estimators.family.step_method import StepMethod, step_function, s
 from wheelload.estimators.kalman import predict, sequential_update, upper
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.two_stage import TUNING, tuning_vector
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function
+from wheelload.models import ModelParameters, Vehicle, paper_equilibrium_function
 
 N_STATES = FRONT_END_STATES + 4 + 16  # observer, x, P (column-major)
 
@@ -45,7 +45,7 @@ def constrained_step() -> ca.Function:
     x = sym.s[FRONT_END_STATES : FRONT_END_STATES + 4]
     P = ca.reshape(sym.s[FRONT_END_STATES + 4 :], 4, 4)
     tuning = sym.c[FRONT_END_CONSTANTS:]
-    A, b = equilibrium_function()(sym.acc, sym.vx, sym.p_vector)
+    A, b = paper_equilibrium_function()(sym.acc, sym.vx, sym.p_vector)
     mask_c = sym.mask(b)
     Q = tuning[0] * sym.dt * ca.DM.eye(4)
     rs = ca.repmat(tuning[1] / sym.dt, 4, 1)

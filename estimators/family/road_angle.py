@@ -60,8 +60,8 @@ from wheelload.models import (
     GRAVITY,
     ModelParameters,
     Vehicle,
-    equilibrium_function,
-    suspension_function,
+    paper_equilibrium_function,
+    travel_function,
 )
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.road_angle import STATE_NAMES, BodyInertia, road_angle_model
@@ -117,7 +117,7 @@ def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
     dt_safe = ca.if_else(ok, dt, 1.0)
 
     roll, pitch, acc_road = attitude_function(vehicle)(d, acc)
-    loads_measured = suspension_function()(d, v, p)
+    loads_measured = travel_function()(d, v, p)
     z = ca.vertcat(roll, rates[0], pitch, rates[1], loads_measured, acc_road)
     travel_ok = valid[0] * valid[1] * valid[2] * valid[3]
     acc_ok = travel_ok * valid[8] * valid[9] * valid[10]
@@ -163,7 +163,7 @@ def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
 
     loads = x_new[4:8]
     std = ca.sqrt(ca.fmax(ca.diag(P_new)[4:8], 0))
-    A_eq, b_eq = equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
     eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
     residual = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok

@@ -39,7 +39,7 @@ from wheelload.estimators.two_stage import (
     interval_is_valid,
     sample_intervals,
 )
-from wheelload.models import ModelParameters, equilibrium_function
+from wheelload.models import ModelParameters, paper_equilibrium_function
 
 #: Per-sample inputs of the family's steps: the KF's, then the body rates [rad/s].
 FAMILY_INPUTS = (*INPUTS, "wx", "wy", "wz")
@@ -117,7 +117,7 @@ def step_function(name: str, sym: StepSymbols, s_next, loads, std, used_suspensi
 
     A rejected interval holds the state (``s_next = s``).
     """
-    A, b = equilibrium_function()(sym.acc, sym.vx, sym.p_vector)
+    A, b = paper_equilibrium_function()(sym.acc, sym.vx, sym.p_vector)
     mask_c = sym.mask(b)
     residual = (b - ca.mtimes(A, loads)) * mask_c
     s_next = ca.if_else(sym.dt_ok, s_next, sym.s)

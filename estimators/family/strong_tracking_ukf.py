@@ -56,7 +56,7 @@ from wheelload.estimators.family.step_method import (
 from wheelload.estimators.family.unscented import sigma_points, unscented_transform
 from wheelload.estimators.kalman import sequential_update, symmetrise
 from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle, suspension_function
+from wheelload.models import ModelParameters, Vehicle, travel_function
 
 #: Process noise densities of d [m^2/s] and v [(m/s)^2/s]: unmodelled corner kinematics, about
 #: 0.5 m/s^2 of body-corner acceleration error at 100 Hz ((0.5 * 0.01)^2 / 0.01).
@@ -120,7 +120,7 @@ def strong_tracking_step() -> ca.Function:
     """Step: state = 4 corners (x, P, V) and the previous rates; constants see module."""
     sym = step_symbols(N_STATES, N_CONSTANTS)
     a_s, rate_state = body_corner_accelerations(sym, sym.s[4 * CORNER_STATES :], sym.c)
-    z_mask = sym.mask(suspension_function()(sym.d, sym.v, sym.p_vector))
+    z_mask = sym.mask(travel_function()(sym.d, sym.v, sym.p_vector))
     ok = z_mask * sym.mask(sym.acc[2])
     states, loads, stds = [], [], []
     for i in range(4):

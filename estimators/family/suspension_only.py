@@ -2,7 +2,7 @@ r"""Method D, suspension-only: the pseudo-measurement alone (Siegloff & Choi §I
 
 .. math:: \hat F_{z,i} = z_i(d, v) = F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i
 
-the suspension model of §II-B (eq. 3-9, :func:`wheelload.models.suspension_function`)
+the suspension model of §II-B (eq. 3-9, :func:`wheelload.models.travel_function`)
 evaluated sample by sample, without filtering or constraint. Adaptation: a
 wheel whose travel or rate (or the anti-roll-bar partner's travel) is
 missing keeps its previous estimate and is flagged. No standard deviation.
@@ -22,14 +22,14 @@ from wheelload.estimators.family.step_method import (
     step_symbols,
 )
 from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle, suspension_function
+from wheelload.models import ModelParameters, Vehicle, travel_function
 
 
 @functools.cache
 def suspension_only_step() -> ca.Function:
     """Step: state = last loads; loads = the suspension model where its inputs are valid."""
     sym = step_symbols(4, 0)
-    z = suspension_function()(sym.d, sym.v, sym.p_vector)
+    z = travel_function()(sym.d, sym.v, sym.p_vector)
     mask = sym.mask(z)
     loads = hold(mask, z, sym.s)
     return step_function("wheelload_suspension_only_step", sym, loads, loads, ca.SX.zeros(4), mask)

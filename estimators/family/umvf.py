@@ -69,10 +69,10 @@ from wheelload.estimators.family.compiled_method import (
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.two_stage import MAX_INTERVAL
-from wheelload.models import GRAVITY, ModelParameters, Vehicle, equilibrium_function
+from wheelload.models import GRAVITY, ModelParameters, Vehicle, paper_equilibrium_function
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.quarter_car import reduced_quarter_car_function
-from wheelload.models.suspension import suspension_function
+from wheelload.models.suspension import travel_function
 
 RANK_TOLERANCE = 1e-9
 
@@ -238,7 +238,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     names = ModelParameters.names()
     static = ca.vertcat(*[p[names.index(f"static_{w}")] for w in ("fl", "fr", "rl", "rr")])
     spring, damper = constants["spring"], constants["damper"]
-    extra = suspension_function()(d, v, p) - static - spring * d - damper * v
+    extra = travel_function()(d, v, p) - static - spring * d - damper * v
     a_s = corner_vertical_acceleration(acc[2], rate_acc[0], rate_acc[1], corner_positions(vehicle))
     Q = ca.diag(ca.vertcat(tuning.travel_density, tuning.travel_rate_density)) * dt_safe
     R = ca.DM(tuning.R)
@@ -265,7 +265,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     memory_new = ca.vertcat(
         *columns["u"], loads, rates_new, ca.if_else(ok * valid[12] * valid[13], 1, started)
     )
-    A_eq, b_eq = equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
     eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
     residual_eq = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok

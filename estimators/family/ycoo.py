@@ -60,7 +60,7 @@ from wheelload.estimators.family.compiled_method import (
 )
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import StepFlag
-from wheelload.models import ModelParameters, Vehicle, equilibrium_function
+from wheelload.models import ModelParameters, Vehicle, paper_equilibrium_function
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.quarter_car import tyre_load_function
 from wheelload.models.vehicle import GRAVITY
@@ -161,7 +161,7 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
     a_s = corner_vertical_acceleration(y[4] + GRAVITY, y_dot[5], y_dot[6], positions)
     a_u = a_s + y_ddot[0:4].T
     loads = tyre_load_function()(y[0:4].T, y_dot[0:4].T, a_u, mu, p)
-    A_eq, b_eq = equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
     residual = b_eq - ca.mtimes(A_eq, loads)
     rejected = 1 - ok
     acc_missing = 1 - valid[8] * valid[9] * valid[10] * valid[11]

@@ -5,7 +5,13 @@ Regressors are Jacobians of the model Functions in ``wheelload.models``
 of the filter's own innovations.
 """
 
-from wheelload.estimators.identification.data import DataKind, DataSet, read_drive, read_rig
+from wheelload.estimators.identification.data import (
+    DataKind,
+    DataSet,
+    drive_gates,
+    read_drive,
+    read_rig,
+)
 from wheelload.estimators.identification.fit import FitSettings, Identification, Loss, identify
 from wheelload.estimators.identification.model import (
     SuspensionModel,
@@ -21,6 +27,7 @@ __all__ = [
     "Loss",
     "SuspensionModel",
     "default_model",
+    "drive_gates",
     "identify",
     "piecewise_model",
     "read_drive",

@@ -30,7 +30,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.signals import LogError, signals_from_frame
+from wheelload.estimators.signals import (
+    RATE_DERIVATIVES,
+    LogError,
+    rate_derivatives,
+    signals_from_frame,
+)
 
 WHEELS = ("fl", "fr", "rl", "rr")
 AXLES = ("front", "rear")
@@ -63,6 +68,7 @@ class DataSet:
     target: np.ndarray
     rows: tuple[str, ...]
     location: int = -1
+    absent: frozenset[str] = frozenset()  # optional channels the log lacks (filled with 0)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -86,6 +92,7 @@ class DataSet:
             target=self.target[index],
             rows=self.rows,
             location=self.location,
+            absent=self.absent,
         )
 
     def with_target(self, target: np.ndarray) -> DataSet:
@@ -98,6 +105,7 @@ class DataSet:
             target=np.asarray(target, float).reshape(self.target.shape),
             rows=self.rows,
             location=self.location,
+            absent=self.absent,
         )
 
 
@@ -197,6 +205,18 @@ def read_rig(path: str | Path) -> tuple[DataSet, ...]:
     return tuple(sets)
 
 
+def drive_gates(p, sets: tuple[DataSet, ...]) -> tuple[float, ...]:
+    """Term gates of the vehicle's [model] switches for the drive logs in ``sets``.
+
+    A term whose optional input one of the logs lacks is off for all of them
+    (the model's gates are constants of the fit).
+    """
+    from wheelload.estimators.identification.model import model_gates
+
+    absent = frozenset().union(*(s.absent for s in sets if s.kind is DataKind.DRIVE))
+    return model_gates(p, absent)
+
+
 def read_drive(
     path: str | Path, channels: tuple[str, ...], optional: frozenset[str] = frozenset()
 ) -> DataSet:
@@ -230,7 +250,12 @@ def read_drive(
         frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]), source=source
     )
     validated = signals.to_frame()
+    if signals.rates is not None and signals.rate_dots is None:
+        derived = rate_derivatives(signals)
+        if np.isfinite(derived).any():
+            validated[list(RATE_DERIVATIVES)] = derived
     table = {}
+    absent = set()
     for name in channels:
         if name in validated.columns:
             values = validated[name].to_numpy(float)
@@ -238,6 +263,7 @@ def read_drive(
             values = pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
         elif name in optional:
             values = np.zeros(len(frame))
+            absent.add(name)
         else:
             raise LogError(f"{source}: the suspension model needs channel '{name}', not in the log")
         table[name] = values[:, None]
@@ -250,4 +276,5 @@ def read_drive(
         signals=table,
         target=reference,
         rows=WHEELS,
+        absent=frozenset(absent),
     )

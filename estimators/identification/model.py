@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from wheelload.models import ModelParameters, suspension_function
+from wheelload.models import GATES, ModelParameters, gates_function, suspension_function
+from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
 from wheelload.models.suspension import (
     piecewise_damper_names,
     piecewise_damper_suspension_function,
@@ -44,6 +45,7 @@ class SuspensionModel:
     channels: dict[str, tuple[str, ...]]  # input name -> log channel name per entry
     constants: dict[str, tuple[float, ...]] = field(default_factory=dict)  # input -> values
     optional: frozenset[str] = frozenset()  # channels a log may lack (taken as 0)
+    held: frozenset[str] = frozenset()  # parameter entries never fitted (body, not suspension)
 
     def __post_init__(self) -> None:
         f = self.function
@@ -126,16 +128,60 @@ def segment_index(name: str) -> int | None:
     return int(tail) if tail.isdigit() and head in ModelParameters.names() else None
 
 
-def default_model() -> SuspensionModel:
-    """The bundled suspension model (paper eq. 3-9) with the linear push/pull damper."""
+#: Entries of ``ModelParameters`` that describe the body, the aerodynamics, the
+#: tyres, the IMU or the term switches, not the suspension: the model terms
+#: make some of them visible in the suspension rows (the mass in the link
+#: loads), but they are weighed or measured, not identified here.
+HELD = frozenset(
+    name
+    for name in ModelParameters.names()
+    if not name.startswith(
+        ("spring_", "damper_", "arb_", "static_", "roll_centre_", "anti_", "bump_gap_",
+         "rebound_gap_", "stop_", "unsprung_")
+    )
+)  # fmt: skip
+
+
+def model_gates(p: ModelParameters, absent: frozenset[str] = frozenset()) -> tuple[float, ...]:
+    """Term gates (``wheelload.models.GATES``) of the vehicle's [model] switches.
+
+    Every input is taken as present except ``absent`` (e.g. the hub
+    accelerometers of a log that lacks them, whose terms are then off); the
+    road-frame attitude is off (see the comment below).
+    """
+    valid = np.array([0.0 if name in absent else 1.0 for name in INPUTS])
+    gates = np.asarray(gates_function()(valid, p.vector())[0]).ravel()
+    # The road-frame attitude takes the tyre deflection (k d / k_t) into the
+    # rotation of the specific force that drives the link loads: the springs and
+    # bars would enter nonlinearly and be held. Its effect on the suspension rows
+    # is second order (angle x specific force), so the fit leaves it off.
+    gates[GATES.index("road_frame")] = 0.0
+    return tuple(float(g) for g in gates)
+
+
+#: The paper's model: every term gate off.
+PAPER_GATES = (0.0,) * len(GATES)
+
+
+def default_model(gates: tuple[float, ...] = PAPER_GATES) -> SuspensionModel:
+    """The bundled suspension model with the linear push/pull damper.
+
+    ``gates`` (constants, :func:`model_gates`) switch the terms beyond the
+    paper's eq. 3-9; by default they are off.
+    """
     return SuspensionModel(
         function=suspension_function(),
         parameters={"p": ModelParameters.names()},
-        channels={"d": TRAVEL, "v": TRAVEL_RATE},
+        channels={"u": INPUTS},
+        constants={"gates": tuple(gates)},
+        optional=frozenset(OPTIONAL_INPUTS),
+        held=HELD,
     )
 
 
-def piecewise_model(knots: tuple[float, ...]) -> SuspensionModel:
+def piecewise_model(
+    knots: tuple[float, ...], gates: tuple[float, ...] = PAPER_GATES
+) -> SuspensionModel:
     """The suspension model with a piecewise-linear damper map over velocity ``knots`` [m/s].
 
     Segment ``j`` of ``damper_push_front`` is the entry ``damper_push_front_j``.
@@ -143,5 +189,8 @@ def piecewise_model(knots: tuple[float, ...]) -> SuspensionModel:
     return SuspensionModel(
         function=piecewise_damper_suspension_function(knots),
         parameters={"p": ModelParameters.names(), "damper": piecewise_damper_names(knots)},
-        channels={"d": TRAVEL, "v": TRAVEL_RATE},
+        channels={"u": INPUTS},
+        constants={"gates": tuple(gates)},
+        optional=frozenset(OPTIONAL_INPUTS),
+        held=HELD,
     )

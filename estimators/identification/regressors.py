@@ -117,12 +117,19 @@ class Rows:
     difference: np.ndarray  # (N,) left minus right travel of the row's axle [m]
 
 
+def _signal(model: SuspensionModel, data: DataSet, name: str) -> np.ndarray:
+    """A data set's samples of signal ``name``; an optional channel it lacks is 0."""
+    if name in data.signals or name not in model.optional:
+        return data.signals[name]
+    return np.zeros((len(data), 1))
+
+
 def evaluate(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray) -> Rows:
     """Predictions and regressors of every used sample (finite target) at ``theta``."""
     parts = []
     for index, data in enumerate(sets):
         pred = prediction(model, data)
-        s = np.hstack([data.signals[name] for name in pred.columns])
+        s = np.hstack([_signal(model, data, name) for name in pred.columns])
         rows = np.isfinite(data.target)
         keep = rows.any(axis=1)
         s = s[keep]
@@ -229,7 +236,7 @@ def linear_free_set(
     free: list[int] = []
     nonlinear: list[int] = []
     for j, name in enumerate(names):
-        if not depends[j] or name in fixed:
+        if not depends[j] or name in fixed or name in model.held:
             continue
         trial = [*free, j]
         linear = True

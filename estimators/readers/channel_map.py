@@ -55,12 +55,14 @@ TARGETS: dict[str, Kind] = {
     **{f"v_{w}": Kind.SPEED for w in WHEELS},
     **{f"fz_{w}": Kind.FORCE for w in WHEELS},
     **{f"ws_{w}": Kind.SPEED for w in WHEELS},
+    **{f"az_{w}": Kind.ACCELERATION for w in WHEELS},  # hub accelerometers (body z)
 }
 #: groups filled with missing (NaN) columns when only some of them are mapped
 GROUPS = (
     tuple(f"d_{w}" for w in WHEELS),
     tuple(f"v_{w}" for w in WHEELS),
     tuple(f"fz_{w}" for w in WHEELS),
+    tuple(f"az_{w}" for w in WHEELS),
 )
 DEFAULT_MAX_GAP = 0.1  # s
 

@@ -7,9 +7,12 @@
  * NAME=VALUE pairs override fields of ${prefix}_default_params (see
  * ${prefix}_param_names), e.g. spring_front=65000, without regenerating.
  * LOG.csv has a header row and the columns of the wheelload log format, in
- * any order: t, vx, ax, ay, az, d_fl, d_fr, d_rl, d_rr and the travel rates
- * v_fl, v_fr, v_rl, v_rr. Unlike wheelload's Python reader, this example
- * does not derive missing travel rates: the v_* columns are required.
+ * any order: t and the channels of ${prefix}_input_names (t, vx, ax, ay, az,
+ * d_fl, d_fr, d_rl, d_rr and the travel rates v_fl, v_fr, v_rl, v_rr are
+ * required; the optional channels, e.g. wx wy wz, wx_dot wy_dot wz_dot and
+ * az_fl az_fr az_rl az_rr, are missing samples when absent). Unlike
+ * wheelload's Python reader, this example derives nothing: the v_* columns
+ * are required and the rate derivatives are read, not computed.
  * Writes t, fz_*, fz_std_*, residual_*, status as CSV (stdout by default).
  * The interval before a sample is t[k] - t[k-1]; the first sample uses
  * t[1] - t[0], as wheelload's Python filter does.
@@ -52,7 +55,7 @@
 
 #define MAX_LINE 16384
 #define MAX_COLUMNS 256
-#define N_CHANNELS 13
+#define N_CHANNELS (1 + ${PREFIX}_N_INPUTS)
 
 /* Largest magnitude an input channel may have (t is kept in double). */
 #if ${PREFIX}_SINGLE_PRECISION
@@ -61,9 +64,10 @@
 #define REAL_MAX DBL_MAX
 #endif
 
+/* t, then the filter's inputs in the order of ${prefix}_input_names. */
 static const char *const channels[N_CHANNELS] = {
-    "t", "ax", "ay", "az", "vx",
-    "d_fl", "d_fr", "d_rl", "d_rr", "v_fl", "v_fr", "v_rl", "v_rr",
+    "t",
+${input_names}
 };
 
 /* The log being read and the position in it, for error messages. */
@@ -246,7 +250,7 @@ static int parse(const log_reader *log, char *line, int n_columns, const int *co
         return 0;
     }
     for (k = 0; k < N_CHANNELS; ++k) {
-        const char *text = fields[column[k]];
+        const char *text = column[k] >= 0 ? fields[column[k]] : "";
         int status = number(text, k == 0 ? DBL_MAX : REAL_MAX, &values[k]);
         if (status != FIELD_OK) {
             fprintf(stderr, "%s: column '%s' is %s at row %ld (line %ld): '%s'\n", log->name,
@@ -263,13 +267,8 @@ static int parse(const log_reader *log, char *line, int n_columns, const int *co
         return 0;
     }
     *t = values[0];
-    input->ax = (${prefix}_real)values[1];
-    input->ay = (${prefix}_real)values[2];
-    input->az = (${prefix}_real)values[3];
-    input->vx = (${prefix}_real)values[4];
-    for (k = 0; k < 4; ++k) {
-        input->d[k] = (${prefix}_real)values[5 + k];
-        input->v[k] = (${prefix}_real)values[9 + k];
+    for (k = 1; k < N_CHANNELS; ++k) {
+        *${prefix}_input_field(input, k - 1) = (${prefix}_real)values[k];
     }
     return 1;
 }
@@ -460,9 +459,11 @@ int main(int argc, char **argv)
             }
             column[k] = j;
         }
-        if (column[k] < 0) {
+        if (column[k] < 0 && (k == 0 || !${prefix}_input_optional[k - 1])) {
             fprintf(stderr, "%s: missing column '%s'%s\n", log.name, channels[k],
-                    k >= 9 ? " (this example needs the travel rates v_fl v_fr v_rl v_rr)" : "");
+                    strncmp(channels[k], "v_", 2) == 0
+                        ? " (this example needs the travel rates v_fl v_fr v_rl v_rr)"
+                        : "");
             return 2;
         }
     }

@@ -28,7 +28,24 @@ ${param_cases}
     }
 }
 
-static const uint32_t update_flags[7] = {${update_flags}};
+const char *const ${prefix}_input_names[${PREFIX}_N_INPUTS] = {
+${input_names}
+};
+
+const int ${prefix}_input_optional[${PREFIX}_N_INPUTS] = {${input_optional}};
+
+${prefix}_real *${prefix}_input_field(${prefix}_input *input, int index)
+{
+    switch (index) {
+${input_cases}
+    default:
+        return 0;
+    }
+}
+
+#define N_USED ${n_used}
+
+static const uint32_t update_flags[N_USED] = {${update_flags}};
 static const uint32_t guard_flags[${n_status}] = {${guard_flags}};
 
 /* The filter step of CasADi Function ${step_name}: inputs x, P (symmetric
@@ -37,12 +54,13 @@ static const uint32_t guard_flags[${n_status}] = {${guard_flags}};
  * ${kernel_flops} arithmetic operations. */
 static void ${prefix}_kernel(const ${prefix}_real x[4], const ${prefix}_real P[10],
                              const ${prefix}_real m[${PREFIX}_N_MONITOR],
-                             const ${prefix}_real u[12], const ${prefix}_real u_valid[12],
+                             const ${prefix}_real u[${PREFIX}_N_INPUTS],
+                             const ${prefix}_real u_valid[${PREFIX}_N_INPUTS],
                              ${prefix}_real dt${kernel_params_arg},
                              ${prefix}_real x_next[4], ${prefix}_real P_next[10],
                              ${prefix}_real m_next[${PREFIX}_N_MONITOR],
                              ${prefix}_real std[4], ${prefix}_real residual[3],
-                             ${prefix}_real used[7], ${prefix}_real status[${n_status}],
+                             ${prefix}_real used[N_USED], ${prefix}_real status[${n_status}],
                              ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS],
                              ${prefix}_real fault[${PREFIX}_N_FAULT_CHANNELS])
 {
@@ -89,22 +107,16 @@ uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
                         ${prefix}_output *output)
 {
     static const int diagonal[4] = {0, 4, 7, 9};
-    ${prefix}_real u[12], u_valid[12], x_next[4], P_next[10], std[4], residual[3], used[7];
+    ${prefix}_real u[${PREFIX}_N_INPUTS], u_valid[${PREFIX}_N_INPUTS];
+    ${prefix}_real x_next[4], P_next[10], std[4], residual[3], used[N_USED];
     ${prefix}_real m_next[${PREFIX}_N_MONITOR], status[${n_status}];
     ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS], fault[${PREFIX}_N_FAULT_CHANNELS];
     uint32_t flags = 0u, faults = 0u;
     int accepted = 0;
     int k;
 ${unused_params}
-    for (k = 0; k < 4; ++k) {
-        u[k] = input->d[k];
-        u[4 + k] = input->v[k];
-    }
-    u[8] = input->ax;
-    u[9] = input->ay;
-    u[10] = input->az;
-    u[11] = input->vx;
-    for (k = 0; k < 12; ++k) {
+${input_copy}
+    for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
         u_valid[k] = isfinite(u[k]) ? ONE : ZERO;
         if (!isfinite(u[k])) {
             u[k] = ZERO;
@@ -131,7 +143,7 @@ ${unused_params}
         for (k = 0; k < ${PREFIX}_N_MONITOR; ++k) {
             state->monitor[k] = m_next[k];
         }
-        for (k = 0; k < 7; ++k) {
+        for (k = 0; k < N_USED; ++k) {
             if (used[k] < HALF) {
                 flags |= update_flags[k];
             }
@@ -156,7 +168,7 @@ ${unused_params}
         for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
             fault_statistic[k] = ZERO;
         }
-        for (k = 0; k < 7; ++k) {
+        for (k = 0; k < N_USED; ++k) {
             flags |= update_flags[k];
         }
         flags |= ${PREFIX}_FLAG_STEP_REJECTED;

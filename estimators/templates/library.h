@@ -66,15 +66,23 @@ typedef struct {
     ${prefix}_real monitor[${PREFIX}_N_MONITOR];
 } ${prefix}_state;
 
-/* One sample of the signals. A non-finite value skips the updates it feeds. */
+#define ${PREFIX}_N_INPUTS ${n_inputs}
+
+/* One sample of the signals (wheelload.models.INPUTS). A non-finite value of
+ * a required channel skips the updates it feeds; a non-finite optional
+ * channel (rates, their derivative, hub accelerometers) drops the model term
+ * that needs it and sets its flag. */
 typedef struct {
-    ${prefix}_real d[4]; /* suspension travel [m], compression > 0 */
-    ${prefix}_real v[4]; /* travel rate [m/s] */
-    ${prefix}_real ax;   /* specific force [m/s^2] */
-    ${prefix}_real ay;
-    ${prefix}_real az;
-    ${prefix}_real vx;   /* forward speed [m/s] */
+${input_fields}
 } ${prefix}_input;
+
+/* Channel names of ${prefix}_input in order, and which are optional. */
+extern const char *const ${prefix}_input_names[${PREFIX}_N_INPUTS];
+extern const int ${prefix}_input_optional[${PREFIX}_N_INPUTS];
+
+/* Address of channel `index` (order of ${prefix}_input_names), or a null
+ * pointer for an index out of range. */
+${prefix}_real *${prefix}_input_field(${prefix}_input *input, int index);
 
 /* Estimates after a step. */
 typedef struct {

@@ -242,6 +242,11 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     if assumed:
         lines.append(f"samples with an assumed input (status bits 20-22): {assumed}")
     lines.extend(guard_lines(estimate))
+    for flag in StepFlag.update_flags()[7:]:
+        dropped = int(np.count_nonzero(estimate.flags & flag))
+        if dropped:
+            name = str(flag.name).lower().replace("_", " ")
+            lines.append(f"samples with a model term dropped ({name}): {dropped}")
     if signals.reference is not None:
         try:
             table = wheel_metrics(estimate.loads, signals.reference, source=signals.source)

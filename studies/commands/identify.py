@@ -16,6 +16,7 @@ from wheelload.estimators.identification import (
     FitSettings,
     Loss,
     default_model,
+    drive_gates,
     identify,
     piecewise_model,
     read_drive,
@@ -109,6 +110,9 @@ def handle(args: argparse.Namespace) -> int:
     model = piecewise_model(knots) if knots else default_model()
     sets = tuple(s for path in args.rig for s in read_rig(path))
     sets += tuple(read_drive(path, model.channel_names(), model.optional) for path in args.drive)
+    # The terms the vehicle file switches on, where the drive logs carry their inputs.
+    gates = drive_gates(ModelParameters.from_vehicle(vehicle), sets)
+    model = piecewise_model(knots, gates) if knots else default_model(gates)
     keys = parameter_keys(table)
     bounds = lower_bounds(table, keys)
     settings = FitSettings(

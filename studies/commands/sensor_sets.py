@@ -34,7 +34,10 @@ def run(args: argparse.Namespace) -> int:
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     default = float(TwoStageKF(vehicle).parameters.roll_split_front)
     truth = reference_split(frame, vehicle)
-    print(f"\nroll split: default {default:.4f} (springs and bars), the log's own {truth:.4f}")
+    print(
+        f"\nroll split: default {default:.4f} (springs, bars and roll centres), "
+        f"the log's own {truth:.4f}"
+    )
     splits = sorted({*args.splits, round(default, 4), round(truth, 4)})
     print(
         split_sweep(frame, vehicle, splits).to_string(

@@ -1,0 +1,68 @@
+"""``wheelload ablation``: each model term on and off, both bundled vehicles, every scenario."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from wheelload.models import example_vehicle_path
+from wheelload.studies.ablation import ALL, PAPER, TERMS, ablation, wide_table
+from wheelload.studies.scenarios import SCENARIOS, Options
+
+
+def bundled_vehicles() -> list[Path]:
+    """The bundled sports car and SUV."""
+    sports = example_vehicle_path()
+    return [sports, sports.with_name("suv.toml")]
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "ablation",
+        help="pooled RMSE / Max of the KF with each model term on and off",
+        description=__doc__.splitlines()[0],
+    )
+    parser.add_argument(
+        "--vehicle", action="append", help="vehicle file (repeatable; default: both bundled)"
+    )
+    parser.add_argument(
+        "--scenario", action="append", choices=sorted(SCENARIOS), metavar="NAME",
+        help="scenario (repeatable; default: all ten)",
+    )  # fmt: skip
+    parser.add_argument("--seed", type=int, default=0, help="random seed (sensor noise)")
+    parser.add_argument("--noise", type=float, default=1.0, help="sensor noise scale")
+    parser.add_argument(
+        "--quick", action="store_true", help="laps cut to 10 %% of their length (tests)"
+    )
+    parser.add_argument("--out", help="also write the long table as CSV")
+    parser.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not args.force:
+        raise ValueError(f"{out} exists: choose another --out or add --force")
+    paths = [Path(p) for p in args.vehicle] if args.vehicle else bundled_vehicles()
+    scenarios = args.scenario or list(SCENARIOS)
+    options = Options(seed=args.seed, shorten=0.1 if args.quick else 1.0)
+    table = ablation(
+        paths, scenarios, options, noise=args.noise,
+        progress=lambda text: print(text, file=sys.stderr, flush=True),
+    )  # fmt: skip
+    alone = [PAPER, *(f"+{term}" for term in TERMS), ALL]
+    but = [ALL, *(f"-{term}" for term in TERMS)]
+    for vehicle in dict.fromkeys(table["vehicle"]):
+        for title, labels in (("each term alone", alone), ("every term but one", but)):
+            print(f"\n{vehicle}: pooled RMSE / Max [N], {title}")
+            print(wide_table(table, vehicle, labels).to_string())
+    if out is not None:
+        handle, name = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
+        with os.fdopen(handle, "w") as stream:
+            table.to_csv(stream, index=False, float_format="%.1f")
+        os.replace(name, out)
+        print(f"\nwrote {out}")
+    return 0
