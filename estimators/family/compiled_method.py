@@ -53,6 +53,16 @@ def flag_sum(conditions: list[tuple[object, StepFlag]]):
     return total
 
 
+def step_flags(wheel_skipped, equilibrium_skipped, rejected):
+    """Status of a family step: the four wheels' skips, the three equilibrium rows, rejection.
+
+    ``wheel_skipped``: four 0/1 conditions (FL, FR, RL, RR); the others single conditions.
+    """
+    wheels = list(zip(wheel_skipped, StepFlag.update_flags()[:4]))
+    rows = [(equilibrium_skipped, flag) for flag in StepFlag.update_flags()[4:7]]
+    return flag_sum([*wheels, *rows, (rejected, StepFlag.STEP_REJECTED)])
+
+
 def input_vector(sample: Sample) -> np.ndarray:
     """A sample in :data:`INPUTS` order; rates NaN when the sample has none."""
     rates = np.full(3, np.nan) if sample.rates is None else np.asarray(sample.rates, float)

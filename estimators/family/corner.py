@@ -36,12 +36,11 @@ import numpy as np
 from wheelload.estimators.family.compiled_method import (
     INPUTS,
     CompiledMethod,
-    flag_sum,
     interval_ok,
     sanitise,
+    step_flags,
 )
 from wheelload.estimators.registry import MethodInfo
-from wheelload.estimators.result import StepFlag
 from wheelload.models import (
     ModelParameters,
     Vehicle,
@@ -108,15 +107,7 @@ def step_function(vehicle: Vehicle, settings: CornerSettings) -> ca.Function:
     residual = ca.if_else(acc_ok * valid[11], b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - acc_ok, rejected)
-    flags = flag_sum(
-        [(rejected, flag) for flag in list(StepFlag)[:4]]
-        + [
-            (missing, StepFlag.VERTICAL_SKIPPED),
-            (missing, StepFlag.PITCH_SKIPPED),
-            (missing, StepFlag.ROLL_SKIPPED),
-            (rejected, StepFlag.STEP_REJECTED),
-        ]
-    )
+    flags = step_flags([rejected] * 4, missing, rejected)
     return ca.Function(
         "wheelload_corner_step",
         [angles, held, u_raw, valid, dt, cp, p],

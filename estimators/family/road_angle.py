@@ -47,13 +47,13 @@ import scipy.linalg
 from wheelload.estimators.family.compiled_method import (
     INPUTS,
     CompiledMethod,
-    flag_sum,
     interval_ok,
     sanitise,
+    step_flags,
 )
 from wheelload.estimators.kalman import sequential_update
 from wheelload.estimators.registry import MethodInfo
-from wheelload.estimators.result import Estimate, StepFlag
+from wheelload.estimators.result import Estimate
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import MAX_INTERVAL
 from wheelload.models import (
@@ -168,15 +168,7 @@ def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
     residual = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
-    flags = flag_sum(
-        [(ca.fmax(1 - wheel_ok[i], rejected), flag) for i, flag in enumerate(list(StepFlag)[:4])]
-        + [
-            (missing, StepFlag.VERTICAL_SKIPPED),
-            (missing, StepFlag.PITCH_SKIPPED),
-            (missing, StepFlag.ROLL_SKIPPED),
-            (rejected, StepFlag.STEP_REJECTED),
-        ]
-    )
+    flags = step_flags([ca.fmax(1 - wheel_ok[i], rejected) for i in range(4)], missing, rejected)
     return ca.Function(
         "wheelload_road_angle_step",
         [x, P, angle, u_raw, valid, dt, F, Q, p],

@@ -62,12 +62,11 @@ import scipy.linalg
 from wheelload.estimators.family.compiled_method import (
     INPUTS,
     CompiledMethod,
-    flag_sum,
     interval_ok,
     sanitise,
+    step_flags,
 )
 from wheelload.estimators.registry import MethodInfo
-from wheelload.estimators.result import StepFlag
 from wheelload.estimators.two_stage import MAX_INTERVAL
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, paper_equilibrium_function
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
@@ -243,7 +242,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     Q = ca.diag(ca.vertcat(tuning.travel_density, tuning.travel_rate_density)) * dt_safe
     R = ca.DM(tuning.R)
     columns = {"x": [], "P": [], "residual": [], "u": [], "load": []}
-    flags = []
+    wheel_skipped = []
     for i in range(4):
         corner_ok = ok * valid[i] * valid[4 + i] * valid[10]
         m = models[:, i]
@@ -259,7 +258,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
         columns["residual"].append(ca.if_else(corner_ok, r_n, residual[:, i]))
         columns["u"].append(ca.if_else(corner_ok, extra[i], u_prev[i]))
         columns["load"].append(ca.if_else(corner_ok, e[0] + static[i], load_prev[i]))
-        flags.append((1 - corner_ok, list(StepFlag)[i]))
+        wheel_skipped.append(1 - corner_ok)
     loads = ca.vertcat(*columns["load"])
     rates_new = ca.if_else(ok * valid[12] * valid[13], rates[0:2], rates_prev)
     memory_new = ca.vertcat(
@@ -270,15 +269,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     residual_eq = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
-    flag_value = flag_sum(
-        flags
-        + [
-            (missing, StepFlag.VERTICAL_SKIPPED),
-            (missing, StepFlag.PITCH_SKIPPED),
-            (missing, StepFlag.ROLL_SKIPPED),
-            (rejected, StepFlag.STEP_REJECTED),
-        ]
-    )
+    flag_value = step_flags(wheel_skipped, missing, rejected)
     return ca.Function(
         "wheelload_umvf_step",
         [x, P, residual, memory, u_raw, valid, dt, models, p],
