@@ -38,8 +38,8 @@ def paper_model(vehicle: Vehicle) -> Vehicle:
     return with_terms(vehicle, **off)
 
 
-def equilibrium_residuals(vehicle: Vehicle, frame: pd.DataFrame) -> np.ndarray:
-    """Per-sample residual ``b - A x_ref`` (n, 3) of a simulated log's reference loads."""
+def _model_inputs(vehicle: Vehicle, frame: pd.DataFrame):
+    """Signals, sample count, inputs, gates and parameters of a simulated log's frame."""
     # The plant's own frames (a test flips a sign on purpose to show the residual
     # catches it): the reader's wiring checks would refuse that frame first.
     signals = signals_from_frame(frame, source="<plant>", wiring_checks=False)
@@ -50,7 +50,13 @@ def equilibrium_residuals(vehicle: Vehicle, frame: pd.DataFrame) -> np.ndarray:
     u = input_matrix(signals)
     valid = np.isfinite(u).astype(float)
     gates = np.asarray(gates_function().map(n)(valid, p)[0])
-    A, b = equilibrium_function().map(n)(np.nan_to_num(u), gates, p)
+    return signals, n, np.nan_to_num(u), gates, p
+
+
+def equilibrium_residuals(vehicle: Vehicle, frame: pd.DataFrame) -> np.ndarray:
+    """Per-sample residual ``b - A x_ref`` (n, 3) of a simulated log's reference loads."""
+    signals, n, u, gates, p = _model_inputs(vehicle, frame)
+    A, b = equilibrium_function().map(n)(u, gates, p)
     A = np.asarray(A)[:, :4]
     return np.asarray(b).T - signals.reference @ A.T
 
@@ -63,15 +69,6 @@ def residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> dict[str, float]:
 
 def suspension_residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> float:
     """Pooled RMS [N] of the pseudo-measurement :math:`z(u)` against the reference loads."""
-    # The plant's own frames (a test flips a sign on purpose to show the residual
-    # catches it): the reader's wiring checks would refuse that frame first.
-    signals = signals_from_frame(frame, source="<plant>", wiring_checks=False)
-    if signals.reference is None:
-        raise ValueError("the frame has no reference loads fz_fl .. fz_rr")
-    n = len(signals)
-    p = ModelParameters.from_vehicle(vehicle).vector()
-    u = input_matrix(signals)
-    valid = np.isfinite(u).astype(float)
-    gates = np.asarray(gates_function().map(n)(valid, p)[0])
-    z = np.asarray(suspension_function().map(n)(np.nan_to_num(u), gates, p)).T
+    signals, n, u, gates, p = _model_inputs(vehicle, frame)
+    z = np.asarray(suspension_function().map(n)(u, gates, p)).T
     return float(np.sqrt(np.mean((z - signals.reference) ** 2)))

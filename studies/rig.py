@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 import pandas as pd
 
+from wheelload.estimators.output_files import check_outputs, write_text
 from wheelload.models.plant import corner_suspension_force, corners
 from wheelload.models.suspension import anti_roll_bar_forces
 from wheelload.models.vehicle import WHEELS, Vehicle
@@ -114,19 +115,17 @@ def bar_file_path(corner_path: str | Path) -> Path:
     return path.with_name(f"{path.stem}_arb{path.suffix}")
 
 
-def write_rig(corner: pd.DataFrame, bar: pd.DataFrame, path: str | Path) -> tuple[Path, Path]:
-    """Write both rig files (never over an existing file); return their paths."""
+def write_rig(
+    corner: pd.DataFrame, bar: pd.DataFrame, path: str | Path, *, force: bool = False
+) -> tuple[Path, Path]:
+    """Write both rig files (an existing file only with ``force``); return their paths."""
     path = Path(path)
     if path.suffix.lower() != ".csv":
         raise ValueError(f"rig file '{path}' must end in .csv")
     targets = (path, bar_file_path(path))
-    for target in targets:
-        if target.exists():
-            raise ValueError(f"{target} exists: remove it or choose another --out")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    check_outputs(targets, [], force=force)
     header = "# wheelload rig sweep on the plant's suspension force elements (SI units)\n"
     for frame, target in zip((corner, bar), targets):
-        temporary = target.with_name(f".{target.name}.tmp")
-        temporary.write_text(header + frame.to_csv(index=False, float_format="%.9g"))
-        temporary.replace(target)
+        text = header + frame.to_csv(index=False, float_format="%.9g")
+        write_text(target, text, replace=force)
     return targets

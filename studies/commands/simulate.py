@@ -116,7 +116,7 @@ def _rig(args: argparse.Namespace, vehicle) -> int:
         raise ValueError(f"--noise, --roughness and --plot do not apply to {RIG_SWEEP}")
     settings = RigSettings(seed=args.seed, rate=args.rate)
     corner, bar = rig_sweep(load_vehicle(vehicle), settings)
-    paths = write_rig(corner, bar, args.out)
+    paths = write_rig(corner, bar, args.out, force=args.force)
     print(
         f"{RIG_SWEEP}: {len(corner)} corner-rig and {len(bar)} bar-rig samples "
         f"({settings.duration:.0f} s per corner and axle at {settings.rate:.0f} Hz); "
