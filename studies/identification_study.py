@@ -53,6 +53,19 @@ SCENARIOS = (
 )
 
 
+#: Link geometry held at the file's (design) values in the study's fit: from one steady
+#: manoeuvre the roll-centre heights are confounded with the bars and the anti-pitch
+#: shares with the springs (wheelload identify --fix).
+LINK_GEOMETRY = (
+    "roll_centre_front",
+    "roll_centre_rear",
+    "anti_brake_front",
+    "anti_brake_rear",
+    "anti_drive_front",
+    "anti_drive_rear",
+)
+
+
 @dataclass(frozen=True, kw_only=True)
 class StudySettings:
     identify_on: str = "accel-in-turn"
@@ -61,6 +74,7 @@ class StudySettings:
     spring: float = 0.8  # factor on the spring rates of the wrong file
     damper: float = 1.3  # on the damper slopes
     bar: float = 0.7  # on the anti-roll-bar rates
+    fixed: tuple[str, ...] = LINK_GEOMETRY  # held at the wrong file's (true) values
 
 
 def wrong_vehicle_text(text: str, settings: StudySettings) -> str:
@@ -91,8 +105,9 @@ def simulate(names: tuple[str, ...], folder: Path) -> dict[str, Path]:
     return paths
 
 
-def identified_text(text: str, log: Path) -> str:
-    """The vehicle file ``text`` with the suspension identified from one drive log."""
+def identified_text(text: str, log: Path, fixed: tuple[str, ...] = ()) -> str:
+    """The vehicle file ``text`` with the suspension identified from one drive log
+    (``fixed`` parameters held at the file's values)."""
     table = tomllib.loads(text)
     keys = parameter_keys(table)
     model = default_model()
@@ -101,7 +116,8 @@ def identified_text(text: str, log: Path) -> str:
     vehicle = load_vehicle_text(text)
     # The terms the vehicle file switches on, where the log carries their inputs.
     model = default_model(drive_gates(ModelParameters.from_vehicle(vehicle), data))
-    result = identify(model, data, ModelParameters.from_vehicle(vehicle), FitSettings(lower=bounds))
+    settings = FitSettings(lower=bounds, fixed=frozenset(fixed))
+    result = identify(model, data, ModelParameters.from_vehicle(vehicle), settings)
     return set_values(text, file_changes(result, keys))
 
 
@@ -116,7 +132,7 @@ def run_study(settings: StudySettings, folder: Path) -> tuple[pd.DataFrame, pd.D
                                          *settings.scenarios))), folder)  # fmt: skip
     true_text = example_vehicle_path().read_text(encoding="utf-8")
     wrong = wrong_vehicle_text(true_text, settings)
-    fixed = identified_text(wrong, logs[settings.identify_on])
+    fixed = identified_text(wrong, logs[settings.identify_on], settings.fixed)
     vehicles = {
         "true": load_vehicle(example_vehicle_path()),
         "wrong": load_vehicle_text(wrong),

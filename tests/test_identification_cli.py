@@ -65,12 +65,12 @@ def test_identify_writes_a_file_that_vehicle_and_estimate_accept(folder, wrong_f
 
 @pytest.mark.xfail(
     strict=True,
-    reason="with the innovation gate and fault monitor (estimators/guard.py) the tuned filter's "
-    "+-2 sigma band covers 81 % of the error on held-out logs, below the 90-98 % goal (issue 10)"
-    "; and "
-    "after the fidelity9 merge (plant with link forces, fit with the vehicle's link "
-    "terms): one drive log identifies a file whose KF is 17 %/33 % above the true file's "
-    "RMSE on iso-dlc/slope-20 (bound 5 %); open, see /work/notes/integ9.md",
+    reason="measured on this build (issue 10): with the link geometry held, a file identified "
+    "from accel-in-turn alone gives a KF within +4.0 % / +1.1 % of the true file on iso-dlc / "
+    "slope-20 (bound 5 %: met), but the wrong file is only +1.9 % above the true one on "
+    "slope-20 (the test wants > 5 %), and the tuned filter's +-2 sigma covers 99.4 % of the "
+    "slope-20 error (bound 90-98 %): its sigma is a constant, tuned on iso-dlc; see "
+    "/work/notes/tune10.md",
 )
 def test_study_wrong_file_identified_from_one_log_matches_the_true_file_elsewhere(folder, capsys):
     """identify-study --quick reuses the module's plant logs (same names, same settings)."""
@@ -84,12 +84,6 @@ def test_study_wrong_file_identified_from_one_log_matches_the_true_file_elsewher
     assert 90.0 <= tuning.loc["slope-20", "coverage_tuned_pct"] <= 98.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="after the fidelity9 merge the bars are no longer reported as not identifiable "
-    "from the straight-line log (the link terms add free parameters); open, see "
-    "/work/notes/integ9.md",
-)
 def test_straight_line_log_warns_about_the_bars(folder, capsys):
     out = folder / "straight.toml"
     log = str(folder / "slope-20.csv")
@@ -98,6 +92,8 @@ def test_straight_line_log_warns_about_the_bars(folder, capsys):
     text = capsys.readouterr().out
     assert "warning: 'arb_rate_front' is not identifiable" in text
     assert "warning: 'arb_rate_rear' is not identifiable" in text
+    # The roll-centre heights (link geometry) need roll too: the same warning.
+    assert "warning: 'roll_centre_front' is not identifiable" in text
     assert load_vehicle(out).suspension.front.arb_rate == 15000.0
 
 
@@ -117,12 +113,12 @@ def test_bad_rig_file_gets_a_one_line_error(folder, capsys):
 
 @pytest.mark.xfail(
     strict=True,
-    reason="with the innovation gate and fault monitor (estimators/guard.py) the tuned filter's "
-    "+-2 sigma band covers 81 % of the error on held-out logs, below the 90-98 % goal (issue 10)"
-    "; and "
-    "after the fidelity9 merge (new plant, every model term on) the tuned filter's "
-    "+-2 sigma covers 100 % of the slope-20 error (bound 90-98 %); open, see "
-    "/work/notes/integ9.md",
+    reason="measured on this build (issue 10): tuned on iso-dlc (likelihood with the gate "
+    "open, scale with the guards on), the +-2 sigma band covers 99.4 % of the slope-20 error "
+    "(bound 90-98 %; pooled over five held-out smooth logs 90.8 %, but the vertical "
+    "equilibrium row is gated 40 % of accel-in-turn, RMSE 36 -> 76 N): the 3-sigma innovation "
+    "gate and a sigma calibrated to the error cannot both hold with this model error; with "
+    "the gate open the same tuning covers 95.7 % at the input RMSE; see /work/notes/tune10.md",
 )
 def test_tune_writes_a_calibrated_filter_section(folder, capsys):
     """Tuned on the lane change; on the slope log (not used): ±2σ covers 90-98 % of the error
@@ -145,3 +141,28 @@ def test_tune_writes_a_calibrated_filter_section(folder, capsys):
         for v in (tuned, default)
     ]
     assert rmse[0] <= 1.02 * rmse[1]
+
+
+def test_tuning_likelihood_keeps_the_rows_the_gate_would_skip(folder):
+    """The innovation likelihood is evaluated with the gate open: at densities 1/1000 of the
+    file's the gate skips rows of iso-dlc, yet the likelihood equals the one summed by hand
+    over every row with inputs from a filter whose gate is out of reach (to 1e-9 relative:
+    the same compiled step); the coverage runs with the file's own guards."""
+    from wheelload.estimators.identification.tuning import SETTLE, FilterRuns
+    from wheelload.estimators.two_stage import TUNING, noise_densities
+
+    vehicle = load_vehicle(example_vehicle_path())
+    signals = read_log(folder / "iso-dlc.csv")
+    runs = FilterRuns(vehicle, (signals,))
+    tight = noise_densities(vehicle) / 1000
+    assert runs.consistency(tight).gated > 0.01
+    open_gate = TwoStageKF(vehicle)
+    open_gate.tuning[: len(tight)] = tight
+    for name in ("innovation_gate", "gate_release_time"):
+        open_gate.tuning[TUNING.index(name)] = 1e300
+    _, inn = open_gate.run_innovations(signals)
+    keep = (inn.variance > 0) & (signals.t - signals.t[0] >= SETTLE)[:, None]
+    assert inn.used[keep].all()
+    S, y = inn.variance[keep], inn.innovation[keep]
+    expected = 0.5 * float(np.sum(np.log(2 * np.pi * S) + y**2 / S))
+    assert runs.negative_log_likelihood(tight) == pytest.approx(expected, rel=1e-9)

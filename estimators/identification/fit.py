@@ -141,6 +141,18 @@ def _solve(A, b, lower, upper, loss: Loss) -> np.ndarray:
     return result.x
 
 
+def _inliers(weighted: np.ndarray, loss: Loss) -> np.ndarray:
+    """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
+    return np.ones(weighted.size, bool) if loss is Loss.LINEAR else np.abs(weighted) < INLIER
+
+
+def _variance_factor(r, sigma, group, free: int, loss: Loss) -> float:
+    """s^2: mean squared scaled residual of the rows that count, per degree of freedom."""
+    weighted = r / sigma[group]
+    inliers = _inliers(weighted, loss)
+    return float(np.sum(weighted[inliers] ** 2) / max(int(inliers.sum()) - free, 1))
+
+
 def identify(
     model: SuspensionModel,
     sets: tuple[DataSet, ...],
@@ -193,7 +205,10 @@ def identify(
         )
         _, singular, vt = np.linalg.svd(info, full_matrices=False)
         weakest = int(np.argmin(singular))
-        precision = 1.0 / max(singular[weakest], 1e-300)
+        # Judged on the same footing as the reported standard errors (s^2 (A^T A)^-1).
+        precision = np.sqrt(_variance_factor(r, sigma, rows.group, cols.size, settings.loss)) / (
+            max(singular[weakest], 1e-300)
+        )
         if precision <= settings.precision:
             break
         culprit = int(cols[np.argmax(np.abs(vt[weakest]))])
@@ -217,11 +232,8 @@ def identify(
         cols = np.array(free)
         value[cols] = theta0[cols] + u * scale[cols]
         weighted = r / sigma[rows.group]
-        inliers = (
-            np.ones(r.size, bool) if settings.loss is Loss.LINEAR else np.abs(weighted) < INLIER
-        )
-        dof = max(int(inliers.sum()) - cols.size, 1)
-        s2 = float(np.sum(weighted[inliers] ** 2) / dof)
+        inliers = _inliers(weighted, settings.loss)
+        s2 = _variance_factor(r, sigma, rows.group, cols.size, settings.loss)
         A = info[inliers]
         cov = s2 * np.linalg.pinv(A.T @ A)
         std[cols] = np.sqrt(np.maximum(np.diag(cov), 0)) * scale[cols]

@@ -8,13 +8,21 @@ maximises
 
 .. math:: \ell(\theta) = -\tfrac12 \sum_{k,i} \big(\log 2\pi S_{k,i} + y_{k,i}^2 / S_{k,i}\big)
 
-over the rows used (Nelder-Mead in the log-parameters, each within a
+over every row whose inputs are present (Nelder-Mead in the log-parameters, each within a
 factor 1000 of the input: the pseudo-measurement error is correlated in
-time, and unbounded the white-noise likelihood may drive ``r_s`` to zero). With reference
-loads, the tuning that minimises the pooled RMSE is found the same way, and
-the likelihood tuning is scaled as a whole (which leaves the estimates
-unchanged and scales P) so that ±2σ covers 95 % of the error: the model
-errors are correlated in time, which the white-noise likelihood cannot see.
+time, and unbounded the white-noise likelihood may drive ``r_s`` to zero).
+The likelihood is evaluated with the innovation gate open: a gate removes
+exactly the large innovations the likelihood needs, and a shrinking
+tuning would gate more and more of them away. Everything else (the
+estimates, the coverage, the RMSE) runs with the guard settings the filter
+of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s
+own). With reference loads, the tuning that minimises the pooled RMSE is
+found the same way, and the tuning written is the likelihood shape or the
+input's shape (whichever has the lower pooled RMSE with the guards), scaled
+as a whole so that ±2σ covers 95 % of the error (scaling leaves the gain
+unchanged and scales P; with the gate it also moves the gate's threshold,
+so the scale is found with the guards on): the model errors are correlated
+in time, which the white-noise likelihood cannot see.
 Consistency: the normalised innovation squared :math:`y^2/S` of each row
 against the 95 % band of :math:`\chi^2_1`, and the share of samples whose
 error lies within :math:`\pm 2\sigma`.
@@ -35,6 +43,7 @@ from scipy import optimize, stats
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import (
     NOISE_DENSITIES,
+    TUNING,
     UPDATE_ROWS,
     TwoStageKF,
     step_function,
@@ -45,6 +54,8 @@ SETTLE = 1.0  # s, start of each log left out of the objective (initial covarian
 SPAN = 1e3  # each density stays within input / SPAN .. input * SPAN
 COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma for a Gaussian error
 NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of chi^2_1
+#: Tuning entries that open the innovation gate for the likelihood (out of reach).
+GATE_OPEN = {"innovation_gate": 1e300, "gate_release_time": 1e300}
 
 
 def with_tuning(vehicle: Vehicle, tuning: np.ndarray) -> Vehicle:
@@ -68,6 +79,8 @@ class Consistency:
     nis_in_band: tuple[float, ...]  # share of y^2/S inside the 95 % chi^2_1 band (0.95)
     coverage: float  # share of (sample, wheel) errors within +-2 sigma (nan: no reference)
     rmse: float  # pooled RMSE [N] (nan: no reference)
+    sigma_error_correlation: float  # Pearson r of sigma and |error| (nan: no reference)
+    gated: float  # share of available update rows the innovation gate skipped
 
 
 class FilterRuns:
@@ -79,22 +92,29 @@ class FilterRuns:
         self.vehicle = vehicle
         self.logs = logs
         self._step = step_function()
+        # The filter the written file runs: its interval and guard settings (TwoStageKF's own).
         self._kf = TwoStageKF(vehicle, step=self._step)
         self._base = self._kf.tuning.copy()
+        self._gate_open = self._base.copy()
+        for name, value in GATE_OPEN.items():
+            self._gate_open[TUNING.index(name)] = value
 
-    def run(self, tuning: np.ndarray):
+    def run(self, tuning: np.ndarray, *, gate_open: bool = False):
         """Estimates and innovations of every log with the noise densities ``tuning``
-        (:data:`NOISE_DENSITIES` order; interval and guards as the filter's own)."""
+        (:data:`NOISE_DENSITIES` order; interval and guards as the filter's own, the
+        innovation gate opened with ``gate_open``)."""
         densities = np.asarray(tuning, float)
         if densities.shape != (len(NOISE_DENSITIES),):
             raise ValueError(f"give the {len(NOISE_DENSITIES)} noise densities {NOISE_DENSITIES}")
-        self._kf.tuning = np.concatenate([densities, self._base[len(NOISE_DENSITIES) :]])
+        rest = (self._gate_open if gate_open else self._base)[len(NOISE_DENSITIES) :]
+        self._kf.tuning = np.concatenate([densities, rest])
         return [self._kf.run_innovations(signals) for signals in self.logs]
 
     def negative_log_likelihood(self, tuning: np.ndarray) -> float:
+        """Minus the innovation log likelihood, innovation gate open (every row with inputs)."""
         total = 0.0
-        for signals, (_, inn) in zip(self.logs, self.run(tuning)):
-            keep = (inn.used & (inn.variance > 0)) & (signals.t - signals.t[0] >= SETTLE)[:, None]
+        for signals, (_, inn) in zip(self.logs, self.run(tuning, gate_open=True)):
+            keep = (inn.variance > 0) & (signals.t - signals.t[0] >= SETTLE)[:, None]
             S, y = inn.variance[keep], inn.innovation[keep]
             total += 0.5 * float(np.sum(np.log(2 * np.pi * S) + y**2 / S))
         return total
@@ -110,10 +130,14 @@ class FilterRuns:
         return float(np.sqrt(np.mean(np.concatenate(errors) ** 2)))
 
     def consistency(self, tuning: np.ndarray) -> Consistency:
-        nis, inside, covered, squared = [], [], [], []
+        nis, inside, covered, squared, pairs = [], [], [], [], []
+        gated, available = 0, 0
         for signals, (estimate, inn) in zip(self.logs, self.run(tuning)):
             settled = signals.t - signals.t[0] >= SETTLE
-            keep = inn.used & (inn.variance > 0) & settled[:, None]
+            present = (inn.variance > 0) & settled[:, None]
+            gated += int(np.sum(present & ~inn.used))
+            available += int(np.sum(present))
+            keep = inn.used & present
             ratio = np.where(keep, inn.innovation**2 / np.where(keep, inn.variance, 1.0), np.nan)
             nis.append(ratio)
             if signals.reference is not None:
@@ -122,6 +146,7 @@ class FilterRuns:
                 ok = np.isfinite(error)
                 covered.append(np.abs(error[ok]) <= 2 * sigma[ok])
                 squared.append(error[ok] ** 2)
+                pairs.append(np.column_stack([sigma[ok], np.abs(error[ok])]))
         ratio = np.vstack(nis)
         for row in range(ratio.shape[1]):
             values = ratio[:, row][np.isfinite(ratio[:, row])]
@@ -135,6 +160,8 @@ class FilterRuns:
             nis_in_band=tuple(inside),
             coverage=float(np.mean(np.concatenate(covered))) if covered else np.nan,
             rmse=float(np.sqrt(np.mean(np.concatenate(squared)))) if squared else np.nan,
+            sigma_error_correlation=_correlation(np.vstack(pairs)) if pairs else np.nan,
+            gated=gated / available if available else 0.0,
         )
 
     def coverage(self, tuning: np.ndarray) -> float:
@@ -156,18 +183,32 @@ class FilterRuns:
         return float(np.exp(0.5 * (low + high)))
 
 
+def _correlation(pairs: np.ndarray) -> float:
+    """Pearson correlation of the two columns (0 when either is constant)."""
+    spread = np.std(pairs, axis=0)
+    if np.any(spread <= 0):
+        return 0.0
+    return float(np.corrcoef(pairs[:, 0], pairs[:, 1])[0, 1])
+
+
 @dataclass(frozen=True, kw_only=True)
 class TuningResult:
     initial: np.ndarray  # NOISE_DENSITIES order
     likelihood: np.ndarray  # maximum-likelihood tuning
     rmse: np.ndarray | None  # RMSE-minimising tuning (with reference loads)
-    scale: float  # calibration factor applied to ``likelihood`` (1 without references)
+    shape: np.ndarray  # the shape written: ``likelihood``, or ``initial`` when it does better
+    scale: float  # calibration factor applied to ``shape`` (1 without references)
     evaluations: int
 
     @property
     def tuned(self) -> np.ndarray:
-        """The tuning written to the file: the likelihood shape, calibrated when possible."""
-        return self.likelihood * self.scale
+        """The tuning written to the file: the chosen shape, calibrated when possible."""
+        return self.shape * self.scale
+
+    @property
+    def shape_source(self) -> str:
+        """Which shape was written: ``"likelihood"`` or ``"input"``."""
+        return "input" if self.shape is self.initial else "likelihood"
 
 
 def _minimise(
@@ -189,13 +230,24 @@ def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: i
     coverage calibration of the likelihood tuning (its estimates unchanged)."""
     span = np.column_stack([start / SPAN, start * SPAN])
     likelihood, count = _minimise(runs.negative_log_likelihood, start, iterations, span)
-    rmse, scale = None, 1.0
+    rmse, shape, scale = None, likelihood, 1.0
     if references:
         rmse, more = _minimise(runs.pooled_rmse, likelihood, iterations, span)
         count += more
-        scale = runs.calibrate(likelihood)
+        # Each shape calibrated to the coverage target with the guards on; the lower pooled
+        # RMSE (with the guards) is written.
+        scored = []
+        for candidate in (likelihood, start):
+            factor = runs.calibrate(candidate)
+            scored.append((runs.pooled_rmse(candidate * factor), candidate, factor))
+        _, shape, scale = min(scored, key=lambda entry: entry[0])
     return TuningResult(
-        initial=start, likelihood=likelihood, rmse=rmse, scale=scale, evaluations=count
+        initial=start,
+        likelihood=likelihood,
+        rmse=rmse,
+        shape=shape,
+        scale=scale,
+        evaluations=count,
     )
 
 

@@ -63,7 +63,7 @@ def handle(args: argparse.Namespace) -> int:
     print(_row("max. likelihood", result.likelihood))
     if result.rmse is not None:
         print(_row("min. RMSE", result.rmse))
-        print(_row(f"written (x{result.scale:.3g})", result.tuned))
+        print(_row(f"written ({result.shape_source} x{result.scale:.3g})", result.tuned))
     lo, hi = NIS_BAND
     print(f"consistency on the tuning logs (NIS = y^2/S, 95 % band {lo:.3g}..{hi:.3g}):")
     for label, tuning in (("input", result.initial), ("tuned", result.tuned)):
@@ -74,14 +74,21 @@ def handle(args: argparse.Namespace) -> int:
         )
         extra = (
             f"; ±2σ coverage {100 * check.coverage:.1f} %, pooled RMSE {check.rmse:.1f} N"
+            f", gated {100 * check.gated:.1f} % of rows"
             if references
             else ""
         )
         print(f"  {label}: mean NIS (share in band) {nis}{extra}")
     tuned = result.tuned
-    note = (
-        f"maximum likelihood of the innovations of {', '.join(Path(p).name for p in args.logs)}"
-        + (f", scaled x{result.scale:.3g} to 95 % ±2σ coverage" if references else "")
+    shape = (
+        "maximum likelihood of the innovations"
+        if result.shape_source == "likelihood"
+        else "the input file's densities (lower RMSE than the likelihood shape)"
+    )
+    note = f"{shape} of {', '.join(Path(p).name for p in args.logs)}" + (
+        f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
+        if references
+        else ""
     )
     changes = {
         ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
@@ -100,12 +107,14 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def evaluation_table(vehicle, logs, result) -> str:
-    """Per-log and pooled ±2σ coverage and RMSE of the input and the tuned filter."""
+    """Per-log and pooled ±2σ coverage, RMSE and σ–|error| correlation, input and tuned."""
     if any(signals.reference is None for signals in logs):
         raise ValueError("--evaluate needs logs with reference loads fz_*")
     lines = [
-        "held-out logs: ±2σ coverage [%] and pooled RMSE [N], input file -> tuned",
-        f"{'log':>28}{'cov in':>9}{'cov tuned':>11}{'RMSE in':>10}{'RMSE tuned':>12}",
+        "held-out logs: ±2σ coverage [%], pooled RMSE [N], correlation of σ and |error|,"
+        " rows gated [%]; input file -> tuned",
+        f"{'log':>28}{'cov in':>9}{'cov tuned':>11}{'RMSE in':>10}{'RMSE tuned':>12}"
+        f"{'r in':>7}{'r tuned':>9}{'gated in':>10}{'gated tuned':>13}",
     ]
     groups = [(Path(s.source).name, (s,)) for s in logs] + [("pooled", logs)]
     for name, group in groups:
@@ -114,5 +123,7 @@ def evaluation_table(vehicle, logs, result) -> str:
         lines.append(
             f"{name:>28}{100 * before.coverage:9.1f}{100 * after.coverage:11.1f}"
             f"{before.rmse:10.1f}{after.rmse:12.1f}"
+            f"{before.sigma_error_correlation:7.2f}{after.sigma_error_correlation:9.2f}"
+            f"{100 * before.gated:10.1f}{100 * after.gated:13.1f}"
         )
     return "\n".join(lines)
