@@ -77,6 +77,7 @@ STEP_NAME = "wheelload_kf_step"
 DEFAULT_SAMPLE_INTERVAL = 0.01
 _SAMPLE_INTERVAL = TUNING.index("sample_interval")
 _GUARD_START = _SAMPLE_INTERVAL + 1
+_GATE = TUNING.index("innovation_gate")
 _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 
 
@@ -94,7 +95,7 @@ def tuning_vector(
     tuning = vehicle.filter
     if not 0.0 < sample_interval < MAX_INTERVAL:
         raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
-    return np.array(
+    vector = np.array(
         [
             tuning.process_noise_density,
             tuning.suspension_noise_density,
@@ -103,6 +104,9 @@ def tuning_vector(
             *settings.vector(),
         ]
     )
+    # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate.
+    vector[_GATE] *= tuning.gate_scale
+    return vector
 
 
 def noise_densities(vehicle: Vehicle) -> np.ndarray:

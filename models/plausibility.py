@@ -254,6 +254,7 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
         lambda v: 1.0, lambda v: 10.0 * _weight(v), "N (N m)"
     ),
     "filter.initial_std": lambda v: Range(1.0, 10.0 * _weight(v), "1 N to 10 x the weight"),
+    "filter.gate_scale": _fixed(1e-4, 1e4, "factor on the innovation gate's threshold"),
     "filter.bias.travel_offset_std": _fixed(1e-4, 0.05, "0.1-50 mm of travel-sensor offset"),
     "filter.bias.travel_offset_bound": _fixed(1e-3, 0.1, "1-100 mm of travel-sensor offset"),
     "filter.bias.travel_offset_density": _fixed(1e-14, 1e-4, "travel offset random walk, m^2/s"),

@@ -182,11 +182,16 @@ class FilterTuning:
     constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt
     initial_std: float  # N
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
+    # Optional: the innovation gate's threshold (estimators/guard.py) times this factor.
+    # ``wheelload tune`` writes 1/c when it scales the densities by c to calibrate sigma, so
+    # that the gate keeps the decisions it had (S scales by c, the innovations do not).
+    gate_scale: float = 1.0
 
     def _check(self) -> None:
         _positive(self, "process_noise_density")
         _positive(self, "suspension_noise_density")
         _positive(self, "initial_std")
+        _positive(self, "gate_scale")
         if min(self.constraint_noise_density) <= 0.0:
             raise _KeyError("constraint_noise_density", "must be > 0 in every row")
 

@@ -19,10 +19,12 @@ of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s
 own). With reference loads, the tuning that minimises the pooled RMSE is
 found the same way, and the tuning written is the likelihood shape or the
 input's shape (whichever has the lower pooled RMSE with the guards), scaled
-as a whole so that ±2σ covers 95 % of the error (scaling leaves the gain
-unchanged and scales P; with the gate it also moves the gate's threshold,
-so the scale is found with the guards on): the model errors are correlated
-in time, which the white-noise likelihood cannot see.
+as a whole by c so that ±2σ covers 95 % of the error: the model errors are
+correlated in time, which the white-noise likelihood cannot see. Scaling
+leaves the gain unchanged and scales P and every innovation variance S by
+c; the innovations themselves do not change, so the gate's threshold is
+scaled by 1/c with it (the file's ``[filter] gate_scale``): the gate keeps
+the decisions it had, and the estimates are those of the unscaled shape.
 Consistency: the normalised innovation squared :math:`y^2/S` of each row
 against the 95 % band of :math:`\chi^2_1`, and the share of samples whose
 error lies within :math:`\pm 2\sigma`.
@@ -35,6 +37,7 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,17 +59,21 @@ COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma for a Gaussian error
 NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of chi^2_1
 #: Tuning entries that open the innovation gate for the likelihood (out of reach).
 GATE_OPEN = {"innovation_gate": 1e300, "gate_release_time": 1e300}
+_GATE = TUNING.index("innovation_gate")
 
 
-def with_tuning(vehicle: Vehicle, tuning: np.ndarray) -> Vehicle:
-    """The vehicle with its ``[filter]`` noise densities replaced (``NOISE_DENSITIES`` order)."""
+def with_tuning(vehicle: Vehicle, tuning: np.ndarray, gate_scale: float | None = None) -> Vehicle:
+    """The vehicle with its ``[filter]`` noise densities replaced (``NOISE_DENSITIES`` order)
+    and, if given, its ``gate_scale``."""
     tuning = np.asarray(tuning, float)
+    current: FilterTuning = vehicle.filter
     return vehicle.replace(
-        filter=FilterTuning(
+        filter=dataclasses.replace(
+            current,
             process_noise_density=float(tuning[0]),
             suspension_noise_density=float(tuning[1]),
             constraint_noise_density=tuple(float(x) for x in tuning[2:5]),
-            initial_std=vehicle.filter.initial_std,
+            gate_scale=current.gate_scale if gate_scale is None else float(gate_scale),
         )
     )
 
@@ -99,15 +106,17 @@ class FilterRuns:
         for name, value in GATE_OPEN.items():
             self._gate_open[TUNING.index(name)] = value
 
-    def run(self, tuning: np.ndarray, *, gate_open: bool = False):
+    def run(self, tuning: np.ndarray, *, gate_factor: float = 1.0, gate_open: bool = False):
         """Estimates and innovations of every log with the noise densities ``tuning``
         (:data:`NOISE_DENSITIES` order; interval and guards as the filter's own, the
-        innovation gate opened with ``gate_open``)."""
+        gate's threshold times ``gate_factor``, or the gate opened with ``gate_open``)."""
         densities = np.asarray(tuning, float)
         if densities.shape != (len(NOISE_DENSITIES),):
             raise ValueError(f"give the {len(NOISE_DENSITIES)} noise densities {NOISE_DENSITIES}")
-        rest = (self._gate_open if gate_open else self._base)[len(NOISE_DENSITIES) :]
-        self._kf.tuning = np.concatenate([densities, rest])
+        full = (self._gate_open if gate_open else self._base).copy()
+        full[_GATE] *= 1.0 if gate_open else gate_factor
+        full[: len(NOISE_DENSITIES)] = densities
+        self._kf.tuning = full
         return [self._kf.run_innovations(signals) for signals in self.logs]
 
     def negative_log_likelihood(self, tuning: np.ndarray) -> float:
@@ -119,9 +128,9 @@ class FilterRuns:
             total += 0.5 * float(np.sum(np.log(2 * np.pi * S) + y**2 / S))
         return total
 
-    def pooled_rmse(self, tuning: np.ndarray) -> float:
+    def pooled_rmse(self, tuning: np.ndarray, gate_factor: float = 1.0) -> float:
         errors = []
-        for signals, (estimate, _) in zip(self.logs, self.run(tuning)):
+        for signals, (estimate, _) in zip(self.logs, self.run(tuning, gate_factor=gate_factor)):
             if signals.reference is None:
                 raise ValueError(f"{signals.source}: no reference loads fz_* for an RMSE tuning")
             keep = signals.t - signals.t[0] >= SETTLE
@@ -129,10 +138,11 @@ class FilterRuns:
             errors.append(error[np.isfinite(error)])
         return float(np.sqrt(np.mean(np.concatenate(errors) ** 2)))
 
-    def consistency(self, tuning: np.ndarray) -> Consistency:
+    def consistency(self, tuning: np.ndarray, gate_factor: float = 1.0) -> Consistency:
+        """NIS, ±2σ coverage, RMSE, σ–|error| correlation and gated share over the logs."""
         nis, inside, covered, squared, pairs = [], [], [], [], []
         gated, available = 0, 0
-        for signals, (estimate, inn) in zip(self.logs, self.run(tuning)):
+        for signals, (estimate, inn) in zip(self.logs, self.run(tuning, gate_factor=gate_factor)):
             settled = signals.t - signals.t[0] >= SETTLE
             present = (inn.variance > 0) & settled[:, None]
             gated += int(np.sum(present & ~inn.used))
@@ -164,19 +174,21 @@ class FilterRuns:
             gated=gated / available if available else 0.0,
         )
 
-    def coverage(self, tuning: np.ndarray) -> float:
-        return self.consistency(tuning).coverage
+    def coverage(self, tuning: np.ndarray, gate_factor: float = 1.0) -> float:
+        return self.consistency(tuning, gate_factor).coverage
 
     def calibrate(self, tuning: np.ndarray, target: float = COVERAGE_TARGET) -> float:
         """Factor c on all densities giving ``target`` ±2σ coverage on the logs' references.
 
-        Scaling Q, R_s and R_c together leaves the gain and the estimates
-        unchanged and scales P by c: only the reported σ moves.
+        Scaling Q, R_s and R_c together by c, with the gate's threshold by 1/c,
+        leaves the gain, the gate's decisions and the estimates unchanged and
+        scales P by c: only the reported σ moves.
         """
         low, high = np.log(1e-4), np.log(1e4)
         for _ in range(40):
             middle = 0.5 * (low + high)
-            if self.coverage(tuning * np.exp(middle)) < target:
+            factor = np.exp(middle)
+            if self.coverage(tuning * factor, 1.0 / factor) < target:
                 low = middle
             else:
                 high = middle
@@ -199,6 +211,11 @@ class TuningResult:
     shape: np.ndarray  # the shape written: ``likelihood``, or ``initial`` when it does better
     scale: float  # calibration factor applied to ``shape`` (1 without references)
     evaluations: int
+
+    @property
+    def gate_factor(self) -> float:
+        """Factor on the gate's threshold that goes with :attr:`tuned` (1 / :attr:`scale`)."""
+        return 1.0 / self.scale
 
     @property
     def tuned(self) -> np.ndarray:
@@ -234,12 +251,13 @@ def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: i
     if references:
         rmse, more = _minimise(runs.pooled_rmse, likelihood, iterations, span)
         count += more
-        # Each shape calibrated to the coverage target with the guards on; the lower pooled
-        # RMSE (with the guards) is written.
+        # Each shape calibrated to the coverage target (gate threshold scaled with it, so
+        # the estimates are the shape's own with the file's guards); the lower pooled RMSE
+        # is written.
         scored = []
         for candidate in (likelihood, start):
             factor = runs.calibrate(candidate)
-            scored.append((runs.pooled_rmse(candidate * factor), candidate, factor))
+            scored.append((runs.pooled_rmse(candidate), candidate, factor))
         _, shape, scale = min(scored, key=lambda entry: entry[0])
     return TuningResult(
         initial=start,
@@ -251,4 +269,18 @@ def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: i
     )
 
 
-__all__ = ["NOISE_DENSITIES", "UPDATE_ROWS", "Consistency", "FilterRuns", "TuningResult", "tune"]
+def tuned_vehicle(vehicle: Vehicle, result: TuningResult) -> Vehicle:
+    """``vehicle`` with the tuning written by ``wheelload tune``: densities and gate scale."""
+    return with_tuning(vehicle, result.tuned, vehicle.filter.gate_scale * result.gate_factor)
+
+
+__all__ = [
+    "NOISE_DENSITIES",
+    "UPDATE_ROWS",
+    "Consistency",
+    "FilterRuns",
+    "TuningResult",
+    "tune",
+    "tuned_vehicle",
+    "with_tuning",
+]

@@ -59,6 +59,49 @@ def set_values(text: str, changes: dict[Key, tuple[object, str]]) -> str:
     return "\n".join(out) + "\n"
 
 
+def add_values(text: str, changes: dict[Key, tuple[object, str]]) -> str:
+    """``text`` with each key set as :func:`set_values` does, or added at the end of its
+    table when the file does not have it (an optional key); the table must exist."""
+    present, missing = {}, {}
+    keys = _assigned_keys(text)
+    for key, change in changes.items():
+        (present if key in keys else missing)[key] = change
+    lines = set_values(text, present).splitlines()
+    for key, (value, comment) in missing.items():
+        table, name = key[:-1], key[-1]
+        start = next(
+            (
+                i
+                for i, line in enumerate(lines)
+                if (match := TABLE.match(line))
+                and tuple(part.strip() for part in match.group(1).split(".")) == table
+            ),
+            None,
+        )
+        if start is None:
+            raise ValueError(f"table [{'.'.join(table)}] not found in the vehicle file")
+        end = next((i for i in range(start + 1, len(lines)) if TABLE.match(lines[i])), len(lines))
+        # After the table's last assignment (comments further down belong to the next table).
+        last = max((i for i in range(start, end) if ASSIGNMENT.match(lines[i])), default=start)
+        lines.insert(last + 1, f"{name} = {_format(value)}  # {comment}")
+    return "\n".join(lines) + "\n"
+
+
+def _assigned_keys(text: str) -> set[Key]:
+    """Every ``table.key`` assigned in the text."""
+    table: Key = ()
+    keys = set()
+    for line in text.splitlines():
+        header = TABLE.match(line)
+        if header:
+            table = tuple(part.strip() for part in header.group(1).split("."))
+            continue
+        match = ASSIGNMENT.match(line)
+        if match:
+            keys.add((*table, match.group(2)))
+    return keys
+
+
 def prepend_comment(text: str, comment: str) -> str:
     """``text`` with comment lines added at the top."""
     return "".join(f"# {line}\n".replace("#  \n", "#\n") for line in comment.splitlines()) + text

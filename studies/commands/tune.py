@@ -14,11 +14,16 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import read_log
-from wheelload.estimators.identification.tuning import NIS_BAND, FilterRuns, tune
+from wheelload.estimators.identification.tuning import (
+    NIS_BAND,
+    FilterRuns,
+    tune,
+    tuned_vehicle,
+)
 from wheelload.estimators.identification.vehicle_writer import (
+    add_values,
     check_output_path,
     prepend_comment,
-    set_values,
     write_vehicle_text,
 )
 from wheelload.estimators.two_stage import NOISE_DENSITIES, UPDATE_ROWS, noise_densities
@@ -66,8 +71,11 @@ def handle(args: argparse.Namespace) -> int:
         print(_row(f"written ({result.shape_source} x{result.scale:.3g})", result.tuned))
     lo, hi = NIS_BAND
     print(f"consistency on the tuning logs (NIS = y^2/S, 95 % band {lo:.3g}..{hi:.3g}):")
-    for label, tuning in (("input", result.initial), ("tuned", result.tuned)):
-        check = runs.consistency(tuning)
+    for label, tuning, gate in (
+        ("input", result.initial, 1.0),
+        ("tuned", result.tuned, result.gate_factor),
+    ):
+        check = runs.consistency(tuning, gate)
         nis = ", ".join(
             f"{row} {m:.2f} ({100 * b:.0f} %)"
             for row, m, b in zip(UPDATE_ROWS, check.nis_mean, check.nis_in_band)
@@ -80,6 +88,7 @@ def handle(args: argparse.Namespace) -> int:
         )
         print(f"  {label}: mean NIS (share in band) {nis}{extra}")
     tuned = result.tuned
+    new_vehicle = tuned_vehicle(vehicle, result)
     shape = (
         "maximum likelihood of the innovations"
         if result.shape_source == "likelihood"
@@ -94,19 +103,23 @@ def handle(args: argparse.Namespace) -> int:
         ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
         ("filter", "suspension_noise_density"): (tuned[1], "tuned (see above)"),
         ("filter", "constraint_noise_density"): (list(tuned[2:5]), "tuned (see above)"),
+        ("filter", "gate_scale"): (
+            new_vehicle.filter.gate_scale,
+            f"tuned: gate threshold x this (the densities were scaled x{result.scale:.3g})",
+        ),
     }
     text = vehicle_path.read_text(encoding="utf-8")
     header = f"Filter tuned by `wheelload tune` from {vehicle_path.name}: {note}.\n"
     write_vehicle_text(
-        prepend_comment(set_values(text, changes), header), out, inputs=inputs, force=args.force
+        prepend_comment(add_values(text, changes), header), out, inputs=inputs, force=args.force
     )
     print(f"vehicle file written to {out}")
     if args.evaluate:
-        print(evaluation_table(vehicle, tuple(read_log(p) for p in args.evaluate), result))
+        print(evaluation_table(vehicle, new_vehicle, tuple(read_log(p) for p in args.evaluate)))
     return 0
 
 
-def evaluation_table(vehicle, logs, result) -> str:
+def evaluation_table(vehicle, tuned, logs) -> str:
     """Per-log and pooled ±2σ coverage, RMSE and σ–|error| correlation, input and tuned."""
     if any(signals.reference is None for signals in logs):
         raise ValueError("--evaluate needs logs with reference loads fz_*")
@@ -118,8 +131,8 @@ def evaluation_table(vehicle, logs, result) -> str:
     ]
     groups = [(Path(s.source).name, (s,)) for s in logs] + [("pooled", logs)]
     for name, group in groups:
-        runs = FilterRuns(vehicle, group)
-        before, after = runs.consistency(result.initial), runs.consistency(result.tuned)
+        before = FilterRuns(vehicle, group).consistency(noise_densities(vehicle))
+        after = FilterRuns(tuned, group).consistency(noise_densities(tuned))
         lines.append(
             f"{name:>28}{100 * before.coverage:9.1f}{100 * after.coverage:11.1f}"
             f"{before.rmse:10.1f}{after.rmse:12.1f}"
