@@ -156,3 +156,78 @@ def test_tuning_likelihood_keeps_the_rows_the_gate_would_skip(folder):
     S, y = inn.variance[keep], inn.innovation[keep]
     expected = 0.5 * float(np.sum(np.log(2 * np.pi * S) + y**2 / S))
     assert runs.negative_log_likelihood(tight) == pytest.approx(expected, rel=1e-9)
+
+
+@pytest.fixture(scope="module")
+def joint(folder):
+    """Several drive logs jointly: lane change, bounce sweep, banked chicane (no rig)."""
+    names = ("iso-dlc", "bounce-sweep", "chicane-bank-30")
+    for name in names[1:]:
+        assert main(["simulate", name, "--out", str(folder / f"{name}.csv")]) == 0
+    logs = [folder / f"{name}.csv" for name in names]
+    wrong = folder / "wrong_joint.toml"
+    wrong.write_text(wrong_vehicle_text(example_vehicle_path().read_text(), StudySettings()))
+    out = folder / "joint.toml"
+    args = ["identify", "--vehicle", str(wrong), "--out", str(out)]
+    return logs, out, args + [arg for log in logs for arg in ("--drive", str(log))]
+
+
+def _plant_damper_slopes(logs) -> dict[tuple[str, str], float]:
+    """Least-squares slope through 0 of the plant's damper map over the logs' travel rates
+    (the issue's reference for a fitted linear damper), per axle and side."""
+    import casadi as ca
+
+    from wheelload.models.plant import damper_map_force
+
+    dampers = load_vehicle(example_vehicle_path()).plant.dampers
+    rates = [read_log(path).v for path in logs]
+    v = ca.SX.sym("v")
+    slopes = {}
+    for axle, columns in (("front", [0, 1]), ("rear", [2, 3])):
+        force = ca.Function("f", [v], [damper_map_force(v, getattr(dampers, axle))])
+        speed = np.concatenate([r[:, columns].ravel() for r in rates])
+        load = np.asarray(force(speed[None, :])).ravel()
+        for side, keep in (("push", speed > 0), ("pull", speed < 0)):
+            x, y = speed[keep], load[keep]
+            slopes[axle, side] = float(x @ y / (x @ x))
+    return slopes
+
+
+def test_joint_drive_logs_identify_springs_and_front_dampers(joint, capsys):
+    """Three plant drive logs jointly from the -20/+30/-30 % file: springs within 3 % of the
+    plant's, front damper slopes within 5 % of the plant map's slope over the logs' travel
+    rates (the issue's bounds); the roll-centre heights, confounded with the bars in the
+    roll direction, are held with the identifiability warning naming the bar."""
+    logs, out, args = joint
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    for axle in ("front", "rear"):
+        assert f"warning: 'roll_centre_{axle}' is not identifiable" in text
+        assert f"confounded with arb_rate_{axle}" in text
+    suspension = load_vehicle(out).suspension
+    assert suspension.front.spring_rate == pytest.approx(60000.0, rel=0.03)
+    assert suspension.rear.spring_rate == pytest.approx(70000.0, rel=0.03)
+    slopes = _plant_damper_slopes(logs)
+    assert suspension.front.damper_push == pytest.approx(slopes["front", "push"], rel=0.05)
+    assert suspension.front.damper_pull == pytest.approx(slopes["front", "pull"], rel=0.05)
+    assert suspension.front.roll_centre_height == 0.05
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured on this build (issue 10): from iso-dlc + bounce-sweep + chicane-bank-30 "
+    "the bars come out +6.1 % / +6.8 % (SE 1.6 %) and the rear damper slopes -9 % / +6 %: "
+    "with the bars held at the plant's value the roll-centre heights come out +21 % / +13 %, "
+    "so the drive logs carry a roll moment the model's link term does not (the rig gives the "
+    "bars to 0.1 %); see /work/notes/tune10.md",
+)
+def test_joint_drive_logs_identify_bars_and_rear_dampers(joint):
+    logs, out, args = joint
+    if not out.exists():
+        assert main(args) == 0
+    suspension = load_vehicle(out).suspension
+    slopes = _plant_damper_slopes(logs)
+    assert suspension.front.arb_rate == pytest.approx(15000.0, rel=0.03)
+    assert suspension.rear.arb_rate == pytest.approx(15000.0, rel=0.03)
+    assert suspension.rear.damper_push == pytest.approx(slopes["rear", "push"], rel=0.05)
+    assert suspension.rear.damper_pull == pytest.approx(slopes["rear", "pull"], rel=0.05)
