@@ -3,7 +3,9 @@
 Maximum likelihood of the filter's innovations (prediction-error method); with
 reference loads ``fz_*`` in every log also the RMSE-minimising tuning and a
 ±2σ coverage calibration (``wheelload.estimators.identification.tuning``).
-The new file is a copy of ``--vehicle`` with a new ``[filter]`` section.
+The new file is a copy of ``--vehicle`` with new ``[filter]`` densities and,
+with references, ``gate_scale = 1/c`` for densities scaled by c (the gate
+keeps its decisions, so only σ is calibrated).
 """
 
 from __future__ import annotations
