@@ -39,7 +39,7 @@ import numpy as np
 
 from wheelload.estimators import guard
 from wheelload.estimators.compiled import ColumnLoop, FlagRule
-from wheelload.estimators.log_checks import MOVING, WINDOW, check_wiring, raise_for_wiring
+from wheelload.estimators.log_checks import MOVING, WINDOW, check_wiring
 from wheelload.estimators.readers.chunks import ChunkError, chunk_columns, read_chunks
 from wheelload.estimators.result import RESIDUALS, SensorFault, StepFlag
 from wheelload.estimators.signals import (
@@ -440,8 +440,6 @@ def scan_log(
         head=_signals(head, source, az_assumed),
         rows=rows,
     )
-    if wiring_checks:
-        raise_for_wiring(stream.wiring_report(), source)
     if stream.velocities_derived:
         Differentiator(np.diff(t), 4, VELOCITY_CUTOFF, source)  # its checks, before any output
     return stream
