@@ -92,6 +92,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="FL,FR,RL,RR",
         help="measured corner weights [kg] (scale readings) as the static loads",
     )
+    parser.add_argument(
+        "--in-memory",
+        action="store_true",
+        help="one log: read it whole into memory (default for a CSV/Parquet log with the KF: "
+        "in chunks, memory bounded by the chunk)",
+    )
     parser.add_argument("--workers", type=int, default=1, help="local processes for many logs")
     parser.add_argument("--dask", metavar="ADDRESS", help="run many logs on this Dask scheduler")
     add_allow_unusual(parser)
@@ -138,7 +144,8 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
         table_format(Path(args.out))
     if args.plot:
         check_figure_suffix(Path(args.plot))
-    if not args.plot and _lean(path, settings) and _run_lean(path, settings, args):
+    lean = not (args.plot or args.in_memory) and _lean(path, settings)
+    if lean and _run_lean(path, settings, args):
         return 0
     result = estimate_log(path, settings)
     estimate, signals = result.estimate, result.signals
