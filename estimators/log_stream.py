@@ -329,7 +329,7 @@ def column_loop(step) -> ColumnLoop:
 def scan_log(
     path: Path,
     *,
-    rows: int = 1 << 18,
+    rows: int = 1 << 16,
     still_period: float | None = None,
     wiring_checks: bool = True,
 ) -> LogStream:

@@ -10,7 +10,9 @@ so that both meet the same machine load, ``--repeat`` times each:
   ``TwoStageKF.run``, ``Estimate.to_pandas`` written by pyarrow.
 
 ``--example`` cold (a fresh, empty build folder: the compiled loop is built)
-and warm (the same folder again). Figures: min / median / max.
+and warm (the same folder again). Figures: min / median / max of wall time,
+CPU time (user + system: on a shared machine the wall time includes waiting
+for a core) and peak resident memory.
 """
 
 from __future__ import annotations
@@ -66,8 +68,8 @@ def write_tiled_log(path: Path, samples: int) -> None:
             w.write_table(pa.table({k: v[:n] for k, v in columns.items()}))
 
 
-def _timed(command: list[str], env: dict | None = None) -> tuple[float, float]:
-    """Wall time [s] and peak resident memory [MB] of a child process."""
+def _timed(command: list[str], env: dict | None = None) -> tuple[float, float, float]:
+    """Wall time [s], peak resident memory [MB] and CPU time [s] of a child process."""
     start = time.perf_counter()
     child = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
     _, status, usage = os.wait4(child.pid, 0)
@@ -77,7 +79,7 @@ def _timed(command: list[str], env: dict | None = None) -> tuple[float, float]:
         child.stderr.close()
     if os.waitstatus_to_exitcode(status) != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {stderr.strip()}")
-    return wall, usage.ru_maxrss / 1024.0
+    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
 
 
 def _spread(values: list[float], fmt: str) -> str:
@@ -100,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
             ways = {"lean": []}
             if n <= args.in_memory_up_to:
                 ways["in-memory"] = ["--in-memory"]
-            figures: dict[str, list[tuple[float, float]]] = {way: [] for way in ways}
+            figures: dict[str, list[tuple[float, float, float]]] = {way: [] for way in ways}
             for _ in range(args.repeat):
                 for way, extra in ways.items():
                     command = [*wheelload, "estimate", str(log), "--vehicle", vehicle,
@@ -109,9 +111,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {n:>10} samples ({log.stat().st_size / 1e6:.0f} MB Parquet in), "
                   f"out {args.suffix}:")  # fmt: skip
             for way, runs in figures.items():
-                walls, peaks = [r[0] for r in runs], [r[1] for r in runs]
+                walls, peaks, cpu = ([r[k] for r in runs] for k in range(3))
                 print(f"    {way:10s} wall {_spread(walls, '7.2f')} s   "
-                      f"peak RSS {_spread(peaks, '7.0f')} MB")  # fmt: skip
+                      f"cpu {_spread(cpu, '7.2f')} s"
+                      f"   peak RSS {_spread(peaks, '6.0f')} MB")  # fmt: skip
             if len(figures) == 2:
                 lean = statistics.median(r[0] for r in figures["lean"])
                 whole = statistics.median(r[0] for r in figures["in-memory"])
@@ -124,8 +127,10 @@ def run(args: argparse.Namespace) -> int:
             with tempfile.TemporaryDirectory() as build:
                 env = dict(os.environ, TMPDIR=build)
                 command = [*wheelload, "estimate", "--example"]
-                cold.append(_timed(command, env)[0])
-                warm.append(_timed(command, env)[0])
-        print(f"  estimate --example cold (empty build folder) {_spread(cold, '6.2f')} s")
-        print(f"  estimate --example warm                      {_spread(warm, '6.2f')} s")
+                cold.append(_timed(command, env))
+                warm.append(_timed(command, env))
+        for name, runs in (("cold (empty build folder)", cold), ("warm", warm)):
+            walls, cpu = [r[0] for r in runs], [r[2] for r in runs]
+            print(f"  estimate --example {name:26s} wall {_spread(walls, '6.2f')} s   "
+                  f"cpu {_spread(cpu, '6.2f')} s")  # fmt: skip
     return 0
