@@ -40,7 +40,7 @@ import numpy as np
 from wheelload.estimators import guard
 from wheelload.estimators.compiled import ColumnLoop, FlagRule
 from wheelload.estimators.log_checks import MOVING, WINDOW, check_wiring
-from wheelload.estimators.readers.chunks import ChunkError, chunk_columns, read_chunks
+from wheelload.estimators.readers.chunks import ChunkError, chunk_columns, read_chunks, row_count
 from wheelload.estimators.result import RESIDUALS, SensorFault, StepFlag
 from wheelload.estimators.signals import (
     HUB,
@@ -118,6 +118,28 @@ class ChannelStats:
     rate_count: np.ndarray  # finite samples of v_* (logged)
     rate_min: np.ndarray
     rate_max: np.ndarray
+
+
+class _Store:
+    """A column gathered chunk by chunk: into one array if the row count is known."""
+
+    def __init__(self, rows: int | None) -> None:
+        self.filled = 0
+        self.whole = None if rows is None else np.empty(rows)
+        self.parts: list[np.ndarray] = []
+
+    def append(self, values: np.ndarray) -> None:
+        if self.whole is not None and self.filled + len(values) <= len(self.whole):
+            self.whole[self.filled : self.filled + len(values)] = values
+        else:
+            self.parts.append(values)
+        self.filled += len(values)
+
+    def array(self) -> np.ndarray:
+        if self.whole is not None and not self.parts:
+            return self.whole[: self.filled]
+        head = [] if self.whole is None else [self.whole[: self.filled - sum(map(len, self.parts))]]
+        return np.concatenate([*head, *self.parts]) if head or self.parts else np.array([])
 
 
 def _column_peak(values: np.ndarray) -> np.ndarray:
@@ -349,7 +371,7 @@ def scan_log(
             raise ChunkError(f"{source}: a partial group of {group[0]}")
     ours = {"t", "ax", "ay", "az", "vx", *WHEEL_SPEED, *REFERENCE, *(n for g in GROUPS for n in g)}
     names = tuple(name for name in present if name in ours)
-    t_parts, az_parts = [], []
+    t_store, az_store = _Store(row_count(path)), _Store(row_count(path))
     peaks = {"d": np.zeros(4), "v": np.zeros(4), "vx": 0.0}
     travel_present = np.zeros(4, bool)
     reference_present = np.zeros(4, bool)
@@ -365,11 +387,11 @@ def scan_log(
         if n == 0:
             continue
         t = chunk["t"]
-        t_parts.append(t)
+        t_store.append(t)
         t0 = t[0] if t0 is None else t0
         speed, speed_source = _speed(chunk, n)
         if "az" in chunk:
-            az_parts.append(chunk["az"])
+            az_store.append(chunk["az"])
         d = _travel(chunk, n)
         peaks["d"] = np.maximum(peaks["d"], _column_peak(d))
         finite = np.isfinite(d)
@@ -409,15 +431,15 @@ def scan_log(
                 stop = int(np.searchsorted(t, wiring_end))
                 wiring.add(collected, first, stop)
                 wiring.done = stop < n
-    if not t_parts:
+    t = t_store.array()
+    if not t.size:
         raise ChunkError(f"{source}: no rows")
-    t = np.concatenate(t_parts)
-    del t_parts
     check_time_column(t, source)
     az_assumed = "az" not in names
-    az = np.concatenate(az_parts) if az_parts else np.array([])
+    az = az_store.array()
+    del az_store
     az_median = np.nanmedian(az) if np.any(np.isfinite(az)) else np.nan
-    del az, az_parts
+    del az
     check_units(
         np.array([[0.0, 0.0, az_median]]),
         peaks["d"][None, :],

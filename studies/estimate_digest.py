@@ -22,12 +22,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import StepFlag
-from wheelload.studies.metrics import (
-    WHEELS,
-    metrics_table,
-    no_reference_message,
-    no_sample_message,
-)
+from wheelload.studies.metrics import COLUMNS, WHEELS, no_reference_message, no_sample_message
 
 _SUSPENSION = (StepFlag.SUSPENSION_FL_SKIPPED, StepFlag.SUSPENSION_FR_SKIPPED,
                StepFlag.SUSPENSION_RL_SKIPPED, StepFlag.SUSPENSION_RR_SKIPPED)  # fmt: skip
@@ -106,10 +101,42 @@ class EstimateDigest:
         return self.std_sum / self.n
 
     def metrics(self, source: str) -> pd.DataFrame:
-        """The table of :func:`~wheelload.studies.metrics.wheel_metrics`; ValueError as it."""
+        """The table of :func:`~wheelload.studies.metrics.wheel_metrics`; ValueError as it.
+
+        Once only: the error store is overwritten (see :func:`_lean_metrics`).
+        """
         if self.wheels is None or not self.wheels.size:
             raise ValueError(no_reference_message(source))
         names = [WHEELS[i] for i in self.wheels]
         if self.scored == 0:
             raise ValueError(no_sample_message(source, names))
-        return metrics_table(self.errors[: self.scored], self.reference_sum / self.scored, names)
+        return _lean_metrics(self.errors[: self.scored], self.reference_sum / self.scored, names)
+
+
+def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> pd.DataFrame:
+    """:func:`~wheelload.studies.metrics.metrics_table` without whole-size temporaries.
+
+    ``errors`` is overwritten (made absolute in place; the pooled percentile
+    partitions it in place), so the peak memory is the store plus one wheel's
+    column. Per wheel the figures are computed as there, to the bit; the pooled
+    RMSE sums the squares one wheel at a time (equal to 1e-15 relative).
+    """
+    np.abs(errors, out=errors)
+    rows, squares = [], 0.0
+    for i in range(len(names)):
+        column = np.ascontiguousarray(errors[:, i])
+        square = column * column
+        rmse = float(np.sqrt(np.mean(square)))
+        squares += float(np.sum(square))
+        del square
+        rows.append([rmse, 100.0 * rmse / means[i], float(np.percentile(column, 95)),
+                     float(column.max())])  # fmt: skip
+        del column
+    pooled = errors.reshape(-1)
+    rmse = float(np.sqrt(squares / pooled.size))
+    peak = float(max(row[3] for row in rows))
+    p95 = float(np.percentile(pooled, 95, overwrite_input=True))
+    rows.append([rmse, 100.0 * rmse / float(means.mean()), p95, peak])
+    table = pd.DataFrame(rows, index=[*names, "pooled"], columns=COLUMNS)
+    table["samples"] = int(errors.shape[0])
+    return table

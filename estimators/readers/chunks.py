@@ -61,6 +61,15 @@ def chunk_columns(path: Path) -> list[str]:
     return names
 
 
+def row_count(path: Path) -> int | None:
+    """The number of rows of a Parquet log (from its footer); None for CSV."""
+    if path.suffix.lower() not in PARQUET_SUFFIXES:
+        return None
+    import pyarrow.parquet as pq
+
+    return int(pq.read_metadata(path).num_rows)
+
+
 def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> Iterator[dict]:
     """Chunks of at most ``rows`` rows of ``columns`` (present in the file), ``{name: float64}``."""
     import pyarrow as pa
@@ -69,8 +78,10 @@ def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> 
         if path.suffix.lower() in PARQUET_SUFFIXES:
             import pyarrow.parquet as pq
 
-            with pq.ParquetFile(path) as source:
-                for batch in source.iter_batches(batch_size=rows, columns=columns):
+            # Column pages read as needed, one thread: memory about a batch, not a row group.
+            with pq.ParquetFile(path, pre_buffer=False, buffer_size=1 << 20) as source:
+                batches = source.iter_batches(batch_size=rows, columns=columns, use_threads=False)
+                for batch in batches:
                     yield _floats(batch, columns)
             return
         import pyarrow.csv as pc
