@@ -56,7 +56,7 @@ def write_tiled_log(path: Path, samples: int) -> None:
     from wheelload.studies.commands.estimate import example_log_path
 
     base = pd.read_csv(example_log_path())
-    dt = float(np.median(np.diff(base["t"].to_numpy())))
+    rate = round(1.0 / float(np.median(np.diff(base["t"].to_numpy()))))  # Hz
     block = 1 << 20
     reps = -(-block // len(base))
     tiled = {name: np.tile(base[name].to_numpy(float), reps)[:block] for name in base.columns}
@@ -64,7 +64,7 @@ def write_tiled_log(path: Path, samples: int) -> None:
         for start in range(0, samples, block):
             n = min(block, samples - start)
             columns = dict(tiled)
-            columns["t"] = (start + np.arange(block)) * dt
+            columns["t"] = (start + np.arange(block)) / rate
             w.write_table(pa.table({k: v[:n] for k, v in columns.items()}))
 
 
