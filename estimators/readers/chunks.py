@@ -54,7 +54,7 @@ def chunk_columns(path: Path) -> list[str]:
                 names = list(reader.schema.names)
         else:
             raise ChunkError(f"{path}: not a CSV or Parquet log")
-    except (pa.ArrowException, OSError) as error:
+    except (pa.ArrowException, OSError, UnicodeDecodeError) as error:
         raise ChunkError(f"{path}: {error}") from None
     if len(set(names)) != len(names) or any(name != name.strip() for name in names):
         raise ChunkError(f"{path}: repeated or padded column names")
@@ -95,7 +95,7 @@ def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> 
             for batch in reader:  # blocks of CSV_BLOCK bytes, cut into ``rows``
                 for start in range(0, batch.num_rows, rows):
                     yield _floats(batch.slice(start, rows), columns)
-    except (pa.ArrowException, OSError) as error:
+    except (pa.ArrowException, OSError, UnicodeDecodeError) as error:
         raise ChunkError(f"{path}: {error}") from None
 
 
