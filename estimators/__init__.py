@@ -1,6 +1,11 @@
-"""Estimators that turn logged signals into wheel-load estimates, and C code generation."""
+"""Estimators that turn logged signals into wheel-load estimates, and C code generation.
 
-from wheelload.estimators.mhe import Arrival, Constraint, MheSettings, MovingHorizonEstimator
+The MHE's names are imported on first use (OSQP and scipy.sparse are slow to
+import, and a command that does not run the MHE should not pay for them).
+"""
+
+import importlib
+
 from wheelload.estimators.projection import ProjectionKF, Weighting
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.estimators.signals import LogError, Signals, read_log, signals_from_frame, write_log
@@ -25,3 +30,14 @@ __all__ = [
     "step_function",
     "write_log",
 ]
+
+_MHE_NAMES = ("Arrival", "Constraint", "MheSettings", "MovingHorizonEstimator")
+_LAZY = dict.fromkeys(_MHE_NAMES, "wheelload.estimators.mhe")
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'wheelload.estimators' has no attribute '{name}'")

@@ -41,7 +41,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from scipy import signal as sp_signal
 
 from wheelload.models import (
     GRAVITY,
@@ -175,6 +174,8 @@ def _fill(values: np.ndarray) -> np.ndarray | None:
 
 def _quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Low-passed, decimated channels over the examined window (missing channels dropped)."""
+    from scipy import signal as sp_signal  # ~1 s to import: only when the checks run
+
     fs = 1.0 / float(np.median(np.diff(t)))
     b, a = sp_signal.butter(2, min(CUTOFF / (0.5 * fs), 0.9))
     step = max(int(fs / RATE), 1)

@@ -178,3 +178,79 @@ def write_text(path: Path, text: str, *, replace: bool = False) -> None:
     """Write UTF-8 ``text`` to ``path`` through :func:`atomic_write`."""
     with atomic_write(path, replace=replace) as temporary:
         temporary.write_text(text, encoding="utf-8")
+
+
+def _write_options(schema):
+    """CSV options: quote only text columns and names that need it (as ``to_csv``)."""
+    import pyarrow as pa
+    import pyarrow.csv as pc
+
+    text = any(pa.types.is_string(f.type) or pa.types.is_large_string(f.type) for f in schema)
+    plain = all(not set(f.name) & set(',"\r\n') for f in schema)
+    return pc.WriteOptions(
+        quoting_style="needed" if text else "none", quoting_header="none" if plain else "needed"
+    )
+
+
+@contextlib.contextmanager
+def table_writer(path: Path, *, replace: bool = False) -> Iterator:
+    """Yield ``write(columns)``, which appends a chunk of named columns to a table file.
+
+    CSV or Parquet by ``path``'s suffix, written by pyarrow (CSV floats in
+    shortest round-trip form: a read gives back the same doubles) into a
+    temporary file renamed into place by :func:`atomic_write` once the last
+    chunk is in; every chunk must have the same columns and types.
+
+    Example
+    -------
+    >>> with table_writer(Path("loads.parquet")) as write:
+    ...     for chunk in chunks:
+    ...         write({"t": chunk.t, "fz_fl": chunk.fz_fl})
+    """
+    import pyarrow as pa
+
+    fmt = table_format(Path(path))
+    with atomic_write(Path(path), replace=replace) as temporary:
+        writer = None
+
+        def write(columns: dict) -> None:
+            nonlocal writer
+            batch = pa.record_batch(columns)
+            if writer is None:
+                if fmt is TableFormat.PARQUET:
+                    import pyarrow.parquet as pq
+
+                    writer = pq.ParquetWriter(str(temporary), batch.schema)
+                else:
+                    import pyarrow.csv as pc
+
+                    options = _write_options(batch.schema)
+                    writer = pc.CSVWriter(str(temporary), batch.schema, write_options=options)
+            writer.write_batch(batch)
+
+        try:
+            yield write
+        finally:
+            if writer is not None:
+                writer.close()
+
+
+def write_frame(frame, path: Path, *, replace: bool = False) -> None:
+    """Write a DataFrame as CSV or Parquet (by suffix) with pyarrow, through :func:`atomic_write`.
+
+    Same columns and values as ``to_csv``/``to_parquet`` (index left out); a
+    read with ``pandas.read_csv`` or ``read_parquet`` gives back the same numbers.
+    """
+    import pyarrow as pa
+
+    fmt = table_format(Path(path))
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    with atomic_write(Path(path), replace=replace) as temporary:
+        if fmt is TableFormat.PARQUET:
+            import pyarrow.parquet as pq
+
+            pq.write_table(table, str(temporary))
+        else:
+            import pyarrow.csv as pc
+
+            pc.write_csv(table, str(temporary), write_options=_write_options(table.schema))

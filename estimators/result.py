@@ -148,13 +148,13 @@ class Estimate:
         return len(self.t)
 
     def to_pandas(self) -> pd.DataFrame:
-        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., status`` (flag bits)."""
+        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., status`` (uint32 bits)."""
         columns = {"t": self.t}
         columns.update({f"fz_{w}": self.loads[:, i] for i, w in enumerate(WHEELS)})
         if self.has_std:
             columns.update({f"fz_std_{w}": self.std[:, i] for i, w in enumerate(WHEELS)})
         columns.update({name: self.residual[:, i] for i, name in enumerate(RESIDUALS)})
-        columns[STATUS] = self.flags
+        columns[STATUS] = self.flags.astype(np.uint32)  # bits 0-30 (StepFlag)
         return pd.DataFrame(columns)
 
 

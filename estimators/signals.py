@@ -40,7 +40,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import signal as sp_signal
 
 from wheelload.estimators.log_checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
@@ -80,6 +79,33 @@ class SpeedSource(enum.Enum):
     LOGGED = "logged"
     WHEEL_SPEEDS = "mean of the wheel speeds"
     NONE = "none (aerodynamic terms off)"
+
+
+def sensor_mode(travel_present: np.ndarray, az_assumed: bool, speed_source: SpeedSource) -> str:
+    """The sensor set in words, for summaries (see :meth:`Signals.mode`)."""
+    count = int(np.sum(travel_present))
+    parts = [(TravelSensors.NONE, TravelSensors.ONE, TravelSensors.TWO,
+              TravelSensors.DEAD_CORNER, TravelSensors.ALL)[count].value]  # fmt: skip
+    if 0 < count < 4:
+        missing = [w.upper() for w, ok in zip(WHEELS, travel_present) if not ok]
+        parts[0] += f", missing {' '.join(missing)}"
+    if az_assumed:
+        parts.append("no az: g assumed")
+    if speed_source is not SpeedSource.LOGGED:
+        parts.append(f"vx: {speed_source.value}")
+    return "; ".join(parts)
+
+
+def input_bits(az_assumed: bool, speed_source: SpeedSource) -> int:
+    """:class:`StepFlag` bits of inputs the log did not have (az, vx)."""
+    bits = 0
+    if az_assumed:
+        bits |= StepFlag.AZ_ASSUMED_G
+    if speed_source is SpeedSource.WHEEL_SPEEDS:
+        bits |= StepFlag.SPEED_FROM_WHEELS
+    if speed_source is SpeedSource.NONE:
+        bits |= StepFlag.AERO_OFF_NO_SPEED
+    return int(bits)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -130,26 +156,12 @@ class Signals:
 
     def mode(self) -> str:
         """The sensor set in words, for summaries."""
-        parts = [self.travel_sensors.value]
-        if 0 < self.travel_present.sum() < 4:
-            missing = [w.upper() for w, ok in zip(WHEELS, self.travel_present) if not ok]
-            parts[0] += f", missing {' '.join(missing)}"
-        if self.az_assumed:
-            parts.append("no az: g assumed")
-        if self.speed_source is not SpeedSource.LOGGED:
-            parts.append(f"vx: {self.speed_source.value}")
-        return "; ".join(parts)
+        return sensor_mode(self.travel_present, self.az_assumed, self.speed_source)
 
     def input_flags(self) -> np.ndarray:
         """(n,) :class:`StepFlag` bits of inputs the log did not have."""
-        bits = 0
-        if self.az_assumed:
-            bits |= StepFlag.AZ_ASSUMED_G
-        if self.speed_source is SpeedSource.WHEEL_SPEEDS:
-            bits |= StepFlag.SPEED_FROM_WHEELS
-        if self.speed_source is SpeedSource.NONE:
-            bits |= StepFlag.AERO_OFF_NO_SPEED
-        return np.full(len(self.t), int(bits), dtype=np.int64)
+        bits = input_bits(self.az_assumed, self.speed_source)
+        return np.full(len(self.t), bits, dtype=np.int64)
 
     @property
     def sample_rate(self) -> float:
@@ -287,13 +299,7 @@ def signals_from_frame(
         return np.column_stack([column(name) for name in names])
 
     t = column("t")
-    _check_time(t, source)
-    step = float(np.median(np.diff(t)))
-    if step > MAX_SAMPLE_INTERVAL:
-        raise LogError(
-            f"{source}: column 't' advances by {step:.4g} per sample: more than "
-            f"{MAX_SAMPLE_INTERVAL} s, it looks like milliseconds (give seconds)"
-        )
+    check_time_column(t, source)
     missing = np.full((t.size, 4), np.nan)
     az_assumed = "az" not in frame.columns
     az = np.full(t.size, GRAVITY) if az_assumed else column("az")
@@ -312,7 +318,7 @@ def signals_from_frame(
         speed_source = SpeedSource.WHEEL_SPEEDS
     else:
         speed, speed_source = np.zeros(t.size), SpeedSource.NONE
-    _check_units(acc, d, v, speed, source)
+    check_units(acc, d, v, speed, source)
     if wiring_checks:
         raise_for_wiring(check_wiring(t, speed, acc, d, group(RATES)), source)
     derived = v is None and bool(np.isfinite(d).any())
@@ -337,6 +343,17 @@ def signals_from_frame(
     )
 
 
+def check_time_column(t: np.ndarray, source: str) -> None:
+    """A log's time column: finite, increasing, in seconds (one-line :class:`LogError`)."""
+    _check_time(t, source)
+    step = float(np.median(np.diff(t)))
+    if step > MAX_SAMPLE_INTERVAL:
+        raise LogError(
+            f"{source}: column 't' advances by {step:.4g} per sample: more than "
+            f"{MAX_SAMPLE_INTERVAL} s, it looks like milliseconds (give seconds)"
+        )
+
+
 def _check_time(t: np.ndarray, source: str) -> None:
     if t.size < 2:
         raise LogError(f"{source}: needs at least 2 samples, has {t.size}")
@@ -353,7 +370,7 @@ def _check_time(t: np.ndarray, source: str) -> None:
         )
 
 
-def _check_units(acc, d, v, vx, source: str) -> None:
+def check_units(acc, d, v, vx, source: str) -> None:
     """Report values that look like the wrong unit rather than guess."""
     az = np.nanmedian(acc[:, 2]) if np.any(np.isfinite(acc[:, 2])) else np.nan
     if np.isfinite(az) and 0.5 < abs(az) < 2.0:
@@ -399,26 +416,62 @@ def derive_velocities(
     median = float(np.median(dt))
     if not np.isfinite(d).any():
         return np.full(d.shape, np.nan)
-    if np.max(np.abs(dt - median)) > 0.05 * median:
-        raise LogError(
-            f"{source}: time stamps are not uniform enough to derive suspension velocities; "
-            "give columns v_fl v_fr v_rl v_rr"
-        )
-    nyquist = 0.5 / median
-    if cutoff >= 0.8 * nyquist:
-        raise LogError(
-            f"{source}: sample rate {1 / median:.4g} Hz is too low for the {cutoff} Hz "
-            "velocity differentiator; give columns v_fl v_fr v_rl v_rr"
-        )
-    omega = 2.0 * np.pi * cutoff
-    b, a = sp_signal.bilinear([omega, 0.0], [1.0, omega], fs=1.0 / median)
-    rest = sp_signal.lfilter_zi(b, a)
-    v = np.full(d.shape, np.nan)
-    for wheel in range(d.shape[1]):
-        for start, stop in _valid_runs(np.isfinite(d[:, wheel])):
-            run = d[start:stop, wheel]
-            v[start:stop, wheel], _ = sp_signal.lfilter(b, a, run, zi=rest * run[0])
-    return v
+    differentiator = Differentiator(dt, d.shape[1], cutoff, source, median=median)
+    return differentiator(d)
+
+
+class Differentiator:
+    r"""The travel differentiator of :func:`derive_velocities` with its state carried.
+
+    Called on consecutive chunks of a log (2-D, one column per channel), it
+    returns what one call on the whole log returns, to the bit: each run of
+    finite samples is filtered by ``lfilter`` with the state it left at the
+    end of the previous chunk. ``dt`` are the whole log's sample intervals
+    (the uniformity and sample-rate checks need all of them).
+    """
+
+    def __init__(
+        self,
+        dt: np.ndarray,
+        channels: int,
+        cutoff: float = VELOCITY_CUTOFF,
+        source: str = "<log>",
+        *,
+        median: float | None = None,
+    ) -> None:
+        from scipy import signal as sp_signal  # ~1 s to import: only where velocities are derived
+
+        median = float(np.median(dt)) if median is None else median
+        if np.max(np.abs(dt - median)) > 0.05 * median:
+            raise LogError(
+                f"{source}: time stamps are not uniform enough to derive suspension velocities; "
+                "give columns v_fl v_fr v_rl v_rr"
+            )
+        nyquist = 0.5 / median
+        if cutoff >= 0.8 * nyquist:
+            raise LogError(
+                f"{source}: sample rate {1 / median:.4g} Hz is too low for the {cutoff} Hz "
+                "velocity differentiator; give columns v_fl v_fr v_rl v_rr"
+            )
+        omega = 2.0 * np.pi * cutoff
+        self._b, self._a = sp_signal.bilinear([omega, 0.0], [1.0, omega], fs=1.0 / median)
+        self._rest = sp_signal.lfilter_zi(self._b, self._a)
+        self._lfilter = sp_signal.lfilter
+        self._state: list[np.ndarray | None] = [None] * channels  # None: not inside a run
+
+    def __call__(self, d: np.ndarray) -> np.ndarray:
+        """Velocities of the next chunk ``d`` (rows: samples, columns: channels)."""
+        v = np.full(d.shape, np.nan)
+        for channel in range(d.shape[1]):
+            valid = np.isfinite(d[:, channel])
+            carried = self._state[channel]
+            for start, stop in _valid_runs(valid):
+                run = d[start:stop, channel]
+                zi = carried if start == 0 and carried is not None else self._rest * run[0]
+                v[start:stop, channel], zf = self._lfilter(self._b, self._a, run, zi=zi)
+                carried = zf
+            self._state[channel] = carried if valid.size and valid[-1] else None
+        return v
 
 
 def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:

@@ -8,8 +8,10 @@ a symbolic link. Anything else is refused rather than trusted.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
+import subprocess
 import tempfile
 from pathlib import Path
 
@@ -38,3 +40,52 @@ def jit_options() -> dict:
         "compiler": "shell",
         "jit_options": {"flags": ["-O2"], "directory": f"{build_folder()}{os.sep}"},
     }
+
+
+#: Flags of the plant's compiled chunk (as the CasADi JIT it replaces: ``-O2``).
+CHUNK_FLAGS = ("-O2", "-fPIC", "-shared")
+
+
+def cached_function(function):
+    """``function`` as generated C, compiled once per source and loaded (``casadi.external``).
+
+    The library is named by the hash of its C source and flags (which hold
+    every parameter baked into the expressions), so a second process with the
+    same model loads it instead of compiling again (the CasADi JIT compiles on
+    every call); built under :func:`build_folder` through a temporary file
+    renamed into place, and a cached library that does not load is built again.
+    """
+    import casadi as ca
+
+    name = function.name()
+    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+    generator.add(function)
+    source = generator.dump()
+    digest = hashlib.sha256((source + " ".join(CHUNK_FLAGS)).encode()).hexdigest()[:16]
+    folder = build_folder()
+    library = folder / f"{name}_{digest}.so"
+    if library.exists():
+        try:
+            return ca.external(name, str(library))
+        except RuntimeError:
+            library.unlink(missing_ok=True)
+    handle, c_name = tempfile.mkstemp(suffix=".c", prefix=f"{name}_", dir=folder)
+    c_file = Path(c_name)
+    with os.fdopen(handle, "w") as stream:
+        stream.write(source)
+    partial = c_file.with_suffix(".so.tmp")
+    try:
+        subprocess.run(
+            ["gcc", *CHUNK_FLAGS, "-o", str(partial), str(c_file), "-lm"],
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+    except FileNotFoundError:
+        raise RuntimeError("no C compiler 'gcc' found: it is needed to compile the plant") from None
+    except subprocess.CalledProcessError as error:
+        raise RuntimeError(f"compiling {name} failed:\n{error.stderr}") from None
+    finally:
+        c_file.unlink(missing_ok=True)
+    partial.replace(library)
+    return ca.external(name, str(library))

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from wheelload.models.build_folder import jit_options
+from wheelload.models.build_folder import cached_function
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.plant_params import DamperMap, Plant
 from wheelload.models.road_surface import RoadSurface, road_lookup
@@ -399,7 +399,8 @@ def chunk_from_ode(
     """``name(x0, u) -> (x, y)``: ``steps`` RK4 steps of ``ode`` at ``internal_rate``, input held.
 
     ``y`` is the second output of ``ode`` at the final state. Compiled with
-    the system C compiler when ``jit`` is true.
+    the system C compiler when ``jit`` is true, once per model: the library is
+    cached by the hash of its source (:func:`~wheelload.models.build_folder.cached_function`).
     """
     if internal_rate <= 0 or steps < 1:
         raise PlantError(f"need internal_rate > 0 and steps >= 1, got {internal_rate}, {steps}")
@@ -411,8 +412,8 @@ def chunk_from_ode(
     states = accum(x0, ca.repmat(inp, 1, steps), ca.repmat(dt, 1, steps))
     x_end = states[:, -1]
     y_end = ode(x_end, inp)[1]
-    options = jit_options() if jit else {}
-    return ca.Function(name, [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"], options)
+    chunk = ca.Function(name, [x0, inp], [x_end, y_end], ["x0", "u"], ["x", "y"])
+    return cached_function(chunk) if jit else chunk
 
 
 def chunk_function(

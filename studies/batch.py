@@ -25,7 +25,7 @@ import pandas as pd
 from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
-from wheelload.estimators.output_files import TableFormat, atomic_write, table_format
+from wheelload.estimators.output_files import write_frame
 from wheelload.estimators.readers import SUFFIXES
 from wheelload.estimators.registry import build
 from wheelload.estimators.two_stage import step_function
@@ -159,13 +159,10 @@ def output_path(log: Path, folder: Path) -> Path:
 def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> None:
     """Write a table as CSV or Parquet, by ``path``'s suffix, through a temporary file.
 
-    An existing file is replaced only with ``replace`` (``--force``).
+    An existing file is replaced only with ``replace`` (``--force``); pyarrow
+    writes it (:func:`~wheelload.estimators.output_files.write_frame`).
     """
-    with atomic_write(path, replace=replace) as temporary:
-        if table_format(path) is TableFormat.PARQUET:
-            frame.to_parquet(temporary, index=False)
-        else:
-            frame.to_csv(temporary, index=False)
+    write_frame(frame, path, replace=replace)
 
 
 def summary_row(path: Path, result: LogResult) -> dict:

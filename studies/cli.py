@@ -33,20 +33,46 @@ COMMANDS = (
 )
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: The module that registers each command: ``wheelload COMMAND ...`` imports that one
+#: only (a cold start pays for what it runs; tests/test_cli_commands.py keeps it exact).
+COMMAND_MODULES = {
+    "vehicle": "wheelload.studies.commands.vehicle",
+    "estimate": "wheelload.studies.commands.estimate",
+    "methods": "wheelload.studies.commands.methods",
+    "compare": "wheelload.studies.commands.compare",
+    "channels": "wheelload.studies.commands.channels",
+    "sensor-sets": "wheelload.studies.commands.sensor_sets",
+    "bench": "wheelload.studies.commands.bench",
+    "simulate": "wheelload.studies.commands.simulate",
+    "study": "wheelload.studies.commands.mhe",
+    "codegen": "wheelload.studies.commands.codegen",
+    "weigh": "wheelload.studies.commands.weigh",
+    "identify": "wheelload.studies.commands.identify",
+    "tune": "wheelload.studies.commands.tune",
+    "identify-study": "wheelload.studies.commands.identify_study",
+    "ablation": "wheelload.studies.commands.ablation",
+}
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The command line; with ``argv`` naming a command, only that command's module is
+    imported (every one for help, a version or an unknown command)."""
     parser = argparse.ArgumentParser(
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
     )
     parser.add_argument("--version", action="version", version=version("wheelload"))
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in COMMANDS:
+    first = next(iter(argv), None) if argv else None
+    modules = (COMMAND_MODULES[first],) if first in COMMAND_MODULES else COMMANDS
+    for module in modules:
         importlib.import_module(module).register(subparsers)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(argv).parse_args(argv)
     try:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError) as error:

@@ -52,22 +52,37 @@ def wheel_metrics(
         )
     wheels = np.flatnonzero(np.any(np.isfinite(reference), axis=0))
     if wheels.size == 0:
-        raise ValueError(f"{source}: no wheel has a finite reference load")
+        raise ValueError(no_reference_message(source))
     estimate, reference = estimate[:, wheels], reference[:, wheels]
     names = [WHEELS[i] for i in wheels]
     keep = np.all(np.isfinite(estimate) & np.isfinite(reference), axis=1)
     if not keep.any():
-        raise ValueError(
-            f"{source}: no sample has a finite estimate and reference on all of "
-            f"{', '.join(n.upper() for n in names)} (the wheels with a reference)"
-        )
+        raise ValueError(no_sample_message(source, names))
     errors = estimate[keep] - reference[keep]
-    means = reference[keep].mean(axis=0)
+    return metrics_table(errors, reference[keep].mean(axis=0), names)
+
+
+def metrics_table(errors: np.ndarray, means: np.ndarray, names: list[str]) -> pd.DataFrame:
+    """The table of :func:`wheel_metrics` from the errors (samples x wheels) of the kept
+    samples and the wheels' mean reference loads (also used chunk by chunk)."""
     rows = [_row(errors[:, i], means[i]) for i in range(len(names))]
     rows.append(_row(errors.ravel(), float(means.mean())))
     table = pd.DataFrame(rows, index=[*names, "pooled"], columns=COLUMNS)
-    table["samples"] = int(keep.sum())
+    table["samples"] = int(errors.shape[0])
     return table
+
+
+def no_reference_message(source: str) -> str:
+    """The error of :func:`wheel_metrics` for a log without a finite reference."""
+    return f"{source}: no wheel has a finite reference load"
+
+
+def no_sample_message(source: str, names: list[str]) -> str:
+    """The error of :func:`wheel_metrics` when no sample has estimate and reference."""
+    return (
+        f"{source}: no sample has a finite estimate and reference on all of "
+        f"{', '.join(n.upper() for n in names)} (the wheels with a reference)"
+    )
 
 
 def pooled_metrics(estimate: np.ndarray, reference: np.ndarray) -> dict[str, float]:

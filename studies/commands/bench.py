@@ -25,6 +25,7 @@ BENCHMARKS = (
     "wheelload.studies.scenario_bench",
     "wheelload.studies.commands.bench_logs",
     "wheelload.studies.fault_injection",
+    "wheelload.studies.commands.bench_estimate",
 )
 
 

@@ -1,6 +1,9 @@
 """``wheelload estimate``: run an estimator (default: the two-stage KF) on one log or many.
 
-One log: a summary on screen, ``--out`` estimates CSV, ``--plot`` figure.
+One log: a summary on screen, ``--out`` estimates CSV, ``--plot`` figure. A CSV or
+Parquet log with the KF runs on the lean whole-log path (``estimators/log_stream.py``:
+read, filtered, written and summarised in chunks, memory bounded by the chunk, the
+numbers of the in-memory run to the bit); ``--in-memory`` reads it whole.
 Many logs (a folder, a glob, or several names): ``--out FOLDER`` gets one
 ``LOG.estimates.csv`` per log and ``summary.csv``; logs run on ``--workers``
 local processes or on a Dask cluster (``--dask ADDRESS``), with a progress bar.
@@ -9,15 +12,17 @@ local processes or on a Dask cluster (``--dask ADDRESS``), with a progress bar.
 from __future__ import annotations
 
 import argparse
+import contextlib
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals, StepFlag
+from wheelload.estimators import Estimate, Signals, TwoStageKF
 from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
-from wheelload.models import example_vehicle_path
+from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.batch import (
     SUMMARY_NAME,
     EstimateSettings,
@@ -27,7 +32,7 @@ from wheelload.studies.batch import (
     write_table,
 )
 from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.estimate_digest import EstimateDigest
 
 WHEELS = ("FL", "FR", "RL", "RR")
 
@@ -90,6 +95,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="FL,FR,RL,RR",
         help="measured corner weights [kg] (scale readings) as the static loads",
     )
+    parser.add_argument(
+        "--in-memory",
+        action="store_true",
+        help="one log: read it whole into memory (default for a CSV/Parquet log with the KF: "
+        "in chunks, memory bounded by the chunk)",
+    )
     parser.add_argument("--workers", type=int, default=1, help="local processes for many logs")
     parser.add_argument("--dask", metavar="ADDRESS", help="run many logs on this Dask scheduler")
     add_allow_unusual(parser)
@@ -136,6 +147,9 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
         table_format(Path(args.out))
     if args.plot:
         check_figure_suffix(Path(args.plot))
+    lean = not (args.plot or args.in_memory) and _lean(path, settings)
+    if lean and _run_lean(path, settings, args):
+        return 0
     result = estimate_log(path, settings)
     estimate, signals = result.estimate, result.signals
     if args.out:
@@ -158,6 +172,116 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
     if args.plot:
         print(f"figure written to {args.plot}")
     return 0
+
+
+def _lean(path: Path, settings: EstimateSettings) -> bool:
+    """Whether the lean whole-log path can take this log (the KF on a CSV/Parquet log)."""
+    return (
+        settings.method == "kf"
+        and not settings.smooth
+        and settings.channels is None
+        and path.suffix.lower() in (".csv", ".parquet", ".pq")
+    )
+
+
+def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> bool:
+    """``_run_one`` on the lean whole-log path (``estimators/log_stream.py``).
+
+    The log is read in chunks and the estimates written and summarised chunk by
+    chunk, so memory is bounded by the chunk (plus 8 bytes a sample for the
+    time column and the scored errors). False (nothing written) for a log the
+    chunked reader cannot take as plain numbers: the ordinary path then reads
+    it and names the problem.
+    """
+    from wheelload.estimators.log_checks import describe, raise_for_wiring
+    from wheelload.estimators.log_stream import scan_log
+    from wheelload.estimators.output_files import table_writer
+    from wheelload.estimators.readers.chunks import ChunkError
+    from wheelload.studies.log_warnings import channel_warnings, negative_load_warnings
+
+    try:
+        stream = scan_log(
+            path, still_period=settings.still_period, wiring_checks=settings.wiring_checks
+        )
+    except ChunkError:
+        return False
+    vehicle = load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual)
+    notes = []
+    if settings.wiring_checks:
+        report = stream.wiring_report()
+        raise_for_wiring(report, stream.source)
+        notes.append(describe(report))
+    static, reason = static_loads_for(stream, vehicle, settings)
+    notes += reason
+    kf = TwoStageKF(vehicle, static=static)
+    digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
+    faults: list = []
+    with contextlib.ExitStack() as stack:
+        write = (
+            stack.enter_context(table_writer(Path(args.out), replace=args.force))
+            if args.out
+            else None
+        )
+        for chunk in stream.chunks(kf, faults=faults):
+            if write is not None:
+                write(chunk.columns())
+            digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
+    stats = stream.channel_stats
+    warnings = channel_warnings(
+        stream.source,
+        stream.sample_rate,
+        travel_count=stats.travel_count,
+        travel_peak=stats.travel_peak,
+        rate_count=stats.rate_count,
+        rate_min=stats.rate_min,
+        rate_max=stats.rate_max,
+        velocities_derived=stream.velocities_derived,
+    ) + negative_load_warnings(digest.negative_samples, digest.load_min, str(path))
+    header = LogHeader(
+        source=stream.source,
+        samples=len(stream),
+        duration=float(stream.t[-1] - stream.t[0]),
+        sample_rate=stream.sample_rate,
+        velocities_derived=stream.velocities_derived,
+        mode=stream.mode(),
+        has_reference=stream.reference_present is not None,
+    )
+    print(f"method {settings.method}: {method(settings.method).description}")
+    print(summary_text(header, digest, faults, vehicle.name))
+    for note in notes:
+        print(note)
+    for warning in warnings:
+        print(f"warning: {warning}")
+    if args.out:
+        print(f"estimates written to {args.out}")
+    return True
+
+
+def static_loads_for(stream, vehicle, settings: EstimateSettings):
+    """Static loads from corner weights and a still period, as ``estimate_log`` sets them.
+
+    The still-period check reads the first samples only (``stream.head``); a travel
+    channel of the log with no sample in the period is refused as on the whole log.
+    """
+    from wheelload.estimators.offsets import check_still_period, corner_weight_loads
+
+    static, notes = None, []
+    if settings.corner_weights is not None:
+        static = corner_weight_loads(settings.corner_weights)
+        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
+    if settings.still_period:
+        head = stream.head
+        window = head.t <= head.t[0] + settings.still_period
+        if settings.still_period > 0 and np.any(
+            stream.travel_present & ~np.isfinite(head.d[window]).any(axis=0)
+        ):
+            raise ValueError(f"{stream.source}: a travel channel has no sample in the still period")
+        still = check_still_period(
+            head, vehicle, settings.still_period, static=static, noise=settings.still_noise
+        )
+        static = still.static
+        notes.append(still.reason)
+    return static, notes
 
 
 def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Namespace) -> int:
@@ -183,29 +307,49 @@ def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Name
     return 1 if failed else 0
 
 
+def digest_of(estimate: Estimate, signals: Signals) -> EstimateDigest:
+    """The summary figures of a whole-log estimate (one chunk)."""
+    reference = signals.reference
+    wheels = None if reference is None else np.any(np.isfinite(reference), axis=0)
+    digest = EstimateDigest(
+        samples=len(estimate), reference_wheels=wheels, has_std=estimate.has_std
+    )
+    digest.add(estimate.loads, estimate.std, estimate.flags, reference)
+    return digest
+
+
 def row_use(estimate: Estimate) -> str:
     """Share of samples in which each suspension row and the roll-split row were used.
 
     A suspension row needs both travel sensors of its axle (the anti-roll bar
     couples them); the roll-split row is used when no suspension row is.
     """
-    bits = [StepFlag.SUSPENSION_FL_SKIPPED, StepFlag.SUSPENSION_FR_SKIPPED,
-            StepFlag.SUSPENSION_RL_SKIPPED, StepFlag.SUSPENSION_RR_SKIPPED]  # fmt: skip
-    skipped = np.array([(estimate.flags & bit) != 0 for bit in bits])
-    rejected = (estimate.flags & StepFlag.STEP_REJECTED) != 0
-    split = skipped.all(axis=0) & ~rejected
-    shares = ", ".join(f"{w} {100 * (1 - s.mean()):.0f} %" for w, s in zip(WHEELS, skipped))
-    return f"suspension rows used: {shares}; roll-split row used: {100 * split.mean():.0f} %"
+    digest = EstimateDigest(samples=len(estimate), reference_wheels=None)
+    digest.add(estimate.loads, estimate.std, estimate.flags)
+    return _row_use(digest)
+
+
+def _row_use(digest: EstimateDigest) -> str:
+    shares = ", ".join(
+        f"{w} {100 * (1 - s / digest.n):.0f} %" for w, s in zip(WHEELS, digest.suspension_skipped)
+    )
+    split = 100 * digest.split / digest.n
+    return f"suspension rows used: {shares}; roll-split row used: {split:.0f} %"
 
 
 def guard_lines(estimate: Estimate) -> list[str]:
     """Summary lines of the guards: gated and implausible samples, isolated sensor faults."""
+    digest = EstimateDigest(samples=len(estimate), reference_wheels=None)
+    digest.add(estimate.loads, estimate.std, estimate.flags)
+    return _guard_lines(digest, estimate.sensor_faults)
+
+
+def _guard_lines(digest: EstimateDigest, faults) -> list[str]:
     lines = []
-    counts = {flag: int(np.count_nonzero(estimate.flags & flag)) for flag in StepFlag.guard_flags()}
-    named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in counts.items() if n)
+    named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in digest.guards.items() if n)
     if named:
         lines.append(f"samples flagged by the guards: {named}")
-    for fault in estimate.sensor_faults:
+    for fault in faults:
         lines.append(
             f"sensor fault: {fault.channel} from {fault.start:.2f} s to {fault.end:.2f} s "
             f"(test statistic {fault.statistic:.1f}); the channel was left out of the updates"
@@ -219,37 +363,63 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     A metrics problem is reported in the text, never raised: the estimates
     stand on their own.
     """
-    n = len(estimate)
+    header = LogHeader(
+        source=signals.source,
+        samples=len(estimate),
+        duration=float(signals.t[-1] - signals.t[0]),
+        sample_rate=signals.sample_rate,
+        velocities_derived=signals.velocities_derived,
+        mode=signals.mode(),
+        has_reference=signals.reference is not None,
+    )
+    return summary_text(header, digest_of(estimate, signals), estimate.sensor_faults, vehicle_name)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LogHeader:
+    """What the summary says of the log itself."""
+
+    source: str
+    samples: int
+    duration: float
+    sample_rate: float
+    velocities_derived: bool
+    mode: str
+    has_reference: bool
+
+
+def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name: str) -> str:
+    """The text of :func:`summary` from a log's header and its :class:`EstimateDigest`."""
     lines = [
-        f"{signals.source}: {n} samples, {signals.t[-1] - signals.t[0]:.2f} s at "
-        f"{signals.sample_rate:.0f} Hz, vehicle '{vehicle_name}'"
+        f"{header.source}: {header.samples} samples, {header.duration:.2f} s at "
+        f"{header.sample_rate:.0f} Hz, vehicle '{vehicle_name}'"
         + (
             ", suspension velocities derived (20 Hz differentiator)"
-            if signals.velocities_derived
+            if header.velocities_derived
             else ""
         ),
         f"{'wheel':>6} {'mean [N]':>10} {'min [N]':>10} {'max [N]':>10} {'mean 1σ [N]':>12}",
     ]
+    means, stds = digest.means(), digest.mean_std()
     for i, wheel in enumerate(WHEELS):
-        load = estimate.loads[:, i]
-        std = f"{estimate.std[:, i].mean():12.0f}" if estimate.has_std else f"{'n/a':>12}"
-        lines.append(f"{wheel:>6} {load.mean():10.0f} {load.min():10.0f} {load.max():10.0f} {std}")
-    skipped = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
-    assumed = int(np.count_nonzero(estimate.flags & StepFlag.assumed_mask()))
-    lines.append(f"sensor set: {signals.mode()}")
-    lines.append(row_use(estimate))
-    lines.append(f"samples with a skipped update (missing or guarded input): {skipped}")
-    if assumed:
-        lines.append(f"samples with an assumed input (status bits 20-22): {assumed}")
-    lines.extend(guard_lines(estimate))
-    for flag in StepFlag.update_flags()[7:]:
-        dropped = int(np.count_nonzero(estimate.flags & flag))
+        std = f"{stds[i]:12.0f}" if digest.has_std else f"{'n/a':>12}"
+        lines.append(
+            f"{wheel:>6} {means[i]:10.0f} {digest.load_min[i]:10.0f} "
+            f"{digest.load_max[i]:10.0f} {std}"
+        )
+    lines.append(f"sensor set: {header.mode}")
+    lines.append(_row_use(digest))
+    lines.append(f"samples with a skipped update (missing or guarded input): {digest.skipped}")
+    if digest.assumed:
+        lines.append(f"samples with an assumed input (status bits 20-22): {digest.assumed}")
+    lines.extend(_guard_lines(digest, faults))
+    for flag, dropped in digest.dropped.items():
         if dropped:
             name = str(flag.name).lower().replace("_", " ")
             lines.append(f"samples with a model term dropped ({name}): {dropped}")
-    if signals.reference is not None:
+    if header.has_reference:
         try:
-            table = wheel_metrics(estimate.loads, signals.reference, source=signals.source)
+            table = digest.metrics(header.source)
         except ValueError as error:
             lines.append(f"no error metrics: {error}")
             return "\n".join(lines)

@@ -1,0 +1,136 @@
+"""``wheelload bench estimate``: ``wheelload estimate --out`` end to end, and its cold start.
+
+Each run is a fresh ``wheelload`` process (its wall time and peak resident
+memory from ``wait4``), on a log made by repeating the bundled example log
+(time kept increasing; written as Parquet in row groups). Two ways, in turn
+so that both meet the same machine load, ``--repeat`` times each:
+
+- ``lean``: the default, the chunked whole-log path (``estimators/log_stream.py``);
+- ``in-memory``: ``--in-memory``, the whole log read into memory (pandas),
+  ``TwoStageKF.run``, ``Estimate.to_pandas`` written by pyarrow.
+
+``--example`` cold (a fresh, empty build folder: the compiled loop is built)
+and warm (the same folder again). Figures: min / median / max of wall time,
+CPU time (user + system: on a shared machine the wall time includes waiting
+for a core) and peak resident memory.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def register_bench(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "estimate", help="wheelload estimate --out end to end (lean vs in-memory), cold start"
+    )
+    parser.add_argument(
+        "--samples", type=float, nargs="+", default=[1e6, 1e7], help="log sizes (default 1e6 1e7)"
+    )
+    parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3)")
+    parser.add_argument(
+        "--in-memory-up-to",
+        type=float,
+        default=1e7,
+        help="measure the in-memory path only up to this size (default 1e7)",
+    )
+    parser.add_argument("--suffix", default=".csv", help="output format (.csv or .parquet)")
+    parser.set_defaults(handler=run)
+
+
+def write_tiled_log(path: Path, samples: int) -> None:
+    """A Parquet log of ``samples`` rows: the example log repeated, time increasing."""
+    import pandas as pd
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from wheelload.studies.commands.estimate import example_log_path
+
+    base = pd.read_csv(example_log_path())
+    rate = round(1.0 / float(np.median(np.diff(base["t"].to_numpy()))))  # Hz
+    block = 1 << 20
+    reps = -(-block // len(base))
+    tiled = {name: np.tile(base[name].to_numpy(float), reps)[:block] for name in base.columns}
+    with pq.ParquetWriter(str(path), pa.schema([(n, pa.float64()) for n in base.columns])) as w:
+        for start in range(0, samples, block):
+            n = min(block, samples - start)
+            columns = dict(tiled)
+            columns["t"] = (start + np.arange(block)) / rate
+            w.write_table(pa.table({k: v[:n] for k, v in columns.items()}))
+
+
+def _timed(command: list[str], env: dict | None = None) -> tuple[float, float, float]:
+    """Wall time [s], peak resident memory [MB] and CPU time [s] of a child process."""
+    start = time.perf_counter()
+    child = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
+    _, status, usage = os.wait4(child.pid, 0)
+    wall = time.perf_counter() - start
+    stderr = child.stderr.read().decode() if child.stderr else ""
+    if child.stderr:
+        child.stderr.close()
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise RuntimeError(f"{' '.join(command)} failed: {stderr.strip()}")
+    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
+
+
+def _spread(values: list[float], fmt: str) -> str:
+    return " / ".join(format(v, fmt) for v in (min(values), statistics.median(values), max(values)))
+
+
+def run(args: argparse.Namespace) -> int:
+    from wheelload.models import example_vehicle_path
+
+    wheelload = [sys.executable, "-m", "wheelload.studies.cli"]
+    vehicle = str(example_vehicle_path())
+    print(f"wheelload estimate --out, {os.cpu_count()} cores; min / median / max of "
+          f"{args.repeat} runs; each a fresh process")  # fmt: skip
+    with tempfile.TemporaryDirectory() as folder:
+        for size in args.samples:
+            n = int(size)
+            log = Path(folder) / f"log_{n}.parquet"
+            write_tiled_log(log, n)
+            out = str(Path(folder) / f"out{args.suffix}")
+            ways = {"lean": []}
+            if n <= args.in_memory_up_to:
+                ways["in-memory"] = ["--in-memory"]
+            figures: dict[str, list[tuple[float, float, float]]] = {way: [] for way in ways}
+            for _ in range(args.repeat):
+                for way, extra in ways.items():
+                    command = [*wheelload, "estimate", str(log), "--vehicle", vehicle,
+                               "--out", out, "--force", *extra]  # fmt: skip
+                    figures[way].append(_timed(command))
+            print(f"  {n:>10} samples ({log.stat().st_size / 1e6:.0f} MB Parquet in), "
+                  f"out {args.suffix}:")  # fmt: skip
+            for way, runs in figures.items():
+                walls, peaks, cpu = ([r[k] for r in runs] for k in range(3))
+                print(f"    {way:10s} wall {_spread(walls, '7.2f')} s   "
+                      f"cpu {_spread(cpu, '7.2f')} s"
+                      f"   peak RSS {_spread(peaks, '6.0f')} MB")  # fmt: skip
+            if len(figures) == 2:
+                lean = statistics.median(r[0] for r in figures["lean"])
+                whole = statistics.median(r[0] for r in figures["in-memory"])
+                lean_mb = statistics.median(r[1] for r in figures["lean"])
+                whole_mb = statistics.median(r[1] for r in figures["in-memory"])
+                print(f"    lean is {whole / lean:.1f}x faster, {whole_mb / lean_mb:.1f}x less "
+                      "memory (medians)")  # fmt: skip
+        cold, warm = [], []
+        for _ in range(args.repeat):
+            with tempfile.TemporaryDirectory() as build:
+                env = dict(os.environ, TMPDIR=build)
+                command = [*wheelload, "estimate", "--example"]
+                cold.append(_timed(command, env))
+                warm.append(_timed(command, env))
+        for name, runs in (("cold (empty build folder)", cold), ("warm", warm)):
+            walls, cpu = [r[0] for r in runs], [r[2] for r in runs]
+            print(f"  estimate --example {name:26s} wall {_spread(walls, '6.2f')} s   "
+                  f"cpu {_spread(cpu, '6.2f')} s")  # fmt: skip
+    return 0
