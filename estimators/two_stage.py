@@ -295,9 +295,10 @@ def step_expressions(
         x_s, P_s, b, A, rc, mask_c, lambda i, y, S: gate(4 + i, y, S)
     )
     # No travel row at all (IMU-only): the weak roll-split row observes the warp, beside
-    # the roll moment it splits (with no data at all the step is a pure prediction).
+    # the roll moment it splits, so only when that row was used (with no data at all the
+    # step is a pure prediction).
     no_travel = (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
-    mask_split = dt_ok * no_travel * mask_c[2]
+    mask_split = dt_ok * no_travel * use_c[2]
     r_split = SPLIT_NOISE_RATIO * rc[2:3]
     x_new, P_new = sequential_update(
         x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split

@@ -19,6 +19,7 @@ from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.guard import GRAVITY, GuardSettings
 from wheelload.estimators.two_stage import input_matrix, nominal_interval, sample_intervals
 from wheelload.models import equilibrium_function, gates_function, suspension_function
+from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 N = 300
@@ -86,10 +87,15 @@ def measurements(vehicle, kf, u):
 
 
 def reference_step(kf, x, P, z, A, b, dt, nominal, rows):
-    """Numpy step: predict, then the scalar updates of ``rows`` (0-6) only."""
+    """Numpy step: predict, then the scalar updates of ``rows`` (0-6) only, and the
+    roll-split row (y = 0, noise SPLIT_NOISE_RATIO x the roll row's) when no travel row
+    is used but the roll row is (the IMU-only mode of models/roll_split.py)."""
     q, r_s, r_c = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
-    H, y_all = np.vstack([np.eye(4), A]), np.concatenate([z, b])
-    r = np.concatenate([np.full(4, r_s), r_c]) / nominal
+    split = np.asarray(roll_split_function()(kf.p)).ravel()
+    H, y_all = np.vstack([np.eye(4), A, split]), np.concatenate([z, b, [0.0]])
+    r = np.concatenate([np.full(4, r_s), r_c, [SPLIT_NOISE_RATIO * r_c[2]]]) / nominal
+    if 6 in rows and not set(rows) & {0, 1, 2, 3}:
+        rows = [*rows, 7]
     P = P + q * dt * np.eye(4)
     for i in rows:
         h = H[i]
