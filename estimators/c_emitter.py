@@ -6,7 +6,8 @@ that a single-precision build cannot take under ``-Wdouble-promotion
 (``instruction_id``, ``instruction_input``, ``instruction_output``,
 ``instruction_constant``) and prints one C statement per instruction on
 local work variables of a ``real`` typedef, with ``f``-suffixed literals and
-``sqrtf``/``fmaxf``-style maths functions in single precision.
+``sqrtf``-style maths functions in single precision; ``fmin``/``fmax`` are
+written as selects.
 
 Example
 -------
@@ -80,8 +81,10 @@ _TEMPLATES = {
     ca.OP_CEIL: "ceil{f}({0})",
     ca.OP_FMOD: "fmod{f}({0}, {1})",
     ca.OP_FABS: "fabs{f}({0})",
-    ca.OP_FMIN: "fmin{f}({0}, {1})",
-    ca.OP_FMAX: "fmax{f}({0}, {1})",
+    # fmin/fmax as selects (a NaN operand loses, as in C99 fmin/fmax): no branch or
+    # library call, so that gcc can vectorise the step across filter instances.
+    ca.OP_FMIN: "({1} != {1}) ? {0} : (({0} < {1}) ? {0} : {1})",
+    ca.OP_FMAX: "({1} != {1}) ? {0} : (({0} > {1}) ? {0} : {1})",
     ca.OP_COPYSIGN: "copysign{f}({0}, {1})",
     ca.OP_ERF: "erf{f}({0})",
     ca.OP_HYPOT: "hypot{f}({0}, {1})",
@@ -91,8 +94,9 @@ _TEMPLATES = {
     ca.OP_EQ: "({0} == {1}) ? {one} : {zero}",
     ca.OP_NE: "({0} != {1}) ? {one} : {zero}",
     ca.OP_NOT: "({0} == {zero}) ? {one} : {zero}",
-    ca.OP_AND: "(({0} != {zero}) && ({1} != {zero})) ? {one} : {zero}",
-    ca.OP_OR: "(({0} != {zero}) || ({1} != {zero})) ? {one} : {zero}",
+    # Logic as nested selects (no short-circuit): vectorisable.
+    ca.OP_AND: "({0} != {zero}) ? (({1} != {zero}) ? {one} : {zero}) : {zero}",
+    ca.OP_OR: "({0} != {zero}) ? {one} : (({1} != {zero}) ? {one} : {zero})",
     ca.OP_IF_ELSE_ZERO: "({0} != {zero}) ? {1} : {zero}",
 }
 
