@@ -126,6 +126,51 @@ def flop_count(f: ca.Function) -> int:
     return sum(1 for k in range(f.n_instructions()) if f.instruction_id(k) in ARITHMETIC)
 
 
+#: Latency [cycles] of each operation on one scalar, for the dependency-chain
+#: bound: add/sub/mul/FMA 3-4, divide 13, square root 15-20 on current x86-64
+#: cores (AMD Zen 4, Intel Golden Cove; Agner Fog's instruction tables); a
+#: compare and blend (selects, logic) 2; sign and abs 1; moves 0.
+LATENCY = {
+    **dict.fromkeys((ca.OP_ADD, ca.OP_SUB, ca.OP_MUL, ca.OP_SQ, ca.OP_TWICE), 3),
+    **dict.fromkeys((ca.OP_DIV, ca.OP_INV), 13),
+    ca.OP_SQRT: 15,
+    **dict.fromkeys((ca.OP_NEG, ca.OP_FABS, ca.OP_COPYSIGN), 1),
+    **dict.fromkeys(
+        (ca.OP_FMIN, ca.OP_FMAX, ca.OP_IF_ELSE_ZERO, ca.OP_LT, ca.OP_LE, ca.OP_EQ, ca.OP_NE,
+         ca.OP_NOT, ca.OP_AND, ca.OP_OR, ca.OP_SIGN),
+        2,
+    ),
+    **dict.fromkeys((ca.OP_ASSIGN, ca.OP_INPUT, ca.OP_CONST, ca.OP_OUTPUT), 0),
+}  # fmt: skip
+#: Latency assumed for an operation not in :data:`LATENCY` (maths library calls).
+CALL_LATENCY = 40
+
+
+def critical_path(f: ca.Function, latency: dict[int, int] | None = None) -> int:
+    """Cycles of the longest dependency chain through ``f``'s instructions.
+
+    Each instruction starts when its operands are ready and takes its
+    :data:`LATENCY`; with unlimited issue width this is the fastest any core
+    can evaluate ``f`` once: the dependency-chain bound of the step.
+    """
+    latency = LATENCY if latency is None else latency
+    ready: dict[int, int] = {}
+    longest = 0
+    for k in range(f.n_instructions()):
+        op = f.instruction_id(k)
+        if op == ca.OP_OUTPUT:
+            (work,) = f.instruction_input(k)
+            longest = max(longest, ready.get(work, 0))
+            continue
+        (target,) = f.instruction_output(k)
+        if op in (ca.OP_INPUT, ca.OP_CONST):
+            ready[target] = 0
+            continue
+        start = max((ready.get(w, 0) for w in f.instruction_input(k) if w >= 0), default=0)
+        ready[target] = start + latency.get(op, CALL_LATENCY)
+    return longest
+
+
 def _element(names: str | Sequence[str], nz: int) -> str:
     return names.format(nz) if isinstance(names, str) else names[nz]
 

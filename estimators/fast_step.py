@@ -135,6 +135,8 @@ class CompiledStep:
         ):
             raise RuntimeError("x, P, m and u must be adjacent in the buffer")
         self._state_and_u = self.buffer[self._in["x"].start : self._in["u"].stop]
+        self._state = self.buffer[self._in["x"].start : self._in["m"].stop]
+        self._last: tuple = (None, None, None, None)  # x, P, m returned last, their block
         self._missing = {size: np.full(size, np.nan) for size in range(1, 9)}
         first = self._out["x_next"].start
         self._result = slice(first, self._out["residual"].stop)
@@ -160,12 +162,26 @@ class CompiledStep:
         arrays ``x, P (4 x 4), m, std, residual`` and the :class:`StepFlag`
         bits as an int.
         """
-        parts = [x, P.ravel(order="F"), m]
-        for values, size in u_parts:
-            parts.append(self._missing[size] if values is None else values)
-        np.concatenate(parts, out=self._state_and_u)  # x, P, m, u are adjacent
-        self.buffer[self._dt] = dt
+        last = self._last
+        if x is last[0] and P is last[1] and m is last[2]:
+            # The very arrays this object returned last: x, P, m lie in order at
+            # the start of their block, as in the buffer: one copy.
+            self._state[:] = last[3][: self._state.size]
+            np.concatenate(
+                [self._missing[size] if values is None else values for values, size in u_parts],
+                out=self._u,
+            )
+        else:
+            parts = [x, P.ravel(order="F"), m]
+            for values, size in u_parts:
+                parts.append(self._missing[size] if values is None else values)
+            np.concatenate(parts, out=self._state_and_u)  # x, P, m, u are adjacent
+        buffer = self.buffer
+        buffer[self._dt] = dt
         self._function(self._address)
-        block = self.buffer[self._result].copy()  # one copy: x_next .. residual
-        x, P, m, std, residual = (block[where] for where in self._parts)
-        return x, P.reshape(4, 4, order="F"), m, std, residual, int(self.buffer[self._flags])
+        # One fresh copy per step: x_next, P_next, m_next, std, residual, NaN, flags.
+        block = buffer[self._result].copy()
+        xs, Ps, ms, stds, residuals = self._parts
+        x, P, m = block[xs], block[Ps].reshape(4, 4, order="F"), block[ms]
+        self._last = (x, P, m, block)
+        return x, P, m, block[stds], block[residuals], int(buffer[self._flags])

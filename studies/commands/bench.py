@@ -21,6 +21,7 @@ from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
     "wheelload.studies.commands.bench_codegen",
+    "wheelload.studies.commands.bench_speed",
     "wheelload.studies.commands.mhe",
     "wheelload.studies.scenario_bench",
     "wheelload.studies.commands.bench_logs",
