@@ -80,3 +80,34 @@ def test_run_batched_equals_run_per_log(vehicle, plant_log):
         assert estimate.sensor_faults == expected.sensor_faults
         flags |= np.bitwise_or.reduce(estimate.flags)
     assert flags & 0xFF, "skipped updates were exercised"
+
+
+def test_monte_carlo_unit_equals_the_per_trial_unit(tmp_path):
+    from wheelload.studies.experiments.cache import ResultCache, cache_key
+    from wheelload.studies.experiments.units import (
+        TRUTH,
+        KfTrials,
+        TrialSpec,
+        TruthSpec,
+        run_kf_trials,
+        run_trial,
+        simulate_truth,
+    )
+
+    text = example_vehicle_path().read_text()
+    truth = TruthSpec(scenario="iso-dlc", vehicle_text=text)
+    key = cache_key(TRUTH, truth)
+    ResultCache(folder=tmp_path).store(key, simulate_truth(truth, tmp_path))
+    specs = tuple(
+        TrialSpec(
+            truth=truth, vehicle_text=text, methods=("kf",), noise=noise, seed=seed, truth_key=key
+        )  # fmt: skip
+        for noise, seed in ((0.0, 1000), (1.0, 1001), (4.0, 1002))
+    )
+    batched = run_kf_trials(KfTrials(specs=specs), tmp_path)
+    for spec, result in zip(specs, batched, strict=True):
+        expected = run_trial(spec, tmp_path).metrics["kf"]
+        # the loads agree to 1e-12 relative, so the metrics do to far better than 1e-9
+        np.testing.assert_allclose(result.metrics["kf"].to_numpy(), expected.to_numpy(),
+                                   rtol=1e-9)  # fmt: skip
+    assert not np.allclose(batched[0].metrics["kf"], batched[2].metrics["kf"])  # noise differs
