@@ -6,6 +6,14 @@ suspension or equilibrium model in ``wheelload.models`` changes the C with no
 other edit. The covariance is kept in symmetric storage (upper triangle, row
 by row); the step reads only that triangle of ``P``.
 
+Besides the single-filter ``wheelload_kf_step``, the library has
+``wheelload_kf_step_batch``: ``n`` independent filters side by side (struct
+of arrays), the same kernel statements with the single step's branches as
+selects, so that gcc vectorises the loop over filters when built with
+:data:`FAST_CFLAGS` (the generated Makefile's ``make fast`` explains each
+flag). Built with the same flags, both give the same numbers; with the
+strict flags they are bit-identical.
+
 Files written to the output folder, for prefix ``wheelload_kf``:
 ``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
 ``wheelload_kf_example.c`` (CSV log in, CSV estimates out),

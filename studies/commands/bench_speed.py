@@ -10,6 +10,9 @@ over ``--repeats`` alternating repeats (min / median / max of the ratio):
 - the generated library's batched step (``--batch`` filters side by side)
   against its single step, double and float, both built with the Makefile's
   ``FAST_CFLAGS``;
+- :func:`~wheelload.estimators.batched.run_batched` over ``--logs`` logs
+  against :meth:`TwoStageKF.run` on each (what ``estimate`` over many logs
+  and the Monte Carlo study now use, against what they used);
 - the single C step against its dependency-chain bound: the longest chain of
   the generated kernel's instructions at :data:`~wheelload.estimators.c_emitter.LATENCY`
   cycles each, at the clock of ``/proc/cpuinfo``.
@@ -55,6 +58,12 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
     parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
     parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
+    parser.add_argument(
+        "--logs", type=int, default=16, help="logs for run_batched vs run (default 16)"
+    )
+    parser.add_argument(
+        "--log-samples", type=int, default=20_000, help="samples per log (default 2e4, 1 kHz)"
+    )
     add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
@@ -114,11 +123,43 @@ def _selftest_ns(binary: Path, *arguments) -> float:
     return float(re.search(r"min_ns (\S+)", out).group(1))
 
 
+def logs_vs_run(vehicle_path: Path, kf: TwoStageKF, args: argparse.Namespace) -> None:
+    """Print run_batched over many logs against run on each, us per sample."""
+    from wheelload.estimators.batched import run_batched
+
+    vehicle = kf.vehicle
+    duration = args.log_samples / 1000.0
+    logs = [
+        synthetic_log(vehicle, slalom(duration=duration), rate=1000.0, seed=seed,
+                      noise=SensorNoise(acceleration=0.05, travel=0.0003))
+        for seed in range(args.logs)
+    ]  # fmt: skip
+    samples = sum(len(log) for log in logs)
+    run_batched(kf, vehicle_path, logs[:2])  # build (or load) the library
+    kf.run(logs[0].slice(0, 10))
+    batched, single = [], []
+    for _ in range(args.repeats):
+        start = time.perf_counter()
+        run_batched(kf, vehicle_path, logs)
+        batched.append((time.perf_counter() - start) / samples * 1e6)
+        start = time.perf_counter()
+        for log in logs:
+            kf.run(log)
+        single.append((time.perf_counter() - start) / samples * 1e6)
+    ratios = [s / b for s, b in zip(single, batched)]
+    print(f"{args.logs} logs of {args.log_samples} samples [us per sample]")
+    print(f"  run_batched (side by side, batched C): {spread(batched)}")
+    print(f"  TwoStageKF.run on each log:            {spread(single)}")
+    print(f"  run_batched is {spread(ratios)} x faster")
+
+
 def run(args: argparse.Namespace) -> int:
     if not 1 <= args.batch <= 64:
         raise ValueError(f"--batch must be 1..64, got {args.batch}")
     if args.repeats < 1 or args.steps < 10 or args.samples < 100:
         raise ValueError("--repeats >= 1, --steps >= 10 and --samples >= 100 are needed")
+    if args.logs < 1 or args.log_samples < 100:
+        raise ValueError("--logs >= 1 and --log-samples >= 100 are needed")
     vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     kf = TwoStageKF(vehicle)
@@ -148,6 +189,7 @@ def run(args: argparse.Namespace) -> int:
         ratios = [p / f for p, f in zip(timings["filterpy"], timings["fast"])]
         print(f"  step is {spread(ratios)} x faster than filterpy (target >= {FILTERPY_TARGET:g})")
 
+    logs_vs_run(vehicle_path, kf, args)
     mhz = cpu_mhz()
     with tempfile.TemporaryDirectory(prefix="wheelload_speed_") as folder:
         print(f"Generated C, FAST_CFLAGS: {' '.join(FAST_CFLAGS)}")
