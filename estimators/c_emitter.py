@@ -6,7 +6,8 @@ that a single-precision build cannot take under ``-Wdouble-promotion
 (``instruction_id``, ``instruction_input``, ``instruction_output``,
 ``instruction_constant``) and prints one C statement per instruction on
 local work variables of a ``real`` typedef, with ``f``-suffixed literals and
-``sqrtf``/``fmaxf``-style maths functions in single precision.
+``sqrtf``-style maths functions in single precision; ``fmin``/``fmax`` are
+written as selects.
 
 Example
 -------
@@ -80,8 +81,10 @@ _TEMPLATES = {
     ca.OP_CEIL: "ceil{f}({0})",
     ca.OP_FMOD: "fmod{f}({0}, {1})",
     ca.OP_FABS: "fabs{f}({0})",
-    ca.OP_FMIN: "fmin{f}({0}, {1})",
-    ca.OP_FMAX: "fmax{f}({0}, {1})",
+    # fmin/fmax as selects (a NaN operand loses, as in C99 fmin/fmax): no branch or
+    # library call, so that gcc can vectorise the step across filter instances.
+    ca.OP_FMIN: "({1} != {1}) ? {0} : (({0} < {1}) ? {0} : {1})",
+    ca.OP_FMAX: "({1} != {1}) ? {0} : (({0} > {1}) ? {0} : {1})",
     ca.OP_COPYSIGN: "copysign{f}({0}, {1})",
     ca.OP_ERF: "erf{f}({0})",
     ca.OP_HYPOT: "hypot{f}({0}, {1})",
@@ -91,8 +94,9 @@ _TEMPLATES = {
     ca.OP_EQ: "({0} == {1}) ? {one} : {zero}",
     ca.OP_NE: "({0} != {1}) ? {one} : {zero}",
     ca.OP_NOT: "({0} == {zero}) ? {one} : {zero}",
-    ca.OP_AND: "(({0} != {zero}) && ({1} != {zero})) ? {one} : {zero}",
-    ca.OP_OR: "(({0} != {zero}) || ({1} != {zero})) ? {one} : {zero}",
+    # Logic as nested selects (no short-circuit): vectorisable.
+    ca.OP_AND: "({0} != {zero}) ? (({1} != {zero}) ? {one} : {zero}) : {zero}",
+    ca.OP_OR: "({0} != {zero}) ? {one} : (({1} != {zero}) ? {one} : {zero})",
     ca.OP_IF_ELSE_ZERO: "({0} != {zero}) ? {1} : {zero}",
 }
 
@@ -120,6 +124,51 @@ def operation_counts(f: ca.Function) -> collections.Counter[str]:
 def flop_count(f: ca.Function) -> int:
     """Floating-point operations per evaluation of ``f`` (one per arithmetic instruction)."""
     return sum(1 for k in range(f.n_instructions()) if f.instruction_id(k) in ARITHMETIC)
+
+
+#: Latency [cycles] of each operation on one scalar, for the dependency-chain
+#: bound: add/sub/mul/FMA 3-4, divide 13, square root 15-20 on current x86-64
+#: cores (AMD Zen 4, Intel Golden Cove; Agner Fog's instruction tables); a
+#: compare and blend (selects, logic) 2; sign and abs 1; moves 0.
+LATENCY = {
+    **dict.fromkeys((ca.OP_ADD, ca.OP_SUB, ca.OP_MUL, ca.OP_SQ, ca.OP_TWICE), 3),
+    **dict.fromkeys((ca.OP_DIV, ca.OP_INV), 13),
+    ca.OP_SQRT: 15,
+    **dict.fromkeys((ca.OP_NEG, ca.OP_FABS, ca.OP_COPYSIGN), 1),
+    **dict.fromkeys(
+        (ca.OP_FMIN, ca.OP_FMAX, ca.OP_IF_ELSE_ZERO, ca.OP_LT, ca.OP_LE, ca.OP_EQ, ca.OP_NE,
+         ca.OP_NOT, ca.OP_AND, ca.OP_OR, ca.OP_SIGN),
+        2,
+    ),
+    **dict.fromkeys((ca.OP_ASSIGN, ca.OP_INPUT, ca.OP_CONST, ca.OP_OUTPUT), 0),
+}  # fmt: skip
+#: Latency assumed for an operation not in :data:`LATENCY` (maths library calls).
+CALL_LATENCY = 40
+
+
+def critical_path(f: ca.Function, latency: dict[int, int] | None = None) -> int:
+    """Cycles of the longest dependency chain through ``f``'s instructions.
+
+    Each instruction starts when its operands are ready and takes its
+    :data:`LATENCY`; with unlimited issue width this is the fastest any core
+    can evaluate ``f`` once: the dependency-chain bound of the step.
+    """
+    latency = LATENCY if latency is None else latency
+    ready: dict[int, int] = {}
+    longest = 0
+    for k in range(f.n_instructions()):
+        op = f.instruction_id(k)
+        if op == ca.OP_OUTPUT:
+            (work,) = f.instruction_input(k)
+            longest = max(longest, ready.get(work, 0))
+            continue
+        (target,) = f.instruction_output(k)
+        if op in (ca.OP_INPUT, ca.OP_CONST):
+            ready[target] = 0
+            continue
+        start = max((ready.get(w, 0) for w in f.instruction_input(k) if w >= 0), default=0)
+        ready[target] = start + latency.get(op, CALL_LATENCY)
+    return longest
 
 
 def _element(names: str | Sequence[str], nz: int) -> str:

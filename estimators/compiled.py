@@ -85,13 +85,14 @@ def _loop_source(
     )
 
 
-def _shared_library(source: str, name: str) -> ctypes.CDLL:
-    """Compile ``source`` once (cached by its hash) and load it.
+def _shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
+    """Compile ``source`` once (cached by its hash and ``compiler``) and load it.
 
     A cached library that does not load (truncated, empty, corrupt) is
     removed and built again.
     """
-    digest = hashlib.sha256(source.encode()).hexdigest()[:16]
+    key = source if compiler == COMPILER else " ".join(compiler) + "\n" + source
+    digest = hashlib.sha256(key.encode()).hexdigest()[:16]
     folder = build_folder()
     library = folder / f"{name}_{digest}.so"
     if library.exists():
@@ -107,7 +108,7 @@ def _shared_library(source: str, name: str) -> ctypes.CDLL:
         partial = c_file.with_suffix(".so.tmp")
         try:
             subprocess.run(
-                [*COMPILER, "-o", str(partial), str(c_file), "-lm"],
+                [*compiler, "-o", str(partial), str(c_file), "-lm"],
                 check=True,
                 capture_output=True,
                 text=True,

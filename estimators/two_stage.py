@@ -479,6 +479,18 @@ class Sample:
             ]
         ).astype(float)
 
+    def parts(self) -> tuple[tuple[np.ndarray | float | None, int], ...]:
+        """``(values, size)`` per group in :meth:`vector` order; None for an absent group."""
+        return (
+            (self.d, 4),
+            (self.v, 4),
+            (self.acc, 3),
+            ((self.vx,), 1),
+            (self.rates, 3),
+            (self.rate_dots, 3),
+            (self.hub, 4),
+        )
+
 
 def input_matrix(signals: Signals) -> np.ndarray:
     """The per-sample inputs of a log in :data:`INPUTS` order, shape (len(INPUTS), n).
@@ -581,7 +593,37 @@ class TwoStageKF:
 
         The measurement noise uses the ``sample_interval`` given to the
         constructor; without one, ``dt`` itself (a gap then shrinks it).
+        Runs the step Function in compiled C on preallocated buffers
+        (:mod:`wheelload.estimators.fast_step`); the same numbers as
+        :meth:`reference_step`.
         """
+        fast = self._fast_step
+        if self.sample_interval is None:  # else set once in _fast_step
+            nominal = dt if 0.0 < dt < MAX_INTERVAL else self.tuning[_SAMPLE_INTERVAL]
+            fast.set_interval(_SAMPLE_INTERVAL, nominal)
+        x, P, m, std, residual, flags = fast(state.x, state.P, state.m, sample.parts(), dt)
+        estimate = Estimate(
+            t=np.array([np.nan]),
+            loads=x.reshape(1, 4),
+            std=std.reshape(1, 4),
+            residual=residual.reshape(1, 3),
+            flags=np.array([flags], dtype=np.int64),
+        )
+        return FilterState(x, P, m), estimate
+
+    @functools.cached_property
+    def _fast_step(self):
+        """The step compiled once (cached by source hash), with this filter's p and tuning."""
+        from wheelload.estimators.fast_step import CompiledStep
+
+        fast = CompiledStep(self.step_function, MAX_INTERVAL)
+        fast.set_fixed(self.p, self.tuning)
+        return fast
+
+    def reference_step(
+        self, state: FilterState, sample: Sample, dt: float
+    ) -> tuple[FilterState, Estimate]:
+        """:meth:`step` through CasADi's virtual machine and numpy: the reference for tests."""
         u = sample.vector()
         valid = np.isfinite(u).astype(float)
         nominal = self.sample_interval or (dt if 0.0 < dt < MAX_INTERVAL else None)

@@ -128,4 +128,36 @@ uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
                         const ${prefix}_input *input, ${prefix}_real dt,
                         ${prefix}_output *output);
 
+/* n independent filters side by side (vehicles, logs, Monte Carlo trials),
+ * struct of arrays: value k of filter b is at [k * n + b]. The caller owns
+ * the arrays; filter b of the batch is initialised by copying a
+ * ${prefix}_state's x, P and monitor into column b. */
+typedef struct {
+    int n;                   /* filters side by side */
+    ${prefix}_real *x;       /* [4 * n] loads [N] */
+    ${prefix}_real *P;       /* [10 * n] covariance, symmetric storage */
+    ${prefix}_real *monitor; /* [${PREFIX}_N_MONITOR * n] */
+} ${prefix}_batch;
+
+/* Outputs of a batched step, the fields of ${prefix}_output per filter
+ * (the loads are the batch's x). */
+typedef struct {
+    ${prefix}_real *std;             /* [4 * n] */
+    ${prefix}_real *residual;        /* [3 * n] */
+    ${prefix}_real *fault_statistic; /* [${PREFIX}_N_FAULT_CHANNELS * n] */
+    uint32_t *faults;                /* [n] */
+    uint32_t *flags;                 /* [n] */
+} ${prefix}_batch_output;
+
+/* ${prefix}_step for each of the batch's n filters with the same params:
+ * input[k * n + b] is channel k (order of ${prefix}_input_names, non-finite
+ * = missing) of filter b, dt[b] its interval. Same arithmetic as
+ * ${prefix}_step, so the same numbers when both are built with the same
+ * flags. Written branch-free (selects) so that a compiler vectorises the
+ * loop over filters: see FAST_CFLAGS in the Makefile. The arrays must not
+ * overlap. */
+void ${prefix}_step_batch(const ${prefix}_batch *batch, const ${prefix}_params *params,
+                          const ${prefix}_real *input, const ${prefix}_real *dt,
+                          const ${prefix}_batch_output *output);
+
 #endif /* ${PREFIX}_H */

@@ -8,6 +8,12 @@
  *         is finite and P positive definite (Cholesky); exit 1 if not.
  *     ${prefix}_selftest bench SAMPLES REPEATS   median ns per step over
  *         REPEATS passes of SAMPLES samples.
+ *     ${prefix}_selftest batch-bench SAMPLES REPEATS N   the same for
+ *         ${prefix}_step_batch with N filters side by side (each fed the
+ *         scenario from its own offset): median ns per filter-step.
+ *     ${prefix}_selftest batch-check STEPS N   N single filters and one batch
+ *         of N on the same inputs; prints the largest relative difference of
+ *         loads, covariance and std, and the count of differing flags.
  */
 #define _POSIX_C_SOURCE 199309L
 #include "${prefix}.h"
@@ -20,6 +26,8 @@
 
 #define SCENARIO 2000
 #define MAX_REPEATS 1001
+#define MAX_BATCH 64
+#define PERIOD 256 /* scenario steps laid out side by side for the batch */
 
 static ${prefix}_input scenario[SCENARIO];
 static ${prefix}_real intervals[SCENARIO];
@@ -182,9 +190,143 @@ static int bench(long samples, int repeats)
     return 0;
 }
 
+/* Batch arrays: state, inputs of PERIOD steps (filter b at scenario offset 37 b), outputs. */
+static ${prefix}_real batch_x[4 * MAX_BATCH], batch_P[10 * MAX_BATCH];
+static ${prefix}_real batch_monitor[${PREFIX}_N_MONITOR * MAX_BATCH];
+static ${prefix}_real batch_input[PERIOD][${PREFIX}_N_INPUTS * MAX_BATCH];
+static ${prefix}_real batch_dt[PERIOD][MAX_BATCH];
+static ${prefix}_real batch_std[4 * MAX_BATCH], batch_residual[3 * MAX_BATCH];
+static ${prefix}_real batch_statistic[${PREFIX}_N_FAULT_CHANNELS * MAX_BATCH];
+static uint32_t batch_faults[MAX_BATCH], batch_flags[MAX_BATCH];
+
+static int scenario_index(long k, int b)
+{
+    return (int)((k + 37L * b) % SCENARIO);
+}
+
+/* Batch b's column set from a single filter's state; inputs of PERIOD steps. */
+static void build_batch(int n, ${prefix}_batch *batch, ${prefix}_batch_output *output)
+{
+    ${prefix}_state state;
+    int b, k, j;
+    ${prefix}_init(&state, &${prefix}_default_params);
+    for (b = 0; b < n; ++b) {
+        for (k = 0; k < 4; ++k) {
+            batch_x[k * n + b] = state.x[k];
+        }
+        for (k = 0; k < 10; ++k) {
+            batch_P[k * n + b] = state.P[k];
+        }
+        for (k = 0; k < ${PREFIX}_N_MONITOR; ++k) {
+            batch_monitor[k * n + b] = state.monitor[k];
+        }
+        for (j = 0; j < PERIOD; ++j) {
+            ${prefix}_input *in = &scenario[scenario_index(j, b)];
+            for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
+                batch_input[j][k * n + b] = *${prefix}_input_field(in, k);
+            }
+            batch_dt[j][b] = intervals[scenario_index(j, b)];
+        }
+    }
+    batch->n = n;
+    batch->x = batch_x;
+    batch->P = batch_P;
+    batch->monitor = batch_monitor;
+    output->std = batch_std;
+    output->residual = batch_residual;
+    output->fault_statistic = batch_statistic;
+    output->faults = batch_faults;
+    output->flags = batch_flags;
+}
+
+static int batch_bench(long samples, int repeats, int n)
+{
+    ${prefix}_batch batch;
+    ${prefix}_batch_output output;
+    volatile double sink = 0.0;
+    long k;
+    int r;
+    build_batch(n, &batch, &output);
+    for (r = 0; r < repeats; ++r) {
+        double start = seconds();
+        for (k = 0; k < samples; ++k) {
+            int j = (int)(k % PERIOD);
+            ${prefix}_step_batch(&batch, &${prefix}_default_params, batch_input[j], batch_dt[j],
+                                 &output);
+        }
+        timings[r] = 1e9 * (seconds() - start) / ((double)samples * n);
+        sink += (double)batch_x[0];
+    }
+    qsort(timings, (size_t)repeats, sizeof timings[0], compare);
+    printf("median_ns %.2f min_ns %.2f sink %g\n", timings[repeats / 2], timings[0], sink);
+    return 0;
+}
+
+static double relative(double a, double b)
+{
+    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
+    return scale > 0.0 ? fabs(a - b) / scale : 0.0;
+}
+
+static int batch_check(long steps, int n)
+{
+    static ${prefix}_state single[MAX_BATCH];
+    ${prefix}_batch batch;
+    ${prefix}_batch_output output;
+    ${prefix}_output out;
+    double worst = 0.0;
+    long k, differing_flags = 0, flagged = 0;
+    int b, i;
+    build_batch(n, &batch, &output);
+    for (b = 0; b < n; ++b) {
+        ${prefix}_init(&single[b], &${prefix}_default_params);
+    }
+    for (k = 0; k < steps; ++k) {
+        int j = (int)(k % PERIOD);
+        ${prefix}_step_batch(&batch, &${prefix}_default_params, batch_input[j], batch_dt[j],
+                             &output);
+        for (b = 0; b < n; ++b) {
+            int s = scenario_index(j, b);
+            uint32_t flags = ${prefix}_step(&single[b], &${prefix}_default_params, &scenario[s],
+                                            intervals[s], &out);
+            for (i = 0; i < 4; ++i) {
+                double d = relative((double)single[b].x[i], (double)batch_x[i * n + b]);
+                double e = relative((double)out.std[i], (double)batch_std[i * n + b]);
+                worst = d > worst ? d : worst;
+                worst = e > worst ? e : worst;
+            }
+            for (i = 0; i < 10; ++i) {
+                double d = relative((double)single[b].P[i], (double)batch_P[i * n + b]);
+                worst = d > worst ? d : worst;
+            }
+            differing_flags += flags != batch_flags[b] || out.faults != batch_faults[b];
+            flagged += flags != 0u;
+        }
+    }
+    printf("steps %ld filters %d max_relative %.3g differing_flags %ld flagged %ld\n", steps, n,
+           worst, differing_flags, flagged);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     build_scenario();
+    if (argc == 5 && strcmp(argv[1], "batch-bench") == 0) {
+        int repeats = atoi(argv[3]), n = atoi(argv[4]);
+        if (n < 1 || n > MAX_BATCH) {
+            fprintf(stderr, "N must be 1..%d\n", MAX_BATCH);
+            return 2;
+        }
+        return batch_bench(atol(argv[2]), repeats < 1 ? 1 : (repeats > MAX_REPEATS ? MAX_REPEATS : repeats), n);
+    }
+    if (argc == 4 && strcmp(argv[1], "batch-check") == 0) {
+        int n = atoi(argv[3]);
+        if (n < 1 || n > MAX_BATCH) {
+            fprintf(stderr, "N must be 1..%d\n", MAX_BATCH);
+            return 2;
+        }
+        return batch_check(atol(argv[2]), n);
+    }
     if (argc == 3 && argv[1][0] == 'c') {
         return check(atol(argv[2]));
     }
@@ -192,6 +334,9 @@ int main(int argc, char **argv)
         int repeats = atoi(argv[3]);
         return bench(atol(argv[2]), repeats < 1 ? 1 : (repeats > MAX_REPEATS ? MAX_REPEATS : repeats));
     }
-    fprintf(stderr, "usage: %s check STEPS | bench SAMPLES REPEATS\n", argv[0]);
+    fprintf(stderr,
+            "usage: %s check STEPS | bench SAMPLES REPEATS | batch-bench SAMPLES REPEATS N"
+            " | batch-check STEPS N\n",
+            argv[0]);
     return 2;
 }

@@ -21,6 +21,7 @@ from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
     "wheelload.studies.commands.bench_codegen",
+    "wheelload.studies.commands.bench_speed",
     "wheelload.studies.commands.mhe",
     "wheelload.studies.scenario_bench",
     "wheelload.studies.commands.bench_logs",
@@ -108,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
         f"= {per_run:7.3f} us/sample"
     )
     print(f"  plain numpy per-sample loop (joint update): {per_numpy:7.2f} us/sample")
-    print(f"  Python step() per sample (CasADi VM):       {per_step:7.2f} us/sample")
+    print(f"  Python step() per sample (compiled step):   {per_step:7.2f} us/sample")
     print(
         f"  run() is {per_numpy / per_run:.0f}x faster than the numpy loop and "
         f"{per_step / per_run:.0f}x faster than step()"

@@ -12,11 +12,14 @@ from wheelload.studies.experiments.cache import cache_key
 from wheelload.studies.experiments.context import Context
 from wheelload.studies.experiments.runner import Job
 from wheelload.studies.experiments.units import (
+    KF_TRIALS,
     TRIAL,
     TRUTH,
+    KfTrials,
     TrialResult,
     TrialSpec,
     TruthSpec,
+    run_kf_trials,
     run_trial,
     simulate_truth,
 )
@@ -70,6 +73,21 @@ def trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialRe
     for owner, part in zip(owners, parts):
         merged[owner].append(part)
     return [merge(group) for group in merged]
+
+
+#: KF trials filtered side by side per unit of work (:func:`kf_trials`).
+KF_BATCH = 16
+
+
+def kf_trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialResult]:
+    """As :func:`trials` for specs of the KF alone (one vehicle file), :data:`KF_BATCH`
+    measured logs per unit of work stepped side by side in the generated C."""
+    simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
+    keyed = [replace(spec, truth_key=cache_key(TRUTH, spec.truth)) for spec in specs]
+    batches = [tuple(keyed[i : i + KF_BATCH]) for i in range(0, len(keyed), KF_BATCH)]
+    jobs = [Job(kind=KF_TRIALS, function=run_kf_trials, spec=KfTrials(specs=batch))
+            for batch in batches]  # fmt: skip
+    return [result for part in context.runner.run(jobs, label) for result in part]
 
 
 def merge(parts: list[TrialResult]) -> TrialResult:

@@ -1,13 +1,14 @@
 """Study ``monte-carlo`` (Table VI): the KF on one simulated Nordschleife lap measured with the
 sensor models at noise scale s in {0, 0.5, 1, 2, 4, 8, 16}, independent seeds per trial
-(paper §IV-F); the mean and sample standard deviation of the pooled metrics per scale."""
+(paper §IV-F); the mean and sample standard deviation of the pooled metrics per scale. The
+trials' logs are filtered side by side in the generated library's batched step."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from wheelload.studies.experiments.common import Section, trials, truth_spec
+from wheelload.studies.experiments.common import Section, kf_trials, truth_spec
 from wheelload.studies.experiments.context import QUICK_TRIALS, Context
 from wheelload.studies.experiments.paper_numbers import MONTE_CARLO
 from wheelload.studies.experiments.shape import compare_trend
@@ -33,7 +34,7 @@ def run(context: Context) -> Section:
         )  # fmt: skip
         for s, seed in cases
     ]
-    results = trials(context, specs, "monte-carlo")
+    results = kf_trials(context, specs, "monte-carlo")  # side by side in the batched C
     rows = []
     for (s, seed), result in zip(cases, results):
         pooled = result.metrics["kf"].loc["pooled"]

@@ -32,6 +32,7 @@ from wheelload.studies.sensors import measure
 
 TRUTH = "truth"
 TRIAL = "trial"
+KF_TRIALS = "kf-trials"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -139,3 +140,54 @@ def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:
         reference=signals.reference[mask],
         estimates=estimates,
     )
+
+
+@dataclass(frozen=True, kw_only=True)
+class KfTrials:
+    """Trials of the two-stage KF alone, filtered side by side (one unit of work)."""
+
+    specs: tuple[TrialSpec, ...]  # same vehicle_text; methods == ("kf",)
+
+
+def run_kf_trials(batch: KfTrials, folder: Path) -> list[TrialResult]:
+    """:func:`run_trial` of each spec with the KF, the logs stepped side by side in C.
+
+    The measured logs differ only in their noise draws, so they go through the
+    generated library's batched step together
+    (:func:`wheelload.estimators.batched.run_batched`); the loads equal the
+    KF's ``run`` on each log to about 1e-12 relative.
+    """
+    from wheelload.estimators.batched import run_batched
+
+    texts = {spec.vehicle_text for spec in batch.specs}
+    if len(texts) != 1 or any(spec.methods != ("kf",) for spec in batch.specs):
+        raise ValueError("KfTrials: one vehicle file and the method 'kf' only")
+    logs, masks = [], []
+    for spec in batch.specs:
+        log = measured(spec, folder)
+        signals = signals_from_frame(log, source=spec.truth.scenario, wiring_checks=False)
+        mask = np.ones(signals.t.size, bool)
+        if spec.window is not None:
+            mask = (signals.t >= spec.window[0]) & (signals.t <= spec.window[1])
+            if not mask.any():
+                raise ValueError(f"{spec.truth.scenario}: window {spec.window} holds no sample")
+        logs.append(signals)
+        masks.append(mask)
+    estimator = build("kf", _vehicle(texts.pop()))
+    with tempfile.TemporaryDirectory() as temporary:
+        path = Path(temporary) / "vehicle.toml"
+        path.write_text(batch.specs[0].vehicle_text, encoding="utf-8")
+        start = time.perf_counter()
+        estimates = run_batched(estimator, path, logs)
+        seconds = (time.perf_counter() - start) / sum(log.t.size for log in logs)
+    results = []
+    for signals, mask, estimate in zip(logs, masks, estimates, strict=True):
+        try:
+            metrics = {"kf": wheel_metrics(estimate.loads[mask], signals.reference[mask])}
+            errors = {}
+        except (ValueError, ArithmeticError) as error:
+            metrics, errors = {}, {"kf": f"{type(error).__name__}: {error}".splitlines()[0]}
+        results.append(
+            TrialResult(metrics=metrics, errors=errors, seconds_per_sample={"kf": seconds})
+        )
+    return results

@@ -1,0 +1,230 @@
+"""``wheelload bench speed``: the per-sample step, the batched C and the C step's chain bound.
+
+Each figure is printed beside its alternative measured in the same run,
+over ``--repeats`` alternating repeats (min / median / max of the ratio):
+
+- :meth:`TwoStageKF.step` (compiled step on preallocated buffers) against
+  filterpy's ``KalmanFilter`` doing the same prediction and two sequential
+  updates (filterpy: the ``bench`` extra), and against the CasADi reference
+  step;
+- the generated library's batched step (``--batch`` filters side by side)
+  against its single step, double and float, both built with the Makefile's
+  ``FAST_CFLAGS``;
+- :func:`~wheelload.estimators.batched.run_batched` over ``--logs`` logs
+  against :meth:`TwoStageKF.run` on each (what ``estimate`` over many logs
+  and the Monte Carlo study now use, against what they used);
+- the single C step against its dependency-chain bound: the longest chain of
+  the generated kernel's instructions at :data:`~wheelload.estimators.c_emitter.LATENCY`
+  cycles each, at the clock of ``/proc/cpuinfo``.
+
+Printed, never asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators.c_emitter import Precision, critical_path
+from wheelload.estimators.codegen import FAST_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.two_stage import sample_intervals
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.bench_codegen import cpu_mhz
+from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.numpy_kf import pseudo_measurements
+from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
+
+STEP_TARGET = 10.0  # µs per TwoStageKF.step
+FILTERPY_TARGET = 10.0  # times faster than filterpy
+BATCH_TARGETS = {Precision.DOUBLE: 4.0, Precision.FLOAT: 8.0}  # throughput vs single step
+CHAIN_TARGET = 1.3  # single C step / dependency-chain bound
+
+
+def register_bench(subparsers: argparse._SubParsersAction) -> None:
+    """``wheelload bench speed``."""
+    parser = subparsers.add_parser(
+        "speed", help="step vs filterpy, batched C vs single C step, C step vs its chain bound"
+    )
+    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
+    parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
+    parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
+    parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
+    parser.add_argument(
+        "--logs", type=int, default=16, help="logs for run_batched vs run (default 16)"
+    )
+    parser.add_argument(
+        "--log-samples", type=int, default=20_000, help="samples per log (default 2e4, 1 kHz)"
+    )
+    add_allow_unusual(parser)
+    parser.set_defaults(handler=run)
+
+
+def spread(values: list[float]) -> str:
+    """``min / median / max`` of ``values``."""
+    return f"{min(values):.3g} / {statistics.median(values):.3g} / {max(values):.3g}"
+
+
+def _per_call_us(function, n: int) -> float:
+    start = time.perf_counter()
+    for k in range(n):
+        function(k)
+    return (time.perf_counter() - start) / n * 1e6
+
+
+def python_steps(kf: TwoStageKF, signals, n: int):
+    """Per-step callables: fast step, reference step, filterpy (None if not installed)."""
+    dt = sample_intervals(signals.t)
+    samples = [
+        Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
+        for k in range(n)
+    ]
+    states = {"fast": kf.initial_state(), "reference": kf.initial_state()}
+
+    def fast(k):
+        states["fast"], _ = kf.step(states["fast"], samples[k], dt[k])
+
+    def reference(k):
+        states["reference"], _ = kf.reference_step(states["reference"], samples[k], dt[k])
+
+    try:
+        from filterpy.kalman import KalmanFilter
+    except ImportError:
+        return fast, reference, None
+    z, A, b = pseudo_measurements(signals, kf.p)
+    q, rs, rc = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
+    filt = KalmanFilter(dim_x=4, dim_z=4)
+    initial = kf.initial_state()
+    filt.x, filt.P, filt.F = initial.x[:, None].copy(), initial.P.copy(), np.eye(4)
+    H_s = np.eye(4)
+
+    def filterpy(k):
+        filt.Q = q * dt[k] * np.eye(4)
+        filt.predict()
+        filt.update(z[k][:, None], R=rs / dt[k] * np.eye(4), H=H_s)
+        filt.update(b[k][:, None], R=np.diag(rc / dt[k]), H=A)
+
+    return fast, reference, filterpy
+
+
+def _selftest_ns(binary: Path, *arguments) -> float:
+    """Fastest of the self-test's internal repeats [ns per (filter-)step]."""
+    out = subprocess.run(
+        [str(binary), *map(str, arguments)], capture_output=True, text=True, check=True
+    ).stdout
+    return float(re.search(r"min_ns (\S+)", out).group(1))
+
+
+def logs_vs_run(vehicle_path: Path, kf: TwoStageKF, args: argparse.Namespace) -> None:
+    """Print run_batched over many logs against run on each, us per sample."""
+    from wheelload.estimators.batched import run_batched
+
+    vehicle = kf.vehicle
+    duration = args.log_samples / 1000.0
+    logs = [
+        synthetic_log(vehicle, slalom(duration=duration), rate=1000.0, seed=seed,
+                      noise=SensorNoise(acceleration=0.05, travel=0.0003))
+        for seed in range(args.logs)
+    ]  # fmt: skip
+    samples = sum(len(log) for log in logs)
+    run_batched(kf, vehicle_path, logs[:2])  # build (or load) the library
+    kf.run(logs[0].slice(0, 10))
+    batched, single = [], []
+    for _ in range(args.repeats):
+        start = time.perf_counter()
+        run_batched(kf, vehicle_path, logs)
+        batched.append((time.perf_counter() - start) / samples * 1e6)
+        start = time.perf_counter()
+        for log in logs:
+            kf.run(log)
+        single.append((time.perf_counter() - start) / samples * 1e6)
+    ratios = [s / b for s, b in zip(single, batched)]
+    print(f"{args.logs} logs of {args.log_samples} samples [us per sample]")
+    print(f"  run_batched (side by side, batched C): {spread(batched)}")
+    print(f"  TwoStageKF.run on each log:            {spread(single)}")
+    print(f"  run_batched is {spread(ratios)} x faster")
+
+
+def run(args: argparse.Namespace) -> int:
+    if not 1 <= args.batch <= 64:
+        raise ValueError(f"--batch must be 1..64, got {args.batch}")
+    if args.repeats < 1 or args.steps < 10 or args.samples < 100:
+        raise ValueError("--repeats >= 1, --steps >= 10 and --samples >= 100 are needed")
+    if args.logs < 1 or args.log_samples < 100:
+        raise ValueError("--logs >= 1 and --log-samples >= 100 are needed")
+    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
+    kf = TwoStageKF(vehicle)
+    signals = synthetic_log(
+        vehicle, slalom(duration=30.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
+    )
+    n = min(args.steps, len(signals))
+    fast, reference, filterpy = python_steps(kf, signals, n)
+    fast(0)  # compile (or load) the step
+    print(f"speed, {vehicle.name}; each ratio from alternating repeats, min / median / max")
+    print(f"Python step (x {n} steps, {args.repeats} repeats) [us per step]")
+    timings: dict[str, list[float]] = {"fast": [], "reference": [], "filterpy": []}
+    for _ in range(args.repeats):
+        timings["fast"].append(_per_call_us(fast, n))
+        timings["reference"].append(_per_call_us(reference, min(n, 500)))
+        if filterpy is not None:
+            timings["filterpy"].append(_per_call_us(filterpy, n))
+    print(f"  TwoStageKF.step (compiled, buffers): {spread(timings['fast'])}"
+          f"  (target <= {STEP_TARGET:g} us)")  # fmt: skip
+    print(f"  reference_step (CasADi VM + numpy): {spread(timings['reference'])}")
+    ratios = [r / f for r, f in zip(timings["reference"], timings["fast"])]
+    print(f"  step is {spread(ratios)} x faster than reference_step")
+    if filterpy is None:
+        print("  filterpy: not installed; install the 'bench' extra (pip install filterpy)")
+    else:
+        print(f"  filterpy KalmanFilter, 2 updates:    {spread(timings['filterpy'])}")
+        ratios = [p / f for p, f in zip(timings["filterpy"], timings["fast"])]
+        print(f"  step is {spread(ratios)} x faster than filterpy (target >= {FILTERPY_TARGET:g})")
+
+    logs_vs_run(vehicle_path, kf, args)
+    mhz = cpu_mhz()
+    with tempfile.TemporaryDirectory(prefix="wheelload_speed_") as folder:
+        print(f"Generated C, FAST_CFLAGS: {' '.join(FAST_CFLAGS)}")
+        for precision in Precision:
+            library = generate(
+                vehicle_path,
+                Path(folder) / precision.value,
+                CodegenOptions(precision=precision),
+                allow_unusual=args.allow_unusual,
+            )
+            binary = build_program(
+                library,
+                library.selftest,
+                Path(folder) / precision.value / "selftest_fast",
+                flags=FAST_CFLAGS,
+            )
+            single, batched = [], []
+            for _ in range(args.repeats):
+                single.append(_selftest_ns(binary, "bench", args.samples, 5))
+                batched.append(
+                    _selftest_ns(binary, "batch-bench", args.samples // args.batch, 5, args.batch)
+                )
+            ratios = [s / b for s, b in zip(single, batched)]
+            print(f"  {precision.value}: single step {spread(single)} ns; batch of {args.batch}: "
+                  f"{spread(batched)} ns per filter-step")  # fmt: skip
+            print(f"    batched throughput {spread(ratios)} x the single step "
+                  f"(target >= {BATCH_TARGETS[precision]:g})")  # fmt: skip
+            if precision is Precision.DOUBLE:
+                cycles = critical_path(library.kernel)
+                if mhz is None:
+                    print(f"    chain bound {cycles} cycles (clock unknown: no ratio)")
+                    continue
+                bound = cycles / (mhz * 1e-3)
+                ratios = [s / bound for s in single]
+                print(f"    chain bound: {cycles} cycles of {library.flops} FLOPs = "
+                      f"{bound:.0f} ns at {mhz:.0f} MHz; single step / bound {spread(ratios)} "
+                      f"(target <= {CHAIN_TARGET:g})")  # fmt: skip
+    return 0
