@@ -49,7 +49,9 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
+import shutil
 import subprocess
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -64,6 +66,7 @@ from wheelload.estimators.mhe import (
     _csc_value_order,
 )
 from wheelload.estimators.mhe_terms import LOAD_SCALE, TERMS_NAME
+from wheelload.estimators.output_files import atomic_write, check_output_folder
 from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals
@@ -92,21 +95,44 @@ def generate_mhe(
     folder: Path,
     dt: float,
     precision: Precision = Precision.DOUBLE,
+    *,
+    force: bool = False,
 ) -> Path:
     """Write the embedded MHE's C sources to ``folder`` (see module docstring).
 
     ``precision`` is OSQP's floating type (``OSQPFloat``: the solver, its
     matrices and the QP vectors); the terms routine and the window stay in
-    double.
+    double. ``folder`` must be new or empty unless ``force``; the files are
+    generated in a temporary folder inside it and each is renamed into place
+    once complete (:func:`~wheelload.estimators.output_files.atomic_write`), so
+    an interrupted run leaves the old file or the new one, never a mix.
     """
+    folder = Path(folder)
+    check_output_folder(folder, [], force=force)
+    folder.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=".wheelload_mhe-", dir=folder))
+    try:
+        _generate_into(vehicle, settings, staging, dt, precision)
+        for source in sorted(p for p in staging.rglob("*") if p.is_file()):
+            target = folder / source.relative_to(staging)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_write(target, replace=force) as temporary:
+                shutil.copyfile(source, temporary)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return folder
+
+
+def _generate_into(
+    vehicle: Vehicle, settings: MheSettings, folder: Path, dt: float, precision: Precision
+) -> None:
+    """Write every generated file into the (temporary) ``folder``."""
     if settings.extended:
         raise ValueError(
             "the embedded MHE supports the quadratic window only (no robust loss, no bias "
             "states); generate with the default losses and bias_states"
         )
     settings = embedded_settings(settings)
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     mhe = MovingHorizonEstimator(vehicle, settings)
     N, width = settings.horizon, mhe.width
     state = mhe.initial_state(dt)
@@ -149,7 +175,6 @@ def generate_mhe(
         _array("X0", x0),
     ])  # fmt: skip
     (folder / "wheelload_mhe.c").write_text(header + DRIVER)
-    return folder
 
 
 DRIVER = r"""

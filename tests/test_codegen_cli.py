@@ -52,3 +52,18 @@ def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):
     argv = ["codegen", "--estimator", "mhe", "--out", str(tmp_path), "--prefix", "car7"]
     assert main(argv) == 2
     assert "--prefix: not an option of --estimator mhe" in capsys.readouterr().err
+
+
+def test_codegen_mhe_refuses_a_folder_with_files_and_replaces_them_with_force(tmp_path, capsys):
+    out = tmp_path / "mhe"
+    out.mkdir()
+    mine = out / "wheelload_mhe.c"
+    mine.write_text("/* the user's own file */\n")
+    argv = ["codegen", "--estimator", "mhe", "--out", str(out), "--horizon", "3"]
+    assert main(argv) == 2
+    assert "is not empty" in capsys.readouterr().err
+    assert mine.read_text() == "/* the user's own file */\n"
+    assert main([*argv, "--force"]) == 0
+    assert "#define N 3" in mine.read_text()
+    # every file renamed into place: no temporary file or staging folder is left behind
+    assert not [p for p in out.rglob("*") if p.name.startswith(".")]

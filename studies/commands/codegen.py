@@ -128,7 +128,9 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
     )
     precision = Precision(args.precision)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    folder = generate_mhe(vehicle, settings, Path(args.out), dt=values["dt"], precision=precision)
+    folder = generate_mhe(
+        vehicle, settings, Path(args.out), dt=values["dt"], precision=precision, force=args.force
+    )
     print(
         f"written the embedded {settings.label()} (dt = {values['dt']} s, "
         f"OSQP in {precision.value}) to {folder}"
