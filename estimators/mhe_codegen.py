@@ -65,8 +65,9 @@ from wheelload.estimators.mhe import (
     MovingHorizonEstimator,
     _csc_value_order,
 )
-from wheelload.estimators.mhe_terms import LOAD_SCALE, TERMS_NAME
-from wheelload.estimators.output_files import atomic_write, check_output_folder
+from wheelload.estimators.mhe_terms import LOAD_SCALE, RESIDUAL_NAME, TERMS_NAME
+from wheelload.estimators.mhe_window import L1_CORE, TRAVEL_UNIT, Loss
+from wheelload.estimators.output_files import atomic_write, check_output_folder, write_text
 from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals
@@ -127,321 +128,350 @@ def _generate_into(
     vehicle: Vehicle, settings: MheSettings, folder: Path, dt: float, precision: Precision
 ) -> None:
     """Write every generated file into the (temporary) ``folder``."""
-    if settings.extended:
-        raise ValueError(
-            "the embedded MHE supports the quadratic window only (no robust loss, no bias "
-            "states); generate with the default losses and bias_states"
-        )
     settings = embedded_settings(settings)
     mhe = MovingHorizonEstimator(vehicle, settings)
-    N, width = settings.horizon, mhe.width
     state = mhe.initial_state(dt)
     P0 = mhe.filter.initial_state().P
     if not np.allclose(P0, P0[0, 0] * np.eye(4), rtol=0, atol=0):
         raise ValueError("the embedded MHE needs an isotropic initial covariance")
+    solver = mhe.window_qp.solver if settings.extended else mhe.workspace.solver
     with quiet_stdout():  # OSQP reports the files it writes
-        mhe.workspace.solver.codegen(str(folder / "osqp"), prefix="wheelload_mhe_",
-                                     parameters="matrices", force_rewrite=True,
-                                     use_float=precision is Precision.FLOAT)  # fmt: skip
-    function = mhe.terms
-    generator = ca.CodeGenerator(f"{TERMS_NAME}.c", {"with_header": True})
-    generator.add(function)
-    generator.generate(str(folder) + "/")
-    rows = N * width if settings.bounded else 0
-    x0 = np.array(mhe.filter.parameters.static(), dtype=float)
-    order = _csc_value_order(N, width)
+        solver.codegen(str(folder / "osqp"), prefix="wheelload_mhe_", parameters="matrices",
+                       force_rewrite=True, use_float=precision is Precision.FLOAT)  # fmt: skip
+    functions = [mhe.terms] + ([mhe.residuals] if settings.extended else [])
+    for function in functions:
+        generator = ca.CodeGenerator(f"{function.name()}.c", {"with_header": True})
+        generator.add(function)
+        generator.generate(str(folder) + "/")
+    n_bias = mhe.bias_report(np.zeros(mhe.beta_std.size)).size if settings.extended else 0
+    (folder / "wheelload_mhe.h").write_text(HEADER.replace("@N_BIAS@", str(max(n_bias, 0)))
+                                            .replace("@N_INPUTS@", str(len(INPUTS)))
+                                            .replace("@LAG@", str(settings.lag)))  # fmt: skip
+    common = _common_defines(mhe, settings, state, dt, float(P0[0, 0]))
+    if settings.extended:
+        specific, template = _window_defines(mhe, settings), "mhe_window.c"
+    else:
+        specific, template = _plain_defines(mhe, settings), "mhe_plain.c"
+    driver = (TEMPLATES / template).read_text()
+    source = PRELUDE + common + specific + INVERT + driver + HOLD_FALLBACK + ARRIVAL + RUN
+    (folder / "wheelload_mhe.c").write_text(source)
+
+
+TEMPLATES = Path(__file__).with_name("templates")
+
+
+def _common_defines(mhe, settings: MheSettings, state, dt: float, p0: float) -> str:
+    """Sizes, scales and tables both drivers use."""
+    terms = mhe.terms
     low, high = mhe.load_bounds
-    header = "".join([
-        f"#define N {N}\n#define W {width}\n#define NX (N * W)\n#define NY {max(rows, 1)}\n",
-        f"#define HAS_Y {int(rows > 0)}\n#define HARD {int(mhe.hard)}\n",
-        f"#define NNZ {order.size}\n#define NP {mhe.p.size}\n",
-        f"#define SZ_ARG {function.sz_arg()}\n#define SZ_RES {function.sz_res()}\n",
-        f"#define SZ_IW {function.sz_iw()}\n#define SZ_W {function.sz_w()}\n",
+    x0 = np.array(mhe.filter.parameters.static(), dtype=float)
+    return "".join([
+        f"#define N {settings.horizon}\n#define W {mhe.width}\n#define HARD {int(mhe.hard)}\n",
+        f"#define LAG {settings.lag}\n#define NP {mhe.p.size}\n#define KALMAN_ARRIVAL 0\n",
+        f"#define SZ_ARG {terms.sz_arg()}\n#define SZ_RES {terms.sz_res()}\n",
+        f"#define SZ_IW {terms.sz_iw()}\n#define SZ_W {terms.sz_w()}\n",
         f"#define LOAD_SCALE {LOAD_SCALE!r}\n#define DT {float(dt)!r}\n",
-        f"#define Q_DENSITY {float(mhe.tuning[0])!r}\n#define P0_VAR {float(P0[0, 0])!r}\n",
+        f"#define Q_DENSITY {float(mhe.tuning[0])!r}\n#define P0_VAR {p0!r}\n",
         f"#define MAX_INTERVAL {float(MAX_INTERVAL)!r}\n",
         f"#define COST {float(state.cost)!r}\n#define RHO0 {float(settings.solver.rho)!r}\n",
+        f"#define EPS_ABS {float(settings.solver.eps_abs)!r}\n",
+        f"#define EPS_REL {float(settings.solver.eps_rel)!r}\n",
         f"#define LOW_LOAD {float(max(low, -1e30))!r}\n",
         f"#define HIGH_LOAD {float(min(high, 1e30))!r}\n",
         f"#define N_INPUTS {len(INPUTS)}\n#define N_USED {len(StepFlag.update_flags())}\n",
         "static const unsigned UPDATE_FLAGS[N_USED] = {"
         + ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags())
         + "};\n",
-        _array("ORDER", order, "int"),
         _array("ARRIVAL_STEADY", state.steady),
         _array("P_VECTOR", mhe.p),
         _array("TUNING", mhe.tuning),
         _array("NULL_VECTOR", mhe.null),
+        _array("A_MATRIX", mhe.A),
         _array("X0", x0),
     ])  # fmt: skip
-    (folder / "wheelload_mhe.c").write_text(header + DRIVER)
 
 
-DRIVER = r"""
+def _plain_defines(mhe, settings: MheSettings) -> str:
+    """The quadratic window's layout: block-tridiagonal Hessian in OSQP's CSC order."""
+    N, width = settings.horizon, mhe.width
+    rows = N * width if settings.bounded else 0
+    order = _csc_value_order(N, width)
+    return "".join([
+        f"#define NX (N * W)\n#define NY {max(rows, 1)}\n#define HAS_Y {int(rows > 0)}\n",
+        f"#define NNZ {order.size}\n",
+        _array("ORDER", order, "int"),
+    ])  # fmt: skip
+
+
+def _window_defines(mhe, settings: MheSettings) -> str:
+    """The extended window's layout, losses and bias states (:mod:`mhe_window`).
+
+    The pattern is the one the Python MHE's OSQP workspace was set up with:
+    ``PATTERN[i]`` is the dense index (row-major) of its ``i``-th value in CSC order.
+    """
+    qp = mhe.window_qp
+    pattern = qp.rows[qp.order] * qp.n + qp.cols[qp.order]
+    rows = mhe.residuals
+    nd = 3 if qp.travel_bias else 0
+    basis = qp.travel_basis if nd else np.zeros((4, 3))
+
+    def loss(group, name):
+        kappa, mu = group.weights() if group.robust else (1.0, 0.0)
+        corner = group.threshold if group.kind is Loss.HUBER else L1_CORE
+        scale = 1.0 if group.kind is Loss.HUBER else 1.0 / L1_CORE
+        return (f"#define {name}_ROBUST {int(group.robust)}\n#define KAPPA_{name[0]} {kappa!r}\n"
+                f"#define MU_{name[0]} {float(mu)!r}\n#define CORNER_{name[0]} {corner!r}\n"
+                f"#define SCALE_{name[0]} {scale!r}\n")  # fmt: skip
+
+    return "".join([
+        f"#define WIDTH {qp.width}\n#define NS {qp.ns}\n#define NC {qp.nc}\n",
+        f"#define NB {qp.n_bias}\n#define ND {nd}\n#define NNZ {pattern.size}\n",
+        f"#define TRAVEL_UNIT {TRAVEL_UNIT!r}\n",
+        f"#define R_SZ_ARG {rows.sz_arg()}\n#define R_SZ_RES {rows.sz_res()}\n",
+        f"#define R_SZ_IW {rows.sz_iw()}\n#define R_SZ_W {rows.sz_w()}\n",
+        loss(settings.suspension_loss, "SUSPENSION"),
+        loss(settings.constraint_loss, "CONSTRAINT"),
+        _array("PATTERN", pattern, "int"),
+        _array("PINV", mhe.pinv),
+        _array("TRAVEL_BASIS", basis),
+        _array("BETA_BOUND", mhe.beta_bound),
+        _array("BETA_DENSITY", mhe.beta_density),
+        _array("BETA_INFO0", 1.0 / mhe.beta_std**2),
+    ])  # fmt: skip
+
+
+PRELUDE = """/* wheelload_mhe.c: generated by wheelload (wheelload.estimators.mhe_codegen). */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime */
 #include <math.h>
 #include <string.h>
 #include <time.h>
-#include "osqp.h"
-#include "wheelload_mhe_workspace.h"
-#include "wheelload_mhe_terms.h"
+"""
 
-/* The window, oldest sample first: the terms of wheelload_mhe_terms (QP units). */
-static double HB[N][W * W], G[N][W], LINK[N], DRIFT[N], XP[N][4], LO[N][W], HI[N][W];
-static double HIST[N][4];
-static OSQPFloat XW[NX], YW[NY], Q[NX], L[NX + 1], U[NX + 1], PX[NNZ]; /* OSQP's type */
-static double VALUES[N * W * W + (N - 1) * W]; /* diagonal blocks, then couplings */
-static long K = 0;
-static double ARRIVAL_FIRST[16]; /* c s^2 (P0 + q dt_0 I)^-1 of the log's first interval */
-
-void wheelload_mhe_reset(void) {
-    K = 0;
-    memset(XW, 0, sizeof XW);
-    memset(YW, 0, sizeof YW);
-    memset(HB, 0, sizeof HB);
-    memset(G, 0, sizeof G);
-    memset(LINK, 0, sizeof LINK);
-    memset(DRIFT, 0, sizeof DRIFT);
-    memset(XP, 0, sizeof XP);
-    memset(LO, 0, sizeof LO);
-    memset(HI, 0, sizeof HI);
-    for (int j = 0; j < N; ++j) {
-        for (int a = 0; a < W; ++a) HB[j][a * W + a] = 1.0; /* inert samples before the log */
-        memcpy(HIST[j], X0, sizeof X0);
-    }
-    osqp_update_rho(&wheelload_mhe_solver, RHO0);
-}
-
-static void shift(double *rows, const double *value, int width) {
-    memmove(rows, rows + width, sizeof(double) * (size_t)(width * (N - 1)));
-    memcpy(rows + width * (N - 1), value, sizeof(double) * (size_t)width);
-}
-
-/* Upper-triangular Hessian values in OSQP's CSC order; 1 if they differ from the loaded. */
-static int hessian(int j0, const double *arrival) {
-    double diagonal[N];
-    for (int j = 0; j < N; ++j)
-        diagonal[j] = (j > 0 ? LINK[j] : 0.0) + (j < N - 1 ? LINK[j + 1] : 0.0);
-#if HARD
-    for (int j = 0; j < N; ++j) VALUES[j] = HB[j][0] + diagonal[j];
-    double warp = 0.0;
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) warp += NULL_VECTOR[r] * arrival[r * 4 + c] * NULL_VECTOR[c];
-    VALUES[j0] += warp;
-    for (int j = 1; j < N; ++j) VALUES[N + j - 1] = -LINK[j];
-#else
-    for (int j = 0; j < N; ++j)
-        for (int e = 0; e < 16; ++e)
-            VALUES[j * 16 + e] = HB[j][e] + (e % 5 == 0 ? diagonal[j] : 0.0)
-                                 + (j == j0 ? arrival[e] : 0.0);
-    for (int j = 1; j < N; ++j)
-        for (int a = 0; a < 4; ++a) VALUES[N * 16 + (j - 1) * 4 + a] = -LINK[j];
-#endif
-    int changed = K == 0;
-    for (int i = 0; i < NNZ; ++i) {
-        OSQPFloat value = (OSQPFloat)VALUES[ORDER[i]];
-        if (value != PX[i]) changed = 1;
-        PX[i] = value;
-    }
-    return changed;
-}
-
-/* One sample u[N_INPUTS] (non-finite entries: missing; the terms they feed are dropped) after the
-   interval dt [s] (0 < dt < MAX_INTERVAL, else nothing is solved: the last estimate is held,
-   status 0, flags 255). Returns OSQP's status (1 = solved); loads[4] keeps the previous
-   estimate on failure; flags: the skipped updates and dropped model terms as in the KF
-   (StepFlag; 255: interval rejected). */
-int wheelload_mhe_step(const double *u, double dt, double *loads, int *iterations,
-                       unsigned *flags) {
-    double u0[N_INPUTS], valid[N_INPUTS], cost = COST;
-    if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
-        memcpy(loads, HIST[N - 1], sizeof(double) * 4);
-        *iterations = 0;
-        *flags = 255u;
-        return 0;
-    }
-    if (K == 0) {
-        memset(ARRIVAL_FIRST, 0, sizeof ARRIVAL_FIRST);
-        for (int r = 0; r < 4; ++r)
-            ARRIVAL_FIRST[r * 5] = cost * LOAD_SCALE * LOAD_SCALE / (P0_VAR + Q_DENSITY * dt);
-    }
-    for (int i = 0; i < N_INPUTS; ++i) {
-        valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
-        u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
-    }
-    double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[N_USED];
-    const double *arg[SZ_ARG] = {u0, valid, &dt, HIST[N - 1], P_VECTOR, TUNING, &cost};
-    double *res[SZ_RES] = {h, g, &link, xp, lo, hi, b, used};
-    casadi_int iw[SZ_IW + 1];
-    double w[SZ_W + 1];
-    wheelload_mhe_terms(arg, res, iw, w, 0);
-    *flags = 0;
-    for (int i = 0; i < N_USED; ++i) *flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
-    if (K == 0) link = 0.0; /* the log's first sample: the arrival cost instead */
-    double drift = 0.0;
-#if HARD
-    for (int r = 0; r < 4; ++r) drift += NULL_VECTOR[r] * (xp[r] - XP[N - 1][r]);
-    drift *= link / LOAD_SCALE;
-#endif
-    shift(HB[0], h, W * W); shift(G[0], g, W); shift(LINK, &link, 1); shift(DRIFT, &drift, 1);
-    shift(XP[0], xp, 4); shift(LO[0], lo, W); shift(HI[0], hi, W);
-    int j0 = K < N - 1 ? (int)(N - 1 - K) : 0;
-    const double *arrival = K <= N - 1 ? ARRIVAL_FIRST : ARRIVAL_STEADY;
-    if (hessian(j0, arrival))
-        osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL, 0);
-    const double *prior = HIST[0];
-    for (int j = 0; j < N; ++j)
-        for (int a = 0; a < W; ++a) {
-            Q[j * W + a] = G[j][a];
-            L[j * W + a] = fmax(LO[j][a], -OSQP_INFTY);
-            U[j * W + a] = fmin(HI[j][a], OSQP_INFTY);
+INVERT = r"""
+/* Gauss-Jordan inverse with partial pivoting of the n x n matrix a (overwritten). */
+static void invert(double *a, int n, double *inverse) {
+    for (int r = 0; r < n; ++r)
+        for (int c = 0; c < n; ++c) inverse[r * n + c] = r == c;
+    for (int c = 0; c < n; ++c) {
+        int p = c;
+        for (int r = c + 1; r < n; ++r)
+            if (fabs(a[r * n + c]) > fabs(a[p * n + c])) p = r;
+        for (int e = 0; e < n; ++e) {
+            double t = a[c * n + e];
+            a[c * n + e] = a[p * n + e];
+            a[p * n + e] = t;
+            t = inverse[c * n + e];
+            inverse[c * n + e] = inverse[p * n + e];
+            inverse[p * n + e] = t;
         }
-#if HARD
-    for (int j = 1; j < N; ++j) {
-        Q[j] += DRIFT[j];
-        Q[j - 1] -= DRIFT[j];
+        double pivot = a[c * n + c];
+        for (int e = 0; e < n; ++e) {
+            a[c * n + e] /= pivot;
+            inverse[c * n + e] /= pivot;
+        }
+        for (int r = 0; r < n; ++r) {
+            if (r == c) continue;
+            double f = a[r * n + c];
+            for (int e = 0; e < n; ++e) {
+                a[r * n + e] -= f * a[c * n + e];
+                inverse[r * n + e] -= f * inverse[c * n + e];
+            }
+        }
     }
-    double nw = 0.0;
-    for (int r = 0; r < 4; ++r) {
-        double row = 0.0;
-        for (int c = 0; c < 4; ++c) row += arrival[r * 4 + c] * (XP[j0][c] - prior[c]);
-        nw += NULL_VECTOR[r] * row;
-    }
-    Q[j0] += nw / LOAD_SCALE;
-#else
-    for (int r = 0; r < 4; ++r) {
-        double row = 0.0;
-        for (int c = 0; c < 4; ++c) row += arrival[r * 4 + c] * prior[c];
-        Q[j0 * W + r] -= row / LOAD_SCALE;
-    }
-#endif
-    osqp_update_data_vec(&wheelload_mhe_solver, Q, HAS_Y ? L : OSQP_NULL, HAS_Y ? U : OSQP_NULL);
-    memmove(XW, XW + W, sizeof(OSQPFloat) * (NX - W));
-#if HAS_Y
-    memmove(YW, YW + W, sizeof(OSQPFloat) * (NY - W));
-    osqp_warm_start(&wheelload_mhe_solver, XW, YW);
-#else
-    osqp_warm_start(&wheelload_mhe_solver, XW, OSQP_NULL);
-#endif
-    osqp_solve(&wheelload_mhe_solver);
-    int status = (int)wheelload_mhe_solver.info->status_val;
-    *iterations = (int)wheelload_mhe_solver.info->iter;
-    const OSQPFloat *x = wheelload_mhe_solver.solution->x;
-    double out[4];
-    if (status == 1) {
-        memcpy(XW, x, sizeof XW);
-#if HAS_Y
-        memcpy(YW, wheelload_mhe_solver.solution->y, sizeof YW);
-#endif
-        const OSQPFloat *last = x + (N - 1) * W;
-#if HARD
-        double omega = fmin(fmax(last[0], LO[N - 1][0]), HI[N - 1][0]);
-        for (int r = 0; r < 4; ++r) out[r] = XP[N - 1][r] + NULL_VECTOR[r] * omega * LOAD_SCALE;
-#else
-        for (int r = 0; r < 4; ++r) out[r] = last[r] * LOAD_SCALE;
-#endif
-        for (int r = 0; r < 4; ++r) out[r] = fmin(fmax(out[r], LOW_LOAD), HIGH_LOAD);
-    } else {
-        memcpy(out, HIST[N - 1], sizeof out);
-    }
-    shift(HIST[0], out, 4);
-    memcpy(loads, out, sizeof out);
-    ++K;
-    return status;
 }
 
-/* A whole log (u: n x N_INPUTS, row-major; dt: the interval before each sample); wall time per
-   sample in seconds. */
-void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, int *status,
-                       int *iterations, unsigned *flags, double *seconds) {
+"""
+
+HOLD_FALLBACK = r"""
+/* No filter linked: the fallback is the last estimate, held (no standard deviations). */
+static void kf_reset(void) {}
+
+static void kf_covariance(double *P) {
+    for (int e = 0; e < 16; ++e) P[e] = e % 5 == 0 ? P0_VAR : 0.0;
+}
+
+static void kf_step(const double *u, double dt, double *x, double *std) {
+    (void)u;
+    (void)dt;
+    memcpy(x, HIST[N - 1], sizeof(double) * 4);
+    memset(std, 0, sizeof(double) * 4);
+}
+
+static void kf_held(const double *u, double dt, const double *held, double *std,
+                    double *residual) {
+    (void)u;
+    (void)dt;
+    (void)held;
+    memset(std, 0, sizeof(double) * 4);
+    memset(residual, 0, sizeof(double) * 3);
+}
+"""
+
+ARRIVAL = r"""
+/* c s^2 (P + q dt I)^-1, symmetrised; the steady-state weight after the log's first sample. */
+static void arrival_weight(int first, const double *P, double dt, double *weight) {
+    if (!first && !KALMAN_ARRIVAL) {
+        memcpy(weight, ARRIVAL_STEADY, sizeof(double) * 16);
+        return;
+    }
+    double a[16], inverse[16];
+    for (int e = 0; e < 16; ++e) a[e] = P[e] + (e % 5 == 0 ? Q_DENSITY * dt : 0.0);
+    invert(a, 4, inverse);
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c)
+            weight[r * 4 + c] =
+                COST * LOAD_SCALE * LOAD_SCALE * (0.5 * (inverse[r * 4 + c] + inverse[c * 4 + r]));
+}
+"""
+
+RUN = r"""
+/* A whole log (u: n x N_INPUTS, row-major; dt: the interval before each sample); bias: n x
+   WHEELLOAD_MHE_N_BIAS; wall time per sample in seconds. */
+void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, double *std,
+                       double *residual, double *bias, int *status, int *iterations,
+                       int *fallback, unsigned *flags, double *seconds) {
     wheelload_mhe_reset();
     for (int k = 0; k < n; ++k) {
         struct timespec start, stop;
+        wheelload_mhe_output out;
         clock_gettime(CLOCK_MONOTONIC, &start);
-        status[k] = wheelload_mhe_step(u + N_INPUTS * k, dt[k], loads + 4 * k, iterations + k,
-                                       flags + k);
+        status[k] = wheelload_mhe_step(u + N_INPUTS * k, dt[k], &out);
         clock_gettime(CLOCK_MONOTONIC, &stop);
-        seconds[k] = (stop.tv_sec - start.tv_sec) + 1e-9 * (stop.tv_nsec - start.tv_nsec);
+        seconds[k] = (double)(stop.tv_sec - start.tv_sec) + 1e-9 * (double)(stop.tv_nsec - start.tv_nsec);
+        memcpy(loads + 4 * k, out.loads, sizeof out.loads);
+        memcpy(std + 4 * k, out.std, sizeof out.std);
+        memcpy(residual + 3 * k, out.residual, sizeof out.residual);
+        for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) bias[WHEELLOAD_MHE_N_BIAS * k + i] = out.bias[i];
+        iterations[k] = out.iterations;
+        fallback[k] = out.fallback;
+        flags[k] = out.flags;
     }
 }
+"""
+
+HEADER = r"""/* wheelload_mhe.h: the embedded moving-horizon wheel-load estimator (generated). */
+#ifndef WHEELLOAD_MHE_H
+#define WHEELLOAD_MHE_H
+
+#define WHEELLOAD_MHE_N_INPUTS @N_INPUTS@ /* wheelload.models.INPUTS order */
+#define WHEELLOAD_MHE_N_BIAS @N_BIAS@     /* entries of bias in use */
+#define WHEELLOAD_MHE_LAG @LAG@           /* samples: loads are the estimate of sample k - LAG */
+
+typedef struct {
+    double loads[4];    /* wheel loads [N] of sample k - LAG */
+    double std[4];      /* the fallback filter's standard deviations [N] (0: no filter) */
+    double residual[3]; /* b - A x of that sample: vertical [N], pitch, roll [N m] */
+    double bias[6];     /* bias states: travel offsets FL..RR [m] and/or ax, ay [m/s^2] */
+    int iterations;     /* ADMM iterations */
+    int fallback;       /* 1: the QP was not solved or its loads out of bounds: the filter's */
+    unsigned flags;     /* skipped updates and dropped terms (StepFlag); 255: interval rejected */
+} wheelload_mhe_output;
+
+/* Start a new log: inert window, static loads. */
+void wheelload_mhe_reset(void);
+
+/* One sample u[WHEELLOAD_MHE_N_INPUTS] (non-finite entries: missing; the terms they feed are
+   dropped) after the interval dt [s] (0 < dt < the maximum interval, else nothing is solved:
+   the last estimate is held, status 0, flags 255). Returns OSQP's status (1 = solved). */
+int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out);
+
+void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, double *std,
+                       double *residual, double *bias, int *status, int *iterations,
+                       int *fallback, unsigned *flags, double *seconds);
+
+#endif
 """
 
 
 @dataclass(frozen=True)
 class EmbeddedResult:
+    """The embedded MHE's outputs over a log, row k from sample k (the estimate of k - lag)."""
+
     loads: np.ndarray  # (n, 4) N
+    std: np.ndarray  # (n, 4) N, the fallback filter's (0 without one)
+    residual: np.ndarray  # (n, 3) b - A x
+    bias: np.ndarray  # (n, nb) travel offsets [m], then ax, ay [m/s^2]
     status: np.ndarray  # (n,) OSQP status value
     flags: np.ndarray  # (n,) StepFlag bits of the skipped updates
     iterations: np.ndarray  # (n,)
+    fallback: np.ndarray  # (n,) bool
     solve_time: np.ndarray  # (n,) s
 
 
 class CompiledMhe:
     """The generated embedded MHE compiled to a shared library and loaded with ctypes."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, n_bias: int) -> None:
         self._lib = ctypes.CDLL(str(path))
         self._lib.wheelload_mhe_run.restype = None
+        self.n_bias = n_bias
 
     def run(self, signals: Signals) -> EmbeddedResult:
         u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
         dt = np.ascontiguousarray(sample_intervals(signals.t), dtype=float)
         n = len(signals)
-        loads = np.zeros((n, 4))
-        status = np.zeros(n, dtype=np.int32)
-        iterations = np.zeros(n, dtype=np.int32)
-        flags = np.zeros(n, dtype=np.uint32)
-        seconds = np.zeros(n)
-
-        def pointer(array, kind):
-            return array.ctypes.data_as(ctypes.POINTER(kind))
-
-        self._lib.wheelload_mhe_run(
-            ctypes.c_int(n), pointer(u, ctypes.c_double), pointer(dt, ctypes.c_double),
-            pointer(loads, ctypes.c_double),
-            pointer(status, ctypes.c_int), pointer(iterations, ctypes.c_int),
-            pointer(flags, ctypes.c_uint), pointer(seconds, ctypes.c_double),
+        out = dict(
+            loads=np.zeros((n, 4)), std=np.zeros((n, 4)), residual=np.zeros((n, 3)),
+            bias=np.zeros((n, self.n_bias)), status=np.zeros(n, dtype=np.int32),
+            iterations=np.zeros(n, dtype=np.int32), fallback=np.zeros(n, dtype=np.int32),
+            flags=np.zeros(n, dtype=np.uint32), solve_time=np.zeros(n),
         )  # fmt: skip
-        return EmbeddedResult(loads, status, flags.astype(np.int64), iterations, seconds)
+        kinds = dict(status=ctypes.c_int, iterations=ctypes.c_int, fallback=ctypes.c_int,
+                     flags=ctypes.c_uint)  # fmt: skip
+        names = ["loads", "std", "residual", "bias", "status", "iterations", "fallback",
+                 "flags", "solve_time"]  # fmt: skip
+        pointers = [
+            out[name].ctypes.data_as(ctypes.POINTER(kinds.get(name, ctypes.c_double)))
+            for name in names
+        ]
+        self._lib.wheelload_mhe_run(
+            ctypes.c_int(n),
+            u.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            dt.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            *pointers,
+        )
+        out["flags"] = out["flags"].astype(np.int64)
+        out["fallback"] = out["fallback"].astype(bool)
+        return EmbeddedResult(**out)
 
 
 def build_mhe_library(
-    vehicle: Vehicle, settings: MheSettings, folder: Path, dt: float
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    precision: Precision = Precision.DOUBLE,
 ) -> CompiledMhe:
     """Generate, compile with gcc -O2 into ``folder/libwheelload_mhe.so`` and load."""
-    folder = generate_mhe(vehicle, settings, Path(folder), dt)
-    osqp_dir = folder / "osqp"
-    sources = [
-        folder / "wheelload_mhe.c",
-        folder / f"{TERMS_NAME}.c",
-        osqp_dir / "wheelload_mhe_workspace.c",
-        *sorted((osqp_dir / "src").glob("*.c")),
-    ]
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision)
     library = folder / "libwheelload_mhe.so"
     command = ["gcc", "-O2", "-shared", "-fPIC", "-std=gnu99", "-o", str(library),
-               f"-I{osqp_dir}", f"-I{osqp_dir / 'inc' / 'public'}",
-               f"-I{osqp_dir / 'inc' / 'private'}", f"-I{folder}",
-               *map(str, sources), "-lm"]  # fmt: skip
+               *mhe_includes(folder), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
     completed = subprocess.run(command, capture_output=True, text=True)
     if completed.returncode != 0:
         raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
-    return CompiledMhe(library)
+    return CompiledMhe(library, n_bias(folder))
+
+
+def n_bias(folder: Path) -> int:
+    """WHEELLOAD_MHE_N_BIAS of a generated embedded MHE."""
+    for line in (Path(folder) / "wheelload_mhe.h").read_text().splitlines():
+        if line.startswith("#define WHEELLOAD_MHE_N_BIAS "):
+            return int(line.split()[2])
+    raise ValueError(f"{folder}: not a generated embedded MHE (no wheelload_mhe.h)")
 
 
 MAIN = r"""
 /* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
-   Each row: the interval dt [s] before the sample, then the ROW_SIZE - 1 inputs in
+   Each row: the interval dt [s] before the sample, then the WHEELLOAD_MHE_N_INPUTS inputs in
    wheelload.models.INPUTS order ('nan' = missing).
-   Output CSV: fz_fl, fz_fr, fz_rl, fz_rr, status, iterations, flags; exit 2 on bad use. */
+   Output CSV: fz_fl..fz_rr (of sample k - lag), std_fl..std_rr, residual_0..2, status,
+   iterations, fallback, flags, osqp_float_bytes, bias_0..; exit 2 on bad use. */
 #include <stdio.h>
 #include "osqp.h"
+#include "wheelload_mhe.h"
 
-#ifndef ROW_SIZE
-#error "ROW_SIZE (1 + number of inputs) must be defined"
-#endif
-
-void wheelload_mhe_reset(void);
-int wheelload_mhe_step(const double *u, double dt, double *loads, int *iterations,
-                       unsigned *flags);
+#define ROW_SIZE (1 + WHEELLOAD_MHE_N_INPUTS)
 
 int main(int argc, char **argv) {
     if (argc != 3) {
@@ -459,19 +489,26 @@ int main(int argc, char **argv) {
         fclose(in);
         return 2;
     }
-    fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,status,iterations,flags,osqp_float_bytes\n");
+    fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,std_fl,std_fr,std_rl,std_rr,residual_0,residual_1,"
+                 "residual_2,status,iterations,fallback,flags,osqp_float_bytes");
+    for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",bias_%d", i);
+    fprintf(out, "\n");
     wheelload_mhe_reset();
-    double row[ROW_SIZE], loads[4];
+    double row[ROW_SIZE];
     for (;;) {
         int i;
         for (i = 0; i < ROW_SIZE; ++i)
             if (fscanf(in, "%lf", &row[i]) != 1) break;
         if (i < ROW_SIZE) break;
-        int iterations;
-        unsigned flags;
-        int status = wheelload_mhe_step(row + 1, row[0], loads, &iterations, &flags);
-        fprintf(out, "%.9g,%.9g,%.9g,%.9g,%d,%d,%u,%d\n", loads[0], loads[1], loads[2],
-                loads[3], status, iterations, flags, (int)sizeof(OSQPFloat));
+        wheelload_mhe_output o;
+        int status = wheelload_mhe_step(row + 1, row[0], &o);
+        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.loads[i]);
+        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.std[i]);
+        for (i = 0; i < 3; ++i) fprintf(out, "%.9g,", o.residual[i]);
+        fprintf(out, "%d,%d,%d,%u,%d", status, o.iterations, o.fallback, o.flags,
+                (int)sizeof(OSQPFloat));
+        for (i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",%.9g", o.bias[i]);
+        fprintf(out, "\n");
     }
     fclose(in);
     return fclose(out) == 0 ? 0 : 1;
@@ -482,9 +519,11 @@ int main(int argc, char **argv) {
 def mhe_sources(folder: Path) -> list[Path]:
     """The C files of a generated embedded MHE (without a main)."""
     osqp_dir = folder / "osqp"
+    generated = [folder / "wheelload_mhe.c", folder / f"{TERMS_NAME}.c"]
+    if (folder / f"{RESIDUAL_NAME}.c").exists():
+        generated.append(folder / f"{RESIDUAL_NAME}.c")
     return [
-        folder / "wheelload_mhe.c",
-        folder / f"{TERMS_NAME}.c",
+        *generated,
         osqp_dir / "wheelload_mhe_workspace.c",
         *sorted((osqp_dir / "src").glob("*.c")),
     ]
@@ -513,7 +552,7 @@ def build_mhe_program(
     """
     folder = generate_mhe(vehicle, settings, Path(folder), dt, precision)
     main = folder / "wheelload_mhe_main.c"
-    main.write_text(f"#define ROW_SIZE {1 + len(INPUTS)}\n" + MAIN)
+    write_text(main, MAIN, replace=True)
     binary = folder / "wheelload_mhe"
     command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
                str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
