@@ -47,7 +47,7 @@ void wheelload_mhe_reset(void) {
     }
     memcpy(FALLBACK, X0, sizeof X0);
     kf_reset();
-    osqp_update_rho(&wheelload_mhe_solver, RHO0);
+    osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
 }
 
 static void shift(double *rows, const double *value, int width) {
@@ -131,11 +131,8 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     double std[4];
     kf_step(u, dt, FALLBACK, std);
     double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[N_USED], arrival[16];
-    const double *arg[SZ_ARG] = {u0, valid, &dt, FALLBACK, P_VECTOR, TUNING, &cost};
-    double *res[SZ_RES] = {h, g, &link, xp, lo, hi, b, used};
-    casadi_int iw[SZ_IW + 1];
-    double w[SZ_W + 1];
-    wheelload_mhe_terms(arg, res, iw, w, 0);
+    wheelload_mhe_terms(u0, valid, &dt, FALLBACK, P_VECTOR, TUNING, &cost, h, g, &link, xp, lo,
+                        hi, b, used);
     for (int i = 0; i < N_USED; ++i) out->flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
     if (K == 0) link = 0.0; /* the log's first sample: the arrival cost instead */
     double drift = 0.0;
@@ -195,8 +192,8 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
         for (int j = 0; j < N; ++j)
             for (int a = 0; a < W; ++a) {
                 Q[j * W + a] = (OSQPFloat)G[j][a];
-                L[j * W + a] = (OSQPFloat)fmax(LO[j][a], -OSQP_INFTY);
-                U[j * W + a] = (OSQPFloat)fmin(HI[j][a], OSQP_INFTY);
+                L[j * W + a] = (OSQPFloat)fmax(LO[j][a], -(double)OSQP_INFTY);
+                U[j * W + a] = (OSQPFloat)fmin(HI[j][a], (double)OSQP_INFTY);
             }
         const double *weight = ARR[j0];
 #if HARD

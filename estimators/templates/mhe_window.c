@@ -16,7 +16,6 @@
 #include "osqp.h"
 #include "wheelload_mhe_workspace.h"
 #include "wheelload_mhe_terms.h"
-#include "wheelload_mhe_residual_rows.h"
 #include "wheelload_mhe.h"
 
 #define NL (WIDTH + NB)     /* a sample's local variables: its block, then the biases */
@@ -63,7 +62,7 @@ void wheelload_mhe_reset(void) {
     }
     memcpy(FALLBACK, X0, sizeof X0);
     kf_reset();
-    osqp_update_rho(&wheelload_mhe_solver, RHO0);
+    osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
 }
 
 /* H[cols, cols] += M^T Wt M, g[cols] -= M^T Wt r; M is k x nc (row-major); Wt is k x k when
@@ -235,13 +234,13 @@ static void assemble(int j0, const double *prior, const double *arrival) {
 #endif
 }
 
+#if NB > 0
 /* Effective (IRLS) weight of a row at residual rho [sigma]. */
 static double effective(int robust, double corner, double scale, double rho) {
     if (!robust) return 1.0;
     return scale * fmin(1.0, corner / fmax(fabs(rho), 1e-12));
 }
 
-#if NB > 0
 /* The bias information of the window's oldest sample with its loads eliminated, at the
    solution v (Schur complement; rows at the loss's effective weight), added to INFO. */
 static void leaving_information(const OSQPFloat *v) {
@@ -391,11 +390,8 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     s = &S[N - 1];
     {
         double h[W * W], g[W], link, lo[W], hi[W], used[N_USED];
-        const double *arg[SZ_ARG] = {u0, valid, &dt, FALLBACK, P_VECTOR, TUNING, &cost};
-        double *res[SZ_RES] = {h, g, &link, s->xp, lo, hi, s->b, used};
-        casadi_int iw[SZ_IW + 1];
-        double w[SZ_W + 1];
-        wheelload_mhe_terms(arg, res, iw, w, 0);
+        wheelload_mhe_terms(u0, valid, &dt, FALLBACK, P_VECTOR, TUNING, &cost, h, g, &link, s->xp,
+                            lo, hi, s->b, used);
         for (int i = 0; i < N_USED; ++i) out->flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
         s->link = K == 0 ? 0.0 : link / (COST * LOAD_SCALE * LOAD_SCALE);
         memcpy(s->lower, lo, sizeof lo);
@@ -403,11 +399,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     }
     {
         double Jd[16], Ba[6];
-        const double *arg[R_SZ_ARG] = {u0, valid, &dt, P_VECTOR, TUNING};
-        double *res[R_SZ_RES] = {s->z, Jd, Ba, s->ls, s->lc};
-        casadi_int iw[R_SZ_IW + 1];
-        double w[R_SZ_W + 1];
-        wheelload_mhe_residual_rows(arg, res, iw, w, 0);
+        wheelload_mhe_residual_rows(u0, valid, &dt, P_VECTOR, TUNING, s->z, Jd, Ba, s->ls, s->lc);
         for (int r = 0; r < 4; ++r)
             for (int c = 0; c < 4; ++c) s->Jd[r * 4 + c] = Jd[c * 4 + r]; /* column-major */
         for (int r = 0; r < 3; ++r)
@@ -418,7 +410,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     memmove(ARR[0], ARR[1], sizeof(double) * 16 * (N - 1));
     arrival_weight(K == 0, previous_P, dt, ARR[N - 1]);
     int j0 = K < N - 1 ? (int)(N - 1 - K) : 0;
-    if (K == 0) osqp_update_rho(&wheelload_mhe_solver, RHO0);
+    if (K == 0) osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
     memmove(XW, XW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
     memmove(YW, YW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
     int data = 0;
@@ -439,15 +431,15 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
                 int j = i / WIDTH, a = i % WIDTH;
                 if (j >= j0) {
                     low = a < W ? S[j].lower[a] : 0.0;
-                    high = a < W ? S[j].upper[a] : OSQP_INFTY;
+                    high = a < W ? S[j].upper[a] : (double)OSQP_INFTY;
                 }
             } else {
                 low = -BETA_BOUND[i - N * WIDTH];
                 high = BETA_BOUND[i - N * WIDTH];
             }
             Q[i] = (OSQPFloat)(COST * GD[i]);
-            L[i] = (OSQPFloat)fmax(low, -OSQP_INFTY);
-            U[i] = (OSQPFloat)fmin(high, OSQP_INFTY);
+            L[i] = (OSQPFloat)fmax(low, -(double)OSQP_INFTY);
+            U[i] = (OSQPFloat)fmin(high, (double)OSQP_INFTY);
         }
         osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL, 0);
         osqp_update_data_vec(&wheelload_mhe_solver, Q, L, U);
