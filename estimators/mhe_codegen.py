@@ -59,8 +59,10 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.c_emitter import Precision, emit_statements
+from wheelload.estimators.codegen import CodegenOptions, generate
 from wheelload.estimators.mhe import (
     Arrival,
+    Constraint,
     MheSettings,
     MovingHorizonEstimator,
     _csc_value_order,
@@ -72,7 +74,7 @@ from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
-from wheelload.models import INPUTS, Vehicle
+from wheelload.models import INPUTS, Vehicle, load_vehicle
 
 
 def _array(name: str, values, kind: str = "double") -> str:
@@ -85,8 +87,14 @@ def _array(name: str, values, kind: str = "double") -> str:
     return f"static const {kind} {name}[{max(flat.size, 1)}] = {{{body or '0'}}};\n"
 
 
-def embedded_settings(settings: MheSettings) -> MheSettings:
-    """The settings the embedded MHE realises: steady-state arrival."""
+def embedded_settings(settings: MheSettings, *, filter_linked: bool = False) -> MheSettings:
+    """The settings the embedded MHE realises.
+
+    With the KF linked in (soft constraint and a vehicle file), every setting
+    as given; otherwise the steady-state arrival cost.
+    """
+    if filter_linked and settings.constraint is Constraint.SOFT:
+        return settings
     return dataclasses.replace(settings, arrival=Arrival.STEADY_STATE)
 
 
@@ -97,9 +105,17 @@ def generate_mhe(
     dt: float,
     precision: Precision = Precision.DOUBLE,
     *,
+    vehicle_path: Path | None = None,
     force: bool = False,
 ) -> Path:
     """Write the embedded MHE's C sources to ``folder`` (see module docstring).
+
+    With ``vehicle_path`` (the file ``vehicle`` was read from) and the soft
+    constraint, the two-stage KF library generated from that file is linked
+    in (``wheelload_mhe_kf.c``): the fallback, the Kalman arrival cost and
+    the standard deviations. Without it, or with the hard constraint (the
+    projection KF has no C), the fallback holds the last estimate and the
+    arrival cost is the steady-state one (:func:`embedded_settings`).
 
     ``precision`` is OSQP's floating type (``OSQPFloat``: the solver, its
     matrices and the QP vectors); the terms routine and the window stay in
@@ -113,7 +129,7 @@ def generate_mhe(
     folder.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=".wheelload_mhe-", dir=folder))
     try:
-        _generate_into(vehicle, settings, staging, dt, precision)
+        _generate_into(vehicle, settings, staging, dt, precision, vehicle_path)
         for source in sorted(p for p in staging.rglob("*") if p.is_file()):
             target = folder / source.relative_to(staging)
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -125,10 +141,18 @@ def generate_mhe(
 
 
 def _generate_into(
-    vehicle: Vehicle, settings: MheSettings, folder: Path, dt: float, precision: Precision
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    precision: Precision,
+    vehicle_path: Path | None,
 ) -> None:
     """Write every generated file into the (temporary) ``folder``."""
-    settings = embedded_settings(settings)
+    linked = vehicle_path is not None and settings.constraint is Constraint.SOFT
+    settings = embedded_settings(settings, filter_linked=linked)
+    if linked:
+        _write_filter(vehicle, Path(vehicle_path), folder, precision)
     mhe = MovingHorizonEstimator(vehicle, settings)
     state = mhe.initial_state(dt)
     P0 = mhe.filter.initial_state().P
@@ -148,18 +172,35 @@ def _generate_into(
                                             .replace("@N_INPUTS@", str(len(INPUTS)))
                                             .replace("@LAG@", str(settings.lag)))  # fmt: skip
     common = _common_defines(mhe, settings, state, dt, float(P0[0, 0]))
+    kalman = settings.arrival is Arrival.KALMAN
+    common = common.replace("#define KALMAN_ARRIVAL 0", f"#define KALMAN_ARRIVAL {int(kalman)}")
     if settings.extended:
         specific, template = _window_defines(mhe, settings), "mhe_window.c"
     else:
         specific, template = _plain_defines(mhe, settings), "mhe_plain.c"
     driver = (TEMPLATES / template).read_text()
-    fallback = (TEMPLATES / "mhe_hold.c").read_text()
+    fallback = (TEMPLATES / ("mhe_kf.c" if linked else "mhe_hold.c")).read_text()
     tail = (TEMPLATES / "mhe_tail.c").read_text()
     source = PRELUDE + common + specific + INVERT + driver + fallback + tail
     (folder / "wheelload_mhe.c").write_text(source)
 
 
 TEMPLATES = Path(__file__).with_name("templates")
+FILTER_PREFIX = "wheelload_mhe_kf"
+
+
+def _write_filter(vehicle: Vehicle, vehicle_path: Path, folder: Path, precision: Precision):
+    """The two-stage KF library of ``vehicle_path`` as ``wheelload_mhe_kf.c/.h`` in ``folder``."""
+    if load_vehicle(vehicle_path, allow_unusual=True) != vehicle:
+        raise ValueError(
+            f"{vehicle_path}: is not the vehicle the MHE is generated for: give the file it "
+            "was read from"
+        )
+    with tempfile.TemporaryDirectory(dir=folder) as scratch:
+        options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX)
+        library = generate(vehicle_path, Path(scratch), options, allow_unusual=True)
+        for path in (library.header, library.source):
+            shutil.copyfile(path, folder / path.name)
 
 
 def _write_functions(functions: list[ca.Function], folder: Path) -> None:
@@ -401,9 +442,15 @@ def build_mhe_library(
     folder: Path,
     dt: float,
     precision: Precision = Precision.DOUBLE,
+    *,
+    vehicle_path: Path | None = None,
 ) -> CompiledMhe:
-    """Generate, compile with gcc -O2 into ``folder/libwheelload_mhe.so`` and load."""
-    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision)
+    """Generate, compile with gcc -O2 into ``folder/libwheelload_mhe.so`` and load.
+
+    ``vehicle_path``: link the KF in (see :func:`generate_mhe`).
+    """
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
+                          vehicle_path=vehicle_path)  # fmt: skip
     library = folder / "libwheelload_mhe.so"
     command = ["gcc", "-O2", "-shared", "-fPIC", "-std=gnu99", "-o", str(library),
                *mhe_includes(folder), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
@@ -479,9 +526,11 @@ int main(int argc, char **argv) {
 def mhe_sources(folder: Path) -> list[Path]:
     """The C files of a generated embedded MHE (without a main)."""
     osqp_dir = folder / "osqp"
+    linked = [folder / f"{FILTER_PREFIX}.c"] if (folder / f"{FILTER_PREFIX}.c").exists() else []
     return [
         folder / "wheelload_mhe.c",
         folder / f"{TERMS_NAME}.c",
+        *linked,
         osqp_dir / "wheelload_mhe_workspace.c",
         *sorted((osqp_dir / "src").glob("*.c")),
     ]
@@ -502,13 +551,15 @@ def build_mhe_program(
     precision: Precision = Precision.DOUBLE,
     compiler: str = "gcc",
     flags: tuple[str, ...] = ("-O2",),
+    vehicle_path: Path | None = None,
 ) -> Path:
     """Generate the embedded MHE and compile it with :data:`MAIN` into ``folder/wheelload_mhe``.
 
     ``compiler`` may be a cross compiler (e.g. ``arm-linux-gnueabihf-gcc`` with
     ``-static`` among ``flags``, run under ``qemu-arm``).
     """
-    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision)
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
+                          vehicle_path=vehicle_path)  # fmt: skip
     main = folder / "wheelload_mhe_main.c"
     write_text(main, MAIN, replace=True)
     binary = folder / "wheelload_mhe"
