@@ -175,8 +175,9 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
         vehicle_path=vehicle_path, force=args.force,
     )  # fmt: skip
     linked = settings.constraint is Constraint.SOFT
+    realised = embedded_settings(settings, filter_linked=linked, precision=precision)
     print(
-        f"written the embedded {embedded_settings(settings, filter_linked=linked).label()} "
+        f"written the embedded {realised.label()} "
         f"(dt = {values['dt']} s, OSQP in {precision.value}"
         f"{', two-stage KF linked in' if linked else ''}) to {folder}"
     )
