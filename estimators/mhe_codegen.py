@@ -1,47 +1,64 @@
-r"""Embedded MHE: OSQP's generated solver plus the generated QP-terms routine, in C.
+r"""Embedded MHE: OSQP's generated solver, the per-sample Functions and the window, in C.
 
-The emitted folder holds OSQP's embedded code (``parameters="matrices"``) for
-the window's QP, set up by :class:`~wheelload.estimators.mhe.MovingHorizonEstimator`
-itself; ``wheelload_mhe_terms.c``, CasADi's C of the estimator's own terms
-Function (:func:`wheelload.estimators.mhe_terms.terms_function`, the one the
-Python MHE maps over a log), which maps one sample to its QP terms; and
-``wheelload_mhe.c``, which keeps the window, assembles the Hessian values
-(updated only when they change), :math:`q, l, u`, warm-starts and solves.
+The emitted folder holds
 
-Input guarding: a non-finite input is treated as missing, as in the KF: the
-suspension and equilibrium rows that depend on it (the filter's dependency
-masks) are dropped from the sample's terms and reported in ``flags``.
+- ``osqp/``: OSQP's embedded code (``parameters="matrices"``) for the
+  window's QP, set up by :class:`~wheelload.estimators.mhe.MovingHorizonEstimator`
+  itself (its own workspace: the quadratic window's, or the extended window's of
+  :mod:`wheelload.estimators.mhe_window` with its fixed Hessian pattern);
+- ``wheelload_mhe_terms.c/.h``: the estimator's own per-sample CasADi
+  Functions (:func:`~wheelload.estimators.mhe_terms.terms_function`, and for
+  robust losses or bias states
+  :func:`~wheelload.estimators.mhe_terms.residual_function`) as straight-line C
+  from the KF's emitter (:func:`~wheelload.estimators.c_emitter.emit_statements`);
+- ``wheelload_mhe.c/.h``: the window driver (``templates/mhe_plain.c`` for
+  quadratic losses, ``templates/mhe_window.c`` with auxiliary variables for
+  the Huber/L1 losses and the bias states with their information
+  recursion), the lagged output, and the fallback filter;
+- ``wheelload_mhe_kf.c/.h`` (soft constraint, given the vehicle file): the
+  two-stage KF library of ``wheelload codegen`` linked in: the fallback
+  estimate when a QP is not solved, the Kalman arrival cost
+  (:attr:`Arrival.KALMAN`) and the reported standard deviations.
+
+``wheelload_mhe_step(u, dt, &out)`` gives the loads of sample k - lag, the
+KF's standard deviations, the equilibrium residual :math:`b - A x` of that
+sample, the bias states (travel offsets [m], ax/ay [m/s²]), OSQP's status,
+iterations, a fallback flag and the ``StepFlag`` bits. Input guarding: a
+non-finite input is treated as missing, as in the KF: the rows that depend
+on it are dropped and flagged. Every file is written through
+:func:`~wheelload.estimators.output_files.atomic_write`.
 
 Limits, against the Python MHE:
 
-- steady-state arrival cost only (:attr:`Arrival.STEADY_STATE`), from tables;
-- the cost scale and the steady-state arrival weight at the nominal interval
-  given at generation (as Python's at its log's median interval); each
-  sample's own interval sets its weights and random-walk link, and a
-  non-positive or non-finite interval holds the estimate (flags 255), as in
-  Python;
-- hard constraints with a missing equilibrium input take :math:`A x` of the
-  previous MHE estimate for that row, where Python takes the Kalman
-  estimate of the same sample (there is no filter in the C);
-- a sample whose QP is not solved keeps the previous estimate (Python: the
-  Kalman estimate) and returns OSQP's status for the caller to act on; the
-  newest loads are clipped to the bounds without Python's tolerance check;
-- no standard deviations or residuals; the robust losses, bias states and
-  lagged output of :mod:`wheelload.estimators.mhe_window` are Python only
-  (``generate_mhe`` refuses them).
+- the cost scale (and the steady-state arrival weight) at the nominal
+  interval given at generation; each sample's own interval sets its weights
+  and random-walk link; a non-positive or non-finite interval holds the
+  estimate (flags 255), as in Python;
+- hard constraint: the projection KF has no C, so the arrival cost is the
+  steady-state one, a sample whose QP is not solved keeps the previous
+  estimate, a missing equilibrium input takes :math:`A x` of the previous MHE
+  estimate (Python: of the projection KF's), and no standard deviations are
+  reported (zeros); likewise for a soft window generated without the vehicle file;
+- the extended window's Hessian is assembled densely per sample
+  ((N w + n_b)² doubles; N = 10 with Huber and L1 on all rows and five bias
+  states: 185² = 274 kB).
 
-Precision: ``Precision.FLOAT`` generates OSQP with ``use_float`` (its
-``osqp_configure.h`` defines ``OSQP_USE_FLOAT``; the program reports
-``sizeof(OSQPFloat)``), the QP vectors in ``OSQPFloat``; the terms routine and
-the window stay in double. Measured on the bundled plant log, N = 10,
-bounded: float against double within 0.02 N (soft) and 3e-5 N (hard), every
-QP solved, on x86-64 and on 32-bit ARM under qemu-arm
-(``tests/test_cross_compiled.py``). :func:`build_mhe_program` builds a
+Precision: ``Precision.FLOAT`` generates OSQP with ``use_float``
+(``OSQPFloat``; the program reports ``sizeof(OSQPFloat)``) and the linked KF
+in float; the per-sample Functions and the window's assembly stay in
+double. OSQP's float path cannot meet the default 1e-6 tolerance on the
+extended window (at the iteration limit its solves end "solved
+inaccurate", e.g. 447 of 1353 samples with an L1 equilibrium loss), so the
+float build of that window runs at :data:`FLOAT_WINDOW_EPS` = 1e-5
+(:func:`embedded_settings` says what a build realises); measured figures
+are in ``tests/test_mhe_codegen_settings.py`` and
+``tests/test_cross_compiled.py``. :func:`build_mhe_program` builds a
 stand-alone program (any compiler, e.g. ``arm-linux-gnueabihf-gcc -static``).
 
 Example
 -------
->>> library = build_mhe_library(vehicle, MheSettings(horizon=20), Path("build"), dt=0.01)
+>>> library = build_mhe_library(vehicle, MheSettings(horizon=20), Path("build"), dt=0.01,
+...                             vehicle_path=Path("car.toml"))
 >>> result = library.run(signals)
 """
 
