@@ -145,8 +145,9 @@ def test_embedded_mhe_robust_bias_lag_on_arm_matches_x86(vehicle, plant_log, tmp
     # the same IEEE double arithmetic on both: measured 0 N (printed to 9 digits)
     np.testing.assert_allclose(double[LOADS], x86[LOADS], rtol=0, atol=1e-3)
     np.testing.assert_allclose(double[bias], x86[bias], rtol=1e-6, atol=1e-9)
-    # float32 OSQP at 1e-5 and a float32 KF against x86 double: stated bound 5 N (the bias
-    # states integrate the solver tolerance; measured in the notes)
-    assert np.abs(single[LOADS].to_numpy() - x86[LOADS].to_numpy()).max() < 5.0
+    # float32 OSQP at 1e-5 and a float32 KF against x86 double: stated bound 8 N, measured
+    # 4.97 N (x86 float32 alike): the bias states integrate the solver tolerance; the double
+    # Python MHE at 1e-5 is 7 N from the 1e-9 minimiser on a slice of this log
+    assert np.abs(single[LOADS].to_numpy() - x86[LOADS].to_numpy()).max() < 8.0
     assert single[LOADS].to_numpy().min() >= 0.0
     np.testing.assert_array_equal(single["flags"], x86["flags"])

@@ -2,7 +2,7 @@
 
 Each generated C is compiled with gcc, loaded and run on the bundled plant log
 (a 20 mm spike on the front-left travel sensor, a 4 mm offset on the rear-left
-one) beside the Python MHE with the settings the C realises
+one, a three-sample dropout of the front-right one) beside the Python MHE with the settings the C realises
 (:func:`embedded_settings`). Row k of the C is the estimate of sample k - lag,
 row i of the Python run that of sample i.
 """
@@ -61,6 +61,7 @@ def faulted_log():
     d = signals.d.copy()
     d[100:104, 0] += 0.02  # spike
     d[:, 2] += 0.004  # ride-height offset
+    d[200:203, 1] = np.nan  # a dropout: its rows are dropped and flagged
     return dataclasses.replace(signals, d=d)
 
 
@@ -80,6 +81,7 @@ def test_double_c_equals_python(vehicle, faulted_log, tmp_path, name):
     c, python, lag, n = run_both(vehicle, faulted_log, settings, Precision.DOUBLE, tmp_path)
     assert np.all(c.status == 1) and not c.fallback.any()
     np.testing.assert_array_equal(c.flags, python.flags)
+    assert c.flags[201] != 0
     # tolerance 0.01 N on loads and 0.05 on the residuals [N, N m] (measured <= 6e-4 and 2e-3)
     np.testing.assert_allclose(c.loads[lag:], python.loads[:n], rtol=0, atol=0.01)
     np.testing.assert_allclose(c.residual[lag:], python.residual[:n], rtol=0, atol=0.05)
