@@ -315,8 +315,9 @@ def _window_defines(mhe, settings: MheSettings) -> str:
     """
     qp = mhe.window_qp
     pattern = qp.rows[qp.order] * qp.n + qp.cols[qp.order]
-    nd = 3 if qp.travel_bias else 0
-    basis = qp.travel_basis if nd else np.zeros((4, 3))
+    nd = qp.travel_basis.shape[1] if qp.travel_bias else 0
+    # the acceleration biases: ax and ay, or ay alone (one column)
+    columns = [0, 1] if qp.n_bias - nd == 2 else [1]
 
     def loss(group, name):
         kappa, mu = group.weights() if group.robust else (1.0, 0.0)
@@ -334,7 +335,8 @@ def _window_defines(mhe, settings: MheSettings) -> str:
         loss(settings.constraint_loss, "CONSTRAINT"),
         _array("PATTERN", pattern, "int"),
         _array("PINV", mhe.pinv) if mhe.hard and qp.n_bias > nd else "",
-        _array("TRAVEL_BASIS", basis) if nd else "",
+        _array("TRAVEL_BASIS", qp.travel_basis) if nd else "",
+        _array("ACC_COLS", columns, "int") if qp.n_bias > nd else "",
         _array("BETA_BOUND", mhe.beta_bound),
         _array("BETA_DENSITY", mhe.beta_density) if qp.n_bias else "",
         _array("BETA_INFO0", 1.0 / mhe.beta_std**2),

@@ -104,14 +104,15 @@ static void row_matrices(const sample_t *s, double *Ms, double *Mc) {
 #if ND > 0
         for (int c = 0; c < ND; ++c) {
             double v = 0.0;
-            for (int m = 0; m < 4; ++m) v += s->Jd[i * 4 + m] * TRAVEL_BASIS[m * 3 + c];
+            for (int m = 0; m < 4; ++m) v += s->Jd[i * 4 + m] * TRAVEL_BASIS[m * ND + c];
             Ms[i * NM + W + c] = -v * TRAVEL_UNIT;
         }
 #endif
 #if HARD && NB > ND
         for (int c = 0; c < NB - ND; ++c) {
             double v = 0.0;
-            for (int m = 0; m < 3; ++m) v += PINV[i * 3 + m] * s->Ba[m * 2 + c] * (s->lc[m] > 0.0);
+            for (int m = 0; m < 3; ++m)
+                v += PINV[i * 3 + m] * s->Ba[m * 2 + ACC_COLS[c]] * (s->lc[m] > 0.0);
             Ms[i * NM + W + ND + c] = v;
         }
 #endif
@@ -122,7 +123,7 @@ static void row_matrices(const sample_t *s, double *Ms, double *Mc) {
     for (int i = 0; i < 3; ++i) {
         for (int c = 0; c < 4; ++c) Mc[i * NM + c] = -A_MATRIX[i * 4 + c] * LOAD_SCALE;
 #if NB > ND
-        for (int c = 0; c < NB - ND; ++c) Mc[i * NM + W + ND + c] = -s->Ba[i * 2 + c];
+        for (int c = 0; c < NB - ND; ++c) Mc[i * NM + W + ND + c] = -s->Ba[i * 2 + ACC_COLS[c]];
 #endif
         for (int c = 0; c < NM; ++c) Mc[i * NM + c] *= s->lc[i];
     }
@@ -254,12 +255,11 @@ static void leaving_information(const OSQPFloat *v) {
         x[i] = s->xp[i] + LOAD_SCALE * (double)v[i];
 #endif
 #if ND > 0
-        for (int c = 0; c < ND; ++c) delta[i] += TRAVEL_BASIS[i * 3 + c] * beta[c] * TRAVEL_UNIT;
+        for (int c = 0; c < ND; ++c) delta[i] += TRAVEL_BASIS[i * ND + c] * beta[c] * TRAVEL_UNIT;
 #endif
     }
 #if NB > ND
-    ba[0] = beta[ND];
-    ba[1] = beta[ND + 1];
+    for (int c = 0; c < NB - ND; ++c) ba[ACC_COLS[c]] = beta[ND + c]; /* ax, ay */
 #endif
     double Ms[4 * NM], Mc[3 * NM], weights[7], M[7 * NM];
     row_matrices(s, Ms, Mc);
@@ -495,7 +495,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
 #if ND > 0
     for (int i = 0; i < 4; ++i) {
         double v = 0.0;
-        for (int c = 0; c < ND; ++c) v += TRAVEL_BASIS[i * 3 + c] * BETA[c];
+        for (int c = 0; c < ND; ++c) v += TRAVEL_BASIS[i * ND + c] * BETA[c];
         out->bias[nr++] = v * TRAVEL_UNIT;
     }
 #endif
