@@ -3,8 +3,8 @@
 Each generated C is compiled with gcc, loaded and run on the bundled plant log
 (a 20 mm spike on the front-left travel sensor, a 4 mm offset on the rear-left
 one, a three-sample dropout of the front-right one) beside the Python MHE with
-the settings the C realises (:func:`embedded_settings`). Row k of the C is the estimate of sample k - lag,
-row i of the Python run that of sample i.
+the settings the C realises (:func:`embedded_settings`). Row k of the C is the
+estimate of sample k - lag, row i of the Python run that of sample i.
 """
 
 import dataclasses
