@@ -40,7 +40,7 @@ def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
             "--precision", "float"]  # fmt: skip
     assert main(argv) == 0
     printed = capsys.readouterr().out
-    assert "MHE N=5 (hard, bounded)" in printed and "dt = 0.005 s" in printed
+    assert "MHE N=5 (hard, bounded, steady arrival)" in printed and "dt = 0.005 s" in printed
     assert {"wheelload_mhe.c", "wheelload_mhe_terms.c", "osqp"} <= {p.name for p in out.iterdir()}
     assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
     assert "#define OSQP_USE_FLOAT" in (out / "osqp" / "osqp_configure.h").read_text()
@@ -52,3 +52,35 @@ def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):
     argv = ["codegen", "--estimator", "mhe", "--out", str(tmp_path), "--prefix", "car7"]
     assert main(argv) == 2
     assert "--prefix: not an option of --estimator mhe" in capsys.readouterr().err
+
+
+def test_codegen_mhe_refuses_a_folder_with_files_and_replaces_them_with_force(tmp_path, capsys):
+    out = tmp_path / "mhe"
+    out.mkdir()
+    mine = out / "wheelload_mhe.c"
+    mine.write_text("/* the user's own file */\n")
+    argv = ["codegen", "--estimator", "mhe", "--out", str(out), "--horizon", "3"]
+    assert main(argv) == 2
+    assert "is not empty" in capsys.readouterr().err
+    assert mine.read_text() == "/* the user's own file */\n"
+    assert main([*argv, "--force"]) == 0
+    assert "#define N 3" in mine.read_text()
+    # every file renamed into place: no temporary file or staging folder is left behind
+    assert not [p for p in out.rglob("*") if p.name.startswith(".")]
+
+
+def test_codegen_mhe_writes_the_robust_bias_lagged_window_with_the_kf_linked_in(tmp_path, capsys):
+    out = tmp_path / "mhe"
+    argv = ["codegen", "--estimator", "mhe", "--out", str(out), "--horizon", "4", "--bounded",
+            "--suspension-loss", "huber", "--huber-threshold", "1.5", "--constraint-loss", "l1",
+            "--bias-states", "travel+acceleration", "--lag", "2"]  # fmt: skip
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "susp huber 1.5σ, eq l1, travel+ax/ay bias, lag 2" in printed
+    assert "two-stage KF linked in" in printed
+    source = (out / "wheelload_mhe.c").read_text()
+    assert "#define LAG 2" in source and "#define NB 5" in source
+    assert "#define KALMAN_ARRIVAL 1" in source and "#define MU_S 1.5" in source
+    assert (out / "wheelload_mhe_kf.c").exists() and (out / "wheelload_mhe.h").exists()
+    assert main(["codegen", "--out", str(tmp_path / "kf"), "--lag", "2"]) == 2
+    assert "--lag: not an option of --estimator kf" in capsys.readouterr().err

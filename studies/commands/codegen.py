@@ -15,7 +15,14 @@ from pathlib import Path
 
 from wheelload.estimators.c_emitter import Precision
 from wheelload.estimators.codegen import CodegenOptions, ParamMode, generate
-from wheelload.estimators.mhe import Constraint, MheSettings
+from wheelload.estimators.mhe import (
+    Arrival,
+    BiasStates,
+    Constraint,
+    Loss,
+    MheSettings,
+    ResidualLoss,
+)
 from wheelload.estimators.output_files import check_output_folder
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
@@ -33,7 +40,25 @@ KF_OPTIONS = {
     "params": ParamMode.RUNTIME.value,
     "prefix": "wheelload_kf",
 }
-MHE_OPTIONS = {"horizon": 10, "constraint": Constraint.SOFT.value, "bounded": False, "dt": 0.01}
+MHE_OPTIONS = {
+    "horizon": 10,
+    "constraint": Constraint.SOFT.value,
+    "bounded": False,
+    "dt": 0.01,
+    "suspension_loss": Loss.QUADRATIC.value,
+    "constraint_loss": Loss.QUADRATIC.value,
+    "huber_threshold": 2.0,
+    "bias_states": "none",
+    "lag": 0,
+    "arrival": Arrival.KALMAN.value,
+}
+#: ``--bias-states`` choices.
+BIAS_CHOICES = {
+    "none": BiasStates.NONE,
+    "travel": BiasStates.TRAVEL,
+    "acceleration": BiasStates.ACCELERATION,
+    "travel+acceleration": BiasStates.TRAVEL | BiasStates.ACCELERATION,
+}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -82,13 +107,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     mhe.add_argument("--bounded", action="store_const", const=True, help="bounds 0 <= Fz")
     mhe.add_argument("--dt", type=float, help="the fixed sample interval [s] (default 0.01)")
+    losses = [loss.value for loss in Loss]
+    mhe.add_argument("--suspension-loss", choices=losses, help="default quadratic")
+    mhe.add_argument("--constraint-loss", choices=losses, help="default quadratic (soft only)")
+    mhe.add_argument("--huber-threshold", type=float, help="Huber corner [sigma] (default 2)")
+    mhe.add_argument("--bias-states", choices=list(BIAS_CHOICES), help="default none")
+    mhe.add_argument("--lag", type=int, help="output the estimate of sample k - LAG (default 0)")
+    mhe.add_argument(
+        "--arrival",
+        choices=[a.value for a in Arrival],
+        help="kalman (default; soft: the linked KF's covariance) or steady-state",
+    )
     add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
 
 def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estimator) -> dict:
     """The estimator's options with defaults filled in; another estimator's is an error."""
-    foreign = [f"--{name}" for name in other if getattr(args, name) is not None]
+    foreign = [f"--{name.replace('_', '-')}" for name in other if getattr(args, name) is not None]
     if foreign:
         raise ValueError(f"{', '.join(foreign)}: not an option of --estimator {estimator.value}")
     return {name: default if getattr(args, name) is None else getattr(args, name)
@@ -118,19 +154,31 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
-    from wheelload.estimators.mhe_codegen import generate_mhe
+    from wheelload.estimators.mhe_codegen import embedded_settings, generate_mhe
 
     values = _options(args, MHE_OPTIONS, KF_OPTIONS, Estimator.MHE)
+    threshold = values["huber_threshold"]
     settings = MheSettings(
         horizon=values["horizon"],
         constraint=Constraint(values["constraint"]),
         bounded=values["bounded"],
+        suspension_loss=ResidualLoss(kind=Loss(values["suspension_loss"]), threshold=threshold),
+        constraint_loss=ResidualLoss(kind=Loss(values["constraint_loss"]), threshold=threshold),
+        bias_states=BIAS_CHOICES[values["bias_states"]],
+        lag=values["lag"],
+        arrival=Arrival(values["arrival"]),
     )
     precision = Precision(args.precision)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    folder = generate_mhe(vehicle, settings, Path(args.out), dt=values["dt"], precision=precision)
+    folder = generate_mhe(
+        vehicle, settings, Path(args.out), dt=values["dt"], precision=precision,
+        vehicle_path=vehicle_path, force=args.force,
+    )  # fmt: skip
+    linked = settings.constraint is Constraint.SOFT
+    realised = embedded_settings(settings, filter_linked=linked, precision=precision)
     print(
-        f"written the embedded {settings.label()} (dt = {values['dt']} s, "
-        f"OSQP in {precision.value}) to {folder}"
+        f"written the embedded {realised.label()} "
+        f"(dt = {values['dt']} s, OSQP in {precision.value}"
+        f"{', two-stage KF linked in' if linked else ''}) to {folder}"
     )
     return 0

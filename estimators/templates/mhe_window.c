@@ -1,0 +1,506 @@
+/* The embedded MHE with robust losses, bias states and lagged output (wheelload.estimators.
+ * mhe_window): one QP per sample on OSQP's embedded solver, set up once with the fixed
+ * upper-triangular pattern of the Python MHE's window (PATTERN: dense index of each value in
+ * OSQP's CSC order).
+ *
+ * Variables (QP units): per sample a block of WIDTH entries, the W load variables (kN, or the
+ * warp amplitude in kN for the hard constraint) then the auxiliaries e+, e- of the robust
+ * suspension rows (NS each) and equilibrium rows (NC each), in sigma; then the NB bias states
+ * (travel offsets in mm along TRAVEL_BASIS, ax/ay biases in m/s^2). Each row i of sample j,
+ * rho = sqrt(mask dt / r) r_i (the CasADi rows of wheelload_mhe_residual_rows), costs
+ * kappa/2 (rho - e)^2 + mu |e| (quadratic: 1/2 rho^2). The bias arrival weight (information)
+ * loses q_b dt of variance per sample and gains the Schur complement of each sample that leaves
+ * the window, rows weighted by the loss's effective (IRLS) weight. */
+#include <math.h>
+#include <string.h>
+#include "osqp.h"
+#include "wheelload_mhe_workspace.h"
+#include "wheelload_mhe_terms.h"
+#include "wheelload_mhe.h"
+
+#define NL (WIDTH + NB)     /* a sample's local variables: its block, then the biases */
+#define NM (W + NB)         /* what a data row acts on: the loads, then the biases */
+#define NQ (N * WIDTH + NB) /* QP variables */
+#define NK (NB > 0 ? NB : 1)
+
+typedef struct {
+    double z[4], Jd[16], b[3], Ba[6], ls[4], lc[3], xp[4], link, lower[W], upper[W];
+    double Hl[NL * NL], gl[NL]; /* the sample's data rows over its block and the biases */
+    double kfx[4];              /* the fallback's estimate of the sample */
+} sample_t;
+
+static sample_t S[N];                   /* the window, oldest first */
+static double ARR[N][16];               /* arrival weight c s^2 Pi^-1 of a window starting there */
+static double HIST[N][4];               /* estimates of the N samples before; the prior is row 0 */
+static double HD[NQ * NQ], GD[NQ];      /* the window's dense Hessian and linear term */
+static OSQPFloat XW[NQ], YW[NQ], Q[NQ], L[NQ], U[NQ], PX[NNZ]; /* OSQP's type */
+static double BETA[NK], INFO[NK * NK];  /* bias estimate and its information */
+static double FALLBACK[4];              /* the fallback filter's (or held) estimate */
+static long K = 0;
+
+/* The fallback filter (appended after this file: the linked KF, or the held estimate). */
+static void kf_reset(void);
+static void kf_covariance(double *P); /* its covariance [N^2] before the sample, 4 x 4 */
+static void kf_step(const double *u, double dt, double *x, double *std);
+static void kf_held(const double *u, double dt, const double *held, double *std, double *residual);
+/* Arrival weight c s^2 Pi^-1 of a window starting at the sample (first: the log's first). */
+static void arrival_weight(int first, const double *P, double dt, double *weight);
+
+void wheelload_mhe_reset(void) {
+    K = 0;
+    memset(S, 0, sizeof S);
+    memset(ARR, 0, sizeof ARR);
+    memset(XW, 0, sizeof XW);
+    memset(YW, 0, sizeof YW);
+    memset(BETA, 0, sizeof BETA);
+    memset(INFO, 0, sizeof INFO);
+    for (int i = 0; i < NB; ++i) INFO[i * NK + i] = BETA_INFO0[i];
+    for (int j = 0; j < N; ++j) {
+        memcpy(S[j].z, X0, sizeof X0);
+        memcpy(S[j].kfx, X0, sizeof X0);
+        memcpy(HIST[j], X0, sizeof X0);
+    }
+    memcpy(FALLBACK, X0, sizeof X0);
+    kf_reset();
+    osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
+}
+
+/* H[cols, cols] += M^T Wt M, g[cols] -= M^T Wt r; M is k x nc (row-major); Wt is k x k when
+   full, else its diagonal (k entries). */
+static void add_rows(double *H, int ld, double *g, const int *cols, int nc, const double *M,
+                     int k, const double *r, const double *Wt, int full) {
+    double MW[32][8];
+    for (int a = 0; a < nc; ++a)
+        for (int i = 0; i < k; ++i) {
+            double s = 0.0;
+            if (full)
+                for (int m = 0; m < k; ++m) s += M[m * nc + a] * Wt[m * k + i];
+            else
+                s = M[i * nc + a] * Wt[i];
+            MW[a][i] = s;
+        }
+    for (int a = 0; a < nc; ++a) {
+        for (int b = 0; b < nc; ++b) {
+            double s = 0.0;
+            for (int i = 0; i < k; ++i) s += MW[a][i] * M[i * nc + b];
+            H[cols[a] * ld + cols[b]] += s;
+        }
+        double s = 0.0;
+        for (int i = 0; i < k; ++i) s += MW[a][i] * r[i];
+        g[cols[a]] -= s;
+    }
+}
+
+/* The data rows of a sample over [loads (W), biases (NB)]: Ms (4 x NM), and for the soft
+   constraint Mc (3 x NM), each scaled by the rows' square-root weights. */
+static void row_matrices(const sample_t *s, double *Ms, double *Mc) {
+    memset(Ms, 0, sizeof(double) * 4 * NM);
+    for (int i = 0; i < 4; ++i) {
+#if HARD
+        Ms[i * NM] = -LOAD_SCALE * NULL_VECTOR[i];
+#else
+        Ms[i * NM + i] = -LOAD_SCALE;
+#endif
+#if ND > 0
+        for (int c = 0; c < ND; ++c) {
+            double v = 0.0;
+            for (int m = 0; m < 4; ++m) v += s->Jd[i * 4 + m] * TRAVEL_BASIS[m * ND + c];
+            Ms[i * NM + W + c] = -v * TRAVEL_UNIT;
+        }
+#endif
+#if HARD && NB > ND
+        for (int c = 0; c < NB - ND; ++c) {
+            double v = 0.0;
+            for (int m = 0; m < 3; ++m)
+                v += PINV[i * 3 + m] * s->Ba[m * 2 + ACC_COLS[c]] * (s->lc[m] > 0.0);
+            Ms[i * NM + W + ND + c] = v;
+        }
+#endif
+        for (int c = 0; c < NM; ++c) Ms[i * NM + c] *= s->ls[i];
+    }
+#if !HARD
+    memset(Mc, 0, sizeof(double) * 3 * NM);
+    for (int i = 0; i < 3; ++i) {
+        for (int c = 0; c < 4; ++c) Mc[i * NM + c] = -A_MATRIX[i * 4 + c] * LOAD_SCALE;
+#if NB > ND
+        for (int c = 0; c < NB - ND; ++c) Mc[i * NM + W + ND + c] = -s->Ba[i * 2 + ACC_COLS[c]];
+#endif
+        for (int c = 0; c < NM; ++c) Mc[i * NM + c] *= s->lc[i];
+    }
+#else
+    (void)Mc;
+#endif
+}
+
+/* One residual group with its loss into the sample's local (H, g); plus: its e+ offset. */
+static void group(double *H, double *g, const double *M, int k, const double *r, int robust,
+                  double kappa, double mu, int plus) {
+    int cols[NM + 8];
+    for (int c = 0; c < W; ++c) cols[c] = c;
+    for (int c = 0; c < NB; ++c) cols[W + c] = WIDTH + c;
+    double ones[4] = {1.0, 1.0, 1.0, 1.0};
+    if (!robust) {
+        add_rows(H, NL, g, cols, NM, M, k, r, ones, 0);
+        return;
+    }
+    double full[4 * (NM + 8)], weights[4];
+    int nc = NM + 2 * k;
+    for (int c = 0; c < k; ++c) {
+        cols[NM + c] = plus + c;
+        cols[NM + k + c] = plus + k + c;
+    }
+    for (int i = 0; i < k; ++i) {
+        weights[i] = kappa;
+        for (int c = 0; c < nc; ++c) full[i * nc + c] = 0.0;
+        for (int c = 0; c < NM; ++c) full[i * nc + c] = M[i * NM + c];
+        full[i * nc + NM + i] = -1.0;
+        full[i * nc + NM + k + i] = 1.0;
+    }
+    add_rows(H, NL, g, cols, nc, full, k, r, weights, 0);
+    for (int c = 0; c < 2 * k; ++c) g[plus + c] += mu;
+}
+
+/* The sample's data rows as (Hl, gl) over its block and the biases (physical units). */
+static void local_terms(sample_t *s) {
+    double Ms[4 * NM], Mc[3 * NM], r[4];
+    memset(s->Hl, 0, sizeof s->Hl);
+    memset(s->gl, 0, sizeof s->gl);
+    row_matrices(s, Ms, Mc);
+    for (int i = 0; i < 4; ++i) r[i] = -s->ls[i] * (s->z[i] - s->xp[i]);
+    group(s->Hl, s->gl, Ms, 4, r, SUSPENSION_ROBUST, KAPPA_S, MU_S, W);
+#if !HARD
+    for (int i = 0; i < 3; ++i) r[i] = -s->lc[i] * s->b[i];
+    group(s->Hl, s->gl, Mc, 3, r, CONSTRAINT_ROBUST, KAPPA_C, MU_C, W + 2 * NS);
+#endif
+}
+
+/* The window's dense Hessian and linear term (physical costs; scaled by COST on loading). */
+static void assemble(int j0, const double *prior, const double *arrival) {
+    memset(HD, 0, sizeof HD);
+    memset(GD, 0, sizeof GD);
+    double X[4 * W];
+    memset(X, 0, sizeof X);
+    for (int i = 0; i < 4; ++i) {
+#if HARD
+        X[i] = LOAD_SCALE * NULL_VECTOR[i];
+#else
+        X[i * 4 + i] = LOAD_SCALE;
+#endif
+    }
+    for (int j = 0; j < N; ++j) {
+        int base = j * WIDTH;
+        if (j < j0) {
+            for (int a = 0; a < W; ++a) HD[(base + a) * NQ + base + a] += 1.0 / COST;
+            continue;
+        }
+        int map[NL];
+        for (int a = 0; a < NL; ++a) map[a] = a < WIDTH ? base + a : N * WIDTH + a - WIDTH;
+        for (int a = 0; a < NL; ++a) {
+            for (int b = 0; b < NL; ++b) HD[map[a] * NQ + map[b]] += S[j].Hl[a * NL + b];
+            GD[map[a]] += S[j].gl[a];
+        }
+        int cols[2 * W];
+        double r[4];
+        for (int a = 0; a < W; ++a) {
+            cols[a] = base + a;
+            cols[W + a] = base - WIDTH + a;
+        }
+        if (j == j0) {
+            double weight[16];
+            for (int e = 0; e < 16; ++e) weight[e] = arrival[e] / (COST * LOAD_SCALE * LOAD_SCALE);
+            for (int i = 0; i < 4; ++i) r[i] = prior[i] - S[j].xp[i];
+            add_rows(HD, NQ, GD, cols, W, X, 4, r, weight, 1);
+        } else if (S[j].link > 0.0) {
+            double M[4 * 2 * W], link[4];
+            for (int i = 0; i < 4; ++i) {
+                for (int a = 0; a < W; ++a) {
+                    M[i * 2 * W + a] = X[i * W + a];
+                    M[i * 2 * W + W + a] = -X[i * W + a];
+                }
+                r[i] = -(S[j].xp[i] - S[j - 1].xp[i]);
+                link[i] = S[j].link;
+            }
+            add_rows(HD, NQ, GD, cols, 2 * W, M, 4, r, link, 0);
+        }
+    }
+#if NB > 0
+    int cols[NB];
+    double eye[NB * NB];
+    memset(eye, 0, sizeof eye);
+    for (int a = 0; a < NB; ++a) {
+        cols[a] = N * WIDTH + a;
+        eye[a * NB + a] = 1.0;
+    }
+    add_rows(HD, NQ, GD, cols, NB, eye, NB, BETA, INFO, 1);
+#endif
+}
+
+#if NB > 0
+/* Effective (IRLS) weight of a row at residual rho [sigma]. */
+static double effective(int robust, double corner, double scale, double rho) {
+    if (!robust) return 1.0;
+    return scale * fmin(1.0, corner / fmax(fabs(rho), 1e-12));
+}
+
+/* The bias information of the window's oldest sample with its loads eliminated, at the
+   solution v (Schur complement; rows at the loss's effective weight), added to INFO. */
+static void leaving_information(const OSQPFloat *v) {
+    const sample_t *s = &S[0];
+    double beta[NB], x[4], delta[4] = {0.0, 0.0, 0.0, 0.0}, ba[2] = {0.0, 0.0};
+    for (int a = 0; a < NB; ++a) beta[a] = (double)v[N * WIDTH + a];
+    for (int i = 0; i < 4; ++i) {
+#if HARD
+        x[i] = s->xp[i] + LOAD_SCALE * NULL_VECTOR[i] * (double)v[0];
+#else
+        x[i] = s->xp[i] + LOAD_SCALE * (double)v[i];
+#endif
+#if ND > 0
+        for (int c = 0; c < ND; ++c) delta[i] += TRAVEL_BASIS[i * ND + c] * beta[c] * TRAVEL_UNIT;
+#endif
+    }
+#if NB > ND
+    for (int c = 0; c < NB - ND; ++c) ba[ACC_COLS[c]] = beta[ND + c]; /* ax, ay */
+#endif
+    double Ms[4 * NM], Mc[3 * NM], weights[7], M[7 * NM];
+    row_matrices(s, Ms, Mc);
+    int k = 4;
+    for (int i = 0; i < 4; ++i) {
+        double jd = 0.0;
+        for (int m = 0; m < 4; ++m) jd += s->Jd[i * 4 + m] * delta[m];
+        double rho = s->ls[i] * (s->z[i] - jd - x[i]);
+        weights[i] = effective(SUSPENSION_ROBUST, CORNER_S, SCALE_S, rho);
+    }
+    memcpy(M, Ms, sizeof Ms);
+#if !HARD
+    for (int i = 0; i < 3; ++i) {
+        double r = s->b[i] - s->Ba[i * 2] * ba[0] - s->Ba[i * 2 + 1] * ba[1];
+        for (int c = 0; c < 4; ++c) r -= A_MATRIX[i * 4 + c] * x[c];
+        weights[4 + i] = effective(CONSTRAINT_ROBUST, CORNER_C, SCALE_C, s->lc[i] * r);
+    }
+    memcpy(M + 4 * NM, Mc, sizeof Mc);
+    k = 7;
+#else
+    (void)ba;
+#endif
+    double F[NM * NM];
+    for (int a = 0; a < NM; ++a)
+        for (int b = 0; b < NM; ++b) {
+            double t = 0.0;
+            for (int i = 0; i < k; ++i) t += M[i * NM + a] * weights[i] * M[i * NM + b];
+            F[a * NM + b] = t;
+        }
+    double Fyy[W * W], inverse[W * W];
+    for (int a = 0; a < W; ++a)
+        for (int b = 0; b < W; ++b) Fyy[a * W + b] = F[a * NM + b] + (a == b ? 1e-12 : 0.0);
+    invert(Fyy, W, inverse);
+    for (int a = 0; a < NB; ++a)
+        for (int b = 0; b < NB; ++b) {
+            double t = F[(W + a) * NM + W + b];
+            for (int c = 0; c < W; ++c)
+                for (int e = 0; e < W; ++e)
+                    t -= F[c * NM + W + a] * inverse[c * W + e] * F[e * NM + W + b];
+            INFO[a * NK + b] += t;
+        }
+}
+#endif
+
+/* Loads [N] from one sample's QP variables, or 0 if out of its bounds by more than ten times
+   OSQP's primal tolerance (as the Python MHE's check); clipped to the bounds. */
+static int checked(const OSQPFloat *block, const sample_t *s, double *loads) {
+    double value[W], largest = 1.0;
+    for (int a = 0; a < W; ++a) {
+        value[a] = (double)block[a];
+        largest = fmax(largest, fabs(value[a]));
+    }
+    double tolerance = 10.0 * (EPS_ABS + EPS_REL * largest);
+    for (int a = 0; a < W; ++a) {
+        if (value[a] < s->lower[a] - tolerance || value[a] > s->upper[a] + tolerance) return 0;
+        value[a] = fmin(fmax(value[a], s->lower[a]), s->upper[a]);
+    }
+#if HARD
+    double x[4], big = 1.0;
+    for (int i = 0; i < 4; ++i) {
+        x[i] = s->xp[i] + NULL_VECTOR[i] * (value[0] * LOAD_SCALE);
+        big = fmax(big, fabs(x[i]));
+    }
+    tolerance = 10.0 * (1e-9 + 1e-12 * big);
+    for (int i = 0; i < 4; ++i) {
+        if (x[i] < LOW_LOAD - tolerance || x[i] > HIGH_LOAD + tolerance) return 0;
+        loads[i] = fmin(fmax(x[i], LOW_LOAD), HIGH_LOAD);
+    }
+#else
+    for (int i = 0; i < 4; ++i) loads[i] = value[i] * LOAD_SCALE;
+#endif
+    return 1;
+}
+
+/* The window's minimiser when no sample has a data term: the prior carried unchanged. */
+static void prior_solution(int j0, const double *prior) {
+    double solution[N][W];
+    for (int j = 0; j < N; ++j)
+        for (int a = 0; a < W; ++a) solution[j][a] = (double)XW[j * WIDTH + a];
+#if HARD
+    double Wn[4], nWn = 0.0, num = 0.0;
+    for (int r = 0; r < 4; ++r) {
+        Wn[r] = 0.0;
+        for (int c = 0; c < 4; ++c) Wn[r] += ARR[j0][r * 4 + c] * NULL_VECTOR[c];
+        nWn += NULL_VECTOR[r] * Wn[r];
+    }
+    for (int r = 0; r < 4; ++r) num += Wn[r] * (prior[r] - S[j0].xp[r]);
+    double omega = num / nWn / LOAD_SCALE;
+    for (int j = j0; j < N; ++j) {
+        if (j > j0) {
+            double step = 0.0;
+            for (int r = 0; r < 4; ++r) step += NULL_VECTOR[r] * (S[j].xp[r] - S[j - 1].xp[r]);
+            omega -= step / LOAD_SCALE;
+        }
+        solution[j][0] = omega;
+    }
+#else
+    for (int j = j0; j < N; ++j)
+        for (int a = 0; a < 4; ++a) solution[j][a] = prior[a] / LOAD_SCALE;
+#endif
+    for (int j = 0; j < N; ++j)
+        for (int a = 0; a < WIDTH; ++a) {
+            double v = a < W ? solution[j][a] : 0.0;
+            if (a < W && j >= j0) v = fmin(fmax(v, S[j].lower[a]), S[j].upper[a]);
+            XW[j * WIDTH + a] = (OSQPFloat)v;
+        }
+}
+
+int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
+    double u0[N_INPUTS], valid[N_INPUTS], cost = COST;
+    memset(out, 0, sizeof *out);
+    double previous_P[16];
+    kf_covariance(previous_P);
+    if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
+        memcpy(out->loads, HIST[N - 1], sizeof out->loads);
+        kf_held(u, dt, HIST[N - 1], out->std, out->residual);
+        out->flags = 255u;
+        return 0;
+    }
+    for (int i = 0; i < N_INPUTS; ++i) {
+        valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
+        u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
+    }
+    double kf_std[4];
+    kf_step(u, dt, FALLBACK, kf_std);
+    sample_t *s = &S[0];
+    memmove(S, S + 1, sizeof(sample_t) * (N - 1));
+    s = &S[N - 1];
+    {
+        double h[W * W], g[W], link, lo[W], hi[W], used[N_USED];
+        wheelload_mhe_terms(u0, valid, &dt, FALLBACK, P_VECTOR, TUNING, &cost, h, g, &link, s->xp,
+                            lo, hi, s->b, used);
+        for (int i = 0; i < N_USED; ++i) out->flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
+        s->link = K == 0 ? 0.0 : link / (COST * LOAD_SCALE * LOAD_SCALE);
+        memcpy(s->lower, lo, sizeof lo);
+        memcpy(s->upper, hi, sizeof hi);
+    }
+    {
+        double Jd[16], Ba[6];
+        wheelload_mhe_residual_rows(u0, valid, &dt, P_VECTOR, TUNING, s->z, Jd, Ba, s->ls, s->lc);
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) s->Jd[r * 4 + c] = Jd[c * 4 + r]; /* column-major */
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 2; ++c) s->Ba[r * 2 + c] = Ba[c * 3 + r];
+    }
+    memcpy(s->kfx, FALLBACK, sizeof FALLBACK);
+    local_terms(s);
+    memmove(ARR[0], ARR[1], sizeof(double) * 16 * (N - 1));
+    arrival_weight(K == 0, previous_P, dt, ARR[N - 1]);
+    int j0 = K < N - 1 ? (int)(N - 1 - K) : 0;
+    if (K == 0) osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
+    memmove(XW, XW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
+    memmove(YW, YW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
+    int data = 0;
+    for (int j = j0; j < N; ++j) {
+        for (int i = 0; i < 4; ++i) data |= S[j].ls[i] != 0.0;
+        for (int i = 0; i < 3; ++i) data |= S[j].lc[i] != 0.0;
+    }
+    int status = 1;
+    out->iterations = 0;
+    if (!data) {
+        prior_solution(j0, HIST[N - 1]);
+    } else {
+        assemble(j0, HIST[0], ARR[j0]);
+        for (int i = 0; i < NNZ; ++i) PX[i] = (OSQPFloat)(COST * HD[PATTERN[i]]);
+        for (int i = 0; i < NQ; ++i) {
+            double low = 0.0, high = 0.0;
+            if (i < N * WIDTH) {
+                int j = i / WIDTH, a = i % WIDTH;
+                if (j >= j0) {
+                    low = a < W ? S[j].lower[a] : 0.0;
+                    high = a < W ? S[j].upper[a] : (double)OSQP_INFTY;
+                }
+            } else {
+                low = -BETA_BOUND[i - N * WIDTH];
+                high = BETA_BOUND[i - N * WIDTH];
+            }
+            Q[i] = (OSQPFloat)(COST * GD[i]);
+            L[i] = (OSQPFloat)fmax(low, -(double)OSQP_INFTY);
+            U[i] = (OSQPFloat)fmin(high, (double)OSQP_INFTY);
+        }
+        osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL, 0);
+        osqp_update_data_vec(&wheelload_mhe_solver, Q, L, U);
+        osqp_warm_start(&wheelload_mhe_solver, XW, YW);
+        osqp_solve(&wheelload_mhe_solver);
+        status = (int)wheelload_mhe_solver.info->status_val;
+        out->iterations = (int)wheelload_mhe_solver.info->iter;
+        if (status == 1) {
+            memcpy(XW, wheelload_mhe_solver.solution->x, sizeof XW);
+            memcpy(YW, wheelload_mhe_solver.solution->y, sizeof YW);
+        }
+    }
+    double x[4];
+    int failed = status != 1 || !checked(XW + (N - 1) * WIDTH, s, x);
+    if (failed) {
+        for (int i = 0; i < 4; ++i) x[i] = fmin(fmax(FALLBACK[i], LOW_LOAD), HIGH_LOAD);
+    }
+#if NB > 0
+    else {
+        for (int a = 0; a < NB; ++a)
+            BETA[a] = fmin(fmax((double)XW[N * WIDTH + a], -BETA_BOUND[a]), BETA_BOUND[a]);
+        if (K >= N - 1) leaving_information(XW);
+    }
+    {
+        double walk = s->link > 0.0 ? 1.0 / (Q_DENSITY * s->link) : 0.0;
+        double a[NB * NB], covariance[NB * NB];
+        memcpy(a, INFO, sizeof a);
+        invert(a, NB, covariance);
+        for (int i = 0; i < NB; ++i) covariance[i * NB + i] += BETA_DENSITY[i] * walk;
+        invert(covariance, NB, a);
+        for (int r = 0; r < NB; ++r)
+            for (int c = 0; c < NB; ++c) INFO[r * NK + c] = 0.5 * (a[r * NB + c] + a[c * NB + r]);
+    }
+#endif
+    memmove(HIST[0], HIST[1], sizeof(double) * 4 * (N - 1));
+    memcpy(HIST[N - 1], x, sizeof x);
+    ++K;
+    /* the output: the window's estimate of sample k - LAG */
+    const sample_t *lagged = &S[N - 1 - LAG];
+    if (LAG == 0 || failed) {
+        memcpy(out->loads, x, sizeof x);
+    } else if (!checked(XW + (N - 1 - LAG) * WIDTH, lagged, out->loads)) {
+        for (int i = 0; i < 4; ++i)
+            out->loads[i] = fmin(fmax(lagged->kfx[i], LOW_LOAD), HIGH_LOAD);
+    }
+    for (int r = 0; r < 3; ++r) {
+        out->residual[r] = lagged->b[r];
+        for (int c = 0; c < 4; ++c) out->residual[r] -= A_MATRIX[r * 4 + c] * out->loads[c];
+    }
+    memcpy(out->std, kf_std, sizeof kf_std);
+#if NB > 0
+    int nr = 0;
+#if ND > 0
+    for (int i = 0; i < 4; ++i) {
+        double v = 0.0;
+        for (int c = 0; c < ND; ++c) v += TRAVEL_BASIS[i * ND + c] * BETA[c];
+        out->bias[nr++] = v * TRAVEL_UNIT;
+    }
+#endif
+    for (int c = ND; c < NB; ++c) out->bias[nr++] = BETA[c];
+#endif
+    out->fallback = failed;
+    return status;
+}
