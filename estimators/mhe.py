@@ -68,6 +68,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators.mhe_ring import run_ring
 from wheelload.estimators.mhe_terms import (
     LOAD_SCALE,
     Constraint,
@@ -719,6 +720,9 @@ class MovingHorizonEstimator:
             ]
         previous = np.concatenate([state.kf.P[None], covariances[:-1]])
         arrival = self._arrival(state, previous, dt)
+        if not self.settings.extended and not self._per_sample_states:
+            return self._run_ring(signals, state, (H, g, link, xp, lower, upper, b, used),
+                                  fallback, arrival)  # fmt: skip
         reports = []
         for k in range(n):
             kf = FilterState(fallback.loads[k], covariances[k])
@@ -735,6 +739,36 @@ class MovingHorizonEstimator:
             lagged = [r[0] for r in reports[lag:]] + tail[max(0, lag - n) :]
             reports = [(x, *r[1:]) for x, r in zip(lagged, reports)]
         return _estimate(signals.t.copy(), reports, self.A, lag=lag)
+
+    #: True: :meth:`run` advances the plain window through :meth:`_advance` and a new
+    #: :class:`MheState` per sample (the reference the ring buffers are tested against)
+    _per_sample_states = False
+    #: a list: the ring loop appends each solved QP's data to it (``wheelload bench mhe``)
+    _qp_record: list | None = None
+
+    def _run_ring(self, signals: Signals, state: MheState, out: tuple, fallback, arrival):
+        """The plain window's loop in preallocated ring buffers (:mod:`mhe_ring`)."""
+        H, g, link, xp, lower, upper, b, used = out
+        loads, status, iterations, failed, solve_time, final = run_ring(
+            self, state, H, g, link, xp, lower, upper, fallback.loads, arrival, self._qp_record
+        )
+        n, lag, N = len(signals), self.settings.lag, self.settings.horizon
+        if lag:  # row i: the estimate of sample i; the log's last samples from its last window
+            tail = [final(N - lag + m) for m in range(min(lag, n))]
+            loads = np.vstack([loads[lag:], np.array(tail[max(0, lag - n) :]).reshape(-1, 4)])
+        return MheEstimate(
+            t=signals.t.copy(),
+            loads=loads,
+            std=fallback.std.reshape(-1, 4),
+            residual=b.reshape(-1, 3) - loads @ self.A.T,
+            flags=flags_from_used(used.reshape(-1, len(StepFlag.update_flags())).T),
+            status=status,
+            iterations=iterations,
+            fallback=failed,
+            solve_time=solve_time,
+            lag=lag,
+            bias=None,
+        )
 
 
 def _estimate(t: np.ndarray, reports: list, A: np.ndarray, lag: int = 0) -> MheEstimate:
@@ -902,10 +936,11 @@ def _clip_checked(value, low, high, eps: tuple[float, float]):
     \epsilon_{rel} \max(1, \|value\|_\infty)`.
     """
     eps_abs, eps_rel = eps
-    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, float(np.max(np.abs(value)))))
-    if np.any(value < low - tolerance) or np.any(value > high + tolerance):
+    largest = max(abs(v) for v in value.tolist())  # a few entries: no numpy reductions
+    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, largest))
+    if (value < low - tolerance).any() or (value > high + tolerance).any():
         return None
-    return np.clip(value, low, high)
+    return value.clip(low, high)
 
 
 def _null_vector(A: np.ndarray) -> np.ndarray:

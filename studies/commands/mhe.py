@@ -99,6 +99,9 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     bench.add_argument("--samples", type=int, default=3000, help="samples per run (default 3000)")
     bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")
+    bench.add_argument(
+        "--repeats", type=int, default=3, help="repeats of the window against bare OSQP"
+    )
     bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     add_allow_unusual(bench)
     bench.set_defaults(handler=run_bench)
@@ -208,6 +211,7 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"{'estimator':38s} {'median us':>10s} {'p99 us':>10s} {'x KF step':>10s}")
     print(f"{'KF step (Python, CasADi call)':38s} {kf_step:10.1f} {'':>10s} {1.0:10.2f}")
     print(f"{'KF run (compiled loop, amortised)':38s} {kf_run:10.2f}")
+    _bench_window(vehicle, signals, args.horizons, args.repeats)
     c_available = not args.no_c and shutil.which("gcc") is not None
     for horizon in args.horizons:
         for constraint in Constraint:
@@ -241,6 +245,30 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"{'KF + RTS smoother (compiled, amortised)':38s} {np.median(smooth):10.2f} "
           f"{'':>10s} (min {min(smooth):.2f}, max {max(smooth):.2f})")  # fmt: skip
     return 0
+
+
+def _bench_window(vehicle, signals, horizons: list[int], repeats: int) -> None:
+    """The window from Python against a bare OSQP solve of the same QPs (min/median/max)."""
+    from wheelload.studies.mhe_bench import window_against_bare_osqp
+
+    if repeats < 1:
+        raise ValueError(f"--repeats must be >= 1, got {repeats}")
+    print(f"MHE window (update + solve, mean per sample) against bare OSQP on the same QPs, "
+          f"{repeats} repeats: min / median / max")  # fmt: skip
+    for horizon in horizons:
+        for constraint in Constraint:
+            for bounded in (False, True):
+                settings = MheSettings(horizon=horizon, constraint=constraint, bounded=bounded)
+                rows = window_against_bare_osqp(vehicle, signals, settings, repeats)
+                mhe = np.array([r.mhe for r in rows])
+                bare = np.array([r.bare for r in rows])
+                ratio = mhe / bare
+                print(f"  {settings.label():34s} MHE {_spread(mhe)} us, bare OSQP "
+                      f"{_spread(bare)} us, ratio {_spread(ratio, '.2f')}")  # fmt: skip
+
+
+def _spread(values: np.ndarray, fmt: str = ".1f") -> str:
+    return " / ".join(format(v, fmt) for v in (values.min(), np.median(values), values.max()))
 
 
 def _bench_c(vehicle, settings: MheSettings, signals, kf_step: float) -> None:
