@@ -27,6 +27,7 @@ from wheelload.studies.experiments import command as experiment_command
 from wheelload.studies.faults import Fault
 from wheelload.studies.mhe_vs_kf import (
     HORIZONS,
+    PLAIN_KF,
     StudySettings,
     against_kf,
     mhe_vs_kf,
@@ -73,7 +74,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument(
         "--quick",
         action="store_true",
-        help="short segments, few trials; mhe-vs-kf robust sweep: KF, RTS, lagged and L1 MHE only",
+        help="short segments, few trials; mhe-vs-kf robust sweep: the KF with and without its "
+        "guards, RTS, the lagged and the Huber 0.5σ MHE only",
     )
     study.add_argument(
         "--horizons", type=int, nargs="+", default=list(HORIZONS), help="equivalence sweep"
@@ -190,8 +192,11 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
     print("pooled RMSE [N] per injected fault (reference: the clean log's loads)")
     print(table.to_string(float_format=lambda v: f"{v:.1f}"))
-    print("change against the two-stage KF on the same fault [%]")
+    print("change against the two-stage KF (with its guards) on the same fault [%]")
     print(change.to_string())
+    if PLAIN_KF in table.index:
+        print("change against the plain KF (no guards) on the same fault [%]")
+        print(against_kf(table, faults, PLAIN_KF).to_string())
     print(f"written {out.with_suffix('.csv')} and {out.with_name(out.name + '-vs-kf.csv')}")
     return 0
 
