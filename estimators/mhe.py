@@ -936,11 +936,17 @@ def _clip_checked(value, low, high, eps: tuple[float, float]):
     \epsilon_{rel} \max(1, \|value\|_\infty)`.
     """
     eps_abs, eps_rel = eps
-    largest = max(abs(v) for v in value.tolist())  # a few entries: no numpy reductions
-    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, largest))
-    if (value < low - tolerance).any() or (value > high + tolerance).any():
-        return None
-    return value.clip(low, high)
+    # one to four entries: plain floats, no numpy reductions (same values as np.clip)
+    v = value.tolist()
+    lows = low.tolist() if isinstance(low, np.ndarray) else [float(low)] * len(v)
+    highs = high.tolist() if isinstance(high, np.ndarray) else [float(high)] * len(v)
+    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, max(abs(x) for x in v)))
+    clipped = []
+    for x, a, b in zip(v, lows, highs):
+        if x < a - tolerance or x > b + tolerance:
+            return None
+        clipped.append(min(max(x, a), b))
+    return np.array(clipped)
 
 
 def _null_vector(A: np.ndarray) -> np.ndarray:

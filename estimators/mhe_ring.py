@@ -72,13 +72,13 @@ class LowLevelSolver:
     def solve(self, Px, q, lower, upper, x, y, rho) -> tuple[int, int, float]:
         """Load, warm-start and solve; returns (status, iterations, rho after the solve)."""
         solver = self.solver
-        if not np.array_equal(Px, self.Px):
+        if not (Px == self.Px).all():  # np.array_equal for equal shapes
             solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
             self.Px[:] = Px
         if rho != self.rho:
             self.workspace.solver.update_settings(rho=rho)
         if lower is not None and not (
-            np.array_equal(lower, self.bounds[0]) and np.array_equal(upper, self.bounds[1])
+            (lower == self.bounds[0]).all() and (upper == self.bounds[1]).all()
         ):
             low = np.maximum(lower, -INFINITY)
             high = np.minimum(upper, INFINITY)
@@ -229,9 +229,15 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     lag = s.lag
     x_warm = np.empty(N * w)
     y_warm = np.empty_like(y_sol)
+    has_data = parts["data"][:, 0].tolist()
+    # samples since the newest with data (the initial window's inert samples count as data:
+    # the test below only looks at the min(k + 1, N) samples of the log)
+    flags = previous["data"][:, 0].tolist()
+    since = next((N - 1 - j for j in range(N - 1, -1, -1) if flags[j]), N)
     for i in range(n):
         start = time.perf_counter()
         k = k0 + i
+        since = 0 if has_data[i] else since + 1
         ring.push(rows[i])
         window = views[ring.head]
         j0 = max(0, N - 1 - k)
@@ -247,7 +253,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
             y_warm[:-w] = y_sol[w:]
             y_warm[-w:] = y_sol[-w:]
         x = None
-        if not window["data"][j0:].any():
+        if since >= min(k + 1, N):  # no sample of the window has a data term
             last = history.window[-1]
             x_sol = _prior_solution(window, j0, last, null, hard, x_warm, w)
             y_sol = y_warm.copy()
