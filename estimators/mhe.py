@@ -82,6 +82,7 @@ from wheelload.estimators.mhe_window import (
     WindowQP,
     WindowSample,
     bias_scales,
+    ride_height_basis,
     travel_basis,
 )
 from wheelload.estimators.projection import ProjectionKF, Weighting
@@ -176,7 +177,16 @@ class MheSettings:
         if not isinstance(self.lag, int) or not 0 <= self.lag < self.horizon:
             raise ValueError(f"lag must be an integer in [0, horizon), got {self.lag!r}")
         hard = self.constraint is Constraint.HARD
-        if hard and BiasStates.ACCELERATION in self.bias_states:
+        both = (
+            BiasStates.TRAVEL | BiasStates.RIDE_HEIGHT,
+            BiasStates.ACCELERATION | BiasStates.LATERAL,
+        )
+        if any(pair in self.bias_states for pair in both):
+            raise ValueError(
+                "bias_states: TRAVEL and RIDE_HEIGHT exclude each other, as do ACCELERATION "
+                "and LATERAL"
+            )
+        if hard and self.bias_states.acceleration_columns:
             raise ValueError(
                 "acceleration bias states need the soft constraint (hard: the bounds would "
                 "move with the bias); use constraint=Constraint.SOFT"
@@ -217,7 +227,7 @@ class MheEstimate(Estimate):
     fallback: np.ndarray  # (n,) True where the Kalman estimate was used
     solve_time: np.ndarray  # (n,) s, wall time of the sample's QP update and solve
     lag: int = 0  # row i holds the estimate of sample i made when sample i + lag arrived
-    bias: np.ndarray | None = None  # (n, nb) bias states: travel offsets [m], then ax, ay
+    bias: np.ndarray | None = None  # (n, nb) travel offsets FL..RR [m] if any, then ax/ay biases
 
     def to_pandas(self):
         frame = super().to_pandas()
@@ -328,16 +338,21 @@ class MovingHorizonEstimator:
         self.workspace = _Workspace(s, self.width)
         if s.extended:
             std, self.beta_bound, self.beta_density = bias_scales(s.bias_states, vehicle)
-            travel = BiasStates.TRAVEL in s.bias_states
+            nd = s.bias_states.travel_states
             self.residuals = residual_function()
             u0 = np.zeros(len(INPUTS))
             Jd = np.asarray(self.residuals(u0, np.ones(len(INPUTS)), 0.01, self.p, self.tuning)[1])
-            self.travel_basis = travel_basis(Jd, self.null)
+            self.travel_basis = (
+                travel_basis(Jd, self.null)
+                if BiasStates.TRAVEL in s.bias_states
+                else ride_height_basis()
+            )
+            self.acceleration_columns = s.bias_states.acceleration_columns
             self.beta_std = std
             self.window_qp = WindowQP(
                 horizon=s.horizon, hard=self.hard, A=self.A, null=self.null,
                 suspension=s.suspension_loss, constraint=s.constraint_loss,
-                n_bias=std.size, travel_basis=self.travel_basis if travel else None,
+                n_bias=std.size, travel_basis=self.travel_basis if nd else None,
                 solver=s.solver,
             )  # fmt: skip
 
@@ -406,7 +421,8 @@ class MovingHorizonEstimator:
         """The extended window's inert samples, warm start and bias prior."""
         qp, w = self.window_qp, self.width
         inert = WindowSample(
-            z=x0, Jd=np.zeros((4, 4)), b=np.zeros(3), Ba=np.zeros((3, 2)), ls=np.zeros(4),
+            z=x0, Jd=np.zeros((4, 4)), b=np.zeros(3),
+            Ba=np.zeros((3, len(self.acceleration_columns))), ls=np.zeros(4),
             lc=np.zeros(3), xp=np.zeros(4), link=0.0, lower=np.zeros(w), upper=np.zeros(w),
         )  # fmt: skip
         return dict(
@@ -582,7 +598,7 @@ class MovingHorizonEstimator:
         z, Jd, Ba, ls, lc = terms.rows
         link = terms.link if state.k > 0 else 0.0
         sample = WindowSample(
-            z=z, Jd=Jd, b=terms.b, Ba=Ba, ls=ls, lc=lc, xp=terms.xp,
+            z=z, Jd=Jd, b=terms.b, Ba=Ba[:, self.acceleration_columns], ls=ls, lc=lc, xp=terms.xp,
             link=link / (c * LOAD_SCALE**2), lower=terms.lower, upper=terms.upper,
         )  # fmt: skip
         samples = state.samples[1:] + (sample,)
@@ -658,10 +674,11 @@ class MovingHorizonEstimator:
 
     def bias_report(self, beta: np.ndarray) -> np.ndarray:
         """Bias states in reporting units: travel offsets FL..RR [m], then ax, ay [m/s^2]."""
-        if BiasStates.TRAVEL not in self.settings.bias_states:
+        nd = self.settings.bias_states.travel_states
+        if not nd:
             return beta
-        offsets = self.travel_basis @ beta[:3] * 1e-3
-        return np.concatenate([offsets, beta[3:]])
+        offsets = self.travel_basis @ beta[:nd] * 1e-3
+        return np.concatenate([offsets, beta[nd:]])
 
     def _leaving_information(self, state: MheState, v: np.ndarray) -> np.ndarray:
         """Bias information of the window's oldest sample at the solution ``v``."""
@@ -670,9 +687,9 @@ class MovingHorizonEstimator:
         y = v[qp.y(0)]
         beta = v[qp.beta]
         x = s.xp + qp.X @ y
-        nd = 3 if qp.travel_bias else 0
+        nd = qp.travel_basis.shape[1]
         delta = qp.travel_basis @ beta[:nd] * 1e-3 if nd else np.zeros(4)
-        beta_a = beta[nd:] if beta.size > nd else np.zeros(2)
+        beta_a = beta[nd:]
         rho_s = s.ls * (s.z - (s.Jd @ delta) - x)
         rho_c = s.lc * (s.b - s.Ba @ beta_a - self.A @ x)
         return qp.bias_information(s, rho_s, rho_c)

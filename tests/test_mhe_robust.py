@@ -162,6 +162,29 @@ def test_settings_reject_bad_extensions():
         ResidualLoss(kind=Loss.HUBER, threshold=0.0)
     with pytest.raises(TypeError, match="Loss"):
         ResidualLoss(kind="huber")
+    with pytest.raises(ValueError, match="exclude"):
+        MheSettings(bias_states=BiasStates.TRAVEL | BiasStates.RIDE_HEIGHT)
+    with pytest.raises(ValueError, match="exclude"):
+        MheSettings(bias_states=BiasStates.ACCELERATION | BiasStates.LATERAL)
+    with pytest.raises(ValueError, match="soft"):
+        MheSettings(constraint=Constraint.HARD, bias_states=BiasStates.LATERAL)
+
+
+def test_ride_height_offsets_are_orthogonal_to_the_warp(vehicle):
+    """Per-axle offsets move no load along the equilibrium's null vector (observable)."""
+    mhe = MovingHorizonEstimator(
+        vehicle, MheSettings(bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL)
+    )
+    from wheelload.models import INPUTS
+
+    T = mhe.travel_basis
+    assert T.shape == (4, 2) and mhe.window_qp.travel_basis is T  # the basis the window uses
+
+    u0 = np.zeros(len(INPUTS))
+    J = np.asarray(mhe.residuals(u0, np.ones(len(INPUTS)), 0.01, mhe.p, mhe.tuning)[1])
+    # relative to the load shift of a unit offset (~75 kN/m): rounding only
+    assert np.abs(mhe.null @ J @ T).max() < 1e-9 * np.abs(J @ T).max()
+    assert mhe.acceleration_columns == [1]  # ay only
 
 
 def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle, iso_dlc):
