@@ -234,6 +234,14 @@ def robust_candidates(horizon: int = 10, quick: bool = False) -> list[Candidate]
             settings=MheSettings(horizon=horizon, bias_states=BiasStates.ACCELERATION),
         ),
         Candidate(
+            name=f"MHE N={horizon} Huber 0.2σ (susp) + ride heights + ay bias",
+            settings=MheSettings(
+                horizon=horizon,
+                suspension_loss=tight,
+                bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL,
+            ),
+        ),
+        Candidate(
             name=f"MHE N={horizon} Huber 0.2σ (susp) + travel offsets",
             settings=MheSettings(
                 horizon=horizon, suspension_loss=tight, bias_states=BiasStates.TRAVEL
