@@ -639,10 +639,9 @@ class MovingHorizonEstimator:
                 c,
             )
             low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
-            result = qp.solve(H, g, low, high, x_warm, y_warm)
-            status, iterations = int(result.info.status_val), int(result.info.iter)
+            status, iterations, x_new, y_new = qp.solve_raw(H, g, low, high, x_warm, y_warm)
             if status == SOLVED:
-                x_warm, y_warm = np.array(result.x), np.array(result.y)
+                x_warm, y_warm = np.array(x_new), np.array(y_new)
         state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)
         if status == SOLVED:
             x = self._checked(x_warm[qp.y(N - 1)], sample.lower, sample.upper, sample.xp)

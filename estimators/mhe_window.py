@@ -361,6 +361,27 @@ class WindowQP:
                 return self.solver.solve(raise_error=False)
         return self.solver.solve(raise_error=False)
 
+    def solve_raw(self, H, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
+        """:meth:`solve` through OSQP's solver object: ``(status, iterations, x, y)``.
+
+        The same calls in the same order as the wrapper makes them (vectors, then
+        the matrix; bounds clamped to OSQP's infinity), without its result object.
+        """
+        solver = self.solver._solver
+        infinity = osqp.constant("OSQP_INFTY")
+        solver.update_data_vec(q=g, l=np.maximum(low, -infinity), u=np.minimum(high, infinity))
+        solver.update_data_mat(
+            P_x=H[self.rows, self.cols][self.order], P_i=None, A_x=None, A_i=None
+        )
+        solver.warm_start(x, y)
+        if self.solver_settings.polish:
+            with quiet_stdout():
+                solver.solve()
+        else:
+            solver.solve()
+        info = solver.info
+        return int(info.status_val), int(info.iter), solver.solution.x, solver.solution.y
+
     def bias_information(self, sample: WindowSample, rho_s, rho_c) -> np.ndarray:
         """The bias information of one sample with its loads eliminated (Schur complement).
 
