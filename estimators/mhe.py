@@ -30,9 +30,12 @@ over the log by :meth:`MovingHorizonEstimator.run` and called once per
 sample by :meth:`MovingHorizonEstimator.step`; the generated C calls the
 same Function. :class:`MheState` holds the window of terms, the fallback
 filter's state, the previous estimates, the warm start and OSQP's
-:math:`\rho`; ``run`` and ``step`` share the code that advances it, so they
-agree to rounding in the filter and the terms (far below the solver
-tolerance).
+:math:`\rho`; ``step`` advances it. ``run`` advances the plain window
+(quadratic losses, no bias states) in preallocated ring buffers instead
+(:mod:`wheelload.estimators.mhe_ring`), with the same arithmetic and OSQP calls
+as ``step``'s path, bit for bit; the extended window shares ``step``'s code. So
+``run`` and ``step`` agree to rounding in the filter and the terms (far below
+the solver tolerance).
 
 The QP is set up once per estimator with a fixed sparsity; each sample
 updates ``q`` (and ``l, u`` when they change), the Hessian values only when
@@ -711,8 +714,9 @@ class MovingHorizonEstimator:
         """Estimate a whole log; the same numbers as :meth:`step` over its samples.
 
         The filter runs in compiled code and the terms Function is mapped
-        over the log first; each sample then goes through the per-sample
-        window update and solve of :meth:`step`. Without ``state`` the
+        over the log first; each sample then goes through the window update
+        and solve of :meth:`step` (the plain window: the same arithmetic in ring
+        buffers, :mod:`~wheelload.estimators.mhe_ring`). Without ``state`` the
         window starts from :meth:`initial_state` at the median interval.
         """
         n = len(signals)

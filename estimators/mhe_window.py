@@ -16,11 +16,17 @@ quadratic core of width :math:`\varepsilon` = :data:`L1_CORE` σ: it equals
 residual group (suspension rows, equilibrium rows).
 
 Bias states :math:`\beta` are constant over the window and enter the
-residuals linearly (the models are linear in travel and specific force, so
-this is exact): travel offsets :math:`\delta` shift the pseudo-measurement,
+residuals linearly, through the model Functions' Jacobians at the sample
+(exact for the paper's model; with the stops engaged it is the local slope, and
+an offset's effect on the road-frame attitude in :math:`b` is left out, under
+6 % of its effect through :math:`J_d` on the bundled car): travel offsets
+:math:`\delta` shift the pseudo-measurement,
 :math:`z(d - \delta) = z(d) - J_d\,\delta`, and ax/ay biases shift the
 equilibrium right-hand side, :math:`b(a - \beta_a) = b(a) - B_a \beta_a`, with
-:math:`J_d, B_a` the model Functions' Jacobians. Their arrival cost is
+:math:`J_d, B_a` the model Functions' Jacobians. Travel offsets are estimated in a basis
+:math:`\delta = T\gamma`: the three combinations the window observes
+(:func:`travel_basis`) or one offset per axle (:func:`ride_height_basis`);
+ax/ay or ay alone (see :class:`BiasStates`). Their arrival cost is
 :math:`\|\beta - \bar\beta\|^2_{\Pi_\beta^{-1}}` with :math:`\bar\beta` the
 previous window's estimate and the information :math:`\Pi_\beta^{-1}` carried
 as in a filter: it loses :math:`q_\beta\,dt` of variance per sample (random
