@@ -960,7 +960,7 @@ def _clip_checked(value, low, high, eps: tuple[float, float]):
     v = value.tolist()
     lows = low.tolist() if isinstance(low, np.ndarray) else [float(low)] * len(v)
     highs = high.tolist() if isinstance(high, np.ndarray) else [float(high)] * len(v)
-    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, max(abs(x) for x in v)))
+    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, max(map(abs, v))))
     clipped = []
     for x, a, b in zip(v, lows, highs):
         if x < a - tolerance or x > b + tolerance:

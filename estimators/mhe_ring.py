@@ -92,15 +92,19 @@ class LowLevelSolver:
                 solver.solve()
         else:
             solver.solve()
-        self.rho = solver.get_settings().rho
+        # OSQP adapts rho during the solve; the window passes back what the solver holds,
+        # so it is read once, when the workspace is handed back (release)
         info = solver.info
         return int(info.status_val), int(info.iter), self.rho
 
     def solution(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array(self.solver.solution.x), np.array(self.solver.solution.y)
+        """The last solution (OSQP's binding returns a new array on each access)."""
+        solution = self.solver.solution
+        return solution.x, solution.y
 
     def release(self) -> None:
         """Hand the remembered values back to the workspace (for :meth:`_Workspace.solve`)."""
+        self.rho = self.solver.get_settings().rho
         self.workspace.Px = self.Px.copy()
         self.workspace.bounds = self.bounds
         self.workspace.rho = self.rho
@@ -121,8 +125,11 @@ class HessianBuffers:
         self.values = np.empty(order.size)
         self.q = np.empty((N, width))
 
-    def hessian(self, H, link, arrival_j0, j0, null, hard) -> np.ndarray:
-        """:func:`wheelload.estimators.mhe._hessian_values` into the buffers (same arithmetic)."""
+    def hessian(self, H, link, arrival_j0, j0, null, hard, nWn=None) -> np.ndarray:
+        """:func:`wheelload.estimators.mhe._hessian_values` into the buffers (same arithmetic).
+
+        ``nWn`` (hard): :math:`n^\top W n` of the arrival weight, computed beforehand.
+        """
         diagonal = self.diagonal
         diagonal[:] = link
         diagonal[0] = 0.0
@@ -130,7 +137,7 @@ class HessianBuffers:
         if hard:
             blocks = self.source[: self.N]
             np.add(H[:, 0, 0], diagonal, out=blocks)
-            blocks[j0] += null @ arrival_j0 @ null
+            blocks[j0] += nWn
             np.negative(link[1:], out=self.source[self.N : 2 * self.N - 1])
             np.take(self.source[: 2 * self.N - 1], self.order, out=self.values)
             return self.values
@@ -142,14 +149,17 @@ class HessianBuffers:
         return self.values
 
     def linear(self, g, j0, prior, arrival_j0, drift, xp_j0, null, hard, scale) -> np.ndarray:
-        """:func:`wheelload.estimators.mhe._linear` into the buffers (same arithmetic)."""
+        """:func:`wheelload.estimators.mhe._linear` into the buffers (same arithmetic).
+
+        Hard: ``arrival_j0`` is :math:`n^\top W` (computed beforehand), soft: :math:`W`.
+        """
         q = self.q
         q[:] = g
         if hard:
             d = drift[1:]
             q[1:, 0] += d
             q[:-1, 0] -= d
-            q[j0, 0] += null @ arrival_j0 @ (xp_j0 - prior) / scale
+            q[j0, 0] += arrival_j0 @ (xp_j0 - prior) / scale
         else:
             q[j0] -= arrival_j0 @ prior / scale
         return q.ravel()
@@ -182,7 +192,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     fields = {  # one packed row per sample: (name, width, shape of the window view)
         "H": (w * w, (w, w)), "g": (w, (w,)), "link": (1, ()), "drift": (1, ()),
         "xp": (4, (4,)), "lower": (w, (w,)), "upper": (w, (w,)), "arrival": (16, (4, 4)),
-        "data": (1, ()),
+        "data": (1, ()), "nW": (4, (4,)), "nWn": (1, ()),
     }  # fmt: skip
     columns, offset = {}, 0
     for name, (size, _) in fields.items():
@@ -198,12 +208,20 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     rows = np.empty((n, offset))
     parts = {"H": H, "g": g, "link": links[:, None], "drift": drifts[:, None], "xp": xp,
              "lower": lower, "upper": upper, "arrival": arrival.reshape(n, 16),
-             "data": H.any(axis=1)[:, None]}  # fmt: skip
+             "data": H.any(axis=1)[:, None], "nW": np.zeros((n, 4)),
+             "nWn": np.zeros((n, 1))}  # fmt: skip
     initial = np.empty((N, offset))
     previous = {"H": state.H.reshape(N, w * w), "g": state.g, "link": state.link[:, None],
              "drift": state.drift[:, None], "xp": state.xp, "lower": state.lower,
              "upper": state.upper, "arrival": state.arrival.reshape(N, 16),
-             "data": state.H.reshape(N, -1).any(axis=1)[:, None]}  # fmt: skip
+             "data": state.H.reshape(N, -1).any(axis=1)[:, None], "nW": np.zeros((N, 4)),
+             "nWn": np.zeros((N, 1))}  # fmt: skip
+    if hard:  # n^T W and n^T W n of each arrival weight, as _hessian_values/_linear form them
+        for rows_, arrivals in ((parts, arrival), (previous, state.arrival)):
+            for j in range(arrivals.shape[0]):
+                nW = null @ arrivals[j]
+                rows_["nW"][j] = nW
+                rows_["nWn"][j, 0] = nW @ null
     for name in fields:
         rows[:, columns[name]] = parts[name]
         initial[:, columns[name]] = previous[name]
@@ -241,7 +259,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
         ring.push(rows[i])
         window = views[ring.head]
         j0 = max(0, N - 1 - k)
-        prior = history.window[0].copy()
+        prior = history.data[history.head]  # the oldest estimate (read before the push)
         if k == 0:
             if solver is not None:
                 solver.release()
@@ -260,10 +278,11 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
             code, iters = SOLVED, 0
             x = mhe._loads(x_sol[-w:], window)
         else:
-            Px = buffers.hessian(window["H"], window["link"], window["arrival"][j0], j0, null, hard)
+            Px = buffers.hessian(window["H"], window["link"], window["arrival"][j0], j0, null,
+                                 hard, window["nWn"][j0])  # fmt: skip
             q = buffers.linear(
-                window["g"], j0, prior, window["arrival"][j0], window["drift"],
-                window["xp"][j0], null, hard, LOAD_SCALE,
+                window["g"], j0, prior, window["nW"][j0] if hard else window["arrival"][j0],
+                window["drift"], window["xp"][j0], null, hard, LOAD_SCALE,
             )  # fmt: skip
             low = window["lower"].ravel() if bounded else None
             high = window["upper"].ravel() if bounded else None
