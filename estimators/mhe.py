@@ -30,9 +30,12 @@ over the log by :meth:`MovingHorizonEstimator.run` and called once per
 sample by :meth:`MovingHorizonEstimator.step`; the generated C calls the
 same Function. :class:`MheState` holds the window of terms, the fallback
 filter's state, the previous estimates, the warm start and OSQP's
-:math:`\rho`; ``run`` and ``step`` share the code that advances it, so they
-agree to rounding in the filter and the terms (far below the solver
-tolerance).
+:math:`\rho`; ``step`` advances it. ``run`` advances the plain window
+(quadratic losses, no bias states) in preallocated ring buffers instead
+(:mod:`wheelload.estimators.mhe_ring`), with the same arithmetic and OSQP calls
+as ``step``'s path, bit for bit; the extended window shares ``step``'s code. So
+``run`` and ``step`` agree to rounding in the filter and the terms (far below
+the solver tolerance).
 
 The QP is set up once per estimator with a fixed sparsity; each sample
 updates ``q`` (and ``l, u`` when they change), the Hessian values only when
@@ -68,6 +71,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators.mhe_ring import run_ring
 from wheelload.estimators.mhe_terms import (
     LOAD_SCALE,
     Constraint,
@@ -81,6 +85,7 @@ from wheelload.estimators.mhe_window import (
     WindowQP,
     WindowSample,
     bias_scales,
+    ride_height_basis,
     travel_basis,
 )
 from wheelload.estimators.projection import ProjectionKF, Weighting
@@ -175,7 +180,16 @@ class MheSettings:
         if not isinstance(self.lag, int) or not 0 <= self.lag < self.horizon:
             raise ValueError(f"lag must be an integer in [0, horizon), got {self.lag!r}")
         hard = self.constraint is Constraint.HARD
-        if hard and BiasStates.ACCELERATION in self.bias_states:
+        both = (
+            BiasStates.TRAVEL | BiasStates.RIDE_HEIGHT,
+            BiasStates.ACCELERATION | BiasStates.LATERAL,
+        )
+        if any(pair in self.bias_states for pair in both):
+            raise ValueError(
+                "bias_states: TRAVEL and RIDE_HEIGHT exclude each other, as do ACCELERATION "
+                "and LATERAL"
+            )
+        if hard and self.bias_states.acceleration_columns:
             raise ValueError(
                 "acceleration bias states need the soft constraint (hard: the bounds would "
                 "move with the bias); use constraint=Constraint.SOFT"
@@ -216,7 +230,7 @@ class MheEstimate(Estimate):
     fallback: np.ndarray  # (n,) True where the Kalman estimate was used
     solve_time: np.ndarray  # (n,) s, wall time of the sample's QP update and solve
     lag: int = 0  # row i holds the estimate of sample i made when sample i + lag arrived
-    bias: np.ndarray | None = None  # (n, nb) bias states: travel offsets [m], then ax, ay
+    bias: np.ndarray | None = None  # (n, nb) travel offsets FL..RR [m] if any, then ax/ay biases
 
     def to_pandas(self):
         frame = super().to_pandas()
@@ -327,16 +341,21 @@ class MovingHorizonEstimator:
         self.workspace = _Workspace(s, self.width)
         if s.extended:
             std, self.beta_bound, self.beta_density = bias_scales(s.bias_states, vehicle)
-            travel = BiasStates.TRAVEL in s.bias_states
+            nd = s.bias_states.travel_states
             self.residuals = residual_function()
             u0 = np.zeros(len(INPUTS))
             Jd = np.asarray(self.residuals(u0, np.ones(len(INPUTS)), 0.01, self.p, self.tuning)[1])
-            self.travel_basis = travel_basis(Jd, self.null)
+            self.travel_basis = (
+                travel_basis(Jd, self.null)
+                if BiasStates.TRAVEL in s.bias_states
+                else ride_height_basis()
+            )
+            self.acceleration_columns = s.bias_states.acceleration_columns
             self.beta_std = std
             self.window_qp = WindowQP(
                 horizon=s.horizon, hard=self.hard, A=self.A, null=self.null,
                 suspension=s.suspension_loss, constraint=s.constraint_loss,
-                n_bias=std.size, travel_basis=self.travel_basis if travel else None,
+                n_bias=std.size, travel_basis=self.travel_basis if nd else None,
                 solver=s.solver,
             )  # fmt: skip
 
@@ -405,7 +424,8 @@ class MovingHorizonEstimator:
         """The extended window's inert samples, warm start and bias prior."""
         qp, w = self.window_qp, self.width
         inert = WindowSample(
-            z=x0, Jd=np.zeros((4, 4)), b=np.zeros(3), Ba=np.zeros((3, 2)), ls=np.zeros(4),
+            z=x0, Jd=np.zeros((4, 4)), b=np.zeros(3),
+            Ba=np.zeros((3, len(self.acceleration_columns))), ls=np.zeros(4),
             lc=np.zeros(3), xp=np.zeros(4), link=0.0, lower=np.zeros(w), upper=np.zeros(w),
         )  # fmt: skip
         return dict(
@@ -581,7 +601,7 @@ class MovingHorizonEstimator:
         z, Jd, Ba, ls, lc = terms.rows
         link = terms.link if state.k > 0 else 0.0
         sample = WindowSample(
-            z=z, Jd=Jd, b=terms.b, Ba=Ba, ls=ls, lc=lc, xp=terms.xp,
+            z=z, Jd=Jd, b=terms.b, Ba=Ba[:, self.acceleration_columns], ls=ls, lc=lc, xp=terms.xp,
             link=link / (c * LOAD_SCALE**2), lower=terms.lower, upper=terms.upper,
         )  # fmt: skip
         samples = state.samples[1:] + (sample,)
@@ -622,10 +642,9 @@ class MovingHorizonEstimator:
                 c,
             )
             low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
-            result = qp.solve(H, g, low, high, x_warm, y_warm)
-            status, iterations = int(result.info.status_val), int(result.info.iter)
+            status, iterations, x_new, y_new = qp.solve_raw(H, g, low, high, x_warm, y_warm)
             if status == SOLVED:
-                x_warm, y_warm = np.array(result.x), np.array(result.y)
+                x_warm, y_warm = np.array(x_new), np.array(y_new)
         state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)
         if status == SOLVED:
             x = self._checked(x_warm[qp.y(N - 1)], sample.lower, sample.upper, sample.xp)
@@ -657,10 +676,11 @@ class MovingHorizonEstimator:
 
     def bias_report(self, beta: np.ndarray) -> np.ndarray:
         """Bias states in reporting units: travel offsets FL..RR [m], then ax, ay [m/s^2]."""
-        if BiasStates.TRAVEL not in self.settings.bias_states:
+        nd = self.settings.bias_states.travel_states
+        if not nd:
             return beta
-        offsets = self.travel_basis @ beta[:3] * 1e-3
-        return np.concatenate([offsets, beta[3:]])
+        offsets = self.travel_basis @ beta[:nd] * 1e-3
+        return np.concatenate([offsets, beta[nd:]])
 
     def _leaving_information(self, state: MheState, v: np.ndarray) -> np.ndarray:
         """Bias information of the window's oldest sample at the solution ``v``."""
@@ -669,9 +689,9 @@ class MovingHorizonEstimator:
         y = v[qp.y(0)]
         beta = v[qp.beta]
         x = s.xp + qp.X @ y
-        nd = 3 if qp.travel_bias else 0
+        nd = qp.travel_basis.shape[1]
         delta = qp.travel_basis @ beta[:nd] * 1e-3 if nd else np.zeros(4)
-        beta_a = beta[nd:] if beta.size > nd else np.zeros(2)
+        beta_a = beta[nd:]
         rho_s = s.ls * (s.z - (s.Jd @ delta) - x)
         rho_c = s.lc * (s.b - s.Ba @ beta_a - self.A @ x)
         return qp.bias_information(s, rho_s, rho_c)
@@ -694,8 +714,9 @@ class MovingHorizonEstimator:
         """Estimate a whole log; the same numbers as :meth:`step` over its samples.
 
         The filter runs in compiled code and the terms Function is mapped
-        over the log first; each sample then goes through the per-sample
-        window update and solve of :meth:`step`. Without ``state`` the
+        over the log first; each sample then goes through the window update
+        and solve of :meth:`step` (the plain window: the same arithmetic in ring
+        buffers, :mod:`~wheelload.estimators.mhe_ring`). Without ``state`` the
         window starts from :meth:`initial_state` at the median interval.
         """
         n = len(signals)
@@ -719,6 +740,9 @@ class MovingHorizonEstimator:
             ]
         previous = np.concatenate([state.kf.P[None], covariances[:-1]])
         arrival = self._arrival(state, previous, dt)
+        if not self.settings.extended and not self._per_sample_states:
+            return self._run_ring(signals, state, (H, g, link, xp, lower, upper, b, used),
+                                  fallback, arrival)  # fmt: skip
         reports = []
         for k in range(n):
             kf = FilterState(fallback.loads[k], covariances[k])
@@ -735,6 +759,36 @@ class MovingHorizonEstimator:
             lagged = [r[0] for r in reports[lag:]] + tail[max(0, lag - n) :]
             reports = [(x, *r[1:]) for x, r in zip(lagged, reports)]
         return _estimate(signals.t.copy(), reports, self.A, lag=lag)
+
+    #: True: :meth:`run` advances the plain window through :meth:`_advance` and a new
+    #: :class:`MheState` per sample (the reference the ring buffers are tested against)
+    _per_sample_states = False
+    #: a list: the ring loop appends each solved QP's data to it (``wheelload bench mhe``)
+    _qp_record: list | None = None
+
+    def _run_ring(self, signals: Signals, state: MheState, out: tuple, fallback, arrival):
+        """The plain window's loop in preallocated ring buffers (:mod:`mhe_ring`)."""
+        H, g, link, xp, lower, upper, b, used = out
+        loads, status, iterations, failed, solve_time, final = run_ring(
+            self, state, H, g, link, xp, lower, upper, fallback.loads, arrival, self._qp_record
+        )
+        n, lag, N = len(signals), self.settings.lag, self.settings.horizon
+        if lag:  # row i: the estimate of sample i; the log's last samples from its last window
+            tail = [final(N - lag + m) for m in range(min(lag, n))]
+            loads = np.vstack([loads[lag:], np.array(tail[max(0, lag - n) :]).reshape(-1, 4)])
+        return MheEstimate(
+            t=signals.t.copy(),
+            loads=loads,
+            std=fallback.std.reshape(-1, 4),
+            residual=b.reshape(-1, 3) - loads @ self.A.T,
+            flags=flags_from_used(used.reshape(-1, len(StepFlag.update_flags())).T),
+            status=status,
+            iterations=iterations,
+            fallback=failed,
+            solve_time=solve_time,
+            lag=lag,
+            bias=None,
+        )
 
 
 def _estimate(t: np.ndarray, reports: list, A: np.ndarray, lag: int = 0) -> MheEstimate:
@@ -902,10 +956,17 @@ def _clip_checked(value, low, high, eps: tuple[float, float]):
     \epsilon_{rel} \max(1, \|value\|_\infty)`.
     """
     eps_abs, eps_rel = eps
-    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, float(np.max(np.abs(value)))))
-    if np.any(value < low - tolerance) or np.any(value > high + tolerance):
-        return None
-    return np.clip(value, low, high)
+    # one to four entries: plain floats, no numpy reductions (same values as np.clip)
+    v = value.tolist()
+    lows = low.tolist() if isinstance(low, np.ndarray) else [float(low)] * len(v)
+    highs = high.tolist() if isinstance(high, np.ndarray) else [float(high)] * len(v)
+    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, max(map(abs, v))))
+    clipped = []
+    for x, a, b in zip(v, lows, highs):
+        if x < a - tolerance or x > b + tolerance:
+            return None
+        clipped.append(min(max(x, a), b))
+    return np.array(clipped)
 
 
 def _null_vector(A: np.ndarray) -> np.ndarray:

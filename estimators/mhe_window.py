@@ -16,11 +16,17 @@ quadratic core of width :math:`\varepsilon` = :data:`L1_CORE` σ: it equals
 residual group (suspension rows, equilibrium rows).
 
 Bias states :math:`\beta` are constant over the window and enter the
-residuals linearly (the models are linear in travel and specific force, so
-this is exact): travel offsets :math:`\delta` shift the pseudo-measurement,
+residuals linearly, through the model Functions' Jacobians at the sample
+(exact for the paper's model; with the stops engaged it is the local slope, and
+an offset's effect on the road-frame attitude in :math:`b` is left out, under
+6 % of its effect through :math:`J_d` on the bundled car): travel offsets
+:math:`\delta` shift the pseudo-measurement,
 :math:`z(d - \delta) = z(d) - J_d\,\delta`, and ax/ay biases shift the
 equilibrium right-hand side, :math:`b(a - \beta_a) = b(a) - B_a \beta_a`, with
-:math:`J_d, B_a` the model Functions' Jacobians. Their arrival cost is
+:math:`J_d, B_a` the model Functions' Jacobians. Travel offsets are estimated in a basis
+:math:`\delta = T\gamma`: the three combinations the window observes
+(:func:`travel_basis`) or one offset per axle (:func:`ride_height_basis`);
+ax/ay or ay alone (see :class:`BiasStates`). Their arrival cost is
 :math:`\|\beta - \bar\beta\|^2_{\Pi_\beta^{-1}}` with :math:`\bar\beta` the
 previous window's estimate and the information :math:`\Pi_\beta^{-1}` carried
 as in a filter: it loses :math:`q_\beta\,dt` of variance per sample (random
@@ -88,30 +94,49 @@ class ResidualLoss:
 
 
 class BiasStates(enum.Flag):
-    """Slow sensor errors estimated as states."""
+    """Slow sensor errors estimated as states.
+
+    ``TRAVEL`` and ``RIDE_HEIGHT`` exclude each other, as do ``ACCELERATION`` and
+    ``LATERAL``. Travel offsets and both accelerometer biases together are five slow
+    unknowns against three equilibrium rows: an ay bias and a roll pattern of travel
+    offsets leave the same residual. ``RIDE_HEIGHT | LATERAL`` (three unknowns: the
+    front and rear ride heights, ay) is observable.
+    """
 
     NONE = 0
-    TRAVEL = enum.auto()  # offsets of the four travel sensors [m]
+    TRAVEL = enum.auto()  # offsets of the four travel sensors [m] (three observable combinations)
     ACCELERATION = enum.auto()  # ax, ay biases [m/s^2]
+    RIDE_HEIGHT = enum.auto()  # one offset per axle, both sensors alike [m]
+    LATERAL = enum.auto()  # ay bias only [m/s^2]
 
     def label(self) -> str:
         names = [name for name, flag in (("travel", BiasStates.TRAVEL),
-                 ("ax/ay", BiasStates.ACCELERATION)) if flag in self]  # fmt: skip
+                 ("ride height", BiasStates.RIDE_HEIGHT), ("ax/ay", BiasStates.ACCELERATION),
+                 ("ay", BiasStates.LATERAL)) if flag in self]  # fmt: skip
         return "+".join(names) + " bias" if names else ""
+
+    @property
+    def travel_states(self) -> int:
+        """Number of travel-offset variables."""
+        return 3 if BiasStates.TRAVEL in self else 2 if BiasStates.RIDE_HEIGHT in self else 0
+
+    @property
+    def acceleration_columns(self) -> list[int]:
+        """Columns of (ax, ay) with a bias state."""
+        if BiasStates.ACCELERATION in self:
+            return [0, 1]
+        return [1] if BiasStates.LATERAL in self else []
 
 
 def bias_scales(bias: BiasStates, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Initial std, bound and random-walk density of each bias variable (QP units)."""
     tuning = vehicle.filter.bias
-    std, bound, density = [], [], []
-    if BiasStates.TRAVEL in bias:  # three observable combinations (see travel_basis)
-        std += [tuning.travel_offset_std / TRAVEL_UNIT] * 3
-        bound += [tuning.travel_offset_bound / TRAVEL_UNIT] * 3
-        density += [tuning.travel_offset_density / TRAVEL_UNIT**2] * 3
-    if BiasStates.ACCELERATION in bias:
-        std += [tuning.acceleration_bias_std] * 2
-        bound += [tuning.acceleration_bias_bound] * 2
-        density += [tuning.acceleration_bias_density] * 2
+    nd, na = bias.travel_states, len(bias.acceleration_columns)
+    std = [tuning.travel_offset_std / TRAVEL_UNIT] * nd + [tuning.acceleration_bias_std] * na
+    bound = [tuning.travel_offset_bound / TRAVEL_UNIT] * nd
+    bound += [tuning.acceleration_bias_bound] * na
+    density = [tuning.travel_offset_density / TRAVEL_UNIT**2] * nd
+    density += [tuning.acceleration_bias_density] * na
     return np.array(std), np.array(bound), np.array(density)
 
 
@@ -129,6 +154,15 @@ def travel_basis(Jd: np.ndarray, null: np.ndarray) -> np.ndarray:
     return Vt[1:].T
 
 
+def ride_height_basis() -> np.ndarray:
+    r"""Basis (4 x 2) of per-axle offsets, both sensors of an axle alike (unit columns).
+
+    Orthogonal to the warp for a left-right symmetric suspension:
+    :math:`n^\top J_d T = 0` (tested).
+    """
+    return np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]) / math.sqrt(2.0)
+
+
 @dataclass(frozen=True, eq=False)
 class WindowSample:
     """What one sample contributes (physical units; ``ls, lc`` are the rows' sqrt weights)."""
@@ -136,7 +170,7 @@ class WindowSample:
     z: np.ndarray  # (4,) pseudo-measurement [N]
     Jd: np.ndarray  # (4, 4) dz/dd [N/m]
     b: np.ndarray  # (3,) equilibrium right-hand side
-    Ba: np.ndarray  # (3, 2) db/d(ax, ay)
+    Ba: np.ndarray  # (3, na) db/d(ax, ay), the columns with a bias state
     ls: np.ndarray  # (4,) sqrt(mask dt / r_s) [1/N]
     lc: np.ndarray  # (3,) sqrt(mask dt / r_c)
     xp: np.ndarray  # (4,) hard: A^+ b [N]; soft: zeros
@@ -209,7 +243,8 @@ class WindowQP:
     def _structure(self) -> np.ndarray:
         """Every entry that can be non-zero (assembled with all-one data, arrival everywhere)."""
         one = WindowSample(
-            z=np.ones(4), Jd=np.ones((4, 4)), b=np.ones(3), Ba=np.ones((3, 2)),
+            z=np.ones(4), Jd=np.ones((4, 4)), b=np.ones(3),
+            Ba=np.ones((3, self.n_bias - self.travel_basis.shape[1])),
             ls=np.ones(4), lc=np.ones(3), xp=np.ones(4), link=1.0,
             lower=np.zeros(self.w), upper=np.ones(self.w),
         )  # fmt: skip
@@ -233,7 +268,7 @@ class WindowQP:
         g = np.zeros(size)
         y = np.arange(self.w)
         beta = np.arange(self.width, size)
-        nd = 3 if self.travel_bias else 0
+        nd = self.travel_basis.shape[1]
         # suspension rows: rho = ls (z - xp - X y - Jd delta)
         Ms = np.zeros((4, self.w + self.n_bias))
         Ms[:, : self.w] = -self.X
@@ -332,13 +367,34 @@ class WindowQP:
                 return self.solver.solve(raise_error=False)
         return self.solver.solve(raise_error=False)
 
+    def solve_raw(self, H, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
+        """:meth:`solve` through OSQP's solver object: ``(status, iterations, x, y)``.
+
+        The same calls in the same order as the wrapper makes them (vectors, then
+        the matrix; bounds clamped to OSQP's infinity), without its result object.
+        """
+        solver = self.solver._solver
+        infinity = osqp.constant("OSQP_INFTY")
+        solver.update_data_vec(q=g, l=np.maximum(low, -infinity), u=np.minimum(high, infinity))
+        solver.update_data_mat(
+            P_x=H[self.rows, self.cols][self.order], P_i=None, A_x=None, A_i=None
+        )
+        solver.warm_start(x, y)
+        if self.solver_settings.polish:
+            with quiet_stdout():
+                solver.solve()
+        else:
+            solver.solve()
+        info = solver.info
+        return int(info.status_val), int(info.iter), solver.solution.x, solver.solution.y
+
     def bias_information(self, sample: WindowSample, rho_s, rho_c) -> np.ndarray:
         """The bias information of one sample with its loads eliminated (Schur complement).
 
         Rows take the loss's effective weight at the solution's residuals
         (Huber: min(1, delta/|rho|)), so an outlier adds little.
         """
-        nd = 3 if self.travel_bias else 0
+        nd = self.travel_basis.shape[1]
         M, weights = [], []
         Ms = np.zeros((4, self.w + self.n_bias))
         Ms[:, : self.w] = -self.X

@@ -27,6 +27,7 @@ from wheelload.studies.experiments import command as experiment_command
 from wheelload.studies.faults import Fault
 from wheelload.studies.mhe_vs_kf import (
     HORIZONS,
+    PLAIN_KF,
     StudySettings,
     against_kf,
     mhe_vs_kf,
@@ -73,7 +74,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument(
         "--quick",
         action="store_true",
-        help="short segments, few trials; mhe-vs-kf robust sweep: KF, RTS, lagged and L1 MHE only",
+        help="short segments, few trials; mhe-vs-kf robust sweep: the KF with and without its "
+        "guards, RTS, the lagged and the Huber 0.5σ MHE only",
     )
     study.add_argument(
         "--horizons", type=int, nargs="+", default=list(HORIZONS), help="equivalence sweep"
@@ -100,7 +102,10 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")
     bench.add_argument(
-        "--repeats", type=int, default=3, help="runs of each generated C (default 3)"
+        "--repeats",
+        type=int,
+        default=3,
+        help="runs of each generated C and of the window against bare OSQP (default 3)",
     )
     bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     add_allow_unusual(bench)
@@ -190,8 +195,11 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
     print("pooled RMSE [N] per injected fault (reference: the clean log's loads)")
     print(table.to_string(float_format=lambda v: f"{v:.1f}"))
-    print("change against the two-stage KF on the same fault [%]")
+    print("change against the two-stage KF (with its guards) on the same fault [%]")
     print(change.to_string())
+    if PLAIN_KF in table.index:
+        print("change against the plain KF (no guards) on the same fault [%]")
+        print(against_kf(table, faults, PLAIN_KF).to_string())
     print(f"written {out.with_suffix('.csv')} and {out.with_name(out.name + '-vs-kf.csv')}")
     return 0
 
@@ -212,6 +220,7 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"{'estimator':38s} {'median us':>10s} {'p99 us':>10s} {'x KF step':>10s}")
     print(f"{'KF step (Python, CasADi call)':38s} {kf_step:10.1f} {'':>10s} {1.0:10.2f}")
     print(f"{'KF run (compiled loop, amortised)':38s} {kf_run:10.2f}")
+    _bench_window(vehicle, signals, args.horizons, args.repeats)
     c_available = not args.no_c and shutil.which("gcc") is not None
     for horizon in args.horizons:
         for constraint in Constraint:
@@ -246,6 +255,32 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"{'KF + RTS smoother (compiled, amortised)':38s} {np.median(smooth):10.2f} "
           f"{'':>10s} (min {min(smooth):.2f}, max {max(smooth):.2f})")  # fmt: skip
     return 0
+
+
+def _bench_window(vehicle, signals, horizons: list[int], repeats: int) -> None:
+    """The window from Python against a bare OSQP solve of the same QPs (min/median/max)."""
+    from wheelload.studies.mhe_bench import window_against_bare_osqp
+
+    if repeats < 1:
+        raise ValueError(f"--repeats must be >= 1, got {repeats}")
+    print(f"MHE window from Python (ring buffers: update + solve) against bare OSQP solving the "
+          f"same QPs, per sample; {repeats} repeats: min / median / max")  # fmt: skip
+    for horizon in horizons:
+        for constraint in Constraint:
+            for bounded in (False, True):
+                settings = MheSettings(horizon=horizon, constraint=constraint, bounded=bounded)
+                rows = window_against_bare_osqp(vehicle, signals, settings, repeats)
+                for label, mhe, bare in (
+                    ("median", [r.mhe_median for r in rows], [r.bare_median for r in rows]),
+                    ("mean", [r.mhe for r in rows], [r.bare for r in rows]),
+                ):
+                    mhe, bare = np.array(mhe), np.array(bare)
+                    print(f"  {settings.label():30s} {label:6s} MHE {_spread(mhe)} us, bare OSQP "
+                          f"{_spread(bare)} us, ratio {_spread(mhe / bare, '.2f')}")  # fmt: skip
+
+
+def _spread(values: np.ndarray, fmt: str = ".1f") -> str:
+    return " / ".join(format(v, fmt) for v in (values.min(), np.median(values), values.max()))
 
 
 def _bench_c(

@@ -1,0 +1,82 @@
+"""The Python MHE window against a bare OSQP solve of the same QPs (``wheelload bench mhe``).
+
+The MHE runs a log once recording each sample's QP (Hessian values, linear
+term, bounds, warm start); the same QPs are then replayed on a fresh OSQP
+problem of the same pattern and settings through the solver object alone
+(update what changed, warm-start, solve). The ratio is the window's
+bookkeeping cost on top of OSQP's own, per sample, from Python.
+
+Example
+-------
+>>> rows = window_against_bare_osqp(vehicle, signals, MheSettings(horizon=20), repeats=3)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from wheelload.estimators import Signals
+from wheelload.estimators.mhe import MheSettings, MovingHorizonEstimator, _Workspace
+from wheelload.estimators.mhe_ring import INFINITY
+from wheelload.models import Vehicle
+
+
+@dataclass(frozen=True, kw_only=True)
+class WindowTiming:
+    """Per-sample times [us] of one repeat."""
+
+    mhe: float  # mean window update + solve, from the estimator's solve_time
+    bare: float  # mean bare OSQP update + warm start + solve of the same QPs
+    mhe_median: float
+    bare_median: float
+
+
+def _replay(settings: MheSettings, width: int, record: list) -> np.ndarray:
+    """Time each recorded QP on a fresh workspace, driven like the window drives it."""
+    solver = _Workspace(settings, width).solver._solver
+    times = np.empty(len(record))
+    held = None
+    for i, (Px, q, low, high, x, y) in enumerate(record):
+        start = time.perf_counter()
+        if held is None or not np.array_equal(Px, held):
+            solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
+            held = Px
+        if low is None:
+            solver.update_data_vec(q=q, l=None, u=None)
+        else:
+            solver.update_data_vec(q=q, l=np.maximum(low, -INFINITY), u=np.minimum(high, INFINITY))
+        solver.warm_start(x, y if y.size else None)
+        solver.solve()
+        solver.solution.x  # noqa: B018 - read the solution as the window does
+        times[i] = time.perf_counter() - start
+    return times
+
+
+def window_against_bare_osqp(
+    vehicle: Vehicle, signals: Signals, settings: MheSettings, repeats: int = 3
+) -> list[WindowTiming]:
+    """Repeated timings of the MHE window and of bare OSQP on the same QPs."""
+    mhe = MovingHorizonEstimator(vehicle, settings)
+    mhe.run(signals.slice(0, 50))  # builds and warms the mapped terms
+    rows = []
+    for _ in range(repeats):
+        estimate = mhe.run(signals)
+        record: list = []
+        mhe._qp_record = record
+        mhe.run(signals)
+        mhe._qp_record = None
+        bare = _replay(settings, mhe.width, record)
+        solved = estimate.iterations > 0
+        mhe_times = estimate.solve_time[solved] * 1e6
+        rows.append(
+            WindowTiming(
+                mhe=float(np.mean(mhe_times)),
+                bare=float(np.mean(bare)) * 1e6,
+                mhe_median=float(np.median(mhe_times)),
+                bare_median=float(np.median(bare)) * 1e6,
+            )
+        )
+    return rows
