@@ -31,7 +31,11 @@ Terms beyond the paper, each times its gate (``wheelload.models.terms``):
   :math:`\theta` relative to the road the wheel load exceeds the body-z force
   by :math:`F_{y,i} \sin\varphi - F_{x,i} \sin\theta`. The tyres share
   the axle's lateral and the car's longitudinal force in proportion to the
-  wheel loads of :func:`travel_loads` (equal friction use);
+  rigid-body wheel loads of
+  :func:`~wheelload.models.load_transfer.algebraic_loads` with the roll
+  split :math:`\lambda` of :mod:`~wheelload.models.roll_split` (equal friction
+  use; mass, geometry and :math:`\lambda` only, so the model stays linear in the suspension
+  parameters that identification fits);
 - unsprung inertia: a hub accelerometer (specific force along body z,
   :math:`+g` at rest) gives the unsprung mass's load :math:`m_u a_{hub}`;
   its static part is already in :math:`F_{z,i,0}`.
@@ -115,7 +119,7 @@ def link_loads(f_road, vx, p: ModelParameters) -> list:
     return loads
 
 
-def tyre_force_loads(f_road, vx, phi, theta, wheel_loads, p: ModelParameters) -> list:
+def tyre_force_loads(f_road, vx, phi, theta, p: ModelParameters) -> list:
     r"""Jacking and body-tilt load per corner FL, FR, RL, RR [N] (module docstring).
 
     .. math::
@@ -125,14 +129,20 @@ def tyre_force_loads(f_road, vx, phi, theta, wheel_loads, p: ModelParameters) ->
             + F_{y,i} \sin\varphi - F_{x,i} \sin\theta
 
     with :math:`F_{y,f} = m \tilde f_y l_r / l`, :math:`F_x = m \tilde f_x + D`,
-    :math:`F_{z,i}` the ``wheel_loads`` (clipped at 0) and :math:`\varphi,
-    \theta` the body attitude relative to the road (ISO 8855: right side down,
-    nose down).
+    :math:`F_{z,i}` the rigid-body loads of
+    :func:`~wheelload.models.load_transfer.algebraic_loads` at :math:`\tilde f`
+    with the front share ``p.roll_split_front`` of the lateral transfer (clipped at
+    0) and :math:`\varphi, \theta` the body attitude relative to the road
+    (ISO 8855: right side down, nose down).
     """
+    # load_transfer imports this module (travel_loads): import here, not at the top.
+    from wheelload.models.load_transfer import algebraic_loads
+
     wheelbase = p.lf + p.lr
     _, drag = aero_forces(vx, p)
     force_x = p.mass * f_road[0] + drag
-    loads = [ca.fmax(load, 0.0) for load in wheel_loads]
+    rigid = algebraic_loads(f_road, p, p.roll_split_front)
+    loads = [ca.fmax(rigid[i], 0.0) for i in range(4)]
     total = ca.fmax(loads[0] + loads[1] + loads[2] + loads[3], 1.0)
     axles = ((p.lr, p.roll_centre_front, p.track_front), (p.lf, p.roll_centre_rear, p.track_rear))
     result = []
@@ -158,7 +168,7 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     f_road, _, _, phi, theta, _ = road_motion(inputs, gates, p)
     paper = travel_loads(d, inputs.v, p, damper)
     couples = link_loads(f_road, inputs.vx, p)
-    tyres = tyre_force_loads(f_road, inputs.vx, phi, theta, [paper[i] for i in range(4)], p)
+    tyres = tyre_force_loads(f_road, inputs.vx, phi, theta, p)
     links = [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
     axles = (
         (p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front, p.stop_progressive_front,
