@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.body_attitude import attitude_from_travel
 from wheelload.models.equilibrium import aero_forces
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
@@ -119,7 +120,7 @@ def link_loads(f_road, vx, p: ModelParameters) -> list:
     return loads
 
 
-def tyre_force_loads(f_road, vx, phi, theta, p: ModelParameters) -> list:
+def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
     r"""Jacking and body-tilt load per corner FL, FR, RL, RR [N] (module docstring).
 
     .. math::
@@ -133,7 +134,11 @@ def tyre_force_loads(f_road, vx, phi, theta, p: ModelParameters) -> list:
     :func:`~wheelload.models.load_transfer.algebraic_loads` at :math:`\tilde f`
     with the front share ``p.roll_split_front`` of the lateral transfer (clipped at
     0) and :math:`\varphi, \theta` the body attitude relative to the road
-    (ISO 8855: right side down, nose down).
+    (ISO 8855: right side down, nose down) of
+    :func:`~wheelload.models.body_attitude.attitude_from_travel` on the corner
+    motions :math:`d_i + (F_{z,i} - F_{z,i}^{rest}) / k_{t,a}` (travel plus
+    tyre deflection under the rigid-body loads, so that the attitude, too,
+    holds no identified parameter).
     """
     # load_transfer imports this module (travel_loads): import here, not at the top.
     from wheelload.models.load_transfer import algebraic_loads
@@ -142,6 +147,10 @@ def tyre_force_loads(f_road, vx, phi, theta, p: ModelParameters) -> list:
     _, drag = aero_forces(vx, p)
     force_x = p.mass * f_road[0] + drag
     rigid = algebraic_loads(f_road, p, p.roll_split_front)
+    rest = algebraic_loads(ca.vertcat(0.0, 0.0, GRAVITY), p, p.roll_split_front)
+    rates = (p.tyre_rate_front, p.tyre_rate_front, p.tyre_rate_rear, p.tyre_rate_rear)
+    motion = [d[i] + (rigid[i] - rest[i]) / rates[i] for i in range(4)]
+    phi, theta = attitude_from_travel(motion, p.track_front, p.track_rear, wheelbase)
     loads = [ca.fmax(rigid[i], 0.0) for i in range(4)]
     total = ca.fmax(loads[0] + loads[1] + loads[2] + loads[3], 1.0)
     axles = ((p.lr, p.roll_centre_front, p.track_front), (p.lf, p.roll_centre_rear, p.track_rear))
@@ -165,10 +174,10 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     """
     inputs = ModelInputs.unpack(u)
     d = inputs.d
-    f_road, _, _, phi, theta, _ = road_motion(inputs, gates, p)
+    f_road = road_motion(inputs, gates, p)[0]
     paper = travel_loads(d, inputs.v, p, damper)
     couples = link_loads(f_road, inputs.vx, p)
-    tyres = tyre_force_loads(f_road, inputs.vx, phi, theta, p)
+    tyres = tyre_force_loads(f_road, inputs.vx, d, p)
     links = [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
     axles = (
         (p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front, p.stop_progressive_front,
