@@ -101,8 +101,8 @@ def test_pseudo_measurement_matches_the_plant_in_a_steady_turn(car):
     body-z force while the wheel load is along the road normal (the body
     rolls ~1-3 deg). Without the per-wheel tyre-force term the mean errors
     were sports car -37, -45, -53, -59 N (sum -193), SUV -174, -251, -192,
-    -233 N (sum -849); with it 7, 9, 2, 8 N (sum 25) and 9, 25, 11, 39 N
-    (sum 83): the model shares the lateral force in proportion to rigid-body
+    -233 N (sum -849); with it 7, 10, 2, 9 N (sum 28) and 11, 29, 13, 43 N
+    (sum 96): the model shares the lateral force in proportion to rigid-body
     loads, the plant's load-sensitive tyres less steeply.
     """
     vehicle, frame = clean_log(car, "brake-in-turn")
