@@ -32,8 +32,9 @@ Terms beyond the paper, each times its gate (``wheelload.models.terms``):
   by :math:`F_{y,i} \sin\varphi - F_{x,i} \sin\theta`. The tyres share
   the axle's lateral and the car's longitudinal force in proportion to the
   rigid-body wheel loads of
-  :func:`~wheelload.models.load_transfer.algebraic_loads` (equal friction
-  use; mass and geometry only, so the model stays linear in the suspension
+  :func:`~wheelload.models.load_transfer.algebraic_loads` with the roll
+  split :math:`\lambda` of :mod:`~wheelload.models.roll_split` (equal friction
+  use; mass, geometry and :math:`\lambda` only, so the model stays linear in the suspension
   parameters that identification fits);
 - unsprung inertia: a hub accelerometer (specific force along body z,
   :math:`+g` at rest) gives the unsprung mass's load :math:`m_u a_{hub}`;
@@ -131,7 +132,8 @@ def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
     with :math:`F_{y,f} = m \tilde f_y l_r / l`, :math:`F_x = m \tilde f_x + D`,
     :math:`F_{z,i}` the rigid-body loads of
     :func:`~wheelload.models.load_transfer.algebraic_loads` at :math:`\tilde f`
-    (clipped at 0) and :math:`\varphi, \theta` the body attitude relative to the road
+    with the front share ``p.roll_split_front`` of the lateral transfer (clipped at
+    0) and :math:`\varphi, \theta` the body attitude relative to the road
     (ISO 8855: right side down, nose down) of
     :func:`~wheelload.models.body_attitude.attitude_from_travel` on the corner
     motions :math:`d_i + (F_{z,i} - F_{z,i}^{rest}) / k_{t,a}` (travel plus
@@ -144,8 +146,8 @@ def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
     wheelbase = p.lf + p.lr
     _, drag = aero_forces(vx, p)
     force_x = p.mass * f_road[0] + drag
-    rigid = algebraic_loads(f_road, p)
-    rest = algebraic_loads(ca.vertcat(0.0, 0.0, GRAVITY), p)
+    rigid = algebraic_loads(f_road, p, p.roll_split_front)
+    rest = algebraic_loads(ca.vertcat(0.0, 0.0, GRAVITY), p, p.roll_split_front)
     rates = (p.tyre_rate_front, p.tyre_rate_front, p.tyre_rate_rear, p.tyre_rate_rear)
     motion = [d[i] + (rigid[i] - rest[i]) / rates[i] for i in range(4)]
     phi, theta = attitude_from_travel(motion, p.track_front, p.track_rear, wheelbase)

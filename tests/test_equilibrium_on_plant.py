@@ -94,7 +94,7 @@ def test_plant_pseudo_measurement_error_falls_with_link_loads(car):
 # Per wheel and summed [N]: what the model's load-proportional share of the tyre side
 # forces leaves against the plant's load-sensitive tyres grows with the roll angle
 # (sports car 0.9 deg, SUV 3.2 deg in this turn).
-STEADY_TURN_TOLERANCE = {"sports_car": (25.0, 50.0), "suv": (80.0, 150.0)}
+STEADY_TURN_TOLERANCE = {"sports_car": (25.0, 50.0), "suv": (50.0, 120.0)}
 
 
 @pytest.mark.parametrize("car", sorted(VEHICLES))
@@ -106,8 +106,8 @@ def test_pseudo_measurement_matches_the_plant_in_a_steady_turn(car):
     the roll centre (jacking beyond the axle couple) and its springs carry
     body-z force while the wheel load is along the road normal. Without the
     per-wheel tyre-force term the mean errors were sports car -37, -45, -53,
-    -59 N (sum -193), SUV -174, -251, -192, -233 N (sum -849); with it 10, 14,
-    -2, 3 N (sum 25) and 3, 8, 28, 71 N (sum 111).
+    -59 N (sum -193), SUV -174, -251, -192, -233 N (sum -849); with it 7, 10,
+    2, 9 N (sum 28) and 11, 29, 13, 43 N (sum 96).
     """
     vehicle, frame = clean_log(car, "brake-in-turn")
     steady = ((frame["t"] >= 5.0) & (frame["t"] <= 9.0)).to_numpy()

@@ -109,7 +109,7 @@ def _tyre_force_terms(vehicle, acc):
     c = vehicle_mass_centre(vehicle)
     L, m, h = c.lf + c.lr, vehicle.mass.total, c.height
     g, t = vehicle.geometry, vehicle.tyres
-    split = c.lr / L  # the rigid body's front share of the lateral transfer
+    split = ModelParameters.from_vehicle(vehicle).roll_split_front
     fx, fy, fz = acc
 
     def rigid(fx, fy, fz):
