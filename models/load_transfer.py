@@ -52,15 +52,20 @@ def body_attitude(d, p: ModelParameters):
     return pitch, roll
 
 
-def algebraic_loads(acc, p: ModelParameters):
-    """Alatorre-style wheel loads from road-frame specific force ``acc`` (module docstring)."""
+def algebraic_loads(acc, p: ModelParameters, front_share=None):
+    """Alatorre-style wheel loads from road-frame specific force ``acc`` (module docstring).
+
+    ``front_share`` (e.g. ``p.roll_split_front``) replaces the front axle's
+    share :math:`l_r / L` of the lateral load transfer :math:`m h f_y`.
+    """
     fx, fy, fz = acc[0], acc[1], acc[2]
     m, h, lf, lr = p.mass, p.cg_height, p.lf, p.lr
     L = lf + lr
+    share = lr / L if front_share is None else front_share
     front = m / (2 * L) * (lr * fz - h * fx)
     rear = m / (2 * L) * (lf * fz + h * fx)
-    lateral_front = m * h * lr / (L * p.track_front) * fy
-    lateral_rear = m * h * lf / (L * p.track_rear) * fy
+    lateral_front = m * h * share / p.track_front * fy
+    lateral_rear = m * h * (1 - share) / p.track_rear * fy
     return ca.vertcat(
         front - lateral_front, front + lateral_front, rear - lateral_rear, rear + lateral_rear
     )

@@ -21,6 +21,21 @@ Terms beyond the paper, each times its gate (``wheelload.models.terms``):
   :math:`\mp h F_x / l` per axle (:math:`F_x = m \tilde f_x + D`) the links
   carry the anti-pitch share :math:`\epsilon_a` (brake share when
   :math:`F_x < 0`, drive share otherwise);
+- tyre in-plane forces per wheel (same gate, :func:`tyre_force_loads`): each
+  wheel's lateral force :math:`F_{y,i}` reaches the body along the line from
+  its contact patch through the roll centre, :math:`\mp F_{y,i} h_{rc,a} /
+  (T_a/2)`, whose part beyond the axle couple above is the jacking force
+  :math:`(F_{y,R} - F_{y,L}) h_{rc,a} / T_a` on both wheels; and the
+  suspension carries body-z force while the wheel load is along the road
+  normal, so with the body rolled by :math:`\varphi` and pitched by
+  :math:`\theta` relative to the road the wheel load exceeds the body-z force
+  by :math:`F_{y,i} \sin\varphi - F_{x,i} \sin\theta`. The tyres share
+  the axle's lateral and the car's longitudinal force in proportion to the
+  rigid-body wheel loads of
+  :func:`~wheelload.models.load_transfer.algebraic_loads` with the roll
+  split :math:`\lambda` of :mod:`~wheelload.models.roll_split` (equal friction
+  use; mass, geometry and :math:`\lambda` only, so the model stays linear in the suspension
+  parameters that identification fits);
 - unsprung inertia: a hub accelerometer (specific force along body z,
   :math:`+g` at rest) gives the unsprung mass's load :math:`m_u a_{hub}`;
   its static part is already in :math:`F_{z,i,0}`.
@@ -35,6 +50,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.body_attitude import attitude_from_travel
 from wheelload.models.equilibrium import aero_forces
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
@@ -44,7 +60,7 @@ from wheelload.models.suspension_elements import (
     piecewise_damper_force,
     stop_force,
 )
-from wheelload.models.terms import GATES, gate, road_motion
+from wheelload.models.terms import GATES, gate, road_motion, small_sin
 from wheelload.models.vehicle import GRAVITY
 
 __all__ = [
@@ -55,6 +71,7 @@ __all__ = [
     "suspension_function",
     "travel_function",
     "travel_loads",
+    "tyre_force_loads",
 ]
 
 
@@ -103,6 +120,53 @@ def link_loads(f_road, vx, p: ModelParameters) -> list:
     return loads
 
 
+def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
+    r"""Jacking and body-tilt load per corner FL, FR, RL, RR [N] (module docstring).
+
+    .. math::
+        F_{y,i} = F_{y,a} \frac{F_{z,i}}{F_{z,L} + F_{z,R}}, \quad
+        F_{x,i} = F_x \frac{F_{z,i}}{\sum_j F_{z,j}}, \quad
+        \Delta F_{z,i} = \frac{(F_{y,R} - F_{y,L}) h_{rc,a}}{T_a}
+            + F_{y,i} \sin\varphi - F_{x,i} \sin\theta
+
+    with :math:`F_{y,f} = m \tilde f_y l_r / l`, :math:`F_x = m \tilde f_x + D`,
+    :math:`F_{z,i}` the rigid-body loads of
+    :func:`~wheelload.models.load_transfer.algebraic_loads` at :math:`\tilde f`
+    with the front share ``p.roll_split_front`` of the lateral transfer (clipped at
+    0) and :math:`\varphi, \theta` the body attitude relative to the road
+    (ISO 8855: right side down, nose down) of
+    :func:`~wheelload.models.body_attitude.attitude_from_travel` on the corner
+    motions :math:`d_i + (F_{z,i} - F_{z,i}^{rest}) / k_{t,a}` (travel plus
+    tyre deflection under the rigid-body loads, so that the attitude, too,
+    holds no identified parameter).
+    """
+    # load_transfer imports this module (travel_loads): import here, not at the top.
+    from wheelload.models.load_transfer import algebraic_loads
+
+    wheelbase = p.lf + p.lr
+    _, drag = aero_forces(vx, p)
+    force_x = p.mass * f_road[0] + drag
+    rigid = algebraic_loads(f_road, p, p.roll_split_front)
+    rest = algebraic_loads(ca.vertcat(0.0, 0.0, GRAVITY), p, p.roll_split_front)
+    rates = (p.tyre_rate_front, p.tyre_rate_front, p.tyre_rate_rear, p.tyre_rate_rear)
+    motion = [d[i] + (rigid[i] - rest[i]) / rates[i] for i in range(4)]
+    phi, theta = attitude_from_travel(motion, p.track_front, p.track_rear, wheelbase)
+    loads = [ca.fmax(rigid[i], 0.0) for i in range(4)]
+    total = ca.fmax(loads[0] + loads[1] + loads[2] + loads[3], 1.0)
+    axles = ((p.lr, p.roll_centre_front, p.track_front), (p.lf, p.roll_centre_rear, p.track_rear))
+    result = []
+    for axle, (arm, height, track) in enumerate(axles):
+        left, right = loads[2 * axle], loads[2 * axle + 1]
+        force_y = p.mass * f_road[1] * arm / wheelbase
+        share_left = left / ca.fmax(left + right, 1.0)
+        share_right = right / ca.fmax(left + right, 1.0)
+        jacking = force_y * (share_right - share_left) * height / track
+        for share, load in ((share_left, left), (share_right, right)):
+            tilt = force_y * share * small_sin(phi) - force_x * load / total * small_sin(theta)
+            result.append(jacking + tilt)
+    return result
+
+
 def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     """Pseudo-measured wheel loads FL, FR, RL, RR from the inputs ``u`` (eq. 9 + terms).
 
@@ -111,8 +175,10 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     inputs = ModelInputs.unpack(u)
     d = inputs.d
     f_road = road_motion(inputs, gates, p)[0]
-    links = link_loads(f_road, inputs.vx, p)
     paper = travel_loads(d, inputs.v, p, damper)
+    couples = link_loads(f_road, inputs.vx, p)
+    tyres = tyre_force_loads(f_road, inputs.vx, d, p)
+    links = [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
     axles = (
         (p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front, p.stop_progressive_front,
          p.unsprung_front),

@@ -67,8 +67,13 @@ def residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> dict[str, float]:
     return dict(zip(ROWS, np.sqrt(np.mean(residual**2, axis=0)).tolist(), strict=True))
 
 
-def suspension_residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> float:
-    """Pooled RMS [N] of the pseudo-measurement :math:`z(u)` against the reference loads."""
+def suspension_residuals(vehicle: Vehicle, frame: pd.DataFrame) -> np.ndarray:
+    """Per-sample pseudo-measurement error :math:`z(u) - F_{ref}` (n, 4) [N], FL FR RL RR."""
     signals, n, u, gates, p = _model_inputs(vehicle, frame)
     z = np.asarray(suspension_function().map(n)(u, gates, p)).T
-    return float(np.sqrt(np.mean((z - signals.reference) ** 2)))
+    return z - signals.reference
+
+
+def suspension_residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> float:
+    """Pooled RMS [N] of the pseudo-measurement :math:`z(u)` against the reference loads."""
+    return float(np.sqrt(np.mean(suspension_residuals(vehicle, frame) ** 2)))

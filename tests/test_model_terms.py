@@ -100,6 +100,45 @@ def test_body_inertia_signs(vehicle):
     np.testing.assert_allclose(on - off, [0.0, -Iyy * 1.0, Ixx * 2.0], rtol=1e-12, atol=1e-9)
 
 
+def _tyre_force_terms(vehicle, acc):
+    """Jacking and tilt per wheel at zero travel, by hand (models/suspension.py docstring).
+
+    Tyre forces shared by rigid-body loads with the roll split; attitude from the
+    tyre deflections under those loads; the specific force ``acc`` in road axes.
+    """
+    c = vehicle_mass_centre(vehicle)
+    L, m, h = c.lf + c.lr, vehicle.mass.total, c.height
+    g, t = vehicle.geometry, vehicle.tyres
+    split = ModelParameters.from_vehicle(vehicle).roll_split_front
+    fx, fy, fz = acc
+
+    def rigid(fx, fy, fz):
+        front, rear = m / (2 * L) * (c.lr * fz - h * fx), m / (2 * L) * (c.lf * fz + h * fx)
+        lat_f, lat_r = m * h * split / g.track_front * fy, m * h * (1 - split) / g.track_rear * fy
+        return np.array([front - lat_f, front + lat_f, rear - lat_r, rear + lat_r])
+
+    loads = rigid(fx, fy, fz)
+    rates = np.array([t.vertical_stiffness_front] * 2 + [t.vertical_stiffness_rear] * 2)
+    e = (loads - rigid(0.0, 0.0, GRAVITY)) / rates
+    phi = 0.5 * ((e[1] - e[0]) / g.track_front + (e[3] - e[2]) / g.track_rear)
+    theta = (e[0] + e[1] - e[2] - e[3]) / (2 * L)
+    force_x = m * fx  # vx = 0: no drag
+    heights = (
+        vehicle.suspension.front.roll_centre_height,
+        vehicle.suspension.rear.roll_centre_height,
+    )
+    result = []
+    for axle, (arm, track) in enumerate(((c.lr, g.track_front), (c.lf, g.track_rear))):
+        force_y = m * fy * arm / L
+        left, right = loads[2 * axle], loads[2 * axle + 1]
+        jacking = force_y * (right - left) / (left + right) * heights[axle] / track
+        for load in (left, right):
+            share = load / (left + right)
+            tilt = force_y * share * np.sin(phi) - force_x * load / loads.sum() * np.sin(theta)
+            result.append(jacking + tilt)
+    return np.array(result)
+
+
 def test_link_loads_follow_roll_centre_and_anti_pitch(vehicle):
     c = vehicle_mass_centre(vehicle)
     L, m = c.lf + c.lr, vehicle.mass.total
@@ -111,13 +150,16 @@ def test_link_loads_follow_roll_centre_and_anti_pitch(vehicle):
                    "geometric_transfer")  # fmt: skip
     f = m * a * c.lr / L * front.roll_centre_height / g.track_front
     r = m * a * c.lf / L * rear.roll_centre_height / g.track_rear
-    np.testing.assert_allclose(z - z0, [-f, f, -r, r], rtol=1e-9)  # left turn loads the right
+    tyres = _tyre_force_terms(vehicle, (0.0, a, GRAVITY))
+    # a left turn loads the right wheels; jacking and tilt raise every wheel's load
+    assert np.all(tyres > 0)
+    np.testing.assert_allclose(z - z0, np.array([-f, f, -r, r]) + tyres, rtol=1e-6)
     braking = input_vector(d=np.zeros(4), acc=[-a, 0, GRAVITY], vx=0.0)
     _, _, z = rows(vehicle, braking, "geometric_transfer")
     transfer = m * c.height * a / L  # rigid, per axle, to the front
     shares = [front.anti_pitch_brake] * 2 + [-rear.anti_pitch_brake] * 2
-    expected = 0.5 * transfer * np.array(shares)
-    np.testing.assert_allclose(z - static_loads(vehicle), expected, rtol=1e-9)
+    expected = 0.5 * transfer * np.array(shares) + _tyre_force_terms(vehicle, (-a, 0.0, GRAVITY))
+    np.testing.assert_allclose(z - static_loads(vehicle), expected, rtol=1e-6)
 
 
 def test_stops_and_hub_accelerometers_in_the_pseudo_measurement(vehicle):
