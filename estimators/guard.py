@@ -39,6 +39,7 @@ from types import SimpleNamespace
 
 import casadi as ca
 
+from wheelload.models import Vehicle
 from wheelload.models.inputs import (
     HUB_ACCELERATION,
     INPUTS,
@@ -60,16 +61,20 @@ class GuardSettings:
     """Thresholds of the guards (all > 0); defaults tested on the bundled scenarios."""
 
     innovation_gate: float = 9.0  # chi^2_1 threshold on y^2 / S (3 sigma)
-    gate_release_time: float = 0.5  # s of consecutive rejections after which a row is taken
+    gate_release_time: float = 0.005  # s failing the gate after which a row is taken
+    spread_time_constant: float = 1.0  # s, memory of each row's innovation spread
     max_acceleration: float = 3.0  # g, |ax|, |ay|, |az|
     max_speed: float = 120.0  # m/s, |vx|
     max_travel_rate: float = 5.0  # m/s, |v|
     travel_range: float = 1.0  # |d| <= travel_range * m g / k: spring force of the whole weight
     covariance_floor: float = 1.0  # N, smallest standard deviation kept
     stuck_time: float = 0.25  # s without change while another corner moves
+    stuck_motion: float = 8e-5  # m another corner must move within stuck_time (2 LSB of 12 bit)
     parity_time_constant: float = 1.0  # s, low-pass of the parity residual
     travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated
-    acceleration_fault: float = 1.2  # m/s^2, smallest accelerometer fault isolated
+    ax_fault: float = 1.2  # m/s^2, smallest ax fault isolated
+    ay_fault: float = 1.2  # m/s^2, smallest ay fault isolated
+    az_fault: float = 1.2  # m/s^2, smallest az fault isolated
     isolation_fraction: float = 0.9  # share of residual energy one channel must explain
     fault_confirm_time: float = 0.2  # s a parity fault must persist
     fault_clear_time: float = 1.0  # s clean before an isolated channel is taken back
@@ -98,6 +103,7 @@ DEFAULT_GUARD = GuardSettings()
 GUARDS_OFF = GuardSettings(
     innovation_gate=1e300,
     gate_release_time=1e300,
+    spread_time_constant=1.0,
     max_acceleration=1e300,
     max_speed=1e300,
     max_travel_rate=1e300,
@@ -105,8 +111,26 @@ GUARDS_OFF = GuardSettings(
     covariance_floor=1e-12,
     stuck_time=1e300,
     travel_fault=1e300,
-    acceleration_fault=1e300,
+    ax_fault=1e300,
+    ay_fault=1e300,
+    az_fault=1e300,
 )
+
+
+def guard_settings_for(vehicle: Vehicle, base: GuardSettings = DEFAULT_GUARD) -> GuardSettings:
+    """``base`` with the fault limits of the vehicle file's ``[filter.faults]``.
+
+    A model that explains less of a vehicle's motion (a larger parity residual on
+    clean logs) needs larger limits, or clean driving is isolated as a fault.
+    """
+    limits = vehicle.filter.faults
+    return dataclasses.replace(
+        base,
+        travel_fault=limits.travel_fault,
+        ax_fault=limits.ax_fault,
+        ay_fault=limits.ay_fault,
+        az_fault=limits.az_fault,
+    )
 
 
 def unpack(vector: ca.SX) -> SimpleNamespace:
@@ -117,7 +141,8 @@ def unpack(vector: ca.SX) -> SimpleNamespace:
 # Layout of the monitor state ``m``.
 _D_PREV, _FROZEN, _RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
 _PERSIST, _CLEAR, _FAULT, _REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
-MONITOR_SIZE = 39
+_SPREAD, _ANCHOR, _MOVED = slice(39, 46), slice(46, 50), slice(50, 54)
+MONITOR_SIZE = 54
 
 
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
@@ -220,12 +245,18 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         *[ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * dt) for i in range(4)]
     )
     d_prev_next = ca.vertcat(*[ca.if_else(d_valid[i], d[i], d_prev[i]) for i in range(4)])
+    # A corner "moves" when its travel leaves +-stuck_motion of its anchor (then re-anchored):
+    # a quantised sensor on a still body flickers by a step or two, which is no evidence.
+    anchor, moved = m[_ANCHOR], m[_MOVED]
+    far = [d_valid[i] * (ca.fabs(d[i] - anchor[i]) > g.stuck_motion) for i in range(4)]
+    anchor_next = ca.vertcat(*[ca.if_else(far[i], d[i], anchor[i]) for i in range(4)])
+    moved_next = ca.vertcat(*[ca.if_else(far[i], 0, moved[i] + dt) for i in range(4)])
     stuck = []
     for i in range(4):
         others_moving = 0
         for j in range(4):
             if j != i:
-                others_moving = ca.logic_or(others_moving, frozen_next[j] < 0.5 * g.stuck_time)
+                others_moving = ca.logic_or(others_moving, moved_next[j] < g.stuck_time)
         stuck.append(ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving))
     # Parity residual of the raw suspension loads, low-pass filtered.
     all_valid = 1
@@ -238,8 +269,8 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     # other two densities, so that no division is repeated at every use.
     w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
     energy = ca.sum1(w * rbar_next * rbar_next)
-    limits = [g.travel_fault] * 4 + [g.acceleration_fault] * 3
-    inverse_limits = [1 / g.travel_fault] * 4 + [1 / g.acceleration_fault] * 3
+    limits = [g.travel_fault] * 4 + [g.ax_fault, g.ay_fault, g.az_fault]
+    inverse_limits = [1 / limit for limit in limits]
     inverse_stuck_time = 1 / g.stuck_time
     statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
     for j in range(7):
@@ -273,40 +304,82 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         *clear_next,
         *fault_next,
         m[_REJECT],
+        m[_SPREAD],
+        anchor_next,
+        moved_next,
     )
     return MonitorOutput(
         m_next, ca.vertcat(*active), ca.vertcat(*statistic), ca.vertcat(*fault_next)
     )
 
 
-def gate_rows(m_reject, g: GuardSettings):
-    """The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions."""
+def gate_rows(m_reject, m_spread, g: GuardSettings):
+    r"""The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions.
+
+    Row ``i`` passes when :math:`y^2 \le \gamma \max(S, \bar s_i)`, with
+    :math:`\bar s_i` the row's recent innovation spread (:func:`next_spread`):
+    the filter's noise densities are tuned for accuracy, not for consistency,
+    so a row whose model error is coloured (a persistent offset, a transient the
+    model follows late) would otherwise fail the :math:`\chi^2` test for long
+    stretches and be skipped exactly where it carries the most information.
+    """
     record = {}
 
     def gate(i, y, S):
-        passes = y * y <= g.innovation_gate * S
+        passes = y * y <= g.innovation_gate * ca.fmax(S, m_spread[i])
         released = m_reject[i] >= g.gate_release_time
-        record[i] = (passes, released)
+        record[i] = (passes, released, y, S)
         return ca.logic_or(passes, released)
 
     return gate, record
 
 
 def reject_times(m_reject, record, available, dt) -> ca.SX:
-    """Consecutive rejection time of each row after this sample (0 once taken or absent)."""
+    """Time each row has failed the gate without a pass (0 once it passes or is absent).
+
+    A row taken by the release stays released while it keeps failing
+    (hysteresis): a real step change is followed, not sampled every
+    ``gate_release_time``.
+    """
     times = []
     for i in range(len(record)):
-        passes, released = record[i]
-        rejected = available[i] * (1 - ca.logic_or(passes, released))
-        times.append(ca.if_else(rejected, m_reject[i] + dt, 0))
+        passes = record[i][0]
+        failing = available[i] * (1 - passes)
+        times.append(ca.if_else(failing, m_reject[i] + dt, 0))
     return ca.vertcat(*times)
 
 
-def with_reject_times(m_next: ca.SX, times: ca.SX) -> ca.SX:
-    """The monitor state with the rows' rejection times replaced."""
-    return ca.vertcat(m_next[0 : _REJECT.start], times)
+def next_spread(m_spread, record, available, dt, g: GuardSettings) -> ca.SX:
+    r"""Each row's innovation spread after this sample.
+
+    .. math:: \bar s \leftarrow \bar s + \alpha\,(\min(y^2, \gamma \max(S, \bar s))
+        - \bar s), \quad \alpha = \Delta t / (\tau + \Delta t)
+
+    (an exponentially weighted mean square, clipped at the gate so that one
+    outlier raises it by at most :math:`\alpha (\gamma - 1)`; a sustained
+    discrepancy raises it geometrically, within a few samples). Held where the
+    row is absent.
+    """
+    alpha = dt / (g.spread_time_constant + dt)
+    spread = []
+    for i in range(len(record)):
+        _, _, y, S = record[i]
+        bound = g.innovation_gate * ca.fmax(S, m_spread[i])
+        target = ca.fmin(y * y, bound)
+        spread.append(m_spread[i] + available[i] * alpha * (target - m_spread[i]))
+    return ca.vertcat(*spread)
+
+
+def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:
+    """The monitor state with the rows' rejection times and innovation spreads replaced."""
+    return ca.vertcat(m_next[0 : _REJECT.start], times, spread, m_next[_SPREAD.stop :])
 
 
 def reject_slice() -> slice:
     """Where the rows' consecutive rejection times sit in the monitor state."""
     return _REJECT
+
+
+def spread_slice() -> slice:
+    """Where the rows' innovation spreads sit in the monitor state."""
+    return _SPREAD

@@ -32,7 +32,7 @@ import pandas as pd
 
 from wheelload.estimators import guard
 from wheelload.estimators.compiled import CompiledLoop
-from wheelload.estimators.guard import DEFAULT_GUARD, GuardSettings
+from wheelload.estimators.guard import GuardSettings
 from wheelload.estimators.kalman import (
     predict,
     sequential_update,
@@ -83,14 +83,15 @@ _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 def tuning_vector(
     vehicle: Vehicle,
     sample_interval: float = DEFAULT_SAMPLE_INTERVAL,
-    settings: GuardSettings = DEFAULT_GUARD,
+    settings: GuardSettings | None = None,
 ) -> np.ndarray:
     r"""The filter tuning in :data:`TUNING` order: the vehicle file's, interval, guards.
 
     ``sample_interval`` is the log's nominal interval [s]: the measurement
     noise is :math:`R = r / \Delta t_{nominal}` whatever the gap before a
-    sample.
+    sample. ``settings``: default the vehicle's (:func:`~wheelload.estimators.guard.guard_settings_for`).
     """
+    settings = guard.guard_settings_for(vehicle) if settings is None else settings
     tuning = vehicle.filter
     if not 0.0 < sample_interval < MAX_INTERVAL:
         raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
@@ -280,8 +281,8 @@ def step_expressions(
     rc = rc_density / dt_nominal
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
-    reject = m[guard.reject_slice()]
-    gate, record = guard.gate_rows(reject, settings)
+    reject, spread = m[guard.reject_slice()], m[guard.spread_slice()]
+    gate, record = guard.gate_rows(reject, spread, settings)
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = guard.limit_covariance(P_pred, settings.covariance_floor, ceiling)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
@@ -306,8 +307,10 @@ def step_expressions(
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
-    m_next = guard.with_reject_times(
-        watch.m_next, guard.reject_times(reject, record, available, dt_used)
+    m_next = guard.with_gate_state(
+        watch.m_next,
+        guard.reject_times(reject, record, available, dt_used),
+        guard.next_spread(spread, record, available, dt_used, settings),
     )
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
@@ -330,7 +333,7 @@ def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
             result = ca.logic_or(result, value)
         return result
 
-    gated = [available[i] * (1 - ca.logic_or(*record[i])) for i in range(7)]
+    gated = [available[i] * (1 - ca.logic_or(*record[i][:2])) for i in range(7)]
     released = [available[i] * (1 - record[i][0]) * record[i][1] for i in range(7)]
     implausible = [valid_raw[i] * (1 - in_range[i]) for i in range(len(INPUTS))]
     return ca.vertcat(
@@ -542,12 +545,14 @@ class TwoStageKF:
         *,
         static: np.ndarray | None = None,
         step: ca.Function | None = None,
-        guard_settings: GuardSettings = DEFAULT_GUARD,
+        guard_settings: GuardSettings | None = None,
         sample_interval: float | None = None,
     ) -> None:
         self.vehicle = vehicle
         self.parameters = ModelParameters.from_vehicle(vehicle, static)
         self.p = self.parameters.vector()
+        if guard_settings is None:
+            guard_settings = guard.guard_settings_for(vehicle)
         self.guard_settings = guard_settings
         self.sample_interval = sample_interval
         self.tuning = tuning_vector(

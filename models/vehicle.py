@@ -176,12 +176,31 @@ class BiasTuning:
 
 
 @dataclass(frozen=True, kw_only=True)
+class FaultTuning:
+    """Smallest sensor faults the fault monitor isolates ([filter.faults], optional).
+
+    Set above what the model's own mismatch looks like on clean logs of the
+    vehicle (``wheelload bench faults --calibrate``); defaults: the sports car.
+    """
+
+    travel_fault: float = 0.005  # m
+    ax_fault: float = 1.2  # m/s^2
+    ay_fault: float = 0.4  # m/s^2
+    az_fault: float = 1.2  # m/s^2
+
+    def _check(self) -> None:
+        for field in dataclasses.fields(self):
+            _positive(self, field.name)
+
+
+@dataclass(frozen=True, kw_only=True)
 class FilterTuning:
     process_noise_density: float  # N^2/s:  Q = q dt I
     suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
     constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt
     initial_std: float  # N
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
+    faults: FaultTuning = FaultTuning()  # [filter.faults], optional: fault-monitor limits
 
     def _check(self) -> None:
         _positive(self, "process_noise_density")
