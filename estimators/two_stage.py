@@ -89,7 +89,8 @@ def tuning_vector(
 
     ``sample_interval`` is the log's nominal interval [s]: the measurement
     noise is :math:`R = r / \Delta t_{nominal}` whatever the gap before a
-    sample. ``settings``: default the vehicle's (:func:`~wheelload.estimators.guard.guard_settings_for`).
+    sample. ``settings``: default the vehicle's
+    (:func:`~wheelload.estimators.guard.guard_settings_for`).
     """
     settings = guard.guard_settings_for(vehicle) if settings is None else settings
     tuning = vehicle.filter
