@@ -70,6 +70,7 @@ class GuardSettings:
     covariance_floor: float = 1.0  # N, smallest standard deviation kept
     stuck_time: float = 0.25  # s without change while another corner moves
     stuck_motion: float = 8e-5  # m another corner must move within stuck_time (2 LSB of 12 bit)
+    stuck_time_still: float = 0.5  # s without change while another corner only flickers
     parity_time_constant: float = 1.0  # s, low-pass of the parity residual
     travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated
     ax_fault: float = 1.2  # m/s^2, smallest ax fault isolated
@@ -110,6 +111,7 @@ GUARDS_OFF = GuardSettings(
     travel_range=1e300,
     covariance_floor=1e-12,
     stuck_time=1e300,
+    stuck_time_still=1e300,
     travel_fault=1e300,
     ax_fault=1e300,
     ay_fault=1e300,
@@ -141,8 +143,8 @@ def unpack(vector: ca.SX) -> SimpleNamespace:
 # Layout of the monitor state ``m``.
 _D_PREV, _FROZEN, _RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
 _PERSIST, _CLEAR, _FAULT, _REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
-_SPREAD, _ANCHOR, _MOVED = slice(39, 46), slice(46, 50), slice(50, 54)
-MONITOR_SIZE = 54
+_SPREAD, _ANCHOR, _MOVED, _JUMP = slice(39, 46), slice(46, 50), slice(50, 54), slice(54, 58)
+MONITOR_SIZE = 58
 
 
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
@@ -222,6 +224,7 @@ class MonitorOutput:
     channel_ok: ca.SX  # (7,) 0 for an isolated channel (FAULT_CHANNELS order)
     statistic: ca.SX  # (7,) test statistic, >= 1 where the channel's test fires
     fault: ca.SX  # (7,) 1 while a channel is isolated
+    jump: ca.SX  # (4,) 1 while a travel that jumped faster than max_travel_rate is frozen
 
 
 def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
@@ -251,13 +254,23 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     far = [d_valid[i] * (ca.fabs(d[i] - anchor[i]) > g.stuck_motion) for i in range(4)]
     anchor_next = ca.vertcat(*[ca.if_else(far[i], d[i], anchor[i]) for i in range(4)])
     moved_next = ca.vertcat(*[ca.if_else(far[i], 0, moved[i] + dt) for i in range(4)])
+    # A reading that jumped faster than max_travel_rate (a dead sensor falling to its rail)
+    # and has not changed since is dropped at once, and is stuck after stuck_time even
+    # when the body is still.
+    jump = [
+        ca.if_else(changed[i], ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt, m[_JUMP][i])
+        for i in range(4)
+    ]
     stuck = []
     for i in range(4):
-        others_moving = 0
+        others_moving, others_changing = jump[i], 0
         for j in range(4):
             if j != i:
                 others_moving = ca.logic_or(others_moving, moved_next[j] < g.stuck_time)
-        stuck.append(ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving))
+                others_changing = ca.logic_or(others_changing, frozen_next[j] < 0.5 * g.stuck_time)
+        moving = ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving)
+        still = ca.logic_and(frozen_next[i] >= g.stuck_time_still, others_changing)
+        stuck.append(ca.logic_or(moving, still))
     # Parity residual of the raw suspension loads, low-pass filtered.
     all_valid = 1
     for name in TRAVEL + TRAVEL_RATE + SPECIFIC_FORCE + ("vx",):
@@ -295,7 +308,7 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         persist_next.append(persist_j)
         clear_next.append(clear_j)
         fault_next.append(fault_j)
-        active.append(1 - fault_j)
+        active.append((1 - fault_j) * (1 - jump[j]) if j < 4 else 1 - fault_j)
     m_next = ca.vertcat(
         d_prev_next,
         frozen_next,
@@ -307,9 +320,14 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         m[_SPREAD],
         anchor_next,
         moved_next,
+        *jump,
     )
     return MonitorOutput(
-        m_next, ca.vertcat(*active), ca.vertcat(*statistic), ca.vertcat(*fault_next)
+        m_next,
+        ca.vertcat(*active),
+        ca.vertcat(*statistic),
+        ca.vertcat(*fault_next),
+        ca.vertcat(*jump),
     )
 
 

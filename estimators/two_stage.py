@@ -315,7 +315,7 @@ def step_expressions(
     )
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
-        ca.logic_or(limited_pred, limited_new),
+        ca.logic_or(limited_pred, limited_new), watch.jump,
     )  # fmt: skip
     inputs = [x, P, m, u_raw, valid_raw, dt, p, tuning]
     outputs = [
@@ -325,7 +325,7 @@ def step_expressions(
     return inputs, outputs
 
 
-def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
+def _status(record, available, valid_raw, in_range, fault, limited, jump) -> ca.SX:
     """Indicators of the guard flags (:data:`GUARD_FLAGS` order)."""
 
     def any_of(values):
@@ -346,6 +346,7 @@ def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
         any_of([fault[i] for i in range(4)]),
         any_of([fault[i] for i in range(4, 7)]),
         limited,
+        any_of([jump[i] for i in range(4)]),
     )
 
 
