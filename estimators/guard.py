@@ -331,7 +331,32 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     )
 
 
-def gate_rows(m_reject, m_spread, g: GuardSettings):
+def prior_failures(y, S, available, m_spread, g: GuardSettings):
+    r"""Which groups of rows fail the gate against the predicted state.
+
+    ``y``, ``S`` (7): each row's innovation against the predicted state (before
+    any update of the sample). Returns ``(suspension, constraint, count)``: 1
+    if a suspension row (an equilibrium row) fails, and how many rows fail.
+    A spike or step on one sensor fails one group only (a travel: its
+    suspension row and, through the anti-roll bar, its neighbour's; an
+    accelerometer axis: its equilibrium row); a real transient the model
+    explains moves the suspension and the equilibrium rows together.
+    """
+    fail = [
+        available[i] * (y[i] * y[i] > g.innovation_gate * ca.fmax(S[i], m_spread[i]))
+        for i in range(7)
+    ]
+    suspension, constraint, count = 0, 0, 0
+    for i in range(4):
+        suspension = ca.logic_or(suspension, fail[i])
+    for i in range(4, 7):
+        constraint = ca.logic_or(constraint, fail[i])
+    for value in fail:
+        count = count + value
+    return suspension, constraint, count
+
+
+def gate_rows(m_reject, m_spread, g: GuardSettings, prior=(0, 0, 0)):
     r"""The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions.
 
     Row ``i`` passes when :math:`y^2 \le \gamma \max(S, \bar s_i)`, with
@@ -340,12 +365,24 @@ def gate_rows(m_reject, m_spread, g: GuardSettings):
     so a row whose model error is coloured (a persistent offset, a transient the
     model follows late) would otherwise fail the :math:`\chi^2` test for long
     stretches and be skipped exactly where it carries the most information.
+    A failing row is still taken (released) when rows of the other group fail
+    too (``prior``, :func:`prior_failures`, or an earlier suspension row of this
+    sample), when three rows fail against the prediction, or after
+    ``gate_release_time`` of failing.
     """
     record = {}
+    suspension_prior, constraint_prior, count_prior = prior
 
     def gate(i, y, S):
         passes = y * y <= g.innovation_gate * ca.fmax(S, m_spread[i])
-        released = m_reject[i] >= g.gate_release_time
+        if i < 4:
+            other_group = constraint_prior
+        else:
+            other_group = suspension_prior
+            for k in range(4):
+                other_group = ca.logic_or(other_group, 1 - record[k][0])
+        transient = ca.logic_or(other_group, count_prior >= 3)
+        released = ca.logic_or(m_reject[i] >= g.gate_release_time, transient)
         record[i] = (passes, released, y, S)
         return ca.logic_or(passes, released)
 

@@ -283,9 +283,15 @@ def step_expressions(
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
     reject, spread = m[guard.reject_slice()], m[guard.spread_slice()]
-    gate, record = guard.gate_rows(reject, spread, settings)
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = guard.limit_covariance(P_pred, settings.covariance_floor, ceiling)
+    H = ca.vertcat(ca.DM.eye(4), A)
+    y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
+    S_prior = ca.vertcat(
+        *[ca.mtimes(ca.mtimes(H[i, :], P_pred), H[i, :].T) for i in range(7)]
+    ) + ca.vertcat(rs, rc)
+    prior = guard.prior_failures(y_prior, S_prior, ca.vertcat(mask_s, mask_c), spread, settings)
+    gate, record = guard.gate_rows(reject, spread, settings, prior)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
         x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s, gate
     )
