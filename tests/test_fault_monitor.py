@@ -5,9 +5,9 @@ logs of the full-vehicle plant (``studies/fault_injection.py``); errors are
 against the plant's reference loads. Delays are stated against the
 monitor's settings: a dead sensor (a jump to its rail, then frozen) within
 ``stuck_time`` + one sample, a stuck one within ``stuck_time`` once another
-corner moves, ``stuck_time_still`` on a still body (goal 0.5 s); a 1 mm/s drift once the low-passed parity residual
-exceeds ``travel_fault`` (5 mm), i.e. within 8 s (goal 2 s, not met: see
-the closing note).
+corner moves, ``stuck_time_still`` on a still body (goal 0.5 s); a 1 mm/s
+drift once the low-passed parity residual exceeds ``travel_fault`` (5 mm),
+i.e. within 8 s (goal 2 s, not met: see the closing note).
 """
 
 import numpy as np
