@@ -39,7 +39,12 @@ import pandas as pd
 from scipy.stats import chi2
 
 from wheelload.estimators import Signals, TwoStageKF
-from wheelload.estimators.guard import FAULT_CHANNELS, GUARDS_OFF
+from wheelload.estimators.guard import (
+    FAULT_CHANNELS,
+    GUARDS_OFF,
+    GuardSettings,
+    guard_settings_for,
+)
 from wheelload.estimators.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
@@ -150,13 +155,22 @@ def detection_delay(faults: pd.DataFrame, channel: str, onset: float) -> float:
     return float(max(hits["start"].min() - onset, 0.0)) if len(hits) else float("nan")
 
 
+def vehicle_guards(vehicle, overrides: dict[str, float] | None = None) -> GuardSettings:
+    """The vehicle's guard settings (``[filter.faults]``) with ``overrides`` by name."""
+    return dataclasses.replace(guard_settings_for(vehicle), **(overrides or {}))
+
+
 def fault_table(
-    scenarios=FAULT_SCENARIOS, seed: int = 0, vehicle_path: Path | None = None
+    scenarios=FAULT_SCENARIOS,
+    seed: int = 0,
+    vehicle_path: Path | None = None,
+    overrides: dict[str, float] | None = None,
 ) -> pd.DataFrame:
     """One row per scenario and fault: RMSE before and after, delay, isolations."""
     path = example_vehicle_path() if vehicle_path is None else vehicle_path
     vehicle = load_vehicle(path)
-    guarded, unguarded = TwoStageKF(vehicle), TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
+    guarded = TwoStageKF(vehicle, guard_settings=vehicle_guards(vehicle, overrides))
+    unguarded = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
     rows = []
     for scenario in scenarios:
         clean = scenario_signals(scenario, seed, path)
@@ -191,7 +205,10 @@ _TINY_LIMITS = {"travel_fault": 1e-9, "ax_fault": 1e-9, "ay_fault": 1e-9, "az_fa
 
 
 def false_alarms(
-    scenarios=tuple(SCENARIOS), seeds=(0,), vehicle_paths: tuple[Path, ...] | None = None
+    scenarios=tuple(SCENARIOS),
+    seeds=(0,),
+    vehicle_paths: tuple[Path, ...] | None = None,
+    overrides: dict[str, float] | None = None,
 ) -> pd.DataFrame:
     """Fault-monitor isolations and clean-log RMSE (guards on and off) per vehicle, scenario, seed.
 
@@ -203,7 +220,8 @@ def false_alarms(
     rows = []
     for path in bundled_vehicles() if vehicle_paths is None else vehicle_paths:
         vehicle = load_vehicle(path)
-        kf, plain = TwoStageKF(vehicle), TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
+        kf = TwoStageKF(vehicle, guard_settings=vehicle_guards(vehicle, overrides))
+        plain = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
         probe = TwoStageKF(
             vehicle, guard_settings=dataclasses.replace(kf.guard_settings, **_TINY_LIMITS)
         )
@@ -253,6 +271,13 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         action="append",
         help="vehicle file (repeatable; default: the bundled sports car and SUV)",
     )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a guard setting for every vehicle (repeatable), e.g. travel_fault=0.002",
+    )
     parser.set_defaults(handler=run)
 
 
@@ -277,16 +302,39 @@ def _print_alarms(alarms: pd.DataFrame) -> None:
         print(f"{name}: guarded {guarded:.1f} N, plain {plain:.1f} N; floor: {floors}")
 
 
+def parse_overrides(items: list[str]) -> dict[str, float]:
+    """``NAME=VALUE`` guard-setting overrides; an error names the item and the settings."""
+    overrides = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        if name not in GuardSettings.names():
+            names = ", ".join(GuardSettings.names())
+            raise ValueError(f"--set {item}: unknown guard setting; choose from {names}")
+        try:
+            overrides[name] = float(value)
+        except ValueError:
+            raise ValueError(f"--set {item}: the value must be a number") from None
+    GuardSettings(**overrides)  # ranges checked here, with the setting named
+    return overrides
+
+
 def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
+    try:
+        overrides = parse_overrides(args.set)
+    except ValueError as error:
+        print(f"error: {error}")
+        return 2
     paths = tuple(args.vehicle) if args.vehicle else bundled_vehicles()
     if not args.alarms_only:
         scenarios = ("iso-dlc", "brake-in-turn") if args.quick else FAULT_SCENARIOS
-        table = pd.concat([fault_table(scenarios, vehicle_path=path) for path in paths])
+        table = pd.concat(
+            [fault_table(scenarios, vehicle_path=path, overrides=overrides) for path in paths]
+        )
         print("Fault injection (faults from 20 % of each log; RMSE pooled over the wheels):")
         table["delay_s"] = [f"{x:.2f}" if np.isfinite(x) else "-" for x in table["delay_s"]]
         print(table.to_string(index=False, float_format=lambda x: f"{x:.1f}"))
     clean = ("iso-dlc", "brake-in-turn", "wheel-lift") if args.quick else tuple(SCENARIOS)
-    _print_alarms(false_alarms(clean, tuple(range(args.seeds)), paths))
+    _print_alarms(false_alarms(clean, tuple(range(args.seeds)), paths, overrides))
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
