@@ -69,7 +69,7 @@ class GuardSettings:
     travel_range: float = 1.0  # |d| <= travel_range * m g / k: spring force of the whole weight
     covariance_floor: float = 1.0  # N, smallest standard deviation kept
     stuck_time: float = 0.25  # s without change while another corner moves
-    stuck_motion: float = 8e-5  # m another corner must move within stuck_time (2 LSB of 12 bit)
+    stuck_motion: float = 1.5e-4  # m another corner must move within stuck_time (4 LSB, 12 bit)
     stuck_time_still: float = 0.5  # s without change while another corner only flickers
     parity_time_constant: float = 1.0  # s, low-pass of the parity residual
     travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated

@@ -76,7 +76,7 @@ def test_spikes_are_still_gated_on_a_transient_log(vehicle, plant_log):
 def test_fault_limits_come_from_the_vehicle_file(vehicle, suv):
     assert guard_settings_for(vehicle).travel_fault == vehicle.filter.faults.travel_fault
     limits = guard_settings_for(suv)
-    assert (limits.travel_fault, limits.az_fault) == (0.012, 2.5)
+    assert (limits.travel_fault, limits.az_fault) == (0.018, 2.5)
     assert TwoStageKF(suv).guard_settings == limits
     assert TwoStageKF(suv, guard_settings=GUARDS_OFF).guard_settings is GUARDS_OFF
 
