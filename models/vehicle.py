@@ -180,7 +180,8 @@ class FaultTuning:
     """Smallest sensor faults the fault monitor isolates ([filter.faults], optional).
 
     Set above what the model's own mismatch looks like on clean logs of the
-    vehicle (``wheelload bench faults --calibrate``); defaults: the sports car.
+    vehicle (``wheelload bench faults --alarms-only`` prints that floor per
+    channel); defaults: the sports car.
     """
 
     travel_fault: float = 0.005  # m
