@@ -39,6 +39,7 @@ from types import SimpleNamespace
 
 import casadi as ca
 
+from wheelload.models import Vehicle
 from wheelload.models.inputs import (
     HUB_ACCELERATION,
     INPUTS,
@@ -60,19 +61,28 @@ class GuardSettings:
     """Thresholds of the guards (all > 0); defaults tested on the bundled scenarios."""
 
     innovation_gate: float = 9.0  # chi^2_1 threshold on y^2 / S (3 sigma)
-    gate_release_time: float = 0.5  # s of consecutive rejections after which a row is taken
+    gate_release_time: float = 0.005  # s failing the gate after which a row is taken
+    spread_time_constant: float = 1.0  # s, memory of each row's innovation spread
     max_acceleration: float = 3.0  # g, |ax|, |ay|, |az|
     max_speed: float = 120.0  # m/s, |vx|
     max_travel_rate: float = 5.0  # m/s, |v|
     travel_range: float = 1.0  # |d| <= travel_range * m g / k: spring force of the whole weight
     covariance_floor: float = 1.0  # N, smallest standard deviation kept
     stuck_time: float = 0.25  # s without change while another corner moves
+    stuck_motion: float = 1.5e-4  # m another corner must move within stuck_time (4 LSB, 12 bit)
+    stuck_time_still: float = 0.5  # s without change while another corner only flickers
     parity_time_constant: float = 1.0  # s, low-pass of the parity residual
     travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated
-    acceleration_fault: float = 1.2  # m/s^2, smallest accelerometer fault isolated
+    ax_fault: float = 1.2  # m/s^2, smallest ax fault isolated
+    ay_fault: float = 0.25  # m/s^2, smallest ay fault isolated
+    az_fault: float = 1.2  # m/s^2, smallest az fault isolated
     isolation_fraction: float = 0.9  # share of residual energy one channel must explain
     fault_confirm_time: float = 0.2  # s a parity fault must persist
     fault_clear_time: float = 1.0  # s clean before an isolated channel is taken back
+    # S in the gate and the spread's clip times this: ``wheelload tune`` scales the noise
+    # densities by c and the file's [filter] gate_scale = 1/c lands here, so the gate and
+    # the spread see the S they had and make the same decisions.
+    innovation_variance_scale: float = 1.0
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -98,15 +108,35 @@ DEFAULT_GUARD = GuardSettings()
 GUARDS_OFF = GuardSettings(
     innovation_gate=1e300,
     gate_release_time=1e300,
+    spread_time_constant=1.0,
     max_acceleration=1e300,
     max_speed=1e300,
     max_travel_rate=1e300,
     travel_range=1e300,
     covariance_floor=1e-12,
     stuck_time=1e300,
+    stuck_time_still=1e300,
     travel_fault=1e300,
-    acceleration_fault=1e300,
+    ax_fault=1e300,
+    ay_fault=1e300,
+    az_fault=1e300,
 )
+
+
+def guard_settings_for(vehicle: Vehicle, base: GuardSettings = DEFAULT_GUARD) -> GuardSettings:
+    """``base`` with the fault limits of the vehicle file's ``[filter.faults]``.
+
+    A model that explains less of a vehicle's motion (a larger parity residual on
+    clean logs) needs larger limits, or clean driving is isolated as a fault.
+    """
+    limits = vehicle.filter.faults
+    return dataclasses.replace(
+        base,
+        travel_fault=limits.travel_fault,
+        ax_fault=limits.ax_fault,
+        ay_fault=limits.ay_fault,
+        az_fault=limits.az_fault,
+    )
 
 
 def unpack(vector: ca.SX) -> SimpleNamespace:
@@ -117,7 +147,8 @@ def unpack(vector: ca.SX) -> SimpleNamespace:
 # Layout of the monitor state ``m``.
 _D_PREV, _FROZEN, _RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
 _PERSIST, _CLEAR, _FAULT, _REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
-MONITOR_SIZE = 39
+_SPREAD, _ANCHOR, _MOVED, _JUMP = slice(39, 46), slice(46, 50), slice(50, 54), slice(54, 58)
+MONITOR_SIZE = 58
 
 
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
@@ -197,6 +228,7 @@ class MonitorOutput:
     channel_ok: ca.SX  # (7,) 0 for an isolated channel (FAULT_CHANNELS order)
     statistic: ca.SX  # (7,) test statistic, >= 1 where the channel's test fires
     fault: ca.SX  # (7,) 1 while a channel is isolated
+    jump: ca.SX  # (4,) 1 while a travel that jumped faster than max_travel_rate is frozen
 
 
 def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
@@ -220,13 +252,29 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         *[ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * dt) for i in range(4)]
     )
     d_prev_next = ca.vertcat(*[ca.if_else(d_valid[i], d[i], d_prev[i]) for i in range(4)])
+    # A corner "moves" when its travel leaves +-stuck_motion of its anchor (then re-anchored):
+    # a quantised sensor on a still body flickers by a step or two, which is no evidence.
+    anchor, moved = m[_ANCHOR], m[_MOVED]
+    far = [d_valid[i] * (ca.fabs(d[i] - anchor[i]) > g.stuck_motion) for i in range(4)]
+    anchor_next = ca.vertcat(*[ca.if_else(far[i], d[i], anchor[i]) for i in range(4)])
+    moved_next = ca.vertcat(*[ca.if_else(far[i], 0, moved[i] + dt) for i in range(4)])
+    # A reading that jumped faster than max_travel_rate (a dead sensor falling to its rail)
+    # and has not changed since is dropped at once, and is stuck after stuck_time even
+    # when the body is still.
+    jump = [
+        ca.if_else(changed[i], ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt, m[_JUMP][i])
+        for i in range(4)
+    ]
     stuck = []
     for i in range(4):
-        others_moving = 0
+        others_moving, others_changing = jump[i], 0
         for j in range(4):
             if j != i:
-                others_moving = ca.logic_or(others_moving, frozen_next[j] < 0.5 * g.stuck_time)
-        stuck.append(ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving))
+                others_moving = ca.logic_or(others_moving, moved_next[j] < g.stuck_time)
+                others_changing = ca.logic_or(others_changing, frozen_next[j] < 0.5 * g.stuck_time)
+        moving = ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving)
+        still = ca.logic_and(frozen_next[i] >= g.stuck_time_still, others_changing)
+        stuck.append(ca.logic_or(moving, still))
     # Parity residual of the raw suspension loads, low-pass filtered.
     all_valid = 1
     for name in TRAVEL + TRAVEL_RATE + SPECIFIC_FORCE + ("vx",):
@@ -238,8 +286,8 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     # other two densities, so that no division is repeated at every use.
     w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
     energy = ca.sum1(w * rbar_next * rbar_next)
-    limits = [g.travel_fault] * 4 + [g.acceleration_fault] * 3
-    inverse_limits = [1 / g.travel_fault] * 4 + [1 / g.acceleration_fault] * 3
+    limits = [g.travel_fault] * 4 + [g.ax_fault, g.ay_fault, g.az_fault]
+    inverse_limits = [1 / limit for limit in limits]
     inverse_stuck_time = 1 / g.stuck_time
     statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
     for j in range(7):
@@ -264,7 +312,7 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         persist_next.append(persist_j)
         clear_next.append(clear_j)
         fault_next.append(fault_j)
-        active.append(1 - fault_j)
+        active.append((1 - fault_j) * (1 - jump[j]) if j < 4 else 1 - fault_j)
     m_next = ca.vertcat(
         d_prev_next,
         frozen_next,
@@ -273,40 +321,129 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         *clear_next,
         *fault_next,
         m[_REJECT],
+        m[_SPREAD],
+        anchor_next,
+        moved_next,
+        *jump,
     )
     return MonitorOutput(
-        m_next, ca.vertcat(*active), ca.vertcat(*statistic), ca.vertcat(*fault_next)
+        m_next,
+        ca.vertcat(*active),
+        ca.vertcat(*statistic),
+        ca.vertcat(*fault_next),
+        ca.vertcat(*jump),
     )
 
 
-def gate_rows(m_reject, g: GuardSettings):
-    """The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions."""
+def prior_failures(y, S, available, m_spread, g: GuardSettings):
+    r"""Which groups of rows fail the gate against the predicted state.
+
+    ``y``, ``S`` (7): each row's innovation against the predicted state (before
+    any update of the sample). Returns ``(suspension, constraint, count)``: 1
+    if a suspension row (an equilibrium row) fails, and how many rows fail.
+    A spike or step on one sensor fails one group only (a travel: its
+    suspension row and, through the anti-roll bar, its neighbour's; an
+    accelerometer axis: its equilibrium row); a real transient the model
+    explains moves the suspension and the equilibrium rows together.
+    """
+    fail = [
+        available[i]
+        * (
+            y[i] * y[i]
+            > g.innovation_gate * ca.fmax(S[i] * g.innovation_variance_scale, m_spread[i])
+        )
+        for i in range(7)
+    ]
+    suspension, constraint, count = 0, 0, 0
+    for i in range(4):
+        suspension = ca.logic_or(suspension, fail[i])
+    for i in range(4, 7):
+        constraint = ca.logic_or(constraint, fail[i])
+    for value in fail:
+        count = count + value
+    return suspension, constraint, count
+
+
+def gate_rows(m_reject, m_spread, g: GuardSettings, prior=(0, 0, 0)):
+    r"""The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions.
+
+    Row ``i`` passes when :math:`y^2 \le \gamma \max(k S, \bar s_i)` (:math:`k`:
+    ``innovation_variance_scale``, 1 unless the tuning was rescaled), with
+    :math:`\bar s_i` the row's recent innovation spread (:func:`next_spread`):
+    the filter's noise densities are tuned for accuracy, not for consistency,
+    so a row whose model error is coloured (a persistent offset, a transient the
+    model follows late) would otherwise fail the :math:`\chi^2` test for long
+    stretches and be skipped exactly where it carries the most information.
+    A failing row is still taken (released) when rows of the other group fail
+    too (``prior``, :func:`prior_failures`, or an earlier suspension row of this
+    sample), when three rows fail against the prediction, or after
+    ``gate_release_time`` of failing.
+    """
     record = {}
+    suspension_prior, constraint_prior, count_prior = prior
 
     def gate(i, y, S):
-        passes = y * y <= g.innovation_gate * S
-        released = m_reject[i] >= g.gate_release_time
-        record[i] = (passes, released)
+        passes = y * y <= g.innovation_gate * ca.fmax(S * g.innovation_variance_scale, m_spread[i])
+        if i < 4:
+            other_group = constraint_prior
+        else:
+            other_group = suspension_prior
+            for k in range(4):
+                other_group = ca.logic_or(other_group, 1 - record[k][0])
+        transient = ca.logic_or(other_group, count_prior >= 3)
+        released = ca.logic_or(m_reject[i] >= g.gate_release_time, transient)
+        record[i] = (passes, released, y, S)
         return ca.logic_or(passes, released)
 
     return gate, record
 
 
 def reject_times(m_reject, record, available, dt) -> ca.SX:
-    """Consecutive rejection time of each row after this sample (0 once taken or absent)."""
+    """Time each row has failed the gate without a pass (0 once it passes or is absent).
+
+    A row taken by the release stays released while it keeps failing
+    (hysteresis): a real step change is followed, not sampled every
+    ``gate_release_time``.
+    """
     times = []
     for i in range(len(record)):
-        passes, released = record[i]
-        rejected = available[i] * (1 - ca.logic_or(passes, released))
-        times.append(ca.if_else(rejected, m_reject[i] + dt, 0))
+        passes = record[i][0]
+        failing = available[i] * (1 - passes)
+        times.append(ca.if_else(failing, m_reject[i] + dt, 0))
     return ca.vertcat(*times)
 
 
-def with_reject_times(m_next: ca.SX, times: ca.SX) -> ca.SX:
-    """The monitor state with the rows' rejection times replaced."""
-    return ca.vertcat(m_next[0 : _REJECT.start], times)
+def next_spread(m_spread, record, available, dt, g: GuardSettings) -> ca.SX:
+    r"""Each row's innovation spread after this sample.
+
+    .. math:: \bar s \leftarrow \bar s + \alpha\,(\min(y^2, \gamma \max(S, \bar s))
+        - \bar s), \quad \alpha = \Delta t / (\tau + \Delta t)
+
+    (an exponentially weighted mean square, clipped at the gate so that one
+    outlier raises it by at most :math:`\alpha (\gamma - 1)`; a sustained
+    discrepancy raises it geometrically, within a few samples). Held where the
+    row is absent.
+    """
+    alpha = dt / (g.spread_time_constant + dt)
+    spread = []
+    for i in range(len(record)):
+        _, _, y, S = record[i]
+        bound = g.innovation_gate * ca.fmax(S * g.innovation_variance_scale, m_spread[i])
+        target = ca.fmin(y * y, bound)
+        spread.append(m_spread[i] + available[i] * alpha * (target - m_spread[i]))
+    return ca.vertcat(*spread)
+
+
+def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:
+    """The monitor state with the rows' rejection times and innovation spreads replaced."""
+    return ca.vertcat(m_next[0 : _REJECT.start], times, spread, m_next[_SPREAD.stop :])
 
 
 def reject_slice() -> slice:
     """Where the rows' consecutive rejection times sit in the monitor state."""
     return _REJECT
+
+
+def spread_slice() -> slice:
+    """Where the rows' innovation spreads sit in the monitor state."""
+    return _SPREAD

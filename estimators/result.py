@@ -61,6 +61,8 @@ class StepFlag(enum.IntFlag):
     AZ_ASSUMED_G = 1 << 20
     AERO_OFF_NO_SPEED = 1 << 21
     SPEED_FROM_WHEELS = 1 << 22
+    # Bits 24-27: guards (estimators/guard.py), after the eight of bits 8-15 in ``status``.
+    TRAVEL_JUMP = 1 << 24  # a travel jumped faster than max_travel_rate and froze: dropped
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
@@ -87,8 +89,12 @@ class StepFlag(enum.IntFlag):
 
     @classmethod
     def guard_flags(cls) -> tuple[StepFlag, ...]:
-        """The eight guard flags in the order of the filter's ``status`` output."""
-        return tuple(flag for flag in cls if 1 << 8 <= flag.value < 1 << 16)
+        """The guard flags in the order of the filter's ``status`` output (bits 8-15, 24-27)."""
+        return tuple(
+            flag
+            for flag in cls
+            if 1 << 8 <= flag.value < 1 << 16 or 1 << 24 <= flag.value < 1 << 28
+        )
 
 
 _TERM_FLAGS = (

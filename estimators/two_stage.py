@@ -32,7 +32,7 @@ import pandas as pd
 
 from wheelload.estimators import guard
 from wheelload.estimators.compiled import CompiledLoop
-from wheelload.estimators.guard import DEFAULT_GUARD, GuardSettings
+from wheelload.estimators.guard import GuardSettings
 from wheelload.estimators.kalman import (
     predict,
     sequential_update,
@@ -77,21 +77,23 @@ STEP_NAME = "wheelload_kf_step"
 DEFAULT_SAMPLE_INTERVAL = 0.01
 _SAMPLE_INTERVAL = TUNING.index("sample_interval")
 _GUARD_START = _SAMPLE_INTERVAL + 1
-_GATE = TUNING.index("innovation_gate")
+_VARIANCE_SCALE = TUNING.index("innovation_variance_scale")
 _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 
 
 def tuning_vector(
     vehicle: Vehicle,
     sample_interval: float = DEFAULT_SAMPLE_INTERVAL,
-    settings: GuardSettings = DEFAULT_GUARD,
+    settings: GuardSettings | None = None,
 ) -> np.ndarray:
     r"""The filter tuning in :data:`TUNING` order: the vehicle file's, interval, guards.
 
     ``sample_interval`` is the log's nominal interval [s]: the measurement
     noise is :math:`R = r / \Delta t_{nominal}` whatever the gap before a
-    sample.
+    sample. ``settings``: default the vehicle's
+    (:func:`~wheelload.estimators.guard.guard_settings_for`).
     """
+    settings = guard.guard_settings_for(vehicle) if settings is None else settings
     tuning = vehicle.filter
     if not 0.0 < sample_interval < MAX_INTERVAL:
         raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
@@ -104,8 +106,8 @@ def tuning_vector(
             *settings.vector(),
         ]
     )
-    # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate.
-    vector[_GATE] *= tuning.gate_scale
+    # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate's S.
+    vector[_VARIANCE_SCALE] *= tuning.gate_scale
     return vector
 
 
@@ -284,10 +286,16 @@ def step_expressions(
     rc = rc_density / dt_nominal
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
-    reject = m[guard.reject_slice()]
-    gate, record = guard.gate_rows(reject, settings)
+    reject, spread = m[guard.reject_slice()], m[guard.spread_slice()]
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = guard.limit_covariance(P_pred, settings.covariance_floor, ceiling)
+    H = ca.vertcat(ca.DM.eye(4), A)
+    y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
+    S_prior = ca.vertcat(
+        *[ca.mtimes(ca.mtimes(H[i, :], P_pred), H[i, :].T) for i in range(7)]
+    ) + ca.vertcat(rs, rc)
+    prior = guard.prior_failures(y_prior, S_prior, ca.vertcat(mask_s, mask_c), spread, settings)
+    gate, record = guard.gate_rows(reject, spread, settings, prior)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
         x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s, gate
     )
@@ -311,12 +319,14 @@ def step_expressions(
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
-    m_next = guard.with_reject_times(
-        watch.m_next, guard.reject_times(reject, record, available, dt_used)
+    m_next = guard.with_gate_state(
+        watch.m_next,
+        guard.reject_times(reject, record, available, dt_used),
+        guard.next_spread(spread, record, available, dt_used, settings),
     )
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
-        ca.logic_or(limited_pred, limited_new),
+        ca.logic_or(limited_pred, limited_new), watch.jump,
     )  # fmt: skip
     inputs = [x, P, m, u_raw, valid_raw, dt, p, tuning]
     outputs = [
@@ -326,7 +336,7 @@ def step_expressions(
     return inputs, outputs
 
 
-def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
+def _status(record, available, valid_raw, in_range, fault, limited, jump) -> ca.SX:
     """Indicators of the guard flags (:data:`GUARD_FLAGS` order)."""
 
     def any_of(values):
@@ -335,7 +345,7 @@ def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
             result = ca.logic_or(result, value)
         return result
 
-    gated = [available[i] * (1 - ca.logic_or(*record[i])) for i in range(7)]
+    gated = [available[i] * (1 - ca.logic_or(*record[i][:2])) for i in range(7)]
     released = [available[i] * (1 - record[i][0]) * record[i][1] for i in range(7)]
     implausible = [valid_raw[i] * (1 - in_range[i]) for i in range(len(INPUTS))]
     return ca.vertcat(
@@ -347,6 +357,7 @@ def _status(record, available, valid_raw, in_range, fault, limited) -> ca.SX:
         any_of([fault[i] for i in range(4)]),
         any_of([fault[i] for i in range(4, 7)]),
         limited,
+        any_of([jump[i] for i in range(4)]),
     )
 
 
@@ -559,12 +570,14 @@ class TwoStageKF:
         *,
         static: np.ndarray | None = None,
         step: ca.Function | None = None,
-        guard_settings: GuardSettings = DEFAULT_GUARD,
+        guard_settings: GuardSettings | None = None,
         sample_interval: float | None = None,
     ) -> None:
         self.vehicle = vehicle
         self.parameters = ModelParameters.from_vehicle(vehicle, static)
         self.p = self.parameters.vector()
+        if guard_settings is None:
+            guard_settings = guard.guard_settings_for(vehicle)
         self.guard_settings = guard_settings
         self.sample_interval = sample_interval
         self.tuning = tuning_vector(

@@ -254,12 +254,18 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
         lambda v: 1.0, lambda v: 10.0 * _weight(v), "N (N m)"
     ),
     "filter.initial_std": lambda v: Range(1.0, 10.0 * _weight(v), "1 N to 10 x the weight"),
-    "filter.gate_scale": _fixed(1e-4, 1e4, "factor on the innovation gate's threshold"),
+    "filter.gate_scale": _fixed(
+        1e-4, 1e4, "factor on the innovation variance the gate compares against"
+    ),
     "filter.bias.travel_offset_std": _fixed(1e-4, 0.05, "0.1-50 mm of travel-sensor offset"),
     "filter.bias.travel_offset_bound": _fixed(1e-3, 0.1, "1-100 mm of travel-sensor offset"),
     "filter.bias.travel_offset_density": _fixed(1e-14, 1e-4, "travel offset random walk, m^2/s"),
     "filter.bias.acceleration_bias_std": _fixed(1e-3, 5.0, "accelerometer bias up to 0.5 g"),
     "filter.bias.acceleration_bias_bound": _fixed(0.01, 10.0, "accelerometer bias up to 1 g"),
+    "filter.faults.travel_fault": _fixed(1e-4, 0.05, "0.1-50 mm of travel-sensor fault"),
+    "filter.faults.ax_fault": _fixed(0.01, 10.0, "an ax fault of 0.01 m/s^2 to 1 g"),
+    "filter.faults.ay_fault": _fixed(0.01, 10.0, "an ay fault of 0.01 m/s^2 to 1 g"),
+    "filter.faults.az_fault": _fixed(0.01, 10.0, "an az fault of 0.01 m/s^2 to 1 g"),
     "filter.bias.acceleration_bias_density": _fixed(
         1e-12, 1.0, "accelerometer bias random walk, (m/s^2)^2/s"
     ),

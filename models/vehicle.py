@@ -176,15 +176,36 @@ class BiasTuning:
 
 
 @dataclass(frozen=True, kw_only=True)
+class FaultTuning:
+    """Smallest sensor faults the fault monitor isolates ([filter.faults], optional).
+
+    Set above what the model's own mismatch looks like on clean logs of the
+    vehicle (``wheelload bench faults --alarms-only`` prints that floor per
+    channel); defaults: the sports car.
+    """
+
+    travel_fault: float = 0.005  # m
+    ax_fault: float = 1.2  # m/s^2
+    ay_fault: float = 0.25  # m/s^2
+    az_fault: float = 1.2  # m/s^2
+
+    def _check(self) -> None:
+        for field in dataclasses.fields(self):
+            _positive(self, field.name)
+
+
+@dataclass(frozen=True, kw_only=True)
 class FilterTuning:
     process_noise_density: float  # N^2/s:  Q = q dt I
     suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
     constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt
     initial_std: float  # N
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
-    # Optional: the innovation gate's threshold (estimators/guard.py) times this factor.
-    # ``wheelload tune`` writes 1/c when it scales the densities by c to calibrate sigma, so
-    # that the gate keeps the decisions it had (S scales by c, the innovations do not).
+    faults: FaultTuning = FaultTuning()  # [filter.faults], optional: fault-monitor limits
+    # Optional: the innovation variance S the gate compares against (estimators/guard.py,
+    # innovation_variance_scale) times this factor. ``wheelload tune`` writes 1/c when it
+    # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
+    # had (S scales by c, the innovations do not).
     gate_scale: float = 1.0
 
     def _check(self) -> None:

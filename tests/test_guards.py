@@ -111,25 +111,25 @@ def test_gated_row_is_skipped_exactly(vehicle, dlc):
     assert abs(unguarded.loads[row, 0] - dlc.reference[row, 0]) > 300.0 + error
 
 
-def test_gate_releases_a_row_rejected_for_too_long(vehicle, dlc):
-    """Started 3 kN off with a confident covariance and a slow random walk, the gate
-    would lock the data out for ever; the release after ``gate_release_time`` lets it back."""
+def test_gate_never_locks_the_data_out(vehicle, dlc):
+    """Started 3 kN off with a confident covariance and a slow random walk, every row fails
+    the gate at first: the rows are taken (released) within ``gate_release_time`` + one
+    sample, and after 2 s the guarded filter is as good as the plain one (within 5 %)."""
     tuning = dataclasses.replace(vehicle.filter, initial_std=20.0, process_noise_density=1e5)
     slow = vehicle.replace(filter=tuning)
     late = dlc.t - dlc.t[0] > 2.0
     errors = {}
-    for release in (GuardSettings().gate_release_time, 1e300):
-        kf = TwoStageKF(slow, guard_settings=GuardSettings(gate_release_time=release))
+    for name, settings in (("guarded", None), ("plain", GUARDS_OFF)):
+        kf = TwoStageKF(slow, guard_settings=settings)
         start = kf.initial_state()
         x0 = start.x + np.array([3000.0, -3000.0, 3000.0, -3000.0])
         estimate = kf.run(dlc, dataclasses.replace(start, x=x0))
-        errors[release] = pooled_rmse(estimate.loads[late], dlc.reference[late])
+        errors[name] = pooled_rmse(estimate.loads[late], dlc.reference[late])
         released = np.flatnonzero(estimate.flags & StepFlag.GATE_RELEASED)
-        if release < 1e300:
-            assert dlc.t[released[0]] - dlc.t[0] == pytest.approx(release, abs=0.015)
-        else:
-            assert released.size == 0
-    assert errors[GuardSettings().gate_release_time] < 150.0 < 1000.0 < errors[1e300]
+        if settings is None:
+            assert dlc.t[released[0]] - dlc.t[0] <= GuardSettings().gate_release_time + 0.011
+    assert errors["guarded"] < 150.0
+    assert errors["guarded"] <= 1.05 * errors["plain"]
 
 
 def test_sigma_grows_across_a_gap(vehicle, dlc):

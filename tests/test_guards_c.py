@@ -27,6 +27,7 @@ LOADS = [f"fz_{w}" for w in ("fl", "fr", "rl", "rr")]
 OUTLIERS = {300: ("ax", 50.0), 400: ("ay", 100.0), 500: ("d_fl", 0.29), 600: ("ax", 1e30)}
 SPIKE_ROW = 700  # d_fl + 30 mm: in range, fails the innovation gate
 STUCK_FROM = 900  # d_fl stuck from here on
+DEAD_FROM = 1100  # d_rr falls to its rail (-75 mm) and freezes: dropped at once (TRAVEL_JUMP)
 
 
 @pytest.fixture(scope="module")
@@ -44,6 +45,8 @@ def faulty_log(plant_log, tmp_path_factory):
     frame.loc[SPIKE_ROW, "d_fl"] += 0.030
     frame.loc[STUCK_FROM:, "d_fl"] = frame.loc[STUCK_FROM - 1, "d_fl"]
     frame.loc[STUCK_FROM:, "v_fl"] = 0.0
+    frame.loc[DEAD_FROM:, "d_rr"] = -0.075
+    frame.loc[DEAD_FROM:, "v_rr"] = 0.0
     path = tmp_path_factory.mktemp("faulty") / "faulty.csv"
     frame.to_csv(path, index=False)
     return path
@@ -66,6 +69,8 @@ def check_outlier_flags(flags):
         assert flags[row] & bit
     assert flags[SPIKE_ROW] & StepFlag.INNOVATION_GATED
     assert flags[STUCK_FROM + 30] & StepFlag.TRAVEL_FAULT
+    assert np.all(flags[DEAD_FROM:] & StepFlag.TRAVEL_JUMP)
+    assert not np.any(flags[:DEAD_FROM] & StepFlag.TRAVEL_JUMP)
 
 
 def test_double_c_guards_equal_python(vehicle, faulty_log, tmp_path):
@@ -75,7 +80,7 @@ def test_double_c_guards_equal_python(vehicle, faulty_log, tmp_path):
     np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
     np.testing.assert_array_equal(c["status"], python.flags)
     check_outlier_flags(c["status"].to_numpy())
-    assert list(python.faults["channel"]) == ["d_fl"]
+    assert list(python.faults["channel"]) == ["d_fl", "d_rr"]
     unguarded = TwoStageKF(vehicle, guard_settings=fi.GUARDS_OFF).run(signals)
     assert pooled_rmse(c[LOADS].to_numpy(), signals.reference) < 100.0
     assert pooled_rmse(unguarded.loads, signals.reference) > 1000.0
@@ -86,7 +91,7 @@ def test_float_c_gates_the_same_outliers(vehicle, faulty_log, tmp_path):
     signals = read_log(faulty_log)
     python = TwoStageKF(vehicle).run(signals)
     check_outlier_flags(c["status"].to_numpy())
-    rows = [*OUTLIERS, SPIKE_ROW]
+    rows = [*OUTLIERS, SPIKE_ROW, DEAD_FROM]
     np.testing.assert_array_equal(c["status"].to_numpy()[rows], python.flags[rows])
     assert (
         abs(

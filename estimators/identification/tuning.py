@@ -22,9 +22,10 @@ input's shape (whichever has the lower pooled RMSE with the guards), scaled
 as a whole by c so that ±2σ covers 95 % of the error: the model errors are
 correlated in time, which the white-noise likelihood cannot see. Scaling
 leaves the gain unchanged and scales P and every innovation variance S by
-c; the innovations themselves do not change, so the gate's threshold is
-scaled by 1/c with it (the file's ``[filter] gate_scale``): the gate keeps
-the decisions it had, and the estimates are those of the unscaled shape.
+c; the innovations themselves do not change, so the S the gate compares
+against is scaled by 1/c (the file's ``[filter] gate_scale``, the guard's
+``innovation_variance_scale``): the gate and its innovation spread keep the
+decisions they had, and the estimates are those of the unscaled shape.
 Consistency: the normalised innovation squared :math:`y^2/S` of each row
 against the 95 % band of :math:`\chi^2_1`, and the share of samples whose
 error lies within :math:`\pm 2\sigma`.
