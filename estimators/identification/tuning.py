@@ -60,7 +60,7 @@ COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma for a Gaussian error
 NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of chi^2_1
 #: Tuning entries that open the innovation gate for the likelihood (out of reach).
 GATE_OPEN = {"innovation_gate": 1e300, "gate_release_time": 1e300}
-_GATE = TUNING.index("innovation_gate")
+_VARIANCE_SCALE = TUNING.index("innovation_variance_scale")
 
 
 def with_tuning(vehicle: Vehicle, tuning: np.ndarray, gate_scale: float | None = None) -> Vehicle:
@@ -110,12 +110,13 @@ class FilterRuns:
     def run(self, tuning: np.ndarray, *, gate_factor: float = 1.0, gate_open: bool = False):
         """Estimates and innovations of every log with the noise densities ``tuning``
         (:data:`NOISE_DENSITIES` order; interval and guards as the filter's own, the
-        gate's threshold times ``gate_factor``, or the gate opened with ``gate_open``)."""
+        S the gate compares against times ``gate_factor``, or the gate opened with
+        ``gate_open``)."""
         densities = np.asarray(tuning, float)
         if densities.shape != (len(NOISE_DENSITIES),):
             raise ValueError(f"give the {len(NOISE_DENSITIES)} noise densities {NOISE_DENSITIES}")
         full = (self._gate_open if gate_open else self._base).copy()
-        full[_GATE] *= 1.0 if gate_open else gate_factor
+        full[_VARIANCE_SCALE] *= 1.0 if gate_open else gate_factor
         full[: len(NOISE_DENSITIES)] = densities
         self._kf.tuning = full
         return [self._kf.run_innovations(signals) for signals in self.logs]
@@ -181,7 +182,7 @@ class FilterRuns:
     def calibrate(self, tuning: np.ndarray, target: float = COVERAGE_TARGET) -> float:
         """Factor c on all densities giving ``target`` ±2σ coverage on the logs' references.
 
-        Scaling Q, R_s and R_c together by c, with the gate's threshold by 1/c,
+        Scaling Q, R_s and R_c together by c, with the gate's S by 1/c,
         leaves the gain, the gate's decisions and the estimates unchanged and
         scales P by c: only the reported σ moves.
         """
@@ -215,7 +216,7 @@ class TuningResult:
 
     @property
     def gate_factor(self) -> float:
-        """Factor on the gate's threshold that goes with :attr:`tuned` (1 / :attr:`scale`)."""
+        """Factor on the gate's S that goes with :attr:`tuned` (1 / :attr:`scale`)."""
         return 1.0 / self.scale
 
     @property
@@ -252,7 +253,7 @@ def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: i
     if references:
         rmse, more = _minimise(runs.pooled_rmse, likelihood, iterations, span)
         count += more
-        # Each shape calibrated to the coverage target (gate threshold scaled with it, so
+        # Each shape calibrated to the coverage target (the gate's S scaled with it, so
         # the estimates are the shape's own with the file's guards); the lower pooled RMSE
         # is written.
         scored = []

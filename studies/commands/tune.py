@@ -107,7 +107,7 @@ def handle(args: argparse.Namespace) -> int:
         ("filter", "constraint_noise_density"): (list(tuned[2:5]), "tuned (see above)"),
         ("filter", "gate_scale"): (
             new_vehicle.filter.gate_scale,
-            f"tuned: gate threshold x this (the densities were scaled x{result.scale:.3g})",
+            f"tuned: the gate's S x this (the densities were scaled x{result.scale:.3g})",
         ),
     }
     text = vehicle_path.read_text(encoding="utf-8")
