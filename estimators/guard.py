@@ -74,7 +74,7 @@ class GuardSettings:
     parity_time_constant: float = 1.0  # s, low-pass of the parity residual
     travel_fault: float = 0.005  # m, smallest travel-sensor fault isolated
     ax_fault: float = 1.2  # m/s^2, smallest ax fault isolated
-    ay_fault: float = 0.25  # m/s^2, smallest ay fault isolated
+    ay_fault: float = 0.3  # m/s^2, smallest ay fault isolated
     az_fault: float = 1.2  # m/s^2, smallest az fault isolated
     isolation_fraction: float = 0.9  # share of residual energy one channel must explain
     fault_confirm_time: float = 0.2  # s a parity fault must persist

@@ -186,7 +186,7 @@ class FaultTuning:
 
     travel_fault: float = 0.005  # m
     ax_fault: float = 1.2  # m/s^2
-    ay_fault: float = 0.25  # m/s^2
+    ay_fault: float = 0.3  # m/s^2
     az_fault: float = 1.2  # m/s^2
 
     def _check(self) -> None:
