@@ -11,17 +11,12 @@ source (so it is never stale), and called through ctypes on numpy arrays.
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
-import subprocess
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from wheelload.models.build_folder import build_folder
+from wheelload.models.build_folder import cached_library
 
 COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
 
@@ -86,44 +81,15 @@ def _loop_source(
 
 
 def _shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
-    """Compile ``source`` once (cached by its hash and ``compiler``) and load it.
-
-    A cached library that does not load (truncated, empty, corrupt) is
-    removed and built again.
-    """
-    key = source if compiler == COMPILER else " ".join(compiler) + "\n" + source
-    digest = hashlib.sha256(key.encode()).hexdigest()[:16]
-    folder = build_folder()
-    library = folder / f"{name}_{digest}.so"
-    if library.exists():
-        try:
-            return ctypes.CDLL(str(library))
-        except OSError:
-            library.unlink(missing_ok=True)
-    if not library.exists():
-        handle, c_name = tempfile.mkstemp(suffix=".c", prefix=f"{name}_", dir=folder)
-        c_file = Path(c_name)
-        with os.fdopen(handle, "w") as stream:
-            stream.write(source)
-        partial = c_file.with_suffix(".so.tmp")
-        try:
-            subprocess.run(
-                [*compiler, "-o", str(partial), str(c_file), "-lm"],
-                check=True,
-                capture_output=True,
-                text=True,
-            )
-        except FileNotFoundError:
-            raise RuntimeError(
-                "no C compiler 'gcc' found: it is needed to run the filter "
-                "over a log in compiled code"
-            ) from None
-        except subprocess.CalledProcessError as error:
-            raise RuntimeError(f"compiling {name} failed:\n{error.stderr}") from None
-        finally:
-            c_file.unlink(missing_ok=True)
-        partial.replace(library)
-    return ctypes.CDLL(str(library))
+    """Compile ``source`` once (cached by its hash and ``compiler``) and load it
+    (:func:`~wheelload.models.build_folder.cached_library`)."""
+    return cached_library(
+        source,
+        name,
+        compiler,
+        lambda library: ctypes.CDLL(str(library)),
+        "run the filter over a log in compiled code",
+    )
 
 
 def _pointers(arrays) -> ctypes.Array:

@@ -46,28 +46,21 @@ def jit_options() -> dict:
 CHUNK_FLAGS = ("-O2", "-fPIC", "-shared")
 
 
-def cached_function(function):
-    """``function`` as generated C, compiled once per source and loaded (``casadi.external``).
+def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
+    """``source`` compiled once by ``command`` (gcc and its flags) and loaded with ``load``.
 
-    The library is named by the hash of its C source and flags (which hold
-    every parameter baked into the expressions), so a second process with the
-    same model loads it instead of compiling again (the CasADi JIT compiles on
-    every call); built under :func:`build_folder` through a temporary file
-    renamed into place, and a cached library that does not load is built again.
+    The library is named by the hash of the source and the command, built
+    under :func:`build_folder` through a temporary file renamed into place; a
+    cached library that does not load (truncated, empty, corrupt) is removed
+    and built again. ``purpose`` completes "gcc is needed to ...".
     """
-    import casadi as ca
-
-    name = function.name()
-    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-    generator.add(function)
-    source = generator.dump()
-    digest = hashlib.sha256((source + " ".join(CHUNK_FLAGS)).encode()).hexdigest()[:16]
+    digest = hashlib.sha256((" ".join(command) + "\n" + source).encode()).hexdigest()[:16]
     folder = build_folder()
     library = folder / f"{name}_{digest}.so"
     if library.exists():
         try:
-            return ca.external(name, str(library))
-        except RuntimeError:
+            return load(library)
+        except (OSError, RuntimeError):
             library.unlink(missing_ok=True)
     handle, c_name = tempfile.mkstemp(suffix=".c", prefix=f"{name}_", dir=folder)
     c_file = Path(c_name)
@@ -76,16 +69,38 @@ def cached_function(function):
     partial = c_file.with_suffix(".so.tmp")
     try:
         subprocess.run(
-            ["gcc", *CHUNK_FLAGS, "-o", str(partial), str(c_file), "-lm"],
+            [*command, "-o", str(partial), str(c_file), "-lm"],
             check=True,
             capture_output=True,
             text=True,
         )
     except FileNotFoundError:
-        raise RuntimeError("no C compiler 'gcc' found: it is needed to compile the plant") from None
+        raise RuntimeError(f"no C compiler 'gcc' found: it is needed to {purpose}") from None
     except subprocess.CalledProcessError as error:
         raise RuntimeError(f"compiling {name} failed:\n{error.stderr}") from None
     finally:
         c_file.unlink(missing_ok=True)
     partial.replace(library)
-    return ca.external(name, str(library))
+    return load(library)
+
+
+def cached_function(function):
+    """``function`` as generated C, compiled once per source and loaded (``casadi.external``).
+
+    The library is named by the hash of its C source and flags (which hold
+    every parameter baked into the expressions), so a second process with the
+    same model loads it instead of compiling again (the CasADi JIT compiles on
+    every call); see :func:`cached_library`.
+    """
+    import casadi as ca
+
+    name = function.name()
+    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+    generator.add(function)
+    return cached_library(
+        generator.dump(),
+        name,
+        ("gcc", *CHUNK_FLAGS),
+        lambda library: ca.external(name, str(library)),
+        "compile the plant",
+    )
