@@ -1,12 +1,6 @@
 /* The embedded MHE with quadratic losses (wheelload.estimators.mhe): the window of per-sample
  * terms of wheelload_mhe_terms, the Hessian values in OSQP's CSC order (loaded only when they
  * change), q, l, u, a warm start from the shifted previous solution, and one solve. */
-#include <math.h>
-#include <string.h>
-#include "osqp.h"
-#include "wheelload_mhe_workspace.h"
-#include "wheelload_mhe_terms.h"
-#include "wheelload_mhe.h"
 
 /* The window, oldest sample first: the terms of wheelload_mhe_terms (QP units). */
 static double HB[N][W * W], G[N][W], LINK[N], DRIFT[N], XP[N][4], LO[N][W], HI[N][W];
@@ -18,14 +12,6 @@ static OSQPFloat XW[NX], YW[NY], Q[NX], L[NX + 1], U[NX + 1], PX[NNZ]; /* OSQP's
 static double VALUES[N * W * W + (N - 1) * W]; /* diagonal blocks, then couplings */
 static double FALLBACK[4];
 static long K = 0;
-
-/* The fallback filter (appended after this file: the linked KF, or the held estimate). */
-static void kf_reset(void);
-static void kf_covariance(double *P); /* its covariance [N^2] before the sample, 4 x 4 */
-static void kf_step(const double *u, double dt, double *x, double *std);
-static void kf_held(const double *u, double dt, const double *held, double *std, double *residual);
-/* Arrival weight c s^2 Pi^-1 of a window starting at the sample (first: the log's first). */
-static void arrival_weight(int first, const double *P, double dt, double *weight);
 
 void wheelload_mhe_reset(void) {
     K = 0;
@@ -84,34 +70,9 @@ static int hessian(int j0, const double *arrival) {
     return changed;
 }
 
-/* Loads [N] of window sample j from its QP variables, or 0 if out of its bounds by more than
-   ten times OSQP's primal tolerance (as the Python MHE's check); clipped to the bounds. */
+/* Loads [N] of window sample j (clipped_loads). */
 static int checked(int j, double *loads) {
-    double value[W], largest = 1.0;
-    for (int a = 0; a < W; ++a) {
-        value[a] = (double)XW[j * W + a];
-        largest = fmax(largest, fabs(value[a]));
-    }
-    double tolerance = 10.0 * (EPS_ABS + EPS_REL * largest);
-    for (int a = 0; a < W; ++a) {
-        if (value[a] < LO[j][a] - tolerance || value[a] > HI[j][a] + tolerance) return 0;
-        value[a] = fmin(fmax(value[a], LO[j][a]), HI[j][a]);
-    }
-#if HARD
-    double x[4], big = 1.0;
-    for (int i = 0; i < 4; ++i) {
-        x[i] = XP[j][i] + NULL_VECTOR[i] * (value[0] * LOAD_SCALE);
-        big = fmax(big, fabs(x[i]));
-    }
-    tolerance = 10.0 * (1e-9 + 1e-12 * big);
-    for (int i = 0; i < 4; ++i) {
-        if (x[i] < LOW_LOAD - tolerance || x[i] > HIGH_LOAD + tolerance) return 0;
-        loads[i] = fmin(fmax(x[i], LOW_LOAD), HIGH_LOAD);
-    }
-#else
-    for (int i = 0; i < 4; ++i) loads[i] = value[i] * LOAD_SCALE;
-#endif
-    return 1;
+    return clipped_loads(XW + j * W, LO[j], HI[j], XP[j], loads);
 }
 
 int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {

@@ -11,12 +11,6 @@
  * kappa/2 (rho - e)^2 + mu |e| (quadratic: 1/2 rho^2). The bias arrival weight (information)
  * loses q_b dt of variance per sample and gains the Schur complement of each sample that leaves
  * the window, rows weighted by the loss's effective (IRLS) weight. */
-#include <math.h>
-#include <string.h>
-#include "osqp.h"
-#include "wheelload_mhe_workspace.h"
-#include "wheelload_mhe_terms.h"
-#include "wheelload_mhe.h"
 
 #define NL (WIDTH + NB)     /* a sample's local variables: its block, then the biases */
 #define NM (W + NB)         /* what a data row acts on: the loads, then the biases */
@@ -37,14 +31,6 @@ static OSQPFloat XW[NQ], YW[NQ], Q[NQ], L[NQ], U[NQ], PX[NNZ]; /* OSQP's type */
 static double BETA[NK], INFO[NK * NK];  /* bias estimate and its information */
 static double FALLBACK[4];              /* the fallback filter's (or held) estimate */
 static long K = 0;
-
-/* The fallback filter (appended after this file: the linked KF, or the held estimate). */
-static void kf_reset(void);
-static void kf_covariance(double *P); /* its covariance [N^2] before the sample, 4 x 4 */
-static void kf_step(const double *u, double dt, double *x, double *std);
-static void kf_held(const double *u, double dt, const double *held, double *std, double *residual);
-/* Arrival weight c s^2 Pi^-1 of a window starting at the sample (first: the log's first). */
-static void arrival_weight(int first, const double *P, double dt, double *weight);
 
 void wheelload_mhe_reset(void) {
     K = 0;
@@ -304,34 +290,9 @@ static void leaving_information(const OSQPFloat *v) {
 }
 #endif
 
-/* Loads [N] from one sample's QP variables, or 0 if out of its bounds by more than ten times
-   OSQP's primal tolerance (as the Python MHE's check); clipped to the bounds. */
+/* Loads [N] from one sample's QP variables (clipped_loads). */
 static int checked(const OSQPFloat *block, const sample_t *s, double *loads) {
-    double value[W], largest = 1.0;
-    for (int a = 0; a < W; ++a) {
-        value[a] = (double)block[a];
-        largest = fmax(largest, fabs(value[a]));
-    }
-    double tolerance = 10.0 * (EPS_ABS + EPS_REL * largest);
-    for (int a = 0; a < W; ++a) {
-        if (value[a] < s->lower[a] - tolerance || value[a] > s->upper[a] + tolerance) return 0;
-        value[a] = fmin(fmax(value[a], s->lower[a]), s->upper[a]);
-    }
-#if HARD
-    double x[4], big = 1.0;
-    for (int i = 0; i < 4; ++i) {
-        x[i] = s->xp[i] + NULL_VECTOR[i] * (value[0] * LOAD_SCALE);
-        big = fmax(big, fabs(x[i]));
-    }
-    tolerance = 10.0 * (1e-9 + 1e-12 * big);
-    for (int i = 0; i < 4; ++i) {
-        if (x[i] < LOW_LOAD - tolerance || x[i] > HIGH_LOAD + tolerance) return 0;
-        loads[i] = fmin(fmax(x[i], LOW_LOAD), HIGH_LOAD);
-    }
-#else
-    for (int i = 0; i < 4; ++i) loads[i] = value[i] * LOAD_SCALE;
-#endif
-    return 1;
+    return clipped_loads(block, s->lower, s->upper, s->xp, loads);
 }
 
 /* The window's minimiser when no sample has a data term: the prior carried unchanged. */
