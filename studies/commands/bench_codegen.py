@@ -98,10 +98,11 @@ def python_step_ns(kf: TwoStageKF, signals, n: int) -> float:
     return _median_ns(step, n)
 
 
-def filterpy_step_ns(kf: TwoStageKF, signals, n: int) -> float | None:
-    """Median ns of filterpy's predict + suspension update + equilibrium update.
+def filterpy_step(kf: TwoStageKF, signals):
+    """filterpy's predict + suspension update + equilibrium update as a per-sample
+    callable ``step(k)`` (None if filterpy is not installed).
 
-    The pseudo-measurements z and b are computed beforehand and not timed.
+    The pseudo-measurements z and b are computed here, beforehand, and not timed.
     """
     try:
         from filterpy.kalman import KalmanFilter
@@ -121,7 +122,13 @@ def filterpy_step_ns(kf: TwoStageKF, signals, n: int) -> float | None:
         filt.update(z[k][:, None], R=rs / dt[k] * np.eye(4), H=H_s)
         filt.update(b[k][:, None], R=np.diag(rc / dt[k]), H=A)
 
-    return _median_ns(step, n)
+    return step
+
+
+def filterpy_step_ns(kf: TwoStageKF, signals, n: int) -> float | None:
+    """Median ns of :func:`filterpy_step` (None if filterpy is not installed)."""
+    step = filterpy_step(kf, signals)
+    return None if step is None else _median_ns(step, n)
 
 
 def cpu_mhz() -> float | None:

@@ -30,16 +30,13 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.c_emitter import Precision, critical_path
 from wheelload.estimators.codegen import FAST_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.bench_codegen import cpu_mhz
+from wheelload.studies.commands.bench_codegen import cpu_mhz, filterpy_step
 from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.numpy_kf import pseudo_measurements
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 STEP_TARGET = 10.0  # µs per TwoStageKF.step
@@ -95,24 +92,7 @@ def python_steps(kf: TwoStageKF, signals, n: int):
     def reference(k):
         states["reference"], _ = kf.reference_step(states["reference"], samples[k], dt[k])
 
-    try:
-        from filterpy.kalman import KalmanFilter
-    except ImportError:
-        return fast, reference, None
-    z, A, b = pseudo_measurements(signals, kf.p)
-    q, rs, rc = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
-    filt = KalmanFilter(dim_x=4, dim_z=4)
-    initial = kf.initial_state()
-    filt.x, filt.P, filt.F = initial.x[:, None].copy(), initial.P.copy(), np.eye(4)
-    H_s = np.eye(4)
-
-    def filterpy(k):
-        filt.Q = q * dt[k] * np.eye(4)
-        filt.predict()
-        filt.update(z[k][:, None], R=rs / dt[k] * np.eye(4), H=H_s)
-        filt.update(b[k][:, None], R=np.diag(rc / dt[k]), H=A)
-
-    return fast, reference, filterpy
+    return fast, reference, filterpy_step(kf, signals)
 
 
 def _selftest_ns(binary: Path, *arguments) -> float:
