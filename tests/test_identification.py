@@ -239,3 +239,57 @@ def test_a_new_input_layout_and_term_flow_into_the_identification(rig_sets, para
     bundled = identify(default_model(), (*rig_sets, drive), parameters)
     assert "cg_height" not in bundled.sources
     assert bundled.value_of("cg_height") == parameters.cg_height
+
+
+def noisy_drive_log(parameters, seed=5):
+    """A drive data set from the paper's model (springs, push/pull dampers, bars) whose travel
+    rates are backward differences of noisy travels, as a logger derives them: travel noise
+    0.02 mm white at 100 Hz, so rate noise 0.003 m/s against rates of about 0.01 m/s (the
+    plant's accel-in-turn log: 0.003 against 0.005 m/s)."""
+    rng = np.random.default_rng(seed)
+    model = default_model()
+    dt, n = 0.01, 6000
+    t = dt * np.arange(n)
+    d_true, v_true = np.zeros((n, 4)), np.zeros((n, 4))
+    for i in range(4):
+        for frequency in rng.uniform(0.3, 2.0, 3):
+            amplitude, phase = rng.uniform(4e-4, 1.2e-3), rng.uniform(0, 2 * np.pi)
+            d_true[:, i] += amplitude * np.sin(2 * np.pi * frequency * t + phase)
+            v_true[:, i] += (
+                amplitude * 2 * np.pi * frequency * np.cos(2 * np.pi * frequency * t + phase)
+            )
+    error = 2e-5 * rng.standard_normal((n, 4))
+    d = d_true + error
+    v = v_true + np.diff(error, axis=0, prepend=error[:1]) / dt
+
+    def signals(travel, rate):
+        table = {name: np.zeros((n, 1)) for name in model.channel_names()}
+        for i in range(4):
+            table[TRAVEL[i]], table[TRAVEL_RATE[i]] = travel[:, i, None], rate[:, i, None]
+        return table
+
+    clean = signals(d_true, v_true)
+    pred = prediction(model, DataSet(kind=DataKind.DRIVE, source="x", t=t, signals=clean,
+                                     target=np.zeros((n, 4)), rows=WHEELS))  # fmt: skip
+    s = np.hstack([clean[name] for name in pred.columns])
+    loads = np.asarray(pred.function.map(n)(s.T, parameters.vector())).T
+    target = loads + 5.0 * rng.standard_normal((n, 4))  # load-transducer noise [N]
+    return DataSet(kind=DataKind.DRIVE, source="noisy.csv", t=t, signals=signals(d, v),
+                   target=target, rows=WHEELS)  # fmt: skip
+
+
+def test_instruments_remove_the_bias_that_rate_noise_gives_the_damper_slopes(parameters):
+    """Noise in a regressor biases least squares towards zero by var(v) / (var(v) +
+    var(noise)); two-stage least squares with the samples two steps away as instruments
+    (their noise is independent) recovers the slopes. Measured: plain -10 to -16 %,
+    instrumented -3.0 to +2.0 % (standard errors 0.8-1.5 %; what is left comes from the
+    push/pull switch, which the noisy rate's sign sets). Tolerance 4 %."""
+    data = (noisy_drive_log(parameters),)
+    truth = dict(zip(ModelParameters.names(), parameters.vector()))
+    plain = identify(default_model(), data, parameters)
+    instrumented = identify(default_model(), data, parameters, FitSettings(instrumental=True))
+    for name in ("damper_push_front", "damper_pull_front", "damper_push_rear", "damper_pull_rear"):
+        assert plain.value_of(name) < 0.92 * truth[name]
+        assert instrumented.value_of(name) == pytest.approx(truth[name], rel=0.04)
+    for name in ("spring_front", "spring_rear", "arb_rate_front", "arb_rate_rear"):
+        assert instrumented.value_of(name) == pytest.approx(truth[name], rel=0.03)

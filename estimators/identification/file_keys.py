@@ -20,7 +20,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from wheelload.models import ModelParameters, VehicleFileError, vehicle_from_dict
+from wheelload.models import ModelParameters, Vehicle, VehicleFileError, vehicle_from_dict
+from wheelload.models.plausibility import RANGES
 
 Key = tuple[str, ...]
 SKIPPED_SECTIONS = ("plant", "filter")  # never model parameters of the suspension or equilibrium
@@ -86,3 +87,23 @@ def lower_bounds(table: dict, keys: dict[str, Key]) -> dict[str, float]:
 
 def key_text(key: Key) -> str:
     return ".".join(key)
+
+
+#: Model parameters that are a share of a vehicle-file key (no one-to-one key, so
+#: :func:`parameter_keys` skips them): parameter -> (key in ``plausibility.RANGES``, share).
+SHARED_KEYS = {
+    "unsprung_front": ("mass.unsprung_front", 0.5),  # one corner of the axle's mass
+    "unsprung_rear": ("mass.unsprung_rear", 0.5),
+}
+
+
+def plausible_bounds(vehicle: Vehicle) -> tuple[dict[str, float], dict[str, float]]:
+    """Lower and upper bounds of :data:`SHARED_KEYS` from the physical ranges of their keys
+    (``wheelload.models.plausibility``): e.g. an unsprung corner mass between 1 % and
+    12.5 % of the total mass, never negative."""
+    lower, upper = {}, {}
+    for name, (key, share) in SHARED_KEYS.items():
+        accepted = RANGES[key](vehicle)
+        lower[name] = max(0.0, share * accepted.low)
+        upper[name] = share * accepted.high
+    return lower, upper

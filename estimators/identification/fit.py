@@ -57,6 +57,10 @@ class FitSettings:
     precision: float = 0.25  # largest 1-sigma relative precision of a fitted direction
     warn_precision: float = 0.10  # relative standard error above which a fitted value is flagged
     lower: dict[str, float] = field(default_factory=dict)  # lower bound per parameter
+    upper: dict[str, float] = field(default_factory=dict)  # upper bound per parameter
+    # Instrumental variables for the drive logs' regressors (noisy travel rates and
+    # accelerations bias least squares towards zero): two-stage least squares.
+    instrumental: bool = False
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -141,6 +145,15 @@ def _solve(A, b, lower, upper, loss: Loss) -> np.ndarray:
     return result.x
 
 
+def _projected(A: np.ndarray, Z: np.ndarray | None) -> np.ndarray:
+    r"""Regressors projected on the instruments' span, :math:`Z (Z^\top Z)^{-1} Z^\top A`
+    (two-stage least squares; ``A`` itself without instruments)."""
+    if Z is None:
+        return A
+    coefficients = np.linalg.lstsq(Z, A, rcond=None)[0]
+    return Z @ coefficients
+
+
 def _inliers(weighted: np.ndarray, loss: Loss) -> np.ndarray:
     """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
     return np.ones(weighted.size, bool) if loss is Loss.LINEAR else np.abs(weighted) < INLIER
@@ -173,7 +186,7 @@ def identify(
     held = {n: "held (--fix)" for n in settings.fixed}
     for j in nonlinear:
         held[names[j]] = "held: the model is not linear in it together with the fitted ones"
-    rows = evaluate(model, sets, theta0)
+    rows = evaluate(model, sets, theta0, settings.instrumental)
     scale = np.where(np.abs(theta0) > 0, np.abs(theta0), 1.0)
     warnings = []
     excited = np.abs(rows.J * scale).max(axis=0) > ZERO_FORCE
@@ -186,6 +199,7 @@ def identify(
                 "sample): held at the file value"
             )
     lower_all = np.array([settings.lower[n] if n in settings.lower else -np.inf for n in names])
+    upper_all = np.array([settings.upper[n] if n in settings.upper else np.inf for n in names])
     r0 = rows.y - rows.y_hat
     count = len(sets)
     sigma, rho = _scales(r0, rows, count)
@@ -193,16 +207,16 @@ def identify(
         cols = np.array(free)
         weight = 1.0 / sigma[rows.group]
         A = rows.J[:, cols] * scale[cols] * weight[:, None]
+        Z = None if rows.Z is None else rows.Z[:, cols] * scale[cols] * weight[:, None]
         b = r0 * weight
         lower = (lower_all[cols] - theta0[cols]) / scale[cols]
-        u = _solve(A, b, lower, np.full(cols.size, np.inf), settings.loss)
+        upper = (upper_all[cols] - theta0[cols]) / scale[cols]
+        u = _solve(_projected(A, Z), b, lower, upper, settings.loss)
         r = r0 - rows.J[:, cols] @ (u * scale[cols])
         sigma, rho = _scales(r, rows, count)
-        info = (
-            rows.J[:, cols]
-            * scale[cols]
-            / (sigma * np.sqrt((1 + rho) / (1 - rho)))[rows.group][:, None]
-        )
+        inflation = (sigma * np.sqrt((1 + rho) / (1 - rho)))[rows.group][:, None]
+        instrument = None if rows.Z is None else rows.Z[:, cols] * scale[cols] / inflation
+        info = _projected(rows.J[:, cols] * scale[cols] / inflation, instrument)
         _, singular, vt = np.linalg.svd(info, full_matrices=False)
         weakest = int(np.argmin(singular))
         # Judged on the same footing as the reported standard errors (s^2 (A^T A)^-1).

@@ -115,6 +115,32 @@ class Rows:
     travel: np.ndarray  # (N,) travel of the row's wheel [m] (bar rig: left wheel)
     rate: np.ndarray  # (N,) travel rate of the row's wheel [m/s]
     difference: np.ndarray  # (N,) left minus right travel of the row's axle [m]
+    Z: np.ndarray | None = None  # (N, n_theta) instrument regressors (see :func:`instruments`)
+
+
+#: Samples between a row and its instruments: the noise of a backward-differenced
+#: rate at k, (e_k - e_{k-1}) / dt, shares no sample with the rates at k - 2 and k + 2.
+INSTRUMENT_LAG = 2
+
+
+def instruments(s: np.ndarray) -> np.ndarray:
+    r"""Instrument signals: the mean of the samples ``INSTRUMENT_LAG`` before and after.
+
+    .. math:: \tilde s_k = (s_{k-2} + s_{k+2}) / 2
+
+    Sensor noise that is white, or white and differenced once (a travel
+    rate from the difference of noisy travels), at sample k is independent
+    of the noise at k - 2 and k + 2, while the motion (well below a quarter
+    of the sample rate) is nearly the same: regressors evaluated at
+    :math:`\tilde s` are instruments for those at :math:`s` (Söderström &
+    Stoica, System Identification, 1989, ch. 8). Edge samples repeat the
+    first and last sample.
+    """
+    n = s.shape[0]
+    index = np.arange(n)
+    before = s[np.clip(index - INSTRUMENT_LAG, 0, n - 1)]
+    after = s[np.clip(index + INSTRUMENT_LAG, 0, n - 1)]
+    return 0.5 * (before + after)
 
 
 def _signal(model: SuspensionModel, data: DataSet, name: str) -> np.ndarray:
@@ -124,21 +150,42 @@ def _signal(model: SuspensionModel, data: DataSet, name: str) -> np.ndarray:
     return np.zeros((len(data), 1))
 
 
-def evaluate(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray) -> Rows:
-    """Predictions and regressors of every used sample (finite target) at ``theta``."""
+def _jacobian(pred: Prediction, s: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Regressors (n, rows, n_theta) at the samples ``s`` (n, signals)."""
+    n = s.shape[0]
+    jac = np.asarray(pred.jacobian.map(n)(s.T, theta))  # (rows, n * n_theta)
+    return jac.reshape(jac.shape[0], n, len(theta)).transpose(1, 0, 2)
+
+
+def evaluate(
+    model: SuspensionModel,
+    sets: tuple[DataSet, ...],
+    theta: np.ndarray,
+    instrumented: bool = False,
+) -> Rows:
+    """Predictions and regressors of every used sample (finite target) at ``theta``.
+
+    ``instrumented``: also the regressors at the drive logs' instrument
+    signals (:func:`instruments`; rig rows are their own instruments).
+    """
     parts = []
     for index, data in enumerate(sets):
         pred = prediction(model, data)
-        s = np.hstack([_signal(model, data, name) for name in pred.columns])
+        full = np.hstack([_signal(model, data, name) for name in pred.columns])
         rows = np.isfinite(data.target)
         keep = rows.any(axis=1)
-        s = s[keep]
+        s = full[keep]
         n = s.shape[0]
         if n == 0:
             continue
         y_hat = np.asarray(pred.function.map(n)(s.T, theta)).T  # (n, rows)
-        jac = np.asarray(pred.jacobian.map(n)(s.T, theta))  # (rows, n * n_theta)
-        jac = jac.reshape(jac.shape[0], n, len(theta)).transpose(1, 0, 2)  # (n, rows, n_theta)
+        jac = _jacobian(pred, s, theta)
+        if not instrumented:
+            instrument = jac
+        elif data.kind is DataKind.DRIVE:
+            instrument = _jacobian(pred, instruments(full)[keep], theta)
+        else:
+            instrument = jac
         mask = rows[keep]
         sample, row = np.nonzero(mask)
         travel, rate, difference = _row_signals(data, keep, sample, row)
@@ -147,6 +194,7 @@ def evaluate(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarra
                 data.target[keep][sample, row],
                 y_hat[sample, row],
                 jac[sample, row, :],
+                instrument[sample, row, :],
                 np.full(sample.size, index),
                 np.asarray(data.rows)[row],
                 data.t[keep][sample],
@@ -157,13 +205,14 @@ def evaluate(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarra
         )
     if not parts:
         raise ValueError("no data sample with a measured force or reference load")
-    y, y_hat, J, group, wheel, t, travel, rate, difference = (
+    y, y_hat, J, Z, group, wheel, t, travel, rate, difference = (
         np.concatenate(items) for items in zip(*parts)
     )
     return Rows(
         y=y,
         y_hat=y_hat,
         J=J,
+        Z=Z if instrumented else None,
         group=group,
         wheel=wheel,
         t=t,

@@ -22,7 +22,11 @@ from wheelload.estimators.identification import (
     read_drive,
     read_rig,
 )
-from wheelload.estimators.identification.file_keys import lower_bounds, parameter_keys
+from wheelload.estimators.identification.file_keys import (
+    lower_bounds,
+    parameter_keys,
+    plausible_bounds,
+)
 from wheelload.estimators.identification.model import base_parameter
 from wheelload.estimators.identification.report import (
     correlation_table,
@@ -70,6 +74,12 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--knots", help="inner velocity knots of the piecewise damper [m/s], e.g. 0.1,0.3"
     )
+    parser.add_argument(
+        "--instrumental",
+        action="store_true",
+        help="two-stage least squares with instruments (the drive logs' samples two steps "
+        "before and after) against sensor noise in travel rates and accelerations",
+    )
     parser.add_argument("--fix", default="", help="parameters held at the file value, NAME,...")
     parser.add_argument(
         "--precision",
@@ -115,6 +125,8 @@ def handle(args: argparse.Namespace) -> int:
     model = piecewise_model(knots, gates) if knots else default_model(gates)
     keys = parameter_keys(table)
     bounds = lower_bounds(table, keys)
+    low, high = plausible_bounds(vehicle)
+    bounds |= low
     settings = FitSettings(
         loss=Loss(args.robust) if args.robust else Loss.LINEAR,
         fixed=frozenset(name.strip() for name in args.fix.split(",") if name.strip()),
@@ -124,6 +136,8 @@ def handle(args: argparse.Namespace) -> int:
             for name in model.parameter_names()
             if base_parameter(name) in bounds
         },
+        upper={name: high[name] for name in model.parameter_names() if name in high},
+        instrumental=args.instrumental,
     )
     result = identify(model, sets, ModelParameters.from_vehicle(vehicle), settings)
     changes = file_changes(result, keys)
