@@ -154,6 +154,12 @@ def _projected(A: np.ndarray, Z: np.ndarray | None) -> np.ndarray:
     return Z @ coefficients
 
 
+def _instrument_columns(Z: np.ndarray, cols, scale, weight) -> np.ndarray:
+    """Instrument regressors of the free columns, all lags side by side, scaled and weighted."""
+    block = Z[:, :, cols] * scale[cols] * weight[:, None, None]
+    return block.reshape(block.shape[0], -1)
+
+
 def _inliers(weighted: np.ndarray, loss: Loss) -> np.ndarray:
     """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
     return np.ones(weighted.size, bool) if loss is Loss.LINEAR else np.abs(weighted) < INLIER
@@ -207,7 +213,7 @@ def identify(
         cols = np.array(free)
         weight = 1.0 / sigma[rows.group]
         A = rows.J[:, cols] * scale[cols] * weight[:, None]
-        Z = None if rows.Z is None else rows.Z[:, cols] * scale[cols] * weight[:, None]
+        Z = None if rows.Z is None else _instrument_columns(rows.Z, cols, scale, weight)
         b = r0 * weight
         lower = (lower_all[cols] - theta0[cols]) / scale[cols]
         upper = (upper_all[cols] - theta0[cols]) / scale[cols]
@@ -215,7 +221,11 @@ def identify(
         r = r0 - rows.J[:, cols] @ (u * scale[cols])
         sigma, rho = _scales(r, rows, count)
         inflation = (sigma * np.sqrt((1 + rho) / (1 - rho)))[rows.group][:, None]
-        instrument = None if rows.Z is None else rows.Z[:, cols] * scale[cols] / inflation
+        instrument = (
+            None
+            if rows.Z is None
+            else _instrument_columns(rows.Z, cols, scale, 1 / inflation[:, 0])
+        )
         info = _projected(rows.J[:, cols] * scale[cols] / inflation, instrument)
         _, singular, vt = np.linalg.svd(info, full_matrices=False)
         weakest = int(np.argmin(singular))

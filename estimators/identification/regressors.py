@@ -115,31 +115,34 @@ class Rows:
     travel: np.ndarray  # (N,) travel of the row's wheel [m] (bar rig: left wheel)
     rate: np.ndarray  # (N,) travel rate of the row's wheel [m/s]
     difference: np.ndarray  # (N,) left minus right travel of the row's axle [m]
-    Z: np.ndarray | None = None  # (N, n_theta) instrument regressors (see :func:`instruments`)
+    Z: np.ndarray | None = None  # (N, lags, n_theta) instrument regressors (:func:`instruments`)
 
 
 #: Samples between a row and its instruments: the noise of a backward-differenced
-#: rate at k, (e_k - e_{k-1}) / dt, shares no sample with the rates at k - 2 and k + 2.
-INSTRUMENT_LAG = 2
+#: rate at k, (e_k - e_{k-1}) / dt, shares no sample with the samples L >= 2 away.
+#: Several lags keep the instruments correlated with the motion at every frequency
+#: below half the sample rate (at 100 Hz the lag-2 mean alone is blind near 12.5 Hz,
+#: the wheel-hop band; lags 3 and 4 see it).
+INSTRUMENT_LAGS = (2, 3, 4)
 
 
-def instruments(s: np.ndarray) -> np.ndarray:
-    r"""Instrument signals: the mean of the samples ``INSTRUMENT_LAG`` before and after.
+def instruments(s: np.ndarray, lag: int) -> np.ndarray:
+    r"""Instrument signals: the mean of the samples ``lag`` before and after.
 
-    .. math:: \tilde s_k = (s_{k-2} + s_{k+2}) / 2
+    .. math:: \tilde s_k = (s_{k-L} + s_{k+L}) / 2
 
     Sensor noise that is white, or white and differenced once (a travel
     rate from the difference of noisy travels), at sample k is independent
-    of the noise at k - 2 and k + 2, while the motion (well below a quarter
-    of the sample rate) is nearly the same: regressors evaluated at
-    :math:`\tilde s` are instruments for those at :math:`s` (Söderström &
-    Stoica, System Identification, 1989, ch. 8). Edge samples repeat the
-    first and last sample.
+    of the noise at k - L and k + L for L >= 2, while the motion is
+    correlated with it: regressors evaluated at :math:`\tilde s` for the
+    lags :data:`INSTRUMENT_LAGS` are instruments for those at :math:`s`
+    (Söderström & Stoica, System Identification, 1989, ch. 8). Edge samples
+    repeat the first and last sample.
     """
     n = s.shape[0]
     index = np.arange(n)
-    before = s[np.clip(index - INSTRUMENT_LAG, 0, n - 1)]
-    after = s[np.clip(index + INSTRUMENT_LAG, 0, n - 1)]
+    before = s[np.clip(index - lag, 0, n - 1)]
+    after = s[np.clip(index + lag, 0, n - 1)]
     return 0.5 * (before + after)
 
 
@@ -180,12 +183,13 @@ def evaluate(
             continue
         y_hat = np.asarray(pred.function.map(n)(s.T, theta)).T  # (n, rows)
         jac = _jacobian(pred, s, theta)
-        if not instrumented:
-            instrument = jac
-        elif data.kind is DataKind.DRIVE:
-            instrument = _jacobian(pred, instruments(full)[keep], theta)
-        else:
-            instrument = jac
+        if data.kind is DataKind.DRIVE and instrumented:
+            instrument = np.stack(
+                [_jacobian(pred, instruments(full, lag)[keep], theta) for lag in INSTRUMENT_LAGS],
+                axis=2,
+            )  # (n, rows, lags, n_theta)
+        else:  # rig rows (and a fit without instruments): their own instruments
+            instrument = np.repeat(jac[:, :, None, :], len(INSTRUMENT_LAGS), axis=2)
         mask = rows[keep]
         sample, row = np.nonzero(mask)
         travel, rate, difference = _row_signals(data, keep, sample, row)
@@ -194,7 +198,7 @@ def evaluate(
                 data.target[keep][sample, row],
                 y_hat[sample, row],
                 jac[sample, row, :],
-                instrument[sample, row, :],
+                instrument[sample, row],
                 np.full(sample.size, index),
                 np.asarray(data.rows)[row],
                 data.t[keep][sample],

@@ -10,11 +10,15 @@ for tuning. ``--quick`` uses three scenarios.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
+from wheelload.models import load_vehicle
 from wheelload.studies.identification_study import StudySettings, run_study
+from wheelload.studies.scenarios import SCENARIOS as SCENARIO_TABLE
 
-QUICK = ("accel-in-turn", "iso-dlc", "slope-20")
+SCENARIO_NAMES = tuple(sorted(SCENARIO_TABLE))
+QUICK = ("accel-in-turn", "iso-dlc", "slope-20")  # identified from accel-in-turn
 
 
 def register(subparsers) -> None:
@@ -25,18 +29,36 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--out", default="identify-study", help="folder for logs and tables")
     parser.add_argument("--quick", action="store_true", help="three scenarios only")
+    parser.add_argument(
+        "--identify-on",
+        choices=SCENARIO_NAMES,
+        help=f"the one drive log to identify from (default {StudySettings().identify_on}; "
+        f"--quick: {QUICK[0]})",
+    )
+    parser.add_argument(
+        "--vehicle", help="the true vehicle file the plant runs (default: the bundled sports car)"
+    )
     parser.set_defaults(handler=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
-    settings = StudySettings(scenarios=QUICK) if args.quick else StudySettings()
+    settings = StudySettings()
+    if args.quick:
+        settings = StudySettings(scenarios=QUICK, identify_on=QUICK[0])
+    if args.identify_on:
+        settings = dataclasses.replace(settings, identify_on=args.identify_on)
+    if args.vehicle:
+        path = Path(args.vehicle)
+        load_vehicle(path)  # a one-line error for a bad file before any simulation
+        settings = dataclasses.replace(settings, vehicle=path)
     folder = Path(args.out)
     identification, tuning = run_study(settings, folder)
     for name, frame in (("identification", identification), ("tuning", tuning)):
         target = folder / f"{name}.csv"
         frame.to_csv(target, index=False, float_format="%.6g")
     print(
-        f"KF pooled RMSE [N]; file identified from {settings.identify_on} "
+        f"KF pooled RMSE [N], {settings.vehicle.name}; file identified from "
+        f"{settings.identify_on} "
         f"(start: springs x{settings.spring}, dampers x{settings.damper}, bars x{settings.bar})"
     )
     print(identification.to_string(index=False, float_format="%.1f"))
