@@ -15,6 +15,16 @@ set ``g`` is weighted by its robust residual scale :math:`\sigma_g`
 autocorrelation :math:`\rho_g` of the residuals (an AR(1) effective sample
 size); for a robust loss only the inlier rows (:math:`|r| < 3\sigma`) count.
 
+With ``instrumental`` (two-stage least squares, Söderström & Stoica 1989,
+ch. 8) the solver runs on :math:`\hat J = P_Z J`, the regressors projected on
+the span of instruments :math:`Z` (the model's regressors at the drive logs'
+signals averaged over the samples 2-4 steps before and after,
+:func:`~wheelload.estimators.identification.regressors.instruments`), whose
+noise is independent of the noise in the regressors: sensor noise in a travel
+rate otherwise biases a damper slope towards zero by
+:math:`\mathrm{var}(v) / (\mathrm{var}(v) + \sigma_v^2)`. Standard errors and
+identifiability then use :math:`\hat J`.
+
 Identifiability (from the singular values of :math:`A\,\mathrm{diag}(|\theta_0|)`,
 the information about relative changes): a direction whose 1σ relative
 precision :math:`1/s_i` is worse than ``precision`` is not determined by the
