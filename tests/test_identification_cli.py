@@ -241,7 +241,7 @@ def test_joint_drive_logs_identify_springs_bars_roll_centres_and_front_dampers(j
     strict=True,
     reason="measured on this build: from iso-dlc + bounce-sweep + chicane-bank-30 the rear "
     "push damper slope comes out -12.5 % of the plant map's slope (pull -0.4 %; with "
-    "--instrumental -21 % / -5 %, so not rate noise). Cause: with the true file the model's "
+    "--instrumental -12.2 % / +0.1 %, so not rate noise). Cause: with the true file the model's "
     "residual where its damper equals the plant map (|v| < 0.1 m/s) already rises with the "
     "rear travel rate (-522 / -2389 N s/m rl / rr on chicane-bank-30, -983 / -952 on iso-dlc) "
     "and follows the yaw acceleration (correlation +0.65 / -0.79, sign pattern FL-, FR+, RL+, "
