@@ -464,9 +464,9 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
             if bounded:
                 low, high = lower[a : a + N], upper[a : a + N]
             if record is not None:
-                held = (low, high) if bounded else (None, None)
+                recorded = (low, high) if bounded else (None, None)
                 record.append(tuple(None if v is None else np.array(v)
-                                    for v in (Px, q, *held, x_warm, y_warm)))  # fmt: skip
+                                    for v in (Px, q, *recorded, x_warm, y_warm)))  # fmt: skip
             # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
             if Px[1] != held_Px[1] or not (Px == held_Px).all():
                 osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
