@@ -52,6 +52,12 @@ CASES = {
         lag=2,
     ),  # fmt: skip
     "quadratic-lag-3": MheSettings(horizon=6, bounded=True, lag=3),
+    "ride-height-ay-huber": MheSettings(
+        horizon=6,
+        bounded=True,
+        suspension_loss=HUBER,
+        bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL,
+    ),  # fmt: skip
 }
 
 
@@ -89,7 +95,9 @@ def test_double_c_equals_python(vehicle, faulted_log, tmp_path, name):
     np.testing.assert_allclose(c.std, python.std, rtol=1e-9)
     assert c.std.min() > 0.0
     if settings.bias_states != BiasStates.NONE:
-        assert c.bias.shape[1] == (6 if settings.bias_states == BOTH else 4)
+        # reported: four travel offsets, then the accelerometer biases in use
+        accelerations = len(settings.bias_states.acceleration_columns)
+        assert c.bias.shape[1] == python.bias.shape[1] == 4 + accelerations
         # travel offsets: 1 um (measured 2e-8 m); ax/ay biases: 1e-4 m/s^2 (measured 6e-6)
         np.testing.assert_allclose(c.bias[:, :4], python.bias[:, :4], rtol=0, atol=1e-6)
         np.testing.assert_allclose(c.bias[:, 4:], python.bias[:, 4:], rtol=0, atol=1e-4)
