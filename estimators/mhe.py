@@ -631,7 +631,7 @@ class MovingHorizonEstimator:
             x_warm = np.concatenate([blocks.ravel(), beta])
             status, iterations = SOLVED, 0
         else:
-            H, g = qp.assemble(
+            Px, g = qp.assemble_values(
                 samples,
                 j0,
                 state.history[0],
@@ -642,7 +642,7 @@ class MovingHorizonEstimator:
                 c,
             )
             low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
-            status, iterations, x_new, y_new = qp.solve_raw(H, g, low, high, x_warm, y_warm)
+            status, iterations, x_new, y_new = qp.solve_raw(Px, g, low, high, x_warm, y_warm)
             if status == SOLVED:
                 x_warm, y_warm = np.array(x_new), np.array(y_new)
         state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)

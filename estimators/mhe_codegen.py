@@ -16,10 +16,13 @@ The emitted folder holds
   auxiliary variables for
   the Huber/L1 losses and the bias states with their information
   recursion), the lagged output, and the fallback filter;
-- ``wheelload_mhe_kf.c/.h`` (soft constraint, given the vehicle file): the
-  two-stage KF library of ``wheelload codegen`` linked in: the fallback
-  estimate when a QP is not solved, the Kalman arrival cost
-  (:attr:`Arrival.KALMAN`) and the reported standard deviations.
+- ``wheelload_mhe_kf.c/.h`` (given the vehicle file): the fallback filter
+  of the Python MHE as a ``wheelload codegen`` library linked in (soft
+  constraint: the two-stage KF; hard: the projection KF with :math:`W =
+  P^{-1}`, from :func:`~wheelload.estimators.projection.projection_step_function`):
+  the estimate of a sample whose QP is not solved (flagged ``fallback``), the
+  Kalman arrival cost (:attr:`Arrival.KALMAN`) and the reported standard
+  deviations.
 
 ``wheelload_mhe_step(u, dt, &out)`` gives the loads of sample k - lag, the
 KF's standard deviations, the equilibrium residual :math:`b - A x` of that
@@ -35,11 +38,11 @@ Limits, against the Python MHE:
   interval given at generation; each sample's own interval sets its weights
   and random-walk link; a non-positive or non-finite interval holds the
   estimate (flags 255), as in Python;
-- hard constraint: the projection KF has no C, so the arrival cost is the
-  steady-state one, a sample whose QP is not solved keeps the previous
+- generated without the vehicle file (no filter linked): the arrival cost is
+  the steady-state one, a sample whose QP is not solved keeps the previous
   estimate, a missing equilibrium input takes :math:`A x` of the previous MHE
-  estimate (Python: of the projection KF's), and no standard deviations are
-  reported (zeros); likewise for a soft window generated without the vehicle file;
+  estimate (Python: of its filter's), and no standard deviations are reported
+  (zeros);
 - the extended window's Hessian is assembled densely per sample
   ((N w + n_b)² doubles; N = 10 with Huber and L1 on all rows and five bias
   states: 185² = 274 kB).
@@ -88,6 +91,7 @@ from wheelload.estimators.mhe import (
 from wheelload.estimators.mhe_terms import LOAD_SCALE, TERMS_NAME, terms_function
 from wheelload.estimators.mhe_window import L1_CORE, TRAVEL_UNIT, Loss
 from wheelload.estimators.output_files import atomic_write, check_output_folder, write_text
+from wheelload.estimators.projection import Weighting, projection_step_function
 from wheelload.estimators.quiet import quiet_stdout
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.signals import Signals
@@ -119,11 +123,11 @@ def embedded_settings(
 ) -> MheSettings:
     """The settings the embedded MHE realises (the Python MHE with these gives its numbers).
 
-    With the KF linked in (soft constraint and a vehicle file), the arrival
-    cost as given; otherwise the steady-state one. In single precision the
+    With the fallback filter linked in (a vehicle file), the arrival cost as
+    given; otherwise the steady-state one. In single precision the
     extended window's OSQP tolerances are at least :data:`FLOAT_WINDOW_EPS`.
     """
-    if not (filter_linked and settings.constraint is Constraint.SOFT):
+    if not filter_linked:
         settings = dataclasses.replace(settings, arrival=Arrival.STEADY_STATE)
     if precision is Precision.FLOAT and settings.extended:
         solver = settings.solver
@@ -145,12 +149,12 @@ def generate_mhe(
 ) -> Path:
     """Write the embedded MHE's C sources to ``folder`` (see module docstring).
 
-    With ``vehicle_path`` (the file ``vehicle`` was read from) and the soft
-    constraint, the two-stage KF library generated from that file is linked
-    in (``wheelload_mhe_kf.c``): the fallback, the Kalman arrival cost and
-    the standard deviations. Without it, or with the hard constraint (the
-    projection KF has no C), the fallback holds the last estimate and the
-    arrival cost is the steady-state one (:func:`embedded_settings`).
+    With ``vehicle_path`` (the file ``vehicle`` was read from), the Python
+    MHE's fallback filter generated from that file is linked in
+    (``wheelload_mhe_kf.c``; soft: the two-stage KF, hard: the projection KF):
+    the fallback, the Kalman arrival cost and the standard deviations.
+    Without it the fallback holds the last estimate and the arrival cost is
+    the steady-state one (:func:`embedded_settings`).
 
     ``precision`` is OSQP's floating type (``OSQPFloat``: the solver, its
     matrices and the QP vectors); the terms routine and the window stay in
@@ -184,10 +188,11 @@ def _generate_into(
     vehicle_path: Path | None,
 ) -> None:
     """Write every generated file into the (temporary) ``folder``."""
-    linked = vehicle_path is not None and settings.constraint is Constraint.SOFT
+    linked = vehicle_path is not None
     settings = embedded_settings(settings, filter_linked=linked, precision=precision)
     if linked:
-        _write_filter(vehicle, Path(vehicle_path), folder, precision)
+        hard = settings.constraint is Constraint.HARD
+        _write_filter(vehicle, Path(vehicle_path), folder, precision, hard)
     mhe = MovingHorizonEstimator(vehicle, settings)
     state = mhe.initial_state(dt)
     P0 = mhe.filter.initial_state().P
@@ -225,8 +230,14 @@ TEMPLATES = Path(__file__).with_name("templates")
 FILTER_PREFIX = "wheelload_mhe_kf"
 
 
-def _write_filter(vehicle: Vehicle, vehicle_path: Path, folder: Path, precision: Precision):
-    """The two-stage KF library of ``vehicle_path`` as ``wheelload_mhe_kf.c/.h`` in ``folder``."""
+def _write_filter(
+    vehicle: Vehicle, vehicle_path: Path, folder: Path, precision: Precision, hard: bool
+) -> None:
+    """The MHE's fallback filter for ``vehicle_path`` as ``wheelload_mhe_kf.c/.h`` in ``folder``.
+
+    Soft constraint: the two-stage KF library; hard: the same library around the
+    projection KF's step (:math:`W = P^{-1}`), as the Python MHE's ``filter``.
+    """
     if load_vehicle(vehicle_path, allow_unusual=True) != vehicle:
         raise ValueError(
             f"{vehicle_path}: is not the vehicle the MHE is generated for: give the file it "
@@ -234,7 +245,8 @@ def _write_filter(vehicle: Vehicle, vehicle_path: Path, folder: Path, precision:
         )
     with tempfile.TemporaryDirectory(dir=folder) as scratch:
         options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX)
-        library = generate(vehicle_path, Path(scratch), options, allow_unusual=True)
+        step = projection_step_function(Weighting.MAXIMUM_PROBABILITY) if hard else None
+        library = generate(vehicle_path, Path(scratch), options, step, allow_unusual=True)
         for path in (library.header, library.source):
             shutil.copyfile(path, folder / path.name)
 

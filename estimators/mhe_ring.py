@@ -25,6 +25,7 @@ import time
 import numpy as np
 import osqp
 
+from wheelload.estimators.mhe_terms import LOAD_SCALE
 from wheelload.estimators.quiet import quiet_stdout
 
 SOLVED = osqp.SolverStatus.OSQP_SOLVED.value
@@ -222,6 +223,12 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
                 nW = null @ arrivals[j]
                 rows_["nW"][j] = nW
                 rows_["nWn"][j, 0] = nW @ null
+    if hard and N > 1:  # the one-variable window: its own loop over whole-log arrays
+        whole = {
+            name: np.concatenate([previous[name], parts[name]]).reshape(N + n, *shape)
+            for name, (_, shape) in fields.items()
+        }
+        return run_hard(mhe, state, whole, kf_loads, record)
     for name in fields:
         rows[:, columns[name]] = parts[name]
         initial[:, columns[name]] = previous[name]
@@ -323,3 +330,191 @@ def _window_loads(mhe, x_sol, window, kfx, j, eps) -> np.ndarray:
     block = x_sol[j * w : (j + 1) * w]
     x = mhe._checked(block, window["lower"][j], window["upper"][j], window["xp"][j])
     return np.clip(kfx[j], *mhe.load_bounds) if x is None else x
+
+
+def _hard_loads(omega: float, low: float, high: float, xp, null, bounds, eps) -> list | None:
+    r"""``MovingHorizonEstimator._loads`` of the hard window in plain floats (same arithmetic).
+
+    :math:`\omega` clipped to its interval within ten times OSQP's tolerance, then
+    :math:`x = \bar x + n\,\omega` clipped to the load bounds within rounding.
+    """
+    eps_abs, eps_rel = eps
+    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, abs(omega)))
+    if omega < low - tolerance or omega > high + tolerance:
+        return None
+    scaled = min(max(omega, low), high) * LOAD_SCALE
+    x = [a + b * scaled for a, b in zip(xp, null)]
+    tolerance = 10.0 * (1e-9 + 1e-12 * max(1.0, max(map(abs, x))))
+    lowest, highest = bounds
+    clipped = []
+    for value in x:
+        if value < lowest - tolerance or value > highest + tolerance:
+            return None
+        clipped.append(min(max(value, lowest), highest))
+    return clipped
+
+
+def run_hard(mhe, state, rows: dict, kf_loads, record=None):
+    r"""The hard window (one warp variable :math:`\omega` per sample) over a log.
+
+    The same numbers and OSQP calls as :func:`run_ring`'s loop, with the
+    window's arithmetic hoisted out of it: every per-sample term is known
+    before the loop, so each field is one array over the initial window and
+    the log (``rows``: name -> ``(N + n, ...)``) and the window of sample
+    ``i`` is the view ``[i + 1 : i + 1 + N]``. The tridiagonal Hessian's
+    interior values :math:`H_j + (\ell_j + \ell_{j+1})` and couplings
+    :math:`-\ell_j`, and the linear term's interior :math:`(g_j + d_j) -
+    d_{j+1}`, are formed once per sample, interleaved in CSC order, so each
+    window's ``Px`` and ``q`` are one copy plus their two end values. Bounds
+    are clamped to OSQP's infinity once. Only the estimate-dependent prior term
+    is computed per sample.
+    """
+    from wheelload.estimators.mhe import _prior_solution, _Workspace
+
+    s = mhe.settings
+    N = s.horizon
+    n = len(kf_loads)
+    k0 = state.k
+    eps = (s.solver.eps_abs, s.solver.eps_rel)
+    H0, L, D, G = rows["H"][:, 0, 0], rows["link"], rows["drift"], rows["g"][:, 0]
+    # Px in CSC order: [d_0, -l_1, d_1, ..., -l_{N-1}, d_{N-1}] = interleaved (-l_j, d_j)[1:]
+    interleaved = np.empty((N + n, 2))
+    interleaved[:, 0] = -L
+    interleaved[:-1, 1] = H0[:-1] + (L[:-1] + L[1:])
+    interleaved[-1, 1] = 0.0  # the log's newest sample is always last in its window
+    interleaved = interleaved.ravel()
+    interior = np.empty(N + n)
+    interior[:-1] = (G[:-1] + D[:-1]) - D[1:]
+    interior[-1] = 0.0
+    bounded = state.y.size > 0
+    if bounded:
+        lower, upper = rows["lower"][:, 0], rows["upper"][:, 0]
+        low_clamped = np.maximum(lower, -INFINITY)
+        high_clamped = np.minimum(upper, INFINITY)
+    H0l, Ll, Dl, Gl = H0.tolist(), L.tolist(), D.tolist(), G.tolist()
+    lower_list = rows["lower"][:, 0].tolist()
+    upper_list = rows["upper"][:, 0].tolist()
+    xp_list = rows["xp"].tolist()
+    nW, nWn, xp = rows["nW"], rows["nWn"].tolist(), rows["xp"]
+    null = mhe.null.tolist()
+    bounds = mhe.load_bounds
+    history = np.empty((N + n, 4))
+    history[:N] = state.history
+    kfx = np.concatenate([state.kfx, kf_loads])
+    x_sol, y_sol, rho = state.x.copy(), state.y.copy(), state.rho
+    workspace = solver = None if k0 == 0 else mhe.workspace
+    if solver is not None:
+        solver = LowLevelSolver(workspace)
+    loads = np.empty((n, 4))
+    status = np.empty(n, dtype=np.int64)
+    iterations = np.empty(n, dtype=np.int64)
+    failed_all = np.zeros(n, dtype=bool)
+    solve_time = np.empty(n)
+    lag = s.lag
+    x_warm = np.empty(N)
+    y_warm = np.empty_like(y_sol)
+    Px, q = np.empty(2 * N - 1), np.empty(N)
+    has_data = rows["data"].tolist()
+    flags = has_data[:N]
+    since = next((N - 1 - j for j in range(N - 1, -1, -1) if flags[j]), N)
+    perf_counter = time.perf_counter
+
+    def window(i: int) -> dict:
+        return {name: values[i + 1 : i + 1 + N] for name, values in rows.items()}
+
+    for i in range(n):
+        start = perf_counter()
+        k = k0 + i
+        a = i + 1  # the window's oldest sample in the arrays over initial window + log
+        since = 0 if has_data[a + N - 1] else since + 1
+        j0 = N - 1 - k if k < N - 1 else 0
+        prior = history[i]  # the oldest estimate
+        if k == 0:
+            if solver is not None:
+                solver.release()
+            mhe.workspace = workspace = _Workspace(s, 1)
+            solver = LowLevelSolver(workspace)
+            osqp_solver = solver.solver
+            held_Px, held_low, held_high = solver.Px, *solver.bounds
+        elif i == 0:
+            osqp_solver = solver.solver
+            held_Px, held_low, held_high = solver.Px, *solver.bounds
+        x_warm[:-1] = x_sol[1:]
+        x_warm[-1] = x_sol[-1]
+        if bounded:
+            y_warm[:-1] = y_sol[1:]
+            y_warm[-1] = y_sol[-1]
+        x = None
+        newest = a + N - 1
+        if since >= min(k + 1, N):  # no sample of the window has a data term
+            current = window(i)
+            x_sol = _prior_solution(current, j0, history[i + N - 1], mhe.null, True, x_warm, 1)
+            y_sol = y_warm.copy()
+            code, iters = SOLVED, 0
+            x = mhe._loads(x_sol[-1:], current)
+        else:
+            Px[:] = interleaved[2 * a + 1 : 2 * a + 2 * N]
+            Px[0] = H0l[a] + (0.0 + Ll[a + 1])
+            Px[-1] = H0l[newest] + Ll[newest]
+            Px[2 * j0] += nWn[a + j0]
+            q[:] = interior[a : a + N]
+            q[0] = Gl[a] - Dl[a + 1]
+            q[-1] = Gl[newest] + Dl[newest]
+            q[j0] += nW[a + j0] @ (xp[a + j0] - prior) / LOAD_SCALE
+            if bounded:
+                low, high = lower[a : a + N], upper[a : a + N]
+            if record is not None:
+                recorded = (low, high) if bounded else (None, None)
+                record.append(tuple(None if v is None else np.array(v)
+                                    for v in (Px, q, *recorded, x_warm, y_warm)))  # fmt: skip
+            # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
+            if Px[1] != held_Px[1] or not (Px == held_Px).all():
+                osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
+                Px, held_Px = held_Px, Px  # the buffer just loaded is now the one held
+            if rho != solver.rho:
+                workspace.solver.update_settings(rho=rho)
+            if bounded and not ((low == held_low).all() and (high == held_high).all()):
+                osqp_solver.update_data_vec(
+                    q=q, l=low_clamped[a : a + N], u=high_clamped[a : a + N]
+                )
+                held_low, held_high = low, high
+            else:
+                osqp_solver.update_data_vec(q=q, l=None, u=None)
+            osqp_solver.warm_start(x_warm, y_warm if bounded else None)
+            if solver.polish:
+                with quiet_stdout():
+                    osqp_solver.solve()
+            else:
+                osqp_solver.solve()
+            info = osqp_solver.info
+            code, iters = info.status_val, info.iter
+            if code == SOLVED:
+                solution = osqp_solver.solution
+                x_sol = solution.x
+                if bounded:
+                    y_sol = solution.y
+                x = _hard_loads(float(x_sol[-1]), lower_list[newest], upper_list[newest],
+                                xp_list[newest], null, bounds, eps)  # fmt: skip
+            else:
+                x_sol, y_sol = x_warm.copy(), y_warm.copy()
+        failed = x is None
+        if failed:
+            x = np.clip(kf_loads[i], *bounds)
+        history[N + i] = x
+        if lag and not failed:
+            x = _window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps)
+        loads[i] = x
+        status[i], iterations[i], failed_all[i] = code, iters, failed
+        solve_time[i] = perf_counter() - start
+    if solver is not None:
+        solver.Px[:] = held_Px
+        solver.bounds = (held_low.copy(), held_high.copy())
+        solver.release()
+    last = n - 1
+    final_window = {name: view.copy() for name, view in window(last).items()}
+    final_kfx = kfx[last + 1 : last + 1 + N].copy()
+
+    def final(j: int) -> np.ndarray:
+        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps)
+
+    return loads, status, iterations, failed_all, solve_time, final

@@ -35,9 +35,12 @@ walk) and gains the bias information of each sample that leaves the window
 loss's effective weights). Bounds :math:`|\beta| \le \beta_{max}` hold in the QP.
 
 The QP (variables in kN, :math:`e` in σ, travel offsets in mm, accelerations
-in m/s²) is assembled densely per sample and loaded into OSQP at the fixed
-upper-triangular pattern found at set-up; the constraints are the identity
-(bounds on every variable).
+in m/s²) has a fixed upper-triangular pattern, found at set-up. Per sample only
+its values are formed (:meth:`WindowQP.assemble_values`): each term's entries
+go to precomputed positions in OSQP's CSC value array and are summed there
+(``numpy.bincount``), so the dense :math:`n \times n` matrix of
+:meth:`WindowQP.assemble` (kept as the reference) is never built. The
+constraints are the identity (bounds on every variable).
 """
 
 from __future__ import annotations
@@ -203,10 +206,13 @@ class WindowQP:
             for j in range(self.N)
         ]
         self.blocks = [np.ix_(c, c) for c in self.columns]
+        # a sample's own block and the bias: columns[j] ascend, so local upper = global upper
+        self.local_upper = np.triu_indices(self.width + n_bias)
         upper_pattern = np.triu(self._structure()) != 0
         self.rows, self.cols = np.nonzero(upper_pattern.T)  # CSC order: by column, then row
         self.cols, self.rows = self.rows, self.cols
         self.setup()
+        self._value_positions()
 
     def setup(self) -> None:
         """A fresh OSQP workspace with the fixed pattern."""
@@ -287,7 +293,91 @@ class WindowQP:
             Mc *= sample.lc[:, None]
             rc = -sample.lc * sample.b
             self._rows(H, g, y, beta, Mc, rc, self.constraint, self.aux(0, 1))
-        return H, g
+        return H, g, H[self.local_upper]
+
+    def _value_positions(self) -> None:
+        """Where each term's upper-triangular entries go in the CSC value array.
+
+        ``position[r, c]`` is the index of entry (r, c) in OSQP's ``Px`` (CSC
+        order), or ``nnz`` (a bin dropped after the sum) outside the pattern,
+        as :meth:`solve_raw` reads ``H[rows, cols][order]`` of the dense matrix.
+        """
+        N, w = self.N, self.w
+        nnz = self.rows.size
+        position = np.full((self.n, self.n), nnz)
+        position[self.rows[self.order], self.cols[self.order]] = np.arange(nnz)
+        self.nnz = nnz
+        a, b = self.local_upper
+        self.local_positions = np.array([position[c[a], c[b]] for c in self.columns])
+        self.local_columns = np.array(self.columns)
+        ya, yb = np.triu_indices(w)
+        y = [np.arange(self.y(j).start, self.y(j).stop) for j in range(N)]
+        self.arrival_upper = (ya, yb)
+        self.arrival_positions = [position[yj[ya], yj[yb]] for yj in y]
+        # random-walk link of sample j: 1/2 link ||X y_j - X y_{j-1} - (xp_j - xp_{j-1})||^2
+        self.link_matrix = np.hstack([self.X, -self.X])
+        pair = [np.concatenate([y[j], y[j - 1]]) for j in range(1, N)]
+        # y_{j-1} precedes y_j: the pair's global upper entries (the same for every j)
+        la, lb = np.nonzero(np.less_equal.outer(pair[0], pair[0])) if pair else ([], [])
+        self.link_upper = (la, lb)
+        self.link_positions = np.array([position[c[la], c[lb]] for c in pair], dtype=int)
+        self.link_columns = np.array(pair, dtype=int).reshape(N - 1, 2 * w)
+        self.inert_positions = np.array([position[yj, yj] for yj in y])
+        beta = np.arange(self.beta.start, self.beta.stop)
+        ba, bb = np.triu_indices(self.n_bias)
+        self.beta_upper = (ba, bb)
+        self.beta_positions = position[beta[ba], beta[bb]]
+        self.beta_columns = beta
+        self._indices: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def _indices_at(self, j0: int) -> tuple[np.ndarray, np.ndarray]:
+        """(value positions, linear-term columns) of every term of a window starting at j0."""
+        if j0 not in self._indices:
+            y0 = np.arange(self.y(j0).start, self.y(j0).stop)
+            self._indices[j0] = (
+                np.concatenate([
+                    self.local_positions[j0:].ravel(), self.arrival_positions[j0],
+                    self.link_positions[j0:].ravel(), self.inert_positions[:j0].ravel(),
+                    self.beta_positions,
+                ]),
+                np.concatenate([
+                    self.local_columns[j0:].ravel(), y0, self.link_columns[j0:].ravel(),
+                    self.beta_columns,
+                ]),
+            )  # fmt: skip
+        return self._indices[j0]
+
+    def assemble_values(self, window, j0, prior, arrival, beta_prior, beta_info, local, cost):
+        """:meth:`assemble` as OSQP's ``Px`` (CSC values at the fixed pattern) and ``q``.
+
+        The same terms, summed at their positions instead of in a dense matrix;
+        equal to ``assemble``'s ``H[rows, cols][order]`` and ``g`` to rounding
+        (the link's weight multiplies :math:`M^\top M` instead of :math:`M^\top`).
+        """
+        positions, columns = self._indices_at(j0)
+        xp = np.array([s.xp for s in window])
+        links = np.array([s.link for s in window[j0 + 1 :]])
+        W = np.asarray(arrival, dtype=float)
+        MW = self.X.T @ W
+        # _add's arithmetic for each link: MW = M^T diag(link), H += MW M, g -= MW r
+        linked = links[:, None, None] * self.link_matrix.T
+        residual = (xp[j0:-1] - xp[j0 + 1 :])[:, :, None]  # r = -(xp_j - xp_{j-1})
+        values = np.concatenate([
+            np.concatenate([term[2] for term in local[j0:]]),
+            (MW @ self.X)[self.arrival_upper],
+            (linked @ self.link_matrix)[:, self.link_upper[0], self.link_upper[1]].ravel(),
+            np.full(j0 * self.w, 1.0 / cost),
+            np.asarray(beta_info, dtype=float)[self.beta_upper],
+        ])  # fmt: skip
+        linear = np.concatenate([
+            np.concatenate([term[1] for term in local[j0:]]),
+            -(MW @ (prior - xp[j0])),
+            -(linked @ residual).ravel(),
+            -(np.asarray(beta_info, dtype=float) @ beta_prior),
+        ])  # fmt: skip
+        Px = np.bincount(positions, values, minlength=self.nnz + 1)[: self.nnz]
+        q = np.bincount(columns, linear, minlength=self.n)
+        return cost * Px, cost * q
 
     def assemble(self, window, j0, prior, arrival, beta_prior, beta_info, local, cost):
         """Dense Hessian and linear term of the window (physical costs times ``cost``).
@@ -303,7 +393,7 @@ class WindowQP:
             if j < j0:
                 H[y, y] += 1.0 / cost  # inert: unit diagonal after scaling
                 continue
-            Hl, gl = local[j]
+            Hl, gl, _ = local[j]
             H[self.blocks[j]] += Hl
             g[self.columns[j]] += gl
             if j == j0:
@@ -343,16 +433,15 @@ class WindowQP:
         g[minus] += mu
 
     def bounds(self, window, j0, beta_bound) -> tuple[np.ndarray, np.ndarray]:
+        """Load bounds of each sample from ``j0`` (inert ones pinned at 0), aux >= 0, bias box."""
         low = np.zeros(self.n)
         high = np.zeros(self.n)
-        for j, sample in enumerate(window):
-            y = self.y(j)
-            if j < j0:
-                continue  # inert: pinned at 0
-            low[y], high[y] = sample.lower, sample.upper
-            for group in (0, 1):
-                plus, minus = self.aux(j, group)
-                high[plus] = high[minus] = np.inf
+        N, w = self.N, self.w
+        blocks_low = low[: N * self.width].reshape(N, self.width)
+        blocks_high = high[: N * self.width].reshape(N, self.width)
+        blocks_low[j0:, :w] = [sample.lower for sample in window[j0:]]
+        blocks_high[j0:, :w] = [sample.upper for sample in window[j0:]]
+        blocks_high[j0:, w:] = np.inf  # the auxiliaries e+, e- >= 0
         low[self.beta], high[self.beta] = -beta_bound, beta_bound
         return np.maximum(low, -osqp.constant("OSQP_INFTY")), np.minimum(
             high, osqp.constant("OSQP_INFTY")
@@ -367,18 +456,17 @@ class WindowQP:
                 return self.solver.solve(raise_error=False)
         return self.solver.solve(raise_error=False)
 
-    def solve_raw(self, H, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
+    def solve_raw(self, Px, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
         """:meth:`solve` through OSQP's solver object: ``(status, iterations, x, y)``.
 
-        The same calls in the same order as the wrapper makes them (vectors, then
+        ``Px``: the Hessian's values in CSC order (:meth:`assemble_values`). The
+        same calls in the same order as the wrapper makes them (vectors, then
         the matrix; bounds clamped to OSQP's infinity), without its result object.
         """
         solver = self.solver._solver
         infinity = osqp.constant("OSQP_INFTY")
         solver.update_data_vec(q=g, l=np.maximum(low, -infinity), u=np.minimum(high, infinity))
-        solver.update_data_mat(
-            P_x=H[self.rows, self.cols][self.order], P_i=None, A_x=None, A_i=None
-        )
+        solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
         solver.warm_start(x, y)
         if self.solver_settings.polish:
             with quiet_stdout():

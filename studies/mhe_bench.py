@@ -80,3 +80,50 @@ def window_against_bare_osqp(
             )
         )
     return rows
+
+
+@dataclass(frozen=True, kw_only=True)
+class AssemblyTiming:
+    """Per-sample times [us] of one repeat of the extended window's QP assembly."""
+
+    sparse: float  # median: values at the fixed pattern (WindowQP.assemble_values)
+    dense: float  # median: the dense n x n matrix read at the pattern (WindowQP.assemble)
+    size: int  # QP variables n
+    nnz: int  # Hessian values loaded per sample
+
+
+def assembly_against_dense(
+    vehicle: Vehicle, signals: Signals, settings: MheSettings, repeats: int = 3
+) -> list[AssemblyTiming]:
+    """The robust/bias window's per-sample QP assembly: sparse values against the dense matrix.
+
+    The MHE runs the log once recording each window's arguments; both
+    assemblies are then timed on the same windows (the dense one including the
+    read-out at the pattern that OSQP needs).
+    """
+    mhe = MovingHorizonEstimator(vehicle, settings)
+    qp = mhe.window_qp
+    record: list = []
+    sparse = qp.assemble_values
+
+    def recording(*args):
+        record.append(args)
+        return sparse(*args)
+
+    qp.assemble_values = recording
+    mhe.run(signals)
+    del qp.assemble_values
+    rows = []
+    for _ in range(repeats):
+        times = np.empty((2, len(record)))
+        for i, args in enumerate(record):
+            start = time.perf_counter()
+            qp.assemble_values(*args)
+            middle = time.perf_counter()
+            H, _ = qp.assemble(*args)
+            H[qp.rows, qp.cols][qp.order]  # noqa: B018 - the values OSQP is given
+            times[:, i] = (middle - start, time.perf_counter() - middle)
+        rows.append(AssemblyTiming(sparse=float(np.median(times[0])) * 1e6,
+                                   dense=float(np.median(times[1])) * 1e6,
+                                   size=qp.n, nnz=qp.nnz))  # fmt: skip
+    return rows

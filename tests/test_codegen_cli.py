@@ -40,8 +40,10 @@ def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
             "--precision", "float"]  # fmt: skip
     assert main(argv) == 0
     printed = capsys.readouterr().out
-    assert "MHE N=5 (hard, bounded, steady arrival)" in printed and "dt = 0.005 s" in printed
-    assert {"wheelload_mhe.c", "wheelload_mhe_terms.c", "osqp"} <= {p.name for p in out.iterdir()}
+    assert "MHE N=5 (hard, bounded)" in printed and "dt = 0.005 s" in printed
+    assert "projection KF linked in" in printed  # the hard window's fallback, as in Python
+    files = {"wheelload_mhe.c", "wheelload_mhe_terms.c", "wheelload_mhe_kf.c", "osqp"}
+    assert files <= {p.name for p in out.iterdir()}
     assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
     assert "#define OSQP_USE_FLOAT" in (out / "osqp" / "osqp_configure.h").read_text()
 

@@ -222,8 +222,12 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
     acc[150:200] = np.nan  # every equilibrium row and no suspension row... for 50 samples
     d[150:200] = np.nan  # ... nor travel: windows without data, held in closed form
     signals = dataclasses.replace(signals, d=d, acc=acc)
-    for lag in (0, 3):
-        settings = MheSettings(horizon=6, constraint=constraint, bounded=bounded, lag=lag)
+    # a few iterations only: unsolved windows fall back to the KF (and polish when bounded)
+    starved = SolverSettings(max_iter=10, check_termination=1, polish=True)
+    for lag, solver in ((0, SolverSettings()), (3, SolverSettings()), (0, starved)):
+        settings = MheSettings(
+            horizon=6, constraint=constraint, bounded=bounded, lag=lag, solver=solver
+        )
         ring = MovingHorizonEstimator(vehicle, settings).run(signals)
         reference = MovingHorizonEstimator(vehicle, settings)
         reference._per_sample_states = True
@@ -231,3 +235,5 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
         for name in ("loads", "std", "residual", "flags", "status", "iterations", "fallback"):
             np.testing.assert_array_equal(getattr(ring, name), getattr(states, name), err_msg=name)
         assert (ring.iterations == 0).sum() > 0  # the held windows were exercised
+        if solver is starved:
+            assert ring.fallback.sum() > 10  # the failed solves were exercised

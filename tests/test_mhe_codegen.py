@@ -6,8 +6,16 @@ import shutil
 import numpy as np
 import pytest
 
-from wheelload.estimators.mhe import Arrival, Constraint, MheSettings, MovingHorizonEstimator
-from wheelload.estimators.mhe_codegen import build_mhe_library
+from wheelload.estimators.mhe import (
+    Arrival,
+    Constraint,
+    MheSettings,
+    MovingHorizonEstimator,
+    SolverSettings,
+)
+from wheelload.estimators.mhe_codegen import build_mhe_library, embedded_settings
+from wheelload.estimators.projection import ProjectionKF, Weighting
+from wheelload.models import example_vehicle_path
 from wheelload.studies.synthetic import SensorNoise, steady_cornering, synthetic_log
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
@@ -69,4 +77,34 @@ def test_generated_c_takes_each_samples_interval_like_python(vehicle, wheel_lift
     assert np.all(c.status == 1)
     np.testing.assert_array_equal(c.flags, python.flags)
     # the same iterations: a tenth of the solver tolerance scaled to newtons, as above
+    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+
+
+@pytest.mark.parametrize(("bounded", "max_iter"), [(False, 20), (True, 15)])
+def test_hard_window_in_c_falls_back_to_the_projection_kf_like_python(
+    vehicle, wheel_lift, tmp_path, bounded, max_iter
+):
+    """A starved solver (these windows need 15-25 ADMM iterations) fails on many samples: the
+    C takes the linked projection KF's estimate, flagged, as the Python MHE does; its sigma is
+    reported."""
+    starved = SolverSettings(max_iter=max_iter)
+    settings = MheSettings(horizon=10, constraint=Constraint.HARD, bounded=bounded,
+                           max_load=12000.0, solver=starved)  # fmt: skip
+    c = build_mhe_library(
+        vehicle, settings, tmp_path, dt=0.01, vehicle_path=example_vehicle_path()
+    ).run(wheel_lift)
+    python = MovingHorizonEstimator(vehicle, embedded_settings(settings, filter_linked=True))
+    python = python.run(wheel_lift)
+    failed = c.fallback
+    assert failed.sum() > 20 and not failed.all()  # failures, and solves between them
+    np.testing.assert_array_equal(failed, python.fallback)
+    np.testing.assert_array_equal(c.status, python.status)
+    # an independent run of the projection KF: the fallback rows are its estimate, clipped
+    kf = ProjectionKF(vehicle, weighting=Weighting.MAXIMUM_PROBABILITY).run(wheel_lift)
+    low, high = (0.0, 12000.0) if bounded else (-np.inf, np.inf)
+    # the C filter against the CasADi one: the same arithmetic in double (1e-6 N)
+    np.testing.assert_allclose(c.loads[failed], np.clip(kf.loads[failed], low, high),
+                               rtol=0, atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(c.std, kf.std, rtol=1e-9)
+    # every row against the Python MHE: the same iterations, as above
     np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)

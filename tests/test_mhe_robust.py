@@ -254,3 +254,44 @@ def test_ride_heights_and_ay_bias_take_up_both_slow_faults_on_a_plant_log(vehicl
         assert error < 0.7 * pooled_rmse(kf.run(faulty).loads, iso_dlc.reference), fault
     # the ay bias read at the end of the log (true 0.5 m/s^2; measured 0.39)
     assert 0.25 < estimate.bias[-1, 4] < 0.6
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [
+        MheSettings(horizon=6, suspension_loss=ResidualLoss(kind=Loss.L1),
+                    constraint_loss=HUBER, bias_states=BiasStates.TRAVEL | BiasStates.ACCELERATION),
+        MheSettings(horizon=5, constraint=Constraint.HARD, bounded=True, max_load=2e4,
+                    suspension_loss=HUBER, bias_states=BiasStates.TRAVEL),
+        MheSettings(horizon=4, bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL),
+    ],
+    ids=["soft-l1-huber-5-bias", "hard-bounded-huber-travel", "soft-ride-height-ay"],
+)  # fmt: skip
+def test_sparse_window_values_equal_the_dense_assembly(vehicle, drive, settings):
+    """Each sample's Px and q at the fixed pattern against the dense assembly of the same window.
+
+    The same terms summed in the same order at each entry; only the links' products
+    are batched: equal to 1e-12 of the largest entry. The dense matrix has nothing
+    outside the pattern (no entry the values could drop).
+    """
+    mhe = MovingHorizonEstimator(vehicle, settings)
+    qp = mhe.window_qp
+    sparse = qp.assemble_values
+    outside = np.ones((qp.n, qp.n), dtype=bool)
+    outside[qp.rows, qp.cols] = False
+    outside[np.tril_indices(qp.n, -1)] = False  # the lower triangle is not loaded
+    checked = []
+
+    def both(window, j0, *args):
+        Px, q = sparse(window, j0, *args)
+        H, g = qp.assemble(window, j0, *args)
+        np.testing.assert_allclose(Px, H[qp.rows, qp.cols][qp.order], rtol=0,
+                                   atol=1e-12 * np.abs(Px).max())  # fmt: skip
+        np.testing.assert_allclose(q, g, rtol=0, atol=1e-12 * np.abs(g).max())
+        assert not H[outside].any()
+        checked.append(j0)
+        return Px, q
+
+    qp.assemble_values = both
+    mhe.run(drive.slice(0, 40))
+    assert set(checked) == set(range(settings.horizon))  # the start-up windows too

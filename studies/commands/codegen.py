@@ -58,6 +58,11 @@ BIAS_CHOICES = {
     "travel": BiasStates.TRAVEL,
     "acceleration": BiasStates.ACCELERATION,
     "travel+acceleration": BiasStates.TRAVEL | BiasStates.ACCELERATION,
+    "ride-height": BiasStates.RIDE_HEIGHT,
+    "ay": BiasStates.LATERAL,
+    "ride-height+ay": BiasStates.RIDE_HEIGHT | BiasStates.LATERAL,
+    "travel+ay": BiasStates.TRAVEL | BiasStates.LATERAL,
+    "ride-height+acceleration": BiasStates.RIDE_HEIGHT | BiasStates.ACCELERATION,
 }
 
 
@@ -116,7 +121,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     mhe.add_argument(
         "--arrival",
         choices=[a.value for a in Arrival],
-        help="kalman (default; soft: the linked KF's covariance) or steady-state",
+        help="kalman (default: the linked filter's covariance) or steady-state",
     )
     add_allow_unusual(parser)
     parser.set_defaults(handler=run)
@@ -174,11 +179,10 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
         vehicle, settings, Path(args.out), dt=values["dt"], precision=precision,
         vehicle_path=vehicle_path, force=args.force,
     )  # fmt: skip
-    linked = settings.constraint is Constraint.SOFT
-    realised = embedded_settings(settings, filter_linked=linked, precision=precision)
+    realised = embedded_settings(settings, filter_linked=True, precision=precision)
+    linked = "two-stage KF" if settings.constraint is Constraint.SOFT else "projection KF"
     print(
         f"written the embedded {realised.label()} "
-        f"(dt = {values['dt']} s, OSQP in {precision.value}"
-        f"{', two-stage KF linked in' if linked else ''}) to {folder}"
+        f"(dt = {values['dt']} s, OSQP in {precision.value}, {linked} linked in) to {folder}"
     )
     return 0

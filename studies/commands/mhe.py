@@ -221,6 +221,7 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"{'KF step (Python, CasADi call)':38s} {kf_step:10.1f} {'':>10s} {1.0:10.2f}")
     print(f"{'KF run (compiled loop, amortised)':38s} {kf_run:10.2f}")
     _bench_window(vehicle, signals, args.horizons, args.repeats)
+    _bench_assembly(vehicle, signals.slice(0, min(len(signals), 500)), args.horizons, args.repeats)
     c_available = not args.no_c and shutil.which("gcc") is not None
     for horizon in args.horizons:
         for constraint in Constraint:
@@ -277,6 +278,25 @@ def _bench_window(vehicle, signals, horizons: list[int], repeats: int) -> None:
                     mhe, bare = np.array(mhe), np.array(bare)
                     print(f"  {settings.label():30s} {label:6s} MHE {_spread(mhe)} us, bare OSQP "
                           f"{_spread(bare)} us, ratio {_spread(mhe / bare, '.2f')}")  # fmt: skip
+
+
+def _bench_assembly(vehicle, signals, horizons: list[int], repeats: int) -> None:
+    """The robust/bias window's QP assembly: sparse values against the dense matrix."""
+    from wheelload.studies.mhe_bench import assembly_against_dense
+
+    print(f"Robust/bias window QP assembly per sample, sparse values at the fixed pattern "
+          f"against the dense matrix; {repeats} repeats of the medians: "
+          "min / median / max")  # fmt: skip
+    for horizon in horizons:
+        for candidate in robust_candidates(horizon):
+            if candidate.settings is None or not candidate.settings.extended:
+                continue
+            rows = assembly_against_dense(vehicle, signals, candidate.settings, repeats)
+            sparse = np.array([r.sparse for r in rows])
+            dense = np.array([r.dense for r in rows])
+            print(f"  {candidate.name:52s} n = {rows[0].size:3d}, {rows[0].nnz:4d} values: "
+                  f"sparse {_spread(sparse)} us, dense {_spread(dense)} us, "
+                  f"dense / sparse {_spread(dense / sparse, '.1f')}")  # fmt: skip
 
 
 def _spread(values: np.ndarray, fmt: str = ".1f") -> str:
