@@ -7,10 +7,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators.family.compiled_method import INPUTS
 from wheelload.estimators.family.ycoo import Ycoo, YcooSettings
 from wheelload.estimators.protocol import Estimator, step_through
-from wheelload.models import ModelParameters, example_vehicle_path, load_vehicle
+from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, load_vehicle
 
 
 def linear_vehicle():
