@@ -53,6 +53,7 @@ from wheelload.estimators.registry import MethodInfo
 from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.models.corner_loads import corner_load_function
+from wheelload.models.equilibrium import roll_axis_height
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -77,8 +78,7 @@ def roll_centre_height(vehicle: Vehicle, settings: CornerSettings, model: Suspen
         return settings.roll_centre_height
     if model is SuspensionModel.PAPER:
         return 0.0
-    p = ModelParameters.from_vehicle(vehicle)
-    return (p.lr * p.roll_centre_front + p.lf * p.roll_centre_rear) / (p.lf + p.lr)
+    return float(roll_axis_height(ModelParameters.from_vehicle(vehicle)))
 
 
 def corner_parameters(

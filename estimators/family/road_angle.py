@@ -8,7 +8,9 @@ Van Loan for the process noise), measured (eq. 16-17) by
 - roll and pitch rate from the gyro (rows skipped when the log has no rates),
 - the four loads from the suspension pseudo-measurement
   (:mod:`wheelload.models.suspension`; the paper lists the loads in its output
-  vector without saying what measures them),
+  vector without saying what measures them): by default the KF's own, with
+  the vehicle file's model terms, with ``suspension=SuspensionModel.PAPER``
+  eq. 9 alone (:mod:`~wheelload.estimators.family.suspension_model`),
 - the specific force rotated into the road frame with the eq. 7 angles
   (eq. 4-5).
 

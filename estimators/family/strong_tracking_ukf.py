@@ -2,13 +2,16 @@ r"""Method F, per-corner strong-tracking UKF after Ding et al. (Siegloff & Choi 
 
 Per corner, state :math:`x = [d, v, F]` (compression, compression rate,
 tyre normal load), measurements :math:`y = [d, v]`, and the quarter-car
-process (the unsprung balance of :func:`wheelload.models.quarter_car.tyre_load_function`
+process (the unsprung balance of :func:`wheelload.models.quarter_car.unsprung_balance`
 solved for the unsprung acceleration)
 
 .. math:: \dot d = v, \quad \dot v = \frac{F - z(d, v)}{m_u} - a_s, \quad \dot F = w_F
 
-with the nonlinear suspension load :math:`z` of eq. 9 (asymmetric damper;
-the anti-roll bar with the partner wheel's measured travel) and the body
+with the nonlinear suspension load :math:`z` (asymmetric damper; the
+anti-roll bar with the partner wheel's measured travel; by default the KF's
+full pseudo-measurement with the vehicle file's terms but the hub
+accelerometers' unsprung term, with ``suspension=SuspensionModel.PAPER``
+eq. 9 alone, :mod:`~wheelload.estimators.family.suspension_model`) and the body
 corner acceleration :math:`a_s` reconstructed from the IMU as in method E.
 Prediction by the unscented transform (:mod:`.unscented`) of a fourth-order
 Runge-Kutta step over :math:`\Delta t`; :math:`Q = \mathrm{diag}(q)\,\Delta t`.

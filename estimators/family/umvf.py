@@ -38,7 +38,11 @@ Adaptations:
   unbiasedness constraint.
 - The known input :math:`u` is the suspension force beyond the linear spring
   and mean damper rate (anti-roll bar, damper asymmetry) from the suspension
-  model, so the filter's model is the project's suspension model.
+  model, so the filter's model is the project's suspension model: by
+  default the KF's full pseudo-measurement with the vehicle file's terms
+  (links, tyre forces, stops; not the hub accelerometers' unsprung term),
+  with ``suspension=SuspensionModel.PAPER`` eq. 9 alone
+  (:mod:`~wheelload.estimators.family.suspension_model`).
 - :math:`a_s` per corner from the body IMU,
   :math:`a_z - g + \dot\omega_x y_i - \dot\omega_y x_i`, the angular
   accelerations by backward differences of the rates (zero without rates).

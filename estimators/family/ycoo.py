@@ -20,7 +20,12 @@ Adaptations, each kept as small as the signals allow:
   :mod:`wheelload.models.suspension` (spring, asymmetric damper, anti-roll
   bar, static load) evaluated on the filtered travel and its filtered
   derivative; with a linear damper and no bar it is exactly eq. (14). The
-  paper assumes no anti-roll bar (§2); ours has one, and it is kept.
+  paper assumes no anti-roll bar (§2); ours has one, and it is kept. By
+  default the pseudo-measurement is the KF's full one with the vehicle
+  file's model terms (links, tyre forces, stops; not the hub accelerometers'
+  unsprung term, which the observer estimates itself); with
+  ``suspension=SuspensionModel.PAPER``, eq. 9 alone
+  (:mod:`~wheelload.estimators.family.suspension_model`).
 - :math:`a_s` per corner is reconstructed from the body IMU:
   :math:`a_z - g + \dot\omega_x y_i - \dot\omega_y x_i` with
   :math:`F(s)\,s\,\omega` as the filtered angular acceleration (zero when
