@@ -29,7 +29,7 @@ from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wi
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.output_files import write_frame
 from wheelload.estimators.readers import SUFFIXES
-from wheelload.estimators.registry import build
+from wheelload.estimators.registry import build, method
 from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
@@ -149,6 +149,8 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
         raise ValueError(f"--smooth applies to --method kf only, not {settings.method!r}")
     else:
         estimator = build(settings.method, vehicle, settings.suspension)
+        if method(settings.method).model_choice:
+            notes.append(f"{settings.suspension.value} vehicle model (--suspension)")
     if settings.smooth:
         estimate = estimator.smooth(signals)
         notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")

@@ -102,6 +102,7 @@ def test_compare_and_estimate_take_the_family_model(tmp_path, capsys, choice):
     out = tmp_path / "d.csv"
     command = ["estimate", str(log), "--vehicle", VEHICLE, "--method", "D", "--out", str(out)]
     assert main([*command, "--suspension", choice]) == 0
+    assert f"{choice} vehicle model (--suspension)" in capsys.readouterr().out
     written = pd.read_csv(out)[["fz_fl", "fz_fr", "fz_rl", "fz_rr"]].to_numpy()
     np.testing.assert_allclose(written, loads, rtol=1e-9)  # CSV round trip of the loads
 
