@@ -6,6 +6,15 @@ in its own module ``wheelload.estimators.family.<module>`` that exports
 that is not (yet) installed is left out, any other import error is raised.
 Studies and the command line reach estimators only through :func:`build`.
 
+Vehicle model: the family methods take the suspension pseudo-measurement and
+the rigid-body equilibrium from the same model Functions as the two-stage KF
+(every model term the vehicle file switches on), so that a comparison ranks
+estimators, not models; ``build(name, vehicle, suspension=SuspensionModel.PAPER)``
+gives a family method with the source paper's bare model instead
+(:mod:`wheelload.estimators.family.suspension_model`). The core estimators
+always use the vehicle file's model (switch its ``[model]`` terms off for
+theirs).
+
 Example
 -------
 >>> sorted(methods())
@@ -20,6 +29,7 @@ import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.protocol import Estimator
 from wheelload.models import Vehicle
 
@@ -45,12 +55,17 @@ class UnknownMethodError(ValueError):
 
 @dataclass(frozen=True, kw_only=True)
 class MethodInfo:
-    """One registered method: its name, a one-line description, its source and its builder."""
+    """One registered method: its name, a one-line description, its source and its builder.
+
+    ``build(vehicle)``; a method with ``model_choice`` also takes
+    ``build(vehicle, suspension=SuspensionModel...)``.
+    """
 
     name: str
     description: str
     reference: str
-    build: Callable[[Vehicle], Estimator]
+    build: Callable[..., Estimator]
+    model_choice: bool = False
 
     def __post_init__(self) -> None:
         if not self.name or any(c.isspace() or c == "," for c in self.name):
@@ -149,6 +164,13 @@ def method(name: str) -> MethodInfo:
     raise UnknownMethodError(f"unknown method {name!r}; known methods: {', '.join(table)}")
 
 
-def build(name: str, vehicle: Vehicle) -> Estimator:
-    """The estimator ``name`` for ``vehicle``; an unknown name raises UnknownMethodError."""
-    return method(name).build(vehicle)
+def build(name: str, vehicle: Vehicle, suspension: SuspensionModel = DEFAULT_MODEL) -> Estimator:
+    """The estimator ``name`` for ``vehicle``; an unknown name raises UnknownMethodError.
+
+    ``suspension`` chooses the vehicle model of a family method (module
+    docstring); the core estimators ignore it (:attr:`MethodInfo.model_choice`).
+    """
+    info = method(name)
+    if info.model_choice:
+        return info.build(vehicle, suspension=suspension)
+    return info.build(vehicle)

@@ -70,6 +70,11 @@ def aero_forces(vx, p: ModelParameters):
     return pressure * p.lift_coefficient, pressure * p.drag_coefficient
 
 
+def roll_axis_height(p: ModelParameters):
+    r"""Height of the roll axis under the CG: :math:`h_{rc} = (l_r h_{rc,f} + l_f h_{rc,r}) / l`."""
+    return (p.lr * p.roll_centre_front + p.lf * p.roll_centre_rear) / (p.lf + p.lr)
+
+
 def equilibrium_matrix(p: ModelParameters) -> ca.SX:
     """Rows: vertical force, pitch moment, roll moment; columns FL, FR, RL, RR (eq. 15)."""
     half_f, half_r = 0.5 * p.track_front, 0.5 * p.track_rear
@@ -88,7 +93,7 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     lift, drag = aero_forces(inputs.vx, p)
     m = p.mass
     sprung_share = p.sprung_mass / m
-    roll_centre = (p.lr * p.roll_centre_front + p.lf * p.roll_centre_rear) / (p.lf + p.lr)
+    roll_centre = roll_axis_height(p)
     h = p.cg_height - sprung_share * heave
     shift_x = sprung_share * p.sprung_cg_height * theta
     shift_y = -sprung_share * (p.sprung_cg_height - roll_centre) * phi

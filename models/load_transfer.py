@@ -80,14 +80,27 @@ def suspension_stiffness(p: ModelParameters) -> ca.SX:
     return ca.substitute(K, d, ca.SX.zeros(4))
 
 
+def quasi_static_transfer(x0, K, A, b):
+    r"""Loads ``x0`` moved onto :math:`A x = b` along the stiffness ``K`` (module docstring).
+
+    .. math:: x = x_0 + K A^\top (A K A^\top)^{-1} (b - A x_0)
+
+    A rigid body on its suspension: the body's heave, pitch and roll move the
+    corners by :math:`G q` with :math:`G` spanning the columns of
+    :math:`A^\top` up to the sign of the roll column, and the loads by
+    :math:`K G q`; :math:`q` is what satisfies the equilibrium.
+    """
+    KAt = ca.mtimes(K, A.T)
+    return x0 + ca.mtimes(KAt, ca.solve(ca.mtimes(A, KAt), b - ca.mtimes(A, x0)))
+
+
 def quasi_static_loads(acc, vx, p: ModelParameters):
     """Static loads moved onto :math:`A x = b` along the suspension stiffness (module docstring)."""
     A = equilibrium_matrix(p)
     b = paper_equilibrium_vector(acc, vx, p)
     x0 = ca.vertcat(*p.static())
     K = suspension_stiffness(p)
-    KAt = ca.mtimes(K, A.T)
-    return x0 + ca.mtimes(KAt, ca.solve(ca.mtimes(A, KAt), b - ca.mtimes(A, x0)))
+    return quasi_static_transfer(x0, K, A, b)
 
 
 def body_attitude_function(name: str = "body_attitude") -> ca.Function:
@@ -119,4 +132,29 @@ def quasi_static_function(name: str = "quasi_static_load") -> ca.Function:
     p_vector, p = ModelParameters.symbolic()
     return ca.Function(
         name, [acc, vx, p_vector], [quasi_static_loads(acc, vx, p)], ["acc", "vx", "p"], ["x"]
+    )
+
+
+def equilibrium_split(b, p: ModelParameters, front_share=None):
+    r"""The wheel loads that meet the equilibrium rows ``b`` with a given lateral split.
+
+    .. math::
+        S_f = \frac{b_2 + l_r b_1}{L}, \quad S_r = \frac{l_f b_1 - b_2}{L}, \quad
+        F_{FL,FR} = \frac{S_f}{2} \pm \frac{\lambda b_3}{T_f}, \quad
+        F_{RL,RR} = \frac{S_r}{2} \pm \frac{(1 - \lambda) b_3}{T_r}
+
+    (rows of :func:`~wheelload.models.equilibrium.equilibrium_matrix`:
+    vertical force, pitch and roll moment); the front share :math:`\lambda`
+    of the roll moment is ``front_share``, default :math:`l_r / L` as in
+    :func:`algebraic_loads`, which this equals for the paper's ``b``
+    without aerodynamics.
+    """
+    L = p.lf + p.lr
+    share = p.lr / L if front_share is None else front_share
+    front = (b[1] + p.lr * b[0]) / L
+    rear = (p.lf * b[0] - b[1]) / L
+    roll_front = share * b[2] / p.track_front
+    roll_rear = (1 - share) * b[2] / p.track_rear
+    return ca.vertcat(
+        front / 2 + roll_front, front / 2 - roll_front, rear / 2 + roll_rear, rear / 2 - roll_rear
     )

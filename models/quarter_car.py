@@ -94,7 +94,14 @@ def tyre_loads(d, v, a_u, unsprung, p: ModelParameters):
     :math:`F_z = F_{susp}(d, v) + m_u a_u`, :math:`a_u` the unsprung vertical
     acceleration without gravity (the static load of the suspension model
     already holds the unsprung weight)."""
-    return travel_loads(d, v, p) + unsprung * a_u
+    return unsprung_balance(travel_loads(d, v, p), a_u, unsprung)
+
+
+def unsprung_balance(suspension, a_u, unsprung):
+    r"""Tyre load from the suspension load and the unsprung acceleration (eq. 3):
+    :math:`F_z = F_{susp} + m_u a_u` (any suspension model's :math:`F_{susp}`,
+    its static part holding the unsprung weight)."""
+    return suspension + unsprung * a_u
 
 
 def tyre_load_function(name: str = "tyre_load") -> ca.Function:

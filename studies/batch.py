@@ -24,11 +24,12 @@ import pandas as pd
 
 from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.batched import run_batched
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.output_files import write_frame
 from wheelload.estimators.readers import SUFFIXES
-from wheelload.estimators.registry import build
+from wheelload.estimators.registry import build, method
 from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
@@ -51,6 +52,7 @@ class EstimateSettings:
     allow_unusual: bool = False
     wiring_checks: bool = True
     smooth: bool = False  # offline RTS smoother over the KF (kf only)
+    suspension: SuspensionModel = DEFAULT_MODEL  # vehicle model of a family method
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -146,7 +148,9 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     elif settings.smooth:
         raise ValueError(f"--smooth applies to --method kf only, not {settings.method!r}")
     else:
-        estimator = build(settings.method, vehicle)
+        estimator = build(settings.method, vehicle, settings.suspension)
+        if method(settings.method).model_choice:
+            notes.append(f"{settings.suspension.value} vehicle model (--suspension)")
     if settings.smooth:
         estimate = estimator.smooth(signals)
         notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")

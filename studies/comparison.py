@@ -13,12 +13,14 @@ Example
 
 from __future__ import annotations
 
+import argparse
 import time
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.registry import MethodInfo, build, method
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.signals import Signals
@@ -47,6 +49,19 @@ class Comparison:
     samples: int
     window: tuple[float, float]
     results: tuple[MethodResult, ...]
+
+
+def add_suspension_option(parser: argparse.ArgumentParser) -> None:
+    """``--suspension full|paper``: the vehicle model of the family methods."""
+    parser.add_argument(
+        "--suspension",
+        choices=[m.value for m in SuspensionModel],
+        default=DEFAULT_MODEL.value,
+        help="vehicle model of the family methods (B-F, ycoo, umvf, road-angle, corner): "
+        "full = the KF's own suspension and equilibrium model with the vehicle file's terms "
+        "(default: a comparison on one model), paper = the source papers' bare spring/damper/"
+        "bar model and body-axis equilibrium; kf, projection and mhe use the vehicle file's",
+    )
 
 
 def parse_methods(text: str) -> tuple[str, ...]:
@@ -80,8 +95,14 @@ def compare_methods(
     *,
     window: tuple[float, float] | None = None,
     repeat: int = 3,
+    suspension: SuspensionModel = DEFAULT_MODEL,
 ) -> Comparison:
-    """Run and score each method on ``signals`` (which must carry reference loads)."""
+    """Run and score each method on ``signals`` (which must carry reference loads).
+
+    ``suspension``: the vehicle model of the family methods (default the KF's
+    full model, so that the table compares estimators on one model;
+    :mod:`wheelload.estimators.family.suspension_model`).
+    """
     if signals.reference is None:
         raise ValueError(
             f"{signals.source}: no reference loads (columns fz_fl fz_fr fz_rl fz_rr): "
@@ -95,7 +116,7 @@ def compare_methods(
     results = []
     for name in names:
         info = method(name)
-        estimator = build(name, vehicle)
+        estimator = build(name, vehicle, suspension)
         estimator.run(warm_up)
         times = []
         for _ in range(repeat):

@@ -77,3 +77,38 @@ def test_compare_rejects_an_empty_window(tmp_path, capsys):
                  "--start", "100"])  # fmt: skip
     assert code == 2
     assert "holds no sample" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("choice", ["full", "paper"])
+def test_compare_and_estimate_take_the_family_model(tmp_path, capsys, choice):
+    from wheelload.estimators import read_log
+    from wheelload.estimators.family.suspension_model import SuspensionModel
+    from wheelload.estimators.registry import build
+    from wheelload.models import load_vehicle
+
+    log = tmp_path / "drive.csv"
+    log.write_bytes(example_log_path().read_bytes())
+    table = tmp_path / "table.csv"
+    args = ["compare", str(log), "--vehicle", VEHICLE, "--methods", "kf,D", "--repeat", "1"]
+    assert main([*args, "--csv", str(table), "--suspension", choice]) == 0
+    assert f"family methods on the {choice} vehicle model" in capsys.readouterr().out
+    signals = read_log(log)
+    vehicle = load_vehicle(example_vehicle_path())
+    loads = build("D", vehicle, SuspensionModel.parse(choice)).run(signals).loads
+    frame = pd.read_csv(table)
+    row = frame[(frame.method == "D") & (frame.wheel == "pooled")].iloc[0]
+    expected = wheel_metrics(loads, signals.reference).loc["pooled", "RMSE"]
+    assert row["RMSE"] == pytest.approx(expected, rel=1e-12)
+    out = tmp_path / "d.csv"
+    command = ["estimate", str(log), "--vehicle", VEHICLE, "--method", "D", "--out", str(out)]
+    assert main([*command, "--suspension", choice]) == 0
+    assert f"{choice} vehicle model (--suspension)" in capsys.readouterr().out
+    written = pd.read_csv(out)[["fz_fl", "fz_fr", "fz_rl", "fz_rr"]].to_numpy()
+    np.testing.assert_allclose(written, loads, rtol=1e-9)  # CSV round trip of the loads
+
+
+def test_unknown_suspension_model_is_refused(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["compare", str(example_log_path()), "--vehicle", VEHICLE, "--suspension", "x"])
+    assert stop.value.code == 2
+    assert "invalid choice: 'x'" in capsys.readouterr().err

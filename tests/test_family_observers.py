@@ -13,6 +13,7 @@ from wheelload.estimators.family.strong_tracking_ukf import (
     PROCESS_NOISE,
     StrongTrackingUKF,
 )
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.suspension_only import SuspensionOnly
 from wheelload.estimators.protocol import step_through
 from wheelload.estimators.result import StepFlag
@@ -123,8 +124,8 @@ def example():
 
 
 def test_constrained_observer_is_the_two_stage_filter_on_the_observer_output(vehicle, example):
-    front = QuarterCarObserver(vehicle).run(example).loads
-    constrained = ConstrainedQuarterCar(vehicle).run(example)
+    front = QuarterCarObserver(vehicle, suspension=SuspensionModel.PAPER).run(example).loads
+    constrained = ConstrainedQuarterCar(vehicle, suspension=SuspensionModel.PAPER).run(example)
     p = ModelParameters.from_vehicle(vehicle).vector()
     n = len(example)
     A, b = paper_equilibrium_function().map(n)(example.acc.T, example.vx[None], p)
@@ -140,7 +141,7 @@ def test_constrained_observer_is_the_two_stage_filter_on_the_observer_output(veh
     # body inertia, whose own loads leave a residual on the paper's rows (about
     # 64 N vertical, 57 N m roll RMS on the lane change) that no filter on those
     # rows removes; measured ratio 0.41 on the previous example log, 0.50 now.
-    observer = QuarterCarObserver(vehicle).run(example)
+    observer = QuarterCarObserver(vehicle, suspension=SuspensionModel.PAPER).run(example)
     assert rms(constrained.residual) < 0.6 * rms(observer.residual)
 
 
@@ -205,7 +206,7 @@ def test_unscented_filter_equals_the_linear_kf_on_a_linear_model(vehicle):
     v = np.gradient(d, t, axis=0) + rng.normal(0, 3e-3, (n, 4))
     acc = np.column_stack([np.zeros(n), np.zeros(n), GRAVITY + rng.normal(0, 0.3, n)])
     signals = Signals(t=t, vx=np.zeros(n), acc=acc, d=d, v=v)
-    ukf = StrongTrackingUKF(linear, max_fading=1.0).run(signals)
+    ukf = StrongTrackingUKF(linear, max_fading=1.0, suspension=SuspensionModel.PAPER).run(signals)
     loads, stds = linear_kf(linear, signals)
     # Same algebra in two orders of evaluation: 1e-7 relative (the covariances span 1e-8..1e6).
     np.testing.assert_allclose(ukf.loads, loads, rtol=1e-7)
@@ -232,8 +233,16 @@ def test_strong_tracking_follows_an_abrupt_load_change_faster(vehicle):
     signals = Signals(t=t, vx=np.zeros_like(t), acc=acc, d=d, v=v)
     truth = static_loads(vehicle)[0] + 2000.0 * (t >= 1.0)
     after = (t > 1.005) & (t < 1.1)  # from the first sample that sees the motion
-    strong = StrongTrackingUKF(linear).run(signals).loads[after, 0] - truth[after]
-    plain = StrongTrackingUKF(linear, max_fading=1.0).run(signals).loads[after, 0] - truth[after]
+    strong = (
+        StrongTrackingUKF(linear, suspension=SuspensionModel.PAPER).run(signals).loads[after, 0]
+        - truth[after]
+    )
+    plain = (
+        StrongTrackingUKF(linear, max_fading=1.0, suspension=SuspensionModel.PAPER)
+        .run(signals)
+        .loads[after, 0]
+        - truth[after]
+    )
     assert rms(strong) < 0.5 * rms(plain)
 
 

@@ -1,9 +1,18 @@
-"""Every registered method on plant logs: the ISO double lane change and a stretch of Hockenheim."""
+"""Every registered method on plant logs: the ISO double lane change and a stretch of Hockenheim.
+
+Against the plant's reference loads, pooled RMSE % (Siegloff & Choi eq. 27-28). Sign
+or unit errors give tens of percent; the paper's own spread on Hockenheim (Table IV)
+is 1.9-10.9 % per wheel. Measured on these two logs (full model / paper model,
+iso-dlc and the stretch): kf 0.68 / 0.94; D 0.71 / 0.82 against 2.13 / 6.58 with the
+paper's model, E 0.82 / 1.00, E+C 0.74 / 1.01, F 1.10 / 1.46, ycoo 0.82 / 1.03, umvf
+1.04 / 1.29, road-angle 0.69 / 0.82, C 0.98 / 2.32, B 1.86 / 2.74, corner 1.90 / 4.48.
+"""
 
 import numpy as np
 import pytest
 
-from wheelload.estimators.registry import build, methods
+from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators.registry import build, method, methods
 from wheelload.estimators.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.metrics import wheel_metrics
@@ -12,6 +21,18 @@ from wheelload.studies.scenarios import Options
 
 # The full lap (14 000 samples) is in the closing note's table; here 8 % of it (~11 s).
 LAP_SHARE = 0.08
+#: Pooled RMSE % bound on the full model: the measured value (module docstring) with a
+#: margin of about 50 % for numerical and plant changes. Methods that take the
+#: pseudo-measurement 2 %; C (no travel) 3 %; B (static lateral split) 4 %; corner (IMU
+#: attitude only, no pseudo-measurement) 6.5 %.
+BOUND = {"B": 4.0, "C": 3.5, "corner": 6.5}
+DEFAULT_BOUND = 2.0
+#: The paper's bare model misses the load the plant's roll centres and anti-pitch links
+#: carry (measured up to 7.0 % on the stretch): every method inside 8 %.
+PAPER_BOUND = 8.0
+#: Methods whose estimate rests on the pseudo-measurement: on the Hockenheim stretch the
+#: full model at most 0.35 of the paper model's error (measured 0.12-0.27).
+PSEUDO_MEASUREMENT = ("D", "E", "E+C", "F", "ycoo", "umvf", "road-angle")
 
 
 @pytest.fixture(scope="module")
@@ -25,21 +46,27 @@ def logs():
     }
 
 
+def pooled(estimator, signals) -> float:
+    estimate = estimator.run(signals)
+    assert estimate.loads.shape == (len(signals), 4)
+    for array in (estimate.loads, estimate.std, estimate.residual):
+        assert np.all(np.isfinite(array))
+    assert not np.any(estimate.flags), "no input is missing"
+    return wheel_metrics(estimate.loads, signals.reference).loc["pooled", "RMSE %"]
+
+
 @pytest.mark.parametrize("name", list(methods()))
-def test_method_runs_on_plant_logs_with_finite_output(name, logs):
+def test_method_on_plant_logs_within_its_bound(name, logs):
     vehicle = load_vehicle(example_vehicle_path())
-    estimator = build(name, vehicle)
-    for log, signals in logs.items():
-        estimate = estimator.run(signals)
-        assert estimate.loads.shape == (len(signals), 4)
-        for array in (estimate.loads, estimate.std, estimate.residual):
-            assert np.all(np.isfinite(array)), f"{name} on {log}"
-        assert not np.any(estimate.flags), f"{name} on {log}: no input is missing"
-        # Sign or unit errors give tens of percent; the paper's own spread on Hockenheim
-        # (Table IV) is 1.9-10.9 % per wheel. Every method must stay inside 8 % pooled
-        # (was 6 %): the family methods use the paper's spring-only model, and the plant
-        # now passes part of the load transfer through roll centres and anti-pitch links,
-        # which that model lacks (measured on this stretch: 6.5-7.0 % for D, E, F, ycoo,
-        # umvf and road-angle; the two-stage KF with the model terms stays far below).
-        pooled = wheel_metrics(estimate.loads, signals.reference).loc["pooled", "RMSE %"]
-        assert pooled < 8.0, f"{name} on {log}: pooled RMSE {pooled:.2f} %"
+    full = {log: pooled(build(name, vehicle), signals) for log, signals in logs.items()}
+    for log, value in full.items():
+        assert value < BOUND.get(name, DEFAULT_BOUND), f"{name} on {log}: {value:.2f} %"
+    if not method(name).model_choice:
+        return
+    estimator = build(name, vehicle, SuspensionModel.PAPER)
+    paper = {log: pooled(estimator, signals) for log, signals in logs.items()}
+    for log, value in paper.items():
+        assert value < PAPER_BOUND, f"{name} (paper model) on {log}: {value:.2f} %"
+    if name in PSEUDO_MEASUREMENT:
+        ratio = full["hockenheim"] / paper["hockenheim"]
+        assert ratio < 0.35, f"{name}: full / paper model on the stretch {ratio:.2f}"

@@ -5,6 +5,7 @@ import pytest
 
 from wheelload.estimators.family.algebraic import Algebraic
 from wheelload.estimators.family.quasi_static import QuasiStatic
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.suspension_only import SuspensionOnly
 from wheelload.estimators.protocol import step_through
 from wheelload.estimators.result import StepFlag
@@ -57,13 +58,15 @@ def rigid_body_on_springs(vehicle, acc):
 @pytest.mark.parametrize("acc", [(0.0, 0.0, GRAVITY), (3.0, -5.0, GRAVITY), (-7.0, 8.0, 10.5)])
 def test_quasi_static_is_exact_on_rigid_body_steady_state(vehicle, acc):
     expected = rigid_body_on_springs(vehicle, acc)
-    loads = QuasiStatic(vehicle).run(constant_log(acc)).loads
+    loads = QuasiStatic(vehicle, suspension=SuspensionModel.PAPER).run(constant_log(acc)).loads
     # Same linear algebra, two derivations: agreement to rounding (1e-9 of the load).
     np.testing.assert_allclose(loads, np.tile(expected, (N, 1)), rtol=1e-9)
 
 
 def test_quasi_static_satisfies_the_equilibrium_with_aero(vehicle):
-    estimate = QuasiStatic(vehicle).run(constant_log((2.0, 4.0, GRAVITY), vx=40.0))
+    estimate = QuasiStatic(vehicle, suspension=SuspensionModel.PAPER).run(
+        constant_log((2.0, 4.0, GRAVITY), vx=40.0)
+    )
     assert np.max(np.abs(estimate.residual)) < 1e-6  # N, N m: rounding
     assert not estimate.has_std and np.all(estimate.std == 0)
 
@@ -83,7 +86,11 @@ def test_suspension_only_equals_the_suspension_model_written_out(vehicle):
         damper = np.where(v[:, i] >= 0, axle.damper_push, axle.damper_pull) * v[:, i]
         bar = axle.arb_rate * axle.arb_ratio * (d[:, i] - d[:, partner])
         expected[:, i] += axle.spring_rate * d[:, i] + damper + bar
-    np.testing.assert_allclose(SuspensionOnly(vehicle).run(signals).loads, expected, rtol=1e-12)
+    np.testing.assert_allclose(
+        SuspensionOnly(vehicle, suspension=SuspensionModel.PAPER).run(signals).loads,
+        expected,
+        rtol=1e-12,
+    )
 
 
 def test_suspension_only_holds_a_wheel_with_a_missing_travel(vehicle):
@@ -105,7 +112,7 @@ def test_algebraic_recovers_the_loads_on_a_grade(vehicle):
     # (g sin a, 0, g cos a). By hand, moments about the contacts along the grade:
     # front axle = m g (l_r cos a - h sin a) / L.
     grade = np.arctan(0.2)
-    estimate = Algebraic(vehicle).run(
+    estimate = Algebraic(vehicle, suspension=SuspensionModel.PAPER).run(
         constant_log((GRAVITY * np.sin(grade), 0, GRAVITY * np.cos(grade)))
     )
     p = ModelParameters.from_vehicle(vehicle)
@@ -132,7 +139,9 @@ def test_algebraic_removes_body_pitch_and_roll_from_the_specific_force(vehicle):
     R_x = np.array([[1, 0, 0], [0, np.cos(roll), -np.sin(roll)], [0, np.sin(roll), np.cos(roll)]])
     body = (R_y @ R_x).T @ np.array([0.0, 0.0, GRAVITY])  # gravity reaction in body axes
     assert body[0] < 0 and body[1] > 0  # nose down reads -x, right down reads +y
-    estimate = Algebraic(vehicle).run(constant_log(body, d=d, n=500))
+    estimate = Algebraic(vehicle, suspension=SuspensionModel.PAPER).run(
+        constant_log(body, d=d, n=500)
+    )
     static = p.mass * GRAVITY / (2 * (p.lf + p.lr)) * np.array([p.lr, p.lr, p.lf, p.lf])
     np.testing.assert_allclose(estimate.loads[-1], static, rtol=1e-9)
     assert np.max(np.abs(estimate.loads[0] - static)) > 20.0  # the filter starts level

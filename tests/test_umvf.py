@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.umvf import (
     Umvf,
     UmvfTuning,
@@ -122,7 +123,7 @@ def test_compiled_step_equals_the_numpy_reference():
         for name, axle in (("front", vehicle.suspension.front), ("rear", vehicle.suspension.rear))
     }
     vehicle = vehicle.replace(suspension=dataclasses.replace(vehicle.suspension, **axles))
-    umvf = Umvf(vehicle)
+    umvf = Umvf(vehicle, suspension=SuspensionModel.PAPER)
     n = 150
     rng = np.random.default_rng(5)
     t = DT * np.arange(1, n + 1)

@@ -7,10 +7,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators.family.compiled_method import INPUTS
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.ycoo import Ycoo, YcooSettings
 from wheelload.estimators.protocol import Estimator, step_through
-from wheelload.models import ModelParameters, example_vehicle_path, load_vehicle
+from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, load_vehicle
 
 
 def linear_vehicle():
@@ -66,7 +66,7 @@ def test_discrete_frequency_response_matches_eq14_within_1_db_up_to_20_hz():
     vehicle = linear_vehicle()
     settings = YcooSettings()
     assert settings.bandwidth == 30.0 and math.isclose(settings.damping, 2**-0.5)
-    ycoo = Ycoo(vehicle, settings)
+    ycoo = Ycoo(vehicle, settings, suspension=SuspensionModel.PAPER)
     f = np.linspace(0.1, 20.0, 120)
     from_acc, from_travel = discrete_response(ycoo, 0.01, f)
     s = 2j * np.pi * f

@@ -15,9 +15,18 @@ transfer shared in proportion to the static axle loads
 .. math:: F_{FL,FR} = \tfrac{m}{2L}(l_r f_z - h f_x) \mp \tfrac{m h l_r}{L T_f} f_y, \quad
           F_{RL,RR} = \tfrac{m}{2L}(l_f f_z + h f_x) \mp \tfrac{m h l_f}{L T_r} f_y
 
+With the full model (the default,
+:mod:`~wheelload.estimators.family.suspension_model`) the loads are the same
+split of the KF's own equilibrium rows, whose road-frame term rotates the
+specific force by the body attitude from the travels and tyre deflections
+(instead of the low-pass attitude above) and which carries the IMU lever
+arm, body inertia, lift and drag and the unsprung heave
+(:func:`~wheelload.models.load_transfer.equilibrium_split`); with the paper
+model, the formula above.
+
 Adaptations: the grade and bank are not estimated separately (the
-road-frame specific force contains them); no aerodynamic terms (as in
-[15]); whole-vehicle mass and CG. A missing travel holds the attitude
+road-frame specific force contains them); no aerodynamic terms in the paper
+variant (as in [15]); whole-vehicle mass and CG. A missing travel holds the attitude
 filter (flagged); a missing accelerometer channel holds the estimate. No
 standard deviation.
 """
@@ -32,18 +41,25 @@ import numpy as np
 from wheelload.estimators.family.step_method import (
     StepMethod,
     hold,
+    model_equilibrium,
     step_function,
+    step_name,
     step_symbols,
 )
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
-from wheelload.models.load_transfer import algebraic_function, body_attitude_function
+from wheelload.models.load_transfer import (
+    algebraic_function,
+    body_attitude_function,
+    equilibrium_split,
+)
 
 ATTITUDE_CUTOFF = 1.0  # Hz, "low-frequency suspension-derived pitch and roll"
 
 
 @functools.cache
-def algebraic_step() -> ca.Function:
+def algebraic_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state = (loads[4], filtered pitch, filtered roll); constants = (cutoff,)."""
     sym = step_symbols(6, 1)
     held, angles = sym.s[0:4], sym.s[4:6]
@@ -51,16 +67,21 @@ def algebraic_step() -> ca.Function:
     travel_ok = sym.mask(attitude)
     alpha = 1.0 - ca.exp(-2.0 * ca.pi * sym.c[0] * sym.dt)
     filtered = hold(travel_ok, angles + alpha * (attitude - angles), angles)
-    x = algebraic_function()(sym.acc, filtered[0], filtered[1], sym.p_vector)
+    A, b, mask_c = model_equilibrium(model, sym)
+    if model is SuspensionModel.PAPER:
+        x = algebraic_function()(sym.acc, filtered[0], filtered[1], sym.p_vector)
+    else:
+        x = equilibrium_split(b, sym.p)
     loads_ok = ca.mmin(sym.mask(sym.acc))
     loads = hold(ca.repmat(loads_ok, 4, 1), x, held)
     return step_function(
-        "wheelload_algebraic_step",
+        step_name("wheelload_algebraic_step", model),
         sym,
         ca.vertcat(loads, filtered),
         loads,
         ca.SX.zeros(4),
         sym.mask(sym.d),
+        (A, b, mask_c),
     )
 
 
@@ -70,15 +91,21 @@ class Algebraic(StepMethod):
     name = "B algebraic"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle, *, attitude_cutoff: float = ATTITUDE_CUTOFF) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        *,
+        attitude_cutoff: float = ATTITUDE_CUTOFF,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         if not attitude_cutoff > 0:
             raise ValueError(f"attitude_cutoff must be > 0 Hz, got {attitude_cutoff}")
         parameters = ModelParameters.from_vehicle(vehicle)
+        self.suspension = suspension
         super().__init__(
-            algebraic_step(),
-            parameters.vector(),
-            np.array([attitude_cutoff]),
-            np.array([*parameters.static(), 0.0, 0.0], float),
+            algebraic_step(suspension),
+            (np.array([*parameters.static(), 0.0, 0.0], float),),
+            (parameters.vector(), np.array([attitude_cutoff])),
         )
 
 
@@ -87,4 +114,5 @@ INFO = MethodInfo(
     description="algebraic load transfer, road grade/bank via low-pass suspension pitch/roll",
     reference="Siegloff & Choi §IV-B method B; Alatorre, Victorino & Charara 2017",
     build=Algebraic,
+    model_choice=True,
 )

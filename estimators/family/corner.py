@@ -20,10 +20,15 @@ interval with the rate held. Without gyro rates the observer reduces to a
 first-order lag on the stationary angles. A constant gyro bias :math:`b`
 leaves an angle error :math:`b / L` instead of a growing one.
 
-Settings: ``roll_centre_height`` (default 0 m, the ground: the vehicle file
-has no roll-centre height; the body roll model of the plant has none
-either) and the observer gain (default 1 /s). The step is a CasADi Function;
-``run`` loops it in compiled C. No standard deviation.
+Settings: ``roll_centre_height`` (default: with the full model, the
+vehicle file's roll centres weighted by the axle loads,
+:math:`(l_r h_{rc,f} + l_f h_{rc,r}) / L`, as in the KF's equilibrium; with
+the paper model 0 m, the ground) and the observer gain (default 1 /s). The
+equilibrium residual is reported against the chosen model's equilibrium
+(:mod:`~wheelload.estimators.family.suspension_model`); the loads are the
+paper's eq. 17-18 either way (the method uses no suspension
+pseudo-measurement). The step is a CasADi Function; ``run`` loops it in
+compiled C. No standard deviation.
 """
 
 from __future__ import annotations
@@ -33,50 +38,64 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.compiled_method import (
-    INPUTS,
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     interval_ok,
     sanitise,
     step_flags,
 )
-from wheelload.estimators.registry import MethodInfo
-from wheelload.models import (
-    ModelParameters,
-    Vehicle,
-    paper_equilibrium_function,
-    vehicle_mass_centre,
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    equilibrium,
 )
+from wheelload.estimators.registry import MethodInfo
+from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.models.corner_loads import corner_load_function
+from wheelload.models.equilibrium import roll_axis_height
 
 
 @dataclass(frozen=True, kw_only=True)
 class CornerSettings:
     """Roll-centre height above ground [m] and the rate observer's gain [1/s]."""
 
-    roll_centre_height: float = 0.0
+    roll_centre_height: float | None = None  # None: from the vehicle file (full model) or 0
     observer_gain: float = 1.0
 
     def __post_init__(self) -> None:
-        if not self.roll_centre_height >= 0 or not self.observer_gain > 0:
+        height = 0.0 if self.roll_centre_height is None else self.roll_centre_height
+        if not height >= 0 or not self.observer_gain > 0:
             raise ValueError(
                 "corner settings: roll_centre_height must be >= 0 and observer_gain > 0, got "
                 f"{self.roll_centre_height}, {self.observer_gain}"
             )
 
 
-def corner_parameters(vehicle: Vehicle, settings: CornerSettings) -> np.ndarray:
+def roll_centre_height(vehicle: Vehicle, settings: CornerSettings, model: SuspensionModel) -> float:
+    """The settings' roll-centre height, else the vehicle file's (full model) or 0 (paper)."""
+    if settings.roll_centre_height is not None:
+        return settings.roll_centre_height
+    if model is SuspensionModel.PAPER:
+        return 0.0
+    return float(roll_axis_height(ModelParameters.from_vehicle(vehicle)))
+
+
+def corner_parameters(
+    vehicle: Vehicle, settings: CornerSettings, model: SuspensionModel = DEFAULT_MODEL
+) -> np.ndarray:
     """Whole-vehicle mass, CG to axles, CG height, tracks, roll-centre height."""
     centre = vehicle_mass_centre(vehicle)
     g = vehicle.geometry
     return np.array(
         [vehicle.mass.total, centre.lf, centre.lr, centre.height, g.track_front, g.track_rear,
-         settings.roll_centre_height]
+         roll_centre_height(vehicle, settings, model)]
     )  # fmt: skip
 
 
-def step_function(vehicle: Vehicle, settings: CornerSettings) -> ca.Function:
+def step_function(
+    vehicle: Vehicle, settings: CornerSettings, model: SuspensionModel = DEFAULT_MODEL
+) -> ca.Function:
     """The step: angles and held loads carried; outputs loads, std, residual, flags."""
     angles = ca.SX.sym("angles", 2)
     held = ca.SX.sym("loads_held", 4)
@@ -86,7 +105,7 @@ def step_function(vehicle: Vehicle, settings: CornerSettings) -> ca.Function:
     cp = ca.SX.sym("cp", 7)
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
-    acc, vx, rates = u[8:11], u[11], u[12:15]
+    acc, rates = u[8:11], u[12:15]
     k = roll_pitch_stiffness(vehicle)
     arm = vehicle.geometry.cg_height - cp[6]
     lever = vehicle.mass.sprung * arm
@@ -103,13 +122,13 @@ def step_function(vehicle: Vehicle, settings: CornerSettings) -> ca.Function:
     new_angles = ca.if_else(ok, ca.if_else(acc_ok, with_acc, only_rates), angles)
     loads = corner_load_function()(acc, new_angles[0], new_angles[1], cp)
     loads = ca.if_else(ca.logic_and(ok, acc_ok), loads, held)
-    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = equilibrium(model, u, valid, p)
     residual = ca.if_else(acc_ok * valid[11], b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - acc_ok, rejected)
     flags = step_flags([rejected] * 4, missing, rejected)
     return ca.Function(
-        "wheelload_corner_step",
+        "wheelload_corner_step" if model is SuspensionModel.FULL else "wheelload_corner_step_paper",
         [angles, held, u_raw, valid, dt, cp, p],
         [new_angles, loads, loads, ca.DM.zeros(4), residual, flags],
         ["angles", "loads_held", "u", "u_valid", "dt", "cp", "p"],
@@ -117,19 +136,26 @@ def step_function(vehicle: Vehicle, settings: CornerSettings) -> ca.Function:
     )
 
 
-class CornerBased(CompiledMethod):
+class CornerBased(StepMethod):
     """Eq. 17-18 with a drift-compensated roll / pitch rate observer; compiled loop."""
 
     name = "corner-based"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle, settings: CornerSettings = CornerSettings()) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        settings: CornerSettings = CornerSettings(),
+        *,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         self.vehicle = vehicle
         self.settings = settings
+        self.suspension = suspension
         parameters = ModelParameters.from_vehicle(vehicle)
         initial = (np.zeros(2), np.array(parameters.static(), float))
-        fixed = (corner_parameters(vehicle, settings), parameters.vector())
-        super().__init__(step_function(vehicle, settings), initial, fixed)
+        fixed = (corner_parameters(vehicle, settings, suspension), parameters.vector())
+        super().__init__(step_function(vehicle, settings, suspension), initial, fixed)
 
 
 INFO = MethodInfo(
@@ -137,4 +163,5 @@ INFO = MethodInfo(
     description="corner loads from IMU roll/pitch (drift-compensated rate observer), roll centre",
     reference="corner-based paper §III-C, eq. 17-18; roll/pitch observer after Rehm",
     build=CornerBased,
+    model_choice=True,
 )

@@ -5,8 +5,12 @@ Per corner, the unsprung-mass balance of the quarter car
 
 .. math:: F = z(d, v) + m_u a_u, \qquad \ddot d = a_u - a_s,
 
-with :math:`z` the suspension load of eq. 9 (static load, spring, damper,
-anti-roll bar) from the measured travel and rate, the unsprung vertical
+with :math:`z` the suspension load from the measured travel and rate: by
+default the KF's pseudo-measurement with the vehicle file's model terms
+(links, tyre forces, stops; the hub accelerometers' unsprung term is left
+out, the observer estimates :math:`a_u` itself), with
+``suspension=SuspensionModel.PAPER`` eq. 9 alone (static load, spring,
+damper, anti-roll bar; :mod:`~wheelload.estimators.family.suspension_model`), the unsprung vertical
 acceleration :math:`a_u` an unknown input (random walk), and the body
 corner's vertical acceleration :math:`a_s` reconstructed from the body IMU
 (:func:`wheelload.models.body_attitude.corner_vertical_acceleration`:
@@ -44,13 +48,21 @@ from wheelload.estimators.family.step_method import (
     StepMethod,
     StepSymbols,
     hold,
+    model_equilibrium,
     step_function,
+    step_name,
     step_symbols,
+)
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    suspension_loads,
+    suspension_mask,
 )
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_vertical_acceleration
-from wheelload.models.quarter_car import tyre_load_function
+from wheelload.models.quarter_car import unsprung_balance
 
 OBSERVER_BANDWIDTH = 25.0  # Hz, both poles: above the wheel-hop mode (~14 Hz), below Nyquist
 #: v_hat[4], a_u_hat[4], previous rates[3], previous rates valid, last F_hat[4]
@@ -99,21 +111,20 @@ def body_corner_accelerations(sym: StepSymbols, rates: ca.SX, c: ca.SX):
     return a_s, rate_state
 
 
-def unsprung_acceleration(F, d, v, m_u, p_vector, corner: int):
-    """The unsprung acceleration of ``corner`` that gives tyre load ``F``.
+def unsprung_acceleration(F, z, m_u, corner: int):
+    """The unsprung acceleration of ``corner`` that gives tyre load ``F`` on suspension load ``z``.
 
-    Solves ``F = tyre_load(d, v, a_u, m_u, p)`` (affine in ``a_u``) with the
-    model Function's value at ``a_u = 0`` and its Jacobian.
+    Solves :func:`~wheelload.models.quarter_car.unsprung_balance` (affine in
+    ``a_u``) with its value at ``a_u = 0`` and its Jacobian.
     """
-    tyre = tyre_load_function()
     a = ca.SX.sym("a_u", 4)
-    loads = tyre(d, v, a, m_u, p_vector)
+    loads = unsprung_balance(z, a, m_u)
     base = ca.substitute(loads, a, ca.DM.zeros(4))
     slope = ca.substitute(ca.jacobian(loads, a), a, ca.DM.zeros(4))
     return (F - base[corner]) / slope[corner, corner]
 
 
-def front_end(sym: StepSymbols, s: ca.SX, c: ca.SX):
+def front_end(sym: StepSymbols, s: ca.SX, c: ca.SX, model: SuspensionModel):
     """One observer step of the four corners: ``(s_next, F_hat, used)`` (module docstring)."""
     v_hat, a_u, F_held = s[0:4], s[4:8], s[12:16]
     m_u, bandwidth = c[0:4], c[12]
@@ -125,21 +136,24 @@ def front_end(sym: StepSymbols, s: ca.SX, c: ca.SX):
     v_pred = v_hat + sym.dt * (a_u - a_s)
     innovation = sym.v - v_pred
     a_u_new = a_u + k2 * innovation
-    tyre = tyre_load_function()
-    F = tyre(sym.d, sym.v, a_u_new, m_u, sym.p_vector)
+    z = suspension_loads(model, sym.u, sym.valid, sym.p_vector, unsprung_inertia=False)
+    F = unsprung_balance(z, a_u_new, m_u)
     # Needs the corner's travel and rate (and the bar partner's travel) and a_z; rates optional.
-    ok = sym.mask(tyre(sym.d, sym.v, ca.DM.zeros(4), m_u, sym.p_vector)) * sym.mask(sym.acc[2])
+    ok = suspension_mask(sym.u_raw, sym.valid, sym.p_vector) * sym.dt_ok * sym.mask(sym.acc[2])
     v_new = hold(ok, v_pred + k1 * innovation, v_hat)
     F_new = hold(ok, F, F_held)
     return ca.vertcat(v_new, hold(ok, a_u_new, a_u), rate_state, F_new), F_new, ok
 
 
 @functools.cache
-def quarter_car_step() -> ca.Function:
+def quarter_car_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state and constants of :func:`front_end`; loads = observed tyre loads."""
     sym = step_symbols(FRONT_END_STATES, FRONT_END_CONSTANTS)
-    s_next, F, used = front_end(sym, sym.s, sym.c)
-    return step_function("wheelload_quarter_car_step", sym, s_next, F, ca.SX.zeros(4), used)
+    s_next, F, used = front_end(sym, sym.s, sym.c, model)
+    return step_function(
+        step_name("wheelload_quarter_car_step", model), sym, s_next, F, ca.SX.zeros(4), used,
+        model_equilibrium(model, sym),
+    )  # fmt: skip
 
 
 class QuarterCarObserver(StepMethod):
@@ -148,13 +162,19 @@ class QuarterCarObserver(StepMethod):
     name = "E quarter-car observer"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle, *, bandwidth: float = OBSERVER_BANDWIDTH) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        *,
+        bandwidth: float = OBSERVER_BANDWIDTH,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         parameters = ModelParameters.from_vehicle(vehicle)
+        self.suspension = suspension
         super().__init__(
-            quarter_car_step(),
-            parameters.vector(),
-            corner_constants(vehicle, bandwidth),
-            front_end_initial(parameters),
+            quarter_car_step(suspension),
+            (front_end_initial(parameters),),
+            (parameters.vector(), corner_constants(vehicle, bandwidth)),
         )
 
 
@@ -163,4 +183,5 @@ INFO = MethodInfo(
     description="quarter-car tyre-force observer per corner, inputs from body IMU + suspension",
     reference="Siegloff & Choi §IV-B method E; Cheon, Choi, Nam & Oh 2024",
     build=QuarterCarObserver,
+    model_choice=True,
 )

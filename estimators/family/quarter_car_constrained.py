@@ -10,7 +10,9 @@ suspension pseudo-measurement. Random walk :math:`x^- = x`,
 all with the kernels of :mod:`wheelload.estimators.kalman` and the vehicle
 file's filter tuning, exactly as the two-stage KF. A corner whose observer
 was held is not used in the first update; a constraint row with a missing
-input is skipped; both are flagged.
+input is skipped; both are flagged. The observers and the equilibrium use
+the vehicle model chosen by ``suspension`` (default the KF's full model,
+:mod:`~wheelload.estimators.family.suspension_model`).
 """
 
 from __future__ import annotations
@@ -28,25 +30,34 @@ from wheelload.estimators.family.quarter_car import (
     front_end,
     front_end_initial,
 )
-from wheelload.estimators.family.step_method import StepMethod, step_function, step_symbols
+from wheelload.estimators.family.step_method import (
+    StepMethod,
+    model_equilibrium,
+    step_function,
+    step_name,
+    step_symbols,
+)
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kalman import predict, sequential_update, upper
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.two_stage import TUNING, tuning_vector
-from wheelload.models import ModelParameters, Vehicle, paper_equilibrium_function
+from wheelload.models import ModelParameters, Vehicle
 
 N_STATES = FRONT_END_STATES + 4 + 16  # observer, x, P (column-major)
 
 
 @functools.cache
-def constrained_step() -> ca.Function:
+def constrained_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state = (observer, x, P); constants = (observer constants, KF tuning)."""
     sym = step_symbols(N_STATES, FRONT_END_CONSTANTS + len(TUNING))
-    observer, F, used_s = front_end(sym, sym.s[:FRONT_END_STATES], sym.c[:FRONT_END_CONSTANTS])
+    observer, F, used_s = front_end(
+        sym, sym.s[:FRONT_END_STATES], sym.c[:FRONT_END_CONSTANTS], model
+    )
     x = sym.s[FRONT_END_STATES : FRONT_END_STATES + 4]
     P = ca.reshape(sym.s[FRONT_END_STATES + 4 :], 4, 4)
     tuning = sym.c[FRONT_END_CONSTANTS:]
-    A, b = paper_equilibrium_function()(sym.acc, sym.vx, sym.p_vector)
-    mask_c = sym.mask(b)
+    A, b, mask_c = model_equilibrium(model, sym)
+    mask_c = mask_c * sym.dt_ok
     Q = tuning[0] * sym.dt * ca.DM.eye(4)
     rs = ca.repmat(tuning[1] / sym.dt, 4, 1)
     rc = tuning[2:5] / sym.dt
@@ -55,7 +66,10 @@ def constrained_step() -> ca.Function:
     x_new, P_new = sequential_update(x_s, P_s, b, A, rc, mask_c)
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     s_next = ca.vertcat(observer, x_new, ca.vec(P_new))
-    return step_function("wheelload_quarter_car_constrained_step", sym, s_next, x_new, std, used_s)
+    return step_function(
+        step_name("wheelload_quarter_car_constrained_step", model), sym, s_next, x_new, std,
+        used_s, (A, b, mask_c),
+    )  # fmt: skip
 
 
 class ConstrainedQuarterCar(StepMethod):
@@ -64,17 +78,21 @@ class ConstrainedQuarterCar(StepMethod):
     name = "E+C quarter-car + constraint"
     has_std = True
 
-    def __init__(self, vehicle: Vehicle, *, bandwidth: float = OBSERVER_BANDWIDTH) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        *,
+        bandwidth: float = OBSERVER_BANDWIDTH,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         parameters = ModelParameters.from_vehicle(vehicle)
         P0 = vehicle.filter.initial_std**2 * np.eye(4)
-        super().__init__(
-            constrained_step(),
-            parameters.vector(),
-            np.concatenate([corner_constants(vehicle, bandwidth), tuning_vector(vehicle)]),
-            np.concatenate(
-                [front_end_initial(parameters), parameters.static(), P0.ravel(order="F")]
-            ),
+        self.suspension = suspension
+        initial = np.concatenate(
+            [front_end_initial(parameters), parameters.static(), P0.ravel(order="F")]
         )
+        constants = np.concatenate([corner_constants(vehicle, bandwidth), tuning_vector(vehicle)])
+        super().__init__(constrained_step(suspension), (initial,), (parameters.vector(), constants))
 
 
 INFO = MethodInfo(
@@ -82,4 +100,5 @@ INFO = MethodInfo(
     description="method E's observers followed by the KF's soft equilibrium update",
     reference="Siegloff & Choi §IV-E2 (Cheon + constraint KF); eq. 19-25",
     build=ConstrainedQuarterCar,
+    model_choice=True,
 )

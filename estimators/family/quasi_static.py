@@ -1,19 +1,28 @@
 r"""Method C, quasi-static: static loads plus rigid-body load transfer (Siegloff & Choi §IV-B).
 
-.. math:: \hat x = x_0 + K A^\top (A K A^\top)^{-1} (b - A x_0)
+.. math:: \hat x = z_0 + K A^\top (A K A^\top)^{-1} (b - A z_0)
 
-with the static loads :math:`x_0`, the equilibrium :math:`A, b` of eq. 15-16
-(specific force, aerodynamic lift and drag) and the suspension stiffness
-:math:`K = \partial z/\partial d` of eq. 9
-(:func:`wheelload.models.load_transfer.quasi_static_function`). It is the
-load distribution of a rigid body on its springs and anti-roll bars in
-steady acceleration: exact equilibrium, roll moment split by roll stiffness.
+(:func:`wheelload.models.load_transfer.quasi_static_transfer`): the loads of
+a rigid body on its suspension in steady acceleration, exact equilibrium
+:math:`A \hat x = b`, the roll moment split by the suspension's stiffness
+:math:`K = \partial z / \partial d`. No suspension travel is used: the
+model is evaluated at the static position (:math:`d = v = 0`).
+
+- Full model (default, :mod:`~wheelload.estimators.family.suspension_model`):
+  :math:`z_0` is the KF's pseudo-measurement at the static position (static
+  loads plus the load the links carry, roll centres and anti-pitch, and the
+  unsprung inertia of the hub accelerometers), :math:`K` its Jacobian there,
+  :math:`A, b` the KF's equilibrium with the vehicle file's terms (IMU lever
+  arm and mounting, body inertia, drag, unsprung heave; the road-frame
+  rotation needs the travel and is therefore zero).
+- Paper model: :math:`z_0 = x_0` the static loads, :math:`K` of eq. 9,
+  :math:`A, b` of eq. 15-16 (specific force, lift, drag)
+  (:func:`wheelload.models.load_transfer.quasi_static_function`).
+
 Adaptations: the paper anchors the transfer to static axle loads without
-naming its split; ours is the suspension's own, and it uses the same
-equilibrium vector as the KF (so it includes lift, drag and :math:`a_z`).
-No suspension travel is used. A sample with a missing accelerometer or
-speed channel keeps the previous estimate and is flagged. No standard
-deviation.
+naming its split; ours is the suspension's own. A sample with a missing
+accelerometer or speed channel keeps the previous estimate and is flagged.
+No standard deviation.
 """
 
 from __future__ import annotations
@@ -25,25 +34,55 @@ import numpy as np
 
 from wheelload.estimators.family.step_method import (
     StepMethod,
+    StepSymbols,
     hold,
+    model_equilibrium,
     step_function,
+    step_name,
     step_symbols,
+)
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    equilibrium,
+    suspension_loads,
 )
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
-from wheelload.models.load_transfer import quasi_static_function
+from wheelload.models.inputs import TRAVEL, TRAVEL_RATE, input_index
+from wheelload.models.load_transfer import quasi_static_function, quasi_static_transfer
+
+_TRAVEL = input_index(TRAVEL + TRAVEL_RATE)
+
+
+def full_quasi_static_loads(sym: StepSymbols) -> ca.SX:
+    """:math:`\\hat x` of the full model at the static position (module docstring)."""
+    u = ca.vertcat(*[0.0 if k in _TRAVEL else sym.u[k] for k in range(sym.u.shape[0])])
+    valid = ca.vertcat(*[1.0 if k in _TRAVEL else sym.valid[k] for k in range(sym.u.shape[0])])
+    model = SuspensionModel.FULL
+    d = ca.SX.sym("d", 4)
+    z = suspension_loads(model, u, valid, sym.p_vector, d=d, v=ca.DM.zeros(4))
+    z0 = ca.substitute(z, d, ca.DM.zeros(4))
+    K = ca.substitute(ca.jacobian(z, d), d, ca.DM.zeros(4))
+    A, b = equilibrium(model, u, valid, sym.p_vector)
+    return quasi_static_transfer(z0, K, A, b)
 
 
 @functools.cache
-def quasi_static_step() -> ca.Function:
+def quasi_static_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state = last loads; loads = quasi-static loads where acc and vx are valid."""
     sym = step_symbols(4, 0)
-    x = quasi_static_function()(sym.acc, sym.vx, sym.p_vector)
-    ok = ca.mmin(sym.mask(x))
+    if model is SuspensionModel.PAPER:
+        x = quasi_static_function()(sym.acc, sym.vx, sym.p_vector)
+    else:
+        x = full_quasi_static_loads(sym)
+    paper = quasi_static_function()(sym.acc, sym.vx, sym.p_vector)
+    ok = ca.mmin(sym.mask(paper))
     loads = hold(ca.repmat(ok, 4, 1), x, sym.s)
     return step_function(
-        "wheelload_quasi_static_step", sym, loads, loads, ca.SX.zeros(4), ca.DM.ones(4)
-    )
+        step_name("wheelload_quasi_static_step", model), sym, loads, loads, ca.SX.zeros(4),
+        ca.DM.ones(4), model_equilibrium(model, sym),
+    )  # fmt: skip
 
 
 class QuasiStatic(StepMethod):
@@ -52,13 +91,13 @@ class QuasiStatic(StepMethod):
     name = "C quasi-static"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle) -> None:
+    def __init__(self, vehicle: Vehicle, *, suspension: SuspensionModel = DEFAULT_MODEL) -> None:
         parameters = ModelParameters.from_vehicle(vehicle)
+        self.suspension = suspension
         super().__init__(
-            quasi_static_step(),
-            parameters.vector(),
-            np.zeros(0),
-            np.array(parameters.static(), float),
+            quasi_static_step(suspension),
+            (np.array(parameters.static(), float),),
+            (parameters.vector(), np.zeros(0)),
         )
 
 
@@ -67,4 +106,5 @@ INFO = MethodInfo(
     description="quasi-static: static loads + rigid-body load transfer split by roll stiffness",
     reference="Siegloff & Choi §IV-B method C; equilibrium eq. 14-16",
     build=QuasiStatic,
+    model_choice=True,
 )

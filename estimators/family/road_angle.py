@@ -8,7 +8,9 @@ Van Loan for the process noise), measured (eq. 16-17) by
 - roll and pitch rate from the gyro (rows skipped when the log has no rates),
 - the four loads from the suspension pseudo-measurement
   (:mod:`wheelload.models.suspension`; the paper lists the loads in its output
-  vector without saying what measures them),
+  vector without saying what measures them): by default the KF's own, with
+  the vehicle file's model terms, with ``suspension=SuspensionModel.PAPER``
+  eq. 9 alone (:mod:`~wheelload.estimators.family.suspension_model`),
 - the specific force rotated into the road frame with the eq. 7 angles
   (eq. 4-5).
 
@@ -44,25 +46,24 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from wheelload.estimators.family.compiled_method import (
-    INPUTS,
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     interval_ok,
     sanitise,
     step_flags,
+)
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    equilibrium,
+    suspension_loads,
 )
 from wheelload.estimators.kalman import sequential_update
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import MAX_INTERVAL
-from wheelload.models import (
-    GRAVITY,
-    ModelParameters,
-    Vehicle,
-    paper_equilibrium_function,
-    travel_function,
-)
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.road_angle import STATE_NAMES, BodyInertia, road_angle_model
 
@@ -100,7 +101,9 @@ class RoadAngleTuning:
 ANGLE_STATE = ("started", "speed", "speed_rate", "grade", "bank_stage", "bank")
 
 
-def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
+def step_function(
+    vehicle: Vehicle, tuning: RoadAngleTuning, model: SuspensionModel = DEFAULT_MODEL
+) -> ca.Function:
     """The filter step: predict with the interval's ``F, Q``, sequential update, road angles."""
     x = ca.SX.sym("x", N)
     P = ca.SX.sym("P", N, N)
@@ -112,12 +115,12 @@ def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
     Q = ca.SX.sym("Q", N, N)
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
-    d, v, acc, vx, rates = u[0:4], u[4:8], u[8:11], u[11], u[12:15]
+    d, acc, vx, rates = u[0:4], u[8:11], u[11], u[12:15]
     ok = interval_ok(dt)
     dt_safe = ca.if_else(ok, dt, 1.0)
 
     roll, pitch, acc_road = attitude_function(vehicle)(d, acc)
-    loads_measured = travel_function()(d, v, p)
+    loads_measured = suspension_loads(model, u, valid, p)
     z = ca.vertcat(roll, rates[0], pitch, rates[1], loads_measured, acc_road)
     travel_ok = valid[0] * valid[1] * valid[2] * valid[3]
     acc_ok = travel_ok * valid[8] * valid[9] * valid[10]
@@ -163,14 +166,16 @@ def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
 
     loads = x_new[4:8]
     std = ca.sqrt(ca.fmax(ca.diag(P_new)[4:8], 0))
-    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = equilibrium(model, u, valid, p)
     eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
     residual = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
     flags = step_flags([ca.fmax(1 - wheel_ok[i], rejected) for i in range(4)], missing, rejected)
     return ca.Function(
-        "wheelload_road_angle_step",
+        "wheelload_road_angle_step"
+        if model is SuspensionModel.FULL
+        else "wheelload_road_angle_step_paper",
         [x, P, angle, u_raw, valid, dt, F, Q, p],
         [x_new, P_new, angles_new, loads, std, residual, flags],
         ["x", "P", "angle_state", "u", "u_valid", "dt", "F", "Q", "p"],
@@ -178,7 +183,7 @@ def step_function(vehicle: Vehicle, tuning: RoadAngleTuning) -> ca.Function:
     )
 
 
-class RoadAngleKF(CompiledMethod):
+class RoadAngleKF(StepMethod):
     """14-state road-angle KF; loads with standard deviations, and road grade and bank.
 
     The step is one CasADi Function; ``run`` loops it in compiled C, with the
@@ -196,8 +201,10 @@ class RoadAngleKF(CompiledMethod):
         *,
         inertia: BodyInertia = DEFAULT_INERTIA,
         tuning: RoadAngleTuning = RoadAngleTuning(),
+        suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
         self.vehicle = vehicle
+        self.suspension = suspension
         self.inertia = inertia
         self.tuning = tuning
         parameters = ModelParameters.from_vehicle(vehicle)
@@ -216,7 +223,8 @@ class RoadAngleKF(CompiledMethod):
         std[4:8] = vehicle.filter.initial_std
         std[[8, 10, 12]], std[[9, 11, 13]] = 2.0, 5.0
         initial = (x0, np.diag(std**2), np.zeros(len(ANGLE_STATE)))
-        super().__init__(step_function(vehicle, tuning), initial, (parameters.vector(),))
+        step = step_function(vehicle, tuning, suspension)
+        super().__init__(step, initial, (parameters.vector(),))
 
     @functools.lru_cache(maxsize=64)  # noqa: B019  (one model per sample interval)
     def _discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -259,4 +267,5 @@ INFO = MethodInfo(
     description="14-state KF with roll/pitch dynamics and road-frame accelerations; grade, bank",
     reference="Jiang et al., road-angle paper §II-III, eq. 4-18",
     build=RoadAngleKF,
+    model_choice=True,
 )

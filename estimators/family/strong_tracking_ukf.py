@@ -2,13 +2,16 @@ r"""Method F, per-corner strong-tracking UKF after Ding et al. (Siegloff & Choi 
 
 Per corner, state :math:`x = [d, v, F]` (compression, compression rate,
 tyre normal load), measurements :math:`y = [d, v]`, and the quarter-car
-process (the unsprung balance of :func:`wheelload.models.quarter_car.tyre_load_function`
+process (the unsprung balance of :func:`wheelload.models.quarter_car.unsprung_balance`
 solved for the unsprung acceleration)
 
 .. math:: \dot d = v, \quad \dot v = \frac{F - z(d, v)}{m_u} - a_s, \quad \dot F = w_F
 
-with the nonlinear suspension load :math:`z` of eq. 9 (asymmetric damper;
-the anti-roll bar with the partner wheel's measured travel) and the body
+with the nonlinear suspension load :math:`z` (asymmetric damper; the
+anti-roll bar with the partner wheel's measured travel; by default the KF's
+full pseudo-measurement with the vehicle file's terms but the hub
+accelerometers' unsprung term, with ``suspension=SuspensionModel.PAPER``
+eq. 9 alone, :mod:`~wheelload.estimators.family.suspension_model`) and the body
 corner acceleration :math:`a_s` reconstructed from the IMU as in method E.
 Prediction by the unscented transform (:mod:`.unscented`) of a fourth-order
 Runge-Kutta step over :math:`\Delta t`; :math:`Q = \mathrm{diag}(q)\,\Delta t`.
@@ -50,13 +53,21 @@ from wheelload.estimators.family.quarter_car import (
 from wheelload.estimators.family.step_method import (
     StepMethod,
     hold,
+    model_equilibrium,
     step_function,
+    step_name,
     step_symbols,
+)
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    suspension_loads,
+    suspension_mask,
 )
 from wheelload.estimators.family.unscented import sigma_points, unscented_transform
 from wheelload.estimators.kalman import sequential_update, symmetrise
 from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle, travel_function
+from wheelload.models import ModelParameters, Vehicle
 
 #: Process noise densities of d [m^2/s] and v [(m/s)^2/s]: unmodelled corner kinematics, about
 #: 0.5 m/s^2 of body-corner acceleration error at 100 Hz ((0.5 * 0.01)^2 / 0.01).
@@ -74,13 +85,14 @@ N_CONSTANTS = 12 + 3 + 2 + 3  # corner geometry, q, r, (rho, beta, lambda_max)
 H = ca.DM([[1, 0, 0], [0, 1, 0]])
 
 
-def _process(sym, corner: int, m_u, a_s):
+def _process(sym, corner: int, m_u, a_s, model: SuspensionModel):
     """Continuous corner dynamics ``f(x)`` with the other wheels' travel and rate as measured."""
 
     def f(x):
         d = ca.vertcat(*[x[0] if i == corner else sym.d[i] for i in range(4)])
         v = ca.vertcat(*[x[1] if i == corner else sym.v[i] for i in range(4)])
-        a_u = unsprung_acceleration(x[2], d, v, m_u, sym.p_vector, corner)
+        z = suspension_loads(model, sym.u, sym.valid, sym.p_vector, d, v, unsprung_inertia=False)
+        a_u = unsprung_acceleration(x[2], z, m_u, corner)
         return ca.vertcat(x[1], a_u - a_s, 0)
 
     return f
@@ -94,13 +106,13 @@ def _rk4(f, x, dt):
     return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
-def corner_update(sym, s, corner: int, a_s, c):
+def corner_update(sym, s, corner: int, a_s, c, model: SuspensionModel):
     """One strong-tracking UKF step of one corner: ``(s_next, F, std_F)``."""
     x, P, V = s[0:3], ca.reshape(s[3:12], 3, 3), ca.reshape(s[12:16], 2, 2)
     m_u = c[0:4]
     q, r = c[12:15], c[15:17]
     rho, beta, max_fading = c[17], c[18], c[19]
-    f = _process(sym, corner, m_u, a_s)
+    f = _process(sym, corner, m_u, a_s, model)
     points = [_rk4(f, point, sym.dt) for point in sigma_points(x, P)]
     x_pred, P_bar = unscented_transform(points)
     R = ca.diag(r)
@@ -116,26 +128,27 @@ def corner_update(sym, s, corner: int, a_s, c):
 
 
 @functools.cache
-def strong_tracking_step() -> ca.Function:
+def strong_tracking_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state = 4 corners (x, P, V) and the previous rates; constants see module."""
     sym = step_symbols(N_STATES, N_CONSTANTS)
     a_s, rate_state = body_corner_accelerations(sym, sym.s[4 * CORNER_STATES :], sym.c)
-    z_mask = sym.mask(travel_function()(sym.d, sym.v, sym.p_vector))
+    z_mask = suspension_mask(sym.u_raw, sym.valid, sym.p_vector) * sym.dt_ok
     ok = z_mask * sym.mask(sym.acc[2])
     states, loads, stds = [], [], []
     for i in range(4):
         s_i = sym.s[i * CORNER_STATES : (i + 1) * CORNER_STATES]
-        s_new, F, std = corner_update(sym, s_i, i, a_s[i], sym.c)
+        s_new, F, std = corner_update(sym, s_i, i, a_s[i], sym.c, model)
         states.append(hold(ca.repmat(ok[i], CORNER_STATES, 1), s_new, s_i))
         loads.append(ca.if_else(ok[i], F, s_i[2]))
         stds.append(ca.if_else(ok[i], std, ca.sqrt(ca.fmax(s_i[3 + 8], 0))))
     return step_function(
-        "wheelload_strong_tracking_ukf_step",
+        step_name("wheelload_strong_tracking_ukf_step", model),
         sym,
         ca.vertcat(*states, rate_state),
         ca.vertcat(*loads),
         ca.vertcat(*stds),
         ok,
+        model_equilibrium(model, sym),
     )
 
 
@@ -145,7 +158,13 @@ class StrongTrackingUKF(StepMethod):
     name = "F strong-tracking UKF"
     has_std = True
 
-    def __init__(self, vehicle: Vehicle, *, max_fading: float = MAX_FADING) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        *,
+        max_fading: float = MAX_FADING,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         if not max_fading >= 1:
             raise ValueError(f"max_fading must be >= 1, got {max_fading}")
         parameters = ModelParameters.from_vehicle(vehicle)
@@ -165,11 +184,11 @@ class StrongTrackingUKF(StepMethod):
             )
             for load in parameters.static()
         ]
+        self.suspension = suspension
         super().__init__(
-            strong_tracking_step(),
-            parameters.vector(),
-            constants,
-            np.concatenate([*corners, np.zeros(4)]),
+            strong_tracking_step(suspension),
+            (np.concatenate([*corners, np.zeros(4)]),),
+            (parameters.vector(), constants),
         )
 
 
@@ -178,4 +197,5 @@ INFO = MethodInfo(
     description="strong-tracking UKF per corner on suspension compression and rate",
     reference="Siegloff & Choi §IV-B method F; Ding, Wang, Zhang & Liu 2022",
     build=StrongTrackingUKF,
+    model_choice=True,
 )

@@ -2,10 +2,14 @@ r"""Method D, suspension-only: the pseudo-measurement alone (Siegloff & Choi §I
 
 .. math:: \hat F_{z,i} = z_i(d, v) = F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i
 
-the suspension model of §II-B (eq. 3-9, :func:`wheelload.models.travel_function`)
-evaluated sample by sample, without filtering or constraint. Adaptation: a
-wheel whose travel or rate (or the anti-roll-bar partner's travel) is
-missing keeps its previous estimate and is flagged. No standard deviation.
+the suspension model of §II-B evaluated sample by sample, without filtering
+or constraint. By default the KF's own pseudo-measurement with the vehicle
+file's model terms (:func:`wheelload.models.suspension_function`: link and
+tyre-force loads, stops, unsprung inertia); ``suspension=SuspensionModel.PAPER``
+gives the paper's eq. 3-9 alone (:mod:`~wheelload.estimators.family.suspension_model`).
+Adaptation: a wheel whose travel or rate (or the anti-roll-bar partner's
+travel) is missing keeps its previous estimate and is flagged. No standard
+deviation.
 """
 
 from __future__ import annotations
@@ -18,21 +22,32 @@ import numpy as np
 from wheelload.estimators.family.step_method import (
     StepMethod,
     hold,
+    model_equilibrium,
     step_function,
+    step_name,
     step_symbols,
 )
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    suspension_loads,
+    suspension_mask,
+)
 from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle, travel_function
+from wheelload.models import ModelParameters, Vehicle
 
 
 @functools.cache
-def suspension_only_step() -> ca.Function:
+def suspension_only_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state = last loads; loads = the suspension model where its inputs are valid."""
     sym = step_symbols(4, 0)
-    z = travel_function()(sym.d, sym.v, sym.p_vector)
-    mask = sym.mask(z)
+    z = suspension_loads(model, sym.u, sym.valid, sym.p_vector)
+    mask = suspension_mask(sym.u_raw, sym.valid, sym.p_vector) * sym.dt_ok
     loads = hold(mask, z, sym.s)
-    return step_function("wheelload_suspension_only_step", sym, loads, loads, ca.SX.zeros(4), mask)
+    return step_function(
+        step_name("wheelload_suspension_only_step", model), sym, loads, loads, ca.SX.zeros(4),
+        mask, model_equilibrium(model, sym),
+    )  # fmt: skip
 
 
 class SuspensionOnly(StepMethod):
@@ -41,13 +56,13 @@ class SuspensionOnly(StepMethod):
     name = "D suspension-only"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle) -> None:
+    def __init__(self, vehicle: Vehicle, *, suspension: SuspensionModel = DEFAULT_MODEL) -> None:
         parameters = ModelParameters.from_vehicle(vehicle)
+        self.suspension = suspension
         super().__init__(
-            suspension_only_step(),
-            parameters.vector(),
-            np.zeros(0),
-            np.array(parameters.static(), float),
+            suspension_only_step(suspension),
+            (np.array(parameters.static(), float),),
+            (parameters.vector(), np.zeros(0)),
         )
 
 
@@ -56,4 +71,5 @@ INFO = MethodInfo(
     description="suspension-only: the suspension pseudo-measurement alone, no filter",
     reference="Siegloff & Choi §IV-B method D; §II-B eq. 3-9",
     build=SuspensionOnly,
+    model_choice=True,
 )

@@ -38,7 +38,11 @@ Adaptations:
   unbiasedness constraint.
 - The known input :math:`u` is the suspension force beyond the linear spring
   and mean damper rate (anti-roll bar, damper asymmetry) from the suspension
-  model, so the filter's model is the project's suspension model.
+  model, so the filter's model is the project's suspension model: by
+  default the KF's full pseudo-measurement with the vehicle file's terms
+  (links, tyre forces, stops; not the hub accelerometers' unsprung term),
+  with ``suspension=SuspensionModel.PAPER`` eq. 9 alone
+  (:mod:`~wheelload.estimators.family.suspension_model`).
 - :math:`a_s` per corner from the body IMU,
   :math:`a_z - g + \dot\omega_x y_i - \dot\omega_y x_i`, the angular
   accelerations by backward differences of the rates (zero without rates).
@@ -59,19 +63,23 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from wheelload.estimators.family.compiled_method import (
-    INPUTS,
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     interval_ok,
     sanitise,
     step_flags,
 )
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    equilibrium,
+    suspension_loads,
+)
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.two_stage import MAX_INTERVAL
-from wheelload.models import GRAVITY, ModelParameters, Vehicle, paper_equilibrium_function
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.quarter_car import reduced_quarter_car_function
-from wheelload.models.suspension import travel_function
 
 RANK_TOLERANCE = 1e-9
 
@@ -216,8 +224,10 @@ def _corner_step(x, P, residual, u_prev, model, constants, y, u, Q, R):
     return x_new, P_new, residual_new, e
 
 
-def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Function:
-    """The four corners' UMVF step (compiled-loop layout of ``CompiledMethod``)."""
+def step_function(
+    vehicle: Vehicle, tuning: UmvfTuning, constants, model: SuspensionModel = DEFAULT_MODEL
+) -> ca.Function:
+    """The four corners' UMVF step (layout of :class:`~.step_method.StepMethod`)."""
     x = ca.SX.sym("x", 2, 4)
     P = ca.SX.sym("P", 2, 8)
     residual = ca.SX.sym("residual", 3, 4)
@@ -228,7 +238,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     models = ca.SX.sym("models", 10, 4)  # per corner: A (4), B (2), H (4), column-major
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
-    d, v, acc, vx, rates = u[0:4], u[4:8], u[8:11], u[11], u[12:15]
+    d, v, acc, rates = u[0:4], u[4:8], u[8:11], u[12:15]
     ok = interval_ok(dt)
     dt_safe = ca.if_else(ok, dt, 1.0)
     u_prev, load_prev, rates_prev, started = memory[0:4], memory[4:8], memory[8:10], memory[10]
@@ -237,7 +247,8 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     names = ModelParameters.names()
     static = ca.vertcat(*[p[names.index(f"static_{w}")] for w in ("fl", "fr", "rl", "rr")])
     spring, damper = constants["spring"], constants["damper"]
-    extra = travel_function()(d, v, p) - static - spring * d - damper * v
+    z = suspension_loads(model, u, valid, p, unsprung_inertia=False)
+    extra = z - static - spring * d - damper * v
     a_s = corner_vertical_acceleration(acc[2], rate_acc[0], rate_acc[1], corner_positions(vehicle))
     Q = ca.diag(ca.vertcat(tuning.travel_density, tuning.travel_rate_density)) * dt_safe
     R = ca.DM(tuning.R)
@@ -246,11 +257,11 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     for i in range(4):
         corner_ok = ok * valid[i] * valid[4 + i] * valid[10]
         m = models[:, i]
-        model = (ca.reshape(m[0:4], 2, 2), m[4:6], ca.reshape(m[6:10], 2, 2))
+        corner_model = (ca.reshape(m[0:4], 2, 2), m[4:6], ca.reshape(m[6:10], 2, 2))
         y = ca.vertcat(a_s[i], d[i], v[i])
         Pi = P[:, 2 * i : 2 * i + 2]
         x_n, P_n, r_n, e = _corner_step(
-            x[:, i], Pi, residual[:, i], u_prev[i], model, constants["CGD"][i], y, extra[i],
+            x[:, i], Pi, residual[:, i], u_prev[i], corner_model, constants["CGD"][i], y, extra[i],
             Q, R,
         )  # fmt: skip
         columns["x"].append(ca.if_else(corner_ok, x_n, x[:, i]))
@@ -264,14 +275,14 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     memory_new = ca.vertcat(
         *columns["u"], loads, rates_new, ca.if_else(ok * valid[12] * valid[13], 1, started)
     )
-    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
+    A_eq, b_eq = equilibrium(model, u, valid, p)
     eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
     residual_eq = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
     flag_value = step_flags(wheel_skipped, missing, rejected)
     return ca.Function(
-        "wheelload_umvf_step",
+        "wheelload_umvf_step" if model is SuspensionModel.FULL else "wheelload_umvf_step_paper",
         [x, P, residual, memory, u_raw, valid, dt, models, p],
         [
             ca.horzcat(*columns["x"]), ca.horzcat(*columns["P"]),
@@ -284,7 +295,7 @@ def step_function(vehicle: Vehicle, tuning: UmvfTuning, constants) -> ca.Functio
     )  # fmt: skip
 
 
-class Umvf(CompiledMethod):
+class Umvf(StepMethod):
     """UMVF tyre-load estimator on each corner (eq. 17-30); compiled loop.
 
     The discrete model of each corner (``A, B, H``: a matrix exponential) is
@@ -295,9 +306,16 @@ class Umvf(CompiledMethod):
     has_std = False
     interval_names = ("models",)
 
-    def __init__(self, vehicle: Vehicle, tuning: UmvfTuning = UmvfTuning()) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        tuning: UmvfTuning = UmvfTuning(),
+        *,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         self.vehicle = vehicle
         self.tuning = tuning
+        self.suspension = suspension
         parameters = ModelParameters.from_vehicle(vehicle)
         self.static = np.array(parameters.static(), float)
         mass = vehicle.mass
@@ -329,7 +347,7 @@ class Umvf(CompiledMethod):
             np.zeros((3, 4)),
             np.concatenate([np.zeros(4), self.static, np.zeros(3)]),
         )
-        step = step_function(vehicle, tuning, constants)
+        step = step_function(vehicle, tuning, constants, suspension)
         super().__init__(step, initial, (parameters.vector(),))
 
     @functools.lru_cache(maxsize=64)  # noqa: B019  (one model per sample interval)
@@ -357,4 +375,5 @@ INFO = MethodInfo(
     description="unbiased minimum-variance unknown-input filter per corner, reduced quarter car",
     reference="ycoo-umvf paper (Energies 2021, 14, 2378) §4, eq. 17-30",
     build=Umvf,
+    model_choice=True,
 )

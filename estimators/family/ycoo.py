@@ -20,7 +20,12 @@ Adaptations, each kept as small as the signals allow:
   :mod:`wheelload.models.suspension` (spring, asymmetric damper, anti-roll
   bar, static load) evaluated on the filtered travel and its filtered
   derivative; with a linear damper and no bar it is exactly eq. (14). The
-  paper assumes no anti-roll bar (§2); ours has one, and it is kept.
+  paper assumes no anti-roll bar (§2); ours has one, and it is kept. By
+  default the pseudo-measurement is the KF's full one with the vehicle
+  file's model terms (links, tyre forces, stops; not the hub accelerometers'
+  unsprung term, which the observer estimates itself); with
+  ``suspension=SuspensionModel.PAPER``, eq. 9 alone
+  (:mod:`~wheelload.estimators.family.suspension_model`).
 - :math:`a_s` per corner is reconstructed from the body IMU:
   :math:`a_z - g + \dot\omega_x y_i - \dot\omega_y x_i` with
   :math:`F(s)\,s\,\omega` as the filtered angular acceleration (zero when
@@ -51,18 +56,23 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.discretise import first_order_hold, trapezoidal
-from wheelload.estimators.family.compiled_method import (
-    INPUTS,
-    CompiledMethod,
+from wheelload.estimators.family.step_method import (
+    StepMethod,
     flag_sum,
     interval_ok,
     sanitise,
 )
+from wheelload.estimators.family.suspension_model import (
+    DEFAULT_MODEL,
+    SuspensionModel,
+    equilibrium,
+    suspension_loads,
+)
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import StepFlag
-from wheelload.models import ModelParameters, Vehicle, paper_equilibrium_function
+from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
-from wheelload.models.quarter_car import tyre_load_function
+from wheelload.models.quarter_car import unsprung_balance
 from wheelload.models.vehicle import GRAVITY
 
 #: Filtered channels: four travels, vertical specific force minus g, roll and pitch rate.
@@ -116,7 +126,9 @@ def filter_outputs(X, settings: YcooSettings):
     return y, y_dot, y_ddot
 
 
-def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
+def step_function(
+    vehicle: Vehicle, settings: YcooSettings, model: SuspensionModel = DEFAULT_MODEL
+) -> ca.Function:
     """``(X, u_prev, u, u_valid, dt, p, m_u) -> (X, u_prev, loads, std, residual, flags)``."""
     X = ca.SX.sym("X", STATES * CHANNELS)
     memory = ca.SX.sym("u_prev", CHANNELS + 1)  # previous channel inputs, started flag
@@ -129,7 +141,7 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
 
     u = sanitise(u_raw, valid)
     u_prev_stored = memory[0:CHANNELS]
-    d, acc, vx, rates = u[0:4], u[8:11], u[11], u[12:15]
+    d, acc, rates = u[0:4], u[8:11], u[12:15]
     channel = ca.vertcat(d, acc[2] - GRAVITY, rates[0], rates[1])
     channel_valid = ca.vertcat(valid[0:4], valid[10], valid[12], valid[13])
     # A missing channel holds its last value (the filter sees a constant input).
@@ -160,8 +172,9 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
     positions = corner_positions(vehicle)
     a_s = corner_vertical_acceleration(y[4] + GRAVITY, y_dot[5], y_dot[6], positions)
     a_u = a_s + y_ddot[0:4].T
-    loads = tyre_load_function()(y[0:4].T, y_dot[0:4].T, a_u, mu, p)
-    A_eq, b_eq = paper_equilibrium_function()(acc, vx, p)
+    z = suspension_loads(model, u, valid, p, y[0:4].T, y_dot[0:4].T, unsprung_inertia=False)
+    loads = unsprung_balance(z, a_u, mu)
+    A_eq, b_eq = equilibrium(model, u, valid, p)
     residual = b_eq - ca.mtimes(A_eq, loads)
     rejected = 1 - ok
     acc_missing = 1 - valid[8] * valid[9] * valid[10] * valid[11]
@@ -178,7 +191,7 @@ def step_function(vehicle: Vehicle, settings: YcooSettings) -> ca.Function:
         ]
     )
     return ca.Function(
-        "wheelload_ycoo_step",
+        "wheelload_ycoo_step" if model is SuspensionModel.FULL else "wheelload_ycoo_step_paper",
         [X, memory, u_raw, valid, dt, p, mu],
         [ca.vec(Xn), u_next, loads, ca.DM.zeros(4), residual, flags],
         ["X", "u_prev", "u", "u_valid", "dt", "p", "m_u"],
@@ -192,18 +205,26 @@ def unsprung_masses(vehicle: Vehicle) -> np.ndarray:
     return np.array([m.unsprung_front, m.unsprung_front, m.unsprung_rear, m.unsprung_rear]) / 2
 
 
-class Ycoo(CompiledMethod):
+class Ycoo(StepMethod):
     """YCOO tyre-load observer on each corner (eq. 15); compiled loop."""
 
     name = "YCOO"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle, settings: YcooSettings = YcooSettings()) -> None:
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        settings: YcooSettings = YcooSettings(),
+        *,
+        suspension: SuspensionModel = DEFAULT_MODEL,
+    ) -> None:
         self.vehicle = vehicle
         self.settings = settings
+        self.suspension = suspension
         p = ModelParameters.from_vehicle(vehicle).vector()
         initial = (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS + 1))
-        super().__init__(step_function(vehicle, settings), initial, (p, unsprung_masses(vehicle)))
+        step = step_function(vehicle, settings, suspension)
+        super().__init__(step, initial, (p, unsprung_masses(vehicle)))
 
 
 INFO = MethodInfo(
@@ -211,4 +232,5 @@ INFO = MethodInfo(
     description="Youla controller-output observer per corner, 30 Hz, zeta = 1/sqrt(2)",
     reference="ycoo-umvf paper (Energies 2021, 14, 2378) §3, eq. 8-15",
     build=Ycoo,
+    model_choice=True,
 )

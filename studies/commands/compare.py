@@ -1,6 +1,7 @@
 """``wheelload compare LOG --vehicle FILE --methods A,B,...``: the paper-style error table.
 
-Runs each registered method on the log, prints RMSE, RMSE %, P95 and Max per
+Runs each registered method on the log (the family methods on the KF's own
+vehicle model unless ``--suspension paper``), prints RMSE, RMSE %, P95 and Max per
 wheel and pooled (Siegloff & Choi eq. 26-34) and the time per sample, and
 with ``--figures DIR`` writes one figure per wheel of every estimate against
 the reference.
@@ -12,8 +13,15 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators import read_log
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.models import load_vehicle
-from wheelload.studies.comparison import compare_methods, format_table, long_table, parse_methods
+from wheelload.studies.comparison import (
+    add_suspension_option,
+    compare_methods,
+    format_table,
+    long_table,
+    parse_methods,
+)
 from wheelload.studies.comparison_plot import (
     check_writable,
     figure_paths,
@@ -41,6 +49,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--figures", help="folder for one PNG per wheel: LOGNAME_compare_fl.png ..")
     parser.add_argument("--csv", help="write the table (one row per method and wheel) to this CSV")
     parser.add_argument("--force", action="store_true", help="overwrite existing output files")
+    add_suspension_option(parser)
     parser.set_defaults(handler=run)
 
 
@@ -61,7 +70,11 @@ def run(args: argparse.Namespace) -> int:
         start = float(signals.t[0]) if args.start is None else args.start
         end = float(signals.t[-1]) if args.end is None else args.end
         window = (start, end)
-    comparison = compare_methods(signals, vehicle, names, window=window, repeat=args.repeat)
+    suspension = SuspensionModel.parse(args.suspension)
+    print(f"family methods on the {suspension.value} vehicle model (--suspension)")
+    comparison = compare_methods(
+        signals, vehicle, names, window=window, repeat=args.repeat, suspension=suspension
+    )
     print(format_table(comparison))
     if csv:
         write_csv(long_table(comparison), csv)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals, TwoStageKF
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
 from wheelload.models import example_vehicle_path, load_vehicle
@@ -32,6 +33,7 @@ from wheelload.studies.batch import (
     write_table,
 )
 from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.comparison import add_suspension_option
 from wheelload.studies.estimate_digest import EstimateDigest
 
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -103,6 +105,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--workers", type=int, default=1, help="local processes for many logs")
     parser.add_argument("--dask", metavar="ADDRESS", help="run many logs on this Dask scheduler")
+    add_suspension_option(parser)
     add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
@@ -118,6 +121,7 @@ def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
         allow_unusual=args.allow_unusual,
         wiring_checks=not args.skip_wiring_checks,
         smooth=args.smooth,
+        suspension=SuspensionModel.parse(args.suspension),
     )
 
 

@@ -18,6 +18,12 @@ def run(args: argparse.Namespace) -> int:
     table = methods()
     width = max(len(name) for name in table)
     for name, info in table.items():
-        print(f"{name:<{width}}  {info.description}")
+        marker = "*" if info.model_choice else " "
+        print(f"{name:<{width}}{marker} {info.description}")
         print(f"{'':<{width}}  [{info.reference}]")
+    print(
+        "\n* on the KF's own vehicle model (suspension and equilibrium with the vehicle file's "
+        "terms)\n  by default, so that a comparison ranks estimators, not models; "
+        "--suspension paper on\n  `estimate` and `compare` gives the source paper's bare model."
+    )
     return 0
