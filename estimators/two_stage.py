@@ -547,6 +547,10 @@ def flags_from_outputs(used: np.ndarray, status: np.ndarray) -> np.ndarray:
     return flags_from_used(used) | guarded
 
 
+_NO_TIME = np.array([np.nan])  # the time of a single step's estimate (shared, read-only)
+_NO_TIME.flags.writeable = False
+
+
 class TwoStageKF:
     """Two-stage physics-constrained Kalman filter for the four wheel loads.
 
@@ -614,15 +618,35 @@ class TwoStageKF:
         if self.sample_interval is None:  # else set once in _fast_step
             nominal = dt if 0.0 < dt < MAX_INTERVAL else self.tuning[_SAMPLE_INTERVAL]
             fast.set_interval(_SAMPLE_INTERVAL, nominal)
-        x, P, m, std, residual, flags = fast(state.x, state.P, state.m, sample.parts(), dt)
+        x, P, m, std, residual, flags = fast.call_sample(state.x, state.P, state.m, sample, dt)
         estimate = Estimate(
-            t=np.array([np.nan]),
+            t=_NO_TIME,
             loads=x.reshape(1, 4),
             std=std.reshape(1, 4),
             residual=residual.reshape(1, 3),
             flags=np.array([flags], dtype=np.int64),
         )
         return FilterState(x, P, m), estimate
+
+    def live(self, state: FilterState | None = None):
+        """A :class:`~wheelload.estimators.fast_step.LiveFilter` from ``state`` (default initial).
+
+        The lean per-sample path: the state stays in the compiled step's
+        buffer and each update returns views, not new objects; the same
+        numbers as :meth:`step` and :meth:`reference_step`.
+        """
+        from wheelload.estimators.fast_step import LiveFilter
+
+        state = state or self.initial_state()
+        return LiveFilter(
+            self._fast_step,
+            state.x,
+            state.P,
+            state.m,
+            interval_index=None if self.sample_interval is not None else _SAMPLE_INTERVAL,
+            default_interval=float(self.tuning[_SAMPLE_INTERVAL]),
+            max_interval=MAX_INTERVAL,
+        )
 
     @functools.cached_property
     def _fast_step(self):
