@@ -199,3 +199,26 @@ def test_a_bad_value_is_named_as_on_the_ordinary_path(tmp_path, capsys, example)
     frame.to_csv(log, index=False)
     assert _estimate(log) == 2
     assert "column 'ax' is not numeric at row 17" in capsys.readouterr().err
+
+
+def test_rate_derivatives_not_derived_where_no_term_reads_them(tmp_path, example, vehicle):
+    """Body inertia and the IMU lever arm off: the lean path skips the rate differentiator
+    (rates logged, no wx_dot) and still equals run, which derives them, to the bit."""
+    import dataclasses
+
+    from wheelload.estimators.signals import rate_derivatives_used
+
+    off = dataclasses.replace(
+        vehicle, model=dataclasses.replace(vehicle.model, body_inertia=False, imu_lever_arm=False)
+    )
+    kf_off = TwoStageKF(off)
+    assert not rate_derivatives_used(kf_off.parameters)
+    assert rate_derivatives_used(TwoStageKF(vehicle).parameters)
+    path = tmp_path / "log.csv"
+    example.to_csv(path, index=False)
+    expected = kf_off.run(read_log(path, wiring_checks=False))
+    chunks = list(scan_log(path, rows=ROWS, wiring_checks=False).chunks(kf_off))
+    for name in ("loads", "std", "residual"):
+        got = np.concatenate([getattr(c, name) for c in chunks])
+        assert np.array_equal(got, getattr(expected, name)), name
+    assert np.array_equal(np.concatenate([c.flags for c in chunks]), expected.flags)
