@@ -42,7 +42,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-import scipy.linalg
 
 from wheelload.estimators.family.compiled_method import (
     INPUTS,
@@ -227,6 +226,8 @@ class RoadAngleKF(CompiledMethod):
         M[:N, :N] = -self.A * dt
         M[:N, N:] = np.diag(self._noise) * dt
         M[N:, N:] = self.A.T * dt
+        import scipy.linalg  # imported where used: listing the methods stays fast
+
         E = scipy.linalg.expm(M)
         F = E[N:, N:].T
         Q = F @ E[:N, N:]
