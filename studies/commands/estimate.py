@@ -16,6 +16,7 @@ import contextlib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from wheelload.studies.batch import (
 )
 from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.estimate_digest import EstimateDigest
+
+if TYPE_CHECKING:
+    from wheelload.estimators.log_stream import LogStream
 
 WHEELS = ("FL", "FR", "RL", "RR")
 
@@ -237,15 +241,7 @@ def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) 
         rate_max=stats.rate_max,
         velocities_derived=stream.velocities_derived,
     ) + negative_load_warnings(digest.negative_samples, digest.load_min, str(path))
-    header = LogHeader(
-        source=stream.source,
-        samples=len(stream),
-        duration=float(stream.t[-1] - stream.t[0]),
-        sample_rate=stream.sample_rate,
-        velocities_derived=stream.velocities_derived,
-        mode=stream.mode(),
-        has_reference=stream.reference_present is not None,
-    )
+    header = LogHeader.of(stream, has_reference=stream.reference_present is not None)
     print(f"method {settings.method}: {method(settings.method).description}")
     print(summary_text(header, digest, faults, vehicle.name))
     for note in notes:
@@ -363,15 +359,7 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     A metrics problem is reported in the text, never raised: the estimates
     stand on their own.
     """
-    header = LogHeader(
-        source=signals.source,
-        samples=len(estimate),
-        duration=float(signals.t[-1] - signals.t[0]),
-        sample_rate=signals.sample_rate,
-        velocities_derived=signals.velocities_derived,
-        mode=signals.mode(),
-        has_reference=signals.reference is not None,
-    )
+    header = LogHeader.of(signals, has_reference=signals.reference is not None)
     return summary_text(header, digest_of(estimate, signals), estimate.sensor_faults, vehicle_name)
 
 
@@ -386,6 +374,21 @@ class LogHeader:
     velocities_derived: bool
     mode: str
     has_reference: bool
+
+    @classmethod
+    def of(cls, log: Signals | LogStream, *, has_reference: bool) -> LogHeader:
+        """The header of a log read whole (:class:`Signals`) or scanned for the lean path
+        (:class:`~wheelload.estimators.log_stream.LogStream`): both give the source, time
+        column, sample rate, sensor set and whether velocities were derived."""
+        return cls(
+            source=log.source,
+            samples=len(log.t),
+            duration=float(log.t[-1] - log.t[0]),
+            sample_rate=log.sample_rate,
+            velocities_derived=log.velocities_derived,
+            mode=log.mode(),
+            has_reference=has_reference,
+        )
 
 
 def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name: str) -> str:
