@@ -587,8 +587,11 @@ class TwoStageKF:
         self.tuning = tuning_vector(
             vehicle, sample_interval or DEFAULT_SAMPLE_INTERVAL, guard_settings
         )
-        self.step_function = step or step_function()
-        self._step = without_monitor(self.step_function)
+        if step is None:
+            from wheelload.estimators.step_cache import default_step_function
+
+            step = default_step_function()  # step_function(), loaded from disk when built before
+        self.step_function = step
 
     def tuning_for(self, sample_interval: float) -> np.ndarray:
         """:attr:`tuning` with the nominal interval ``sample_interval`` [s]."""
@@ -647,6 +650,11 @@ class TwoStageKF:
             default_interval=float(self.tuning[_SAMPLE_INTERVAL]),
             max_interval=MAX_INTERVAL,
         )
+
+    @functools.cached_property
+    def _step(self) -> ca.Function:
+        """:attr:`step_function` without the fault monitor (built on first use)."""
+        return without_monitor(self.step_function)
 
     @functools.cached_property
     def _fast_step(self):
