@@ -40,7 +40,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators import first_order
 from wheelload.estimators.log_checks import check_wiring, duplicate_columns, raise_for_wiring
@@ -48,6 +47,8 @@ from wheelload.estimators.result import StepFlag
 from wheelload.models.vehicle import GRAVITY
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from wheelload.models import ModelParameters
 
 WHEELS = ("fl", "fr", "rl", "rr")
@@ -175,6 +176,8 @@ class Signals:
 
     def to_frame(self) -> pd.DataFrame:
         """The signals as a DataFrame with the log's column names."""
+        import pandas as pd
+
         columns = {"t": self.t, "vx": self.vx}
         columns.update(zip(("ax", "ay", "az"), self.acc.T))
         if self.rates is not None:
@@ -225,6 +228,8 @@ def read_log(
     without it the log's channels must be named as ours, in SI units.
     ``wiring_checks``: run :mod:`wheelload.estimators.log_checks` (signs, units, wiring).
     """
+    import pandas as pd
+
     from wheelload.estimators.readers import ChannelMapError, load_channel_map, read_frame
 
     path = Path(path)
@@ -256,6 +261,8 @@ def signals_from_frame(
     wiring_checks: bool = True,
 ) -> Signals:
     """Validate a DataFrame with the log's columns and build :class:`Signals`."""
+    import pandas as pd
+
     duplicate = duplicate_columns(frame.columns)
     if duplicate is not None:
         raise LogError(

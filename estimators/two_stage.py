@@ -25,10 +25,10 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators import guard
 from wheelload.estimators.compiled import CompiledLoop
@@ -59,6 +59,9 @@ from wheelload.models.inputs import (
     input_index,
 )
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Order of the tuning vector.
 TUNING = (
@@ -439,6 +442,8 @@ class Innovations:
 
     def to_pandas(self) -> pd.DataFrame:
         """Columns ``t, innovation_<row>.., variance_<row>.., used_<row>..``."""
+        import pandas as pd
+
         columns = {"t": self.t}
         columns.update(
             {f"innovation_{r}": self.innovation[:, i] for i, r in enumerate(UPDATE_ROWS)}

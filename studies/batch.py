@@ -18,9 +18,9 @@ import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.batched import run_batched
@@ -33,6 +33,9 @@ from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.metrics import wheel_metrics
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 WHEELS = ("fl", "fr", "rl", "rr")
 SUMMARY_NAME = "summary.csv"
@@ -371,6 +374,7 @@ def run_logs(
     task is small beside the logs it carries. Logs over ``lean_bytes`` are read
     in chunks (:func:`process_logs`).
     """
+    import pandas as pd
     from tqdm import tqdm
 
     bar = tqdm(total=len(paths), unit="log", disable=not progress or None)

@@ -344,15 +344,14 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
             lines.append(f"samples with a model term dropped ({name}): {dropped}")
     if header.has_reference:
         try:
-            table = digest.metrics(header.source)
+            names, rows = digest.metric_rows(header.source)
         except ValueError as error:
             lines.append(f"no error metrics: {error}")
             return "\n".join(lines)
         lines.append("error against the log's reference loads (Siegloff & Choi eq. 26-34):")
         lines.append(f"{'':>8}{'RMSE [N]':>10}{'RMSE [%]':>10}{'P95 [N]':>10}{'Max [N]':>10}")
-        for name, row in table.iterrows():
+        for name, (rmse, rmse_percent, p95, peak) in zip(names, rows, strict=True):
             lines.append(
-                f"{str(name).upper():>8}{row['RMSE']:10.1f}{row['RMSE %']:10.2f}"
-                f"{row['P95']:10.1f}{row['Max']:10.1f}"
+                f"{name.upper():>8}{rmse:10.1f}{rmse_percent:10.2f}{p95:10.1f}{peak:10.1f}"
             )
     return "\n".join(lines)
