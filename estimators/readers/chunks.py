@@ -111,6 +111,8 @@ def _float_values(array) -> np.ndarray:
     view without nulls, a copy with them), without the pandas import ``to_numpy`` makes."""
     n, offset = len(array), array.offset
     validity, data = array.buffers()
+    if data is None:  # no value buffer (all null)
+        return np.full(n, np.nan)
     values = np.frombuffer(data, dtype=np.float64, count=n, offset=8 * offset)
     if array.null_count == 0:
         values.flags.writeable = False  # a view of arrow's memory, as to_numpy's
