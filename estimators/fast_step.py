@@ -11,11 +11,17 @@ zero, as :meth:`TwoStageKF.reference_step` does in numpy) and computes the
 buffer: a few microseconds per sample, the same numbers as the reference
 step (the same operations in the same order, without FMA contraction).
 
+:class:`LiveFilter` (``TwoStageKF.live()``) is the leanest form: the state
+stays in the buffer (copied from the step's outputs to its inputs in C) and
+each update returns views into the buffer, so nothing is allocated per sample.
+
 Example
 -------
 >>> fast = CompiledStep(step_function(), MAX_INTERVAL)
 >>> fast.set_fixed(p, tuning)
 >>> x, P, m, std, residual, flags = fast(state.x, state.P, state.m, sample.parts(), dt)
+>>> live = kf.live()
+>>> estimate = live.update(sample, dt)  # estimate.loads: a view, valid until the next update
 """
 
 from __future__ import annotations
