@@ -218,15 +218,7 @@ class CompiledStep:
             for values, size in u_parts:
                 parts.append(self._missing[size] if values is None else values)
             np.concatenate(parts, out=self._state_and_u)  # x, P, m, u are adjacent
-        buffer = self.buffer
-        buffer[self._dt] = dt
-        self._function(self._address)
-        # One fresh copy per step: x_next, P_next, m_next, std, residual, NaN, flags.
-        block = buffer[self._result].copy()
-        xs, Ps, ms, stds, residuals = self._parts
-        x, P, m = block[xs], block[Ps].reshape(4, 4, order="F"), block[ms]
-        self._last = (x, P, m, block)
-        return x, P, m, block[stds], block[residuals], int(buffer[self._flags])
+        return self._step_and_copy(dt)
 
     def call_sample(self, x, P, m, sample, dt: float):
         """As :meth:`__call__` with a :class:`~wheelload.estimators.Sample` (its groups written
@@ -241,22 +233,33 @@ class CompiledStep:
             views["x"][:] = x
             views["P"][:] = P.ravel(order="F")
             views["m"][:] = m
-        d, v, acc, vx, rates, rate_dots, hub = self._groups
-        d[:] = sample.d
-        v[:] = sample.v
-        acc[:] = sample.acc
-        vx[0] = sample.vx
-        rates[:] = np.nan if sample.rates is None else sample.rates
-        rate_dots[:] = np.nan if sample.rate_dots is None else sample.rate_dots
-        hub[:] = np.nan if sample.hub is None else sample.hub
+        write_sample(self._groups, sample)
+        return self._step_and_copy(dt)
+
+    def _step_and_copy(self, dt: float):
+        """Run the C step on the buffer; fresh copies of its results (see :meth:`__call__`)."""
         buffer = self.buffer
         buffer[self._dt] = dt
         self._function(self._address)
+        # One fresh copy per step: x_next, P_next, m_next, std, residual, NaN, flags.
         block = buffer[self._result].copy()
         xs, Ps, ms, stds, residuals = self._parts
         x, P, m = block[xs], block[Ps].reshape(4, 4, order="F"), block[ms]
         self._last = (x, P, m, block)
         return x, P, m, block[stds], block[residuals], int(buffer[self._flags])
+
+
+def write_sample(groups: tuple[np.ndarray, ...], sample) -> None:
+    """Write a :class:`~wheelload.estimators.Sample` into the views ``groups`` of the step's
+    ``u`` (:data:`SAMPLE_GROUPS`); an absent optional group is NaN (missing)."""
+    d, v, acc, vx, rates, rate_dots, hub = groups
+    d[:] = sample.d
+    v[:] = sample.v
+    acc[:] = sample.acc
+    vx[0] = sample.vx
+    rates[:] = np.nan if sample.rates is None else sample.rates
+    rate_dots[:] = np.nan if sample.rate_dots is None else sample.rate_dots
+    hub[:] = np.nan if sample.hub is None else sample.hub
 
 
 class LiveEstimate:
@@ -348,14 +351,7 @@ class LiveFilter:
 
     def update(self, sample, dt: float) -> LiveEstimate:
         """One prediction and both updates with a :class:`~wheelload.estimators.Sample`."""
-        d, v, acc, vx, rates, rate_dots, hub = self._groups
-        d[:] = sample.d
-        v[:] = sample.v
-        acc[:] = sample.acc
-        vx[0] = sample.vx
-        rates[:] = np.nan if sample.rates is None else sample.rates
-        rate_dots[:] = np.nan if sample.rate_dots is None else sample.rate_dots
-        hub[:] = np.nan if sample.hub is None else sample.hub
+        write_sample(self._groups, sample)
         return self._run(dt)
 
     def update_inputs(self, u: np.ndarray, dt: float) -> LiveEstimate:

@@ -176,16 +176,21 @@ def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> No
     write_frame(frame, path, replace=replace)
 
 
+def _log_columns(path: Path, log) -> dict:
+    """The summary row's columns of the log itself; ``log`` a ``Signals`` or ``LogStream``."""
+    return {
+        "log": str(path),
+        "samples": len(log.t),
+        "duration_s": float(log.t[-1] - log.t[0]),
+        "rate_hz": log.sample_rate,
+        "mode": log.mode(),
+    }
+
+
 def summary_row(path: Path, result: LogResult) -> dict:
     """One row of the summary table."""
     estimate, signals = result.estimate, result.signals
-    row: dict = {
-        "log": str(path),
-        "samples": len(signals),
-        "duration_s": float(signals.t[-1] - signals.t[0]),
-        "rate_hz": signals.sample_rate,
-        "mode": signals.mode(),
-    }
+    row = _log_columns(path, signals)
     for i, wheel in enumerate(WHEELS):
         row[f"mean_fz_{wheel}"] = float(estimate.loads[:, i].mean())
     for i, wheel in enumerate(WHEELS):
@@ -234,13 +239,7 @@ def lean_row(
         if result is None:
             return None
         stream, digest = result.stream, result.digest
-        row: dict = {
-            "log": str(path),
-            "samples": len(stream),
-            "duration_s": float(stream.t[-1] - stream.t[0]),
-            "rate_hz": stream.sample_rate,
-            "mode": stream.mode(),
-        }
+        row = _log_columns(path, stream)
         means, stds = digest.means(), digest.mean_std()
         row.update({f"mean_fz_{wheel}": float(means[i]) for i, wheel in enumerate(WHEELS)})
         row.update({f"mean_std_{wheel}": float(stds[i]) for i, wheel in enumerate(WHEELS)})
