@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators import zero_phase
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -174,18 +175,16 @@ def _fill(values: np.ndarray) -> np.ndarray | None:
 
 def _quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Low-passed, decimated channels over the examined window (missing channels dropped)."""
-    from scipy import signal as sp_signal  # ~1 s to import: only when the checks run
-
     fs = 1.0 / float(np.median(np.diff(t)))
-    b, a = sp_signal.butter(2, min(CUTOFF / (0.5 * fs), 0.9))
+    b, a = zero_phase.butter2(min(CUTOFF / (0.5 * fs), 0.9))
     step = max(int(fs / RATE), 1)
     result = {}
     for name, values in channels.items():
         filled = _fill(values)
         if filled is None or filled.size <= 3 * max(len(a), len(b)):
             continue
-        despiked = sp_signal.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
-        result[name] = sp_signal.filtfilt(b, a, despiked)[::step]
+        despiked = zero_phase.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
+        result[name] = zero_phase.filtfilt(b, a, despiked)[::step]
     result["t"] = t[::step]
     return result
 

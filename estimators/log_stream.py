@@ -59,6 +59,7 @@ from wheelload.estimators.signals import (
     check_time_column,
     check_units,
     input_bits,
+    rate_derivatives_used,
     sensor_mode,
 )
 from wheelload.estimators.two_stage import (
@@ -232,7 +233,11 @@ class LogStream:
             Differentiator(dt, 4, VELOCITY_CUTOFF, self.source) if self.velocities_derived else None
         )
         rate_dots = None
-        if RATE_DERIVATIVES[0] not in self.names and RATES[0] in self.names:
+        if (
+            RATE_DERIVATIVES[0] not in self.names
+            and RATES[0] in self.names
+            and rate_derivatives_used(kf.parameters)
+        ):
             try:
                 rate_dots = Differentiator(dt, 3, VELOCITY_CUTOFF, self.source)
             except LogError:

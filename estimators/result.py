@@ -10,9 +10,12 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 WHEELS = ("fl", "fr", "rl", "rr")
 RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
@@ -140,6 +143,8 @@ class Estimate:
     @property
     def faults(self) -> pd.DataFrame:
         """The ``faults`` table: ``channel, start, end, statistic``, one row per fault."""
+        import pandas as pd
+
         return pd.DataFrame(
             {
                 "channel": pd.Series([f.channel for f in self.sensor_faults], dtype=object),
@@ -155,6 +160,8 @@ class Estimate:
 
     def to_pandas(self) -> pd.DataFrame:
         """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., status`` (uint32 bits)."""
+        import pandas as pd
+
         columns = {"t": self.t}
         columns.update({f"fz_{w}": self.loads[:, i] for i, w in enumerate(WHEELS)})
         if self.has_std:
@@ -170,6 +177,8 @@ OLD_STATUS = "flags"  # the column's name before it collided with ``DataFrame.fl
 
 def read_estimates(path: str | Path) -> pd.DataFrame:
     """Read an estimates CSV or Parquet file; an old ``flags`` column is renamed ``status``."""
+    import pandas as pd
+
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such estimates file")

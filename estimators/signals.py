@@ -37,13 +37,19 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
+from wheelload.estimators import first_order
 from wheelload.estimators.log_checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
 from wheelload.models.vehicle import GRAVITY
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from wheelload.models import ModelParameters
 
 WHEELS = ("fl", "fr", "rl", "rr")
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
@@ -170,6 +176,8 @@ class Signals:
 
     def to_frame(self) -> pd.DataFrame:
         """The signals as a DataFrame with the log's column names."""
+        import pandas as pd
+
         columns = {"t": self.t, "vx": self.vx}
         columns.update(zip(("ax", "ay", "az"), self.acc.T))
         if self.rates is not None:
@@ -220,6 +228,8 @@ def read_log(
     without it the log's channels must be named as ours, in SI units.
     ``wiring_checks``: run :mod:`wheelload.estimators.log_checks` (signs, units, wiring).
     """
+    import pandas as pd
+
     from wheelload.estimators.readers import ChannelMapError, load_channel_map, read_frame
 
     path = Path(path)
@@ -251,6 +261,8 @@ def signals_from_frame(
     wiring_checks: bool = True,
 ) -> Signals:
     """Validate a DataFrame with the log's columns and build :class:`Signals`."""
+    import pandas as pd
+
     duplicate = duplicate_columns(frame.columns)
     if duplicate is not None:
         raise LogError(
@@ -439,8 +451,6 @@ class Differentiator:
         *,
         median: float | None = None,
     ) -> None:
-        from scipy import signal as sp_signal  # ~1 s to import: only where velocities are derived
-
         median = float(np.median(dt)) if median is None else median
         if np.max(np.abs(dt - median)) > 0.05 * median:
             raise LogError(
@@ -454,9 +464,10 @@ class Differentiator:
                 "velocity differentiator; give columns v_fl v_fr v_rl v_rr"
             )
         omega = 2.0 * np.pi * cutoff
-        self._b, self._a = sp_signal.bilinear([omega, 0.0], [1.0, omega], fs=1.0 / median)
-        self._rest = sp_signal.lfilter_zi(self._b, self._a)
-        self._lfilter = sp_signal.lfilter
+        # scipy.signal's bilinear, lfilter_zi and lfilter to the bit, without its import.
+        self._b, self._a = first_order.bilinear_differentiator(omega, 1.0 / median)
+        self._rest = first_order.lfilter_zi(self._b, self._a)
+        self._lfilter = first_order.lfilter
         self._state: list[np.ndarray | None] = [None] * channels  # None: not inside a run
 
     def __call__(self, d: np.ndarray) -> np.ndarray:
@@ -468,7 +479,7 @@ class Differentiator:
             for start, stop in _valid_runs(valid):
                 run = d[start:stop, channel]
                 zi = carried if start == 0 and carried is not None else self._rest * run[0]
-                v[start:stop, channel], zf = self._lfilter(self._b, self._a, run, zi=zi)
+                v[start:stop, channel], zf = self._lfilter(self._b, self._a, run, zi)
                 carried = zf
             self._state[channel] = carried if valid.size and valid[-1] else None
         return v
@@ -490,6 +501,17 @@ def write_log(signals: Signals, path: str | Path) -> None:
         frame.to_parquet(path, index=False)
     else:
         raise LogError(f"{path}: unknown log format '{path.suffix}' (use .csv or .parquet)")
+
+
+def rate_derivatives_used(parameters: ModelParameters) -> bool:
+    """Whether a model term switched on reads the body-rate derivatives ``wx_dot wy_dot wz_dot``.
+
+    Only the body inertia and the IMU lever arm do (their gates in
+    :func:`wheelload.models.terms.term_gates`); with both off a log's rate
+    derivatives change no number, so the lean path does not derive them (no
+    differentiator, no ``scipy.signal`` import) and feeds them as missing.
+    """
+    return bool(parameters.term_body_inertia) or bool(parameters.term_imu_lever_arm)
 
 
 def rate_derivatives(signals: Signals, cutoff: float = VELOCITY_CUTOFF) -> np.ndarray:

@@ -25,10 +25,10 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators import guard
 from wheelload.estimators.compiled import CompiledLoop
@@ -59,6 +59,9 @@ from wheelload.models.inputs import (
     input_index,
 )
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Order of the tuning vector.
 TUNING = (
@@ -439,6 +442,8 @@ class Innovations:
 
     def to_pandas(self) -> pd.DataFrame:
         """Columns ``t, innovation_<row>.., variance_<row>.., used_<row>..``."""
+        import pandas as pd
+
         columns = {"t": self.t}
         columns.update(
             {f"innovation_{r}": self.innovation[:, i] for i, r in enumerate(UPDATE_ROWS)}
@@ -547,6 +552,10 @@ def flags_from_outputs(used: np.ndarray, status: np.ndarray) -> np.ndarray:
     return flags_from_used(used) | guarded
 
 
+_NO_TIME = np.array([np.nan])  # the time of a single step's estimate (shared, read-only)
+_NO_TIME.flags.writeable = False
+
+
 class TwoStageKF:
     """Two-stage physics-constrained Kalman filter for the four wheel loads.
 
@@ -583,8 +592,11 @@ class TwoStageKF:
         self.tuning = tuning_vector(
             vehicle, sample_interval or DEFAULT_SAMPLE_INTERVAL, guard_settings
         )
-        self.step_function = step or step_function()
-        self._step = without_monitor(self.step_function)
+        if step is None:
+            from wheelload.estimators.step_cache import default_step_function
+
+            step = default_step_function()  # step_function(), loaded from disk when built before
+        self.step_function = step
 
     def tuning_for(self, sample_interval: float) -> np.ndarray:
         """:attr:`tuning` with the nominal interval ``sample_interval`` [s]."""
@@ -614,15 +626,40 @@ class TwoStageKF:
         if self.sample_interval is None:  # else set once in _fast_step
             nominal = dt if 0.0 < dt < MAX_INTERVAL else self.tuning[_SAMPLE_INTERVAL]
             fast.set_interval(_SAMPLE_INTERVAL, nominal)
-        x, P, m, std, residual, flags = fast(state.x, state.P, state.m, sample.parts(), dt)
+        x, P, m, std, residual, flags = fast.call_sample(state.x, state.P, state.m, sample, dt)
         estimate = Estimate(
-            t=np.array([np.nan]),
+            t=_NO_TIME,
             loads=x.reshape(1, 4),
             std=std.reshape(1, 4),
             residual=residual.reshape(1, 3),
             flags=np.array([flags], dtype=np.int64),
         )
         return FilterState(x, P, m), estimate
+
+    def live(self, state: FilterState | None = None):
+        """A :class:`~wheelload.estimators.fast_step.LiveFilter` from ``state`` (default initial).
+
+        The lean per-sample path: the state stays in the compiled step's
+        buffer and each update returns views, not new objects; the same
+        numbers as :meth:`step` and :meth:`reference_step`.
+        """
+        from wheelload.estimators.fast_step import LiveFilter
+
+        state = state or self.initial_state()
+        return LiveFilter(
+            self._fast_step,
+            state.x,
+            state.P,
+            state.m,
+            interval_index=None if self.sample_interval is not None else _SAMPLE_INTERVAL,
+            default_interval=float(self.tuning[_SAMPLE_INTERVAL]),
+            max_interval=MAX_INTERVAL,
+        )
+
+    @functools.cached_property
+    def _step(self) -> ca.Function:
+        """:attr:`step_function` without the fault monitor (built on first use)."""
+        return without_monitor(self.step_function)
 
     @functools.cached_property
     def _fast_step(self):

@@ -18,9 +18,9 @@ import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.batched import run_batched
@@ -34,6 +34,9 @@ from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.metrics import wheel_metrics
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 WHEELS = ("fl", "fr", "rl", "rr")
 SUMMARY_NAME = "summary.csv"
@@ -177,16 +180,21 @@ def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> No
     write_frame(frame, path, replace=replace)
 
 
+def _log_columns(path: Path, log) -> dict:
+    """The summary row's columns of the log itself; ``log`` a ``Signals`` or ``LogStream``."""
+    return {
+        "log": str(path),
+        "samples": len(log.t),
+        "duration_s": float(log.t[-1] - log.t[0]),
+        "rate_hz": log.sample_rate,
+        "mode": log.mode(),
+    }
+
+
 def summary_row(path: Path, result: LogResult) -> dict:
     """One row of the summary table."""
     estimate, signals = result.estimate, result.signals
-    row: dict = {
-        "log": str(path),
-        "samples": len(signals),
-        "duration_s": float(signals.t[-1] - signals.t[0]),
-        "rate_hz": signals.sample_rate,
-        "mode": signals.mode(),
-    }
+    row = _log_columns(path, signals)
     for i, wheel in enumerate(WHEELS):
         row[f"mean_fz_{wheel}"] = float(estimate.loads[:, i].mean())
     for i, wheel in enumerate(WHEELS):
@@ -206,14 +214,72 @@ def summary_row(path: Path, result: LogResult) -> dict:
     return row
 
 
-def process_log(
+#: Logs of more bytes than this run one at a time on the lean path (read in chunks,
+#: memory bounded by the chunk) instead of read whole and filtered side by side.
+LEAN_BYTES = 32 << 20
+
+
+def _goes_lean(path: Path, settings: EstimateSettings, lean_bytes: int) -> bool:
+    from wheelload.studies.lean_estimate import takes_lean_path
+
+    try:
+        size = path.stat().st_size
+    except OSError:
+        return False  # the ordinary reader names the problem
+    return takes_lean_path(path, settings) and size > lean_bytes
+
+
+def lean_row(
     path: Path, settings: EstimateSettings, folder: Path | None, force: bool = False
+) -> dict | None:
+    """:func:`process_log` on the lean path (``studies/lean_estimate.py``): the same
+    estimates as :meth:`TwoStageKF.run` to the bit, memory bounded by the chunk; None where
+    the chunked reader cannot take the log (nothing written)."""
+    from wheelload.studies.lean_estimate import estimate_lean
+
+    try:
+        out = None if folder is None else output_path(path, folder)
+        result = estimate_lean(path, settings, out, force=force)
+        if result is None:
+            return None
+        stream, digest = result.stream, result.digest
+        row = _log_columns(path, stream)
+        means, stds = digest.means(), digest.mean_std()
+        row.update({f"mean_fz_{wheel}": float(means[i]) for i, wheel in enumerate(WHEELS)})
+        row.update({f"mean_std_{wheel}": float(stds[i]) for i, wheel in enumerate(WHEELS)})
+        row["skipped_samples"] = digest.skipped
+        row["negative_samples"] = digest.negative_samples
+        row["min_fz"] = float(digest.load_min.min())
+        row["rmse_pooled"] = np.nan
+        if stream.reference_present is not None:
+            try:
+                row["rmse_pooled"] = float(digest.metrics(str(path)).loc["pooled", "RMSE"])
+            except ValueError:
+                pass  # the row keeps NaN: no sample to score
+        row["warnings"] = len(result.warnings)
+        row["error"] = ""
+        return row
+    except (ValueError, FileNotFoundError) as error:
+        return {"log": str(path), "error": str(error)}
+
+
+def process_log(
+    path: Path,
+    settings: EstimateSettings,
+    folder: Path | None,
+    force: bool = False,
+    lean_bytes: int = LEAN_BYTES,
 ) -> dict:
     """Estimate one log, write its output into ``folder``; its summary row.
 
     A log that cannot be used gives a row with its one-line error, so one bad
-    file does not stop a fleet.
+    file does not stop a fleet. A CSV or Parquet log over ``lean_bytes`` is
+    read in chunks (:func:`lean_row`).
     """
+    if _goes_lean(path, settings, lean_bytes):
+        row = lean_row(path, settings, folder, force)
+        if row is not None:
+            return row
     try:
         result = estimate_log(path, settings)
         if folder is not None:
@@ -224,19 +290,31 @@ def process_log(
 
 
 def process_logs(
-    paths: list[Path], settings: EstimateSettings, folder: Path | None, force: bool = False
+    paths: list[Path],
+    settings: EstimateSettings,
+    folder: Path | None,
+    force: bool = False,
+    lean_bytes: int = LEAN_BYTES,
 ) -> list[dict]:
     """:func:`process_log` over a chunk of logs (one task on a worker).
 
     With the two-stage KF (not smoothed), the chunk's logs are filtered side
     by side in the generated C library's batched step (``estimators/batched.py``),
-    :data:`BATCH` at a time: the same estimates to about 1e-12 relative.
+    :data:`BATCH` at a time: the same estimates to about 1e-12 relative. A CSV
+    or Parquet log over ``lean_bytes`` runs alone on the lean path instead
+    (:func:`lean_row`: memory bounded by the chunk, :meth:`TwoStageKF.run`'s
+    numbers to the bit).
     """
     if settings.method != "kf" or settings.smooth or len(paths) < 2:
-        return [process_log(path, settings, folder, force) for path in paths]
+        return [process_log(path, settings, folder, force, lean_bytes) for path in paths]
     rows: dict[Path, dict] = {}
     prepared: dict[tuple[float, ...] | None, list] = {}
     for path in paths:
+        if _goes_lean(path, settings, lean_bytes):
+            row = lean_row(path, settings, folder, force)
+            if row is not None:
+                rows[path] = row
+                continue
         try:
             vehicle, signals, notes, static = _prepare_log(path, settings)
         except (ValueError, FileNotFoundError) as error:
@@ -291,12 +369,15 @@ def run_logs(
     dask_address: str | None = None,
     progress: bool = True,
     force: bool = False,
+    lean_bytes: int = LEAN_BYTES,
 ) -> pd.DataFrame:
     """The summary table of many logs (module docstring); rows sorted by log path.
 
     Logs go to the workers in chunks (:func:`chunks`), so that the cost of a
-    task is small beside the logs it carries.
+    task is small beside the logs it carries. Logs over ``lean_bytes`` are read
+    in chunks (:func:`process_logs`).
     """
+    import pandas as pd
     from tqdm import tqdm
 
     bar = tqdm(total=len(paths), unit="log", disable=not progress or None)
@@ -307,7 +388,8 @@ def run_logs(
 
         with Client(dask_address) as client:
             threads = max(1, sum(client.nthreads().values()))
-            futures = [client.submit(process_logs, chunk, settings, folder, force, pure=False)
+            futures = [client.submit(process_logs, chunk, settings, folder, force, lean_bytes,
+                                     pure=False)
                        for chunk in chunks(paths, threads)]  # fmt: skip
             for future in dask_completed(futures):
                 done = future.result()
@@ -315,7 +397,7 @@ def run_logs(
                 bar.update(len(done))
     elif workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [pool.submit(process_logs, chunk, settings, folder, force)
+            futures = [pool.submit(process_logs, chunk, settings, folder, force, lean_bytes)
                        for chunk in chunks(paths, workers)]  # fmt: skip
             for future in as_completed(futures):
                 done = future.result()
@@ -323,7 +405,7 @@ def run_logs(
                 bar.update(len(done))
     else:
         for chunk in chunks(paths, 1):
-            done = process_logs(chunk, settings, folder, force)
+            done = process_logs(chunk, settings, folder, force, lean_bytes)
             rows += done
             bar.update(len(done))
     bar.close()

@@ -13,7 +13,6 @@ Example
 
 from __future__ import annotations
 
-import argparse
 import time
 from dataclasses import dataclass
 
@@ -49,19 +48,6 @@ class Comparison:
     samples: int
     window: tuple[float, float]
     results: tuple[MethodResult, ...]
-
-
-def add_suspension_option(parser: argparse.ArgumentParser) -> None:
-    """``--suspension full|paper``: the vehicle model of the family methods."""
-    parser.add_argument(
-        "--suspension",
-        choices=[m.value for m in SuspensionModel],
-        default=DEFAULT_MODEL.value,
-        help="vehicle model of the family methods (B-F, ycoo, umvf, road-angle, corner): "
-        "full = the KF's own suspension and equilibrium model with the vehicle file's terms "
-        "(default: a comparison on one model), paper = the source papers' bare spring/damper/"
-        "bar model and body-axis equilibrium; kf, projection and mhe use the vehicle file's",
-    )
 
 
 def parse_methods(text: str) -> tuple[str, ...]:

@@ -18,11 +18,15 @@ Example
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators import StepFlag
 from wheelload.studies.metrics import COLUMNS, WHEELS, no_reference_message, no_sample_message
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 _SUSPENSION = (StepFlag.SUSPENSION_FL_SKIPPED, StepFlag.SUSPENSION_FR_SKIPPED,
                StepFlag.SUSPENSION_RL_SKIPPED, StepFlag.SUSPENSION_RR_SKIPPED)  # fmt: skip
@@ -105,15 +109,26 @@ class EstimateDigest:
 
         Once only: the error store is overwritten (see :func:`_lean_metrics`).
         """
+        import pandas as pd
+
+        names, rows = self.metric_rows(source)
+        table = pd.DataFrame(rows, index=names, columns=COLUMNS)
+        table["samples"] = self.scored
+        return table
+
+    def metric_rows(self, source: str) -> tuple[list[str], list[list[float]]]:
+        """:meth:`metrics` as plain rows (no pandas): row names (the wheels scored, then
+        ``pooled``) and their :data:`~wheelload.studies.metrics.COLUMNS`. Once only."""
         if self.wheels is None or not self.wheels.size:
             raise ValueError(no_reference_message(source))
         names = [WHEELS[i] for i in self.wheels]
         if self.scored == 0:
             raise ValueError(no_sample_message(source, names))
-        return _lean_metrics(self.errors[: self.scored], self.reference_sum / self.scored, names)
+        rows = _lean_metrics(self.errors[: self.scored], self.reference_sum / self.scored, names)
+        return [*names, "pooled"], rows
 
 
-def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> pd.DataFrame:
+def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> list[list[float]]:
     """:func:`~wheelload.studies.metrics.metrics_table` without whole-size temporaries.
 
     ``errors`` is overwritten (made absolute in place; the pooled percentile
@@ -137,6 +152,4 @@ def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> pd
     peak = float(max(row[3] for row in rows))
     p95 = float(np.percentile(pooled, 95, overwrite_input=True))
     rows.append([rmse, 100.0 * rmse / float(means.mean()), p95, peak])
-    table = pd.DataFrame(rows, index=[*names, "pooled"], columns=COLUMNS)
-    table["samples"] = int(errors.shape[0])
-    return table
+    return rows

@@ -17,8 +17,12 @@ Example
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 WHEELS = ("fl", "fr", "rl", "rr")
 COLUMNS = ("RMSE", "RMSE %", "P95", "Max")
@@ -65,6 +69,8 @@ def wheel_metrics(
 def metrics_table(errors: np.ndarray, means: np.ndarray, names: list[str]) -> pd.DataFrame:
     """The table of :func:`wheel_metrics` from the errors (samples x wheels) of the kept
     samples and the wheels' mean reference loads (also used chunk by chunk)."""
+    import pandas as pd
+
     rows = [_row(errors[:, i], means[i]) for i in range(len(names))]
     rows.append(_row(errors.ravel(), float(means.mean())))
     table = pd.DataFrame(rows, index=[*names, "pooled"], columns=COLUMNS)

@@ -82,3 +82,47 @@ def test_returned_state_is_not_overwritten_by_the_next_step(vehicle, plant_log):
     np.testing.assert_array_equal(first.x, kept[0])
     np.testing.assert_array_equal(first.P, kept[1])
     np.testing.assert_array_equal(estimate.loads, kept[2])
+
+
+@pytest.mark.parametrize("sample_interval", [None, 0.01])
+def test_live_filter_is_bit_identical_to_the_casadi_step(vehicle, plant_log, sample_interval):
+    """The lean path (state kept in the compiled buffer, views returned) equals reference_step
+    bit for bit, through Sample groups and through input vectors alike."""
+    kf = TwoStageKF(vehicle, sample_interval=sample_interval)
+    samples, dt = samples_with_trouble(plant_log("iso-dlc"), 400)
+    live, live_vector = kf.live(), kf.live()
+    reference = kf.initial_state()
+    flags = 0
+    for sample, interval in zip(samples, dt):
+        estimate = live.update(sample, interval)
+        by_vector = live_vector.update_inputs(sample.vector(), interval)
+        reference, expected = kf.reference_step(reference, sample, interval)
+        for one in (estimate, by_vector):
+            np.testing.assert_array_equal(one.loads, expected.loads[0])
+            np.testing.assert_array_equal(one.std, expected.std[0])
+            np.testing.assert_array_equal(one.residual, expected.residual[0])
+            assert one.flags == int(expected.flags[0])
+        flags |= estimate.flags
+    x, P, m = live.state
+    np.testing.assert_array_equal(x, reference.x)
+    np.testing.assert_array_equal(P, reference.P)
+    np.testing.assert_array_equal(m, reference.m)
+    assert flags & 0xFF00, "the guards acted on this log"
+
+
+def test_live_filter_and_step_share_no_buffer(vehicle, plant_log):
+    """Interleaving kf.step and a live filter on one TwoStageKF keeps both exact."""
+    kf = TwoStageKF(vehicle)
+    samples, dt = samples_with_trouble(plant_log("iso-dlc"), 130)
+    live = kf.live()
+    state = reference = kf.initial_state()
+    for sample, interval in zip(samples, dt):
+        state, _ = kf.step(state, sample, interval)
+        estimate = live.update(sample, interval)
+        reference, expected = kf.reference_step(reference, sample, interval)
+        np.testing.assert_array_equal(state.x, expected.loads[0])
+        np.testing.assert_array_equal(estimate.loads, expected.loads[0])
+    initial = kf.initial_state()
+    live.reset(initial.x, initial.P, initial.m)
+    np.testing.assert_array_equal(live.state[0], initial.x)
+    np.testing.assert_array_equal(live.state[1], initial.P)

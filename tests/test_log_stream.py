@@ -199,3 +199,44 @@ def test_a_bad_value_is_named_as_on_the_ordinary_path(tmp_path, capsys, example)
     frame.to_csv(log, index=False)
     assert _estimate(log) == 2
     assert "column 'ax' is not numeric at row 17" in capsys.readouterr().err
+
+
+def test_rate_derivatives_not_derived_where_no_term_reads_them(tmp_path, example, vehicle):
+    """Body inertia and the IMU lever arm off: the lean path skips the rate differentiator
+    (rates logged, no wx_dot) and still equals run, which derives them, to the bit."""
+    import dataclasses
+
+    from wheelload.estimators.signals import rate_derivatives_used
+
+    off = dataclasses.replace(
+        vehicle, model=dataclasses.replace(vehicle.model, body_inertia=False, imu_lever_arm=False)
+    )
+    kf_off = TwoStageKF(off)
+    assert not rate_derivatives_used(kf_off.parameters)
+    assert rate_derivatives_used(TwoStageKF(vehicle).parameters)
+    path = tmp_path / "log.csv"
+    example.to_csv(path, index=False)
+    expected = kf_off.run(read_log(path, wiring_checks=False))
+    chunks = list(scan_log(path, rows=ROWS, wiring_checks=False).chunks(kf_off))
+    for name in ("loads", "std", "residual"):
+        got = np.concatenate([getattr(c, name) for c in chunks])
+        assert np.array_equal(got, getattr(expected, name)), name
+    assert np.array_equal(np.concatenate([c.flags for c in chunks]), expected.flags)
+
+
+def test_arrow_columns_read_as_to_numpy_reads_them():
+    """The chunk reader's arrow-to-numpy (no pandas import) equals ``to_numpy``: values,
+    NaN for nulls, sliced arrays, and a read-only view where there is no null."""
+    import pyarrow as pa
+
+    from wheelload.estimators.readers.chunks import _float_values
+
+    with_nulls = pa.array([1.0, None, 3.0, 4.0, None, 6.0, 7.0, 8.0, 9.0, None, 11.0])
+    plain = pa.array(np.arange(20.0))
+    for array in (with_nulls, with_nulls.slice(1, 7), with_nulls.slice(9, 2),
+                  with_nulls.slice(5, 3), plain, plain.slice(5, 7), plain.slice(0, 0),
+                  pa.nulls(5, pa.float64())):  # fmt: skip
+        got, expected = _float_values(array), array.to_numpy(zero_copy_only=False)
+        assert got.dtype == np.float64
+        assert np.array_equal(got, expected, equal_nan=True)
+        assert got.flags.writeable == expected.flags.writeable

@@ -44,7 +44,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-import scipy.linalg
 
 from wheelload.estimators.family.step_method import (
     StepMethod,
@@ -235,6 +234,8 @@ class RoadAngleKF(StepMethod):
         M[:N, :N] = -self.A * dt
         M[:N, N:] = np.diag(self._noise) * dt
         M[N:, N:] = self.A.T * dt
+        import scipy.linalg  # imported where used: listing the methods stays fast
+
         E = scipy.linalg.expm(M)
         F = E[N:, N:].T
         Q = F @ E[:N, N:]

@@ -61,7 +61,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-import scipy.linalg
 
 from wheelload.estimators.family.step_method import (
     StepMethod,
@@ -145,6 +144,8 @@ def discrete_model(continuous: tuple[np.ndarray, ...], dt: float) -> DiscreteMod
     M = np.zeros((n + m, n + m))
     M[:n, :n] = A * dt
     M[:n, n:] = np.column_stack([H, B]) * dt
+    import scipy.linalg  # imported where used: listing the methods stays fast
+
     E = scipy.linalg.expm(M)
     Ad, inputs = E[:n, :n], E[:n, n:]
     Hd, Bd = inputs[:, :-1], inputs[:, -1]

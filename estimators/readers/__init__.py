@@ -7,8 +7,7 @@ which ``signals_from_frame`` validates into ``Signals``.
 from __future__ import annotations
 
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from wheelload.estimators.readers import erg, mdf, tabular
 from wheelload.estimators.readers.channel_map import (
@@ -20,6 +19,9 @@ from wheelload.estimators.readers.channel_map import (
     load_channel_map,
 )
 from wheelload.estimators.readers.resample import Method
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 SUFFIXES = (*tabular.CSV_SUFFIXES, *tabular.PARQUET_SUFFIXES, *mdf.SUFFIXES, *erg.SUFFIXES)
 

@@ -33,12 +33,15 @@ import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from wheelload.estimators.readers.resample import Method, resample
 from wheelload.estimators.readers.units import Kind, UnitError, unit_factor
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 WHEELS = ("fl", "fr", "rl", "rr")
 
@@ -286,6 +289,8 @@ def convert(spec: ChannelSpec, kind: Kind, values: np.ndarray, where: str) -> np
 
 def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: str) -> pd.DataFrame:
     """Our columns on one clock, in SI units (a frame for ``signals_from_frame``)."""
+    import pandas as pd
+
     for name, spec in channel_map.channels.items():
         if spec.source not in raw:
             raise ChannelMapError(

@@ -102,7 +102,22 @@ def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> 
 def _floats(batch, columns: list[str]) -> dict:
     result = {}
     for name in columns:
-        array = batch.column(name)
-        values = array.to_numpy(zero_copy_only=False)
-        result[name] = np.asarray(values, dtype=np.float64)
+        result[name] = _float_values(batch.column(name))
     return result
+
+
+def _float_values(array) -> np.ndarray:
+    """A float64 arrow array as numpy, nulls as NaN: what ``to_numpy`` gives (a read-only
+    view without nulls, a copy with them), without the pandas import ``to_numpy`` makes."""
+    n, offset = len(array), array.offset
+    validity, data = array.buffers()
+    if data is None:  # no value buffer (all null)
+        return np.full(n, np.nan)
+    values = np.frombuffer(data, dtype=np.float64, count=n, offset=8 * offset)
+    if array.null_count == 0:
+        values.flags.writeable = False  # a view of arrow's memory, as to_numpy's
+        return values
+    values = values.copy()
+    bits = np.unpackbits(np.frombuffer(validity, dtype=np.uint8), bitorder="little")
+    values[bits[offset : offset + n] == 0] = np.nan
+    return values

@@ -7,11 +7,13 @@ Only the columns a channel map names are read; CSV in chunks of
 from __future__ import annotations
 
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from wheelload.estimators.readers.channel_map import Channel, ChannelMap, ChannelMapError
 from wheelload.estimators.readers.units import Kind, unit_factor
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 CHUNK_ROWS = 200_000
 CSV_SUFFIXES = (".csv",)
@@ -20,6 +22,8 @@ PARQUET_SUFFIXES = (".parquet", ".pq")
 
 def read_table(path: Path, columns: list[str] | None = None) -> pd.DataFrame:
     """The columns of a CSV (``#`` comments, in chunks) or Parquet file."""
+    import pandas as pd
+
     if path.suffix.lower() in CSV_SUFFIXES:
         chunks = pd.read_csv(path, comment="#", usecols=columns, chunksize=CHUNK_ROWS)
         frames = list(chunks)
@@ -29,6 +33,8 @@ def read_table(path: Path, columns: list[str] | None = None) -> pd.DataFrame:
 
 def table_columns(path: Path) -> list[str]:
     """The column names of a CSV or Parquet log."""
+    import pandas as pd
+
     if path.suffix.lower() in CSV_SUFFIXES:
         return [str(c).strip() for c in pd.read_csv(path, comment="#", nrows=0).columns]
     import pyarrow.parquet as pq
@@ -38,6 +44,8 @@ def table_columns(path: Path) -> list[str]:
 
 def read_tabular_channels(path: Path, channel_map: ChannelMap) -> dict[str, Channel]:
     """The mapped columns of a table, each a :class:`Channel` on the time column."""
+    import pandas as pd
+
     if channel_map.time is None:
         raise ChannelMapError(
             f"{channel_map.source}: a CSV or Parquet log needs [time] source = COLUMN"

@@ -34,7 +34,11 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         "estimate", help="wheelload estimate --out end to end (lean vs in-memory), cold start"
     )
     parser.add_argument(
-        "--samples", type=float, nargs="+", default=[1e6, 1e7], help="log sizes (default 1e6 1e7)"
+        "--samples",
+        type=float,
+        nargs="*",
+        default=[1e6, 1e7],
+        help="log sizes (default 1e6 1e7; none: only the --example cold start)",
     )
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3)")
     parser.add_argument(
@@ -93,6 +97,10 @@ def run(args: argparse.Namespace) -> int:
     vehicle = str(example_vehicle_path())
     print(f"wheelload estimate --out, {os.cpu_count()} cores; min / median / max of "
           f"{args.repeat} runs; each a fresh process")  # fmt: skip
+    print(
+        f"  load average {_load()} at the start; Python bytecode "
+        f"{'not written (PYTHONDONTWRITEBYTECODE)' if sys.flags.dont_write_bytecode else 'cached'}"
+    )
     with tempfile.TemporaryDirectory() as folder:
         for size in args.samples:
             n = int(size)
@@ -133,4 +141,10 @@ def run(args: argparse.Namespace) -> int:
             walls, cpu = [r[0] for r in runs], [r[2] for r in runs]
             print(f"  estimate --example {name:26s} wall {_spread(walls, '6.2f')} s   "
                   f"cpu {_spread(cpu, '6.2f')} s")  # fmt: skip
+    print(f"  load average {_load()} at the end")
     return 0
+
+
+def _load() -> str:
+    """The 1, 5 and 15 min load averages (``uptime``)."""
+    return " ".join(f"{value:.2f}" for value in os.getloadavg())

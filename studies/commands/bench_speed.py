@@ -95,6 +95,21 @@ def python_steps(kf: TwoStageKF, signals, n: int):
     return fast, reference, filterpy_step(kf, signals)
 
 
+def live_steps(kf: TwoStageKF, signals, n: int):
+    """Per-step callable of the lean path: :meth:`TwoStageKF.live`'s ``update``."""
+    dt = sample_intervals(signals.t)
+    samples = [
+        Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
+        for k in range(n)
+    ]
+    live = kf.live()
+
+    def lean(k):
+        live.update(samples[k], dt[k])
+
+    return lean
+
+
 def _selftest_ns(binary: Path, *arguments) -> float:
     """Fastest of the self-test's internal repeats [ns per (filter-)step]."""
     out = subprocess.run(
@@ -149,11 +164,13 @@ def run(args: argparse.Namespace) -> int:
     n = min(args.steps, len(signals))
     fast, reference, filterpy = python_steps(kf, signals, n)
     fast(0)  # compile (or load) the step
+    lean = live_steps(kf, signals, n)
     print(f"speed, {vehicle.name}; each ratio from alternating repeats, min / median / max")
     print(f"Python step (x {n} steps, {args.repeats} repeats) [us per step]")
-    timings: dict[str, list[float]] = {"fast": [], "reference": [], "filterpy": []}
+    timings: dict[str, list[float]] = {"fast": [], "reference": [], "filterpy": [], "lean": []}
     for _ in range(args.repeats):
         timings["fast"].append(_per_call_us(fast, n))
+        timings["lean"].append(_per_call_us(lean, n))
         timings["reference"].append(_per_call_us(reference, min(n, 500)))
         if filterpy is not None:
             timings["filterpy"].append(_per_call_us(filterpy, n))
@@ -168,6 +185,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"  filterpy KalmanFilter, 2 updates:    {spread(timings['filterpy'])}")
         ratios = [p / f for p, f in zip(timings["filterpy"], timings["fast"])]
         print(f"  step is {spread(ratios)} x faster than filterpy (target >= {FILTERPY_TARGET:g})")
+    print(f"  TwoStageKF.live().update (lean):    {spread(timings['lean'])}")
+    if filterpy is not None:
+        ratios = [p / f for p, f in zip(timings["filterpy"], timings["lean"])]
+        print(f"  live update is {spread(ratios)} x faster than filterpy "
+              f"(target >= {FILTERPY_TARGET:g})")  # fmt: skip
 
     logs_vs_run(vehicle_path, kf, args)
     mhz = cpu_mhz()

@@ -15,8 +15,8 @@ from pathlib import Path
 from wheelload.estimators import read_log
 from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.models import load_vehicle
+from wheelload.studies.commands.options import add_suspension_option
 from wheelload.studies.comparison import (
-    add_suspension_option,
     compare_methods,
     format_table,
     long_table,

@@ -12,18 +12,18 @@ local processes or on a Dask cluster (``--dask ADDRESS``), with a progress bar.
 from __future__ import annotations
 
 import argparse
-import contextlib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals, TwoStageKF
+from wheelload.estimators import Estimate, Signals
 from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models import example_vehicle_path
 from wheelload.studies.batch import (
     SUMMARY_NAME,
     EstimateSettings,
@@ -32,9 +32,12 @@ from wheelload.studies.batch import (
     run_logs,
     write_table,
 )
-from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.comparison import add_suspension_option
+from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
 from wheelload.studies.estimate_digest import EstimateDigest
+from wheelload.studies.lean_estimate import estimate_lean, takes_lean_path
+
+if TYPE_CHECKING:
+    from wheelload.estimators.log_stream import LogStream
 
 WHEELS = ("FL", "FR", "RL", "RR")
 
@@ -151,7 +154,7 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
         table_format(Path(args.out))
     if args.plot:
         check_figure_suffix(Path(args.plot))
-    lean = not (args.plot or args.in_memory) and _lean(path, settings)
+    lean = not (args.plot or args.in_memory) and takes_lean_path(path, settings)
     if lean and _run_lean(path, settings, args):
         return 0
     result = estimate_log(path, settings)
@@ -178,114 +181,28 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
     return 0
 
 
-def _lean(path: Path, settings: EstimateSettings) -> bool:
-    """Whether the lean whole-log path can take this log (the KF on a CSV/Parquet log)."""
-    return (
-        settings.method == "kf"
-        and not settings.smooth
-        and settings.channels is None
-        and path.suffix.lower() in (".csv", ".parquet", ".pq")
-    )
-
-
 def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> bool:
-    """``_run_one`` on the lean whole-log path (``estimators/log_stream.py``).
+    """``_run_one`` on the lean whole-log path (``studies/lean_estimate.py``).
 
-    The log is read in chunks and the estimates written and summarised chunk by
-    chunk, so memory is bounded by the chunk (plus 8 bytes a sample for the
-    time column and the scored errors). False (nothing written) for a log the
-    chunked reader cannot take as plain numbers: the ordinary path then reads
-    it and names the problem.
+    Memory is bounded by the chunk (plus 8 bytes a sample for the time column
+    and the scored errors). False (nothing written) for a log the chunked
+    reader cannot take as plain numbers: the ordinary path then reads it and
+    names the problem.
     """
-    from wheelload.estimators.log_checks import describe, raise_for_wiring
-    from wheelload.estimators.log_stream import scan_log
-    from wheelload.estimators.output_files import table_writer
-    from wheelload.estimators.readers.chunks import ChunkError
-    from wheelload.studies.log_warnings import channel_warnings, negative_load_warnings
-
-    try:
-        stream = scan_log(
-            path, still_period=settings.still_period, wiring_checks=settings.wiring_checks
-        )
-    except ChunkError:
+    result = estimate_lean(path, settings, Path(args.out) if args.out else None, force=args.force)
+    if result is None:
         return False
-    vehicle = load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual)
-    notes = []
-    if settings.wiring_checks:
-        report = stream.wiring_report()
-        raise_for_wiring(report, stream.source)
-        notes.append(describe(report))
-    static, reason = static_loads_for(stream, vehicle, settings)
-    notes += reason
-    kf = TwoStageKF(vehicle, static=static)
-    digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
-    faults: list = []
-    with contextlib.ExitStack() as stack:
-        write = (
-            stack.enter_context(table_writer(Path(args.out), replace=args.force))
-            if args.out
-            else None
-        )
-        for chunk in stream.chunks(kf, faults=faults):
-            if write is not None:
-                write(chunk.columns())
-            digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
-    stats = stream.channel_stats
-    warnings = channel_warnings(
-        stream.source,
-        stream.sample_rate,
-        travel_count=stats.travel_count,
-        travel_peak=stats.travel_peak,
-        rate_count=stats.rate_count,
-        rate_min=stats.rate_min,
-        rate_max=stats.rate_max,
-        velocities_derived=stream.velocities_derived,
-    ) + negative_load_warnings(digest.negative_samples, digest.load_min, str(path))
-    header = LogHeader(
-        source=stream.source,
-        samples=len(stream),
-        duration=float(stream.t[-1] - stream.t[0]),
-        sample_rate=stream.sample_rate,
-        velocities_derived=stream.velocities_derived,
-        mode=stream.mode(),
-        has_reference=stream.reference_present is not None,
-    )
+    stream = result.stream
+    header = LogHeader.of(stream, has_reference=stream.reference_present is not None)
     print(f"method {settings.method}: {method(settings.method).description}")
-    print(summary_text(header, digest, faults, vehicle.name))
-    for note in notes:
+    print(summary_text(header, result.digest, result.faults, result.vehicle.name))
+    for note in result.notes:
         print(note)
-    for warning in warnings:
+    for warning in result.warnings:
         print(f"warning: {warning}")
     if args.out:
         print(f"estimates written to {args.out}")
     return True
-
-
-def static_loads_for(stream, vehicle, settings: EstimateSettings):
-    """Static loads from corner weights and a still period, as ``estimate_log`` sets them.
-
-    The still-period check reads the first samples only (``stream.head``); a travel
-    channel of the log with no sample in the period is refused as on the whole log.
-    """
-    from wheelload.estimators.offsets import check_still_period, corner_weight_loads
-
-    static, notes = None, []
-    if settings.corner_weights is not None:
-        static = corner_weight_loads(settings.corner_weights)
-        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
-    if settings.still_period:
-        head = stream.head
-        window = head.t <= head.t[0] + settings.still_period
-        if settings.still_period > 0 and np.any(
-            stream.travel_present & ~np.isfinite(head.d[window]).any(axis=0)
-        ):
-            raise ValueError(f"{stream.source}: a travel channel has no sample in the still period")
-        still = check_still_period(
-            head, vehicle, settings.still_period, static=static, noise=settings.still_noise
-        )
-        static = still.static
-        notes.append(still.reason)
-    return static, notes
 
 
 def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Namespace) -> int:
@@ -367,15 +284,7 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     A metrics problem is reported in the text, never raised: the estimates
     stand on their own.
     """
-    header = LogHeader(
-        source=signals.source,
-        samples=len(estimate),
-        duration=float(signals.t[-1] - signals.t[0]),
-        sample_rate=signals.sample_rate,
-        velocities_derived=signals.velocities_derived,
-        mode=signals.mode(),
-        has_reference=signals.reference is not None,
-    )
+    header = LogHeader.of(signals, has_reference=signals.reference is not None)
     return summary_text(header, digest_of(estimate, signals), estimate.sensor_faults, vehicle_name)
 
 
@@ -390,6 +299,21 @@ class LogHeader:
     velocities_derived: bool
     mode: str
     has_reference: bool
+
+    @classmethod
+    def of(cls, log: Signals | LogStream, *, has_reference: bool) -> LogHeader:
+        """The header of a log read whole (:class:`Signals`) or scanned for the lean path
+        (:class:`~wheelload.estimators.log_stream.LogStream`): both give the source, time
+        column, sample rate, sensor set and whether velocities were derived."""
+        return cls(
+            source=log.source,
+            samples=len(log.t),
+            duration=float(log.t[-1] - log.t[0]),
+            sample_rate=log.sample_rate,
+            velocities_derived=log.velocities_derived,
+            mode=log.mode(),
+            has_reference=has_reference,
+        )
 
 
 def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name: str) -> str:
@@ -423,15 +347,14 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
             lines.append(f"samples with a model term dropped ({name}): {dropped}")
     if header.has_reference:
         try:
-            table = digest.metrics(header.source)
+            names, rows = digest.metric_rows(header.source)
         except ValueError as error:
             lines.append(f"no error metrics: {error}")
             return "\n".join(lines)
         lines.append("error against the log's reference loads (Siegloff & Choi eq. 26-34):")
         lines.append(f"{'':>8}{'RMSE [N]':>10}{'RMSE [%]':>10}{'P95 [N]':>10}{'Max [N]':>10}")
-        for name, row in table.iterrows():
+        for name, (rmse, rmse_percent, p95, peak) in zip(names, rows, strict=True):
             lines.append(
-                f"{str(name).upper():>8}{row['RMSE']:10.1f}{row['RMSE %']:10.2f}"
-                f"{row['P95']:10.1f}{row['Max']:10.1f}"
+                f"{name.upper():>8}{rmse:10.1f}{rmse_percent:10.2f}{p95:10.1f}{peak:10.1f}"
             )
     return "\n".join(lines)
