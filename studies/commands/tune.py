@@ -13,11 +13,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from wheelload.estimators import read_log
 from wheelload.estimators.identification.tuning import (
     NIS_BAND,
+    RATIO_AGREEMENT,
+    RATIOS,
+    RMSE_TOLERANCE,
     FilterRuns,
     tune,
     tuned_vehicle,
@@ -28,7 +29,7 @@ from wheelload.estimators.identification.vehicle_writer import (
     prepend_comment,
     write_vehicle_text,
 )
-from wheelload.estimators.two_stage import NOISE_DENSITIES, UPDATE_ROWS, noise_densities
+from wheelload.estimators.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
 
 
@@ -49,11 +50,13 @@ def register(subparsers) -> None:
         metavar="LOG",
         help="logs not used for tuning, with reference loads: print the before/after table",
     )
+    parser.add_argument(
+        "--iterations",
+        type=int,
+        default=400,
+        help="Nelder-Mead iterations per fit (default 400; fewer for a quick look)",
+    )
     parser.set_defaults(handler=handle)
-
-
-def _row(name: str, values: np.ndarray) -> str:
-    return f"{name:>22}" + "".join(f"{v:12.4g}" for v in values)
 
 
 def handle(args: argparse.Namespace) -> int:
@@ -64,13 +67,37 @@ def handle(args: argparse.Namespace) -> int:
     logs = tuple(read_log(path) for path in args.logs)
     references = all(signals.reference is not None for signals in logs)
     runs = FilterRuns(vehicle, logs)
-    result = tune(runs, noise_densities(vehicle), references=references)
-    print(f"{'':>22}" + "".join(f"{name[:11]:>12}" for name in NOISE_DENSITIES))
-    print(_row("input file", result.initial))
-    print(_row("max. likelihood", result.likelihood))
+    result = tune(runs, noise_densities(vehicle), references=references, iterations=args.iterations)
+    columns = [
+        ("input file", result.initial),
+        ("max. likelihood", result.likelihood),
+        *[(f"without log {k + 1}", fit) for k, fit in enumerate(result.folds)],
+        ("agreed ratios", result.robust),
+    ]
     if result.rmse is not None:
-        print(_row("min. RMSE", result.rmse))
-        print(_row(f"written ({result.shape_source} x{result.scale:.3g})", result.tuned))
+        columns += [
+            ("min. RMSE", result.rmse),
+            (f"written ({result.shape_source} x{result.scale:.3g})", result.tuned),
+        ]
+    print(f"{'density':>39}" + "".join(f"{label[:17]:>18}" for label, _ in columns))
+    for k, name in enumerate(TUNED_DENSITIES):
+        print(f"{name:>39}" + "".join(f"{values[k]:18.4g}" for _, values in columns))
+    kept = [name for name in RATIOS if name not in result.agreed]
+    print(
+        f"ratios to suspension_noise_density taken from the likelihood (leave-one-log-out fits"
+        f" within {RATIO_AGREEMENT:g}x): {', '.join(result.agreed) or 'none'};"
+        f" the input file's: {', '.join(kept) or 'none'}"
+    )
+    if result.scores:
+        print(
+            "shape blend t (0 input, 1 likelihood): RMSE / input's per tuning log,"
+            f" taken within {RMSE_TOLERANCE:g}x on every log"
+        )
+        for score in result.scores:
+            held = ", ".join(f"{x:.3f}" for x in score.held_out) or "-"
+            own = ", ".join(f"{x:.3f}" for x in score.in_sample)
+            mark = "  <- written" if score.t == result.blend else ""
+            print(f"  t={score.t:<5g} left out: {held}; in sample: {own}{mark}")
     lo, hi = NIS_BAND
     print(f"consistency on the tuning logs (NIS = y^2/S, 95 % band {lo:.3g}..{hi:.3g}):")
     for label, tuning, gate in (
@@ -90,12 +117,12 @@ def handle(args: argparse.Namespace) -> int:
         )
         print(f"  {label}: mean NIS (share in band) {nis}{extra}")
     tuned = result.tuned
+    named = dict(zip(TUNED_DENSITIES, tuned, strict=True))
     new_vehicle = tuned_vehicle(vehicle, result)
-    shape = (
-        "maximum likelihood of the innovations"
-        if result.shape_source == "likelihood"
-        else "the input file's densities (lower RMSE than the likelihood shape)"
-    )
+    shape = {
+        "likelihood": "maximum likelihood of the innovations",
+        "input": "the input file's densities (the likelihood shape raised a log's RMSE)",
+    }.get(result.shape_source, f"{result.shape_source} of input and likelihood shapes")
     note = f"{shape} of {', '.join(Path(p).name for p in args.logs)}" + (
         f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
         if references
@@ -105,6 +132,18 @@ def handle(args: argparse.Namespace) -> int:
         ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
         ("filter", "suspension_noise_density"): (tuned[1], "tuned (see above)"),
         ("filter", "constraint_noise_density"): (list(tuned[2:5]), "tuned (see above)"),
+        ("filter", "suspension_noise_rate_density"): (
+            named["suspension_noise_rate_density"],
+            "tuned: R_s + this x v^2 / dt (models/measurement_noise.py)",
+        ),
+        ("filter", "suspension_noise_hub_density"): (
+            named["suspension_noise_hub_density"],
+            "tuned: R_s + this x (a_hub - az)^2 / dt",
+        ),
+        ("filter", "constraint_noise_acceleration_density"): (
+            [named[f"constraint_noise_{r}_acceleration"] for r in ("vertical", "pitch", "roll")],
+            "tuned: R_c + this x ((az - g)^2, ax^2, ay^2) / dt",
+        ),
         ("filter", "gate_scale"): (
             new_vehicle.filter.gate_scale,
             f"tuned: the gate's S x this (the densities were scaled x{result.scale:.3g})",
