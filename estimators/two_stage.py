@@ -228,8 +228,12 @@ def step_expressions(
     equilibrium: ca.Function,
     *,
     constraint_update=sequential_update_innovations,
+    measurement_noise: ca.Function | None = None,
 ):
     """Symbolic inputs and outputs of one filter step built from the model Functions.
+
+    ``measurement_noise(u, u_valid, densities, dt_nominal) -> (R_s, R_c)``
+    defaults to :func:`~wheelload.models.measurement_noise.measurement_noise_function`.
 
     ``constraint_update(x, P, b, A, r_c, mask, gate) -> (x, P, y, S, use)``
     is the second stage; the default is the soft-constraint Kalman update
@@ -298,7 +302,8 @@ def step_expressions(
     Q = ca.fmin(tuning[TUNING_INDEX["process_noise_density"]] * dt_used, ceiling) * ca.DM.eye(4)
     # R_s, R_c from the inputs (models/measurement_noise.py; constant with the default zeros).
     densities = ca.vertcat(*[tuning[k] for k in _NOISE_INDEX])
-    rs, rc = measurement_noise_function()(u, valid_plausible, densities, dt_nominal)
+    noise = measurement_noise or measurement_noise_function()
+    rs, rc = noise(u, valid_plausible, densities, dt_nominal)
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
     reject, spread = m[guard.reject_slice()], m[guard.spread_slice()]
@@ -391,12 +396,14 @@ def step_function(
     name: str = STEP_NAME,
     *,
     constraint_update=sequential_update_innovations,
+    measurement_noise: ca.Function | None = None,
 ) -> ca.Function:
     """The filter step as a CasADi Function (model Functions default to ``wheelload.models``)."""
     inputs, outputs = step_expressions(
         suspension or suspension_function(),
         equilibrium or equilibrium_function(),
         constraint_update=constraint_update,
+        measurement_noise=measurement_noise,
     )
     # The suspension and equilibrium share the body motion and attitude: one copy.
     outputs = ca.cse(outputs)
