@@ -216,3 +216,35 @@ def test_generated_c_equals_python_with_input_dependent_noise(tmp_path, noisy_lo
         np.testing.assert_allclose(
             pd.read_csv(changed)["fz_fl"], expected["fz_fl"], rtol=1e-9, atol=1e-5
         )
+
+
+def test_shape_rules_of_the_tuning():
+    """Blend along the log-parameter line, the ratios the folds agree on, the input's ratios."""
+    from wheelload.estimators.identification.tuning import (
+        agreed_ratios,
+        blend,
+        with_input_ratios,
+    )
+
+    index = {name: k for k, name in enumerate(TUNED_DENSITIES)}
+    start = np.array([2.25e7, 625.0, 900.0, 3600.0, 2500.0, 0, 0, 0, 0, 0])
+    fit = np.array([3e4, 1.0, 40.0, 300.0, 30.0, 50.0, 0, 0, 0, 0.1])
+    np.testing.assert_array_equal(blend(start, fit, 0.0), start)
+    np.testing.assert_allclose(blend(start, fit, 1.0), fit, rtol=1e-12)
+    half = blend(start, fit, 0.5)
+    assert half[0] == pytest.approx(np.sqrt(2.25e7 * 3e4), rel=1e-12)  # geometric
+    assert half[index["suspension_noise_rate_density"]] == pytest.approx(25.0)  # from 0: linear
+    # Two fold fits: q/r_s 3e4 and 5e4 agree (within 2x); the pitch row's 300 and 900 do not.
+    other = fit.copy()
+    other[index["process_noise_density"]] = 5e4
+    other[index["constraint_noise_pitch"]] = 900.0
+    agreed = agreed_ratios([fit, other])
+    assert "process_noise_density" in agreed and "constraint_noise_pitch" not in agreed
+    assert agreed_ratios([fit]) == ()
+    shaped = with_input_ratios(start, fit, ("process_noise_density",))
+    assert shaped[index["process_noise_density"]] == 3e4  # agreed: the fit's
+    assert shaped[index["suspension_noise_density"]] == 1.0
+    assert shaped[index["constraint_noise_roll"]] == pytest.approx(2500.0 / 625.0)  # input's
+    # The roll row's input-dependent density moves with its constant density (30 -> 4).
+    roll = index["constraint_noise_roll_acceleration"]
+    assert shaped[roll] == pytest.approx(0.1 * 4.0 / 30.0)

@@ -3,32 +3,39 @@ r"""Tuning of the two-stage KF's noise densities: innovation likelihood and refe
 Prediction-error method (Mehra 1970; Ljung, *System Identification*, §7):
 the filter's sequential innovations :math:`y_{k,i}` with variances
 :math:`S_{k,i}` (outputs of the filter step itself) are independent normals
-under the model, so the tuning :math:`\theta = \log(q, r_s, r_{c,1..3})`
-maximises
+under the model, so the tuning :math:`\theta = \log(q, r_s, r_{c,1..3}, r_{sv}, r_{sh},
+r_{ca,1..3})` (constant and input-dependent densities,
+:mod:`wheelload.models.measurement_noise`) maximises
 
 .. math:: \ell(\theta) = -\tfrac12 \sum_{k,i} \big(\log 2\pi S_{k,i} + y_{k,i}^2 / S_{k,i}\big)
 
-over every row whose inputs are present (Nelder-Mead in the log-parameters, each within a
-factor 1000 of the input: the pseudo-measurement error is correlated in
-time, and unbounded the white-noise likelihood may drive ``r_s`` to zero).
-The likelihood is evaluated with the innovation gate open: a gate removes
-exactly the large innovations the likelihood needs, and a shrinking
-tuning would gate more and more of them away. Everything else (the
-estimates, the coverage, the RMSE) runs with the guard settings the filter
-of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s
-own). With reference loads, the tuning that minimises the pooled RMSE is
-found the same way, and the tuning written is the likelihood shape or the
-input's shape (whichever has the lower pooled RMSE with the guards), scaled
-as a whole by c so that ±2σ covers 95 % of the error: the model errors are
-correlated in time, which the white-noise likelihood cannot see. Scaling
-leaves the gain unchanged and scales P and every innovation variance S by
-c; the innovations themselves do not change, so the S the gate compares
-against is scaled by 1/c (the file's ``[filter] gate_scale``, the guard's
-``innovation_variance_scale``): the gate and its innovation spread keep the
-decisions they had, and the estimates are those of the unscaled shape.
-Consistency: the normalised innovation squared :math:`y^2/S` of each row
-against the 95 % band of :math:`\chi^2_1`, and the share of samples whose
-error lies within :math:`\pm 2\sigma`.
+over every row whose inputs are present (Nelder-Mead in the log-parameters, each constant
+density within a factor 1000 of the input: the pseudo-measurement error is correlated in
+time, and unbounded the white-noise likelihood may drive ``r_s`` to zero). An
+input-dependent density is kept only if it raises :math:`\ell` by 2 (a likelihood-ratio
+test at about 5 %), else it is 0 (constant noise). The likelihood is evaluated with the
+innovation gate open: a gate removes exactly the large innovations the likelihood needs.
+Everything else (the estimates, the coverage, the RMSE) runs with the guard settings the
+filter of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s own).
+
+Shape that generalises: a shape fitted on a few manoeuvres must not wreck another. The
+likelihood is fitted again leaving each log out; a ratio of q or of an equilibrium row's
+r_c to r_s is taken from the likelihood only if those fits agree on it within a factor 2,
+else it stays the input file's (the relative trust in the suspension and the equilibrium
+rows depends on the manoeuvre: on the sports car's lane change and steady turn the fits
+differ by 3-30x). Along the log-parameter line from the input shape to that one, the
+largest step whose per-log RMSE stays within 2 % of the input's on every tuning log, both
+in sample and for the fits that left the log out, is written. With reference loads the
+written shape is scaled as a whole by c so that ±2σ covers 95 % of the error: the model
+errors are correlated in time, which the white-noise likelihood cannot see. Scaling leaves
+the gain unchanged and scales P and every innovation variance S by c; the innovations
+themselves do not change, so the S the gate compares against is scaled by 1/c (the file's
+``[filter] gate_scale``, the guard's ``innovation_variance_scale``): the gate and its
+innovation spread keep the decisions they had, and the estimates are those of the
+unscaled shape. With references the tuning that minimises the pooled RMSE is also
+reported. Consistency: the normalised innovation squared :math:`y^2/S` of each row against
+the 95 % band of :math:`\chi^2_1`, and the share of samples whose error lies within
+:math:`\pm 2\sigma`.
 
 Example
 -------
@@ -313,6 +320,8 @@ def blend(start: np.ndarray, target: np.ndarray, t: float) -> np.ndarray:
     :math:`r^{1-t} r_\star^{t}`; a density that is 0 in ``start`` (an input-dependent term
     off) grows linearly, :math:`t\,r_\star`."""
     start, target = np.asarray(start, float), np.asarray(target, float)
+    if t in (0.0, 1.0):  # the end points exactly
+        return (start if t == 0.0 else target).copy()
     positive = (start > 0) & (target > 0)
     geometric = np.exp((1 - t) * np.log(np.where(positive, start, 1.0))
                        + t * np.log(np.where(positive, target, 1.0)))  # fmt: skip

@@ -1,12 +1,14 @@
 """``wheelload tune LOG ... --vehicle FILE --out NEW.toml``: fit the filter's noise densities.
 
-Maximum likelihood of the filter's innovations (prediction-error method); with
-reference loads ``fz_*`` in every log also the RMSE-minimising tuning and a
-±2σ coverage calibration (``wheelload.estimators.identification.tuning``).
-The new file is a copy of ``--vehicle`` with new ``[filter]`` densities and,
-with references, ``gate_scale = 1/c`` for densities scaled by c (the gate
-keeps its decisions, so only σ is calibrated).
-"""
+Maximum likelihood of the filter's innovations (prediction-error method) for the
+constant and the input-dependent densities (``models/measurement_noise.py``); the
+ratios the leave-one-log-out fits do not agree on stay the input file's; with
+reference loads ``fz_*`` in every log also the RMSE-minimising tuning, the blend
+of input and likelihood shape no tuning log objects to, and a ±2σ coverage
+calibration (``wheelload.estimators.identification.tuning``). The new file is a
+copy of ``--vehicle`` with new ``[filter]`` densities and, with references,
+``gate_scale = 1/c`` for densities scaled by c (the gate keeps its decisions, so
+only σ is calibrated)."""
 
 from __future__ import annotations
 
