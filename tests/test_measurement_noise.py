@@ -12,6 +12,7 @@ import subprocess
 
 import casadi as ca
 import numpy as np
+import pandas as pd
 import pytest
 
 from wheelload.estimators import Sample, TwoStageKF, read_log, write_log
@@ -173,8 +174,9 @@ def noisy_log(tmp_path_factory):
     return path
 
 
-@pytest.mark.parametrize("mode", list(ParamMode))
-def test_generated_c_equals_python_with_input_dependent_noise(tmp_path, noisy_log, mode):
+def test_generated_c_equals_python_with_input_dependent_noise(tmp_path, noisy_log):
+    """The library with run-time parameters (the baked one folds the same expressions)."""
+    mode = ParamMode.RUNTIME
     text = example_vehicle_path().read_text()
     rows = ("vertical", "pitch", "roll")
     changes = {
@@ -194,8 +196,6 @@ def test_generated_c_equals_python_with_input_dependent_noise(tmp_path, noisy_lo
     out = tmp_path / "c_estimates.csv"
     args = [str(binary), str(noisy_log), str(out)]
     subprocess.run(args, check=True, timeout=60)
-    import pandas as pd
-
     c = pd.read_csv(out)
     loaded = load_vehicle(path)
     python = TwoStageKF(loaded).run(read_log(noisy_log)).to_pandas()
@@ -205,17 +205,17 @@ def test_generated_c_equals_python_with_input_dependent_noise(tmp_path, noisy_lo
         np.testing.assert_allclose(c[column], expected, rtol=1e-9, atol=1e-9 * np.max(expected))
     # The noise terms changed the filter (else the comparison shows nothing new).
     assert np.max(np.abs(python["fz_std_fl"] - default["fz_std_fl"])) > 1.0
-    if mode is ParamMode.RUNTIME:
-        # A density set at run time equals the file with that density.
-        changed = tmp_path / "changed.csv"
-        subprocess.run([*args[:2], str(changed), "suspension_noise_rate_density=0"], check=True)
-        zero = loaded.replace(
-            filter=dataclasses.replace(loaded.filter, suspension_noise_rate_density=0.0)
-        )
-        expected = TwoStageKF(zero).run(read_log(noisy_log)).to_pandas()
-        np.testing.assert_allclose(
-            pd.read_csv(changed)["fz_fl"], expected["fz_fl"], rtol=1e-9, atol=1e-5
-        )
+    # A density set at run time equals the file with that density.
+    changed = tmp_path / "changed.csv"
+    subprocess.run([*args[:2], str(changed), "suspension_noise_rate_density=0"], check=True)
+    zero = loaded.replace(
+        filter=dataclasses.replace(loaded.filter, suspension_noise_rate_density=0.0)
+    )
+    expected = TwoStageKF(zero).run(read_log(noisy_log)).to_pandas()
+    np.testing.assert_allclose(
+        pd.read_csv(changed)["fz_fl"], expected["fz_fl"], rtol=1e-9, atol=1e-5
+    )
+    assert np.max(np.abs(expected["fz_fl"] - python["fz_fl"])) > 0.1  # the override acted
 
 
 def test_shape_rules_of_the_tuning():
@@ -238,9 +238,14 @@ def test_shape_rules_of_the_tuning():
     other = fit.copy()
     other[index["process_noise_density"]] = 5e4
     other[index["constraint_noise_pitch"]] = 900.0
-    agreed = agreed_ratios([fit, other])
+    agreed = agreed_ratios([fit, other, fit])
     assert "process_noise_density" in agreed and "constraint_noise_pitch" not in agreed
-    assert agreed_ratios([fit]) == ()
+    assert "constraint_noise_roll" in agreed
+    assert agreed_ratios([fit, other]) == ()  # one log: nothing to compare
+    # The fit on all logs far from both fold fits (a poorly converged search): not taken.
+    far = fit.copy()
+    far[index["constraint_noise_roll"]] = 300.0
+    assert "constraint_noise_roll" not in agreed_ratios([far, fit, other])
     shaped = with_input_ratios(start, fit, ("process_noise_density",))
     assert shaped[index["process_noise_density"]] == 3e4  # agreed: the fit's
     assert shaped[index["suspension_noise_density"]] == 1.0

@@ -20,7 +20,8 @@ filter of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'
 
 Shape that generalises: a shape fitted on a few manoeuvres must not wreck another. The
 likelihood is fitted again leaving each log out; a ratio of q or of an equilibrium row's
-r_c to r_s is taken from the likelihood only if those fits agree on it within a factor 2,
+r_c to r_s is taken from the likelihood only if those fits and the fit on all logs agree
+on it within a factor 2,
 else it stays the input file's (the relative trust in the suspension and the equilibrium
 rows depends on the manoeuvre: on the sports car's lane change and steady turn the fits
 differ by 3-30x). Along the log-parameter line from the input shape to that one, the
@@ -386,9 +387,10 @@ def fold_fits(runs: FilterRuns, start: np.ndarray, iterations: int):
 
 
 def agreed_ratios(fits: list[np.ndarray]) -> tuple[str, ...]:
-    """The :data:`RATIOS` whose value (to r_s) the fits agree on within
-    :data:`RATIO_AGREEMENT`; none with fewer than two fits."""
-    if len(fits) < 2:
+    """The :data:`RATIOS` whose value (to r_s) the fits (the fit on all logs and those
+    leaving one out) agree on within :data:`RATIO_AGREEMENT`; none with fewer than three
+    fits (two logs)."""
+    if len(fits) < 3:
         return ()
     agreed = []
     for name in RATIOS:
@@ -450,7 +452,7 @@ def tune(
     likelihood, count = _maximum_likelihood(runs, start, iterations)
     folds, more = fold_fits(runs, likelihood, iterations)
     count += more
-    agreed = agreed_ratios([fit for _, fit in folds])
+    agreed = agreed_ratios([likelihood, *[fit for _, fit in folds]])
     robust = with_input_ratios(start, likelihood, agreed)
     rmse, shape, scale, t, scores = None, robust, 1.0, 1.0, ()
     if references:

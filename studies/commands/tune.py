@@ -86,7 +86,7 @@ def handle(args: argparse.Namespace) -> int:
         print(f"{name:>39}" + "".join(f"{values[k]:18.4g}" for _, values in columns))
     kept = [name for name in RATIOS if name not in result.agreed]
     print(
-        f"ratios to suspension_noise_density taken from the likelihood (leave-one-log-out fits"
+        f"ratios to suspension_noise_density taken from the likelihood (its fits on all logs and"
         f" within {RATIO_AGREEMENT:g}x): {', '.join(result.agreed) or 'none'};"
         f" the input file's: {', '.join(kept) or 'none'}"
     )
@@ -121,10 +121,18 @@ def handle(args: argparse.Namespace) -> int:
     tuned = result.tuned
     named = dict(zip(TUNED_DENSITIES, tuned, strict=True))
     new_vehicle = tuned_vehicle(vehicle, result)
-    shape = {
-        "likelihood": "maximum likelihood of the innovations",
-        "input": "the input file's densities (the likelihood shape raised a log's RMSE)",
-    }.get(result.shape_source, f"{result.shape_source} of input and likelihood shapes")
+    if result.shape_source == "input":
+        shape = "the input file's densities (the likelihood shape raised a log's RMSE)"
+    else:
+        shape = "maximum likelihood of the innovations"
+        if result.shape_source != "likelihood":
+            shape = f"{result.shape_source} of the input file's and the {shape}"
+        kept = [name for name in RATIOS if name not in result.agreed]
+        if kept:
+            shape += (
+                f" with the input file's ratio to suspension_noise_density of {', '.join(kept)}"
+                " (the fits leaving one log out disagreed)"
+            )
     note = f"{shape} of {', '.join(Path(p).name for p in args.logs)}" + (
         f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
         if references
