@@ -86,8 +86,8 @@ def handle(args: argparse.Namespace) -> int:
         print(f"{name:>39}" + "".join(f"{values[k]:18.4g}" for _, values in columns))
     kept = [name for name in RATIOS if name not in result.agreed]
     print(
-        f"ratios to suspension_noise_density taken from the likelihood (its fits on all logs and"
-        f" within {RATIO_AGREEMENT:g}x): {', '.join(result.agreed) or 'none'};"
+        "ratios to suspension_noise_density taken from the likelihood (its fits on all logs"
+        f" and leaving each out within {RATIO_AGREEMENT:g}x): {', '.join(result.agreed) or 'none'};"
         f" the input file's: {', '.join(kept) or 'none'}"
     )
     if result.scores:
