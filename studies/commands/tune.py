@@ -121,23 +121,21 @@ def handle(args: argparse.Namespace) -> int:
     tuned = result.tuned
     named = dict(zip(TUNED_DENSITIES, tuned, strict=True))
     new_vehicle = tuned_vehicle(vehicle, result)
+    logs = ", ".join(Path(p).name for p in args.logs)
     if result.shape_source == "input":
-        shape = "the input file's densities (the likelihood shape raised a log's RMSE)"
+        note = f"the input file's densities (the likelihood shape of {logs} raised a log's RMSE)"
     else:
-        shape = "maximum likelihood of the innovations"
+        note = f"maximum likelihood of the innovations of {logs}"
         if result.shape_source != "likelihood":
-            shape = f"{result.shape_source} of the input file's and the {shape}"
+            note = f"{result.shape_source} of the input file's and the {note}"
         kept = [name for name in RATIOS if name not in result.agreed]
         if kept:
-            shape += (
-                f" with the input file's ratio to suspension_noise_density of {', '.join(kept)}"
+            note += (
+                f", with the input file's ratio to suspension_noise_density of {', '.join(kept)}"
                 " (the fits leaving one log out disagreed)"
             )
-    note = f"{shape} of {', '.join(Path(p).name for p in args.logs)}" + (
-        f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
-        if references
-        else ""
-    )
+    if references:
+        note += f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
     changes = {
         ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
         ("filter", "suspension_noise_density"): (tuned[1], "tuned (see above)"),
