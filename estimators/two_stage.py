@@ -8,7 +8,10 @@ constraint :math:`b = A x + w_c` (eq. 17, 23-25). Joseph form throughout.
 Tuning is per second (white-noise densities): :math:`Q = q\\,dt\\,I`,
 :math:`R_s = r_s/\\Delta t_{nom}\\,I`, :math:`R_c = \\mathrm{diag}(r_c)/\\Delta t_{nom}` with the
 log's nominal (median) interval, so that a gap grows the covariance and never
-shrinks the measurement noise. Guards (plausibility, innovation gate, fault
+shrinks the measurement noise. Optional input-dependent densities (vehicle file
+``[filter]``, default 0) add terms in the damper velocity, the hub acceleration and the
+body accelerations (:mod:`wheelload.models.measurement_noise`, one Function, used here);
+the MHE keeps the constant densities. Guards (plausibility, innovation gate, fault
 monitor, covariance limits) act inside the step: :mod:`wheelload.estimators.guard`.
 
 The per-sample step is one CasADi Function built from the model Functions in
