@@ -47,6 +47,7 @@ from wheelload.estimators.output_files import write_text
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.two_stage import (
     DEFAULT_SAMPLE_INTERVAL,
+    INPUT_DENSITIES,
     STEP_INPUT_NAMES,
     STEP_NAME,
     STEP_OUTPUT_NAMES,
@@ -79,7 +80,8 @@ FAST_CFLAGS = (
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
 #: Calibration values that must be positive (the rest must be finite).
-POSITIVE = ("mass", *TUNING, "initial_std")
+#: The input-dependent noise densities may be 0 (constant measurement noise).
+POSITIVE = ("mass", *[n for n in TUNING if n not in INPUT_DENSITIES], "initial_std")
 
 
 class ParamMode(enum.Enum):

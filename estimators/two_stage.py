@@ -8,7 +8,10 @@ constraint :math:`b = A x + w_c` (eq. 17, 23-25). Joseph form throughout.
 Tuning is per second (white-noise densities): :math:`Q = q\\,dt\\,I`,
 :math:`R_s = r_s/\\Delta t_{nom}\\,I`, :math:`R_c = \\mathrm{diag}(r_c)/\\Delta t_{nom}` with the
 log's nominal (median) interval, so that a gap grows the covariance and never
-shrinks the measurement noise. Guards (plausibility, innovation gate, fault
+shrinks the measurement noise. Optional input-dependent densities (vehicle file
+``[filter]``, default 0) add terms in the damper velocity, the hub acceleration and the
+body accelerations (:mod:`wheelload.models.measurement_noise`, one Function, used here);
+the MHE keeps the constant densities. Guards (plausibility, innovation gate, fault
 monitor, covariance limits) act inside the step: :mod:`wheelload.estimators.guard`.
 
 The per-sample step is one CasADi Function built from the model Functions in
@@ -58,6 +61,8 @@ from wheelload.models.inputs import (
     TRAVEL_RATE,
     input_index,
 )
+from wheelload.models.measurement_noise import DENSITIES as NOISE_DENSITY_ORDER
+from wheelload.models.measurement_noise import INPUT_DENSITIES, measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 
 if TYPE_CHECKING:
@@ -72,14 +77,23 @@ TUNING = (
     "constraint_noise_roll",
     "sample_interval",
     *GuardSettings.names(),
+    *INPUT_DENSITIES,
 )
-#: The filter's noise densities: the first entries of the tuning vector (vehicle file [filter]).
+#: The filter's constant noise densities: the first entries of the tuning vector (vehicle
+#: file [filter]); the input-dependent ones (default 0) are :data:`INPUT_DENSITIES`, last.
 NOISE_DENSITIES = TUNING[:5]
+#: Every density ``wheelload tune`` fits: the constant ones, then the input-dependent ones.
+TUNED_DENSITIES = NOISE_DENSITIES + INPUT_DENSITIES
+#: Position of each entry of the tuning vector.
+TUNING_INDEX = {name: k for k, name in enumerate(TUNING)}
 STEP_NAME = "wheelload_kf_step"
 #: Nominal sample interval [s] where no log gives one (100 Hz).
 DEFAULT_SAMPLE_INTERVAL = 0.01
 _SAMPLE_INTERVAL = TUNING.index("sample_interval")
 _GUARD_START = _SAMPLE_INTERVAL + 1
+_GUARD_END = _GUARD_START + len(GuardSettings.names())
+_NOISE_INDEX = [TUNING_INDEX[name] for name in NOISE_DENSITY_ORDER]
+_RC_INDEX = [TUNING_INDEX[f"constraint_noise_{row}"] for row in ("vertical", "pitch", "roll")]
 _VARIANCE_SCALE = TUNING.index("innovation_variance_scale")
 _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 
@@ -107,6 +121,7 @@ def tuning_vector(
             *tuning.constraint_noise_density,
             sample_interval,
             *settings.vector(),
+            *tuning.input_densities(),
         ]
     )
     # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate's S.
@@ -115,8 +130,9 @@ def tuning_vector(
 
 
 def noise_densities(vehicle: Vehicle) -> np.ndarray:
-    """The vehicle file's noise densities in :data:`NOISE_DENSITIES` order."""
-    return tuning_vector(vehicle)[: len(NOISE_DENSITIES)]
+    """The vehicle file's noise densities in :data:`TUNED_DENSITIES` order (constant, then
+    input-dependent)."""
+    return tuning_vector(vehicle)[[TUNING_INDEX[name] for name in TUNED_DENSITIES]]
 
 
 def nominal_interval(t: np.ndarray) -> float:
@@ -218,8 +234,12 @@ def step_expressions(
     equilibrium: ca.Function,
     *,
     constraint_update=sequential_update_innovations,
+    measurement_noise: ca.Function | None = None,
 ):
     """Symbolic inputs and outputs of one filter step built from the model Functions.
+
+    ``measurement_noise(u, u_valid, densities, dt_nominal) -> (R_s, R_c)``
+    defaults to :func:`~wheelload.models.measurement_noise.measurement_noise_function`.
 
     ``constraint_update(x, P, b, A, r_c, mask, gate) -> (x, P, y, S, use)``
     is the second stage; the default is the soft-constraint Kalman update
@@ -239,7 +259,7 @@ def step_expressions(
     dt = ca.SX.sym("dt")
     p = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
-    settings = guard.unpack(tuning[_GUARD_START:])
+    settings = guard.unpack(tuning[_GUARD_START:_GUARD_END])
     dt_nominal = tuning[_SAMPLE_INTERVAL]
 
     # A non-positive or non-finite interval skips the whole step: the state is held.
@@ -272,7 +292,8 @@ def step_expressions(
     Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
     B = ca.substitute(ca.jacobian(equilibrium(u_acc, gates, p)[1], acc_sym), acc_sym, acc_now)
     signatures = ca.horzcat(-ca.mtimes(A, Jd), B)
-    rc_density = tuning[2:5]
+    # The fault monitor's parity test weighs the constant densities (the paper's R_c).
+    rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
     watch = guard.monitor(m, u, valid_plausible, z, A, signatures, b, dt_used, rc_density, settings)
     valid = valid_plausible * _channel_drop(watch.channel_ok)
     # The updates the channels left after the guards feed (an isolated channel's rows are
@@ -284,9 +305,11 @@ def step_expressions(
     # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
     weight = p[_P_INDEX["mass"]] * guard.GRAVITY
     ceiling = weight * weight
-    Q = ca.fmin(tuning[0] * dt_used, ceiling) * ca.DM.eye(4)
-    rs = ca.repmat(tuning[1] / dt_nominal, 4, 1)
-    rc = rc_density / dt_nominal
+    Q = ca.fmin(tuning[TUNING_INDEX["process_noise_density"]] * dt_used, ceiling) * ca.DM.eye(4)
+    # R_s, R_c from the inputs (models/measurement_noise.py; constant with the default zeros).
+    densities = ca.vertcat(*[tuning[k] for k in _NOISE_INDEX])
+    noise = measurement_noise or measurement_noise_function()
+    rs, rc = noise(u, valid_plausible, densities, dt_nominal)
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
     reject, spread = m[guard.reject_slice()], m[guard.spread_slice()]
@@ -379,12 +402,14 @@ def step_function(
     name: str = STEP_NAME,
     *,
     constraint_update=sequential_update_innovations,
+    measurement_noise: ca.Function | None = None,
 ) -> ca.Function:
     """The filter step as a CasADi Function (model Functions default to ``wheelload.models``)."""
     inputs, outputs = step_expressions(
         suspension or suspension_function(),
         equilibrium or equilibrium_function(),
         constraint_update=constraint_update,
+        measurement_noise=measurement_noise,
     )
     # The suspension and equilibrium share the body motion and attitude: one copy.
     outputs = ca.cse(outputs)

@@ -253,6 +253,17 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.constraint_noise_density": _sigma_density(
         lambda v: 1.0, lambda v: 10.0 * _weight(v), "N (N m)"
     ),
+    # Input-dependent noise (models/measurement_noise.py): 0 (constant R) up to the range's
+    # 1-sigma ceiling reached at 1 m/s of damper velocity or 1 g of acceleration.
+    "filter.suspension_noise_rate_density": _sigma_density(
+        lambda v: 0.0, lambda v: 10.0 * max(_wheel_loads(v)), "N at 1 m/s damper velocity,"
+    ),
+    "filter.suspension_noise_hub_density": _sigma_density(
+        lambda v: 0.0, lambda v: 10.0 * max(_wheel_loads(v)) / GRAVITY, "N at 1 m/s^2 hub,"
+    ),
+    "filter.constraint_noise_acceleration_density": _sigma_density(
+        lambda v: 0.0, lambda v: 10.0 * _weight(v) / GRAVITY, "N (N m) at 1 m/s^2,"
+    ),
     "filter.initial_std": lambda v: Range(1.0, 10.0 * _weight(v), "1 N to 10 x the weight"),
     "filter.gate_scale": _fixed(
         1e-4, 1e4, "factor on the innovation variance the gate compares against"

@@ -207,8 +207,31 @@ class FilterTuning:
     # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
     # had (S scales by c, the innovations do not).
     gate_scale: float = 1.0
+    # Optional: input-dependent measurement noise (models/measurement_noise.py), default 0
+    # (constant R). N^2 s per (m/s)^2 of damper velocity, per (m/s^2)^2 of hub acceleration
+    # relative to the body; vertical, pitch, roll rows per (m/s^2)^2 of az - g, ax, ay.
+    suspension_noise_rate_density: float = 0.0
+    suspension_noise_hub_density: float = 0.0
+    constraint_noise_acceleration_density: Vector3 = (0.0, 0.0, 0.0)
+
+    def input_densities(self) -> tuple[float, ...]:
+        """The input-dependent densities in ``measurement_noise.INPUT_DENSITIES`` order."""
+        return (
+            self.suspension_noise_rate_density,
+            self.suspension_noise_hub_density,
+            *self.constraint_noise_acceleration_density,
+        )
 
     def _check(self) -> None:
+        for key in (
+            "suspension_noise_rate_density",
+            "suspension_noise_hub_density",
+            "constraint_noise_acceleration_density",
+        ):
+            values = getattr(self, key)
+            values = values if isinstance(values, tuple) else (values,)
+            if not all(math.isfinite(x) and x >= 0.0 for x in values):
+                raise _KeyError(key, f"must be finite and >= 0 (0: constant noise), got {values}")
         _positive(self, "process_noise_density")
         _positive(self, "suspension_noise_density")
         _positive(self, "initial_std")

@@ -75,8 +75,7 @@ def test_study_wrong_file_identified_from_one_log_matches_the_true_file_elsewher
     # The wrong file is far off where the body moves (on the straight slope-20 log, +2 %).
     assert table.loc["iso-dlc", "rmse_wrong"] > 1.5 * table.loc["iso-dlc", "rmse_true"]
     tuning = pd.read_csv(folder / "tuning.csv").set_index("log")
-    # the issue's 98 % upper bound is a strict xfail below (measured 99.0 %)
-    assert 90.0 <= tuning.loc["slope-20", "coverage_tuned_pct"] <= 99.5
+    assert 90.0 <= tuning.loc["slope-20", "coverage_tuned_pct"] <= 98.0  # measured 92.6 %
     assert tuning.loc["slope-20", "rmse_tuned"] <= 1.02 * tuning.loc["slope-20", "rmse_input"]
 
 
@@ -107,22 +106,31 @@ def test_bad_rig_file_gets_a_one_line_error(folder, capsys):
     assert not (folder / "b.toml").exists()
 
 
-def test_tune_writes_a_calibrated_filter_section(folder, capsys):
-    """Tuned on the lane change and the steady turn; on the slope log (not used): ±2σ covers
-    90-98 % of the error and the pooled RMSE is at most 2 % above the input tuning's (the
-    issue's bounds). The densities are scaled by c and the gate by 1/c, so the estimates are
-    the input tuning's after 1 s (to 1e-6 N) and the gate takes the same decisions."""
+@pytest.fixture(scope="module")
+def tuned_file(folder):
+    """``wheelload tune`` on the lane change and the steady turn (run once for the module)."""
     out = folder / "tuned.toml"
     logs = [str(folder / "iso-dlc.csv"), str(folder / "accel-in-turn.csv")]
     args = ["tune", *logs, "--vehicle", str(example_vehicle_path())]
     assert main([*args, "--out", str(out), "--evaluate", str(folder / "slope-20.csv")]) == 0
-    assert "max. likelihood" in capsys.readouterr().out
+    return out
+
+
+def test_tune_writes_a_calibrated_filter_section(folder, tuned_file):
+    """Tuned on the lane change and the steady turn; on the slope log (not used): ±2σ covers
+    90-98 % of the error and the pooled RMSE is at most 2 % above the input tuning's (the
+    issue's bounds). The densities are scaled by c and the gate by 1/c, so the estimates are
+    the input tuning's after 1 s (to 1e-6 N) and the gate takes the same decisions."""
+    out = tuned_file
+    text = out.read_text()
+    assert "maximum likelihood of the innovations of iso-dlc.csv, accel-in-turn.csv" in text
+    assert "suspension_noise_rate_density = " in text
     tuned, default = load_vehicle(out), load_vehicle(example_vehicle_path())
     # The written densities are a shape (the input's or the likelihood's) times c, with the
     # gate's S times 1/c: the shape, unscaled, gives the same estimates (only sigma moves).
     shape = with_tuning(default, noise_densities(tuned) * tuned.filter.gate_scale, 1.0)
-    # slope-20's upper bound: see the strict xfail below (measured 99.0 %).
-    for path, low, high in (("iso-dlc.csv", 0.90, 0.99), ("slope-20.csv", 0.90, 0.995)):
+    # Measured: iso-dlc 95.9 %, slope-20 92.6 % (the issue's 90-98 %).
+    for path, low, high in (("iso-dlc.csv", 0.90, 0.98), ("slope-20.csv", 0.90, 0.98)):
         signals = read_log(folder / path)
         settled = signals.t - signals.t[0] >= 1.0
         estimate = TwoStageKF(tuned).run(signals)
@@ -137,30 +145,13 @@ def test_tune_writes_a_calibrated_filter_section(folder, capsys):
     np.testing.assert_allclose(loads[0][settled], loads[2][settled], atol=1e-6)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="held-out slope-20 ±2σ covers 99.0 % of the error (issue: 90-98 %): σ is one "
-    "constant per log, calibrated to 95 % on the manoeuvres; with the tyre-force link term "
-    "the straight log's error is smaller than theirs",
-)
-def test_tuned_band_on_the_straight_held_out_log_within_98_percent(folder, tmp_path):
-    out = tmp_path / "tuned.toml"
-    logs = [str(folder / "iso-dlc.csv"), str(folder / "accel-in-turn.csv")]
-    assert main(["tune", *logs, "--vehicle", str(example_vehicle_path()), "--out", str(out)]) == 0
-    signals = read_log(folder / "slope-20.csv")
-    settled = signals.t - signals.t[0] >= 1.0
-    estimate = TwoStageKF(load_vehicle(out)).run(signals)
-    error = np.abs(estimate.loads - signals.reference)[settled]
-    assert np.mean(error <= 2 * estimate.std[settled]) <= 0.98
-
-
 def test_tuning_likelihood_keeps_the_rows_the_gate_would_skip(folder):
     """The innovation likelihood is evaluated with the gate open: at densities 1/1000 of the
     file's the gate skips rows of iso-dlc, yet the likelihood equals the one summed by hand
     over every row with inputs from a filter whose gate is out of reach (to 1e-9 relative:
     the same compiled step); the coverage runs with the file's own guards."""
     from wheelload.estimators.identification.tuning import SETTLE, FilterRuns
-    from wheelload.estimators.two_stage import TUNING
+    from wheelload.estimators.two_stage import TUNED_DENSITIES, TUNING, TUNING_INDEX
 
     vehicle = load_vehicle(example_vehicle_path())
     signals = read_log(folder / "iso-dlc.csv")
@@ -168,7 +159,8 @@ def test_tuning_likelihood_keeps_the_rows_the_gate_would_skip(folder):
     tight = noise_densities(vehicle) / 1000
     assert runs.consistency(tight).gated > 0.001  # measured 0.2 % with the spread gate
     open_gate = TwoStageKF(vehicle)
-    open_gate.tuning[: len(tight)] = tight
+    for name, value in zip(TUNED_DENSITIES, tight, strict=True):
+        open_gate.tuning[TUNING_INDEX[name]] = value
     for name in ("innovation_gate", "gate_release_time"):
         open_gate.tuning[TUNING.index(name)] = 1e300
     _, inn = open_gate.run_innovations(signals)
@@ -177,6 +169,20 @@ def test_tuning_likelihood_keeps_the_rows_the_gate_would_skip(folder):
     S, y = inn.variance[keep], inn.innovation[keep]
     expected = 0.5 * float(np.sum(np.log(2 * np.pi * S) + y**2 / S))
     assert runs.negative_log_likelihood(tight) == pytest.approx(expected, rel=1e-9)
+
+
+def test_tuned_shape_does_not_wreck_the_held_out_wheel_hop(folder, tuned_file, joint):
+    """The shape fitted on two smooth manoeuvres keeps every held-out log's pooled RMSE within
+    2 % of the default tuning's, the bounce sweep's wheel hop included (the likelihood shape
+    alone doubled it: 67.7 -> 152.6 N). Measured 67.6 and 23.4 N (default 67.7, 23.5)."""
+    tuned, default = load_vehicle(tuned_file), load_vehicle(example_vehicle_path())
+    for name in ("bounce-sweep", "chicane-bank-30"):
+        signals = read_log(folder / f"{name}.csv")
+        rmse = [
+            pooled_metrics(TwoStageKF(v).run(signals).loads, signals.reference)["RMSE"]
+            for v in (tuned, default)
+        ]
+        assert rmse[0] <= 1.02 * rmse[1], name
 
 
 @pytest.fixture(scope="module")

@@ -3,32 +3,40 @@ r"""Tuning of the two-stage KF's noise densities: innovation likelihood and refe
 Prediction-error method (Mehra 1970; Ljung, *System Identification*, §7):
 the filter's sequential innovations :math:`y_{k,i}` with variances
 :math:`S_{k,i}` (outputs of the filter step itself) are independent normals
-under the model, so the tuning :math:`\theta = \log(q, r_s, r_{c,1..3})`
-maximises
+under the model, so the tuning :math:`\theta = \log(q, r_s, r_{c,1..3}, r_{sv}, r_{sh},
+r_{ca,1..3})` (constant and input-dependent densities,
+:mod:`wheelload.models.measurement_noise`) maximises
 
 .. math:: \ell(\theta) = -\tfrac12 \sum_{k,i} \big(\log 2\pi S_{k,i} + y_{k,i}^2 / S_{k,i}\big)
 
-over every row whose inputs are present (Nelder-Mead in the log-parameters, each within a
-factor 1000 of the input: the pseudo-measurement error is correlated in
-time, and unbounded the white-noise likelihood may drive ``r_s`` to zero).
-The likelihood is evaluated with the innovation gate open: a gate removes
-exactly the large innovations the likelihood needs, and a shrinking
-tuning would gate more and more of them away. Everything else (the
-estimates, the coverage, the RMSE) runs with the guard settings the filter
-of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s
-own). With reference loads, the tuning that minimises the pooled RMSE is
-found the same way, and the tuning written is the likelihood shape or the
-input's shape (whichever has the lower pooled RMSE with the guards), scaled
-as a whole by c so that ±2σ covers 95 % of the error: the model errors are
-correlated in time, which the white-noise likelihood cannot see. Scaling
-leaves the gain unchanged and scales P and every innovation variance S by
-c; the innovations themselves do not change, so the S the gate compares
-against is scaled by 1/c (the file's ``[filter] gate_scale``, the guard's
-``innovation_variance_scale``): the gate and its innovation spread keep the
-decisions they had, and the estimates are those of the unscaled shape.
-Consistency: the normalised innovation squared :math:`y^2/S` of each row
-against the 95 % band of :math:`\chi^2_1`, and the share of samples whose
-error lies within :math:`\pm 2\sigma`.
+over every row whose inputs are present (Nelder-Mead in the log-parameters, each constant
+density within a factor 1000 of the input: the pseudo-measurement error is correlated in
+time, and unbounded the white-noise likelihood may drive ``r_s`` to zero). An
+input-dependent density is kept only if it raises :math:`\ell` by 2 (a likelihood-ratio
+test at about 5 %), else it is 0 (constant noise). The likelihood is evaluated with the
+innovation gate open: a gate removes exactly the large innovations the likelihood needs.
+Everything else (the estimates, the coverage, the RMSE) runs with the guard settings the
+filter of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s own).
+
+Shape that generalises: a shape fitted on a few manoeuvres must not wreck another. The
+likelihood is fitted again leaving each log out; a ratio of q or of an equilibrium row's
+r_c to r_s is taken from the likelihood only if those fits and the fit on all logs agree
+on it within a factor 2,
+else it stays the input file's (the relative trust in the suspension and the equilibrium
+rows depends on the manoeuvre: on the sports car's lane change and steady turn the fits
+differ by 3-30x). Along the log-parameter line from the input shape to that one, the
+largest step whose per-log RMSE stays within 2 % of the input's on every tuning log, both
+in sample and for the fits that left the log out, is written. With reference loads the
+written shape is scaled as a whole by c so that ±2σ covers 95 % of the error: the model
+errors are correlated in time, which the white-noise likelihood cannot see. Scaling leaves
+the gain unchanged and scales P and every innovation variance S by c; the innovations
+themselves do not change, so the S the gate compares against is scaled by 1/c (the file's
+``[filter] gate_scale``, the guard's ``innovation_variance_scale``): the gate and its
+innovation spread keep the decisions they had, and the estimates are those of the
+unscaled shape. With references the tuning that minimises the pooled RMSE is also
+reported. Consistency: the normalised innovation squared :math:`y^2/S` of each row against
+the 95 % band of :math:`\chi^2_1`, and the share of samples whose error lies within
+:math:`\pm 2\sigma`.
 
 Example
 -------
@@ -47,11 +55,14 @@ from scipy import optimize, stats
 from wheelload.estimators.signals import Signals
 from wheelload.estimators.two_stage import (
     NOISE_DENSITIES,
+    TUNED_DENSITIES,
     TUNING,
+    TUNING_INDEX,
     UPDATE_ROWS,
     TwoStageKF,
     step_function,
 )
+from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle import FilterTuning, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out of the objective (initial covariance)
@@ -61,19 +72,44 @@ NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of 
 #: Tuning entries that open the innovation gate for the likelihood (out of reach).
 GATE_OPEN = {"innovation_gate": 1e300, "gate_release_time": 1e300}
 _VARIANCE_SCALE = TUNING.index("innovation_variance_scale")
+_DENSITY_INDEX = [TUNING_INDEX[name] for name in TUNED_DENSITIES]
+#: Input size at which an input-dependent density starts its fit, adding a tenth of the
+#: constant density it goes with: damper velocity 0.1 m/s, accelerations 2 m/s^2.
+INPUT_SCALE = {
+    "suspension_noise_rate_density": ("suspension_noise_density", 0.1),
+    "suspension_noise_hub_density": ("suspension_noise_density", 2.0),
+    "constraint_noise_vertical_acceleration": ("constraint_noise_vertical", 2.0),
+    "constraint_noise_pitch_acceleration": ("constraint_noise_pitch", 2.0),
+    "constraint_noise_roll_acceleration": ("constraint_noise_roll", 2.0),
+}
+INPUT_SPAN = 1e6  # an input-dependent density may fall to start / INPUT_SPAN (then off)
+#: Blend steps t along the log-parameter line from the input shape (0) to the likelihood's (1).
+BLENDS = (1.0, 0.75, 0.5, 0.25, 0.0)
+RMSE_TOLERANCE = 1.02  # a blend is taken only within 2 % of the input's RMSE on every log
 
 
 def with_tuning(vehicle: Vehicle, tuning: np.ndarray, gate_scale: float | None = None) -> Vehicle:
-    """The vehicle with its ``[filter]`` noise densities replaced (``NOISE_DENSITIES`` order)
-    and, if given, its ``gate_scale``."""
+    """The vehicle with its ``[filter]`` noise densities replaced (``TUNED_DENSITIES`` order;
+    the first five alone keep the file's input-dependent ones) and, if given, ``gate_scale``."""
     tuning = np.asarray(tuning, float)
     current: FilterTuning = vehicle.filter
+    if tuning.shape == (len(NOISE_DENSITIES),):
+        tuning = np.concatenate([tuning, current.input_densities()])
+    named = dict(zip(TUNED_DENSITIES, map(float, tuning), strict=True))
     return vehicle.replace(
         filter=dataclasses.replace(
             current,
-            process_noise_density=float(tuning[0]),
-            suspension_noise_density=float(tuning[1]),
-            constraint_noise_density=tuple(float(x) for x in tuning[2:5]),
+            process_noise_density=named["process_noise_density"],
+            suspension_noise_density=named["suspension_noise_density"],
+            constraint_noise_density=tuple(
+                named[f"constraint_noise_{row}"] for row in ("vertical", "pitch", "roll")
+            ),
+            suspension_noise_rate_density=named["suspension_noise_rate_density"],
+            suspension_noise_hub_density=named["suspension_noise_hub_density"],
+            constraint_noise_acceleration_density=tuple(
+                named[f"constraint_noise_{row}_acceleration"]
+                for row in ("vertical", "pitch", "roll")
+            ),
             gate_scale=current.gate_scale if gate_scale is None else float(gate_scale),
         )
     )
@@ -109,15 +145,17 @@ class FilterRuns:
 
     def run(self, tuning: np.ndarray, *, gate_factor: float = 1.0, gate_open: bool = False):
         """Estimates and innovations of every log with the noise densities ``tuning``
-        (:data:`NOISE_DENSITIES` order; interval and guards as the filter's own, the
+        (:data:`TUNED_DENSITIES` order; interval and guards as the filter's own, the
         S the gate compares against times ``gate_factor``, or the gate opened with
         ``gate_open``)."""
         densities = np.asarray(tuning, float)
-        if densities.shape != (len(NOISE_DENSITIES),):
-            raise ValueError(f"give the {len(NOISE_DENSITIES)} noise densities {NOISE_DENSITIES}")
+        if densities.shape == (len(NOISE_DENSITIES),):  # constant densities: the file's others
+            densities = np.concatenate([densities, self.vehicle.filter.input_densities()])
+        if densities.shape != (len(TUNED_DENSITIES),):
+            raise ValueError(f"give the {len(TUNED_DENSITIES)} noise densities {TUNED_DENSITIES}")
         full = (self._gate_open if gate_open else self._base).copy()
         full[_VARIANCE_SCALE] *= 1.0 if gate_open else gate_factor
-        full[: len(NOISE_DENSITIES)] = densities
+        full[_DENSITY_INDEX] = densities
         self._kf.tuning = full
         return [self._kf.run_innovations(signals) for signals in self.logs]
 
@@ -129,6 +167,19 @@ class FilterRuns:
             S, y = inn.variance[keep], inn.innovation[keep]
             total += 0.5 * float(np.sum(np.log(2 * np.pi * S) + y**2 / S))
         return total
+
+    def log_rmse(self, tuning: np.ndarray) -> np.ndarray:
+        """Pooled RMSE [N] of each log (guards on), after :data:`SETTLE`."""
+        values = []
+        for signals, (estimate, _) in zip(self.logs, self.run(tuning)):
+            keep = signals.t - signals.t[0] >= SETTLE
+            error = (estimate.loads[keep] - signals.reference[keep]).ravel()
+            values.append(np.sqrt(np.mean(error[np.isfinite(error)] ** 2)))
+        return np.array(values)
+
+    def subset(self, keep: list[int]) -> FilterRuns:
+        """The same filter over the logs at ``keep``."""
+        return FilterRuns(self.vehicle, tuple(self.logs[k] for k in keep))
 
     def pooled_rmse(self, tuning: np.ndarray, gate_factor: float = 1.0) -> float:
         errors = []
@@ -206,11 +257,30 @@ def _correlation(pairs: np.ndarray) -> float:
 
 
 @dataclass(frozen=True, kw_only=True)
+class BlendScore:
+    """RMSE ratios to the input tuning of one blend step ``t`` (1: the likelihood shape)."""
+
+    t: float
+    held_out: tuple[float, ...]  # per tuning log, shape fitted on the other logs
+    in_sample: tuple[float, ...]  # per tuning log, shape fitted on all of them
+
+    @property
+    def accepted(self) -> bool:
+        """No log more than :data:`RMSE_TOLERANCE` times the input tuning's RMSE."""
+        return max((*self.held_out, *self.in_sample), default=1.0) <= RMSE_TOLERANCE
+
+
+@dataclass(frozen=True, kw_only=True)
 class TuningResult:
-    initial: np.ndarray  # NOISE_DENSITIES order
+    initial: np.ndarray  # TUNED_DENSITIES order
     likelihood: np.ndarray  # maximum-likelihood tuning
+    folds: tuple[np.ndarray, ...]  # likelihood fits leaving one log out each (>= 2 logs)
+    agreed: tuple[str, ...]  # RATIOS the fold fits agree on (taken from the likelihood)
+    robust: np.ndarray  # ``likelihood`` with the other ratios the input's
     rmse: np.ndarray | None  # RMSE-minimising tuning (with reference loads)
-    shape: np.ndarray  # the shape written: ``likelihood``, or ``initial`` when it does better
+    shape: np.ndarray  # the shape written: the blend ``blend`` of input and ``robust``
+    blend: float  # 0: the input shape, 1: the likelihood shape
+    scores: tuple[BlendScore, ...]  # the blend steps tried (with references)
     scale: float  # calibration factor applied to ``shape`` (1 without references)
     evaluations: int
 
@@ -226,8 +296,10 @@ class TuningResult:
 
     @property
     def shape_source(self) -> str:
-        """Which shape was written: ``"likelihood"`` or ``"input"``."""
-        return "input" if self.shape is self.initial else "likelihood"
+        """Which shape was written: ``"likelihood"``, ``"input"`` or ``"blend t=.."``."""
+        if self.blend >= 1.0:
+            return "likelihood"
+        return "input" if self.blend <= 0.0 else f"blend t={self.blend:g}"
 
 
 def _minimise(
@@ -244,28 +316,166 @@ def _minimise(
     return np.exp(result.x), int(result.nfev)
 
 
-def tune(runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: int = 400):
-    """Maximum-likelihood tuning; with ``references`` also the RMSE-minimising one and the
-    coverage calibration of the likelihood tuning (its estimates unchanged)."""
-    span = np.column_stack([start / SPAN, start * SPAN])
-    likelihood, count = _minimise(runs.negative_log_likelihood, start, iterations, span)
-    rmse, shape, scale = None, likelihood, 1.0
+def blend(start: np.ndarray, target: np.ndarray, t: float) -> np.ndarray:
+    r"""The point ``t`` of the way from ``start`` to ``target`` on the log-parameter line:
+    :math:`r^{1-t} r_\star^{t}`; a density that is 0 in ``start`` (an input-dependent term
+    off) grows linearly, :math:`t\,r_\star`."""
+    start, target = np.asarray(start, float), np.asarray(target, float)
+    if t in (0.0, 1.0):  # the end points exactly
+        return (start if t == 0.0 else target).copy()
+    positive = (start > 0) & (target > 0)
+    geometric = np.exp((1 - t) * np.log(np.where(positive, start, 1.0))
+                       + t * np.log(np.where(positive, target, 1.0)))  # fmt: skip
+    return np.where(positive, geometric, (1 - t) * start + t * target)
+
+
+def _search_start(start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Starting point and bounds of the log-parameter search: an input-dependent density
+    that is 0 starts where it adds a tenth of its constant density at :data:`INPUT_SCALE`."""
+    begin = np.array(start, float)
+    low, high = begin / SPAN, begin * SPAN
+    for name in INPUT_DENSITIES:
+        k = TUNED_DENSITIES.index(name)
+        base, size = INPUT_SCALE[name]
+        if begin[k] <= 0:
+            begin[k] = 0.1 * start[TUNED_DENSITIES.index(base)] / size**2
+        low[k], high[k] = begin[k] / INPUT_SPAN, begin[k] * SPAN
+    return begin, np.column_stack([low, high])
+
+
+def _maximum_likelihood(runs: FilterRuns, start: np.ndarray, iterations: int):
+    """Maximum likelihood of the innovations; an input-dependent density whose term does not
+    raise the log likelihood by 2 (a likelihood-ratio test at about 5 %, one degree of
+    freedom) is switched off (0)."""
+    begin, span = _search_start(start)
+    best, count = _minimise(runs.negative_log_likelihood, begin, iterations, span)
+    value = runs.negative_log_likelihood(best)
+    for name in INPUT_DENSITIES:
+        k = TUNED_DENSITIES.index(name)
+        trial = best.copy()
+        trial[k] = 0.0
+        nll = runs.negative_log_likelihood(trial)
+        count += 1
+        if nll - value < 2.0:
+            best, value = trial, nll
+    return best, count
+
+
+#: Ratios of densities the likelihood sets only when the logs agree on them (see
+#: :func:`agreed_ratios`): each to the suspension density r_s.
+RATIOS = (
+    "process_noise_density",
+    "constraint_noise_vertical",
+    "constraint_noise_pitch",
+    "constraint_noise_roll",
+)
+RATIO_AGREEMENT = 2.0  # largest factor between the logs' own fits of a ratio that is taken
+_RS = TUNED_DENSITIES.index("suspension_noise_density")
+
+
+def fold_fits(runs: FilterRuns, start: np.ndarray, iterations: int):
+    """Maximum-likelihood tuning of each leave-one-log-out fold: ``[(held_out_runs, fit)]``
+    (empty with one log) and the evaluations spent."""
+    n, folds, count = len(runs.logs), [], 0
+    if n > 1:
+        for k in range(n):
+            others = runs.subset([j for j in range(n) if j != k])
+            fit, more = _maximum_likelihood(others, start, iterations)
+            count += more
+            folds.append((runs.subset([k]), fit))
+    return folds, count
+
+
+def agreed_ratios(fits: list[np.ndarray]) -> tuple[str, ...]:
+    """The :data:`RATIOS` whose value (to r_s) the fits (the fit on all logs and those
+    leaving one out) agree on within :data:`RATIO_AGREEMENT`; none with fewer than three
+    fits (two logs)."""
+    if len(fits) < 3:
+        return ()
+    agreed = []
+    for name in RATIOS:
+        k = TUNED_DENSITIES.index(name)
+        values = [fit[k] / fit[_RS] for fit in fits]
+        if max(values) <= RATIO_AGREEMENT * min(values):
+            agreed.append(name)
+    return tuple(agreed)
+
+
+def with_input_ratios(start: np.ndarray, fit: np.ndarray, agreed: tuple[str, ...]) -> np.ndarray:
+    """``fit`` with each :data:`RATIOS` entry not in ``agreed`` set to the input's ratio to
+    r_s (at the fit's r_s); an equilibrium row's input-dependent density moves with it."""
+    shape = np.array(fit, float)
+    for name in RATIOS:
+        if name in agreed:
+            continue
+        k = TUNED_DENSITIES.index(name)
+        value = fit[_RS] * start[k] / start[_RS]
+        if name.startswith("constraint_noise_"):
+            gain = TUNED_DENSITIES.index(f"{name}_acceleration")
+            shape[gain] = fit[gain] * value / fit[k]
+        shape[k] = value
+    return shape
+
+
+def choose_blend(runs: FilterRuns, start: np.ndarray, likelihood: np.ndarray, folds):
+    """The largest blend step t (:data:`BLENDS`) of input and likelihood shape that leaves
+    every tuning log within :data:`RMSE_TOLERANCE` of the input's RMSE, both fitted on all
+    logs (in sample) and, leaving each log out in turn, fitted on the others (held out:
+    ``folds`` from :func:`fold_fits`, shaped as ``likelihood`` is).
+
+    Returns ``(t, scores)``; t = 0 (the input shape) always passes.
+    """
+    base = runs.log_rmse(start)
+    scores = []
+    for t in BLENDS:
+        in_sample = runs.log_rmse(blend(start, likelihood, t)) / base
+        held_out = [
+            float(held.log_rmse(blend(start, fold, t))[0] / base[k])
+            for k, (held, fold) in enumerate(folds)
+        ]
+        scores.append(BlendScore(t=t, held_out=tuple(held_out), in_sample=tuple(in_sample)))
+    chosen = next(score.t for score in scores if score.accepted or score.t == 0.0)
+    return chosen, tuple(scores)
+
+
+def tune(
+    runs: FilterRuns, start: np.ndarray, *, references: bool, iterations: int = 400
+) -> TuningResult:
+    """Maximum-likelihood tuning (constant and input-dependent densities) shaped so that it
+    generalises: the ratios of q and r_c to r_s the leave-one-log-out fits do not agree on
+    stay the input's (:func:`agreed_ratios`); with ``references`` also the RMSE-minimising
+    tuning, the blend of input and likelihood shape no tuning log objects to
+    (:func:`choose_blend`) and its coverage calibration (its estimates unchanged)."""
+    start = np.asarray(start, float)
+    if start.shape == (len(NOISE_DENSITIES),):
+        start = np.concatenate([start, runs.vehicle.filter.input_densities()])
+    likelihood, count = _maximum_likelihood(runs, start, iterations)
+    folds, more = fold_fits(runs, likelihood, iterations)
+    count += more
+    agreed = agreed_ratios([likelihood, *[fit for _, fit in folds]])
+    robust = with_input_ratios(start, likelihood, agreed)
+    rmse, shape, scale, t, scores = None, robust, 1.0, 1.0, ()
     if references:
-        rmse, more = _minimise(runs.pooled_rmse, likelihood, iterations, span)
+        begin, span = _search_start(start)
+        rmse, more = _minimise(runs.pooled_rmse, np.where(likelihood > 0, likelihood, begin),
+                               iterations, span)  # fmt: skip
         count += more
-        # Each shape calibrated to the coverage target (the gate's S scaled with it, so
-        # the estimates are the shape's own with the file's guards); the lower pooled RMSE
-        # is written.
-        scored = []
-        for candidate in (likelihood, start):
-            factor = runs.calibrate(candidate)
-            scored.append((runs.pooled_rmse(candidate), candidate, factor))
-        _, shape, scale = min(scored, key=lambda entry: entry[0])
+        shaped = [(held, with_input_ratios(start, fit, agreed)) for held, fit in folds]
+        t, scores = choose_blend(runs, start, robust, shaped)
+        # The chosen shape calibrated to the coverage target (the gate's S scaled with it,
+        # so the estimates are the shape's own with the file's guards).
+        shape = blend(start, robust, t)
+        scale = runs.calibrate(shape)
     return TuningResult(
         initial=start,
         likelihood=likelihood,
+        folds=tuple(fit for _, fit in folds),
+        agreed=agreed,
+        robust=robust,
         rmse=rmse,
         shape=shape,
+        blend=t,
+        scores=scores,
         scale=scale,
         evaluations=count,
     )
@@ -278,7 +488,14 @@ def tuned_vehicle(vehicle: Vehicle, result: TuningResult) -> Vehicle:
 
 __all__ = [
     "NOISE_DENSITIES",
+    "TUNED_DENSITIES",
     "UPDATE_ROWS",
+    "BlendScore",
+    "blend",
+    "agreed_ratios",
+    "choose_blend",
+    "fold_fits",
+    "with_input_ratios",
     "Consistency",
     "FilterRuns",
     "TuningResult",

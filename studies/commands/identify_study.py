@@ -62,7 +62,10 @@ def handle(args: argparse.Namespace) -> int:
         f"(start: springs x{settings.spring}, dampers x{settings.damper}, bars x{settings.bar})"
     )
     print(identification.to_string(index=False, float_format="%.1f"))
-    print(f"\ntuned on {', '.join(settings.tune_on)}: [q, r_s, r_c] = {tuning.attrs['tuned']}")
+    print(
+        f"\ntuned on {', '.join(settings.tune_on)}: [q, r_s, r_c, r_sv, r_sh, r_ca] ="
+        f" {tuning.attrs['tuned']}"
+    )
     print(tuning.to_string(index=False, float_format="%.1f"))
     print(f"tables written to {folder}")
     return 0

@@ -1,23 +1,26 @@
 """``wheelload tune LOG ... --vehicle FILE --out NEW.toml``: fit the filter's noise densities.
 
-Maximum likelihood of the filter's innovations (prediction-error method); with
-reference loads ``fz_*`` in every log also the RMSE-minimising tuning and a
-±2σ coverage calibration (``wheelload.estimators.identification.tuning``).
-The new file is a copy of ``--vehicle`` with new ``[filter]`` densities and,
-with references, ``gate_scale = 1/c`` for densities scaled by c (the gate
-keeps its decisions, so only σ is calibrated).
-"""
+Maximum likelihood of the filter's innovations (prediction-error method) for the
+constant and the input-dependent densities (``models/measurement_noise.py``); the
+ratios the leave-one-log-out fits do not agree on stay the input file's; with
+reference loads ``fz_*`` in every log also the RMSE-minimising tuning, the blend
+of input and likelihood shape no tuning log objects to, and a ±2σ coverage
+calibration (``wheelload.estimators.identification.tuning``). The new file is a
+copy of ``--vehicle`` with new ``[filter]`` densities and, with references,
+``gate_scale = 1/c`` for densities scaled by c (the gate keeps its decisions, so
+only σ is calibrated)."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from wheelload.estimators import read_log
 from wheelload.estimators.identification.tuning import (
     NIS_BAND,
+    RATIO_AGREEMENT,
+    RATIOS,
+    RMSE_TOLERANCE,
     FilterRuns,
     tune,
     tuned_vehicle,
@@ -28,7 +31,7 @@ from wheelload.estimators.identification.vehicle_writer import (
     prepend_comment,
     write_vehicle_text,
 )
-from wheelload.estimators.two_stage import NOISE_DENSITIES, UPDATE_ROWS, noise_densities
+from wheelload.estimators.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
 
 
@@ -49,11 +52,13 @@ def register(subparsers) -> None:
         metavar="LOG",
         help="logs not used for tuning, with reference loads: print the before/after table",
     )
+    parser.add_argument(
+        "--iterations",
+        type=int,
+        default=400,
+        help="Nelder-Mead iterations per fit (default 400; fewer for a quick look)",
+    )
     parser.set_defaults(handler=handle)
-
-
-def _row(name: str, values: np.ndarray) -> str:
-    return f"{name:>22}" + "".join(f"{v:12.4g}" for v in values)
 
 
 def handle(args: argparse.Namespace) -> int:
@@ -64,13 +69,37 @@ def handle(args: argparse.Namespace) -> int:
     logs = tuple(read_log(path) for path in args.logs)
     references = all(signals.reference is not None for signals in logs)
     runs = FilterRuns(vehicle, logs)
-    result = tune(runs, noise_densities(vehicle), references=references)
-    print(f"{'':>22}" + "".join(f"{name[:11]:>12}" for name in NOISE_DENSITIES))
-    print(_row("input file", result.initial))
-    print(_row("max. likelihood", result.likelihood))
+    result = tune(runs, noise_densities(vehicle), references=references, iterations=args.iterations)
+    columns = [
+        ("input file", result.initial),
+        ("max. likelihood", result.likelihood),
+        *[(f"without log {k + 1}", fit) for k, fit in enumerate(result.folds)],
+        ("agreed ratios", result.robust),
+    ]
     if result.rmse is not None:
-        print(_row("min. RMSE", result.rmse))
-        print(_row(f"written ({result.shape_source} x{result.scale:.3g})", result.tuned))
+        columns += [
+            ("min. RMSE", result.rmse),
+            (f"written ({result.shape_source} x{result.scale:.3g})", result.tuned),
+        ]
+    print(f"{'density':>39}" + "".join(f"{label[:17]:>18}" for label, _ in columns))
+    for k, name in enumerate(TUNED_DENSITIES):
+        print(f"{name:>39}" + "".join(f"{values[k]:18.4g}" for _, values in columns))
+    kept = [name for name in RATIOS if name not in result.agreed]
+    print(
+        "ratios to suspension_noise_density taken from the likelihood (its fits on all logs"
+        f" and leaving each out within {RATIO_AGREEMENT:g}x): {', '.join(result.agreed) or 'none'};"
+        f" the input file's: {', '.join(kept) or 'none'}"
+    )
+    if result.scores:
+        print(
+            "shape blend t (0 input, 1 likelihood): RMSE / input's per tuning log,"
+            f" taken within {RMSE_TOLERANCE:g}x on every log"
+        )
+        for score in result.scores:
+            held = ", ".join(f"{x:.3f}" for x in score.held_out) or "-"
+            own = ", ".join(f"{x:.3f}" for x in score.in_sample)
+            mark = "  <- written" if score.t == result.blend else ""
+            print(f"  t={score.t:<5g} left out: {held}; in sample: {own}{mark}")
     lo, hi = NIS_BAND
     print(f"consistency on the tuning logs (NIS = y^2/S, 95 % band {lo:.3g}..{hi:.3g}):")
     for label, tuning, gate in (
@@ -90,21 +119,39 @@ def handle(args: argparse.Namespace) -> int:
         )
         print(f"  {label}: mean NIS (share in band) {nis}{extra}")
     tuned = result.tuned
+    named = dict(zip(TUNED_DENSITIES, tuned, strict=True))
     new_vehicle = tuned_vehicle(vehicle, result)
-    shape = (
-        "maximum likelihood of the innovations"
-        if result.shape_source == "likelihood"
-        else "the input file's densities (lower RMSE than the likelihood shape)"
-    )
-    note = f"{shape} of {', '.join(Path(p).name for p in args.logs)}" + (
-        f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
-        if references
-        else ""
-    )
+    logs = ", ".join(Path(p).name for p in args.logs)
+    if result.shape_source == "input":
+        note = f"the input file's densities (the likelihood shape of {logs} raised a log's RMSE)"
+    else:
+        note = f"maximum likelihood of the innovations of {logs}"
+        if result.shape_source != "likelihood":
+            note = f"{result.shape_source} of the input file's and the {note}"
+        kept = [name for name in RATIOS if name not in result.agreed]
+        if kept:
+            note += (
+                f", with the input file's ratio to suspension_noise_density of {', '.join(kept)}"
+                " (the fits leaving one log out disagreed)"
+            )
+    if references:
+        note += f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
     changes = {
         ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
         ("filter", "suspension_noise_density"): (tuned[1], "tuned (see above)"),
         ("filter", "constraint_noise_density"): (list(tuned[2:5]), "tuned (see above)"),
+        ("filter", "suspension_noise_rate_density"): (
+            named["suspension_noise_rate_density"],
+            "tuned: R_s + this x v^2 / dt (models/measurement_noise.py)",
+        ),
+        ("filter", "suspension_noise_hub_density"): (
+            named["suspension_noise_hub_density"],
+            "tuned: R_s + this x (a_hub - az)^2 / dt",
+        ),
+        ("filter", "constraint_noise_acceleration_density"): (
+            [named[f"constraint_noise_{r}_acceleration"] for r in ("vertical", "pitch", "roll")],
+            "tuned: R_c + this x ((az - g)^2, ax^2, ay^2) / dt",
+        ),
         ("filter", "gate_scale"): (
             new_vehicle.filter.gate_scale,
             f"tuned: the gate's S x this (the densities were scaled x{result.scale:.3g})",
