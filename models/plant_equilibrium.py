@@ -40,7 +40,7 @@ from wheelload.models.plant import (
     corners,
     plant_dynamics,
 )
-from wheelload.models.road_surface import RoadSurface
+from wheelload.models.road_surface import RoadSurface, road_lookup
 from wheelload.models.vehicle import Vehicle
 
 ROLLING = 0.5  # m/s, speed from which the tyre slips are solved too
@@ -58,17 +58,28 @@ MAX_ITERATIONS = 40
 
 
 def guess_state(vehicle: Vehicle, road: RoadSurface, s: float, speed: float, n: float = 0.0):
-    """Level-ground start: static height above the road, road attitude, zero-slip wheels."""
-    grade = float(np.interp(s, road.s, road.grade))
-    bank = float(np.interp(s, road.s, road.bank))
+    """Start on the road plane under the four wheels: static height, its attitude, zero slip.
+
+    The plane :math:`z = a + b\,x + c\,y` is the least-squares fit of the road heights
+    (roughness included) under the four contact points, so that no wheel starts off a
+    rough road; on a smooth road it is the road's own grade and bank.
+    """
+    wheels = corners(vehicle)
+    contact = np.array([[1.0, c.x, c.y] for c in wheels])
+    lookup = road_lookup(road)  # the plant's own road (linear, extrapolated off the grid)
+    heights = []
+    for c in wheels:
+        elevation, _, bank, _, left, right = np.asarray(lookup(s + c.x)).ravel()
+        heights.append(elevation + (n + c.y) * bank + (left if c.left else right))
+    (level, grade, bank), *_ = np.linalg.lstsq(contact, np.array(heights), rcond=None)
     x = np.zeros(len(STATE_NAMES))
     x[STATE["s"]] = s
     x[STATE["n"]] = n
-    x[STATE["z"]] = float(road.height(s, n)) + vehicle.geometry.cg_height
+    x[STATE["z"]] = level + vehicle.geometry.cg_height
     x[STATE["theta"]] = -np.arctan(grade)
     x[STATE["phi"]] = np.arctan(bank)
     x[STATE["u"]] = speed
-    for i, c in enumerate(corners(vehicle)):
+    for i, c in enumerate(wheels):
         deflection = c.static_load / c.tyre_rate
         x[STATE["omega_fl"] + i] = speed / (c.radius - deflection / 3.0)
     return x
@@ -124,7 +135,7 @@ def initial_state(
         norm = np.abs(r).max()
         if norm < TOLERANCE:
             break
-        step = np.linalg.solve(jac, -r)
+        step = np.linalg.lstsq(jac, -r, rcond=None)[0]  # a wheel off the road: singular
         length = 1.0
         while length > 1e-4:  # backtrack while the residual grows
             trial = guess + length * step
@@ -136,7 +147,11 @@ def initial_state(
                 break
         guess = trial
     else:
-        raise PlantError(f"initial equilibrium at s = {s} m did not converge (residual {norm:.3g})")
+        raise PlantError(
+            f"initial equilibrium at s = {s} m did not converge (residual {norm:.3g}): on a "
+            "rough road a wheel may find no steady contact there; try another seed or a "
+            "smoother roughness class"
+        )
     x_eq = x0.copy()
     x_eq[index] = guess
     return x_eq

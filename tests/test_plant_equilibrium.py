@@ -75,3 +75,21 @@ def test_start_on_a_bank_matches_rigid_body_statics(vehicle):
     # (the sprung CG moves downhill by h_s phi_rel, about 1 cm against the 0.15 m
     # lever h tan beta) and the contact patches shift with tyre deflection.
     assert moment == pytest.approx(-m * c.height * GRAVITY * np.sin(beta), rel=0.05)
+
+
+@pytest.mark.parametrize("road_class", ["B", "C"])
+def test_start_on_a_rough_road_puts_every_wheel_on_the_road(vehicle, road_class):
+    """The start is solved on the plant's road plane under the four wheels: with the road
+    height under the CG alone a wheel of iso-dlc (seed 0) started in the air and Newton's
+    Jacobian was singular. Now every wheel carries load from the first sample (measured
+    at least 2365 N on class C, against 3601-4262 N static), and over the first 20 m the
+    loads sum to what they sum to on the smooth road (0.994 m g; aerodynamic forces at
+    80 km/h) within 1 % (measured 0.992 on B, 0.989 on C)."""
+    weight = vehicle.mass.total * GRAVITY
+    sums = {}
+    for roughness in (None, road_class):
+        run = scenario_run("iso-dlc", vehicle, Options(roughness=roughness))
+        frame = simulate(vehicle, dataclasses.replace(run, record_from=None, stop=20.0)).frame
+        assert np.all(frame[LOADS].iloc[0].to_numpy() > 0.5 * weight / 4)
+        sums[roughness] = frame[LOADS].to_numpy().sum(axis=1).mean() / weight
+    assert abs(sums[road_class] - sums[None]) < 0.01
