@@ -178,6 +178,8 @@ def kernel_function(
 
 #: Inputs of the C kernel, in order (``p`` and ``tuning`` with runtime parameters).
 KERNEL_INPUTS = ("x", "P", "m", "u", "u_valid", "dt", "p", "tuning")
+#: Kernel inputs that hold exactly 0 or 1 (the step sets ``u_valid`` to ONE or ZERO).
+BOOLEAN_INPUTS = (KERNEL_INPUTS.index("u_valid"),)
 #: Outputs of the C kernel, in order.
 KERNEL_OUTPUTS = (
     "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
@@ -239,6 +241,7 @@ def _substitutions(
         [f"{name}[{{}}]" for name in KERNEL_OUTPUTS],
         precision,
         f"{prefix}_real",
+        boolean_inputs=BOOLEAN_INPUTS,
     )
     checks = [
         f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
@@ -389,7 +392,14 @@ def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix
             [f"param_{n}" for n in TUNING],
         ]
     lines.append("{")
-    body = emit_statements(kernel, inputs, [f"{name}{{}}" for name in sizes], precision, real)
+    body = emit_statements(
+        kernel,
+        inputs,
+        [f"{name}{{}}" for name in sizes],
+        precision,
+        real,
+        boolean_inputs=BOOLEAN_INPUTS,
+    )
     lines += [f"    {line}" for line in body.splitlines()]
     lines.append("}")
     finite = [
