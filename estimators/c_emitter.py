@@ -14,10 +14,11 @@ and a blend, or a ``min``/``max`` instruction): the emitter knows which work
 variables hold a truth value (exactly 0 or 1: comparisons, logic, products
 of truth values, the inputs named in ``boolean_inputs``) and which can never
 be NaN (constants, truth values, ``fmax`` with such an operand), and writes
-``c ? x : 0`` as ``c > 0.5``, ``and``/``or`` of truth values as ``min``/``max``,
-``not`` as ``1 - c``, and ``fmax(a, b)`` with a non-NaN ``b`` as one compare.
-Every form gives the same value as the C99 one for every input (NaN and
-signed zeros included), so the emitted code computes the same bits.
+``c ? x : 0`` as ``c > 0.5``, ``and``/``or`` and products of truth values as
+``min``/``max``, ``not`` as ``1 - c``, and ``fmax(a, b)`` with a non-NaN
+``b`` as one compare. Each form gives the value of the C99 one for every
+operand value, NaN included, so the emitted code computes the same numbers
+(a ``boolean_inputs`` value of -0.0 may come out as +0.0 or the reverse).
 
 Example
 -------
@@ -257,6 +258,8 @@ def _select(op: int, operands: list[int], values: _Values, precision: Precision)
         if operands[0] in values.truth:
             return f"{one} - {a}"
         return f"(fabs{suffix}({a}) <= {zero}) ? {one} : {zero}"
+    if op == ca.OP_MUL and all(w in values.truth for w in operands):
+        return f"({a} < {b}) ? {a} : {b}"  # a product of truth values is their minimum
     if op in (ca.OP_AND, ca.OP_OR):
         left, right = truth(operands[0]), truth(operands[1])
         compare = "<" if op == ca.OP_AND else ">"
@@ -276,6 +279,7 @@ def emit_statements(
     real: str,
     *,
     boolean_inputs: Sequence[int] = (),
+    branch_free: bool = True,
 ) -> str:
     """C statements that evaluate the SX Function ``f``.
 
@@ -296,6 +300,10 @@ def emit_statements(
         Indices of the inputs whose every value the caller guarantees to be
         exactly 0 or 1 (validity flags): tests on them are written as
         compares with 0.5 and ``min``/``max``, which gcc compiles without branches.
+    branch_free
+        False writes every select in its plain C99 form (``c != 0 ? x : 0``,
+        nested selects for logic), which gcc compiles to branches: the
+        alternative ``wheelload bench speed`` measures the forms against.
     """
     if not f.is_a("SXFunction"):
         raise EmitError(f"{f.name()}: only SX Functions can be emitted, got {f.class_name()}")
@@ -329,9 +337,9 @@ def emit_statements(
             values.define(target, truth=value in (0.0, 1.0), number=True, constant=value)
         elif op in _TEMPLATES:
             operands = [w for w in f.instruction_input(k) if w >= 0]
-            expression = _select(op, operands, values, precision) or _TEMPLATES[op].format(
-                *(f"w{w}" for w in operands), f=suffix, one=one, zero=zero
-            )
+            expression = (branch_free and _select(op, operands, values, precision)) or _TEMPLATES[
+                op
+            ].format(*(f"w{w}" for w in operands), f=suffix, one=one, zero=zero)
             truth, number = values.after(op, operands)
             values.define(target, truth=truth, number=number, constant=None)
         else:

@@ -72,10 +72,10 @@ STRICT_CFLAGS = (
     "-Werror",
 )  # fmt: skip
 #: The speed build (generated Makefile's FAST_CFLAGS, where each flag is explained):
-#: vectorises the batched step, FMA contraction stated, no -ffast-math.
+#: vectorises the batched step, FMA contraction and shared reciprocals stated, no -ffast-math.
 FAST_CFLAGS = (
-    "-std=c99", "-O3", "-march=native", "-ffp-contract=fast", "-fno-math-errno",
-    "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
+    "-std=c99", "-O3", "-march=native", "-ffp-contract=fast", "-freciprocal-math",
+    "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
 #: Calibration values that must be positive (the rest must be finite).
@@ -97,6 +97,7 @@ class CodegenOptions:
     params: ParamMode = ParamMode.RUNTIME
     prefix: str = "wheelload_kf"
     sample_interval: float = DEFAULT_SAMPLE_INTERVAL  # s, the logger's nominal interval
+    branch_free: bool = True  # selects in branch-free forms (False: plain C99 selects)
 
     def __post_init__(self) -> None:
         if not 0.0 < self.sample_interval < 1e6:
@@ -242,6 +243,7 @@ def _substitutions(
         precision,
         f"{prefix}_real",
         boolean_inputs=BOOLEAN_INPUTS,
+        branch_free=options.branch_free,
     )
     checks = [
         f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
