@@ -48,6 +48,9 @@ STEP_TARGET = 10.0  # µs per TwoStageKF.step
 FILTERPY_TARGET = 10.0  # times faster than filterpy
 BATCH_TARGETS = {Precision.DOUBLE: 4.0, Precision.FLOAT: 8.0}  # throughput vs single step
 CHAIN_TARGET = 1.3  # single C step / dependency-chain bound
+#: Passes of each C timing (of --samples filter-steps each): short passes, the
+#: fastest taken, so that a pass rarely loses the core on a shared machine.
+PASSES = 101
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -58,7 +61,12 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
-    parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
+    parser.add_argument(
+        "--samples",
+        type=int,
+        default=1000,
+        help=f"C (filter-)steps per timing pass, fastest of {PASSES} passes (default 1000)",
+    )
     parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
     parser.add_argument(
         "--logs", type=int, default=16, help="logs for run_batched vs run (default 16)"
@@ -197,9 +205,11 @@ def batch_vs_single(vehicle_path: Path, folder: Path, precision: Precision, args
     )  # fmt: skip
     single, batched = [], []
     for _ in range(args.repeats):
-        single.append(_selftest_ns(binary, "bench", SHORT_PASS, SHORT_PASSES))
+        single.append(_selftest_ns(binary, "bench", args.samples, PASSES))
         batched.append(
-            _selftest_ns(binary, "batch-bench", args.samples // args.batch, 5, args.batch)
+            _selftest_ns(
+                binary, "batch-bench", max(args.samples // args.batch, 1), PASSES, args.batch
+            )
         )
     ratios = [s / b for s, b in zip(single, batched)]
     print(f"  {precision.value}: single step {spread(single)} ns; batch of {args.batch}: "
@@ -211,9 +221,6 @@ def batch_vs_single(vehicle_path: Path, folder: Path, precision: Precision, args
 #: The single step as it was generated before the branch-free selects: plain C99
 #: selects, FAST_CFLAGS without -freciprocal-math.
 PLAIN_FLAGS = tuple(flag for flag in FAST_CFLAGS if flag != "-freciprocal-math")
-#: Samples per pass and passes of the single-step timing: short passes, fastest
-#: taken, so that a pass rarely loses the core on a shared machine.
-SHORT_PASS, SHORT_PASSES = 1000, 101
 
 
 def single_step_vs_bounds(vehicle_path: Path, folder: Path, args) -> None:
@@ -238,7 +245,7 @@ def single_step_vs_bounds(vehicle_path: Path, folder: Path, args) -> None:
     times: dict[str, list[float]] = {name: [] for name in variants}
     for _ in range(args.repeats):
         for name, (_, binary) in built.items():
-            times[name].append(_selftest_ns(binary, "bench", SHORT_PASS, SHORT_PASSES))
+            times[name].append(_selftest_ns(binary, "bench", args.samples, PASSES))
     kernel = next(iter(built.values()))[0].kernel
     chain = critical_path(kernel)
     mhz = clock or nominal
