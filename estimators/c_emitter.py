@@ -9,6 +9,17 @@ local work variables of a ``real`` typedef, with ``f``-suffixed literals and
 ``sqrtf``-style maths functions in single precision; ``fmin``/``fmax`` are
 written as selects.
 
+Selects are written in the forms gcc compiles without a branch (a compare
+and a blend, or a ``min``/``max`` instruction): the emitter knows which work
+variables hold a truth value (exactly 0 or 1: comparisons, logic, products
+of truth values, the inputs named in ``boolean_inputs``) and which can never
+be NaN (constants, truth values, ``fmax`` with such an operand), and writes
+``c ? x : 0`` as ``c > 0.5``, ``and``/``or`` and products of truth values as
+``min``/``max``, ``not`` as ``1 - c``, and ``fmax(a, b)`` with a non-NaN
+``b`` as one compare. Each form gives the value of the C99 one for every
+operand value, NaN included, so the emitted code computes the same numbers
+(a ``boolean_inputs`` value of -0.0 may come out as +0.0 or the reverse).
+
 Example
 -------
 >>> body = emit_statements(f, ["x[{}]", "u[{}]"], ["y[{}]"], Precision.FLOAT, "wl_real")
@@ -175,12 +186,100 @@ def _element(names: str | Sequence[str], nz: int) -> str:
     return names.format(nz) if isinstance(names, str) else names[nz]
 
 
+#: Operations whose result is a truth value, exactly 0 or 1.
+_TRUTH = frozenset(
+    (ca.OP_LT, ca.OP_LE, ca.OP_EQ, ca.OP_NE, ca.OP_NOT, ca.OP_AND, ca.OP_OR)
+)  # fmt: skip
+#: Operations whose result is not NaN when their (first) operand is not.
+_KEEPS_NUMBER = frozenset((ca.OP_ASSIGN, ca.OP_FABS, ca.OP_NEG, ca.OP_SQ))
+
+
+class _Values:
+    """What is known of each work variable: a truth value (0 or 1), never NaN, a constant."""
+
+    def __init__(self) -> None:
+        self.truth: set[int] = set()
+        self.number: set[int] = set()
+        self.constant: dict[int, float] = {}
+
+    def define(self, target: int, *, truth: bool, number: bool, constant: float | None) -> None:
+        for known, holds in ((self.truth, truth), (self.number, number)):
+            if holds:
+                known.add(target)
+            else:
+                known.discard(target)
+        if constant is None:
+            self.constant.pop(target, None)
+        else:
+            self.constant[target] = constant
+
+    def after(self, op: int, operands: list[int]) -> tuple[bool, bool]:
+        """(truth value, never NaN) of the result of ``op`` on ``operands``."""
+        truths = [w in self.truth for w in operands]
+        numbers = [w in self.number for w in operands]
+        truth = (
+            op in _TRUTH
+            or (op in (ca.OP_MUL, ca.OP_FMIN, ca.OP_FMAX) and all(truths))
+            or (op in (ca.OP_ASSIGN, ca.OP_SQ) and truths[0])
+            or (op == ca.OP_SUB and self.constant.get(operands[0]) == 1.0 and truths[1])
+            or (op == ca.OP_IF_ELSE_ZERO and truths[1])
+        )
+        number = (
+            truth
+            or (op in (ca.OP_FMIN, ca.OP_FMAX) and any(numbers))
+            or (op in _KEEPS_NUMBER and numbers[0])
+            or (op == ca.OP_IF_ELSE_ZERO and numbers[1])
+        )
+        return truth, number
+
+
+def _select(op: int, operands: list[int], values: _Values, precision: Precision) -> str | None:
+    """Branch-free C of a select or logic operation, or None for :data:`_TEMPLATES`' form.
+
+    The forms equal the C99 ones for every operand value: ``c != 0`` and
+    ``c > 0.5`` agree on truth values; ``min``/``max`` of truth values are
+    their ``and``/``or``; ``(b == b) ? max : a`` is ``fmax``'s NaN rule.
+    """
+    one, zero, half = (literal(v, precision) for v in (1.0, 0.0, 0.5))
+    suffix = "f" if precision is Precision.FLOAT else ""
+    a, b = (f"w{w}" for w in (*operands, operands[0])[:2])
+
+    def truth(w: int) -> str:
+        # C's (v != 0) as a compare against |v| (NaN counts as true, as in C).
+        return (
+            f"w{w}" if w in values.truth else f"((fabs{suffix}(w{w}) <= {zero}) ? {zero} : {one})"
+        )
+
+    if op == ca.OP_IF_ELSE_ZERO:
+        if operands[0] in values.truth:
+            return f"({a} > {half}) ? {b} : {zero}"
+        return f"(fabs{suffix}({a}) <= {zero}) ? {zero} : {b}"
+    if op == ca.OP_NOT:
+        if operands[0] in values.truth:
+            return f"{one} - {a}"
+        return f"(fabs{suffix}({a}) <= {zero}) ? {one} : {zero}"
+    if op == ca.OP_MUL and all(w in values.truth for w in operands):
+        return f"({a} < {b}) ? {a} : {b}"  # a product of truth values is their minimum
+    if op in (ca.OP_AND, ca.OP_OR):
+        left, right = truth(operands[0]), truth(operands[1])
+        compare = "<" if op == ca.OP_AND else ">"
+        return f"({left} {compare} {right}) ? {left} : {right}"
+    if op in (ca.OP_FMIN, ca.OP_FMAX):
+        compare = "<" if op == ca.OP_FMIN else ">"
+        pick = f"({a} {compare} {b}) ? {a} : {b}"
+        return pick if operands[1] in values.number else f"({b} == {b}) ? ({pick}) : {a}"
+    return None
+
+
 def emit_statements(
     f: ca.Function,
     inputs: Sequence[str | Sequence[str]],
     outputs: Sequence[str | Sequence[str]],
     precision: Precision,
     real: str,
+    *,
+    boolean_inputs: Sequence[int] = (),
+    branch_free: bool = True,
 ) -> str:
     """C statements that evaluate the SX Function ``f``.
 
@@ -197,6 +296,14 @@ def emit_statements(
         Literal suffix and maths-function names.
     real
         Name of the C floating type of the work variables.
+    boolean_inputs
+        Indices of the inputs whose every value the caller guarantees to be
+        exactly 0 or 1 (validity flags): tests on them are written as
+        compares with 0.5 and ``min``/``max``, which gcc compiles without branches.
+    branch_free
+        False writes every select in its plain C99 form (``c != 0 ? x : 0``,
+        nested selects for logic), which gcc compiles to branches: the
+        alternative ``wheelload bench speed`` measures the forms against.
     """
     if not f.is_a("SXFunction"):
         raise EmitError(f"{f.name()}: only SX Functions can be emitted, got {f.class_name()}")
@@ -207,6 +314,7 @@ def emit_statements(
         )
     suffix = "f" if precision is Precision.FLOAT else ""
     one, zero = literal(1.0, precision), literal(0.0, precision)
+    values = _Values()
     lines = []
     used = set()
     for k in range(f.n_instructions()):
@@ -221,11 +329,19 @@ def emit_statements(
         if op == ca.OP_INPUT:
             index, nz = f.instruction_input(k)
             expression = _element(inputs[index], nz)
+            boolean = index in boolean_inputs
+            values.define(target, truth=boolean, number=boolean, constant=None)
         elif op == ca.OP_CONST:
-            expression = literal(f.instruction_constant(k), precision)
+            value = f.instruction_constant(k)
+            expression = literal(value, precision)
+            values.define(target, truth=value in (0.0, 1.0), number=True, constant=value)
         elif op in _TEMPLATES:
-            operands = [f"w{w}" for w in f.instruction_input(k) if w >= 0]
-            expression = _TEMPLATES[op].format(*operands, f=suffix, one=one, zero=zero)
+            operands = [w for w in f.instruction_input(k) if w >= 0]
+            expression = (branch_free and _select(op, operands, values, precision)) or _TEMPLATES[
+                op
+            ].format(*(f"w{w}" for w in operands), f=suffix, one=one, zero=zero)
+            truth, number = values.after(op, operands)
+            values.define(target, truth=truth, number=number, constant=None)
         else:
             raise EmitError(
                 f"{f.name()}: operation '{OPERATION_NAMES.get(op, op)}' at instruction {k} "

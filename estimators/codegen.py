@@ -73,10 +73,10 @@ STRICT_CFLAGS = (
     "-Werror",
 )  # fmt: skip
 #: The speed build (generated Makefile's FAST_CFLAGS, where each flag is explained):
-#: vectorises the batched step, FMA contraction stated, no -ffast-math.
+#: vectorises the batched step, FMA contraction and shared reciprocals stated, no -ffast-math.
 FAST_CFLAGS = (
-    "-std=c99", "-O3", "-march=native", "-ffp-contract=fast", "-fno-math-errno",
-    "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
+    "-std=c99", "-O3", "-march=native", "-ffp-contract=fast", "-freciprocal-math",
+    "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
 #: Calibration values that must be positive (the rest must be finite).
@@ -99,6 +99,7 @@ class CodegenOptions:
     params: ParamMode = ParamMode.RUNTIME
     prefix: str = "wheelload_kf"
     sample_interval: float = DEFAULT_SAMPLE_INTERVAL  # s, the logger's nominal interval
+    branch_free: bool = True  # selects in branch-free forms (False: plain C99 selects)
 
     def __post_init__(self) -> None:
         if not 0.0 < self.sample_interval < 1e6:
@@ -180,6 +181,8 @@ def kernel_function(
 
 #: Inputs of the C kernel, in order (``p`` and ``tuning`` with runtime parameters).
 KERNEL_INPUTS = ("x", "P", "m", "u", "u_valid", "dt", "p", "tuning")
+#: Kernel inputs that hold exactly 0 or 1 (the step sets ``u_valid`` to ONE or ZERO).
+BOOLEAN_INPUTS = (KERNEL_INPUTS.index("u_valid"),)
 #: Outputs of the C kernel, in order.
 KERNEL_OUTPUTS = (
     "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
@@ -241,6 +244,8 @@ def _substitutions(
         [f"{name}[{{}}]" for name in KERNEL_OUTPUTS],
         precision,
         f"{prefix}_real",
+        boolean_inputs=BOOLEAN_INPUTS,
+        branch_free=options.branch_free,
     )
     checks = [
         f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
@@ -391,7 +396,14 @@ def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix
             [f"param_{n}" for n in TUNING],
         ]
     lines.append("{")
-    body = emit_statements(kernel, inputs, [f"{name}{{}}" for name in sizes], precision, real)
+    body = emit_statements(
+        kernel,
+        inputs,
+        [f"{name}{{}}" for name in sizes],
+        precision,
+        real,
+        boolean_inputs=BOOLEAN_INPUTS,
+    )
     lines += [f"    {line}" for line in body.splitlines()]
     lines.append("}")
     finite = [

@@ -76,15 +76,14 @@ static void ${prefix}_kernel(const ${prefix}_real x[4], const ${prefix}_real P[1
 ${kernel_body}
 }
 
+/* 1 if every value is finite: one test per value, no early exit (no branch). */
 static int all_finite(const ${prefix}_real *values, int n)
 {
-    int k;
+    int k, finite = 1;
     for (k = 0; k < n; ++k) {
-        if (!isfinite(values[k])) {
-            return 0;
-        }
+        finite &= FINITE(values[k]);
     }
-    return 1;
+    return finite;
 }
 
 int ${prefix}_init(${prefix}_state *state, const ${prefix}_params *params)
@@ -126,20 +125,19 @@ uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
 ${unused_params}
 ${input_copy}
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
-        u_valid[k] = isfinite(u[k]) ? ONE : ZERO;
-        if (!isfinite(u[k])) {
-            u[k] = ZERO;
-        }
+        const int finite = FINITE(u[k]);
+        u_valid[k] = finite ? ONE : ZERO;
+        u[k] = finite ? u[k] : ZERO;
     }
-    if (isfinite(dt) && dt > ZERO) {
+    if (FINITE(dt) && dt > ZERO) {
         ${prefix}_kernel(state->x, state->P, state->monitor, u, u_valid, dt${kernel_params_call},
                          x_next, P_next, m_next, std, residual, used, status, fault_statistic,
                          fault);
-        accepted = all_finite(x_next, 4) && all_finite(P_next, 10) && all_finite(std, 4)
-                   && all_finite(residual, 3) && all_finite(m_next, ${PREFIX}_N_MONITOR)
-                   && all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS);
+        accepted = all_finite(x_next, 4) & all_finite(P_next, 10) & all_finite(std, 4)
+                   & all_finite(residual, 3) & all_finite(m_next, ${PREFIX}_N_MONITOR)
+                   & all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS);
         for (k = 0; k < 4; ++k) {
-            accepted = accepted && P_next[diagonal[k]] > ZERO;
+            accepted &= P_next[diagonal[k]] > ZERO;
         }
     }
     if (accepted) {
@@ -153,19 +151,13 @@ ${input_copy}
             state->monitor[k] = m_next[k];
         }
         for (k = 0; k < N_USED; ++k) {
-            if (used[k] < HALF) {
-                flags |= update_flags[k];
-            }
+            flags |= used[k] < HALF ? update_flags[k] : 0u;
         }
         for (k = 0; k < ${n_status}; ++k) {
-            if (status[k] > HALF) {
-                flags |= guard_flags[k];
-            }
+            flags |= status[k] > HALF ? guard_flags[k] : 0u;
         }
         for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
-            if (fault[k] > HALF) {
-                faults |= 1u << k;
-            }
+            faults |= fault[k] > HALF ? 1u << k : 0u;
         }
     } else {
         for (k = 0; k < 4; ++k) {

@@ -13,9 +13,13 @@ over ``--repeats`` alternating repeats (min / median / max of the ratio):
 - :func:`~wheelload.estimators.batched.run_batched` over ``--logs`` logs
   against :meth:`TwoStageKF.run` on each (what ``estimate`` over many logs
   and the Monte Carlo study now use, against what they used);
-- the single C step against its dependency-chain bound: the longest chain of
-  the generated kernel's instructions at :data:`~wheelload.estimators.c_emitter.LATENCY`
-  cycles each, at the clock of ``/proc/cpuinfo``.
+- the single C step (double, fastest of short passes) against its
+  dependency-chain bound (the longest chain of the kernel's instructions at
+  :data:`~wheelload.estimators.c_emitter.LATENCY` cycles each) and its
+  throughput bound (the compiled kernel's instruction mix,
+  :mod:`~wheelload.studies.commands.c_step_bounds`), in cycles of the
+  measured clock; and against the same step with plain C99 selects built
+  without ``-freciprocal-math`` (the step before the branch-free selects).
 
 Printed, never asserted.
 """
@@ -31,11 +35,12 @@ import time
 from pathlib import Path
 
 from wheelload.estimators import Sample, TwoStageKF
-from wheelload.estimators.c_emitter import Precision, critical_path
+from wheelload.estimators.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.codegen import FAST_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.bench_codegen import cpu_mhz, filterpy_step
+from wheelload.studies.commands.c_step_bounds import compiled_mix, measured_clock_mhz
 from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -43,6 +48,9 @@ STEP_TARGET = 10.0  # µs per TwoStageKF.step
 FILTERPY_TARGET = 10.0  # times faster than filterpy
 BATCH_TARGETS = {Precision.DOUBLE: 4.0, Precision.FLOAT: 8.0}  # throughput vs single step
 CHAIN_TARGET = 1.3  # single C step / dependency-chain bound
+#: Passes of each C timing (of --samples filter-steps each): short passes, the
+#: fastest taken, so that a pass rarely loses the core on a shared machine.
+PASSES = 101
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -53,7 +61,12 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
     parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
-    parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
+    parser.add_argument(
+        "--samples",
+        type=int,
+        default=1000,
+        help=f"C (filter-)steps per timing pass, fastest of {PASSES} passes (default 1000)",
+    )
     parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
     parser.add_argument(
         "--logs", type=int, default=16, help="logs for run_batched vs run (default 16)"
@@ -192,41 +205,99 @@ def run(args: argparse.Namespace) -> int:
               f"(target >= {FILTERPY_TARGET:g})")  # fmt: skip
 
     logs_vs_run(vehicle_path, kf, args)
-    mhz = cpu_mhz()
     with tempfile.TemporaryDirectory(prefix="wheelload_speed_") as folder:
         print(f"Generated C, FAST_CFLAGS: {' '.join(FAST_CFLAGS)}")
         for precision in Precision:
-            library = generate(
-                vehicle_path,
-                Path(folder) / precision.value,
-                CodegenOptions(precision=precision),
-                allow_unusual=args.allow_unusual,
-            )
-            binary = build_program(
-                library,
-                library.selftest,
-                Path(folder) / precision.value / "selftest_fast",
-                flags=FAST_CFLAGS,
-            )
-            single, batched = [], []
-            for _ in range(args.repeats):
-                single.append(_selftest_ns(binary, "bench", args.samples, 5))
-                batched.append(
-                    _selftest_ns(binary, "batch-bench", args.samples // args.batch, 5, args.batch)
-                )
-            ratios = [s / b for s, b in zip(single, batched)]
-            print(f"  {precision.value}: single step {spread(single)} ns; batch of {args.batch}: "
-                  f"{spread(batched)} ns per filter-step")  # fmt: skip
-            print(f"    batched throughput {spread(ratios)} x the single step "
-                  f"(target >= {BATCH_TARGETS[precision]:g})")  # fmt: skip
-            if precision is Precision.DOUBLE:
-                cycles = critical_path(library.kernel)
-                if mhz is None:
-                    print(f"    chain bound {cycles} cycles (clock unknown: no ratio)")
-                    continue
-                bound = cycles / (mhz * 1e-3)
-                ratios = [s / bound for s in single]
-                print(f"    chain bound: {cycles} cycles of {library.flops} FLOPs = "
-                      f"{bound:.0f} ns at {mhz:.0f} MHz; single step / bound {spread(ratios)} "
-                      f"(target <= {CHAIN_TARGET:g})")  # fmt: skip
+            batch_vs_single(vehicle_path, Path(folder), precision, args)
+        single_step_vs_bounds(vehicle_path, Path(folder), args)
     return 0
+
+
+def _fast_selftest(vehicle_path: Path, folder: Path, options: CodegenOptions, flags, args):
+    library = generate(vehicle_path, folder, options, allow_unusual=args.allow_unusual)
+    binary = build_program(library, library.selftest, folder / "selftest_fast", flags=flags)
+    return library, binary
+
+
+def batch_vs_single(vehicle_path: Path, folder: Path, precision: Precision, args) -> None:
+    """Print the batched step against the single step (both FAST_CFLAGS) in ``precision``."""
+    _, binary = _fast_selftest(
+        vehicle_path, folder / precision.value, CodegenOptions(precision=precision), FAST_CFLAGS,
+        args,
+    )  # fmt: skip
+    single, batched = [], []
+    for _ in range(args.repeats):
+        single.append(_selftest_ns(binary, "bench", args.samples, PASSES))
+        batched.append(
+            _selftest_ns(
+                binary, "batch-bench", max(args.samples // args.batch, 1), PASSES, args.batch
+            )
+        )
+    ratios = [s / b for s, b in zip(single, batched)]
+    print(f"  {precision.value}: single step {spread(single)} ns; batch of {args.batch}: "
+          f"{spread(batched)} ns per filter-step")  # fmt: skip
+    print(f"    batched throughput {spread(ratios)} x the single step "
+          f"(target >= {BATCH_TARGETS[precision]:g})")  # fmt: skip
+
+
+#: The single step as it was generated before the branch-free selects: plain C99
+#: selects, FAST_CFLAGS without -freciprocal-math.
+PLAIN_FLAGS = tuple(flag for flag in FAST_CFLAGS if flag != "-freciprocal-math")
+
+
+def single_step_vs_bounds(vehicle_path: Path, folder: Path, args) -> None:
+    """Print the single C step (double) against its chain and throughput bounds.
+
+    Two builds side by side: this emitter (branch-free selects, FAST_CFLAGS)
+    and the plain C99 selects with FAST_CFLAGS without -freciprocal-math
+    (the step before them); for each, the compiled kernel's instruction mix.
+    """
+    nominal, clock = cpu_mhz(), measured_clock_mhz(folder)
+    variants = {
+        "branch-free selects, FAST_CFLAGS": (CodegenOptions(), FAST_CFLAGS),
+        "plain C99 selects, no -freciprocal-math": (
+            CodegenOptions(branch_free=False),
+            PLAIN_FLAGS,
+        ),
+    }
+    built = {
+        name: _fast_selftest(vehicle_path, folder / f"single{k}", options, flags, args)
+        for k, (name, (options, flags)) in enumerate(variants.items())
+    }
+    times: dict[str, list[float]] = {name: [] for name in variants}
+    for _ in range(args.repeats):
+        for name, (_, binary) in built.items():
+            times[name].append(_selftest_ns(binary, "bench", args.samples, PASSES))
+    kernel = next(iter(built.values()))[0].kernel
+    chain = critical_path(kernel)
+    mhz = clock or nominal
+    print(f"Single C step (double) against its bounds; clock {_mhz(clock)} measured "
+          f"(dependent adds), {_mhz(nominal)} nominal (/proc/cpuinfo)")  # fmt: skip
+    in_ns = f" = {chain / mhz * 1e3:.0f} ns" if mhz else ""
+    print(f"  kernel: {kernel.n_instructions()} CasADi instructions, {flop_count(kernel)} FLOPs; "
+          f"chain bound {chain} cycles{in_ns}")  # fmt: skip
+    for name, (library, _) in built.items():
+        options, flags = variants[name]
+        mix = compiled_mix(library.source, f"{options.prefix}_kernel", flags)
+        cycles = [t * mhz * 1e-3 for t in times[name]] if mhz else []
+        print(f"  {name}: {spread(times[name])} ns per step"
+              + (f" = {spread(cycles)} cycles" if cycles else ""))  # fmt: skip
+        if mix is not None:
+            bounds = ", ".join(f"{k} {v:.0f}" for k, v in mix.bounds().items())
+            print(f"    compiled kernel: {mix.instructions} instructions ({mix.multiply} mul/FMA/"
+                  f"blend, {mix.add} add/compare/min/max, {mix.divide} div/sqrt, {mix.stack} "
+                  f"stack accesses, {mix.branches} branches)")  # fmt: skip
+            print(f"    throughput bound {mix.throughput_bound():.0f} cycles ({bounds})")
+        if cycles:
+            print(f"    step / chain bound {spread([c / chain for c in cycles])} "
+                  f"(target <= {CHAIN_TARGET:g})")  # fmt: skip
+            if mix is not None:
+                bound = mix.throughput_bound()
+                print(f"    step / throughput bound {spread([c / bound for c in cycles])}")
+    first, second = variants
+    ratios = [b / a for a, b in zip(times[first], times[second])]
+    print(f"  {first} is {spread(ratios)} x faster than {second}")
+
+
+def _mhz(value: float | None) -> str:
+    return "unknown" if value is None else f"{value:.0f} MHz"
