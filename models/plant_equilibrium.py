@@ -58,7 +58,7 @@ MAX_ITERATIONS = 40
 
 
 def guess_state(vehicle: Vehicle, road: RoadSurface, s: float, speed: float, n: float = 0.0):
-    """Start on the road plane under the four wheels: static height, its attitude, zero slip.
+    r"""Start on the road plane under the four wheels: static height, its attitude, zero slip.
 
     The plane :math:`z = a + b\,x + c\,y` is the least-squares fit of the road heights
     (roughness included) under the four contact points, so that no wheel starts off a
