@@ -43,14 +43,19 @@ class Options:
     bank: float = 0.0  # standstill only: rise over run, > 0 left edge higher
 
 
+#: The roughness fades in (cosine ramp) from RUN_IN[0] to RUN_IN[0] + RUN_IN[1] metres after
+#: the road's start, so that the car starts in steady motion on a smooth road: on a class D
+#: road a wheel could otherwise find no steady contact at the start.
+RUN_IN = (3.0, 10.0)
+
+
 def _rough(s: np.ndarray, vehicle: Vehicle, options: Options) -> tuple | None:
     if options.roughness is None:
         return None
     model = vehicle_plant(vehicle).roughness
     rng = np.random.default_rng(np.random.SeedSequence([options.seed, 8608]))
-    return iso8608_profile(s, options.roughness, model, rng), iso8608_profile(
-        s, options.roughness, model, rng
-    )
+    fade = smooth_step(s, s[0] + RUN_IN[0], RUN_IN[1])
+    return tuple(fade * iso8608_profile(s, options.roughness, model, rng) for _ in range(2))
 
 
 def _constant(road: Road, speed: float) -> np.ndarray:
