@@ -27,6 +27,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench_logs",
     "wheelload.studies.fault_injection",
     "wheelload.studies.commands.bench_estimate",
+    "wheelload.studies.commands.bench_family",
 )
 
 

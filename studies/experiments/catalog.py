@@ -6,6 +6,7 @@ import time
 from collections.abc import Callable
 from functools import partial
 
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.studies.experiments import (
     ablation,
     cheon_structural,
@@ -41,6 +42,22 @@ text under each table says so.
 """
 
 
+MODEL_TEXT = {
+    SuspensionModel.FULL: "the two-stage KF's full vehicle model (every model term the "
+    "vehicle file switches on), so that the tables rank estimators on one model",
+    SuspensionModel.PAPER: "the source papers' bare model (spring, damper and anti-roll bar, "
+    "eq. 9; body-axis equilibrium, eq. 15-16); kf, projection and mhe keep the vehicle file's",
+}
+
+
+def model_line(suspension: SuspensionModel) -> str:
+    """The report's line naming the vehicle model the family methods ran on."""
+    return (
+        f"Vehicle model of the family methods: **{suspension.value}** "
+        f"(`--suspension {suspension.value}`): {MODEL_TEXT[suspension]}.\n"
+    )
+
+
 def plant_runs(context: Context) -> list:
     """Every plant run of ``all``, simulated together first so that they run in parallel."""
     specs = [truth_spec(context, name) for name in ("nordschleife", "hockenheim", "iso-dlc")]
@@ -63,10 +80,15 @@ def run_study(name: str, context: Context) -> list[Section]:
         sections.append(STUDIES[study](context))
         times[study] = time.perf_counter() - start
         if name != "all":
-            context.outputs.write_text(f"{study}.md", sections[-1].markdown + "\n")
+            model = model_line(context.settings.suspension)
+            context.outputs.write_text(f"{study}.md", f"{model}\n{sections[-1].markdown}\n")
     if name == "all":
         mode = "--quick (short segments, few trials)" if context.settings.quick else "full"
-        lines = [PREAMBLE, f"Mode: {mode}. Vehicle: `{context.settings.vehicle_path.name}`.\n"]
+        lines = [
+            PREAMBLE,
+            f"Mode: {mode}. Vehicle: `{context.settings.vehicle_path.name}`.\n",
+            model_line(context.settings.suspension),
+        ]
         lines += [section.markdown + "\n" for section in sections]
         lines.append("## Wall time per study [s] (this run; cached parts take no time)\n")
         lines += [f"- {study}: {seconds:.1f}" for study, seconds in times.items()]

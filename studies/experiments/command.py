@@ -6,7 +6,9 @@ import argparse
 import time
 from pathlib import Path
 
+from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.models import example_vehicle_path
+from wheelload.studies.commands.options import add_suspension_option
 from wheelload.studies.experiments.cache import ResultCache
 from wheelload.studies.experiments.catalog import NAMES, run_study
 from wheelload.studies.experiments.context import Context, Outputs, Settings
@@ -20,6 +22,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dask", metavar="ADDRESS", help="run on this Dask scheduler")
     parser.add_argument("--cache", help="cache folder (default DIR/.cache)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_suspension_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
         vehicle_path=vehicle_path,
         vehicles_folder=example_vehicle_path().parent,
         quick=args.quick,
+        suspension=SuspensionModel.parse(args.suspension),
     )
     runner = Runner(
         cache=ResultCache(folder=Path(args.cache) if args.cache else out / ".cache"),

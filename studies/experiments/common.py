@@ -7,7 +7,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.registry import methods
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators.registry import method, methods
 from wheelload.studies.experiments.cache import cache_key
 from wheelload.studies.experiments.context import Context
 from wheelload.studies.experiments.runner import Job
@@ -59,13 +60,23 @@ def simulate(context: Context, truths: list[TruthSpec]) -> None:
 
 
 def trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialResult]:
-    """Simulate what the trials need, then run them one job per method; merged per spec."""
+    """Simulate what the trials need, then run them one job per method; merged per spec.
+
+    Every trial runs the family methods on the study's vehicle model
+    (:attr:`~wheelload.studies.experiments.context.Settings.suspension`); a method
+    without that choice keeps the default, so its cached result serves either model.
+    """
     simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
     jobs, owners = [], []
     for i, spec in enumerate(specs):
         truth_key = cache_key(TRUTH, spec.truth)
         for name in spec.methods:
-            single = replace(spec, methods=(name,), truth_key=truth_key)
+            single = replace(
+                spec,
+                methods=(name,),
+                truth_key=truth_key,
+                suspension=_model(name, context),
+            )
             jobs.append(Job(kind=TRIAL, function=run_trial, spec=single))
             owners.append(i)
     parts = context.runner.run(jobs, label)
@@ -73,6 +84,11 @@ def trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialRe
     for owner, part in zip(owners, parts):
         merged[owner].append(part)
     return [merge(group) for group in merged]
+
+
+def _model(name: str, context: Context) -> SuspensionModel:
+    """The study's vehicle model for a family method; the default for a core one."""
+    return context.settings.suspension if method(name).model_choice else DEFAULT_MODEL
 
 
 #: KF trials filtered side by side per unit of work (:func:`kf_trials`).

@@ -11,6 +11,7 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.studies.experiments.runner import Runner
 
 QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode
@@ -26,11 +27,13 @@ def _readable(path: str) -> None:
 
 @dataclass(frozen=True, kw_only=True)
 class Settings:
-    """A study's inputs: the plant's (and the estimators') vehicle file and the mode."""
+    """A study's inputs: the plant's (and the estimators') vehicle file, the mode and the
+    vehicle model of the family methods (:mod:`wheelload.estimators.family.suspension_model`)."""
 
     vehicle_path: Path
     vehicles_folder: Path  # every *.toml here is a bundled vehicle (study `vehicles`)
     quick: bool = False
+    suspension: SuspensionModel = DEFAULT_MODEL
 
     @property
     def vehicle_text(self) -> str:

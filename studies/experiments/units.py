@@ -5,7 +5,8 @@
 truth frame. :func:`run_trial` measures that frame with the sensor models at
 noise scale ``s`` and seed (paper §IV-F: the noise is drawn afresh on one
 simulated drive), builds each method through the registry from the
-estimator's vehicle file (which a study may edit: ablation, mismatch) and
+estimator's vehicle file (which a study may edit: ablation, mismatch), the
+family methods on the spec's vehicle model (``wheelload study --suspension``), and
 scores it with the paper's metrics (eq. 26-34) over the evaluation window.
 """
 
@@ -21,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.registry import build
 from wheelload.estimators.signals import signals_from_frame
 from wheelload.models.vehicle import Vehicle, vehicle_from_dict
@@ -56,6 +58,7 @@ class TrialSpec:
     seed: int = 0  # measurement seed
     window: tuple[float, float] | None = None  # scored samples, t in [start, end] s
     keep_estimates: bool = False  # keep the loads for figures
+    suspension: SuspensionModel = DEFAULT_MODEL  # vehicle model of the family methods
     truth_key: str = ""  # cache key of ``truth``, set by the process that plans the jobs
 
 
@@ -120,7 +123,7 @@ def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:
     metrics, errors, seconds, estimates = {}, {}, {}, {}
     for name in spec.methods:
         try:
-            estimator = build(name, vehicle)
+            estimator = build(name, vehicle, spec.suspension)
             start = time.perf_counter()
             estimate = estimator.run(signals)
             seconds[name] = (time.perf_counter() - start) / t.size
