@@ -11,6 +11,9 @@ The emitted folder holds
   robust losses or bias states
   :func:`~wheelload.estimators.mhe_terms.residual_function`) as straight-line C
   from the KF's emitter (:func:`~wheelload.estimators.c_emitter.emit_statements`);
+  their row weights come from the filter's noise Function
+  (:mod:`wheelload.models.measurement_noise`, the vehicle file's input-dependent
+  densities included, through the ``TUNING`` table), as in Python;
 - ``wheelload_mhe.c/.h``: the window driver (``templates/mhe_shared.c``, then
   ``templates/mhe_plain.c`` for quadratic losses, ``templates/mhe_window.c`` with
   auxiliary variables for

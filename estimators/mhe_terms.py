@@ -2,9 +2,12 @@ r"""The quadratic-program terms one sample adds to the MHE window, as one CasADi
 
 For sample :math:`j` with suspension pseudo-measurement :math:`z_j` (Siegloff
 & Choi eq. 13) and equilibrium :math:`A x_j = b_j` (eq. 14-17), weights
-:math:`W_s = \mathrm{diag}(m_s)\,dt/r_s`, :math:`W_c = \mathrm{diag}(m_c)\,dt/r_c`
+:math:`W_s = \mathrm{diag}(m_s\,dt/r_{s,j})`, :math:`W_c = \mathrm{diag}(m_c\,dt/r_{c,j})`
 (:math:`m`: the filter's dependency masks, 0 where an input the row needs is
-missing) and random-walk weight :math:`w_q = 1/(q\,dt)`:
+missing; :math:`r_{s,j}, r_{c,j}`: the rows' noise densities at sample :math:`j`,
+:math:`R\,\Delta t` of :mod:`wheelload.models.measurement_noise`, the filter's
+Function, so constant :math:`r_s, r_c` with the default zero input-dependent
+densities) and random-walk weight :math:`w_q = 1/(q\,dt)`:
 
 .. math::
     \text{soft:}\quad H_j = W_s + A^\top W_c A, \quad g_j = -(W_s z_j + A^\top W_c b_j)
@@ -34,7 +37,14 @@ import enum
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.two_stage import INPUTS, TUNING, _replace, _sanitise, model_rows
+from wheelload.estimators.two_stage import (
+    INPUTS,
+    TUNING,
+    TUNING_INDEX,
+    _replace,
+    _sanitise,
+    model_rows,
+)
 from wheelload.models import (
     ModelParameters,
     equilibrium_function,
@@ -42,11 +52,13 @@ from wheelload.models import (
     suspension_function,
 )
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, input_index
+from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 
 TERMS_NAME = "wheelload_mhe_terms"
 LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
 TERMS_INPUTS = ["u", "u_valid", "dt", "x_ref", "p", "tuning", "cost"]
 TERMS_OUTPUTS = ["H", "g", "link", "xp", "lower", "upper", "b", "used"]
+_DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
 
 
 class Constraint(enum.Enum):
@@ -69,6 +81,18 @@ def warp_interval(xp, null: np.ndarray, lower_load: float, upper_load: float):
     middle = 0.5 * (low + high)
     empty = low > high
     return ca.if_else(empty, middle, low), ca.if_else(empty, middle, high)
+
+
+def row_densities(u_raw, valid, tuning) -> tuple[ca.SX, ca.SX]:
+    r"""The rows' white-noise densities ``(r_s[4], r_c[3])`` of one sample.
+
+    :math:`R\,\Delta t` of :func:`~wheelload.models.measurement_noise.measurement_noise_function`
+    (evaluated at :math:`\Delta t = 1`): the filter's measurement noise, input-dependent
+    with the vehicle file's optional densities, :math:`r_s`, :math:`r_c` bit for bit without.
+    The window weighs a row by :math:`dt / r` with the sample's own interval.
+    """
+    densities = ca.vertcat(*[tuning[k] for k in _DENSITY_INDEX])
+    return measurement_noise_function()(_sanitise(u_raw, valid), valid, densities, 1.0)
 
 
 def terms_function(
@@ -104,8 +128,9 @@ def terms_function(
     cost = ca.SX.sym("cost")
 
     z, A, b, mask_s, mask_c, dropped = model_rows(suspension, equilibrium, u_raw, valid, p)
-    w_s = mask_s * dt / tuning[1]
-    w_c = mask_c * dt / tuning[2:5]
+    r_s, r_c = row_densities(u_raw, valid, tuning)
+    w_s = mask_s * dt / r_s
+    w_c = mask_c * dt / r_c
     link = cost * LOAD_SCALE**2 / (tuning[0] * dt)
     n = ca.DM(null)
     if constraint is Constraint.SOFT:
@@ -151,7 +176,7 @@ def residual_function(
     The pseudo-measurement :math:`z` [N], its Jacobian :math:`J_d = \partial z /
     \partial d`, the Jacobian :math:`B_a = \partial b / \partial (a_x, a_y)` of the
     equilibrium right-hand side, and the rows' square-root weights
-    :math:`\sqrt{m\,dt/r}` (masked like the filter's updates) used by the
+    :math:`\sqrt{m\,dt/r}` (masked like the filter's updates; :func:`row_densities`) used by the
     robust and bias-state window (:mod:`wheelload.estimators.mhe_window`).
     """
     suspension = suspension or suspension_function()
@@ -171,8 +196,9 @@ def residual_function(
     Jd = ca.substitute(ca.jacobian(suspension(_replace(u, travel, d), gates, p), d), d, d_now)
     b_sym = equilibrium(_replace(u, axes, acc), gates, p)[1]
     Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, acc_now)
-    ls = ca.sqrt(mask_s * dt / tuning[1])
-    lc = ca.sqrt(mask_c * dt / tuning[2:5])
+    r_s, r_c = row_densities(u_raw, valid, tuning)
+    ls = ca.sqrt(mask_s * dt / r_s)
+    lc = ca.sqrt(mask_c * dt / r_c)
     outputs = [ca.densify(ca.SX(o)) for o in (z, Jd, Ba, ls, lc)]
     return ca.Function(
         RESIDUAL_NAME, [u_raw, valid, dt, p, tuning], outputs,

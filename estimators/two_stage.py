@@ -10,8 +10,8 @@ Tuning is per second (white-noise densities): :math:`Q = q\\,dt\\,I`,
 log's nominal (median) interval, so that a gap grows the covariance and never
 shrinks the measurement noise. Optional input-dependent densities (vehicle file
 ``[filter]``, default 0) add terms in the damper velocity, the hub acceleration and the
-body accelerations (:mod:`wheelload.models.measurement_noise`, one Function, used here);
-the MHE keeps the constant densities. Guards (plausibility, innovation gate, fault
+body accelerations (:mod:`wheelload.models.measurement_noise`, one Function, used here
+and by the MHE, method E+C and the numpy joint filter). Guards (plausibility, innovation gate, fault
 monitor, covariance limits) act inside the step: :mod:`wheelload.estimators.guard`.
 
 The per-sample step is one CasADi Function built from the model Functions in

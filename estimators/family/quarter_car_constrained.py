@@ -5,10 +5,14 @@ Filter"): the two-stage filter of §III with the four observer outputs of
 method E (:mod:`wheelload.estimators.family.quarter_car`) in place of the
 suspension pseudo-measurement. Random walk :math:`x^- = x`,
 :math:`P^- = P + q\Delta t I` (eq. 19); update with :math:`z = \hat F_E`,
-:math:`R_s = r_s/\Delta t\,I` (eq. 20-22); soft equilibrium update
-:math:`b = A x + w_c`, :math:`R_c = \mathrm{diag}(r_c)/\Delta t` (eq. 23-25),
-all with the kernels of :mod:`wheelload.estimators.kalman` and the vehicle
-file's filter tuning, exactly as the two-stage KF. A corner whose observer
+:math:`R_s` (eq. 20-22); soft equilibrium update :math:`b = A x + w_c`,
+:math:`R_c` (eq. 23-25), all with the kernels of
+:mod:`wheelload.estimators.kalman` and the vehicle file's filter tuning, as the
+two-stage KF: :math:`R_s, R_c` are the KF's Function
+(:mod:`wheelload.models.measurement_noise`) at the sample's interval, so
+:math:`r_s/\Delta t\,I`, :math:`\mathrm{diag}(r_c)/\Delta t` with the default zero
+input-dependent densities, and the same per-sample noise as the KF's rows with
+a tuned file. A corner whose observer
 was held is not used in the first update; a constraint row with a missing
 input is skipped; both are flagged. The observers and the equilibrium use
 the vehicle model chosen by ``suspension`` (default the KF's full model,
@@ -40,10 +44,12 @@ from wheelload.estimators.family.step_method import (
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kalman import predict, sequential_update, upper
 from wheelload.estimators.registry import MethodInfo
-from wheelload.estimators.two_stage import TUNING, tuning_vector
+from wheelload.estimators.two_stage import TUNING, TUNING_INDEX, tuning_vector
 from wheelload.models import ModelParameters, Vehicle
+from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 
 N_STATES = FRONT_END_STATES + 4 + 16  # observer, x, P (column-major)
+_DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
 
 
 @functools.cache
@@ -59,8 +65,8 @@ def constrained_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     A, b, mask_c = model_equilibrium(model, sym)
     mask_c = mask_c * sym.dt_ok
     Q = tuning[0] * sym.dt * ca.DM.eye(4)
-    rs = ca.repmat(tuning[1] / sym.dt, 4, 1)
-    rc = tuning[2:5] / sym.dt
+    densities = ca.vertcat(*[tuning[k] for k in _DENSITY_INDEX])
+    rs, rc = measurement_noise_function()(sym.u, sym.valid, densities, sym.dt)
     x_pred, P_pred = predict(x, upper(P), Q)
     x_s, P_s = sequential_update(x_pred, P_pred, F, ca.DM.eye(4), rs, used_s)
     x_new, P_new = sequential_update(x_s, P_s, b, A, rc, mask_c)
