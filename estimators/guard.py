@@ -39,7 +39,7 @@ from types import SimpleNamespace
 
 import casadi as ca
 
-from wheelload.models import Vehicle
+from wheelload.models import GRAVITY, Vehicle
 from wheelload.models.inputs import (
     HUB_ACCELERATION,
     INPUTS,
@@ -48,7 +48,6 @@ from wheelload.models.inputs import (
     TRAVEL_RATE,
 )
 
-GRAVITY = 9.80665  # m/s^2
 #: Largest plausible hub (unsprung mass) specific force [m/s^2]: 50 g.
 MAX_HUB_ACCELERATION = 50.0 * GRAVITY
 

@@ -35,8 +35,8 @@ from wheelload.models.inputs import (
     TRAVEL_RATE,
     input_index,
 )
+from wheelload.models.vehicle import GRAVITY  # the vertical row's reference specific force
 
-GRAVITY = 9.80665  # m/s^2, the vertical row's reference specific force
 #: The constant densities (the paper's): r_s, r_c vertical, pitch, roll.
 BASE_DENSITIES = (
     "suspension_noise_density",
