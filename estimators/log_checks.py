@@ -173,7 +173,7 @@ def _fill(values: np.ndarray) -> np.ndarray | None:
     return np.interp(index, index[good], values[good])
 
 
-def _quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Low-passed, decimated channels over the examined window (missing channels dropped)."""
     fs = 1.0 / float(np.median(np.diff(t)))
     b, a = zero_phase.butter2(min(CUTOFF / (0.5 * fs), 0.9))
@@ -312,7 +312,7 @@ def check_wiring(
     rates: np.ndarray | None = None,
 ) -> WiringReport:
     """Run every check on the first :data:`WINDOW` s of motion (see module docstring)."""
-    window = _motion_window(t, vx)
+    window = motion_window(t, vx)
     if window is None:
         note = f"less than 4 s above {MOVING} m/s"
         return WiringReport(checks=(_undecided("motion", note),), diagnosis="")
@@ -320,7 +320,7 @@ def check_wiring(
     channels.update({f"d_{w}": d[:, k] for k, w in enumerate(WHEELS)})
     if rates is not None:
         channels["wz"] = rates[:, 2]
-    q = _quasi_static(t[window], {name: values[window] for name, values in channels.items()})
+    q = quasi_static(t[window], {name: values[window] for name, values in channels.items()})
     travel, observed = _travel_checks(q)
     kinematic, signs, ratios = _kinematic_checks(q)
     roll, roll_mistakes = _roll_gain(q)
@@ -331,7 +331,7 @@ def check_wiring(
     return WiringReport(checks=(*travel, *kinematic, *roll), diagnosis="; and ".join(mistakes))
 
 
-def _motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
+def motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
     """The first :data:`WINDOW` s from the first sample above :data:`MOVING`, or None."""
     moving = np.flatnonzero(np.abs(np.nan_to_num(vx)) > MOVING)
     if moving.size == 0:
@@ -436,7 +436,10 @@ def _unit_mistakes(ratios: dict[str, float]) -> list[str]:
     if speed and not (lon == "ok" and lat in ("km/h", "mph")):
         unit = units[speed[0]]
         shown = ", ".join(f"{measured[key]} = {ratios[key]:.3g}" for key in speed)
-        found.append(f"column 'vx' looks like {unit} ({shown}): give m/s")
+        found.append(
+            f"column 'vx' looks like {unit} ({shown}): give m/s (from wheel speeds: check "
+            "their 'radius' and 'ratio', shaft turns per wheel turn)"
+        )
     elif speed:
         found.append(f"vx wz is {ratios['lateral']:.3g} x ay while dvx/dt matches ax: "
                      "check the units of ay and wz")  # fmt: skip
@@ -453,10 +456,14 @@ def _unit_mistakes(ratios: dict[str, float]) -> list[str]:
     return found
 
 
-def describe(report: WiringReport) -> str:
-    """One line: how many checks passed, and which could not decide (and why)."""
+def describe(report: WiringReport, title: str = "wiring checks") -> str:
+    """One line: how many checks passed, and which could not decide (and why).
+
+    ``report``: any report with ``checks`` and ``undecided`` (also the plausibility
+    report of :mod:`~wheelload.estimators.log_plausibility`, with its ``title``).
+    """
     passed = sum(c.outcome is Outcome.PASSED for c in report.checks)
-    return f"wiring checks: {passed} passed" + (
+    return f"{title}: {passed} passed" + (
         f"; could not decide: {_undecided_names(report)}" if report.undecided else ""
     )
 

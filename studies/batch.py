@@ -26,6 +26,11 @@ from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_l
 from wheelload.estimators.batched import run_batched
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wiring
+from wheelload.estimators.log_plausibility import (
+    check_plausibility,
+    describe_plausibility,
+    raise_for_plausibility,
+)
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.output_files import write_frame
 from wheelload.estimators.readers import SUFFIXES
@@ -123,6 +128,9 @@ def _prepare_log(path: Path, settings: EstimateSettings):
         report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
         raise_for_wiring(report, signals.source)
         notes.append(describe(report))
+        plausibility = check_plausibility(signals, vehicle)
+        raise_for_plausibility(plausibility, signals.source)
+        notes.append(describe_plausibility(plausibility))
     static = None
     if settings.corner_weights is not None:
         static = corner_weight_loads(settings.corner_weights)
