@@ -52,12 +52,14 @@ from wheelload.estimators.log_checks import (
     KINEMATIC_CORRELATION,
     MIN_STD,
     Check,
+    CheckReport,
     Outcome,
     WiringError,
     describe,
     motion_window,
     quasi_static,
     travel_response,
+    undecided_check,
 )
 from wheelload.models import (
     GRAVITY,
@@ -83,33 +85,15 @@ MIN_RESPONSE = 0.3  # relative spread of the expected front/rear responses to co
 
 
 @dataclass(frozen=True, kw_only=True)
-class PlausibilityReport:
+class PlausibilityReport(CheckReport):
     """All plausibility checks and the mistakes they name."""
 
-    checks: tuple[Check, ...]
     mistakes: tuple[str, ...]
-
-    @property
-    def failures(self) -> tuple[Check, ...]:
-        return tuple(c for c in self.checks if c.outcome is Outcome.FAILED)
-
-    @property
-    def undecided(self) -> tuple[Check, ...]:
-        return tuple(c for c in self.checks if c.outcome is Outcome.UNDECIDED)
-
-    def statistic(self, name: str) -> float:
-        """The statistic of the check called ``name``."""
-        (check,) = [c for c in self.checks if c.name == name]
-        return check.statistic
 
 
 def _check(name: str, statistic: float, failed: bool, note: str) -> Check:
     outcome = Outcome.FAILED if failed else Outcome.PASSED
     return Check(name=name, statistic=statistic, outcome=outcome, note=note)
-
-
-def _undecided(name: str, note: str, statistic: float = math.nan) -> Check:
-    return Check(name=name, statistic=statistic, outcome=Outcome.UNDECIDED, note=note)
 
 
 def sample_rate_check(t: np.ndarray) -> tuple[Check, str | None]:
@@ -177,11 +161,11 @@ def travel_scale_checks(
     for row, (name, axis) in enumerate((("pitch", "ax"), ("roll", "ay")), start=1):
         check = f"travel scale ({name} row)"
         if not np.std(y[row]) > mass * height * MIN_STD[axis]:
-            checks.append(_undecided(check, f"{axis} varies too little"))
+            checks.append(undecided_check(check, f"{axis} varies too little"))
             continue
         kappa, correlation = _slope(x[row], y[row])
         if not abs(correlation) >= KINEMATIC_CORRELATION:
-            checks.append(_undecided(check, f"travel and {axis} correlate too little", kappa))
+            checks.append(undecided_check(check, f"travel and {axis} correlate too little", kappa))
             continue
         low, high = SCALE_LIMITS
         failed = not low <= kappa <= high
@@ -238,11 +222,11 @@ def lift_checks(
     shown = np.sum(z, axis=0) - parameters.mass * q["az"]  # -lift the travel shows
     name = "lift against speed"
     if not np.std(lift) > MIN_LIFT_STD * weight:
-        checks.append(_undecided(name, "speed (lift) varies too little"))
+        checks.append(undecided_check(name, "speed (lift) varies too little"))
     else:
         slope, correlation = _slope(-shown, lift)
         if not correlation >= KINEMATIC_CORRELATION:
-            checks.append(_undecided(name, "travel and lift correlate too little", slope))
+            checks.append(undecided_check(name, "travel and lift correlate too little", slope))
         else:
             low, high = LIFT_LIMITS
             failed = not low <= slope <= high
@@ -252,7 +236,7 @@ def lift_checks(
     steady = (np.abs(q["ax"]) < STEADY) & (np.abs(q["ay"]) < STEADY)
     name = "loads at steady speed"
     if not steady.any():
-        checks.append(_undecided(name, "no steady driving"))
+        checks.append(undecided_check(name, "no steady driving"))
         return checks, mistakes
     error = float(np.median((np.sum(z, axis=0) - parameters.mass * q["az"] + lift)[steady]))
     failed = abs(error) > MAX_WEIGHT_ERROR * weight
@@ -286,11 +270,11 @@ def front_rear_check(
     axes = [k for k, axis in enumerate(("ax", "ay", "az")) if np.std(q[axis]) > MIN_STD[axis]]
     axes = [k for k in axes if k != 1]  # roll travel is the same front and rear
     if not axes:
-        return [_undecided(name, "ax and az vary too little")], []
+        return [undecided_check(name, "ax and az vary too little")], []
     expected = response[:, axes]
     spread = np.abs(expected[:2] - expected[2:]) / np.abs(expected).max(axis=0)
     if not np.any(spread > MIN_RESPONSE):
-        return [_undecided(name, "front and rear respond alike")], []
+        return [undecided_check(name, "front and rear respond alike")], []
     X = np.column_stack([np.ones(q["t"].size), *(q[a] for a in ("ax", "ay", "az"))])
     d = np.column_stack([q[f"d_{w}"] for w in WHEELS])
     coef, *_ = np.linalg.lstsq(X, d - d.mean(axis=0), rcond=None)
@@ -314,7 +298,7 @@ def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     checks, mistakes = [rate], [mistake] if mistake else []
     window = motion_window(signals.t, signals.vx)
     if window is None or mistake:
-        checks.append(_undecided("travel and speed", "less than 4 s of motion"))
+        checks.append(undecided_check("travel and speed", "less than 4 s of motion"))
         return PlausibilityReport(checks=tuple(checks), mistakes=tuple(mistakes))
     channels = {"vx": signals.vx, "ax": signals.acc[:, 0], "ay": signals.acc[:, 1],
                 "az": signals.acc[:, 2]}  # fmt: skip
@@ -326,7 +310,7 @@ def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     checks += found[0]
     mistakes += found[1]
     if not all(f"d_{w}" in q for w in WHEELS) or not all(a in q for a in ("vx", "az")):
-        checks.append(_undecided("travel scale", "needs four travel channels, vx and az"))
+        checks.append(undecided_check("travel scale", "needs four travel channels, vx and az"))
         return PlausibilityReport(checks=tuple(checks), mistakes=tuple(mistakes))
     A, loads, b = _rows(_inputs(q), parameters.vector())
     n = q["t"].size
