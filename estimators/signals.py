@@ -234,6 +234,21 @@ def travel_quantum(d: np.ndarray) -> np.ndarray:
     return steps
 
 
+def coarse_travel_note(quantum: np.ndarray | None, stuck_motion: float) -> str | None:
+    """A line for a travel logged in steps above a quarter of the stuck test's motion
+    threshold (``GuardSettings.stuck_motion``, 4 steps of a 12-bit sensor), else None:
+    quiet corners of such a log may be isolated as stuck (``travel_fault``)."""
+    if quantum is None or not np.any(quantum > 0.25 * stuck_motion):
+        return None
+    shown = " ".join(
+        f"{w.upper()} {1000 * q:.3g} mm" for w, q in zip(WHEELS, quantum) if np.isfinite(q)
+    )
+    return (
+        f"travel logged in steps of {shown}: coarser than the stuck test expects "
+        f"({1000 * stuck_motion:.3g} mm = 4 steps); a quiet corner may be flagged travel_fault"
+    )
+
+
 def read_log(
     path: str | Path,
     velocity_cutoff: float = VELOCITY_CUTOFF,

@@ -212,3 +212,14 @@ def test_travel_beyond_what_a_corner_can_have_is_named(scenario_logs):
     assert any("column 'd_fl' exceeds 264 mm" in m for m in report.mistakes), report.mistakes
     clean = check_plausibility(log, load_vehicle(example_vehicle_path()))
     assert clean.statistic("d_fl range") == 0.0
+
+
+@pytest.mark.parametrize("in_memory", [False, True])
+def test_a_log_below_20_hz_is_questioned(tmp_path, capsys, in_memory):
+    """Every tenth row of the example: 10 Hz, too slow for the body motion."""
+    path = tmp_path / "slow.csv"
+    pd.read_csv(example_log_path()).iloc[::10].to_csv(path, index=False)
+    extra = ("--in-memory",) if in_memory else ()
+    code, _, err = estimate(capsys, path, example_vehicle_path(), *extra)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "the log runs at 10 Hz, below 20 Hz" in err and "'time.unit'" in err

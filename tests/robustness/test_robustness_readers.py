@@ -253,3 +253,24 @@ def test_quantised_travel_is_recognised_with_its_logger_step(tmp_path):
     example = read_log(example_log_path())
     np.testing.assert_allclose(example.travel_quantum, 0.15 / 4096, rtol=1e-4)
     assert np.isnan(travel_quantum(np.full((5, 4), np.nan))).all()
+
+
+def test_int16_travel_in_an_mf4_is_read_and_its_coarse_step_said(tmp_path, capsys):
+    """An MF4 with travel as int16 mm (asammdf keeps the integer type) reads through a
+    channel map; the 1 mm step is said in a line, the loads are finite."""
+    frame = example_frame()[["t", "vx", "ax", "ay", "az", "d_fl", "d_fr", "d_rl", "d_rr"]]
+    for wheel in WHEELS:
+        frame[f"d_{wheel}"] = (1000 * frame[f"d_{wheel}"]).round().astype("int16")
+    path = tmp_path / "int16.mf4"
+    write_mf4(path, frame)
+    channels = tmp_path / "map.toml"
+    lines = []
+    for name in ("ax", "ay", "az", "vx", *(f"d_{w}" for w in WHEELS)):
+        unit = "mm" if name.startswith("d_") else ("m/s" if name == "vx" else "m/s^2")
+        lines.append(f'[channels.{name}]\nsource = "{name}"\nunit = "{unit}"')
+    channels.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "loads.csv"
+    code, text, err = estimate(capsys, path, "--channels", str(channels), "--out", str(out))
+    assert code == 0 and err == "", err
+    assert "travel logged in steps of FL 1 mm FR 1 mm RL 1 mm RR 1 mm" in text
+    assert np.isfinite(pd.read_csv(out)[[f"fz_{w}" for w in WHEELS]].to_numpy()).all()
