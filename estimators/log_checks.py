@@ -94,11 +94,10 @@ class Check:
 
 
 @dataclass(frozen=True, kw_only=True)
-class WiringReport:
-    """All checks and, if any failed, the explanation of the mistake."""
+class CheckReport:
+    """Checks of a log and their outcomes (the wiring and the plausibility reports)."""
 
     checks: tuple[Check, ...]
-    diagnosis: str
 
     @property
     def failures(self) -> tuple[Check, ...]:
@@ -112,6 +111,13 @@ class WiringReport:
         """The statistic of the check called ``name``."""
         (check,) = [c for c in self.checks if c.name == name]
         return check.statistic
+
+
+@dataclass(frozen=True, kw_only=True)
+class WiringReport(CheckReport):
+    """All checks and, if any failed, the explanation of the mistake."""
+
+    diagnosis: str
 
 
 class WiringError(ValueError):
@@ -173,7 +179,7 @@ def _fill(values: np.ndarray) -> np.ndarray | None:
     return np.interp(index, index[good], values[good])
 
 
-def _quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Low-passed, decimated channels over the examined window (missing channels dropped)."""
     fs = 1.0 / float(np.median(np.diff(t)))
     b, a = zero_phase.butter2(min(CUTOFF / (0.5 * fs), 0.9))
@@ -312,15 +318,15 @@ def check_wiring(
     rates: np.ndarray | None = None,
 ) -> WiringReport:
     """Run every check on the first :data:`WINDOW` s of motion (see module docstring)."""
-    window = _motion_window(t, vx)
+    window = motion_window(t, vx)
     if window is None:
         note = f"less than 4 s above {MOVING} m/s"
-        return WiringReport(checks=(_undecided("motion", note),), diagnosis="")
+        return WiringReport(checks=(undecided_check("motion", note),), diagnosis="")
     channels = {"vx": vx, "ax": acc[:, 0], "ay": acc[:, 1], "az": acc[:, 2]}
     channels.update({f"d_{w}": d[:, k] for k, w in enumerate(WHEELS)})
     if rates is not None:
         channels["wz"] = rates[:, 2]
-    q = _quasi_static(t[window], {name: values[window] for name, values in channels.items()})
+    q = quasi_static(t[window], {name: values[window] for name, values in channels.items()})
     travel, observed = _travel_checks(q)
     kinematic, signs, ratios = _kinematic_checks(q)
     roll, roll_mistakes = _roll_gain(q)
@@ -331,7 +337,7 @@ def check_wiring(
     return WiringReport(checks=(*travel, *kinematic, *roll), diagnosis="; and ".join(mistakes))
 
 
-def _motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
+def motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
     """The first :data:`WINDOW` s from the first sample above :data:`MOVING`, or None."""
     moving = np.flatnonzero(np.abs(np.nan_to_num(vx)) > MOVING)
     if moving.size == 0:
@@ -341,7 +347,8 @@ def _motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
     return slice(start, stop) if t[stop - 1] - t[start] >= 4.0 else None
 
 
-def _undecided(name: str, note: str, statistic: float = math.nan) -> Check:
+def undecided_check(name: str, note: str, statistic: float = math.nan) -> Check:
+    """A check that could not decide, and why (``note``)."""
     return Check(name=name, statistic=statistic, outcome=Outcome.UNDECIDED, note=note)
 
 
@@ -363,11 +370,13 @@ def _travel_checks(q: dict[str, np.ndarray]) -> tuple[list[Check], dict[str, lis
             agreement = float(EXPECTED_SIGNS[axis][k] * value)
             check = f"{name} against {axis}"
             if not np.std(q[axis]) > MIN_STD[axis]:
-                checks.append(_undecided(check, f"{axis} varies too little", agreement))
+                checks.append(undecided_check(check, f"{axis} varies too little", agreement))
                 continue
             observed[axis][k] = _sign(agreement) if abs(agreement) >= threshold else 0
             if observed[axis][k] == 0:
-                checks.append(_undecided(check, f"correlation below {threshold:.2f}", agreement))
+                checks.append(
+                    undecided_check(check, f"correlation below {threshold:.2f}", agreement)
+                )
                 continue
             outcome = Outcome.FAILED if observed[axis][k] < 0 else Outcome.PASSED
             checks.append(Check(name=check, statistic=agreement, outcome=outcome, note=note))
@@ -384,16 +393,16 @@ def _kinematic_checks(
     for key, (name, axis) in relations.items():
         missing = [c for c in ("vx", "wz" if key == "lateral" else "vx") if c not in q]
         if missing:
-            checks.append(_undecided(name, f"no {missing[0]} in the log"))
+            checks.append(undecided_check(name, f"no {missing[0]} in the log"))
             continue
         y = np.gradient(q["vx"], q["t"]) if key == "longitudinal" else q["vx"] * q["wz"]
         if not max(np.std(y), np.std(q[axis])) > MIN_STD[axis]:
-            checks.append(_undecided(name, f"{axis} varies too little"))
+            checks.append(undecided_check(name, f"{axis} varies too little"))
             continue
         correlation = float(np.corrcoef(y, q[axis])[0, 1])
         if not abs(correlation) >= KINEMATIC_CORRELATION:
             note = "correlation too weak (grade, bank or slip)"
-            checks.append(_undecided(name, note, correlation))
+            checks.append(undecided_check(name, note, correlation))
             continue
         signs[key] = int(np.sign(correlation))
         ratios[key] = float(np.std(y) / np.std(q[axis]))
@@ -412,7 +421,7 @@ def _roll_gain(q: dict[str, np.ndarray]) -> tuple[list[Check], list[str]]:
     roll = 0.5 * (q["d_fr"] + q["d_rr"] - q["d_fl"] - q["d_rl"])
     correlation = float(np.corrcoef(roll, q["ay"])[0, 1])
     if not (np.std(roll) > MIN_ROLL_TRAVEL and abs(correlation) > KINEMATIC_CORRELATION):
-        return [_undecided(name, "too little roll")], []
+        return [undecided_check(name, "too little roll")], []
     gain = float(np.std(roll) / np.std(q["ay"]))
     failed = gain > MAX_ROLL_TRAVEL
     check = Check(name=name, statistic=gain, outcome=Outcome.FAILED if failed else Outcome.PASSED,
@@ -436,7 +445,10 @@ def _unit_mistakes(ratios: dict[str, float]) -> list[str]:
     if speed and not (lon == "ok" and lat in ("km/h", "mph")):
         unit = units[speed[0]]
         shown = ", ".join(f"{measured[key]} = {ratios[key]:.3g}" for key in speed)
-        found.append(f"column 'vx' looks like {unit} ({shown}): give m/s")
+        found.append(
+            f"column 'vx' looks like {unit} ({shown}): give m/s (from wheel speeds: check "
+            "their 'radius' and 'ratio', shaft turns per wheel turn)"
+        )
     elif speed:
         found.append(f"vx wz is {ratios['lateral']:.3g} x ay while dvx/dt matches ax: "
                      "check the units of ay and wz")  # fmt: skip
@@ -453,10 +465,14 @@ def _unit_mistakes(ratios: dict[str, float]) -> list[str]:
     return found
 
 
-def describe(report: WiringReport) -> str:
-    """One line: how many checks passed, and which could not decide (and why)."""
+def describe(report: CheckReport, title: str = "wiring checks") -> str:
+    """One line: how many checks passed, and which could not decide (and why).
+
+    ``report``: any report with ``checks`` and ``undecided`` (also the plausibility
+    report of :mod:`~wheelload.estimators.log_plausibility`, with its ``title``).
+    """
     passed = sum(c.outcome is Outcome.PASSED for c in report.checks)
-    return f"wiring checks: {passed} passed" + (
+    return f"{title}: {passed} passed" + (
         f"; could not decide: {_undecided_names(report)}" if report.undecided else ""
     )
 

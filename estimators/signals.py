@@ -131,6 +131,7 @@ class Signals:
     source: str = "<memory>"
     az_assumed: bool = False
     speed_source: SpeedSource = SpeedSource.LOGGED
+    travel_quantum: np.ndarray | None = None  # (4,) logger step of d_* [m] (travel_quantum)
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
@@ -212,7 +213,40 @@ class Signals:
             source=self.source,
             az_assumed=self.az_assumed,
             speed_source=self.speed_source,
+            travel_quantum=self.travel_quantum,
         )
+
+
+def travel_quantum(d: np.ndarray) -> np.ndarray:
+    """(4,) the logger step of each travel channel [m]: the smallest difference between
+    two of its distinct finite values (NaN with fewer than two).
+
+    A travel logged as integers (``int16`` mm, raw converter counts) moves in steps of
+    this size: a corner on a still body shows no change for long, or flickers by a step,
+    however still it is. The fault monitor's stuck test (``estimators/guard.py``) needs
+    it to tell a quiet quantised channel from a stuck one.
+    """
+    steps = np.full(d.shape[1], np.nan)
+    for k in range(d.shape[1]):
+        values = np.unique(d[np.isfinite(d[:, k]), k])
+        if values.size > 1:
+            steps[k] = float(np.min(np.diff(values)))
+    return steps
+
+
+def coarse_travel_note(quantum: np.ndarray | None, stuck_motion: float) -> str | None:
+    """A line for a travel logged in steps above a quarter of the stuck test's motion
+    threshold (``GuardSettings.stuck_motion``, 4 steps of a 12-bit sensor), else None:
+    quiet corners of such a log may be isolated as stuck (``travel_fault``)."""
+    if quantum is None or not np.any(quantum > 0.25 * stuck_motion):
+        return None
+    shown = " ".join(
+        f"{w.upper()} {1000 * q:.3g} mm" for w, q in zip(WHEELS, quantum) if np.isfinite(q)
+    )
+    return (
+        f"travel logged in steps of {shown}: coarser than the stuck test expects "
+        f"({1000 * stuck_motion:.3g} mm = 4 steps); a quiet corner may be flagged travel_fault"
+    )
 
 
 def read_log(
@@ -352,6 +386,7 @@ def signals_from_frame(
         source=source,
         az_assumed=az_assumed,
         speed_source=speed_source,
+        travel_quantum=travel_quantum(d),
     )
 
 

@@ -25,11 +25,18 @@ import numpy as np
 from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
 from wheelload.estimators.batched import run_batched
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators.guard import guard_settings_for
 from wheelload.estimators.log_checks import check_wiring, describe, raise_for_wiring
+from wheelload.estimators.log_plausibility import (
+    check_plausibility,
+    describe_plausibility,
+    raise_for_plausibility,
+)
 from wheelload.estimators.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.output_files import write_frame
 from wheelload.estimators.readers import SUFFIXES
 from wheelload.estimators.registry import build, method
+from wheelload.estimators.signals import coarse_travel_note
 from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
@@ -119,10 +126,16 @@ def _prepare_log(path: Path, settings: EstimateSettings):
     vehicle = _vehicle(settings.vehicle, settings.allow_unusual)
     signals = read_log(path, channels=settings.channels, wiring_checks=False)
     notes = []
+    coarse = coarse_travel_note(signals.travel_quantum, guard_settings_for(vehicle).stuck_motion)
+    if coarse is not None:
+        notes.append(coarse)
     if settings.wiring_checks:
         report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
         raise_for_wiring(report, signals.source)
         notes.append(describe(report))
+        plausibility = check_plausibility(signals, vehicle)
+        raise_for_plausibility(plausibility, signals.source)
+        notes.append(describe_plausibility(plausibility))
     static = None
     if settings.corner_weights is not None:
         static = corner_weight_loads(settings.corner_weights)

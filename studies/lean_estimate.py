@@ -60,6 +60,11 @@ def estimate_lean(
     numbers: the ordinary reader then reads it and names the problem.
     """
     from wheelload.estimators.log_checks import describe, raise_for_wiring
+    from wheelload.estimators.log_plausibility import (
+        check_plausibility,
+        describe_plausibility,
+        raise_for_plausibility,
+    )
     from wheelload.estimators.log_stream import scan_log
     from wheelload.estimators.output_files import table_writer
     from wheelload.estimators.readers.chunks import ChunkError
@@ -77,6 +82,9 @@ def estimate_lean(
         report = stream.wiring_report()
         raise_for_wiring(report, stream.source)
         notes.append(describe(report))
+        plausibility = check_plausibility(stream.wiring or stream.head, vehicle)
+        raise_for_plausibility(plausibility, stream.source)
+        notes.append(describe_plausibility(plausibility))
     static, reason = static_loads_for(stream, vehicle, settings)
     notes += reason
     kf = TwoStageKF(vehicle, static=static)

@@ -269,13 +269,21 @@ def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelM
 def load_channel_map(path: str | Path) -> ChannelMap:
     """Read and validate a channel-map TOML file."""
     path = Path(path)
+    if path.is_dir():
+        raise ChannelMapError(f"{path}: is a folder, not a channel map: give the map's .toml file")
     try:
         with path.open("rb") as stream:
             table = tomllib.load(stream)
     except FileNotFoundError:
         raise ChannelMapError(f"{path}: no such channel map") from None
+    except UnicodeDecodeError as error:
+        raise ChannelMapError(
+            f"{path}: the channel map is not UTF-8 text (byte {error.start}): save it as UTF-8"
+        ) from None
     except tomllib.TOMLDecodeError as error:
-        raise ChannelMapError(f"{path}: not valid TOML: {error}") from None
+        raise ChannelMapError(f"{path}: the channel map is not valid TOML: {error}") from None
+    except OSError as error:
+        raise ChannelMapError(f"{path}: the channel map cannot be read: {error}") from None
     return channel_map_from_dict(table, str(path))
 
 
@@ -285,6 +293,25 @@ def convert(spec: ChannelSpec, kind: Kind, values: np.ndarray, where: str) -> np
     if spec.radius is not None and spec.unit.strip() in ("rpm", "1/min", "rad/s_wheel"):
         factor = factor * spec.radius / spec.ratio
     return spec.sign * factor * np.asarray(values, float) / spec.motion_ratio
+
+
+def check_stamps(t: np.ndarray, source: str, name: str, where: str) -> None:
+    """The time stamps of a source channel go forward: else an error naming it and the row.
+
+    Resampling (:func:`~wheelload.estimators.readers.resample.resample`) needs them
+    sorted; a stamp that goes back (a logger clock reset, two recordings joined)
+    would be interpolated silently out of order.
+    """
+    t = np.asarray(t, float)
+    rows = np.flatnonzero(np.isfinite(t))
+    back = np.flatnonzero(np.diff(t[rows]) < 0.0)
+    if back.size:
+        before, row = rows[back[0]], rows[back[0] + 1]
+        raise ChannelMapError(
+            f"{where}: channel '{source}' (for '{name}') has time stamps that go back at "
+            f"sample {row} (t = {t[before]:.6g} s then {t[row]:.6g} s): export the log with "
+            "one increasing clock per channel (a logger restart splits it into two logs)"
+        )
 
 
 def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: str) -> pd.DataFrame:
@@ -303,6 +330,8 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
                 f"{where}: channel '{spec.source}' is declared in '{declared}' in the log but "
                 f"in '{spec.unit}' in {channel_map.source} (key 'channels.{name}.unit')"
             )
+    for name, spec in channel_map.channels.items():
+        check_stamps(raw[spec.source].t, spec.source, name, where)
     clock = np.asarray(raw[channel_map.channels[channel_map.clock.channel].source].t, float)
     columns: dict[str, np.ndarray] = {"t": clock}
     for name, spec in channel_map.channels.items():

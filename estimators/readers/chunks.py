@@ -100,9 +100,14 @@ def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> 
 
 
 def _floats(batch, columns: list[str]) -> dict:
+    import pyarrow as pa
+
     result = {}
     for name in columns:
-        result[name] = _float_values(batch.column(name))
+        array = batch.column(name)
+        if array.type != pa.float64():  # float16/32, (u)int8-64: exact in float64 but int64
+            array = array.cast(pa.float64(), safe=False)
+        result[name] = _float_values(array)
     return result
 
 

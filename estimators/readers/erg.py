@@ -11,8 +11,12 @@ documented layout:
   ``LongLong``, ``ULongLong``, ``Int``, ``UInt``, ``Short``, ``UShort``,
   ``Char``, ``UChar``, or ``N Bytes`` of padding), and for a quantity its
   ``Quantity.NAME.Unit``.
-- ``NAME.erg`` is a 16-byte header followed by fixed-size records, one per
-  time step, the columns packed in ``File.At`` order without alignment.
+- ``NAME.erg`` is a 16-byte header (starting ``CM-ERG``) followed by
+  fixed-size records, one per time step, the columns packed in ``File.At``
+  order without alignment.
+- The infofile may declare the number of records, ``File.NRecords = N``
+  (:func:`write_erg` does): a file cut on a record boundary is then found.
+  Without it only a cut inside a record is.
 
 All columns share the time column ``Time`` [s]. The file is memory-mapped,
 so only the columns read are touched. :func:`write_erg` writes the same
@@ -30,8 +34,10 @@ from wheelload.estimators.readers.channel_map import Channel, ChannelMapError
 
 SUFFIXES = (".erg",)
 HEADER_SIZE = 16
-HEADER = b"CM-ERG\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00"
+MAGIC = b"CM-ERG"
+HEADER = MAGIC + bytes(HEADER_SIZE - len(MAGIC))
 TIME = "Time"
+RECORDS = "File.NRecords"
 TYPES = {
     "Double": "f8",
     "Float": "f4",
@@ -70,6 +76,13 @@ def erg_layout(path: Path) -> tuple[np.dtype, dict[str, str]]:
     """The record dtype and the units of an ERG file, from its infofile."""
     info_file = info_path(path)
     info = parse_info(info_file)
+    with path.open("rb") as stream:
+        head = stream.read(len(MAGIC))
+    if head != MAGIC:
+        raise ChannelMapError(
+            f"{path}: does not start with '{MAGIC.decode()}' ({head!r}): not a CarMaker ERG "
+            "file; export the results as ERG again"
+        )
     if "File.Format" not in info or info["File.Format"] != "erg":
         raise ChannelMapError(f"{info_file}: 'File.Format = erg' is missing")
     order = info["File.ByteOrder"] if "File.ByteOrder" in info else "LittleEndian"
@@ -97,6 +110,17 @@ def erg_layout(path: Path) -> tuple[np.dtype, dict[str, str]]:
     return np.dtype(fields), units
 
 
+def declared_records(info_file: Path) -> int | None:
+    """The infofile's ``File.NRecords`` (None when absent); not a count is an error."""
+    info = parse_info(info_file)
+    if RECORDS not in info:
+        return None
+    value = info[RECORDS]
+    if not value.isdigit():
+        raise ChannelMapError(f"{info_file}: '{RECORDS} = {value}' is not a record count")
+    return int(value)
+
+
 def erg_channel_names(path: Path) -> list[str]:
     """Names of the columns of an ERG file."""
     dtype, _ = erg_layout(path)
@@ -111,6 +135,13 @@ def read_erg_channels(path: Path, names: list[str]) -> dict[str, Channel]:
         raise ChannelMapError(
             f"{path}: {size} data bytes is not a whole number of {dtype.itemsize}-byte records "
             "(truncated file, or an infofile of another run)"
+        )
+    declared = declared_records(info_path(path))
+    if declared is not None and declared != size // dtype.itemsize:
+        raise ChannelMapError(
+            f"{path}: has {size // dtype.itemsize} records but its infofile declares "
+            f"{RECORDS} = {declared} (truncated file, or an infofile of another run): "
+            "copy the whole file again"
         )
     records = np.memmap(path, dtype=dtype, mode="r", offset=HEADER_SIZE)
     if TIME not in dtype.names:
@@ -140,5 +171,6 @@ def write_erg(path: Path, columns: dict[str, np.ndarray], units: dict[str, str])
     for i, name in enumerate(names, start=1):
         lines += [f"File.At.{i}.Name = {name}", f"File.At.{i}.Type = Double"]
     lines += [f"Quantity.{name}.Unit = {unit}" for name, unit in units.items()]
+    lines.append(f"{RECORDS} = {len(records)}")
     path.write_bytes(HEADER + records.tobytes())
     info_path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
