@@ -201,7 +201,13 @@ def fault_table(
 
 
 #: Fault limits of the calibration run: every isolated parity fault is reported.
-_TINY_LIMITS = {"travel_fault": 1e-9, "ax_fault": 1e-9, "ay_fault": 1e-9, "az_fault": 1e-9}
+_TINY_LIMITS = {
+    "travel_fault": 1e-9,
+    "ax_fault": 1e-9,
+    "ay_fault": 1e-9,
+    "az_fault": 1e-9,
+    "parity_spread_factor": 1e-12,
+}
 
 
 def false_alarms(
