@@ -250,8 +250,8 @@ def parity_model(suspension: ca.Function, equilibrium: ca.Function, u, valid, p)
     A, b = equilibrium(u, gates, p)
     travel, acc = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
     d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
-    u_d = _with_entries(u, travel, d_sym)
-    u_acc = _with_entries(u, acc, acc_sym)
+    u_d = with_entries(u, travel, d_sym)
+    u_acc = with_entries(u, acc, acc_sym)
     d_now = ca.vertcat(*[u[k] for k in travel])
     acc_now = ca.vertcat(*[u[k] for k in acc])
     Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
@@ -259,7 +259,7 @@ def parity_model(suspension: ca.Function, equilibrium: ca.Function, u, valid, p)
     return z, A, b, ca.horzcat(-ca.mtimes(A, Jd), B)
 
 
-def _with_entries(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
+def with_entries(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
     """``u`` with the entries at ``index`` replaced by ``values``."""
     entries = [u[k] for k in range(u.shape[0])]
     for j, k in enumerate(index):

@@ -181,6 +181,11 @@ _ACC_INDEX = input_index(SPECIFIC_FORCE)
 _HUB_INDEX = input_index(HUB_ACCELERATION)
 
 
+#: ``_replace(u, index, values)``: ``u`` with the entries at ``index`` replaced (the MHE's
+#: residual Function uses it too).
+_replace = guard.with_entries
+
+
 def _channel_drop(channel_ok: ca.SX) -> ca.SX:
     """Validity factor per input from the fault monitor's channels (d_fl..d_rr, ax, ay, az).
 
