@@ -17,15 +17,18 @@ step, the compiled loop and the generated C share one implementation.
   (:math:`D P D`, positive semidefinite preserved), the floor adds to the
   diagonal.
 - **Fault monitor** (detection and isolation, carried as state ``m``): a
-  travel channel that does not change for ``stuck_time`` while another
-  corner moves is *stuck*; the parity residual :math:`r = b - A z` of the raw
-  suspension loads, low-pass filtered, is matched against the signature of
+  travel channel that does not change for ``stuck_time`` while ``stuck_corners``
+  other corners move is *stuck*; the parity residual :math:`r = b - A z` of the raw
+  suspension loads (every model term the inputs allow, :func:`parity_model`),
+  low-pass filtered, is matched against the signature of
   each channel (a travel fault :math:`f` in corner :math:`i` gives
   :math:`r = -A (\partial z / \partial d_i) f`, through the anti-roll bar
   also in the other wheel of the axle; an accelerometer bias :math:`g`
   gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
   its signature explains ``isolation_fraction`` of the residual energy and
-  its estimated fault exceeds the limit for ``fault_confirm_time``
+  its estimated fault exceeds the limit (at least ``parity_spread_factor`` times
+  the fault the residual's own spread looks like, :func:`parity_spread`) for
+  ``fault_confirm_time``
   (generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
   Engineering Systems*, 1998, ch. 5). An isolated channel is dropped from
   the updates until it has been clean for ``fault_clear_time``.
