@@ -17,15 +17,18 @@ step, the compiled loop and the generated C share one implementation.
   (:math:`D P D`, positive semidefinite preserved), the floor adds to the
   diagonal.
 - **Fault monitor** (detection and isolation, carried as state ``m``): a
-  travel channel that does not change for ``stuck_time`` while another
-  corner moves is *stuck*; the parity residual :math:`r = b - A z` of the raw
-  suspension loads, low-pass filtered, is matched against the signature of
+  travel channel that does not change for ``stuck_time`` while ``stuck_corners``
+  other corners move is *stuck*; the parity residual :math:`r = b - A z` of the raw
+  suspension loads (every model term the inputs allow, :func:`parity_model`),
+  low-pass filtered, is matched against the signature of
   each channel (a travel fault :math:`f` in corner :math:`i` gives
   :math:`r = -A (\partial z / \partial d_i) f`, through the anti-roll bar
   also in the other wheel of the axle; an accelerometer bias :math:`g`
   gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
   its signature explains ``isolation_fraction`` of the residual energy and
-  its estimated fault exceeds the limit for ``fault_confirm_time``
+  its estimated fault exceeds the limit (at least ``parity_spread_factor`` times
+  the fault the residual's own spread looks like, :func:`parity_spread`) for
+  ``fault_confirm_time``
   (generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
   Engineering Systems*, 1998, ch. 5). An isolated channel is dropped from
   the updates until it has been clean for ``fault_clear_time``.
@@ -39,13 +42,14 @@ from types import SimpleNamespace
 
 import casadi as ca
 
-from wheelload.models import GRAVITY, Vehicle
+from wheelload.models import GRAVITY, ModelParameters, Vehicle, gates_function
 from wheelload.models.inputs import (
     HUB_ACCELERATION,
     INPUTS,
     SPECIFIC_FORCE,
     TRAVEL,
     TRAVEL_RATE,
+    input_index,
 )
 
 #: Largest plausible hub (unsprung mass) specific force [m/s^2]: 50 g.
@@ -82,6 +86,11 @@ class GuardSettings:
     # densities by c and the file's [filter] gate_scale = 1/c lands here, so the gate and
     # the spread see the S they had and make the same decisions.
     innovation_variance_scale: float = 1.0
+    # The model's own parity spread: a fault is isolated only beyond max(limit, factor * the
+    # fault the clean residual of the last parity_spread_time would look like).
+    parity_spread_time: float = 30.0  # s, memory of the parity residual's mean square
+    parity_spread_factor: float = 2.0  # times the residual's spread, in fault units
+    stuck_corners: float = 2.0  # other corners that must move for a still one to be stuck
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -147,7 +156,8 @@ def unpack(vector: ca.SX) -> SimpleNamespace:
 _D_PREV, _FROZEN, _RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
 _PERSIST, _CLEAR, _FAULT, _REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
 _SPREAD, _ANCHOR, _MOVED, _JUMP = slice(39, 46), slice(46, 50), slice(50, 54), slice(54, 58)
-MONITOR_SIZE = 58
+_PARITY_MEAN, _PARITY_VARIANCE, _PARITY_WEIGHT = slice(58, 61), slice(61, 64), slice(64, 65)
+MONITOR_SIZE = 65
 
 
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
@@ -219,6 +229,47 @@ def limit_covariance(P: ca.SX, floor_std, ceiling) -> tuple[ca.SX, ca.SX]:
     return ca.vertcat(*rows), changed
 
 
+#: The [model] switches in the parameter vector: on for the monitor's parity test.
+_TERM_SWITCHES = [k for k, name in enumerate(ModelParameters.names()) if name.startswith("term_")]
+
+
+def parity_model(suspension: ca.Function, equilibrium: ca.Function, u, valid, p):
+    r"""``(z, A, b, signatures)`` of the parity test, with every model term switched on.
+
+    The monitor checks the travels and the IMU against the vehicle's complete physics
+    (each term whose inputs are valid in the sample), whatever the vehicle file's
+    ``[model]`` switches choose for the estimator's updates: a model without the link
+    or road-frame terms (the paper's) leaves a parity residual of several hundred N
+    on a clean lap, which the signatures of the travel faults explain. ``u``: the
+    sanitised inputs, ``valid`` their validity, ``p`` the parameter vector.
+
+    Signatures in the parity space from the models' Jacobians: a travel fault moves
+    :math:`b - A z` by :math:`-A\,\partial z / \partial d`, an accelerometer fault by
+    :math:`\partial b / \partial a`.
+    """
+    p = ca.vertcat(*[1 if k in _TERM_SWITCHES else p[k] for k in range(p.shape[0])])
+    gates, _ = gates_function()(valid, p)
+    z = suspension(u, gates, p)
+    A, b = equilibrium(u, gates, p)
+    travel, acc = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
+    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+    u_d = with_entries(u, travel, d_sym)
+    u_acc = with_entries(u, acc, acc_sym)
+    d_now = ca.vertcat(*[u[k] for k in travel])
+    acc_now = ca.vertcat(*[u[k] for k in acc])
+    Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
+    B = ca.substitute(ca.jacobian(equilibrium(u_acc, gates, p)[1], acc_sym), acc_sym, acc_now)
+    return z, A, b, ca.horzcat(-ca.mtimes(A, Jd), B)
+
+
+def with_entries(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
+    """``u`` with the entries at ``index`` replaced by ``values``."""
+    entries = [u[k] for k in range(u.shape[0])]
+    for j, k in enumerate(index):
+        entries[k] = values[j]
+    return ca.vertcat(*entries)
+
+
 @dataclass(frozen=True)
 class MonitorOutput:
     """Symbolic results of :func:`monitor`."""
@@ -230,11 +281,12 @@ class MonitorOutput:
     jump: ca.SX  # (4,) 1 while a travel that jumped faster than max_travel_rate is frozen
 
 
-def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> MonitorOutput:
+def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> MonitorOutput:
     r"""One sample of the fault monitor (see module docstring).
 
     ``valid`` (:data:`~wheelload.models.INPUTS`): inputs finite and plausible;
-    ``z`` (4) raw suspension loads; ``A``, ``b`` the equilibrium; ``signatures`` (3 x 7): the change
+    ``z`` (4) raw suspension loads; ``A``, ``b`` the equilibrium (:func:`parity_model`);
+    ``signatures`` (3 x 7): the change
     of :math:`b - A z` per unit fault of each channel, :math:`-A\,\partial
     z / \partial d` for the travels [per m] and :math:`\partial b /
     \partial a` for the accelerometer [per m/s^2]; ``dt`` 0 for a rejected
@@ -264,13 +316,17 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         ca.if_else(changed[i], ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt, m[_JUMP][i])
         for i in range(4)
     ]
+    # The body moves for corner i when ``stuck_corners`` other corners moved within
+    # stuck_time: one other corner alone (a spike, a bad sample) is no evidence that i
+    # should have changed too.
     stuck = []
     for i in range(4):
-        others_moving, others_changing = jump[i], 0
+        movers, others_changing = 0, 0
         for j in range(4):
             if j != i:
-                others_moving = ca.logic_or(others_moving, moved_next[j] < g.stuck_time)
+                movers = movers + (moved_next[j] < g.stuck_time)
                 others_changing = ca.logic_or(others_changing, frozen_next[j] < 0.5 * g.stuck_time)
+        others_moving = ca.logic_or(jump[i], movers >= g.stuck_corners)
         moving = ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving)
         still = ca.logic_and(frozen_next[i] >= g.stuck_time_still, others_changing)
         stuck.append(ca.logic_or(moving, still))
@@ -285,8 +341,8 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
     # other two densities, so that no division is repeated at every use.
     w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
     energy = ca.sum1(w * rbar_next * rbar_next)
+    spread, *spread_next = parity_spread(m, rbar_next, all_valid * dt, m[_FAULT], g)
     limits = [g.travel_fault] * 4 + [g.ax_fault, g.ay_fault, g.az_fault]
-    inverse_limits = [1 / limit for limit in limits]
     inverse_stuck_time = 1 / g.stuck_time
     statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
     for j in range(7):
@@ -294,12 +350,17 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         norm = ca.sum1(w * s * s)
         projection = ca.sum1(w * s * rbar_next)
         # A channel without signature (norm 0) can never be isolated; no 0/0.
-        magnitude = projection / ca.if_else(norm > 0, norm, 1) * (norm > 0)
+        inverse_norm = 1 / ca.if_else(norm > 0, norm, 1) * (norm > 0)
+        magnitude = projection * inverse_norm
         isolated = projection * magnitude > g.isolation_fraction * energy
-        candidate = ca.logic_and(ca.fabs(magnitude) > limits[j], isolated)
+        # The fault the model's own clean residual would look like on this channel:
+        # sqrt(sum (w s)^2 spread) / (s' W s), the spread of the magnitude estimate.
+        floor_j = ca.sqrt(ca.sum1(w * w * s * s * spread)) * inverse_norm
+        limit_j = ca.fmax(limits[j], g.parity_spread_factor * floor_j)
+        candidate = ca.logic_and(ca.fabs(magnitude) > limit_j, isolated)
         persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)
         parity_fault = persist_j >= g.fault_confirm_time
-        level = ca.fabs(magnitude) * inverse_limits[j] * isolated
+        level = ca.fabs(magnitude) / limit_j * isolated
         if j < 4:
             now = ca.logic_or(stuck[j], parity_fault)
             level = ca.fmax(level, frozen_next[j] * inverse_stuck_time * stuck[j])
@@ -324,6 +385,7 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         anchor_next,
         moved_next,
         *jump,
+        *spread_next,
     )
     return MonitorOutput(
         m_next,
@@ -332,6 +394,40 @@ def monitor(m, u, valid, z, A, signatures, b, dt, r_c, g: GuardSettings) -> Moni
         ca.vertcat(*fault_next),
         ca.vertcat(*jump),
     )
+
+
+def parity_spread(m, rbar, dt, fault, g: GuardSettings):
+    r"""The model's own parity spread per row; and the next monitor slots it needs.
+
+    .. math:: w \leftarrow w + \beta (1 - w), \quad
+        \mu \leftarrow \mu + \beta (\bar r - \mu), \quad
+        v \leftarrow v + \beta \big((\bar r - \mu / w)^2 - v\big), \quad
+        \sigma_r^2 = v / w, \quad \beta = \Delta t / (\tau_q + \Delta t)
+
+    the exponentially weighted variance of the low-passed parity residual
+    :math:`\bar r` about its own mean over ``parity_spread_time``
+    (:math:`\tau_q`), bias-corrected by the weight :math:`w` (0 at the start, so
+    the first samples count in full). It is held while any channel is isolated
+    (a fault is not learnt as model mismatch). The variance, not the mean square:
+    a steady offset of the model says nothing about how far the residual wanders
+    on clean driving. A model that explains less of the motion (the paper's,
+    without links or road frame) has a larger spread, hence larger effective fault
+    limits (:func:`monitor`). ``dt`` is 0 for a sample whose residual is not updated.
+
+    Returns ``(spread, mean, variance, weight)``: :math:`\sigma_r^2` (3) and the next
+    :math:`\mu, v, w`.
+    """
+    mean, variance, weight = m[_PARITY_MEAN], m[_PARITY_VARIANCE], m[_PARITY_WEIGHT]
+    isolated = 0
+    for j in range(len(FAULT_CHANNELS)):
+        isolated = ca.logic_or(isolated, fault[j])
+    beta = (1 - isolated) * dt / (g.parity_spread_time + dt)
+    weight_next = weight + beta * (1 - weight)
+    inverse_weight = 1 / ca.if_else(weight_next > 0, weight_next, 1)
+    mean_next = mean + beta * (rbar - mean)
+    deviation = rbar - mean_next * inverse_weight
+    variance_next = variance + beta * (deviation * deviation - variance)
+    return variance_next * inverse_weight, mean_next, variance_next, weight_next
 
 
 def prior_failures(y, S, available, m_spread, g: GuardSettings):

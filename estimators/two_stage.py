@@ -181,12 +181,9 @@ _ACC_INDEX = input_index(SPECIFIC_FORCE)
 _HUB_INDEX = input_index(HUB_ACCELERATION)
 
 
-def _replace(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
-    """``u`` with the entries at ``index`` replaced by ``values``."""
-    entries = [u[k] for k in range(u.shape[0])]
-    for j, k in enumerate(index):
-        entries[k] = values[j]
-    return ca.vertcat(*entries)
+#: ``_replace(u, index, values)``: ``u`` with the entries at ``index`` replaced (the MHE's
+#: residual Function uses it too).
+_replace = guard.with_entries
 
 
 def _channel_drop(channel_ok: ca.SX) -> ca.SX:
@@ -280,21 +277,12 @@ def step_expressions(
     # sample (``dropped``).
     z, A, b, _, _, dropped = model_rows(suspension, equilibrium, u_raw, valid_plausible, p)
 
-    # Fault monitor: an isolated channel is dropped like a missing one.
-    # Fault signatures in the parity space from the models' Jacobians: a travel
-    # fault moves b - A z by -A dz/dd, an accelerometer fault by db/da.
-    gates, _ = gates_function()(valid_plausible, p)
-    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
-    u_d = _replace(u, _TRAVEL_INDEX, d_sym)
-    u_acc = _replace(u, _ACC_INDEX, acc_sym)
-    d_now = ca.vertcat(*[u[k] for k in _TRAVEL_INDEX])
-    acc_now = ca.vertcat(*[u[k] for k in _ACC_INDEX])
-    Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
-    B = ca.substitute(ca.jacobian(equilibrium(u_acc, gates, p)[1], acc_sym), acc_sym, acc_now)
-    signatures = ca.horzcat(-ca.mtimes(A, Jd), B)
+    # Fault monitor: an isolated channel is dropped like a missing one. Its parity test
+    # uses every model term the inputs allow, whatever the [model] switches.
+    parity = guard.parity_model(suspension, equilibrium, u, valid_plausible, p)
     # The fault monitor's parity test weighs the constant densities (the paper's R_c).
     rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
-    watch = guard.monitor(m, u, valid_plausible, z, A, signatures, b, dt_used, rc_density, settings)
+    watch = guard.monitor(m, u, valid_plausible, *parity, dt_used, rc_density, settings)
     valid = valid_plausible * _channel_drop(watch.channel_ok)
     # The updates the channels left after the guards feed (an isolated channel's rows are
     # skipped; the model terms keep their inputs, as for the monitor).

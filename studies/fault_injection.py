@@ -22,7 +22,11 @@ the fault monitor on the clean logs of every bundled scenario.
 Command: ``wheelload bench faults`` (``--quick``: iso-dlc and brake-in-turn only;
 ``--seeds N``: the clean logs with N seeds of road and sensors; ``--alarms-only``:
 the false alarms, clean-log RMSE and each channel's clean-log fault floor only;
-``--vehicle FILE``: repeatable, default both bundled vehicles).
+``--vehicle FILE``: repeatable, default both bundled vehicles; ``--model
+full|paper|both``: the vehicle file's model, the paper's, or both on the same logs;
+``--progress``: hours and alarms so far after each vehicle and seed; ``--spikes``: the
+isolation table of :mod:`wheelload.studies.fault_spikes` only). The false alarms print
+the hours of clean driving, the alarm count and the 95 % Poisson upper bound on the rate.
 """
 
 from __future__ import annotations
@@ -47,6 +51,8 @@ from wheelload.estimators.guard import (
 )
 from wheelload.estimators.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.equilibrium_residuals import paper_model
+from wheelload.studies.fault_spikes import SPIKE_SCENARIOS, spike_table
 from wheelload.studies.metrics import wheel_metrics
 from wheelload.studies.scenario_runner import run_scenario
 from wheelload.studies.scenarios import SCENARIOS, Options
@@ -201,7 +207,17 @@ def fault_table(
 
 
 #: Fault limits of the calibration run: every isolated parity fault is reported.
-_TINY_LIMITS = {"travel_fault": 1e-9, "ax_fault": 1e-9, "ay_fault": 1e-9, "az_fault": 1e-9}
+_TINY_LIMITS = {
+    "travel_fault": 1e-9,
+    "ax_fault": 1e-9,
+    "ay_fault": 1e-9,
+    "az_fault": 1e-9,
+    "parity_spread_factor": 1e-12,
+}
+
+
+#: Vehicle models of the false-alarm run: the file's own, the paper's (every term off).
+MODELS = {"full": lambda vehicle: vehicle, "paper": paper_model}
 
 
 def false_alarms(
@@ -209,42 +225,68 @@ def false_alarms(
     seeds=(0,),
     vehicle_paths: tuple[Path, ...] | None = None,
     overrides: dict[str, float] | None = None,
+    models: tuple[str, ...] = ("full",),
+    progress: Callable[[pd.DataFrame], None] | None = None,
 ) -> pd.DataFrame:
-    """Fault-monitor isolations and clean-log RMSE (guards on and off) per vehicle, scenario, seed.
+    """Fault-monitor isolations and clean-log RMSE (guards on and off) per vehicle, seed,
+    scenario and model (:data:`MODELS`; each log is simulated once for every model).
 
     ``floor_<channel>``: the largest fault the parity test attributes to the
     channel (one channel explaining ``isolation_fraction`` of the residual for
     ``fault_confirm_time``) on the clean log [m, m/s^2]: the vehicle's
-    ``[filter.faults]`` limits must lie above it.
+    ``[filter.faults]`` limits must lie above it. ``progress(rows)`` is called
+    with the rows so far after each vehicle and seed.
     """
     rows = []
     for path in bundled_vehicles() if vehicle_paths is None else vehicle_paths:
-        vehicle = load_vehicle(path)
-        kf = TwoStageKF(vehicle, guard_settings=vehicle_guards(vehicle, overrides))
-        plain = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
-        probe = TwoStageKF(
-            vehicle, guard_settings=dataclasses.replace(kf.guard_settings, **_TINY_LIMITS)
-        )
+        base = load_vehicle(path)
+        filters = {}
+        for model in models:
+            vehicle = MODELS[model](base)
+            kf = TwoStageKF(vehicle, guard_settings=vehicle_guards(base, overrides))
+            plain = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
+            probe = TwoStageKF(
+                vehicle, guard_settings=dataclasses.replace(kf.guard_settings, **_TINY_LIMITS)
+            )
+            filters[model] = (kf, plain, probe)
         for seed in seeds:
             for scenario in scenarios:
                 signals = scenario_signals(scenario, seed, path)
-                estimate = kf.run(signals)
-                floors = probe.run(signals).faults
-                row = {
-                    "vehicle": vehicle.name,
-                    "scenario": scenario,
-                    "seed": seed,
-                    "duration_s": float(signals.t[-1] - signals.t[0]),
-                    "alarms": len(estimate.faults),
-                    "channels": ",".join(estimate.faults["channel"]) or "-",
-                    "rmse_guarded": pooled_rmse(estimate.loads, signals.reference),
-                    "rmse_plain": pooled_rmse(plain.run(signals).loads, signals.reference),
-                }
-                for channel in FAULT_CHANNELS:
-                    peaks = floors["statistic"][floors["channel"] == channel]
-                    row[f"floor_{channel}"] = float(peaks.max()) * 1e-9 if len(peaks) else 0.0
-                rows.append(row)
+                for model, (kf, plain, probe) in filters.items():
+                    rows.append(_alarm_row(kf, plain, probe, signals, scenario, seed, model))
+            if progress is not None:
+                progress(pd.DataFrame(rows))
     return pd.DataFrame(rows)
+
+
+def _alarm_row(kf, plain, probe, signals: Signals, scenario: str, seed: int, model: str) -> dict:
+    """One row of :func:`false_alarms`: one clean log through one vehicle model."""
+    estimate = kf.run(signals)
+    floors = probe.run(signals).faults
+    row = {
+        "vehicle": kf.vehicle.name,
+        "model": model,
+        "scenario": scenario,
+        "seed": seed,
+        "duration_s": float(signals.t[-1] - signals.t[0]),
+        "alarms": len(estimate.faults),
+        "channels": ",".join(estimate.faults["channel"]) or "-",
+        "rmse_guarded": pooled_rmse(estimate.loads, signals.reference),
+        "rmse_plain": pooled_rmse(plain.run(signals).loads, signals.reference),
+    }
+    for channel in FAULT_CHANNELS:
+        peaks = floors["statistic"][floors["channel"] == channel]
+        row[f"floor_{channel}"] = float(peaks.max()) * 1e-9 if len(peaks) else 0.0
+    return row
+
+
+def alarm_bound(count: int, hours: float) -> float:
+    r"""Exact one-sided 95 % Poisson upper bound on the alarm rate [1/h].
+
+    :math:`\chi^2_{0.95}(2 (n + 1)) / (2 T)` for ``count`` alarms in ``hours``; with
+    no alarm, :math:`3.0 / T`: 3.0 h of clean driving bound the rate below 1 per hour.
+    """
+    return float(chi2.ppf(0.95, 2 * (count + 1)) / 2 / hours)
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -278,28 +320,75 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         metavar="NAME=VALUE",
         help="override a guard setting for every vehicle (repeatable), e.g. travel_fault=0.002",
     )
+    parser.add_argument(
+        "--model",
+        choices=("full", "paper", "both"),
+        default="full",
+        help="vehicle model of the false alarms and spikes: the file's, the paper's "
+        "(every [model] term off) or both on the same logs (default full)",
+    )
+    parser.add_argument(
+        "--progress",
+        action="store_true",
+        help="print the hours and alarms so far after each vehicle and seed",
+    )
+    parser.add_argument(
+        "--spikes",
+        action="store_true",
+        help="only the isolation table of one spike on each channel (at rest and iso-dlc)",
+    )
     parser.set_defaults(handler=run)
 
 
+def alarm_summary(alarms: pd.DataFrame) -> str:
+    """Hours of clean driving, alarms and the 95 % upper bound, per model and in all."""
+    lines = []
+    groups = [(f"model {m}", g) for m, g in alarms.groupby("model", sort=False)]
+    for name, group in [*groups, ("both models", alarms)] if len(groups) > 1 else groups:
+        hours = group["duration_s"].sum() / 3600.0
+        count = int(group["alarms"].sum())
+        lines.append(
+            f"{name}: {count} alarms in {hours:.2f} h of clean driving "
+            f"({group['vehicle'].nunique()} vehicles, {group['seed'].nunique()} seeds): "
+            f"{count / hours:.2f} per hour (95 % upper bound {alarm_bound(count, hours):.2f})"
+        )
+    return "\n".join(lines)
+
+
 def _print_alarms(alarms: pd.DataFrame) -> None:
-    hours = alarms["duration_s"].sum() / 3600.0
-    count = int(alarms["alarms"].sum())
     print("\nFalse alarms of the fault monitor on the clean logs:")
     shown = alarms.drop(columns=[c for c in alarms if c.startswith("floor_")])
     print(shown.to_string(index=False, float_format=lambda x: f"{x:.1f}"))
-    # Exact one-sided 95 % Poisson bound on the rate: chi^2_{0.95}(2 (count + 1)) / 2.
-    bound = chi2.ppf(0.95, 2 * (count + 1)) / 2 / hours
-    print(
-        f"total {count} alarms in {hours:.2f} h simulated: {count / hours:.2f} per hour "
-        f"(95 % upper bound {bound:.2f} per hour)"
-    )
+    print(alarm_summary(alarms))
     print("\nClean-log RMSE pooled over the logs [N] and the largest isolated parity fault:")
-    for name, group in alarms.groupby("vehicle", sort=False):
+    for (name, model), group in alarms.groupby(["vehicle", "model"], sort=False):
         weights = group["duration_s"]
         guarded = np.sqrt(np.average(group["rmse_guarded"] ** 2, weights=weights))
         plain = np.sqrt(np.average(group["rmse_plain"] ** 2, weights=weights))
         floors = ", ".join(f"{c} {group[f'floor_{c}'].max():.4g}" for c in FAULT_CHANNELS)
-        print(f"{name}: guarded {guarded:.1f} N, plain {plain:.1f} N; floor: {floors}")
+        print(f"{name} ({model}): guarded {guarded:.1f} N, plain {plain:.1f} N; floor: {floors}")
+
+
+def _progress_line(rows: pd.DataFrame) -> str:
+    last = rows.iloc[-1]
+    return f"[{last['vehicle']} seed {last['seed']}] " + alarm_summary(rows).replace("\n", "; ")
+
+
+def _print_spikes(paths, overrides, models) -> None:
+    print("Single spike at mid-log on each channel: isolated channels (the spiked one or none),")
+    print("time isolated [s], pooled RMSE change [N] (guarded, spiked minus clean):")
+    tables = []
+    for path in paths:
+        base = load_vehicle(path)
+        for model in models:
+            kf = TwoStageKF(MODELS[model](base), guard_settings=vehicle_guards(base, overrides))
+            for scenario in SPIKE_SCENARIOS:
+                table = spike_table(kf, scenario_signals(scenario, 0, path), scenario, pooled_rmse)
+                tables.append(table.assign(model=model))
+    table = pd.concat(tables)
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.2f}"))
+    wrong = table[table["healthy_isolated"] != "-"]
+    print(f"spikes that isolated a healthy channel: {len(wrong)} of {len(table)}")
 
 
 def parse_overrides(items: list[str]) -> dict[str, float]:
@@ -326,6 +415,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: {error}")
         return 2
     paths = tuple(args.vehicle) if args.vehicle else bundled_vehicles()
+    models = ("full", "paper") if args.model == "both" else (args.model,)
+    if args.spikes:
+        _print_spikes(paths, overrides, models)
+        print(f"({time.perf_counter() - start:.0f} s)")
+        return 0
     if not args.alarms_only:
         scenarios = ("iso-dlc", "brake-in-turn") if args.quick else FAULT_SCENARIOS
         table = pd.concat(
@@ -335,6 +429,8 @@ def run(args: argparse.Namespace) -> int:
         table["delay_s"] = [f"{x:.2f}" if np.isfinite(x) else "-" for x in table["delay_s"]]
         print(table.to_string(index=False, float_format=lambda x: f"{x:.1f}"))
     clean = ("iso-dlc", "brake-in-turn", "wheel-lift") if args.quick else tuple(SCENARIOS)
-    _print_alarms(false_alarms(clean, tuple(range(args.seeds)), paths, overrides))
+    progress = (lambda rows: print(_progress_line(rows), flush=True)) if args.progress else None
+    alarms = false_alarms(clean, tuple(range(args.seeds)), paths, overrides, models, progress)
+    _print_alarms(alarms)
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
