@@ -52,7 +52,7 @@ def build_folder() -> Path:
     elif info.st_uid != os.getuid():
         reason = f"is owned by user {info.st_uid}"
     elif mode & 0o077:
-        reason = f"has mode {mode:o} (others may write)"
+        reason = f"has mode {mode:o}: others may enter it"
     else:
         return folder
     raise BuildFolderError(
