@@ -34,6 +34,7 @@ from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.workers import ignore_interrupts
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -406,13 +407,16 @@ def run_logs(
                 rows += done
                 bar.update(len(done))
     elif workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts)
+        try:
             futures = [pool.submit(process_logs, chunk, settings, folder, force, lean_bytes)
                        for chunk in chunks(paths, workers)]  # fmt: skip
             for future in as_completed(futures):
                 done = future.result()
                 rows += done
                 bar.update(len(done))
+        finally:  # on Ctrl-C or SIGTERM: the chunks not started are dropped
+            pool.shutdown(cancel_futures=True)
     else:
         for chunk in chunks(paths, 1):
             done = process_logs(chunk, settings, folder, force, lean_bytes)

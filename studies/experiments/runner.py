@@ -15,7 +15,6 @@ Example
 from __future__ import annotations
 
 import multiprocessing
-import signal
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -25,6 +24,7 @@ from typing import Any
 from tqdm import tqdm
 
 from wheelload.studies.experiments.cache import MISSING, ResultCache, cache_key
+from wheelload.studies.workers import ignore_interrupts
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -37,11 +37,6 @@ class Job:
 
     def key(self) -> str:
         return cache_key(self.kind, self.spec)
-
-
-def ignore_interrupts() -> None:
-    """A worker process leaves Ctrl-C to the command (which stops the pool, one line)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _execute(job: Job, folder: Path) -> Any:
