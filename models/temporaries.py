@@ -11,9 +11,9 @@ suffix is the target's, so writers that choose the format by suffix see the
 right one). A ``try/finally`` removes the temporary on every exception,
 including the ``KeyboardInterrupt`` of Ctrl-C and the exception the command
 line raises on SIGTERM (:mod:`wheelload.studies.cli`). SIGKILL cannot be
-caught, so :func:`remove_stale` runs whenever a folder is written next: it
-removes the temporaries of this host whose process is gone (or that are older
-than :data:`STALE_SECONDS`), and nothing else.
+caught, so :func:`remove_stale` runs when a folder is written next (on each
+process's first write there): it removes the temporaries of this host whose
+process is gone (or that are older than :data:`STALE_SECONDS`), and nothing else.
 
 Example
 -------
@@ -22,6 +22,7 @@ Example
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import re
@@ -84,13 +85,21 @@ def remove_stale(folder: Path) -> list[Path]:
     return removed
 
 
+@functools.cache
+def _cleaned(folder: str) -> None:
+    """:func:`remove_stale` once per folder and process (a fleet's output folder holds
+    thousands of files: one scan, not one per file written)."""
+    remove_stale(Path(folder))
+
+
 def temporary_file(folder: Path, stem: str, suffix: str) -> Path:
     """A new empty file in ``folder`` named as a temporary of this process (module docstring).
 
-    The folder's stale temporaries are removed first (:func:`remove_stale`).
+    The folder's stale temporaries are removed first, on this process's first write
+    there (:func:`remove_stale`).
     """
     folder = Path(folder)
-    remove_stale(folder)
+    _cleaned(os.path.realpath(folder))
     handle, name = tempfile.mkstemp(
         prefix=f".{stem}.{TAG}-{_host()}-{os.getpid()}-", suffix=suffix, dir=folder
     )

@@ -34,9 +34,18 @@ def wheelload(*args, tmpdir: Path, **options) -> subprocess.CompletedProcess:
                           **options)  # fmt: skip
 
 
+#: The command with Ctrl-C's default handling, also when this test runs where SIGINT is
+#: ignored (a background job of a shell inherits SIG_IGN, which Python then keeps).
+INTERRUPTIBLE = [sys.executable, "-c", "import runpy, signal, sys; "
+                 "signal.signal(signal.SIGINT, signal.default_int_handler); "
+                 "sys.argv[0] = 'wheelload'; "
+                 "runpy.run_module('wheelload.studies.cli', run_name='__main__')"]  # fmt: skip
+
+
 def start(*args, tmpdir: Path) -> subprocess.Popen:
+    """A running ``wheelload`` (interruptible: :data:`INTERRUPTIBLE`)."""
     env = {**os.environ, "TMPDIR": str(tmpdir)}
-    return subprocess.Popen([*COMMAND, *map(str, args)], stdout=subprocess.PIPE,
+    return subprocess.Popen([*INTERRUPTIBLE, *map(str, args)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
 
 
