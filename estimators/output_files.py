@@ -4,7 +4,8 @@ Every command that writes checks its outputs first with
 :func:`check_outputs` (an output equal to an input is always refused; an
 existing output only with ``force``), then writes each one through
 :func:`atomic_write`: a temporary file in the target folder, renamed into
-place once complete, so an interrupted run leaves the old file or nothing.
+place once complete, so an interrupted run leaves the old file or nothing
+(and no temporary: :func:`atomic_write`).
 
 Example
 -------
@@ -21,6 +22,8 @@ import os
 import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+
+from wheelload.models.temporaries import temporary_file
 
 
 class OutputError(ValueError):
@@ -147,13 +150,14 @@ def atomic_write(path: Path, *, replace: bool = False) -> Iterator[Path]:
     The temporary file keeps ``path``'s suffix (writers that choose the format
     by suffix see the right one). Without ``replace``, an existing ``path`` is
     never overwritten (the rename is a hard link, which fails if the name
-    exists). On an error the temporary file is removed and ``path`` is untouched.
+    exists). On an error, Ctrl-C or SIGTERM (the command line turns it into an
+    exception) the temporary file is removed and ``path`` is untouched; the
+    temporaries of a killed run are removed when the folder is written next
+    (:mod:`wheelload.models.temporaries`).
     """
     path = Path(path)
     check_folder(path.parent, path)
-    handle, name = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    os.close(handle)
-    temporary = Path(name)
+    temporary = temporary_file(path.parent, path.stem, path.suffix)
     try:
         os.chmod(temporary, 0o666 & ~_umask())
         yield temporary

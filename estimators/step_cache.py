@@ -8,7 +8,8 @@ of ``wheelload.models`` and ``wheelload.estimators``) and of the CasADi
 version, so an edit of any of them builds it again; it lives in the private
 build folder of the compiled loops
 (:func:`~wheelload.models.build_folder.build_folder`), written to a temporary
-file and renamed into place. A file that does not load is built again.
+file and renamed into place. A file that does not load is built again (with a
+one-line note).
 
 Example
 -------
@@ -19,13 +20,16 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import logging
 import os
-import tempfile
 from pathlib import Path
 
 import casadi as ca
 
 from wheelload.models.build_folder import build_folder
+from wheelload.models.temporaries import temporary_file
+
+_log = logging.getLogger(__name__)
 
 
 def _code_digest() -> str:
@@ -52,14 +56,18 @@ def default_step_function() -> ca.Function:
     if path.exists():
         try:
             return ca.Function.deserialize(path.read_text())
-        except (RuntimeError, OSError, UnicodeDecodeError):
-            path.unlink(missing_ok=True)  # truncated or corrupt: built again below
+        except (RuntimeError, OSError, UnicodeDecodeError):  # truncated or corrupt
+            _log.warning("wheelload: note: cached filter step %s does not load: built again", path)
     step = step_function()
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(handle, "w") as file:
-            file.write(step.serialize())
+        temporary = temporary_file(path.parent, path.stem, path.suffix)
+    except OSError:
+        return step  # not cached: the step is still returned
+    try:
+        temporary.write_text(step.serialize())
         os.replace(temporary, path)
     except OSError:
-        Path(temporary).unlink(missing_ok=True)  # not cached: the step is still returned
+        pass  # not cached: the step is still returned
+    finally:
+        temporary.unlink(missing_ok=True)
     return step

@@ -41,6 +41,7 @@ from wheelload.estimators.two_stage import step_function
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.workers import ignore_interrupts
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -313,12 +314,17 @@ def process_logs(
 
     With the two-stage KF (not smoothed), the chunk's logs are filtered side
     by side in the generated C library's batched step (``estimators/batched.py``),
-    :data:`BATCH` at a time: the same estimates to about 1e-12 relative. A CSV
-    or Parquet log over ``lean_bytes`` runs alone on the lean path instead
-    (:func:`lean_row`: memory bounded by the chunk, :meth:`TwoStageKF.run`'s
+    :data:`BATCH` at a time, a chunk of one log too: a log's estimates do not depend
+    on its batch, so serial, local processes and Dask give the same bits however
+    the logs are split. They equal :meth:`TwoStageKF.run` (a single log's path, the
+    compiled loop of the CasADi step) within :data:`BATCHED_TOLERANCE`: the
+    generated library evaluates the same equations in another order of
+    operations (a few units in the last place, measured by ``wheelload bench
+    logs``). A CSV or Parquet log over ``lean_bytes`` runs alone on the lean path
+    instead (:func:`lean_row`: memory bounded by the chunk, :meth:`TwoStageKF.run`'s
     numbers to the bit).
     """
-    if settings.method != "kf" or settings.smooth or len(paths) < 2:
+    if settings.method != "kf" or settings.smooth:
         return [process_log(path, settings, folder, force, lean_bytes) for path in paths]
     rows: dict[Path, dict] = {}
     prepared: dict[tuple[float, ...] | None, list] = {}
@@ -349,6 +355,11 @@ def process_logs(
 
 #: Logs filtered side by side at most (their inputs are held in memory together).
 BATCH = 16
+
+#: Largest relative difference of a batched estimate from :meth:`TwoStageKF.run`'s
+#: (loads and standard deviations): measured at 5e-16 (1.8e-12 N on 5 kN) by
+#: ``wheelload bench logs``, allowed with a margin for other logs and compilers.
+BATCHED_TOLERANCE = 1e-13
 
 
 def _finish_log(path, settings, folder, force, signals, estimate, vehicle, notes) -> dict:
@@ -409,13 +420,16 @@ def run_logs(
                 rows += done
                 bar.update(len(done))
     elif workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts)
+        try:
             futures = [pool.submit(process_logs, chunk, settings, folder, force, lean_bytes)
                        for chunk in chunks(paths, workers)]  # fmt: skip
             for future in as_completed(futures):
                 done = future.result()
                 rows += done
                 bar.update(len(done))
+        finally:  # on Ctrl-C or SIGTERM: the chunks not started are dropped
+            pool.shutdown(cancel_futures=True)
     else:
         for chunk in chunks(paths, 1):
             done = process_logs(chunk, settings, folder, force, lean_bytes)

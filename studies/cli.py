@@ -3,6 +3,12 @@
 Each module named in :data:`COMMANDS` exposes ``register(subparsers)``, which
 adds its sub-parser and sets ``handler`` (a function of the parsed arguments
 returning an exit status).
+
+A mistake a user can make is one line on stderr and exit status 2. Ctrl-C
+(SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130; SIGTERM
+raises :class:`Terminated` in the main thread, so that every ``finally`` runs
+(temporary files are removed, :mod:`wheelload.models.temporaries`), then the
+line ``terminated`` and status 143.
 """
 
 from __future__ import annotations
@@ -10,7 +16,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from importlib.metadata import version
 
@@ -70,12 +78,39 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """Raised in the main thread on SIGTERM (not an ``Exception``: nothing swallows it)."""
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    command = argv[0] if argv and argv[0] in COMMAND_MODULES else "command"
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print(f"wheelload {command}: interrupted", file=sys.stderr)
+        return 130
+    except Terminated:
+        print(f"wheelload {command}: terminated", file=sys.stderr)
+        return 143
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str]) -> int:
+    from wheelload.models.build_folder import BuildFolderError
+
     args = build_parser(argv).parse_args(argv)
     try:
         return int(args.handler(args) or 0)
-    except (ValueError, FileNotFoundError) as error:
+    except (ValueError, FileNotFoundError, BuildFolderError) as error:
         print(f"wheelload {args.command}: error: {error}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into a command that stopped reading (head)

@@ -6,7 +6,12 @@ bundled plant log, each starting elsewhere) into a temporary folder and runs
 (``--workers``) and on a ``distributed.LocalCluster`` of the same size;
 prints samples per second (min / median / max of ``--repeat`` runs, the
 variants run in turn so that each meets the same machine load), the ratio to
-the serial run, and whether each summary equals the serial one.
+the serial run, and how each summary compares with the serial one: ``same``
+(bit for bit), ``within`` (every number within
+:data:`~wheelload.studies.batch.BATCHED_TOLERANCE` relative to its column's
+largest magnitude) or ``NO``, with the largest difference. A last line
+compares the serial summary with single runs of each log
+(:meth:`TwoStageKF.run`, which the batched step equals within that tolerance).
 """
 
 from __future__ import annotations
@@ -18,10 +23,17 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from wheelload.models import example_vehicle_path
-from wheelload.studies.batch import EstimateSettings, expand_logs, run_logs
+from wheelload.studies.batch import (
+    BATCHED_TOLERANCE,
+    EstimateSettings,
+    expand_logs,
+    process_log,
+    run_logs,
+)
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -47,12 +59,33 @@ def _write_logs(folder: Path, count: int, samples: int) -> list[Path]:
     return expand_logs([str(folder)])
 
 
-def _line(label: str, samples: int, times: list[float], serial: float | None, same: str) -> str:
+def compare(table: pd.DataFrame, reference: pd.DataFrame) -> tuple[str, float]:
+    """``same``, ``within`` or ``NO`` (module docstring) and the largest difference of the
+    numbers (inf when the tables differ in shape, columns or text)."""
+    if table.equals(reference):
+        return "same", 0.0
+    numbers = reference.select_dtypes("number").columns
+    text = [c for c in reference.columns if c not in numbers]
+    if list(table.columns) != list(reference.columns) or len(table) != len(reference):
+        return "NO", float("inf")
+    if not table[text].equals(reference[text]):
+        return "NO", float("inf")
+    a, b = table[numbers].to_numpy(float), reference[numbers].to_numpy(float)
+    if not np.array_equal(np.isnan(a), np.isnan(b)):
+        return "NO", float("inf")
+    difference = np.abs(np.nan_to_num(a - b))
+    scale = np.nanmax(np.abs(b), axis=0, initial=0.0)
+    within = (difference <= BATCHED_TOLERANCE * scale).all()
+    return ("within" if within else "NO"), float(difference.max(initial=0.0))
+
+
+def _line(label: str, samples: int, times: list[float], serial: float | None, same) -> str:
     rates = sorted(samples / t for t in times)
     median = statistics.median(rates)
     ratio = f"{median / serial:5.2f}" if serial else f"{1.0:5.2f}"
+    verdict, difference = same
     return (f"{label:28s} {rates[0]:10.0f} {median:10.0f} {rates[-1]:10.0f} {ratio:>8s} "
-            f"{same:>8s}")  # fmt: skip
+            f"{verdict:>8s} {difference:12.2e}")  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,10 +119,15 @@ def run(args: argparse.Namespace) -> int:
         print(f"{args.logs} logs x {args.samples} samples (windows of the bundled plant log); "
               f"samples/s over {args.repeat} runs, run in turn")  # fmt: skip
         print(f"{'run':28s} {'min':>10s} {'median':>10s} {'max':>10s} {'x serial':>8s} "
-              f"{'same':>8s}")  # fmt: skip
+              f"{'summary':>8s} {'max |diff|':>12s}")  # fmt: skip
         for name in variants:
-            same = "-" if name == serial_name else (
-                "yes" if tables[name].equals(tables[serial_name]) else "NO")  # fmt: skip
+            same = compare(tables[name], tables[serial_name])
             ratio = None if name == serial_name else serial_rate
             print(_line(name, total, times[name], ratio, same))
+        single = pd.DataFrame([process_log(path, settings, None) for path in paths])
+        verdict, difference = compare(
+            tables[serial_name], single.sort_values("log", ignore_index=True)
+        )
+        print(f"serial against single runs (TwoStageKF.run per log): {verdict}, max |diff| "
+              f"{difference:.2e} (tolerance {BATCHED_TOLERANCE:.0e} relative)")  # fmt: skip
     return 0

@@ -1,4 +1,9 @@
-"""``wheelload study NAME --out DIR`` for the experiments (every name but ``mhe-vs-kf``)."""
+"""``wheelload study NAME --out DIR`` for the experiments (every name but ``mhe-vs-kf``).
+
+The output folder is locked before any work
+(:mod:`~wheelload.studies.experiments.folder_lock`), so a second study into it
+refuses at once.
+"""
 
 from __future__ import annotations
 
@@ -12,6 +17,7 @@ from wheelload.studies.commands.options import add_suspension_option
 from wheelload.studies.experiments.cache import ResultCache
 from wheelload.studies.experiments.catalog import NAMES, run_study
 from wheelload.studies.experiments.context import Context, Outputs, Settings
+from wheelload.studies.experiments.folder_lock import folder_lock
 from wheelload.studies.experiments.runner import Runner
 
 
@@ -37,6 +43,11 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out}: exists and is not a folder; give a folder to --out")
     out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out):  # before any work: a second study into ``out`` refuses at once
+        return _run(args, out)
+
+
+def _run(args: argparse.Namespace, out: Path) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     if not vehicle_path.is_file():
         raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")

@@ -1,24 +1,26 @@
 """What every study is given: its settings, the shared runner and a guarded output folder.
 
 Outputs never replace an existing file without ``force``; each is written to
-a temporary file in the output folder and renamed.
+a temporary file in the output folder and renamed (removed on an error, Ctrl-C
+or SIGTERM; a killed run's is removed when the folder is written next:
+:mod:`wheelload.models.temporaries`).
 """
 
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.models.temporaries import temporary_file
 from wheelload.studies.experiments.runner import Runner
 
 QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode
 QUICK_TRIALS = 2  # Monte Carlo trials per noise scale in --quick mode
 
 
-def _readable(path: str) -> None:
+def _readable(path: str | Path) -> None:
     """Give a temporary file the permissions of a new file (mkstemp makes it 0600)."""
     mask = os.umask(0)
     os.umask(mask)
@@ -66,26 +68,24 @@ class Outputs:
 
     def save_figure(self, figure, name: str) -> Path:
         path = self.path(name)
-        handle, temporary = tempfile.mkstemp(suffix=".png", prefix=".", dir=self.folder)
-        os.close(handle)
+        temporary = temporary_file(Path(self.folder), path.stem, path.suffix)
         try:
             figure.savefig(temporary, dpi=110)
             _readable(temporary)
-            Path(temporary).replace(path)
+            temporary.replace(path)
         finally:
-            Path(temporary).unlink(missing_ok=True)
+            temporary.unlink(missing_ok=True)
         self.written.append(path)
         return path
 
     def _replace(self, path: Path, data: bytes) -> None:
-        handle, temporary = tempfile.mkstemp(suffix=".tmp", prefix=".", dir=self.folder)
+        temporary = temporary_file(Path(self.folder), path.stem, path.suffix)
         try:
-            with os.fdopen(handle, "wb") as stream:
-                stream.write(data)
+            temporary.write_bytes(data)
             _readable(temporary)
-            Path(temporary).replace(path)
+            temporary.replace(path)
         finally:
-            Path(temporary).unlink(missing_ok=True)
+            temporary.unlink(missing_ok=True)
         self.written.append(path)
 
 

@@ -23,7 +23,8 @@ from typing import Any
 
 from tqdm import tqdm
 
-from wheelload.studies.experiments.cache import ResultCache, cache_key
+from wheelload.studies.experiments.cache import MISSING, ResultCache, cache_key
+from wheelload.studies.workers import ignore_interrupts
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -66,7 +67,7 @@ class Runner:
         """Stop the local processes and the Dask client (kept between :meth:`run` calls, so
         their imports and compiled methods are paid once per study command)."""
         if self._pool is not None:
-            self._pool.shutdown()
+            self._pool.shutdown(cancel_futures=True)  # on Ctrl-C: no job left to start
             self._pool = None
         if self._client is not None:
             self._client.close()
@@ -76,17 +77,24 @@ class Runner:
         """The results of ``jobs`` in order; only jobs not in the cache are computed."""
         keys = [job.key() for job in jobs]
         todo: dict[str, Job] = {}
+        values: dict[str, Any] = {}
         for key, job in zip(keys, jobs):
-            if key not in todo and not self.cache.has(key):
+            if key in todo or key in values:
+                continue
+            value = self.cache.get(key)  # a bad entry is MISSING (with a note): computed again
+            if value is MISSING:
                 todo[key] = job
-        self.cached += len(set(keys)) - len(todo)
+            else:
+                values[key] = value
+        self.cached += len(values)
         if todo:
             with tqdm(total=len(todo), desc=label, disable=not self.progress, unit="job") as bar:
                 for key, value in self._compute(todo):
                     self.cache.store(key, value)
+                    values[key] = value
                     self.computed += 1
                     bar.update(1)
-        return [self.cache.load(key) for key in keys]
+        return [values[key] for key in keys]
 
     def _compute(self, todo: dict[str, Job]):
         folder = Path(self.cache.folder)
@@ -98,7 +106,9 @@ class Runner:
         else:
             if self._pool is None:
                 context = multiprocessing.get_context("forkserver")
-                self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
+                self._pool = ProcessPoolExecutor(
+                    max_workers=self.workers, mp_context=context, initializer=ignore_interrupts
+                )
             futures = {self._pool.submit(_execute, job, folder): key for key, job in todo.items()}
             for future in as_completed(futures):
                 yield futures[future], future.result()

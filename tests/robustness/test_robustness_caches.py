@@ -1,0 +1,331 @@
+"""Issue 21, items 3 and 6: caches that cannot be turned against their user, and
+interrupted writes that leave nothing behind.
+
+Every test runs the real ``wheelload`` command in a child process on real files.
+Each child gets its own TMPDIR, so its own build folder: the build cache of other
+processes is never touched. The compiled libraries are built once per session
+(:func:`built`) and copied into each test's TMPDIR (gcc is slow under load).
+"""
+
+import os
+import pickle
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wheelload.models import example_vehicle_path
+from wheelload.models.build_folder import checked_library
+from wheelload.studies.commands.estimate import example_log_path
+
+COMMAND = [sys.executable, "-m", "wheelload.studies.cli"]
+
+
+def wheelload(*args, tmpdir: Path, **options) -> subprocess.CompletedProcess:
+    env = {**os.environ, "TMPDIR": str(tmpdir)}
+    return subprocess.run([*COMMAND, *map(str, args)], capture_output=True, text=True, env=env,
+                          **options)  # fmt: skip
+
+
+#: The command with Ctrl-C's default handling, also when this test runs where SIGINT is
+#: ignored (a background job of a shell inherits SIG_IGN, which Python then keeps).
+INTERRUPTIBLE = [sys.executable, "-c", "import runpy, signal, sys; "
+                 "signal.signal(signal.SIGINT, signal.default_int_handler); "
+                 "sys.argv[0] = 'wheelload'; "
+                 "runpy.run_module('wheelload.studies.cli', run_name='__main__')"]  # fmt: skip
+
+
+def start(*args, tmpdir: Path) -> subprocess.Popen:
+    """A running ``wheelload`` (interruptible: :data:`INTERRUPTIBLE`)."""
+    env = {**os.environ, "TMPDIR": str(tmpdir)}
+    return subprocess.Popen([*INTERRUPTIBLE, *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
+
+
+def stop(process: subprocess.Popen, how: signal.Signals) -> tuple[str, str]:
+    """Send ``how`` until ``process`` ends (as a user presses Ctrl-C again: Python drops a
+    KeyboardInterrupt raised inside a finaliser); its stdout and stderr."""
+    for _ in range(10):
+        process.send_signal(how)
+        try:
+            return process.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            continue
+    process.kill()
+    return process.communicate()
+
+
+def build_folder_in(tmpdir: Path) -> Path:
+    return tmpdir / f"wheelload-build-{os.getuid()}"
+
+
+def temporaries(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.rglob("*") if ".wltmp-" in p.name)
+
+
+def one_line(err: str) -> str:
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+@pytest.fixture(scope="session")
+def built(tmp_path_factory):
+    """A TMPDIR whose build folder holds every library of ``estimate``, and the clean run's
+    output file (the reference of the runs below)."""
+    tmpdir = tmp_path_factory.mktemp("built")
+    out = tmpdir / "clean.csv"
+    done = wheelload("estimate", example_log_path(), "--vehicle", example_vehicle_path(),
+                     "--out", out, tmpdir=tmpdir)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert sorted(build_folder_in(tmpdir).glob("*.so")), "estimate built no library"
+    return tmpdir, out
+
+
+def copy_build(built, tmp_path: Path) -> Path:
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    shutil.copytree(build_folder_in(built[0]), build_folder_in(tmpdir), symlinks=True)
+    return tmpdir
+
+
+# --- build cache -------------------------------------------------------------------
+
+
+def test_truncated_libraries_are_rebuilt_with_a_note_and_the_output_equals_a_clean_run(
+    built, tmp_path
+):
+    tmpdir = copy_build(built, tmp_path)
+    libraries = sorted(build_folder_in(tmpdir).glob("*.so"))
+    for library in libraries:
+        assert checked_library(library) is None  # recorded at build time
+        os.truncate(library, 4000)  # in place: mapped as it is, this was SIGBUS (rc 135)
+        assert checked_library(library) is not None
+    out = tmp_path / "loads.csv"
+    run = wheelload("estimate", example_log_path(), "--vehicle", example_vehicle_path(),
+                    "--out", out, tmpdir=tmpdir)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    notes = [line for line in run.stderr.splitlines() if "note: cached library" in line]
+    assert len(notes) == len(libraries), run.stderr
+    assert all("is rebuilt: its 4000 bytes are not those recorded" in n for n in notes), notes
+    assert "Traceback" not in run.stderr
+    assert out.read_bytes() == built[1].read_bytes()  # the numbers of a clean run, to the bit
+    for library in libraries:
+        assert library.stat().st_size > 4000 and checked_library(library) is None
+
+
+@pytest.mark.parametrize("kind", ["mode", "symlink", "owner"])
+def test_an_untrusted_build_folder_is_one_line_and_exit_2(tmp_path, kind):
+    folder = build_folder_in(tmp_path)
+    if kind == "mode":
+        folder.mkdir()
+        folder.chmod(0o777)
+        reason = "has mode 777"
+    elif kind == "symlink":
+        target = tmp_path / "elsewhere"
+        target.mkdir(mode=0o700)
+        folder.symlink_to(target)
+        reason = "is a symbolic link"
+    else:
+        if os.geteuid() != 0:
+            pytest.skip("giving a folder to another user needs root")
+        folder.mkdir(mode=0o700)
+        os.chown(folder, 4242, 4242)
+        reason = "is owned by user 4242"
+    run = wheelload("estimate", "--example", tmpdir=tmp_path)
+    assert run.returncode == 2
+    err = one_line(run.stderr)
+    assert f"{folder}: not a folder private to this user ({reason}" in err
+    assert f"rm -r {folder}" in err  # the fix
+
+
+# --- study cache -------------------------------------------------------------------
+
+
+STUDY = ("study", "iso-dlc", "--quick", "--workers", "1", "--no-progress")
+LONG_STUDY = ("study", "nordschleife", "--workers", "1", "--no-progress")  # minutes
+
+
+@pytest.fixture(scope="session")
+def study(tmp_path_factory, built):
+    """A quick iso-dlc study and its filled cache."""
+    tmpdir = tmp_path_factory.mktemp("study_tmp")
+    shutil.copytree(build_folder_in(built[0]), build_folder_in(tmpdir), symlinks=True)
+    out = tmp_path_factory.mktemp("study") / "out"
+    run = wheelload(*STUDY, "--out", out, tmpdir=tmpdir)
+    assert run.returncode == 0, run.stderr
+    return tmpdir, out
+
+
+def study_copy(study, tmp_path: Path) -> Path:
+    out = tmp_path / "out"
+    shutil.copytree(study[1], out)
+    return out
+
+
+def trial_entry(cache: Path) -> Path:
+    """A trial's entry (the truth is the largest; recomputing a trial is quick)."""
+    return min(cache.glob("*.npz"), key=lambda p: p.stat().st_size)
+
+
+class _Plant:
+    """Unpickling this creates ``path`` (an attacker's payload)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def __reduce__(self):
+        return (Path.touch, (self.path,))
+
+
+def _rerun_recomputes_one(study, out: Path, entry: Path) -> str:
+    run = wheelload(*STUDY, "--out", out, "--force", tmpdir=study[0])
+    assert run.returncode == 0, run.stderr
+    assert "Traceback" not in run.stderr
+    notes = [line for line in run.stderr.splitlines() if "note: cache entry" in line]
+    assert len(notes) == 1 and str(entry) in notes[0] and "recomputed" in notes[0], run.stderr
+    assert "1 jobs computed" in run.stdout, run.stdout
+    # the recomputed trial is the one the first run cached: the same table
+    table = "iso-dlc_table.csv"
+    assert (out / table).read_bytes() == (study[1] / table).read_bytes()
+    return notes[0]
+
+
+@pytest.mark.parametrize("form", ["pickle", "npz-with-object-array"])
+def test_a_planted_entry_is_never_executed_and_is_recomputed(study, tmp_path, form):
+    out = study_copy(study, tmp_path)
+    entry = trial_entry(out / ".cache")
+    marker = tmp_path / "planted-code-ran"
+    if form == "pickle":
+        entry.write_bytes(pickle.dumps(_Plant(marker)))
+    else:  # an NPZ whose member is a pickled object array
+        payload = np.empty(1, dtype=object)
+        payload[0] = _Plant(marker)
+        with entry.open("wb") as stream:
+            np.savez(stream, manifest=np.frombuffer(b"{}", np.uint8), a0=payload)
+    pickle.loads(pickle.dumps(_Plant(tmp_path / "payload-works")))  # the payload is live
+    assert (tmp_path / "payload-works").exists()
+    note = _rerun_recomputes_one(study, out, entry)
+    assert not marker.exists()
+    assert "truncated or damaged" in note
+
+
+def test_a_truncated_entry_is_recomputed_with_a_note(study, tmp_path):
+    out = study_copy(study, tmp_path)
+    entry = trial_entry(out / ".cache")
+    os.truncate(entry, entry.stat().st_size // 2)
+    _rerun_recomputes_one(study, out, entry)
+
+
+def test_an_entry_of_another_key_is_recomputed(study, tmp_path):
+    out = study_copy(study, tmp_path)
+    first, second = sorted(out / ".cache" / p.name for p in (study[1] / ".cache").glob("*.npz")
+                           if p.stat().st_size < 100_000)[:2]  # fmt: skip
+    shutil.copy(second, first)  # a valid entry, but under the wrong name
+    note = _rerun_recomputes_one(study, out, first)
+    assert "written under another key" in note
+
+
+def test_the_cache_folder_is_private(study, tmp_path):
+    cache = study[1] / ".cache"
+    assert stat.S_IMODE(cache.stat().st_mode) == 0o700
+    out = study_copy(study, tmp_path)
+    (out / ".cache").chmod(0o755)  # a cache of an earlier version
+    run = wheelload(*STUDY, "--out", out, "--force", tmpdir=study[0])
+    assert run.returncode == 0, run.stderr
+    assert "had mode 755: made private" in run.stderr and "0 jobs computed" in run.stdout
+    assert stat.S_IMODE((out / ".cache").stat().st_mode) == 0o700
+
+
+def test_a_symlinked_cache_folder_is_one_line(study, tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".cache").symlink_to(study[1] / ".cache")
+    run = wheelload(*STUDY, "--out", out, tmpdir=study[0])
+    assert run.returncode == 2
+    assert "the study cache is a symbolic link" in one_line(run.stderr)
+
+
+def test_a_second_study_into_the_same_folder_refuses_at_once(study, tmp_path):
+    out = tmp_path / "out"
+    first = start(*LONG_STUDY, "--out", out, tmpdir=study[0])
+    lock = out / ".wheelload-study.lock"
+    while not (lock.exists() and lock.read_text().strip() == str(first.pid)):
+        assert first.poll() is None, first.communicate()
+        time.sleep(0.02)
+    began = time.perf_counter()
+    second = wheelload(*STUDY, "--out", out, tmpdir=study[0])
+    seconds = time.perf_counter() - began
+    assert first.poll() is None, "the second run waited for the first"
+    assert second.returncode == 2, second.stderr
+    err = one_line(second.stderr)
+    assert f"pid {first.pid}" in err and "give another --out" in err, (err, seconds)
+    assert "jobs computed" not in second.stdout
+    output, err = stop(first, signal.SIGINT)  # Ctrl-C: one line, exit 130, no temporary left
+    assert first.returncode == 130, (output, err)
+    assert one_line(err) == "wheelload study: interrupted\n"
+    assert temporaries(out) == []
+
+
+# --- interrupted writes ------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def long_log(tmp_path_factory):
+    """The example log repeated 80 times (108 000 samples): written for a few seconds."""
+    source = pd.read_csv(example_log_path())
+    log = pd.concat([source] * 80, ignore_index=True)
+    log["t"] = source["t"].iloc[0] + 0.01 * np.arange(len(log))
+    path = tmp_path_factory.mktemp("long") / "long.csv"
+    log.to_csv(path, index=False)
+    return path
+
+
+def _interrupt(long_log, built, tmp_path, how):
+    """Run ``estimate --out OLD --force``, send ``how`` while its temporary is written."""
+    tmpdir = copy_build(built, tmp_path)
+    folder = tmp_path / "out"
+    folder.mkdir()
+    old = folder / "loads.csv"
+    old.write_text("the old output\n")
+    run = start("estimate", long_log, "--vehicle", example_vehicle_path(), "--out", old,
+                "--force", tmpdir=tmpdir)  # fmt: skip
+    while not any(p.stat().st_size > 0 for p in temporaries(folder)):
+        assert run.poll() is None, run.communicate()
+        time.sleep(0.005)
+    _, err = stop(run, how)
+    assert old.read_text() == "the old output\n"
+    return run.returncode, err, folder, tmpdir
+
+
+@pytest.mark.parametrize(
+    "how, code, line",
+    [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")],
+)
+def test_a_signal_mid_write_leaves_no_temporary_and_the_old_output(
+    long_log, built, tmp_path, how, code, line
+):
+    returncode, err, folder, _ = _interrupt(long_log, built, tmp_path, how)
+    assert returncode == code, err
+    assert one_line(err) == f"wheelload estimate: {line}\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["loads.csv"]
+
+
+def test_a_killed_runs_temporary_is_removed_by_the_next_write(long_log, built, tmp_path):
+    returncode, _, folder, tmpdir = _interrupt(long_log, built, tmp_path, signal.SIGKILL)
+    assert returncode == -signal.SIGKILL
+    (stale,) = temporaries(folder)  # SIGKILL cannot be caught: it stays ...
+    alive = folder / f".x.wltmp-{stale.name.split('-')[1]}-{os.getpid()}-live.csv"
+    alive.write_text("a temporary of a process that is still running\n")
+    run = wheelload("estimate", example_log_path(), "--vehicle", example_vehicle_path(),
+                    "--out", folder / "other.csv", tmpdir=tmpdir)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert not stale.exists()  # ... until the folder is written next
+    assert alive.exists()  # a live writer's temporary is left alone
+    assert (folder / "loads.csv").read_text() == "the old output\n"
