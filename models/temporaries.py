@@ -22,6 +22,7 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import os
@@ -29,6 +30,7 @@ import re
 import socket
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 #: The mark of a temporary file in its name.
@@ -105,3 +107,29 @@ def temporary_file(folder: Path, stem: str, suffix: str) -> Path:
     )
     os.close(handle)
     return Path(name)
+
+
+@contextlib.contextmanager
+def replacing(path: Path, *, mode: int | None = None) -> Iterator[Path]:
+    """A temporary beside ``path`` that replaces it when the block ends without error.
+
+    The temporary (:func:`temporary_file`) gets the permissions of a new file under
+    the umask (``mode`` instead, when given) and is removed whatever happens.
+
+    Example
+    -------
+    >>> with replacing(Path("out/table.csv")) as temporary:
+    ...     frame.to_csv(temporary, index=False)
+    """
+    path = Path(path)
+    temporary = temporary_file(path.parent, path.stem, path.suffix)
+    try:
+        yield temporary
+        if mode is None:
+            mask = os.umask(0)
+            os.umask(mask)
+            mode = 0o666 & ~mask
+        os.chmod(temporary, mode)
+        temporary.replace(path)
+    finally:
+        temporary.unlink(missing_ok=True)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -13,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wheelload.estimators.signals import Signals  # noqa: E402
+from wheelload.models.temporaries import replacing
 from wheelload.studies.comparison import Comparison  # noqa: E402
 
 WHEELS = ("fl", "fr", "rl", "rr")
@@ -35,14 +34,8 @@ def check_writable(paths: list[Path], force: bool) -> None:
 
 def _save(figure, path: Path) -> None:
     """Write to a temporary file in the target folder, then rename over ``path``."""
-    handle, temporary = tempfile.mkstemp(suffix=".png", prefix=f".{path.stem}_", dir=path.parent)
-    os.close(handle)
-    try:
+    with replacing(path) as temporary:
         figure.savefig(temporary, dpi=110)
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
 
 
 def plot_comparison(
@@ -82,12 +75,6 @@ def plot_comparison(
 
 def write_csv(frame, path: Path) -> Path:
     """Write ``frame`` as CSV through a temporary file in the target folder, then rename."""
-    handle, temporary = tempfile.mkstemp(suffix=".csv", prefix=f".{path.stem}_", dir=path.parent)
-    os.close(handle)
-    try:
+    with replacing(path) as temporary:
         frame.to_csv(temporary, index=False)
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
     return path

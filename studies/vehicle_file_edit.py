@@ -8,11 +8,10 @@ input file is ever replaced, and an existing file only with ``force``.
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from pathlib import Path
 
+from wheelload.models.temporaries import replacing
 from wheelload.models.vehicle import load_vehicle
 
 _TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")
@@ -68,12 +67,6 @@ def write_vehicle_copy(
     target = Path(target)
     check_target(target, (Path(source), *inputs), force=force)
     text = edited_vehicle_text(Path(source).read_text(encoding="utf-8"), changes)
-    handle, name = tempfile.mkstemp(suffix=".toml.tmp", prefix=".", dir=target.parent or ".")
-    temporary = Path(name)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
+    with replacing(target) as temporary:
+        temporary.write_text(text, encoding="utf-8")
         load_vehicle(temporary)  # the copy must be a valid vehicle file
-        temporary.replace(target)
-    finally:
-        temporary.unlink(missing_ok=True)

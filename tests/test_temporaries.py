@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 from wheelload.models import temporaries
-from wheelload.models.temporaries import remove_stale, temporary_file
+from wheelload.models.temporaries import remove_stale, replacing, temporary_file
 
 
 def _dead_pid() -> int:
@@ -27,3 +27,21 @@ def test_only_the_temporaries_of_gone_writers_on_this_host_are_removed(tmp_path)
     os.utime(old, (0, 0))  # older than STALE_SECONDS (its process id may have been reused)
     assert sorted(remove_stale(tmp_path)) == sorted([dead, old])
     assert mine.exists() and other_host.exists() and plain.exists()
+
+
+def test_replacing_renames_on_success_and_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "table.csv"
+    target.write_text("old")
+    try:
+        with replacing(target) as temporary:
+            temporary.write_text("half")
+            raise RuntimeError("writer failed")
+    except RuntimeError:
+        pass
+    assert target.read_text() == "old" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "table.csv"
+    ]
+    with replacing(target, mode=0o640) as temporary:
+        temporary.write_text("new")
+    assert target.read_text() == "new" and (target.stat().st_mode & 0o777) == 0o640
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv"]

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from pathlib import Path
 
 from wheelload.models import load_vehicle
+from wheelload.models.temporaries import replacing
 
 Key = tuple[str, ...]
 TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")
@@ -125,14 +125,8 @@ def check_output_path(path: str | Path, inputs: tuple[str | Path, ...], force: b
 def write_text_atomically(text: str, path: Path) -> None:
     """Write ``text`` to a temporary file beside ``path`` and rename it into place."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(name, path)
-    except BaseException:
-        Path(name).unlink(missing_ok=True)
-        raise
+    with replacing(path) as temporary:
+        temporary.write_text(text, encoding="utf-8")
 
 
 def write_vehicle_text(
@@ -141,13 +135,7 @@ def write_vehicle_text(
     """Validate ``text`` as a vehicle file and write it to ``path`` (see module docstring)."""
     path = check_output_path(path, inputs, force)
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        load_vehicle(name)
-        os.replace(name, path)
-    except BaseException:
-        Path(name).unlink(missing_ok=True)
-        raise
+    with replacing(path) as temporary:
+        temporary.write_text(text, encoding="utf-8")
+        load_vehicle(temporary)  # the copy must be a valid vehicle file
     return path

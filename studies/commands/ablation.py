@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 from wheelload.models import example_vehicle_path
+from wheelload.models.temporaries import replacing
 from wheelload.studies.ablation import ALL, PAPER, TERMS, ablation, wide_table
 from wheelload.studies.scenarios import SCENARIOS, Options
 
@@ -60,9 +59,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"\n{vehicle}: pooled RMSE / Max [N], {title}")
             print(wide_table(table, vehicle, labels).to_string())
     if out is not None:
-        handle, name = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
-        with os.fdopen(handle, "w") as stream:
-            table.to_csv(stream, index=False, float_format="%.1f")
-        os.replace(name, out)
+        with replacing(out) as temporary:
+            table.to_csv(temporary, index=False, float_format="%.1f")
         print(f"\nwrote {out}")
     return 0

@@ -8,23 +8,15 @@ or SIGTERM; a killed run's is removed when the folder is written next:
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
-from wheelload.models.temporaries import temporary_file
+from wheelload.models.temporaries import replacing
 from wheelload.studies.experiments.runner import Runner
 
 QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode
 QUICK_TRIALS = 2  # Monte Carlo trials per noise scale in --quick mode
-
-
-def _readable(path: str | Path) -> None:
-    """Give a temporary file the permissions of a new file (mkstemp makes it 0600)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(path, 0o666 & ~mask)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,24 +60,14 @@ class Outputs:
 
     def save_figure(self, figure, name: str) -> Path:
         path = self.path(name)
-        temporary = temporary_file(Path(self.folder), path.stem, path.suffix)
-        try:
+        with replacing(path) as temporary:
             figure.savefig(temporary, dpi=110)
-            _readable(temporary)
-            temporary.replace(path)
-        finally:
-            temporary.unlink(missing_ok=True)
         self.written.append(path)
         return path
 
     def _replace(self, path: Path, data: bytes) -> None:
-        temporary = temporary_file(Path(self.folder), path.stem, path.suffix)
-        try:
+        with replacing(path) as temporary:
             temporary.write_bytes(data)
-            _readable(temporary)
-            temporary.replace(path)
-        finally:
-            temporary.unlink(missing_ok=True)
         self.written.append(path)
 
 
