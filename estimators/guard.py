@@ -106,6 +106,7 @@ class GuardSettings:
     rate_settle_time: float = 0.1  # s a derivative is not taken after its rate was gated
     hold_time: float = 0.15  # s a term holds a missing or gated input's last valid value
     load_limit: float = 3.0  # m g, largest |Fz| an update may reach
+    total_margin: float = 0.25  # m g the total load may pass the log's own vertical-row range
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -148,6 +149,7 @@ GUARDS_OFF = GuardSettings(
     rate_settle_time=1e-300,
     hold_time=1e-300,
     load_limit=1e300,
+    total_margin=1e300,
 )
 
 
@@ -183,7 +185,9 @@ _MONITOR_END = 58
 _HELD = slice(_MONITOR_END, _MONITOR_END + len(INPUTS))
 _CREDIT = slice(_HELD.stop, _HELD.stop + len(INPUTS))
 _SETTLE = slice(_CREDIT.stop, _CREDIT.stop + len(BODY_RATES))
-MONITOR_SIZE = _SETTLE.stop
+# Lowest and highest vertical-row b seen so far, less the weight (0 at the start).
+_TOTAL = slice(_SETTLE.stop, _SETTLE.stop + 2)
+MONITOR_SIZE = _TOTAL.stop
 _RATE_INDEX = [INPUTS.index(name) for name in BODY_RATES]
 _RATE_DOT_INDEX = [INPUTS.index(name) for name in BODY_RATE_DERIVATIVES]
 
@@ -256,7 +260,8 @@ def hold_inputs(u, valid, m, dt, g: GuardSettings) -> tuple[ca.SX, ca.SX, ca.SX,
     An input missing or gated at this sample keeps the value it had at its last
     valid sample for at most ``hold_time``; after that it is missing and its
     terms are dropped. (The terms' flags, bits 16-19, are set either way: the
-    term ran without a live input; ``INPUT_HELD`` tells which.) Returns ``(u_term, valid_term, held, hold_state)``:
+    term ran without a live input; ``INPUT_HELD`` tells which.)
+    Returns ``(u_term, valid_term, held, hold_state)``:
     ``held`` 1 per input that holds, ``hold_state`` the next values of the held
     values and remaining hold times (``m``'s slots after the fault monitor).
     ``u`` is 0 where not ``valid``; ``dt`` 0 for a rejected step (nothing ages).
@@ -273,17 +278,45 @@ def hold_inputs(u, valid, m, dt, g: GuardSettings) -> tuple[ca.SX, ca.SX, ca.SX,
     return u_term, valid_term, held, ca.vertcat(value_next, credit_next)
 
 
-def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX) -> ca.SX:
-    """The fault monitor's next state followed by the held inputs and the settle times."""
-    return ca.vertcat(m_next[0:_MONITOR_END], hold_state, settle)
+def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.SX) -> ca.SX:
+    """The fault monitor's next state, then the held inputs, settle times and total range."""
+    return ca.vertcat(m_next[0:_MONITOR_END], hold_state, settle, total)
 
 
-def within_load_limit(x: ca.SX, weight, g: GuardSettings) -> ca.SX:
-    r"""1 if every load is finite and within :math:`\pm` ``load_limit`` :math:`m g`."""
+def total_range(m, b_vertical, available, weight) -> ca.SX:
+    r"""The range of the vertical row's :math:`b` over the log so far, less the weight.
+
+    ``available``: 1 where this sample's vertical row has its inputs. The range
+    starts at :math:`[m g, m g]` (the state starts at the static loads).
+    """
+    low, high = m[_TOTAL][0], m[_TOTAL][1]
+    offset = b_vertical - weight
+    return ca.vertcat(
+        ca.if_else(available, ca.fmin(low, offset), low),
+        ca.if_else(available, ca.fmax(high, offset), high),
+    )
+
+
+def within_load_limit(x: ca.SX, x_prior: ca.SX, total, weight, g: GuardSettings) -> ca.SX:
+    r"""1 if an update from ``x_prior`` to ``x`` stays within the physical load envelope.
+
+    Every load finite and within :math:`\pm` ``load_limit`` :math:`m g`, and the
+    total :math:`\sum F_z` no further outside the log's own vertical-row range
+    ``total`` (:func:`total_range`), widened by ``total_margin`` :math:`m g`, than
+    before the update (the vertical row is the equilibrium of the total, eq. 15;
+    travels the model cannot explain must not carry the total beyond any
+    :math:`m a_z` the log shows).
+    """
     ok = 1
     for i in range(x.shape[0]):
         ok = ca.logic_and(ok, ca.fabs(x[i]) <= g.load_limit * weight)
-    return ok
+    low = weight + total[0] - g.total_margin * weight
+    high = weight + total[1] + g.total_margin * weight
+
+    def excess(value):
+        return ca.fmax(ca.fmax(value - high, low - value), 0)
+
+    return ca.logic_and(ok, excess(ca.sum1(x)) <= excess(ca.sum1(x_prior)))
 
 
 def floor_covariance(P: ca.SX, floor_std) -> tuple[ca.SX, ca.SX]:

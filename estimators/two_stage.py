@@ -358,7 +358,8 @@ def step_expressions(
     P_new, limited_new = guard.floor_covariance(P_new, settings.covariance_floor)
     # An update that would take a load out of +-load_limit m g (or to a non-finite value)
     # is not taken: the sample is the prediction, so no hostile sample poisons the state.
-    bounded = guard.within_load_limit(x_new, weight, settings)
+    total = guard.total_range(m, b[0], mask_c[0], weight)
+    bounded = guard.within_load_limit(x_new, x_pred, total, weight, settings)
     x_new = ca.if_else(bounded, x_new, x_pred)
     P_new = ca.if_else(bounded, P_new, P_pred)
     use_s, use_c = use_s * bounded, use_c * bounded
@@ -374,7 +375,7 @@ def step_expressions(
         guard.reject_times(reject, record, available, dt_used),
         guard.next_spread(spread, record, available, dt_used, settings),
     )
-    m_next = guard.with_hold_state(m_next, hold_state, settle_next)
+    m_next = guard.with_hold_state(m_next, hold_state, settle_next, total)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
