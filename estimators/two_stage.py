@@ -293,7 +293,7 @@ def step_expressions(
     # ``hold_time``, then drop; the rows needing the input are skipped. ``dropped`` (the
     # flags) marks a term without a live input, held or dropped.
     u_term, valid_term, held, hold_state = guard.hold_inputs(
-        u, valid_plausible * dt_ok, m, dt_used, settings
+        u, valid_plausible, m, dt_used, settings
     )
     z, A, b, _ = model_equations(suspension, equilibrium, u_term, valid_term, p)
     dropped = gates_function()(valid_plausible, p)[1]
