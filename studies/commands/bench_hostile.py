@@ -53,7 +53,9 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the corruptions")
     parser.add_argument("--no-mhe", action="store_true", help="leave the embedded MHE out")
     parser.add_argument("--envelope", type=int, default=0, help="white-noise logs to run")
-    parser.add_argument("--ranges", action="store_true", help="print the scenarios' rate ranges")
+    parser.add_argument(
+        "--ranges", action="store_true", help="print the scenarios' rate ranges (both vehicles)"
+    )
     add_allow_unusual(parser)
     parser.set_defaults(handler=run)
 
@@ -141,7 +143,9 @@ def run(args: argparse.Namespace) -> int:
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     weight = vehicle.mass.total * GRAVITY
     if args.ranges:
-        _ranges([vehicle_path])
+        from wheelload.studies.fault_injection import bundled_vehicles
+
+        _ranges([args.vehicle] if args.vehicle else bundled_vehicles())
     clean = run_scenario(args.scenario, vehicle_path).log
     signals = signals_from_frame(clean, source=args.scenario)
     frame = hostile.with_rate_derivatives(clean, signals)
