@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.c_emitter import Precision
 from wheelload.estimators.codegen import STRICT_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.guard import GRAVITY
@@ -97,14 +97,24 @@ def _c_mhe(vehicle, vehicle_path, signals, folder: Path) -> hostile.HostileSumma
     return hostile.summarise("MHE C (embedded)", out[hostile.LOADS], std, out["flags"], reports)
 
 
+#: Flags of a clean sample the new guards must never raise.
+_CLEAN_BITS = (
+    StepFlag.RATE_IMPLAUSIBLE | StepFlag.INPUT_HELD | StepFlag.LOAD_LIMITED
+    | StepFlag.ACCELERATION_IMPLAUSIBLE | StepFlag.TRAVEL_IMPLAUSIBLE
+)  # fmt: skip
+
+
 def _ranges(vehicle_paths) -> None:
-    """Largest |w|, |dw|/dt and differentiator |w_dot| per scenario, smooth and rough D."""
+    """Largest |w|, |dw|/dt and differentiator |w_dot| per scenario, smooth and rough D,
+    and the clean samples the KF flags as implausible, held or load-limited."""
     from wheelload.studies.scenario_runner import run_scenario
     from wheelload.studies.scenarios import Options
 
-    print("scenario, vehicle, roughness: max |w| [rad/s], max |dw|/dt, max |w_dot| [rad/s^2]")
+    print("scenario, vehicle, roughness: max |w| [rad/s], max |dw|/dt, max |w_dot| [rad/s^2],"
+          " samples, flagged")  # fmt: skip
     worst = np.zeros(3)
     for path in vehicle_paths:
+        kf = TwoStageKF(load_vehicle(path))
         for name in SCENARIOS:
             for roughness in (None, "D"):
                 options = Options(roughness=roughness) if roughness else Options()
@@ -114,8 +124,11 @@ def _ranges(vehicle_paths) -> None:
                 dot = np.nanmax(np.abs(derive_velocities(t, w)))
                 row = np.array([np.abs(w).max(), jump, dot])
                 worst = np.maximum(worst, row)
-                print(f"  {name:20s} {Path(path).stem:10s} {roughness or '-':2s} "
-                      f"{row[0]:6.3f} {row[1]:7.2f} {row[2]:7.2f}")  # fmt: skip
+                flags = kf.run(signals_from_frame(log, source=name)).flags
+                flagged = np.count_nonzero(flags & _CLEAN_BITS)
+                label = f"{name:20s} {Path(path).stem:10s} {roughness or '-':2s}"
+                numbers = f"{row[0]:6.3f} {row[1]:7.2f} {row[2]:7.2f} {len(flags):7d} {flagged}"
+                print(f"  {label} {numbers}")
     print(f"largest: |w| {worst[0]:.3f} rad/s, |dw|/dt {worst[1]:.2f}, |w_dot| {worst[2]:.2f}")
 
 
