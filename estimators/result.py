@@ -53,7 +53,8 @@ class StepFlag(enum.IntFlag):
     COVARIANCE_LIMITED = 1 << 15  # the covariance floor or ceiling acted
     # Bits 16-19: a model term (wheelload.models.terms) switched on in the
     # vehicle file was dropped for this sample because an input it needs is
-    # missing (the updates themselves went ahead without it).
+    # missing, or ran on that input's held last valid value (with INPUT_HELD); the
+    # updates themselves went ahead.
     BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
     UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
     ROAD_FRAME_OR_LINKS_DROPPED = (
