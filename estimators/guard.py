@@ -7,7 +7,20 @@ step, the compiled loop and the generated C share one implementation.
 - **Plausibility** (input ranges from the vehicle): :math:`|a| \le a_{max}`,
   :math:`|v_x| \le v_{max}`, :math:`|d_i| \le c\,m g / k_i` (``c = 1``: the
   travel whose spring force would carry the whole vehicle), :math:`|\dot d_i| \le \dot
-  d_{max}`. An implausible input is treated as missing.
+  d_{max}`, body rates :math:`|\omega| \le \omega_{max}` and their derivatives
+  :math:`|\dot\omega| \le \dot\omega_{max}`, hub accelerations. An implausible
+  input is treated as missing.
+- **Rate consistency** (:func:`rate_consistency`): a body rate that moves
+  from its last valid value by more than :math:`\dot\omega_{max}` times the
+  time since is a spike; a rate derivative is not taken while its rate or
+  itself was implausible within ``rate_settle_time`` (the first-order
+  differentiator that derives it from the rates carries a spike that long).
+- **Held inputs** (:func:`hold_inputs`): a model term whose input is missing or
+  implausible uses that input's last valid value for up to ``hold_time``;
+  the update rows that need the input directly are still skipped.
+- **State limit**: an update that would take a load beyond
+  :math:`\pm` ``load_limit`` :math:`m g` (or make it non-finite) is not taken;
+  the sample is a prediction.
 - **Innovation gate** (per update row): the row is skipped when
   :math:`y^2 > \gamma S` (normalised innovation squared, :math:`\chi^2_1`),
   unless the row has been rejected for ``gate_release_time`` in a row: then
@@ -44,6 +57,8 @@ import casadi as ca
 
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, gates_function
 from wheelload.models.inputs import (
+    BODY_RATE_DERIVATIVES,
+    BODY_RATES,
     HUB_ACCELERATION,
     INPUTS,
     SPECIFIC_FORCE,
@@ -91,6 +106,16 @@ class GuardSettings:
     parity_spread_time: float = 30.0  # s, memory of the parity residual's mean square
     parity_spread_factor: float = 2.0  # times the residual's spread, in fault units
     stuck_corners: float = 2.0  # other corners that must move for a still one to be stuck
+    # Body rates and their derivatives. On the plant's scenarios (both bundled vehicles,
+    # roughness D included, 100 Hz) |w| <= 0.87 rad/s, |dw|/dt <= 17 rad/s^2 between
+    # samples and the 20 Hz differentiator's |w_dot| <= 16.6 rad/s^2: the limits leave a
+    # factor of about 4 and 2.4 (``wheelload bench hostile --ranges`` measures them).
+    max_body_rate: float = 4.0  # rad/s, |wx|, |wy|, |wz|
+    max_angular_acceleration: float = 40.0  # rad/s^2, |w_dot| and |dw| / elapsed time
+    rate_settle_time: float = 0.1  # s a derivative is not taken after its rate was gated
+    hold_time: float = 0.15  # s a term holds a missing or gated input's last valid value
+    load_limit: float = 3.0  # m g, largest |Fz| an update may reach
+    total_margin: float = 0.25  # m g the total load may pass the log's own vertical-row range
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -128,6 +153,12 @@ GUARDS_OFF = GuardSettings(
     ax_fault=1e300,
     ay_fault=1e300,
     az_fault=1e300,
+    max_body_rate=1e300,
+    max_angular_acceleration=1e300,
+    rate_settle_time=1e-300,
+    hold_time=1e-300,
+    load_limit=1e300,
+    total_margin=1e300,
 )
 
 
@@ -157,7 +188,18 @@ _D_PREV, _FROZEN, _RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
 _PERSIST, _CLEAR, _FAULT, _REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
 _SPREAD, _ANCHOR, _MOVED, _JUMP = slice(39, 46), slice(46, 50), slice(50, 54), slice(54, 58)
 _PARITY_MEAN, _PARITY_VARIANCE, _PARITY_WEIGHT = slice(58, 61), slice(61, 64), slice(64, 65)
-MONITOR_SIZE = 65
+#: Slots of the fault monitor proper; the held inputs follow (:func:`hold_inputs`).
+_MONITOR_END = 65
+# Each input's last valid value, its remaining hold time, and each rate derivative's
+# remaining settle time after a gated rate.
+_HELD = slice(_MONITOR_END, _MONITOR_END + len(INPUTS))
+_CREDIT = slice(_HELD.stop, _HELD.stop + len(INPUTS))
+_SETTLE = slice(_CREDIT.stop, _CREDIT.stop + len(BODY_RATES))
+# Lowest and highest vertical-row b seen so far, less the weight (0 at the start).
+_TOTAL = slice(_SETTLE.stop, _SETTLE.stop + 2)
+MONITOR_SIZE = _TOTAL.stop
+_RATE_INDEX = [INPUTS.index(name) for name in BODY_RATES]
+_RATE_DOT_INDEX = [INPUTS.index(name) for name in BODY_RATE_DERIVATIVES]
 
 
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
@@ -165,7 +207,8 @@ def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca
 
     Travels, travel rates, the IMU's specific force and ``vx`` from the settings;
     hub accelerations :math:`|a_{hub}| \le` :data:`MAX_HUB_ACCELERATION`; body
-    rates and their derivatives are passed through (always 1).
+    rates :math:`|\omega| \le` ``max_body_rate``, their derivatives
+    :math:`|\dot\omega| \le` ``max_angular_acceleration``.
     """
     weight = mass * GRAVITY
     springs = [spring_front, spring_front, spring_rear, spring_rear]
@@ -181,7 +224,109 @@ def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca
     ok[INPUTS.index("vx")] = ca.fabs(u[INPUTS.index("vx")]) <= g.max_speed
     for name in HUB_ACCELERATION:
         ok[INPUTS.index(name)] = ca.fabs(u[INPUTS.index(name)]) <= MAX_HUB_ACCELERATION
+    for k in _RATE_INDEX:
+        ok[k] = ca.fabs(u[k]) <= g.max_body_rate
+    for k in _RATE_DOT_INDEX:
+        ok[k] = ca.fabs(u[k]) <= g.max_angular_acceleration
     return ca.vertcat(*ok)
+
+
+def rate_consistency(u, finite, in_range, m, dt, g: GuardSettings) -> tuple[ca.SX, ca.SX]:
+    r"""Per input 0 where a body rate or its derivative is inconsistent; the next settle times.
+
+    A rate :math:`\omega_k` whose last valid value :math:`\omega_h` (held in ``m``,
+    :func:`hold_inputs`) is :math:`\tau` old fails when
+
+    .. math:: |\omega_k - \omega_h| > \dot\omega_{max} \tau
+
+    (no body turns faster than that; once the hold has run out there is no
+    reference and the rate is taken: a bias step is followed, not locked out).
+    Its derivative is not taken while the rate or the derivative itself was
+    finite but implausible within ``rate_settle_time`` (the first-order
+    differentiator that derives it spreads a spike over its settling time).
+    ``finite``: 1 per input where the sample is finite; ``in_range`` from
+    :func:`plausible`; ``dt`` 0 for a rejected step.
+    """
+    ok = [1] * len(INPUTS)
+    held, credit, settle = m[_HELD], m[_CREDIT], m[_SETTLE]
+    settle_next = []
+    for j, (k, k_dot) in enumerate(zip(_RATE_INDEX, _RATE_DOT_INDEX, strict=True)):
+        left = credit[k] - dt
+        elapsed = g.hold_time - left
+        jump = (left > 0) * (ca.fabs(u[k] - held[k]) > g.max_angular_acceleration * elapsed)
+        rate_gated = finite[k] * (1 - in_range[k] * (1 - jump))
+        dot_gated = finite[k_dot] * (1 - in_range[k_dot])
+        after = ca.if_else(ca.logic_or(rate_gated, dot_gated), g.rate_settle_time,
+                           ca.fmax(settle[j] - dt, 0))  # fmt: skip
+        settle_next.append(after)
+        ok[k] = 1 - jump
+        ok[k_dot] = after <= 0
+    return ca.vertcat(*ok), ca.vertcat(*settle_next)
+
+
+def hold_inputs(u, valid, m, dt, g: GuardSettings) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+    r"""The inputs the model terms take: each valid input, else its last valid value.
+
+    An input missing or gated at this sample keeps the value it had at its last
+    valid sample for at most ``hold_time``; after that it is missing and its
+    terms are dropped. (The terms' flags, bits 16-19, are set either way: the
+    term ran without a live input; ``INPUT_HELD`` tells which.)
+    Returns ``(u_term, valid_term, held, hold_state)``:
+    ``held`` 1 per input that holds, ``hold_state`` the next values of the held
+    values and remaining hold times (``m``'s slots after the fault monitor).
+    ``u`` is 0 where not ``valid``; ``dt`` 0 for a rejected step (nothing ages).
+    """
+    value, credit = m[_HELD], m[_CREDIT]
+    left = credit - dt
+    held = (1 - valid) * (left > 0)
+    u_term = ca.vertcat(*[ca.if_else(held[k], value[k], u[k]) for k in range(len(INPUTS))])
+    valid_term = ca.fmax(valid, held)
+    value_next = ca.vertcat(*[ca.if_else(valid[k], u[k], value[k]) for k in range(len(INPUTS))])
+    credit_next = ca.vertcat(
+        *[ca.if_else(valid[k], g.hold_time, ca.fmax(left[k], 0)) for k in range(len(INPUTS))]
+    )
+    return u_term, valid_term, held, ca.vertcat(value_next, credit_next)
+
+
+def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.SX) -> ca.SX:
+    """The fault monitor's next state, then the held inputs, settle times and total range."""
+    return ca.vertcat(m_next[0:_MONITOR_END], hold_state, settle, total)
+
+
+def total_range(m, b_vertical, available, weight) -> ca.SX:
+    r"""The range of the vertical row's :math:`b` over the log so far, less the weight.
+
+    ``available``: 1 where this sample's vertical row has its inputs. The range
+    starts at :math:`[m g, m g]` (the state starts at the static loads).
+    """
+    low, high = m[_TOTAL][0], m[_TOTAL][1]
+    offset = b_vertical - weight
+    return ca.vertcat(
+        ca.if_else(available, ca.fmin(low, offset), low),
+        ca.if_else(available, ca.fmax(high, offset), high),
+    )
+
+
+def within_load_limit(x: ca.SX, x_prior: ca.SX, total, weight, g: GuardSettings) -> ca.SX:
+    r"""1 if an update from ``x_prior`` to ``x`` stays within the physical load envelope.
+
+    Every load finite and within :math:`\pm` ``load_limit`` :math:`m g`, and the
+    total :math:`\sum F_z` no further outside the log's own vertical-row range
+    ``total`` (:func:`total_range`), widened by ``total_margin`` :math:`m g`, than
+    before the update (the vertical row is the equilibrium of the total, eq. 15;
+    travels the model cannot explain must not carry the total beyond any
+    :math:`m a_z` the log shows).
+    """
+    ok = 1
+    for i in range(x.shape[0]):
+        ok = ca.logic_and(ok, ca.fabs(x[i]) <= g.load_limit * weight)
+    low = weight + total[0] - g.total_margin * weight
+    high = weight + total[1] + g.total_margin * weight
+
+    def excess(value):
+        return ca.fmax(ca.fmax(value - high, low - value), 0)
+
+    return ca.logic_and(ok, excess(ca.sum1(x)) <= excess(ca.sum1(x_prior)))
 
 
 def floor_covariance(P: ca.SX, floor_std) -> tuple[ca.SX, ca.SX]:

@@ -53,7 +53,8 @@ class StepFlag(enum.IntFlag):
     COVARIANCE_LIMITED = 1 << 15  # the covariance floor or ceiling acted
     # Bits 16-19: a model term (wheelload.models.terms) switched on in the
     # vehicle file was dropped for this sample because an input it needs is
-    # missing (the updates themselves went ahead without it).
+    # missing, or ran on that input's held last valid value (with INPUT_HELD); the
+    # updates themselves went ahead.
     BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
     UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
     ROAD_FRAME_OR_LINKS_DROPPED = (
@@ -66,6 +67,11 @@ class StepFlag(enum.IntFlag):
     SPEED_FROM_WHEELS = 1 << 22
     # Bits 24-27: guards (estimators/guard.py), after the eight of bits 8-15 in ``status``.
     TRAVEL_JUMP = 1 << 24  # a travel jumped faster than max_travel_rate and froze: dropped
+    # a body rate or its derivative out of range, a rate jump beyond max_angular_acceleration,
+    # or a derivative within rate_settle_time of one: treated as missing
+    RATE_IMPLAUSIBLE = 1 << 25
+    INPUT_HELD = 1 << 26  # a missing or gated input's last valid value fed the model terms
+    LOAD_LIMITED = 1 << 27  # an update would leave +-load_limit m g: the sample is a prediction
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:

@@ -55,6 +55,8 @@ from wheelload.models import (
     suspension_function,
 )
 from wheelload.models.inputs import (
+    BODY_RATE_DERIVATIVES,
+    BODY_RATES,
     HUB_ACCELERATION,
     SPECIFIC_FORCE,
     TRAVEL,
@@ -179,6 +181,7 @@ _TRAVEL_INDEX = input_index(TRAVEL)
 _RATE_INDEX = input_index(TRAVEL_RATE)
 _ACC_INDEX = input_index(SPECIFIC_FORCE)
 _HUB_INDEX = input_index(HUB_ACCELERATION)
+_BODY_RATE_INDEX = input_index(BODY_RATES + BODY_RATE_DERIVATIVES)
 
 
 #: ``_replace(u, index, values)``: ``u`` with the entries at ``index`` replaced (the MHE's
@@ -211,11 +214,17 @@ def model_rows(suspension: ca.Function, equilibrium: ca.Function, u_raw, valid, 
     order) says which.
     """
     u = _sanitise(u_raw, valid)
+    z, A, b, dropped = model_equations(suspension, equilibrium, u, valid, p)
+    mask_s, mask_c = row_masks(suspension, equilibrium, u, u_raw, valid, p)
+    return z, A, b, mask_s, mask_c, dropped
+
+
+def model_equations(suspension: ca.Function, equilibrium: ca.Function, u, valid, p):
+    """``(z, A, b, dropped)`` from inputs ``u`` (0 where not ``valid``) with their terms gated."""
     gates, dropped = gates_function()(valid, p)
     z = suspension(u, gates, p)
     A, b = equilibrium(u, gates, p)
-    mask_s, mask_c = row_masks(suspension, equilibrium, u, u_raw, valid, p)
-    return z, A, b, mask_s, mask_c, dropped
+    return z, A, b, dropped
 
 
 def row_masks(suspension: ca.Function, equilibrium: ca.Function, u, u_raw, valid, p):
@@ -264,22 +273,32 @@ def step_expressions(
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
     dt_used = dt_safe * dt_ok
 
-    # Missing or implausible inputs are replaced by zero and skip the updates they feed
-    # (or drop the model terms they feed, for the optional inputs).
+    # Missing or implausible inputs are replaced by zero and skip the updates they feed;
+    # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
     u_finite = _sanitise(u_raw, valid_raw)
     in_range = guard.plausible(
         u_finite, p[_P_INDEX["mass"]], p[_P_INDEX["spring_front"]], p[_P_INDEX["spring_rear"]],
         settings,
     )  # fmt: skip
+    consistent, settle_next = guard.rate_consistency(
+        u_finite, valid_raw, in_range, m, dt_used, settings
+    )
+    in_range = in_range * consistent
     valid_plausible = valid_raw * in_range
     u = _sanitise(u_raw, valid_plausible)
-    # Model terms whose optional input is missing or implausible are gated off for the
-    # sample (``dropped``).
-    z, A, b, _, _, dropped = model_rows(suspension, equilibrium, u_raw, valid_plausible, p)
+    # The model terms take each missing or gated input's last valid value for
+    # ``hold_time``, then drop; the rows needing the input are skipped. ``dropped`` (the
+    # flags) marks a term without a live input, held or dropped.
+    u_term, valid_term, held, hold_state = guard.hold_inputs(
+        u, valid_plausible, m, dt_used, settings
+    )
+    z, A, b, _ = model_equations(suspension, equilibrium, u_term, valid_term, p)
+    dropped = gates_function()(valid_plausible, p)[1]
 
     # Fault monitor: an isolated channel is dropped like a missing one. Its parity test
-    # uses every model term the inputs allow, whatever the [model] switches.
-    parity = guard.parity_model(suspension, equilibrium, u, valid_plausible, p)
+    # uses every model term the inputs allow (held inputs included), whatever the
+    # [model] switches.
+    parity = guard.parity_model(suspension, equilibrium, u_term, valid_term, p)
     # The fault monitor's parity test weighs the constant densities (the paper's R_c).
     rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
     watch = guard.monitor(m, u, valid_plausible, *parity, dt_used, rc_density, settings)
@@ -326,6 +345,13 @@ def step_expressions(
         x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
     )
     P_new, limited_new = guard.floor_covariance(P_new, settings.covariance_floor)
+    # An update that would take a load out of +-load_limit m g (or to a non-finite value)
+    # is not taken: the sample is the prediction, so no hostile sample poisons the state.
+    total = guard.total_range(m, b[0], mask_c[0], weight)
+    bounded = guard.within_load_limit(x_new, x_pred, total, weight, settings)
+    x_new = ca.if_else(bounded, x_new, x_pred)
+    P_new = ca.if_else(bounded, P_new, P_pred)
+    use_s, use_c = use_s * bounded, use_c * bounded
 
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
@@ -338,9 +364,10 @@ def step_expressions(
         guard.reject_times(reject, record, available, dt_used),
         guard.next_spread(spread, record, available, dt_used, settings),
     )
+    m_next = guard.with_hold_state(m_next, hold_state, settle_next, total)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
-        ca.logic_or(limited_pred, limited_new), watch.jump,
+        ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
     )  # fmt: skip
     inputs = [x, P, m, u_raw, valid_raw, dt, p, tuning]
     outputs = [
@@ -350,7 +377,7 @@ def step_expressions(
     return inputs, outputs
 
 
-def _status(record, available, valid_raw, in_range, fault, limited, jump) -> ca.SX:
+def _status(record, available, valid_raw, in_range, fault, limited, jump, held, unbounded):
     """Indicators of the guard flags (:data:`GUARD_FLAGS` order)."""
 
     def any_of(values):
@@ -372,6 +399,9 @@ def _status(record, available, valid_raw, in_range, fault, limited, jump) -> ca.
         any_of([fault[i] for i in range(4, 7)]),
         limited,
         any_of([jump[i] for i in range(4)]),
+        any_of([implausible[k] for k in _BODY_RATE_INDEX]),
+        any_of([held[k] for k in range(len(INPUTS))]),
+        unbounded,
     )
 
 

@@ -74,11 +74,28 @@ def in_range(vehicle, u):
     return ok | ~np.isfinite(u)  # a missing value is missing, not implausible
 
 
-def measurements(vehicle, kf, u):
-    """z (n, 4), A (n, 3, 4), b (n, 3); a missing or implausible input enters as 0 and
-    gates off the model terms it feeds, as in the filter (the rows it feeds are unused)."""
-    valid = (np.isfinite(u) & in_range(vehicle, np.where(np.isfinite(u), u, 0.0))).T
-    u = np.where(valid, u.T, 0.0)
+def held(u, valid, dt, hold_time):
+    """Independent numpy hold: a missing or implausible input takes its last valid value
+    while less than ``hold_time`` has passed since (``GuardSettings.hold_time``)."""
+    value, credit = np.zeros(u.shape[1]), np.zeros(u.shape[1])
+    u_term, valid_term = np.zeros_like(u), np.zeros_like(valid)
+    for k in range(u.shape[0]):
+        left = credit - dt[k]
+        hold = ~valid[k] & (left > 0)
+        u_term[k] = np.where(valid[k], u[k], np.where(hold, value, 0.0))
+        valid_term[k] = valid[k] | hold
+        value = np.where(valid[k], u[k], value)
+        credit = np.where(valid[k], hold_time, np.maximum(left, 0.0))
+    return u_term, valid_term
+
+
+def measurements(vehicle, kf, u, dt):
+    """z (n, 4), A (n, 3, 4), b (n, 3); a missing or implausible input enters the model
+    terms it feeds with its last valid value for the hold time, then as 0 with those
+    terms gated off, as in the filter (the rows it feeds are unused)."""
+    valid = np.isfinite(u) & in_range(vehicle, np.where(np.isfinite(u), u, 0.0))
+    u, valid = held(np.where(valid, u, 0.0), valid, dt, GuardSettings().hold_time)
+    u, valid = u.T, valid.T
     n = u.shape[1]
     gates = gates_function().map(n)(valid.astype(float), kf.p)[0]
     z = np.asarray(suspension_function().map(n)(u, gates, kf.p)).T
@@ -127,7 +144,7 @@ def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(vehicle, ba
     assert not np.any(flags & StepFlag.STEP_REJECTED)
     # Each sample's state is the numpy step with exactly the used rows.
     dt, nominal = sample_intervals(signals.t), nominal_interval(signals.t)
-    z, A, b = measurements(vehicle, kf, u)
+    z, A, b = measurements(vehicle, kf, u, dt)
     skipped = [flag.value for flag in StepFlag.update_flags()]
     for k in range(1, len(signals)):
         rows = [i for i in range(7) if not flags[k] & skipped[i]]

@@ -28,11 +28,12 @@ BENCHMARKS = (
     "wheelload.studies.fault_injection",
     "wheelload.studies.commands.bench_estimate",
     "wheelload.studies.commands.bench_family",
+    "wheelload.studies.commands.bench_hostile",
 )
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    bench = subparsers.add_parser("bench", help="print timings (kf, codegen, mhe, scenarios)")
+    bench = subparsers.add_parser("bench", help="print timings and the hostile-input table")
     benchmarks = bench.add_subparsers(dest="what", required=True, metavar="WHAT")
     parser = benchmarks.add_parser("kf", help="two-stage KF: compiled run, step, numpy loop")
     parser.add_argument(
