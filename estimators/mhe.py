@@ -990,9 +990,12 @@ def finite_data(*arrays) -> bool:
     overflow of their sum, makes it infinite.
     """
     Px, q, *bounds = arrays
-    if not math.isfinite(float(np.sum(Px)) + float(np.sum(q))):
+    if not math.isfinite(float(Px.sum()) + float(q.sum())):
         return False
-    return not any(math.isnan(float(np.sum(b))) for b in bounds)
+    for b in bounds:
+        if math.isnan(float(b.sum())):
+            return False
+    return True
 
 
 def _clip_checked(value, low, high, eps: tuple[float, float]):
