@@ -101,7 +101,7 @@ from wheelload.estimators.two_stage import (
     input_matrix,
     sample_intervals,
 )
-from wheelload.models import GATES, INPUTS, Vehicle, equilibrium_function
+from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 
 __all__ = [
     "LOAD_SCALE",
@@ -118,6 +118,12 @@ __all__ = [
 ]
 
 SOLVED = osqp.SolverStatus.OSQP_SOLVED.value
+#: Status of a sample whose QP data are not finite: not handed to OSQP, the filter's estimate.
+UNSOLVED = osqp.SolverStatus.OSQP_UNSOLVED.value
+#: Largest :math:`|F_z|` [m g] an estimate may take: a QP solution beyond it is not
+#: solved (the filter's estimate), a filter estimate beyond it is not taken (the last
+#: estimate is held). No road wheel carries twice the vehicle's weight.
+LOAD_LIMIT = 2.0
 
 
 class Arrival(enum.Enum):
@@ -331,6 +337,9 @@ class MovingHorizonEstimator:
         self.pinv = np.linalg.pinv(self.A)
         self.width = 1 if self.hard else 4
         self.load_bounds = (0.0, s.max_load) if s.bounded else (-math.inf, math.inf)
+        mass = float(self.p[ModelParameters.names().index("mass")])
+        #: N, :data:`LOAD_LIMIT` times the vehicle's weight
+        self.load_limit = LOAD_LIMIT * mass * GRAVITY
         self.terms = terms_function(
             s.constraint,
             null=self.null,
@@ -538,14 +547,17 @@ class MovingHorizonEstimator:
             Px = _hessian_values(window, j0, self.null, self.hard)
             q = _linear(window, j0, prior, self.null, self.hard)
             bounds = (window["lower"].ravel(), window["upper"].ravel()) if state.y.size else None
-            result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
-            status, iterations = int(result.info.status_val), int(result.info.iter)
+            if finite_data(Px, q, *(bounds or ())):
+                result, rho = self.workspace.solve(Px, q, bounds, x_warm, y_warm, state.rho)
+                status, iterations = int(result.info.status_val), int(result.info.iter)
+            else:
+                status, iterations = UNSOLVED, 0
             if status == SOLVED:
                 x_warm, y_warm = np.array(result.x), np.array(result.y)
                 x = self._loads(x_warm[-w:], window)
         failed = x is None
         if failed:
-            x = np.clip(terms.kf.x, *self.load_bounds)
+            x = self.fallback_loads(terms.kf.x, state.history[-1])
         kfx = _shift(state.kfx, terms.kf.x)
         state = replace(
             state,
@@ -581,18 +593,43 @@ class MovingHorizonEstimator:
             w = self.width
             block = state.x[j * w : (j + 1) * w]
             x = self._checked(block, state.lower[j], state.upper[j], state.xp[j])
-        return np.clip(state.kfx[j], *self.load_bounds) if x is None else x
+        return self.fallback_loads(state.kfx[j], state.history[-1]) if x is None else x
+
+    def fallback_loads(self, filtered: np.ndarray, held: np.ndarray) -> np.ndarray:
+        """The loads of a sample whose QP is not solved: the filter's, clipped to the bounds.
+
+        A filter estimate that is not finite or beyond :attr:`load_limit` is not
+        taken: ``held`` (the last estimate) is, so no output is ever non-finite.
+        """
+        source = filtered if self.plausible_loads(filtered) else held
+        return np.clip(source, *self.load_bounds)
+
+    def plausible_loads(self, x) -> bool:
+        """True when every load is finite and within :attr:`load_limit` (NaN fails)."""
+        limit = self.load_limit
+        return all(abs(value) <= limit for value in np.asarray(x, dtype=float).tolist())
 
     def _checked(self, block, lower, upper, xp) -> np.ndarray | None:
-        """Loads [N] from one sample's QP variables, or None if out of bounds."""
+        r"""Loads [N] from one sample's QP variables, or None if out of bounds.
+
+        Hard constraint: a collapsed warp interval (``lower == upper``, no bounded loads
+        satisfy the equilibrium, :func:`~wheelload.estimators.mhe_terms.warp_interval`)
+        gives :math:`A^+ b + n\,\omega` at its midpoint clipped to the bounds, a solved
+        sample; elsewhere the loads must lie within the bounds up to rounding.
+        """
         eps = (self.settings.solver.eps_abs, self.settings.solver.eps_rel)
         clipped = _clip_checked(block, lower, upper, eps)
         if clipped is None:
             return None
         if not self.hard:
-            return clipped * LOAD_SCALE
-        x = xp + self.null * (clipped[0] * LOAD_SCALE)
-        return _clip_checked(x, *self.load_bounds, (1e-9, 1e-12))
+            x = clipped * LOAD_SCALE
+        else:
+            x = xp + self.null * (clipped[0] * LOAD_SCALE)
+            if float(lower[0]) == float(upper[0]):
+                x = np.clip(x, *self.load_bounds)
+            else:
+                x = _clip_checked(x, *self.load_bounds, (1e-9, 1e-12))
+        return x if x is not None and self.plausible_loads(x) else None
 
     def _advance_extended(self, state: MheState, terms: _SampleTerms, arrival: np.ndarray):
         """:meth:`_advance` for the window with robust losses and bias states."""
@@ -642,7 +679,10 @@ class MovingHorizonEstimator:
                 c,
             )
             low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
-            status, iterations, x_new, y_new = qp.solve_raw(Px, g, low, high, x_warm, y_warm)
+            if finite_data(Px, g, low, high):
+                status, iterations, x_new, y_new = qp.solve_raw(Px, g, low, high, x_warm, y_warm)
+            else:
+                status, iterations = UNSOLVED, 0
             if status == SOLVED:
                 x_warm, y_warm = np.array(x_new), np.array(y_new)
         state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)
@@ -650,7 +690,7 @@ class MovingHorizonEstimator:
             x = self._checked(x_warm[qp.y(N - 1)], sample.lower, sample.upper, sample.xp)
         failed = x is None
         if failed:
-            x = np.clip(terms.kf.x, *self.load_bounds)
+            x = self.fallback_loads(terms.kf.x, state.history[-1])
         else:
             beta = np.clip(x_warm[qp.beta], -self.beta_bound, self.beta_bound)
             if state.k >= N - 1 and beta.size:  # the oldest sample leaves the window next
@@ -697,16 +737,8 @@ class MovingHorizonEstimator:
         return qp.bias_information(s, rho_s, rho_c)
 
     def _loads(self, last: np.ndarray, window: dict) -> np.ndarray | None:
-        """The newest sample's loads [N] from its QP variables, or None if out of bounds."""
-        eps = (self.settings.solver.eps_abs, self.settings.solver.eps_rel)
-        clipped = _clip_checked(last, window["lower"][-1], window["upper"][-1], eps)
-        if clipped is None:
-            return None
-        if not self.hard:
-            return clipped * LOAD_SCALE
-        x = window["xp"][-1] + self.null * (clipped[0] * LOAD_SCALE)
-        # rounding of A^+ b + n omega only: far below a newton
-        return _clip_checked(x, *self.load_bounds, (1e-9, 1e-12))
+        """The newest sample's loads [N] from its QP variables, or None (:meth:`_checked`)."""
+        return self._checked(last, window["lower"][-1], window["upper"][-1], window["xp"][-1])
 
     # -- whole log ---------------------------------------------------------------------------
 
@@ -947,6 +979,23 @@ class _Workspace:
             result = solver.solve(raise_error=False)
         self.rho = solver._solver.get_settings().rho  # adapted during the solve
         return result, self.rho
+
+
+def finite_data(*arrays) -> bool:
+    """True when no entry is NaN and none but a bound is infinite.
+
+    The Hessian values and the linear term must be finite; bounds may be
+    :math:`\\pm\\infty` (OSQP's "no bound") but not NaN. One reduction per array:
+    a NaN, or both infinities, make the sum NaN; an infinity in the first two, or an
+    overflow of their sum, makes it infinite.
+    """
+    Px, q, *bounds = arrays
+    if not math.isfinite(float(Px.sum()) + float(q.sum())):
+        return False
+    for b in bounds:
+        if math.isnan(float(b.sum())):
+            return False
+    return True
 
 
 def _clip_checked(value, low, high, eps: tuple[float, float]):

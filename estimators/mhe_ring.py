@@ -20,6 +20,7 @@ Example
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -179,9 +180,11 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     """
     from wheelload.estimators.mhe import (
         LOAD_SCALE,
+        UNSOLVED,
         _csc_value_order,
         _prior_solution,
         _Workspace,
+        finite_data,
     )
 
     s = mhe.settings
@@ -296,7 +299,10 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
             if record is not None:
                 record.append(tuple(None if a is None else np.array(a)
                                     for a in (Px, q, low, high, x_warm, y_warm)))  # fmt: skip
-            code, iters, rho = solver.solve(Px, q, low, high, x_warm, y_warm, rho)
+            if finite_data(Px, q, *((low, high) if bounded else ())):
+                code, iters, rho = solver.solve(Px, q, low, high, x_warm, y_warm, rho)
+            else:
+                code, iters = UNSOLVED, 0
             if code == SOLVED:
                 x_sol, y_sol = solver.solution()
                 x = mhe._loads(x_sol[-w:], window)
@@ -304,12 +310,12 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
                 x_sol, y_sol = x_warm.copy(), y_warm.copy()
         failed = x is None
         if failed:
-            x = np.clip(kf_loads[i], *mhe.load_bounds)
+            x = mhe.fallback_loads(kf_loads[i], history.window[-1])
         kfx.push(kf_loads[i])
         history.push(x)
         if lag and not failed:
             j = N - 1 - lag
-            x = _window_loads(mhe, x_sol, window, kfx.window, j, eps)
+            x = _window_loads(mhe, x_sol, window, kfx.window, j, eps, x)
         loads[i] = x
         status[i], iterations[i], failed_all[i] = code, iters, failed
         solve_time[i] = time.perf_counter() - start
@@ -317,26 +323,31 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
         solver.release()
     final_window = {name: view.copy() for name, view in views[ring.head].items()}
     final_kfx = kfx.window.copy()
+    final_held = history.window[-1].copy()
 
     def final(j: int) -> np.ndarray:
-        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps)
+        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
 
     return loads, status, iterations, failed_all, solve_time, final
 
 
-def _window_loads(mhe, x_sol, window, kfx, j, eps) -> np.ndarray:
-    """:meth:`MovingHorizonEstimator.window_loads` of the ring's window."""
+def _window_loads(mhe, x_sol, window, kfx, j, eps, held) -> np.ndarray:
+    """:meth:`MovingHorizonEstimator.window_loads` of the ring's window (``held``: the newest
+    estimate)."""
     w = mhe.width
     block = x_sol[j * w : (j + 1) * w]
     x = mhe._checked(block, window["lower"][j], window["upper"][j], window["xp"][j])
-    return np.clip(kfx[j], *mhe.load_bounds) if x is None else x
+    return mhe.fallback_loads(kfx[j], held) if x is None else x
 
 
-def _hard_loads(omega: float, low: float, high: float, xp, null, bounds, eps) -> list | None:
+def _hard_loads(
+    omega: float, low: float, high: float, xp, null, bounds, eps, limit: float
+) -> list | None:
     r"""``MovingHorizonEstimator._loads`` of the hard window in plain floats (same arithmetic).
 
     :math:`\omega` clipped to its interval within ten times OSQP's tolerance, then
-    :math:`x = \bar x + n\,\omega` clipped to the load bounds within rounding.
+    :math:`x = \bar x + n\,\omega` clipped to the load bounds within rounding (a
+    collapsed interval, ``low == high``: clipped); None beyond ``limit`` or not finite.
     """
     eps_abs, eps_rel = eps
     tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, abs(omega)))
@@ -344,11 +355,11 @@ def _hard_loads(omega: float, low: float, high: float, xp, null, bounds, eps) ->
         return None
     scaled = min(max(omega, low), high) * LOAD_SCALE
     x = [a + b * scaled for a, b in zip(xp, null)]
-    tolerance = 10.0 * (1e-9 + 1e-12 * max(1.0, max(map(abs, x))))
+    tolerance = math.inf if low == high else 10.0 * (1e-9 + 1e-12 * max(1.0, max(map(abs, x))))
     lowest, highest = bounds
     clipped = []
     for value in x:
-        if value < lowest - tolerance or value > highest + tolerance:
+        if value < lowest - tolerance or value > highest + tolerance or not abs(value) <= limit:
             return None
         clipped.append(min(max(value, lowest), highest))
     return clipped
@@ -369,7 +380,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     are clamped to OSQP's infinity once. Only the estimate-dependent prior term
     is computed per sample.
     """
-    from wheelload.estimators.mhe import _prior_solution, _Workspace
+    from wheelload.estimators.mhe import UNSOLVED, _prior_solution, _Workspace, finite_data
 
     s = mhe.settings
     N = s.horizon
@@ -467,42 +478,45 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                 recorded = (low, high) if bounded else (None, None)
                 record.append(tuple(None if v is None else np.array(v)
                                     for v in (Px, q, *recorded, x_warm, y_warm)))  # fmt: skip
-            # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
-            if Px[1] != held_Px[1] or not (Px == held_Px).all():
-                osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
-                Px, held_Px = held_Px, Px  # the buffer just loaded is now the one held
-            if rho != solver.rho:
-                workspace.solver.update_settings(rho=rho)
-            if bounded and not ((low == held_low).all() and (high == held_high).all()):
-                osqp_solver.update_data_vec(
-                    q=q, l=low_clamped[a : a + N], u=high_clamped[a : a + N]
-                )
-                held_low, held_high = low, high
+            if not finite_data(Px, q, *((low, high) if bounded else ())):
+                code, iters = UNSOLVED, 0  # not handed to OSQP: the filter's estimate
             else:
-                osqp_solver.update_data_vec(q=q, l=None, u=None)
-            osqp_solver.warm_start(x_warm, y_warm if bounded else None)
-            if solver.polish:
-                with quiet_stdout():
+                # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
+                if Px[1] != held_Px[1] or not (Px == held_Px).all():
+                    osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
+                    Px, held_Px = held_Px, Px  # the buffer just loaded is now the one held
+                if rho != solver.rho:
+                    workspace.solver.update_settings(rho=rho)
+                if bounded and not ((low == held_low).all() and (high == held_high).all()):
+                    osqp_solver.update_data_vec(
+                        q=q, l=low_clamped[a : a + N], u=high_clamped[a : a + N]
+                    )
+                    held_low, held_high = low, high
+                else:
+                    osqp_solver.update_data_vec(q=q, l=None, u=None)
+                osqp_solver.warm_start(x_warm, y_warm if bounded else None)
+                if solver.polish:
+                    with quiet_stdout():
+                        osqp_solver.solve()
+                else:
                     osqp_solver.solve()
-            else:
-                osqp_solver.solve()
-            info = osqp_solver.info
-            code, iters = info.status_val, info.iter
-            if code == SOLVED:
-                solution = osqp_solver.solution
-                x_sol = solution.x
-                if bounded:
-                    y_sol = solution.y
-                x = _hard_loads(float(x_sol[-1]), lower_list[newest], upper_list[newest],
-                                xp_list[newest], null, bounds, eps)  # fmt: skip
-            else:
+                info = osqp_solver.info
+                code, iters = info.status_val, info.iter
+                if code == SOLVED:
+                    solution = osqp_solver.solution
+                    x_sol = solution.x
+                    if bounded:
+                        y_sol = solution.y
+                    x = _hard_loads(float(x_sol[-1]), lower_list[newest], upper_list[newest],
+                                    xp_list[newest], null, bounds, eps, mhe.load_limit)  # fmt: skip
+            if code != SOLVED:
                 x_sol, y_sol = x_warm.copy(), y_warm.copy()
         failed = x is None
         if failed:
-            x = np.clip(kf_loads[i], *bounds)
+            x = mhe.fallback_loads(kf_loads[i], history[N + i - 1])
         history[N + i] = x
         if lag and not failed:
-            x = _window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps)
+            x = _window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)
         loads[i] = x
         status[i], iterations[i], failed_all[i] = code, iters, failed
         solve_time[i] = perf_counter() - start
@@ -513,8 +527,9 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     last = n - 1
     final_window = {name: view.copy() for name, view in window(last).items()}
     final_kfx = kfx[last + 1 : last + 1 + N].copy()
+    final_held = np.array(history[N + last], dtype=float)
 
     def final(j: int) -> np.ndarray:
-        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps)
+        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
 
     return loads, status, iterations, failed_all, solve_time, final

@@ -37,6 +37,8 @@ import enum
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators import guard
+from wheelload.estimators.guard import GuardSettings
 from wheelload.estimators.two_stage import (
     INPUTS,
     TUNING,
@@ -59,6 +61,8 @@ LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
 TERMS_INPUTS = ["u", "u_valid", "dt", "x_ref", "p", "tuning", "cost"]
 TERMS_OUTPUTS = ["H", "g", "link", "xp", "lower", "upper", "b", "used"]
 _DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
+_GUARD_INDEX = [TUNING_INDEX[name] for name in GuardSettings.names()]
+_PARAMETER_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 
 
 class Constraint(enum.Enum):
@@ -81,6 +85,23 @@ def warp_interval(xp, null: np.ndarray, lower_load: float, upper_load: float):
     middle = 0.5 * (low + high)
     empty = low > high
     return ca.if_else(empty, middle, low), ca.if_else(empty, middle, high)
+
+
+def plausible_inputs(u_raw, valid, p, tuning) -> ca.SX:
+    r"""``valid`` times the KF's plausibility of each input (:func:`.guard.plausible`).
+
+    The ranges are the filter's guard settings in ``tuning`` (:math:`|a| \le a_{max}`,
+    :math:`|v_x| \le v_{max}`, :math:`|d_i| \le c\,m g / k_i`, :math:`|\dot d_i| \le
+    \dot d_{max}`, hub accelerations): an input the KF would not take is missing for the
+    window too, so its rows are dropped and flagged (a 1e30 or a spike off the physical
+    range never reaches the QP). The same symbolic function as the KF's step, so the Python
+    MHE and its generated C share it.
+    """
+    settings = guard.unpack(ca.vertcat(*[tuning[k] for k in _GUARD_INDEX]))
+    mass, front, rear = (p[_PARAMETER_INDEX[name]] for name in ("mass", "spring_front",
+                                                                  "spring_rear"))  # fmt: skip
+    in_range = guard.plausible(_sanitise(u_raw, valid), mass, front, rear, settings)
+    return valid * in_range
 
 
 def row_densities(u_raw, valid, tuning) -> tuple[ca.SX, ca.SX]:
@@ -127,6 +148,8 @@ def terms_function(
     tuning = ca.SX.sym("tuning", len(TUNING))
     cost = ca.SX.sym("cost")
 
+    inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
+    valid = plausible_inputs(u_raw, valid, p, tuning)
     z, A, b, mask_s, mask_c, dropped = model_rows(suspension, equilibrium, u_raw, valid, p)
     r_s, r_c = row_densities(u_raw, valid, tuning)
     w_s = mask_s * dt / r_s
@@ -160,7 +183,6 @@ def terms_function(
         b,
         ca.vertcat(mask_s, mask_c, 1 - dropped),
     ]
-    inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
     dense = [ca.densify(ca.SX(output)) for output in outputs]  # C reads every entry
     return ca.Function(TERMS_NAME, inputs, dense, TERMS_INPUTS, TERMS_OUTPUTS)
 
@@ -186,6 +208,8 @@ def residual_function(
     dt = ca.SX.sym("dt")
     p = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
+    inputs = [u_raw, valid, dt, p, tuning]
+    valid = plausible_inputs(u_raw, valid, p, tuning)
     z, _, b, mask_s, mask_c, _ = model_rows(suspension, equilibrium, u_raw, valid, p)
     gates, _ = gates_function()(valid, p)
     u = _sanitise(u_raw, valid)
@@ -201,6 +225,6 @@ def residual_function(
     lc = ca.sqrt(mask_c * dt / r_c)
     outputs = [ca.densify(ca.SX(o)) for o in (z, Jd, Ba, ls, lc)]
     return ca.Function(
-        RESIDUAL_NAME, [u_raw, valid, dt, p, tuning], outputs,
+        RESIDUAL_NAME, inputs, outputs,
         ["u", "u_valid", "dt", "p", "tuning"], ["z", "Jd", "Ba", "ls", "lc"],
     )  # fmt: skip

@@ -146,9 +146,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
                 XW[j * W + a] = (OSQPFloat)v;
             }
     } else {
-        if (hessian(j0, ARR[j0]))
-            osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL,
-                                 0);
+        int changed = hessian(j0, ARR[j0]);
         const double *prior = HIST[0];
         for (int j = 0; j < N; ++j)
             for (int a = 0; a < W; ++a) {
@@ -176,16 +174,23 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
             Q[j0 * W + r] = (OSQPFloat)((double)Q[j0 * W + r] - row / LOAD_SCALE);
         }
 #endif
-        osqp_update_data_vec(&wheelload_mhe_solver, Q, HAS_Y ? L : OSQP_NULL,
-                             HAS_Y ? U : OSQP_NULL);
+        if (finite_data(PX, NNZ, Q, L, U, NX, HAS_Y)) {
+            if (changed)
+                osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL,
+                                     OSQP_NULL, 0);
+            osqp_update_data_vec(&wheelload_mhe_solver, Q, HAS_Y ? L : OSQP_NULL,
+                                 HAS_Y ? U : OSQP_NULL);
 #if HAS_Y
-        osqp_warm_start(&wheelload_mhe_solver, XW, YW);
+            osqp_warm_start(&wheelload_mhe_solver, XW, YW);
 #else
-        osqp_warm_start(&wheelload_mhe_solver, XW, OSQP_NULL);
+            osqp_warm_start(&wheelload_mhe_solver, XW, OSQP_NULL);
 #endif
-        osqp_solve(&wheelload_mhe_solver);
-        status = (int)wheelload_mhe_solver.info->status_val;
-        out->iterations = (int)wheelload_mhe_solver.info->iter;
+            osqp_solve(&wheelload_mhe_solver);
+            status = (int)wheelload_mhe_solver.info->status_val;
+            out->iterations = (int)wheelload_mhe_solver.info->iter;
+        } else {
+            status = OSQP_UNSOLVED; /* not handed to OSQP: the filter's estimate */
+        }
         if (status == 1) {
             memcpy(XW, wheelload_mhe_solver.solution->x, sizeof XW);
 #if HAS_Y
@@ -195,16 +200,14 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     }
     double x[4];
     int failed = status != 1 || !checked(N - 1, x);
-    if (failed)
-        for (int i = 0; i < 4; ++i) x[i] = fmin(fmax(FALLBACK[i], LOW_LOAD), HIGH_LOAD);
+    if (failed) fallback_loads(FALLBACK, HIST[N - 1], x);
     shift(HIST[0], x, 4);
     ++K;
     /* the output: the window's estimate of sample k - LAG */
     if (LAG == 0 || failed) {
         memcpy(out->loads, x, sizeof x);
     } else if (!checked(N - 1 - LAG, out->loads)) {
-        for (int i = 0; i < 4; ++i)
-            out->loads[i] = fmin(fmax(KFX[N - 1 - LAG][i], LOW_LOAD), HIGH_LOAD);
+        fallback_loads(KFX[N - 1 - LAG], HIST[N - 1], out->loads);
     }
     for (int r = 0; r < 3; ++r) {
         out->residual[r] = BW[N - 1 - LAG][r];

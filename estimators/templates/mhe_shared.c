@@ -40,9 +40,38 @@ static void invert(double *a, int n, double *inverse) {
     }
 }
 
+/* 1 when every load is finite and |x| <= LOAD_LIMIT (NaN fails), as plausible_loads in Python. */
+static int plausible_loads(const double *x) {
+    for (int i = 0; i < 4; ++i)
+        if (!(fabs(x[i]) <= LOAD_LIMIT)) return 0;
+    return 1;
+}
+
+/* The loads of a sample whose QP is not solved: the filter's, clipped to the bounds; the held
+   (last) estimate when the filter's is not finite or beyond LOAD_LIMIT. */
+static void fallback_loads(const double *filtered, const double *held, double *x) {
+    const double *source = plausible_loads(filtered) ? filtered : held;
+    for (int i = 0; i < 4; ++i) x[i] = fmin(fmax(source[i], LOW_LOAD), HIGH_LOAD);
+}
+
+/* 1 when the QP data can be handed to OSQP: Hessian values and linear term finite, no bound
+   NaN (the caller's bounds are clamped to OSQP_INFTY); else the sample is not solved. */
+static int finite_data(const OSQPFloat *Px, int nnz, const OSQPFloat *q, const OSQPFloat *l,
+                       const OSQPFloat *u, int n, int bounds) {
+    for (int i = 0; i < nnz; ++i)
+        if (!isfinite((double)Px[i])) return 0;
+    for (int i = 0; i < n; ++i) {
+        if (!isfinite((double)q[i])) return 0;
+        if (bounds && (isnan((double)l[i]) || isnan((double)u[i]))) return 0;
+    }
+    return 1;
+}
+
 /* Loads [N] from one sample's QP variables (block: its W load variables first), or 0 if out of
-   [lower, upper] by more than ten times OSQP's primal tolerance (as the Python MHE's check);
-   clipped to the bounds. xp: the sample's particular solution (hard constraint only). */
+   [lower, upper] by more than ten times OSQP's primal tolerance (as the Python MHE's check) or
+   not plausible_loads; clipped to the bounds. xp: the sample's particular solution (hard
+   constraint only); a collapsed warp interval (lower == upper: no bounded loads satisfy the
+   equilibrium) gives its loads clipped to the bounds. */
 static int clipped_loads(const OSQPFloat *block, const double *lower, const double *upper,
                          const double *xp, double *loads) {
     double value[W], largest = 1.0;
@@ -61,7 +90,7 @@ static int clipped_loads(const OSQPFloat *block, const double *lower, const doub
         x[i] = xp[i] + NULL_VECTOR[i] * (value[0] * LOAD_SCALE);
         big = fmax(big, fabs(x[i]));
     }
-    tolerance = 10.0 * (1e-9 + 1e-12 * big);
+    tolerance = lower[0] == upper[0] ? INFINITY : 10.0 * (1e-9 + 1e-12 * big);
     for (int i = 0; i < 4; ++i) {
         if (x[i] < LOW_LOAD - tolerance || x[i] > HIGH_LOAD + tolerance) return 0;
         loads[i] = fmin(fmax(x[i], LOW_LOAD), HIGH_LOAD);
@@ -70,6 +99,6 @@ static int clipped_loads(const OSQPFloat *block, const double *lower, const doub
     (void)xp;
     for (int i = 0; i < 4; ++i) loads[i] = value[i] * LOAD_SCALE;
 #endif
-    return 1;
+    return plausible_loads(loads);
 }
 

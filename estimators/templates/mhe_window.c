@@ -402,12 +402,17 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
             L[i] = (OSQPFloat)fmax(low, -(double)OSQP_INFTY);
             U[i] = (OSQPFloat)fmin(high, (double)OSQP_INFTY);
         }
-        osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL, 0);
-        osqp_update_data_vec(&wheelload_mhe_solver, Q, L, U);
-        osqp_warm_start(&wheelload_mhe_solver, XW, YW);
-        osqp_solve(&wheelload_mhe_solver);
-        status = (int)wheelload_mhe_solver.info->status_val;
-        out->iterations = (int)wheelload_mhe_solver.info->iter;
+        if (finite_data(PX, NNZ, Q, L, U, NQ, 1)) {
+            osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL,
+                                 0);
+            osqp_update_data_vec(&wheelload_mhe_solver, Q, L, U);
+            osqp_warm_start(&wheelload_mhe_solver, XW, YW);
+            osqp_solve(&wheelload_mhe_solver);
+            status = (int)wheelload_mhe_solver.info->status_val;
+            out->iterations = (int)wheelload_mhe_solver.info->iter;
+        } else {
+            status = OSQP_UNSOLVED; /* not handed to OSQP: the filter's estimate */
+        }
         if (status == 1) {
             memcpy(XW, wheelload_mhe_solver.solution->x, sizeof XW);
             memcpy(YW, wheelload_mhe_solver.solution->y, sizeof YW);
@@ -416,7 +421,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     double x[4];
     int failed = status != 1 || !checked(XW + (N - 1) * WIDTH, s, x);
     if (failed) {
-        for (int i = 0; i < 4; ++i) x[i] = fmin(fmax(FALLBACK[i], LOW_LOAD), HIGH_LOAD);
+        fallback_loads(FALLBACK, HIST[N - 1], x);
     }
 #if NB > 0
     else {
@@ -443,8 +448,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     if (LAG == 0 || failed) {
         memcpy(out->loads, x, sizeof x);
     } else if (!checked(XW + (N - 1 - LAG) * WIDTH, lagged, out->loads)) {
-        for (int i = 0; i < 4; ++i)
-            out->loads[i] = fmin(fmax(lagged->kfx[i], LOW_LOAD), HIGH_LOAD);
+        fallback_loads(lagged->kfx, HIST[N - 1], out->loads);
     }
     for (int r = 0; r < 3; ++r) {
         out->residual[r] = lagged->b[r];
