@@ -51,6 +51,7 @@ import numpy as np
 from wheelload.estimators.log_checks import (
     KINEMATIC_CORRELATION,
     MIN_STD,
+    RATE,
     Check,
     CheckReport,
     Outcome,
@@ -82,6 +83,8 @@ MAX_WEIGHT_ERROR = 0.3  # of the weight: sum of the loads at steady speed
 STEADY = 0.5  # m/s^2: |ax|, |ay| below this (low-passed) is steady driving
 SWAP_MARGIN = 2.0  # the exchanged fit must be this many times better to be named
 MIN_RESPONSE = 0.3  # relative spread of the expected front/rear responses to compare them
+MIN_SECONDS = 4.0  # s of examined samples (no frozen travel) needed to decide
+FROZEN_TIME = 0.5  # s a travel holds one value while driving: a dead or stuck sensor, not a map
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -292,6 +295,21 @@ def front_rear_check(
     ]
 
 
+def frozen_samples(t: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Samples at which any travel column (``d``: n x 4) holds one value for
+    :data:`FROZEN_TIME` or longer: a dead or stuck sensor, which the fault monitor
+    isolates; the checks of a channel map's scale leave those samples out."""
+    frozen = np.zeros(t.size, bool)
+    for column in d.T:
+        change = np.flatnonzero(np.diff(column) != 0) + 1  # NaN != NaN: a change
+        starts = np.concatenate([[0], change])
+        stops = np.concatenate([change, [t.size]])
+        for start, stop in zip(starts, stops, strict=True):
+            if t[stop - 1] - t[start] >= FROZEN_TIME:
+                frozen[start:stop] = True
+    return frozen
+
+
 def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     """Every check of the module docstring on a :class:`~wheelload.estimators.signals.Signals`."""
     rate, mistake = sample_rate_check(signals.t)
@@ -305,6 +323,13 @@ def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     present = signals.travel_present
     channels.update({f"d_{w}": signals.d[:, k] for k, w in enumerate(WHEELS) if present[k]})
     q = quasi_static(signals.t[window], {k: v[window] for k, v in channels.items()})
+    frozen = frozen_samples(signals.t[window], signals.d[window][:, present])
+    if frozen.any():
+        keep = ~np.isin(q["t"], signals.t[window][frozen])
+        q = {name: values[keep] for name, values in q.items()}
+    if q["t"].size < MIN_SECONDS * RATE:
+        checks.append(undecided_check("travel and speed", "a travel sensor holds one value"))
+        return PlausibilityReport(checks=tuple(checks), mistakes=tuple(mistakes))
     parameters = ModelParameters.from_vehicle(vehicle)
     found = travel_range_check(q, parameters)
     checks += found[0]
