@@ -71,8 +71,8 @@ from wheelload.models import (
     gates_function,
     suspension_function,
 )
+from wheelload.models.inputs import WHEELS
 
-WHEELS = ("fl", "fr", "rl", "rr")
 MAX_RATE = 5000.0  # Hz, above it no vehicle logger of body and suspension signals
 MIN_RATE = 20.0  # Hz, below it the body motion (1-3 Hz) and wheel hop are lost
 MAX_OUT_OF_RANGE = 0.01  # share of samples with |d| k > m g
