@@ -3,7 +3,12 @@
 ``tests/data/family_paper_model_reference.npz`` holds every family method's
 output (paper model) on the first 250 samples of the bundled log with a
 travel gap (FL..RR sample 100-109, FR) and an ax gap (200-204), written by the
-two runners that this one replaced; the paper model reproduces them to the bit.
+two runners that this one replaced; the paper model reproduces them to the bit,
+except where a third-party kernel's last bits change between releases: the
+road-angle KF discretises its model with ``scipy.linalg.expm`` (the one LAPACK
+kernel on its path); with SciPy 1.17.1 / NumPy 2.4.6 its numbers differ from the
+reference by 1.9e-14 relative on the loads and 1e-10 N on the residuals, so its
+floats are held to 1e-12 relative + 1e-9 N instead (flags exactly).
 """
 
 from dataclasses import replace
@@ -22,6 +27,8 @@ from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.estimate import example_log_path
 
 REFERENCE = Path(__file__).parent / "data" / "family_paper_model_reference.npz"
+#: Methods whose numbers pass through a third-party kernel that may change its last bits.
+THIRD_PARTY_KERNELS = {"road-angle"}
 FAMILY = [name for name in methods() if name not in {info.name for info in CORE}]
 
 
@@ -39,7 +46,11 @@ def test_paper_model_reproduces_the_former_runners_to_the_bit(name, gappy):
     reference = np.load(REFERENCE)
     estimate = build(name, load_vehicle(example_vehicle_path()), SuspensionModel.PAPER).run(gappy)
     for key in ("loads", "std", "residual", "flags"):
-        assert np.array_equal(getattr(estimate, key), reference[f"{name}|{key}"]), (name, key)
+        actual, expected = getattr(estimate, key), reference[f"{name}|{key}"]
+        if name in THIRD_PARTY_KERNELS and key != "flags":
+            np.testing.assert_allclose(actual, expected, rtol=1e-12, atol=1e-9, err_msg=key)
+        else:
+            assert np.array_equal(actual, expected), (name, key)
     assert np.any(estimate.flags[100:110]) or np.any(estimate.flags[200:205])
 
 
