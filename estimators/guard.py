@@ -202,6 +202,13 @@ _RATE_INDEX = [INPUTS.index(name) for name in BODY_RATES]
 _RATE_DOT_INDEX = [INPUTS.index(name) for name in BODY_RATE_DERIVATIVES]
 
 
+def plausible_for(u: ca.SX, p: ca.SX, g: GuardSettings) -> ca.SX:
+    """:func:`plausible` with the mass and springs read from the parameter vector ``p``
+    (:class:`~wheelload.models.ModelParameters` order)."""
+    index = {name: k for k, name in enumerate(ModelParameters.names())}
+    return plausible(u, p[index["mass"]], p[index["spring_front"]], p[index["spring_rear"]], g)
+
+
 def plausible(u: ca.SX, mass, spring_front, spring_rear, g: GuardSettings) -> ca.SX:
     r"""1 per input of ``u`` (:data:`~wheelload.models.INPUTS` order) in range.
 

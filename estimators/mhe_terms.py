@@ -43,7 +43,6 @@ from wheelload.estimators.two_stage import (
     INPUTS,
     TUNING,
     TUNING_INDEX,
-    _replace,
     _sanitise,
     model_rows,
 )
@@ -62,7 +61,6 @@ TERMS_INPUTS = ["u", "u_valid", "dt", "x_ref", "p", "tuning", "cost"]
 TERMS_OUTPUTS = ["H", "g", "link", "xp", "lower", "upper", "b", "used"]
 _DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
 _GUARD_INDEX = [TUNING_INDEX[name] for name in GuardSettings.names()]
-_PARAMETER_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 
 
 class Constraint(enum.Enum):
@@ -98,9 +96,7 @@ def plausible_inputs(u_raw, valid, p, tuning) -> ca.SX:
     MHE and its generated C share it.
     """
     settings = guard.unpack(ca.vertcat(*[tuning[k] for k in _GUARD_INDEX]))
-    mass, front, rear = (p[_PARAMETER_INDEX[name]] for name in ("mass", "spring_front",
-                                                                  "spring_rear"))  # fmt: skip
-    in_range = guard.plausible(_sanitise(u_raw, valid), mass, front, rear, settings)
+    in_range = guard.plausible_for(_sanitise(u_raw, valid), p, settings)
     return valid * in_range
 
 
@@ -217,8 +213,10 @@ def residual_function(
     travel, axes = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
     d_now = ca.vertcat(*[u[k] for k in travel])
     acc_now = ca.vertcat(*[u[k] for k in axes])
-    Jd = ca.substitute(ca.jacobian(suspension(_replace(u, travel, d), gates, p), d), d, d_now)
-    b_sym = equilibrium(_replace(u, axes, acc), gates, p)[1]
+    Jd = ca.substitute(
+        ca.jacobian(suspension(guard.with_entries(u, travel, d), gates, p), d), d, d_now
+    )
+    b_sym = equilibrium(guard.with_entries(u, axes, acc), gates, p)[1]
     Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, acc_now)
     r_s, r_c = row_densities(u_raw, valid, tuning)
     ls = ca.sqrt(mask_s * dt / r_s)

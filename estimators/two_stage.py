@@ -184,11 +184,6 @@ _HUB_INDEX = input_index(HUB_ACCELERATION)
 _BODY_RATE_INDEX = input_index(BODY_RATES + BODY_RATE_DERIVATIVES)
 
 
-#: ``_replace(u, index, values)``: ``u`` with the entries at ``index`` replaced (the MHE's
-#: residual Function uses it too).
-_replace = guard.with_entries
-
-
 def _channel_drop(channel_ok: ca.SX) -> ca.SX:
     """Validity factor per input from the fault monitor's channels (d_fl..d_rr, ax, ay, az).
 
@@ -276,10 +271,7 @@ def step_expressions(
     # Missing or implausible inputs are replaced by zero and skip the updates they feed;
     # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
     u_finite = _sanitise(u_raw, valid_raw)
-    in_range = guard.plausible(
-        u_finite, p[_P_INDEX["mass"]], p[_P_INDEX["spring_front"]], p[_P_INDEX["spring_rear"]],
-        settings,
-    )  # fmt: skip
+    in_range = guard.plausible_for(u_finite, p, settings)
     consistent, settle_next = guard.rate_consistency(
         u_finite, valid_raw, in_range, m, dt_used, settings
     )
