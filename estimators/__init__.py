@@ -6,10 +6,16 @@ import, and a command that does not run the MHE should not pay for them).
 
 import importlib
 
-from wheelload.estimators.projection import ProjectionKF, Weighting
+from wheelload.estimators.kf.projection import ProjectionKF, Weighting
+from wheelload.estimators.kf.two_stage import FilterState, Sample, TwoStageKF, step_function
+from wheelload.estimators.logs.signals import (
+    LogError,
+    Signals,
+    read_log,
+    signals_from_frame,
+    write_log,
+)
 from wheelload.estimators.result import Estimate, StepFlag
-from wheelload.estimators.signals import LogError, Signals, read_log, signals_from_frame, write_log
-from wheelload.estimators.two_stage import FilterState, Sample, TwoStageKF, step_function
 
 __all__ = [
     "Arrival",
@@ -32,7 +38,7 @@ __all__ = [
 ]
 
 _MHE_NAMES = ("Arrival", "Constraint", "MheSettings", "MovingHorizonEstimator")
-_LAZY = dict.fromkeys(_MHE_NAMES, "wheelload.estimators.mhe")
+_LAZY = dict.fromkeys(_MHE_NAMES, "wheelload.estimators.mhe.estimator")
 
 
 def __getattr__(name: str):

@@ -37,9 +37,9 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from wheelload.estimators.kf.two_stage import Sample, sample_intervals
+from wheelload.estimators.logs.signals import Signals, rate_derivatives
 from wheelload.estimators.result import Estimate
-from wheelload.estimators.signals import Signals, rate_derivatives
-from wheelload.estimators.two_stage import Sample, sample_intervals
 
 
 @runtime_checkable

@@ -77,14 +77,14 @@ class MethodInfo:
 
 
 def _kf(vehicle: Vehicle) -> Estimator:
-    from wheelload.estimators.two_stage import TwoStageKF
+    from wheelload.estimators.kf.two_stage import TwoStageKF
 
     return TwoStageKF(vehicle)
 
 
 def _projection(weighting_name: str) -> Callable[[Vehicle], Estimator]:
     def build(vehicle: Vehicle) -> Estimator:
-        from wheelload.estimators.projection import ProjectionKF, Weighting
+        from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 
         return ProjectionKF(vehicle, weighting=Weighting[weighting_name])
 
@@ -92,7 +92,7 @@ def _projection(weighting_name: str) -> Callable[[Vehicle], Estimator]:
 
 
 def _mhe(vehicle: Vehicle) -> Estimator:
-    from wheelload.estimators.mhe_method import MheMethod
+    from wheelload.estimators.mhe.method import MheMethod
 
     return MheMethod(vehicle)
 

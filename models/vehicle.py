@@ -202,7 +202,7 @@ class FilterTuning:
     initial_std: float  # N
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
     faults: FaultTuning = FaultTuning()  # [filter.faults], optional: fault-monitor limits
-    # Optional: the innovation variance S the gate compares against (estimators/guard.py,
+    # Optional: the innovation variance S the gate compares against (estimators/kf/guard.py,
     # innovation_variance_scale) times this factor. ``wheelload tune`` writes 1/c when it
     # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
     # had (S scales by c, the innovations do not).
@@ -271,7 +271,7 @@ class Vehicle:
     suspension: Suspension
     model: ModelTerms
     filter: FilterTuning
-    plant: Plant | None = None  # ground-truth simulator only (models/plant_params.py)
+    plant: Plant | None = None  # ground-truth simulator only (models/plant/params.py)
 
     def _check(self) -> None:
         pass
@@ -427,4 +427,4 @@ def vehicle_template() -> str:
 
 
 # Imported last: the plant sections reuse the validation helpers above.
-from wheelload.models.plant_params import Plant  # noqa: E402
+from wheelload.models.plant.params import Plant  # noqa: E402

@@ -7,7 +7,7 @@ returning an exit status).
 A mistake a user can make is one line on stderr and exit status 2. Ctrl-C
 (SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130; SIGTERM
 raises :class:`Terminated` in the main thread, so that every ``finally`` runs
-(temporary files are removed, :mod:`wheelload.models.temporaries`), then the
+(temporary files are removed, :mod:`wheelload.models.files.temporaries`), then the
 line ``terminated`` and status 143.
 """
 
@@ -42,7 +42,7 @@ COMMANDS = (
 
 
 #: The module that registers each command: ``wheelload COMMAND ...`` imports that one
-#: only (a cold start pays for what it runs; tests/test_cli_commands.py keeps it exact).
+#: only (a cold start pays for what it runs; tests/cli/test_cli_commands.py keeps it exact).
 COMMAND_MODULES = {
     "vehicle": "wheelload.studies.commands.vehicle",
     "estimate": "wheelload.studies.commands.estimate",
@@ -105,7 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: list[str]) -> int:
-    from wheelload.models.build_folder import BuildFolderError
+    from wheelload.models.files.build_folder import BuildFolderError
 
     args = build_parser(argv).parse_args(argv)
     try:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from wheelload.models.temporaries import replacing
+from wheelload.models.files.temporaries import replacing
 from wheelload.models.vehicle import load_vehicle
 
 _TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")

@@ -11,8 +11,8 @@ def vehicle():
 @pytest.fixture(scope="session")
 def plant_log():
     """``plant_log(name)``: the measured log of a bundled scenario, simulated once per session."""
-    from wheelload.estimators.signals import signals_from_frame
-    from wheelload.studies.scenario_runner import run_scenario
+    from wheelload.estimators.logs.signals import signals_from_frame
+    from wheelload.studies.drive.scenario_runner import run_scenario
 
     cache = {}
 

@@ -3,7 +3,7 @@ r"""Corner-based vertical load estimator (corner-based paper §III-C, eq. 17-18)
 Loads from the body IMU alone (the paper's method uses no travel sensor):
 the specific force rotated by the body roll and pitch relative to the road,
 the rigid-body axle loads (eq. 17) and their left/right split with the
-roll-centre term (eq. 18), written once in :mod:`wheelload.models.corner_loads`.
+roll-centre term (eq. 18), written once in :mod:`wheelload.models.family.corner_loads`.
 
 The roll and pitch angles come from a drift-compensated rate observer (after
 Rehm, the paper's ref. [18]):
@@ -52,8 +52,8 @@ from wheelload.estimators.family.suspension_model import (
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.body_attitude import roll_pitch_stiffness
-from wheelload.models.corner_loads import corner_load_function
 from wheelload.models.equilibrium import roll_axis_height
+from wheelload.models.family.corner_loads import corner_load_function
 
 
 @dataclass(frozen=True, kw_only=True)

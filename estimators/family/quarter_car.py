@@ -1,7 +1,7 @@
 r"""Method E, quarter-car tyre-force observer after Cheon et al. (Siegloff & Choi §IV-B, [12]).
 
 Per corner, the unsprung-mass balance of the quarter car
-(:func:`wheelload.models.quarter_car.tyre_load_function`),
+(:func:`wheelload.models.family.quarter_car.tyre_load_function`),
 
 .. math:: F = z(d, v) + m_u a_u, \qquad \ddot d = a_u - a_s,
 
@@ -62,7 +62,7 @@ from wheelload.estimators.family.suspension_model import (
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_vertical_acceleration
-from wheelload.models.quarter_car import unsprung_balance
+from wheelload.models.family.quarter_car import unsprung_balance
 
 OBSERVER_BANDWIDTH = 25.0  # Hz, both poles: above the wheel-hop mode (~14 Hz), below Nyquist
 #: v_hat[4], a_u_hat[4], previous rates[3], previous rates valid, last F_hat[4]
@@ -114,7 +114,7 @@ def body_corner_accelerations(sym: StepSymbols, rates: ca.SX, c: ca.SX):
 def unsprung_acceleration(F, z, m_u, corner: int):
     """The unsprung acceleration of ``corner`` that gives tyre load ``F`` on suspension load ``z``.
 
-    Solves :func:`~wheelload.models.quarter_car.unsprung_balance` (affine in
+    Solves :func:`~wheelload.models.family.quarter_car.unsprung_balance` (affine in
     ``a_u``) with its value at ``a_u = 0`` and its Jacobian.
     """
     a = ca.SX.sym("a_u", 4)

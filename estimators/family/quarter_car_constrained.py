@@ -7,7 +7,7 @@ suspension pseudo-measurement. Random walk :math:`x^- = x`,
 :math:`P^- = P + q\Delta t I` (eq. 19); update with :math:`z = \hat F_E`,
 :math:`R_s` (eq. 20-22); soft equilibrium update :math:`b = A x + w_c`,
 :math:`R_c` (eq. 23-25), all with the kernels of
-:mod:`wheelload.estimators.kalman` and the vehicle file's filter tuning, as the
+:mod:`wheelload.estimators.kernels.kalman` and the vehicle file's filter tuning, as the
 two-stage KF: :math:`R_s, R_c` are the KF's Function
 (:mod:`wheelload.models.measurement_noise`) at the sample's interval, so
 :math:`r_s/\Delta t\,I`, :math:`\mathrm{diag}(r_c)/\Delta t` with the default zero
@@ -42,9 +42,9 @@ from wheelload.estimators.family.step_method import (
     step_symbols,
 )
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
-from wheelload.estimators.kalman import predict, sequential_update, upper
+from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
+from wheelload.estimators.kf.two_stage import TUNING, TUNING_INDEX, tuning_vector
 from wheelload.estimators.registry import MethodInfo
-from wheelload.estimators.two_stage import TUNING, TUNING_INDEX, tuning_vector
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 

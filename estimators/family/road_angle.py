@@ -1,6 +1,6 @@
 r"""Road-angle Kalman filter (Jiang et al., road-angle paper §II-III, eq. 4-18).
 
-A linear KF on the 14-state model of :mod:`wheelload.models.road_angle`
+A linear KF on the 14-state model of :mod:`wheelload.models.family.road_angle`
 (eq. 12-15), discretised exactly for each sample interval (matrix exponential,
 Van Loan for the process noise), measured (eq. 16-17) by
 
@@ -57,14 +57,14 @@ from wheelload.estimators.family.suspension_model import (
     equilibrium,
     suspension_loads,
 )
-from wheelload.estimators.kalman import sequential_update
+from wheelload.estimators.kernels.kalman import sequential_update
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL
+from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import Estimate
-from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import MAX_INTERVAL
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import attitude_function
-from wheelload.models.road_angle import STATE_NAMES, BodyInertia, road_angle_model
+from wheelload.models.family.road_angle import STATE_NAMES, BodyInertia, road_angle_model
 
 N = len(STATE_NAMES)
 #: Measured states (eq. 16): roll, roll rate, pitch, pitch rate, 4 loads, 3 road-frame

@@ -3,7 +3,7 @@ r"""Standstill mass and CG from logs at rest on one or more slopes (ycoo-umvf pa
 Each log contributes the mean loads and specific force of its samples at rest
 (speed below ``max_speed``, after ``settle`` seconds of each still period);
 weighted Gauss-Newton on the residual of
-:func:`~wheelload.models.standstill.standstill_residual_function` (its
+:func:`~wheelload.models.family.standstill.standstill_residual_function` (its
 CasADi Jacobians) gives the whole-vehicle mass, CG distance to the front
 axle, lateral CG offset and CG height.
 
@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.signals import Signals
+from wheelload.estimators.logs.signals import Signals
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, vehicle_mass_centre
-from wheelload.models.quarter_car import tyre_load_function
-from wheelload.models.standstill import UNKNOWNS, standstill_residual_function
+from wheelload.models.family.quarter_car import tyre_load_function
+from wheelload.models.family.standstill import UNKNOWNS, standstill_residual_function
 
 MAX_ITERATIONS = 30
 CONDITION_LIMIT = 1e10  # of the normal matrix: beyond it an unknown is not determined

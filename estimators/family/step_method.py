@@ -16,7 +16,7 @@ and whose outputs after the carried state are ``loads`` (4), ``std`` (4),
 ``residual`` (3) and ``flags`` (1, a sum of
 :class:`~wheelload.estimators.result.StepFlag` values).
 :meth:`StepMethod.step` calls the Function once; :meth:`StepMethod.run` loops
-it in generated C (:class:`~wheelload.estimators.compiled.CompiledLoop`, as
+it in generated C (:class:`~wheelload.estimators.loops.compiled.CompiledLoop`, as
 the KF), in chunks of :data:`CHUNK` samples with the state carried; both give
 the same numbers.
 
@@ -33,15 +33,12 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.compiled import CompiledLoop
 from wheelload.estimators.family.suspension_model import (
     SuspensionModel,
     equilibrium,
     equilibrium_mask,
 )
-from wheelload.estimators.result import Estimate, StepFlag
-from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import (
+from wheelload.estimators.kf.two_stage import (
     INPUTS,
     Sample,
     _dependency_mask,
@@ -50,6 +47,9 @@ from wheelload.estimators.two_stage import (
     interval_is_valid,
     sample_intervals,
 )
+from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.loops.compiled import CompiledLoop
+from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.models import ModelParameters
 
 PER_SAMPLE = ("u", "u_valid", "dt")

@@ -2,7 +2,7 @@ r"""Method F, per-corner strong-tracking UKF after Ding et al. (Siegloff & Choi 
 
 Per corner, state :math:`x = [d, v, F]` (compression, compression rate,
 tyre normal load), measurements :math:`y = [d, v]`, and the quarter-car
-process (the unsprung balance of :func:`wheelload.models.quarter_car.unsprung_balance`
+process (the unsprung balance of :func:`wheelload.models.family.quarter_car.unsprung_balance`
 solved for the unsprung acceleration)
 
 .. math:: \dot d = v, \quad \dot v = \frac{F - z(d, v)}{m_u} - a_s, \quad \dot F = w_F
@@ -26,7 +26,7 @@ Strong tracking (Zhou's suboptimal fading factor): with the innovation
 
 (:math:`\bar P^-` the transformed covariance before :math:`Q`). The
 measurement is linear, so the update is the Joseph-form Kalman update of
-:mod:`wheelload.estimators.kalman` (what the UKF update gives for a linear
+:mod:`wheelload.estimators.kernels.kalman` (what the UKF update gives for a linear
 measurement).
 
 Adaptations ([1] is not in our library; the main paper names only the
@@ -65,7 +65,7 @@ from wheelload.estimators.family.suspension_model import (
     suspension_mask,
 )
 from wheelload.estimators.family.unscented import sigma_points, unscented_transform
-from wheelload.estimators.kalman import sequential_update, symmetrise
+from wheelload.estimators.kernels.kalman import sequential_update, symmetrise
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
 

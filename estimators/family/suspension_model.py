@@ -29,7 +29,7 @@ import enum
 
 import casadi as ca
 
-from wheelload.estimators.two_stage import _dependency_mask
+from wheelload.estimators.kf.two_stage import _dependency_mask
 from wheelload.models import (
     GATES,
     equilibrium_function,

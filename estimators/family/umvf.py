@@ -2,7 +2,7 @@ r"""Unbiased minimum-variance filter with unknown inputs, UMVF (ycoo-umvf paper 
 
 Per corner, on the reduced quarter-car model (§4: the direction in which both
 masses move together is unobservable and removed;
-:func:`~wheelload.models.quarter_car.reduced_quarter_car_function`), states
+:func:`~wheelload.models.family.quarter_car.reduced_quarter_car_function`), states
 :math:`x = [\tilde q, \dot q]`, unknown inputs
 :math:`e = [\tilde f_z, \Delta f_z]`, measurements
 :math:`y = [a_s, \tilde q, \dot q]`, discretised with the inputs held over the
@@ -74,11 +74,11 @@ from wheelload.estimators.family.suspension_model import (
     equilibrium,
     suspension_loads,
 )
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL
 from wheelload.estimators.registry import MethodInfo
-from wheelload.estimators.two_stage import MAX_INTERVAL
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
-from wheelload.models.quarter_car import reduced_quarter_car_function
+from wheelload.models.family.quarter_car import reduced_quarter_car_function
 
 RANK_TOLERANCE = 1e-9
 

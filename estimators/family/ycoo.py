@@ -33,12 +33,12 @@ Adaptations, each kept as small as the signals allow:
 - The filters start in steady state on the first sample (the paper leaves
   its observers uninitialised to show their 0.1 s convergence; a start from
   zero travel costs a 600 N transient on a log that begins at speed).
-- Discretised with the interval as an input (:mod:`wheelload.estimators.discretise`),
+- Discretised with the interval as an input (:mod:`wheelload.estimators.kernels.discretise`),
   the hold chosen per channel for the magnitude closest to eq. (14) at the
   logs' 100 Hz: first-order hold on the travels (FOH's sinc^2 droop is
   partly offset by the aliased :math:`m_u s^2` term), Tustin on the
   accelerations and rates (FOH alone droops 1.1 dB at 20 Hz). Both paths are
-  within 1 dB of eq. (14) up to 20 Hz (tests/test_ycoo.py).
+  within 1 dB of eq. (14) up to 20 Hz (tests/estimators/family/test_ycoo.py).
 
 The filter is realised as a cascade (two first-order lags, then the
 second-order section) with states
@@ -55,7 +55,6 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.discretise import first_order_hold, trapezoidal
 from wheelload.estimators.family.step_method import (
     StepMethod,
     flag_sum,
@@ -68,11 +67,12 @@ from wheelload.estimators.family.suspension_model import (
     equilibrium,
     suspension_loads,
 )
+from wheelload.estimators.kernels.discretise import first_order_hold, trapezoidal
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
-from wheelload.models.quarter_car import unsprung_balance
+from wheelload.models.family.quarter_car import unsprung_balance
 from wheelload.models.vehicle import GRAVITY
 
 #: Filtered channels: four travels, vertical specific force minus g, roll and pitch rate.

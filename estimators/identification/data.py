@@ -11,7 +11,7 @@ load the bar adds to the left wheel; the right wheel gets the opposite];
 optional ``t``. The axle (``front``, ``rear``) is a column ``axle`` or a
 header line ``# axle = front``.
 
-Drive log: the log format of :mod:`wheelload.estimators.signals`, with
+Drive log: the log format of :mod:`wheelload.estimators.logs.signals`, with
 reference loads ``fz_fl .. fz_rr`` for any subset of the wheels (a missing
 column or a blank cell: no reference there).
 
@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.signals import (
+from wheelload.estimators.logs.signals import (
     RATE_DERIVATIVES,
     LogError,
     rate_derivatives,

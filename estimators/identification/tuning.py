@@ -52,8 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-from wheelload.estimators.signals import Signals
-from wheelload.estimators.two_stage import (
+from wheelload.estimators.kf.two_stage import (
     NOISE_DENSITIES,
     TUNED_DENSITIES,
     TUNING,
@@ -62,6 +61,7 @@ from wheelload.estimators.two_stage import (
     TwoStageKF,
     step_function,
 )
+from wheelload.estimators.logs.signals import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle import FilterTuning, Vehicle
 

@@ -17,7 +17,7 @@ import re
 from pathlib import Path
 
 from wheelload.models import load_vehicle
-from wheelload.models.temporaries import replacing
+from wheelload.models.files.temporaries import replacing
 
 Key = tuple[str, ...]
 TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")

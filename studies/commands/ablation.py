@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 
 from wheelload.models import example_vehicle_path
-from wheelload.models.temporaries import replacing
-from wheelload.studies.ablation import ALL, PAPER, TERMS, ablation, wide_table
-from wheelload.studies.scenarios import SCENARIOS, Options
+from wheelload.models.files.temporaries import replacing
+from wheelload.studies.drive.scenarios import SCENARIOS, Options
+from wheelload.studies.experiments.terms_ablation import ALL, PAPER, TERMS, ablation, wide_table
 
 
 def bundled_vehicles() -> list[Path]:

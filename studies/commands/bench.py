@@ -13,19 +13,19 @@ import time
 import numpy as np
 
 from wheelload.estimators import Sample, TwoStageKF
-from wheelload.estimators.two_stage import sample_intervals
+from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.bench.numpy_kf import joint_filter
 from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.numpy_kf import joint_filter
-from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
+from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
     "wheelload.studies.commands.bench_codegen",
     "wheelload.studies.commands.bench_speed",
     "wheelload.studies.commands.mhe",
-    "wheelload.studies.scenario_bench",
+    "wheelload.studies.bench.scenarios",
     "wheelload.studies.commands.bench_logs",
-    "wheelload.studies.fault_injection",
+    "wheelload.studies.experiments.faults.fault_injection",
     "wheelload.studies.commands.bench_estimate",
     "wheelload.studies.commands.bench_family",
     "wheelload.studies.commands.bench_hostile",

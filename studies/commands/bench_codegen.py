@@ -21,13 +21,13 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import Sample, TwoStageKF
-from wheelload.estimators.c_emitter import Precision, operation_counts
-from wheelload.estimators.codegen import CodegenOptions, build_program, generate
-from wheelload.estimators.two_stage import sample_intervals
+from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
+from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.bench.numpy_kf import pseudo_measurements
 from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.numpy_kf import pseudo_measurements
-from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
+from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 TARGET_NS = 150.0
 #: Scalar floating-point operations a core can issue per cycle: two multiply

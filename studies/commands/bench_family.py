@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method, methods
-from wheelload.estimators.signals import Signals
 from wheelload.studies.commands.options import add_allow_unusual
 
 REFERENCE = "kf"
@@ -84,7 +84,7 @@ def models_of(choice: str) -> tuple[SuspensionModel, ...]:
 
 def method_names(text: str | None) -> tuple[str, ...]:
     """``--methods`` in canonical spelling, ``kf`` first (added if missing)."""
-    from wheelload.studies.comparison import parse_methods
+    from wheelload.studies.pipeline.comparison import parse_methods
 
     names = tuple(methods()) if text is None else parse_methods(text)
     return (REFERENCE, *(name for name in names if name != REFERENCE))

@@ -6,10 +6,10 @@ linked in). Columns: sanitizer findings (C built with
 ``-fsanitize=address,undefined``), non-finite outputs, max :math:`|F_z|` (and
 whether it is within :math:`2 m g`), steps locked out. The log: a plant
 scenario with every input channel corrupted at each ``--fractions`` share of
-its samples (:func:`wheelload.studies.hostile.hostile_frame`).
+its samples (:func:`wheelload.studies.experiments.faults.hostile.hostile_frame`).
 
 ``--envelope N`` also runs the envelope property on N unseeded white-noise
-logs (:func:`~wheelload.studies.hostile.white_noise_signals`) and prints the
+logs (:func:`~wheelload.studies.experiments.faults.hostile.white_noise_signals`) and prints the
 largest excursion of the KF's total load from the log's own vertical-row range;
 ``--ranges`` prints the body-rate ranges of the plant's scenarios that the
 guard settings were chosen from.
@@ -26,13 +26,13 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.c_emitter import Precision
-from wheelload.estimators.codegen import STRICT_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.guard import GRAVITY
-from wheelload.estimators.signals import derive_velocities, signals_from_frame
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.kf.guard import GRAVITY
+from wheelload.estimators.logs.signals import derive_velocities, signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies import hostile
 from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.experiments.faults import hostile
 
 SCENARIOS = (
     "iso-dlc", "hockenheim", "nordschleife", "brake-in-turn", "accel-in-turn", "bounce-sweep",
@@ -78,8 +78,8 @@ def _c_kf(vehicle_path, frame, folder: Path, precision: Precision) -> hostile.Ho
 
 
 def _c_mhe(vehicle, vehicle_path, signals, folder: Path) -> hostile.HostileSummary:
-    from wheelload.estimators.mhe import Constraint, MheSettings
-    from wheelload.estimators.mhe_codegen import build_mhe_program, embedded_settings, write_inputs
+    from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_settings, write_inputs
+    from wheelload.estimators.mhe.estimator import Constraint, MheSettings
 
     settings = embedded_settings(MheSettings(horizon=10, constraint=Constraint.SOFT, bounded=True))
     dt = float(np.median(np.diff(signals.t)))
@@ -107,8 +107,8 @@ _CLEAN_BITS = (
 def _ranges(vehicle_paths) -> None:
     """Largest |w|, |dw|/dt and differentiator |w_dot| per scenario, smooth and rough D,
     and the clean samples the KF flags as implausible, held or load-limited."""
-    from wheelload.studies.scenario_runner import run_scenario
-    from wheelload.studies.scenarios import Options
+    from wheelload.studies.drive.scenario_runner import run_scenario
+    from wheelload.studies.drive.scenarios import Options
 
     print("scenario, vehicle, roughness: max |w| [rad/s], max |dw|/dt, max |w_dot| [rad/s^2],"
           " samples, flagged")  # fmt: skip
@@ -133,7 +133,7 @@ def _ranges(vehicle_paths) -> None:
 
 
 def _envelope(vehicle, runs: int) -> None:
-    from wheelload.studies.synthetic import slalom, synthetic_log
+    from wheelload.studies.drive.synthetic import slalom, synthetic_log
 
     kf = TwoStageKF(vehicle)
     base = synthetic_log(vehicle, slalom(duration=3.0), seed=1)
@@ -150,13 +150,13 @@ def _envelope(vehicle, runs: int) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from wheelload.studies.scenario_runner import run_scenario
+    from wheelload.studies.drive.scenario_runner import run_scenario
 
     vehicle_path = args.vehicle or example_vehicle_path()
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     weight = vehicle.mass.total * GRAVITY
     if args.ranges:
-        from wheelload.studies.fault_injection import bundled_vehicles
+        from wheelload.studies.experiments.faults.fault_injection import bundled_vehicles
 
         _ranges([args.vehicle] if args.vehicle else bundled_vehicles())
     clean = run_scenario(args.scenario, vehicle_path).log

@@ -8,7 +8,7 @@ prints samples per second (min / median / max of ``--repeat`` runs, the
 variants run in turn so that each meets the same machine load), the ratio to
 the serial run, and how each summary compares with the serial one: ``same``
 (bit for bit), ``within`` (every number within
-:data:`~wheelload.studies.batch.BATCHED_TOLERANCE` relative to its column's
+:data:`~wheelload.studies.pipeline.batch.BATCHED_TOLERANCE` relative to its column's
 largest magnitude) or ``NO``, with the largest difference. A last line
 compares the serial summary with single runs of each log
 (:meth:`TwoStageKF.run`, which the batched step equals within that tolerance).
@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.models import example_vehicle_path
-from wheelload.studies.batch import (
+from wheelload.studies.pipeline.batch import (
     BATCHED_TOLERANCE,
     EstimateSettings,
     expand_logs,

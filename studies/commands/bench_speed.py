@@ -10,12 +10,12 @@ over ``--repeats`` alternating repeats (min / median / max of the ratio):
 - the generated library's batched step (``--batch`` filters side by side)
   against its single step, double and float, both built with the Makefile's
   ``FAST_CFLAGS``;
-- :func:`~wheelload.estimators.batched.run_batched` over ``--logs`` logs
+- :func:`~wheelload.estimators.codegen.batched.run_batched` over ``--logs`` logs
   against :meth:`TwoStageKF.run` on each (what ``estimate`` over many logs
   and the Monte Carlo study now use, against what they used);
 - the single C step (double, fastest of short passes) against its
   dependency-chain bound (the longest chain of the kernel's instructions at
-  :data:`~wheelload.estimators.c_emitter.LATENCY` cycles each) and its
+  :data:`~wheelload.estimators.codegen.c_emitter.LATENCY` cycles each) and its
   throughput bound (the compiled kernel's instruction mix,
   :mod:`~wheelload.studies.commands.c_step_bounds`), in cycles of the
   measured clock; and against the same step with plain C99 selects built
@@ -35,14 +35,14 @@ import time
 from pathlib import Path
 
 from wheelload.estimators import Sample, TwoStageKF
-from wheelload.estimators.c_emitter import Precision, critical_path, flop_count
-from wheelload.estimators.codegen import FAST_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.two_stage import sample_intervals
+from wheelload.estimators.codegen.c_emitter import Precision, critical_path, flop_count
+from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.bench_codegen import cpu_mhz, filterpy_step
 from wheelload.studies.commands.c_step_bounds import compiled_mix, measured_clock_mhz
 from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
+from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 STEP_TARGET = 10.0  # µs per TwoStageKF.step
 FILTERPY_TARGET = 10.0  # times faster than filterpy
@@ -133,7 +133,7 @@ def _selftest_ns(binary: Path, *arguments) -> float:
 
 def logs_vs_run(vehicle_path: Path, kf: TwoStageKF, args: argparse.Namespace) -> None:
     """Print run_batched over many logs against run on each, us per sample."""
-    from wheelload.estimators.batched import run_batched
+    from wheelload.estimators.codegen.batched import run_batched
 
     vehicle = kf.vehicle
     duration = args.log_samples / 1000.0

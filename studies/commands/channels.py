@@ -1,4 +1,4 @@
-"""``wheelload channels``: write, list and check channel maps (estimators/readers).
+"""``wheelload channels``: write, list and check channel maps (estimators/logs/readers).
 
 ``--template`` prints a commented map; ``--list LOG`` the channels of a log
 (any format); ``MAP`` checks a map, and with ``--log LOG`` reads the log
@@ -12,7 +12,7 @@ import argparse
 import numpy as np
 
 from wheelload.estimators import read_log
-from wheelload.estimators.readers import channel_map_template, channel_names, load_channel_map
+from wheelload.estimators.logs.readers import channel_map_template, channel_names, load_channel_map
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

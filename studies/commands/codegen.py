@@ -3,7 +3,7 @@
 ``--estimator kf`` (default) writes the two-stage KF as a self-contained,
 allocation-free C99 library; ``--estimator mhe`` writes the embedded MHE
 (OSQP's generated solver, the generated QP-terms routine and the window
-driver; see :mod:`wheelload.estimators.mhe_codegen`). Options that belong to
+driver; see :mod:`wheelload.estimators.codegen.mhe`). Options that belong to
 the other estimator are rejected with a message naming them.
 """
 
@@ -13,9 +13,10 @@ import argparse
 import enum
 from pathlib import Path
 
-from wheelload.estimators.c_emitter import Precision
-from wheelload.estimators.codegen import CodegenOptions, ParamMode, generate
-from wheelload.estimators.mhe import (
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
+from wheelload.estimators.logs.output_files import check_output_folder
+from wheelload.estimators.mhe.estimator import (
     Arrival,
     BiasStates,
     Constraint,
@@ -23,7 +24,6 @@ from wheelload.estimators.mhe import (
     MheSettings,
     ResidualLoss,
 )
-from wheelload.estimators.output_files import check_output_folder
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
 
@@ -159,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
-    from wheelload.estimators.mhe_codegen import embedded_settings, generate_mhe
+    from wheelload.estimators.codegen.mhe import embedded_settings, generate_mhe
 
     values = _options(args, MHE_OPTIONS, KF_OPTIONS, Estimator.MHE)
     threshold = values["huber_threshold"]

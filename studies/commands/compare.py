@@ -16,13 +16,13 @@ from wheelload.estimators import read_log
 from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.models import load_vehicle
 from wheelload.studies.commands.options import add_suspension_option
-from wheelload.studies.comparison import (
+from wheelload.studies.pipeline.comparison import (
     compare_methods,
     format_table,
     long_table,
     parse_methods,
 )
-from wheelload.studies.comparison_plot import (
+from wheelload.studies.plots.comparison import (
     check_writable,
     figure_paths,
     plot_comparison,

@@ -1,7 +1,7 @@
 """``wheelload estimate``: run an estimator (default: the two-stage KF) on one log or many.
 
 One log: a summary on screen, ``--out`` estimates CSV, ``--plot`` figure. A CSV or
-Parquet log with the KF runs on the lean whole-log path (``estimators/log_stream.py``:
+Parquet log with the KF runs on the lean whole-log path (``estimators/loops/log_stream.py``:
 read, filtered, written and summarised in chunks, memory bounded by the chunk, the
 numbers of the in-memory run to the bit); ``--in-memory`` reads it whole.
 Many logs (a folder, a glob, or several names): ``--out FOLDER`` gets one
@@ -21,10 +21,11 @@ import numpy as np
 
 from wheelload.estimators import Estimate, Signals
 from wheelload.estimators.family.suspension_model import SuspensionModel
-from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
+from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
 from wheelload.models import example_vehicle_path
-from wheelload.studies.batch import (
+from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
+from wheelload.studies.pipeline.batch import (
     SUMMARY_NAME,
     EstimateSettings,
     estimate_log,
@@ -32,12 +33,11 @@ from wheelload.studies.batch import (
     run_logs,
     write_table,
 )
-from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
-from wheelload.studies.estimate_digest import EstimateDigest
-from wheelload.studies.lean_estimate import estimate_lean, takes_lean_path
+from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline.lean_estimate import estimate_lean, takes_lean_path
 
 if TYPE_CHECKING:
-    from wheelload.estimators.log_stream import LogStream
+    from wheelload.estimators.loops.log_stream import LogStream
 
 WHEELS = ("FL", "FR", "RL", "RR")
 
@@ -162,8 +162,8 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
     if args.out:
         write_table(estimate.to_pandas(), Path(args.out), replace=args.force)
     if args.plot:
-        from wheelload.estimators.output_files import atomic_write
-        from wheelload.studies.plots import plot_estimate
+        from wheelload.estimators.logs.output_files import atomic_write
+        from wheelload.studies.plots.estimate import plot_estimate
 
         title = f"{path.name} — {result.vehicle.name}"
         with atomic_write(Path(args.plot), replace=args.force) as temporary:
@@ -182,7 +182,7 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
 
 
 def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> bool:
-    """``_run_one`` on the lean whole-log path (``studies/lean_estimate.py``).
+    """``_run_one`` on the lean whole-log path (``studies/pipeline/lean_estimate.py``).
 
     Memory is bounded by the chunk (plus 8 bytes a sample for the time column
     and the scored errors). False (nothing written) for a log the chunked
@@ -303,7 +303,7 @@ class LogHeader:
     @classmethod
     def of(cls, log: Signals | LogStream, *, has_reference: bool) -> LogHeader:
         """The header of a log read whole (:class:`Signals`) or scanned for the lean path
-        (:class:`~wheelload.estimators.log_stream.LogStream`): both give the source, time
+        (:class:`~wheelload.estimators.loops.log_stream.LogStream`): both give the source, time
         column, sample rate, sensor set and whether velocities were derived."""
         return cls(
             source=log.source,

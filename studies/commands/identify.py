@@ -160,7 +160,7 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def _write_report(result, keys, report: Path, vehicle_path: Path, out: Path) -> None:
-    from wheelload.studies.identification_plots import plot_maps, plot_residuals
+    from wheelload.studies.plots.identification import plot_maps, plot_residuals
 
     report.mkdir(parents=True, exist_ok=True)
     tables = {

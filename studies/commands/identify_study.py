@@ -1,6 +1,6 @@
 """``wheelload identify-study``: a wrong vehicle file put right by identify and tune, on the plant.
 
-Prints two tables (``studies/identification_study.py``): the two-stage KF's
+Prints two tables (``studies/experiments/identification_study.py``): the two-stage KF's
 pooled RMSE with the true, the wrong (springs -20 %, dampers +30 %, bars
 -30 %) and the identified file on scenarios not used for identification;
 and ±2σ coverage and RMSE of the input and the tuned filter on logs not used
@@ -14,8 +14,8 @@ import dataclasses
 from pathlib import Path
 
 from wheelload.models import load_vehicle
-from wheelload.studies.identification_study import StudySettings, run_study
-from wheelload.studies.scenarios import SCENARIOS as SCENARIO_TABLE
+from wheelload.studies.drive.scenarios import SCENARIOS as SCENARIO_TABLE
+from wheelload.studies.experiments.identification_study import StudySettings, run_study
 
 SCENARIO_NAMES = tuple(sorted(SCENARIO_TABLE))
 QUICK = ("accel-in-turn", "iso-dlc", "slope-20")  # identified from accel-in-turn

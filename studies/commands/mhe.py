@@ -18,14 +18,15 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import TwoStageKF, read_log
-from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
-from wheelload.estimators.output_files import atomic_write, check_outputs
+from wheelload.estimators.logs.output_files import atomic_write, check_outputs
+from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 from wheelload.studies.experiments import catalog as experiments
 from wheelload.studies.experiments import command as experiment_command
-from wheelload.studies.faults import Fault
-from wheelload.studies.mhe_vs_kf import (
+from wheelload.studies.experiments.faults.sensor_faults import Fault
+from wheelload.studies.experiments.mhe_vs_kf import (
     HORIZONS,
     PLAIN_KF,
     StudySettings,
@@ -35,7 +36,6 @@ from wheelload.studies.mhe_vs_kf import (
     robust_sweep,
     step_times,
 )
-from wheelload.studies.synthetic import SensorNoise, slalom, synthetic_log
 
 STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
 
@@ -116,9 +116,9 @@ def _simulate(
     names: list[str], folder: Path, vehicle_path: Path, allow_unusual: bool
 ) -> list[Path]:
     """Simulate the scenarios on the plant with the study's vehicle; the log paths."""
-    from wheelload.studies.scenario_log import write_log
-    from wheelload.studies.scenario_runner import run_scenario
-    from wheelload.studies.scenarios import SCENARIOS
+    from wheelload.studies.drive.scenario_log import write_log
+    from wheelload.studies.drive.scenario_runner import run_scenario
+    from wheelload.studies.drive.scenarios import SCENARIOS
 
     names = names or [name for name in STUDY_SCENARIOS if name in SCENARIOS]
     unknown = [name for name in names if name not in SCENARIOS]
@@ -165,7 +165,7 @@ def run_study(args: argparse.Namespace) -> int:
     if args.sweep == "robust":
         return _robust(args, logs, paths, vehicle)
     table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
-    from wheelload.studies.mhe_vs_kf import plot_accuracy_against_time
+    from wheelload.studies.experiments.mhe_vs_kf import plot_accuracy_against_time
 
     with atomic_write(outputs[0], replace=args.force) as temporary:
         table.to_csv(temporary)
@@ -260,7 +260,7 @@ def run_bench(args: argparse.Namespace) -> int:
 
 def _bench_window(vehicle, signals, horizons: list[int], repeats: int) -> None:
     """The window from Python against a bare OSQP solve of the same QPs (min/median/max)."""
-    from wheelload.studies.mhe_bench import window_against_bare_osqp
+    from wheelload.studies.bench.mhe import window_against_bare_osqp
 
     if repeats < 1:
         raise ValueError(f"--repeats must be >= 1, got {repeats}")
@@ -282,7 +282,7 @@ def _bench_window(vehicle, signals, horizons: list[int], repeats: int) -> None:
 
 def _bench_assembly(vehicle, signals, horizons: list[int], repeats: int) -> None:
     """The robust/bias window's QP assembly: sparse values against the dense matrix."""
-    from wheelload.studies.mhe_bench import assembly_against_dense
+    from wheelload.studies.bench.mhe import assembly_against_dense
 
     print(f"Robust/bias window QP assembly per sample, sparse values at the fixed pattern "
           f"against the dense matrix; {repeats} repeats of the medians: "
@@ -316,7 +316,7 @@ def _bench_c(
 
     Soft windows link the two-stage KF library in (its step is in the time).
     """
-    from wheelload.estimators.mhe_codegen import build_mhe_library
+    from wheelload.estimators.codegen.mhe import build_mhe_library
 
     with tempfile.TemporaryDirectory() as folder:
         library = build_mhe_library(vehicle, settings, Path(folder), dt=0.01,

@@ -9,8 +9,8 @@ import pandas as pd
 
 from wheelload.estimators import TwoStageKF
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.batch import expand_logs
-from wheelload.studies.sensor_sets import reference_split, sensor_set_table, split_sweep
+from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
+from wheelload.studies.pipeline.batch import expand_logs
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

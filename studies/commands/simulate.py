@@ -8,15 +8,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators.output_files import check_figure_suffix, check_outputs, table_format
+from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.vehicle import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
-from wheelload.studies.rig import RigSettings, rig_sweep, write_rig
-from wheelload.studies.roads import ISO_CLASSES
-from wheelload.studies.scenario_log import metadata_path, write_log
-from wheelload.studies.scenario_plot import plot_scenario
-from wheelload.studies.scenario_runner import run_scenario
-from wheelload.studies.scenarios import SCENARIOS, Options
+from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
+from wheelload.studies.drive.roads import ISO_CLASSES
+from wheelload.studies.drive.scenario_log import metadata_path, write_log
+from wheelload.studies.drive.scenario_runner import run_scenario
+from wheelload.studies.drive.scenarios import SCENARIOS, Options
+from wheelload.studies.plots.scenario import plot_scenario
 
 RIG_SWEEP = "rig-sweep"
 

@@ -31,7 +31,7 @@ from wheelload.estimators.identification.vehicle_writer import (
     prepend_comment,
     write_vehicle_text,
 )
-from wheelload.estimators.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
+from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
 
 

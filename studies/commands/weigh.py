@@ -13,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators.family.standstill import WeighSettings, sprung_geometry, weigh
-from wheelload.estimators.signals import read_log
+from wheelload.estimators.logs.signals import read_log
 from wheelload.models import load_vehicle, vehicle_mass_centre
 from wheelload.studies.vehicle_file_edit import check_target, write_vehicle_copy
 

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import tomllib
 
-from wheelload.studies.experiments.common import Section, simulate, trials, truth_spec
-from wheelload.studies.experiments.context import Context
-from wheelload.studies.experiments.paper_numbers import ABLATION
-from wheelload.studies.experiments.shape import compare_ranking
-from wheelload.studies.experiments.tables import markdown, pooled_table
-from wheelload.studies.experiments.units import TrialSpec
+from wheelload.studies.experiments.report.paper_numbers import ABLATION
+from wheelload.studies.experiments.report.shape import compare_ranking
+from wheelload.studies.experiments.report.tables import markdown, pooled_table
+from wheelload.studies.experiments.runs.common import Section, simulate, trials, truth_spec
+from wheelload.studies.experiments.runs.context import Context
+from wheelload.studies.experiments.runs.units import TrialSpec
 from wheelload.studies.experiments.vehicle_variants import Edit, Variant, scaled, value
 
 AXLES = ("suspension.front", "suspension.rear")

@@ -15,8 +15,8 @@ from wheelload.studies.experiments import (
     monte_carlo,
     vehicles,
 )
-from wheelload.studies.experiments.common import Section, simulate, truth_spec
-from wheelload.studies.experiments.context import Context
+from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
+from wheelload.studies.experiments.runs.context import Context
 
 STUDIES: dict[str, Callable[[Context], Section]] = {
     "iso-dlc": partial(headline.run, scenario="iso-dlc"),

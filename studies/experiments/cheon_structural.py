@@ -3,11 +3,11 @@ KF's soft equilibrium update (E+C), with the KF (A) beside, on the Nordschleife,
 
 from __future__ import annotations
 
-from wheelload.studies.experiments.common import Section, trials, truth_spec
-from wheelload.studies.experiments.context import Context
-from wheelload.studies.experiments.paper_numbers import CHEON
-from wheelload.studies.experiments.tables import markdown, pooled_table
-from wheelload.studies.experiments.units import TrialSpec
+from wheelload.studies.experiments.report.paper_numbers import CHEON
+from wheelload.studies.experiments.report.tables import markdown, pooled_table
+from wheelload.studies.experiments.runs.common import Section, trials, truth_spec
+from wheelload.studies.experiments.runs.context import Context
+from wheelload.studies.experiments.runs.units import TrialSpec
 
 METHODS = ("E", "E+C", "kf")
 

@@ -1,7 +1,7 @@
 """``wheelload study NAME --out DIR`` for the experiments (every name but ``mhe-vs-kf``).
 
 The output folder is locked before any work
-(:mod:`~wheelload.studies.experiments.folder_lock`), so a second study into it
+(:mod:`~wheelload.studies.experiments.runs.folder_lock`), so a second study into it
 refuses at once.
 """
 
@@ -14,11 +14,11 @@ from pathlib import Path
 from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.models import example_vehicle_path
 from wheelload.studies.commands.options import add_suspension_option
-from wheelload.studies.experiments.cache import ResultCache
 from wheelload.studies.experiments.catalog import NAMES, run_study
-from wheelload.studies.experiments.context import Context, Outputs, Settings
-from wheelload.studies.experiments.folder_lock import folder_lock
-from wheelload.studies.experiments.runner import Runner
+from wheelload.studies.experiments.runs.cache import ResultCache
+from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
+from wheelload.studies.experiments.runs.folder_lock import folder_lock
+from wheelload.studies.experiments.runs.runner import Runner
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

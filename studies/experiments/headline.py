@@ -11,9 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.studies import tracks
-from wheelload.studies.experiments import figures
-from wheelload.studies.experiments.common import (
+from wheelload.studies.drive import tracks
+from wheelload.studies.experiments.report import figures
+from wheelload.studies.experiments.report.paper_numbers import PAPER_TABLES
+from wheelload.studies.experiments.report.shape import compare_ranking
+from wheelload.studies.experiments.report.tables import beside_paper, markdown, wheel_table
+from wheelload.studies.experiments.runs.common import (
     Section,
     all_methods,
     errors_markdown,
@@ -23,11 +26,8 @@ from wheelload.studies.experiments.common import (
     truth_spec,
     window,
 )
-from wheelload.studies.experiments.context import Context
-from wheelload.studies.experiments.paper_numbers import PAPER_TABLES
-from wheelload.studies.experiments.shape import compare_ranking
-from wheelload.studies.experiments.tables import beside_paper, markdown, wheel_table
-from wheelload.studies.experiments.units import TrialResult, TrialSpec
+from wheelload.studies.experiments.runs.context import Context
+from wheelload.studies.experiments.runs.units import TrialResult, TrialSpec
 
 TITLES = {
     "iso-dlc": "ISO double lane change, trimmed 5.0-12.0 s (Table II, Figs. 5-6)",

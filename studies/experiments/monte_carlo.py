@@ -8,12 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from wheelload.studies.experiments.common import Section, kf_trials, truth_spec
-from wheelload.studies.experiments.context import QUICK_TRIALS, Context
-from wheelload.studies.experiments.paper_numbers import MONTE_CARLO
-from wheelload.studies.experiments.shape import compare_trend
-from wheelload.studies.experiments.tables import markdown
-from wheelload.studies.experiments.units import TrialSpec
+from wheelload.studies.experiments.report.paper_numbers import MONTE_CARLO
+from wheelload.studies.experiments.report.shape import compare_trend
+from wheelload.studies.experiments.report.tables import markdown
+from wheelload.studies.experiments.runs.common import Section, kf_trials, truth_spec
+from wheelload.studies.experiments.runs.context import QUICK_TRIALS, Context
+from wheelload.studies.experiments.runs.units import TrialSpec
 
 SCALES = (0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
 TRIALS = 30

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from wheelload.studies.experiments.common import Section, all_methods, trials, truth_spec
-from wheelload.studies.experiments.context import Context
-from wheelload.studies.experiments.tables import markdown
-from wheelload.studies.experiments.units import TrialSpec
+from wheelload.studies.experiments.report.tables import markdown
+from wheelload.studies.experiments.runs.common import Section, all_methods, trials, truth_spec
+from wheelload.studies.experiments.runs.context import Context
+from wheelload.studies.experiments.runs.units import TrialSpec
 
 SCENARIO = "hockenheim"
 

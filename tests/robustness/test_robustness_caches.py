@@ -22,7 +22,7 @@ import pandas as pd
 import pytest
 
 from wheelload.models import example_vehicle_path
-from wheelload.models.build_folder import checked_library
+from wheelload.models.files.build_folder import checked_library
 from wheelload.studies.commands.estimate import example_log_path
 
 COMMAND = [sys.executable, "-m", "wheelload.studies.cli"]

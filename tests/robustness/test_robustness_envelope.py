@@ -2,7 +2,7 @@
 
 The envelope is the equilibrium's vertical row, :math:`b_0 = \\sum F_z = m a_z`
 rotated into the road frame, plus lift (eq. 15), evaluated independently on the
-log's inputs (:func:`wheelload.studies.hostile.total_envelope`) over all
+log's inputs (:func:`wheelload.studies.experiments.faults.hostile.total_envelope`) over all
 samples, and the weight (the filter starts at the static loads). Tolerance: the
 guard's ``total_margin`` (0.25 m g, 3.9 kN for the sports car): the step
 refuses an update that takes the total further outside the range of the
@@ -13,7 +13,7 @@ az isolated leave the total to the moment rows; the released suspension rows of
 white-noise travels then carry it).
 
 The logs: white noise over every channel's whole plausible range
-(:func:`~wheelload.studies.hostile.white_noise_signals`), 300 samples at 100 Hz.
+(:func:`~wheelload.studies.experiments.faults.hostile.white_noise_signals`), 300 samples at 100 Hz.
 Hypothesis draws the seeds; the CI run is derandomised (fixed examples).
 ``wheelload bench hostile --envelope N`` runs N unseeded logs.
 """
@@ -24,9 +24,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators import TwoStageKF
-from wheelload.estimators.guard import GRAVITY
-from wheelload.studies.hostile import envelope_excess, white_noise_signals
-from wheelload.studies.synthetic import slalom, synthetic_log
+from wheelload.estimators.kf.guard import GRAVITY
+from wheelload.studies.drive.synthetic import slalom, synthetic_log
+from wheelload.studies.experiments.faults.hostile import envelope_excess, white_noise_signals
 
 FIXED = settings(
     max_examples=25,

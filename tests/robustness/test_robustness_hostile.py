@@ -14,14 +14,14 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.c_emitter import Precision
-from wheelload.estimators.codegen import STRICT_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.guard import GRAVITY
-from wheelload.estimators.signals import signals_from_frame
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.kf.guard import GRAVITY
+from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import example_vehicle_path
-from wheelload.studies import hostile
 from wheelload.studies.cli import main
-from wheelload.studies.scenario_runner import run_scenario
+from wheelload.studies.drive.scenario_runner import run_scenario
+from wheelload.studies.experiments.faults import hostile
 
 VEHICLE = str(example_vehicle_path())
 ROW = 676  # mid lane change: the car is turning back, rates and loads are changing
@@ -144,7 +144,7 @@ def test_generated_c_on_hostile_log_is_clean_finite_bounded_and_never_locked(
 
 def test_double_c_equals_python_on_hostile_log(hostile_runs):
     # The same symbolic step in the same operation order: 1e-9 relative as for clean logs
-    # (tests/test_guards_c.py), flag for flag.
+    # (tests/estimators/kf/test_guard_c.py), flag for flag.
     _, out = hostile_runs[Precision.DOUBLE]
     python = hostile_runs["python"]
     np.testing.assert_allclose(out[hostile.LOADS], python.loads, rtol=1e-9, atol=1e-6)

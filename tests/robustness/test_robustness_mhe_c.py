@@ -19,16 +19,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators.c_emitter import Precision
-from wheelload.estimators.mhe import Constraint, MheSettings, MovingHorizonEstimator
-from wheelload.estimators.mhe_codegen import (
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.mhe import (
     MAIN,
     embedded_settings,
     mhe_includes,
     mhe_sources,
     write_inputs,
 )
-from wheelload.estimators.signals import Signals, read_log
+from wheelload.estimators.logs.signals import Signals, read_log
+from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.models import GRAVITY, INPUTS, example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 
@@ -40,8 +40,9 @@ SPIKE = {"d": 0.2, "v": 20.0, "a": 100.0, "w": 50.0}  # m, m/s, m/s^2, rad/s (an
 HARD = MheSettings(horizon=10, constraint=Constraint.HARD, bounded=True)
 HARD_OPTIONS = ["--horizon", "10", "--constraint", "hard", "--bounded"]
 #: name -> (command-line options, the settings, C = Python tolerance on the clean log [N]):
-#: double, the tolerance of tests/test_mhe_codegen.py (0.1 N, a tenth of OSQP's 1e-6 kN
-#: tolerance x 1e3); float (OSQP in float32), the README's 0.07 N of the hard window, rounded up
+#: double, the tolerance of tests/estimators/codegen/test_mhe_codegen.py (0.1 N, a tenth of
+#: OSQP's 1e-6 kN tolerance x 1e3); float (OSQP in float32), the README's 0.07 N of the hard
+#: window, rounded up
 SETTINGS = {
     "soft": (["--horizon", "10"], MheSettings(horizon=10), 0.1),
     "hard-bounded": (HARD_OPTIONS, HARD, 0.1),

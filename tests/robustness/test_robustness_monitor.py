@@ -18,13 +18,13 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF, read_log
-from wheelload.estimators.c_emitter import Precision
-from wheelload.estimators.codegen import CodegenOptions, build_program, generate
-from wheelload.estimators.guard import GUARDS_OFF
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.kf.guard import GUARDS_OFF
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.vehicle import ModelTerms
 from wheelload.studies.cli import main
-from wheelload.studies.fault_injection import bundled_vehicles, pooled_rmse
+from wheelload.studies.experiments.faults.fault_injection import bundled_vehicles, pooled_rmse
 
 LOADS = [f"fz_{w}" for w in ("fl", "fr", "rl", "rr")]
 FAULT_BITS = StepFlag.TRAVEL_FAULT | StepFlag.IMU_FAULT
@@ -128,9 +128,10 @@ def test_compiled_c_monitor_equals_python_on_the_paper_model(biased_lap, tmp_pat
     """The generated C (double precision, gcc) on the biased paper-model lap: loads to
     1e-9 relative (the same operations in the same order) and every status bit equal,
     including the ay isolation from the changed monitor. The C example reads the
-    body-rate derivatives instead of deriving them (tests/test_codegen_rates.py), so the
-    Python filter it is compared with runs without them too: the monitor's complete
-    model then drops the body-inertia term in both."""
+    body-rate derivatives instead of deriving them
+    (tests/estimators/codegen/test_codegen_rates.py), so the Python filter it is compared
+    with runs without them too: the monitor's complete model then drops the body-inertia
+    term in both."""
     log, paper = biased_lap
     library = generate(paper, tmp_path, CodegenOptions(precision=Precision.DOUBLE))
     binary = build_program(library, library.example, tmp_path / "example")

@@ -6,8 +6,8 @@ import subprocess
 import pandas as pd
 import pytest
 
-from wheelload.estimators.codegen import build_program, generate
-from wheelload.estimators.output_files import OutputError, atomic_write
+from wheelload.estimators.codegen.kf import build_program, generate
+from wheelload.estimators.logs.output_files import OutputError, atomic_write
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 

@@ -15,15 +15,15 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from wheelload.estimators.log_checks import Outcome
-from wheelload.estimators.log_plausibility import check_plausibility
-from wheelload.estimators.signals import read_log
+from wheelload.estimators.logs.checks import Outcome
+from wheelload.estimators.logs.plausibility import check_plausibility
+from wheelload.estimators.logs.signals import read_log
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 from wheelload.studies.commands.estimate import example_log_path
-from wheelload.studies.log_corruptions import SHORT_SCENARIOS
-from wheelload.studies.scenario_log import write_log
-from wheelload.studies.scenario_runner import run_scenario
+from wheelload.studies.drive.scenario_log import write_log
+from wheelload.studies.drive.scenario_runner import run_scenario
+from wheelload.studies.experiments.faults.log_corruptions import SHORT_SCENARIOS
 
 WHEELS = ("fl", "fr", "rl", "rr")
 SUV = Path(example_vehicle_path()).with_name("suv.toml")

@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators.readers.chunks import read_chunks
-from wheelload.estimators.readers.erg import read_erg_channels, write_erg
-from wheelload.estimators.signals import read_log, travel_quantum
+from wheelload.estimators.logs.readers.chunks import read_chunks
+from wheelload.estimators.logs.readers.erg import read_erg_channels, write_erg
+from wheelload.estimators.logs.signals import read_log, travel_quantum
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.commands.estimate import example_log_path

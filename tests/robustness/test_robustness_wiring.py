@@ -1,6 +1,6 @@
 """Item 4: sign, unit and wiring checks at load, on plant logs corrupted as a user would.
 
-Each corruption of :data:`wheelload.studies.log_corruptions.CORRUPTIONS` is
+Each corruption of :data:`wheelload.studies.experiments.faults.log_corruptions.CORRUPTIONS` is
 run through ``wheelload estimate`` on a real file and must be refused with
 one line naming the channel and the mistake; the clean plant logs of every
 short bundled scenario must pass (no false alarm).
@@ -10,10 +10,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators.log_checks import EXPECTED_SIGNS, travel_response
+from wheelload.estimators.logs.checks import EXPECTED_SIGNS, travel_response
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
-from wheelload.studies.log_corruptions import CORRUPTIONS, FAULTS, SHORT_SCENARIOS, report_of
+from wheelload.studies.experiments.faults.log_corruptions import (
+    CORRUPTIONS,
+    FAULTS,
+    SHORT_SCENARIOS,
+    report_of,
+)
 
 #: Corruption -> what the one-line error must say, on a log with braking in a turn.
 EXPECTED = {
@@ -146,7 +151,7 @@ def test_short_log_decides_no_sign_on_chance_correlations():
     """A 4.3 s log (a short quick-study segment of the Nordschleife was refused for d_fl
     against az): 1 Hz low-passed channels give about 9 independent samples, so chance
     correlations reach 0.4; the decisive |r| grows as 2.5 / sqrt(n - 3) on short logs."""
-    from wheelload.estimators.log_checks import Outcome, check_wiring
+    from wheelload.estimators.logs.checks import Outcome, check_wiring
 
     rng = np.random.default_rng(0)
     t = np.arange(0.0, 4.3, 0.01)

@@ -1,0 +1,514 @@
+"""Generate the two-stage KF as a self-contained, allocation-free C99 library.
+
+The C step is emitted from the CasADi step Function the Python filter runs
+(:func:`wheelload.estimators.kf.two_stage.step_function`), so a change of the
+suspension or equilibrium model in ``wheelload.models`` changes the C with no
+other edit. The covariance is kept in symmetric storage (upper triangle, row
+by row); the step reads only that triangle of ``P``.
+
+Besides the single-filter ``wheelload_kf_step``, the library has
+``wheelload_kf_step_batch``: ``n`` independent filters side by side (struct
+of arrays), the same kernel statements with the single step's branches as
+selects, so that gcc vectorises the loop over filters when built with
+:data:`FAST_CFLAGS` (the generated Makefile's ``make fast`` explains each
+flag). Built with the same flags, both give the same numbers; with the
+strict flags they are bit-identical.
+
+Files written to the output folder, for prefix ``wheelload_kf``:
+``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
+``wheelload_kf_example.c`` (CSV log in, CSV estimates out),
+``wheelload_kf_selftest.c`` (long-run check and timing) and a ``Makefile``.
+
+Example
+-------
+>>> library = generate(example_vehicle_path(), "out/c", CodegenOptions(precision=Precision.FLOAT))
+>>> library.header.name
+'wheelload_kf.h'
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+import re
+import string
+import subprocess
+from dataclasses import dataclass
+from importlib import resources
+from importlib.metadata import version
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.kf.guard import FAULT_CHANNELS
+from wheelload.estimators.kf.two_stage import (
+    DEFAULT_SAMPLE_INTERVAL,
+    INPUT_DENSITIES,
+    STEP_INPUT_NAMES,
+    STEP_NAME,
+    STEP_OUTPUT_NAMES,
+    TUNING,
+    step_function,
+    tuning_vector,
+)
+from wheelload.estimators.logs.output_files import write_text
+from wheelload.estimators.result import StepFlag
+from wheelload.models import (
+    INPUTS,
+    OPTIONAL_INPUTS,
+    WHEELS,
+    ModelParameters,
+    Vehicle,
+    load_vehicle,
+)
+from wheelload.models.inputs import input_description
+
+#: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
+PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
+#: gcc flags the generated code compiles clean under, in both precisions.
+STRICT_CFLAGS = (
+    "-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion",
+    "-Werror",
+)  # fmt: skip
+#: The speed build (generated Makefile's FAST_CFLAGS, where each flag is explained):
+#: vectorises the batched step, FMA contraction and shared reciprocals stated, no -ffast-math.
+FAST_CFLAGS = (
+    "-std=c99", "-O3", "-march=native", "-ffp-contract=fast", "-freciprocal-math",
+    "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
+    "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
+)  # fmt: skip
+#: Calibration values that must be positive (the rest must be finite).
+#: The input-dependent noise densities may be 0 (constant measurement noise).
+POSITIVE = ("mass", *[n for n in TUNING if n not in INPUT_DENSITIES], "initial_std")
+
+
+class ParamMode(enum.Enum):
+    """Where the calibration lives in the generated code."""
+
+    BAKED = "baked"  # constants folded into the step
+    RUNTIME = "runtime"  # fields of the parameter struct
+
+
+@dataclass(frozen=True, kw_only=True)
+class CodegenOptions:
+    """Precision, parameter handling and C symbol prefix of the generated library."""
+
+    precision: Precision = Precision.DOUBLE
+    params: ParamMode = ParamMode.RUNTIME
+    prefix: str = "wheelload_kf"
+    sample_interval: float = DEFAULT_SAMPLE_INTERVAL  # s, the logger's nominal interval
+    branch_free: bool = True  # selects in branch-free forms (False: plain C99 selects)
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.sample_interval < 1e6:
+            raise ValueError(f"sample interval must be > 0 s, got {self.sample_interval}")
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.prefix):
+            raise ValueError(f"prefix '{self.prefix}' is not a C identifier")
+
+
+@dataclass(frozen=True)
+class GeneratedLibrary:
+    """Paths of the generated files and the kernel Function they were emitted from."""
+
+    header: Path
+    source: Path
+    example: Path
+    selftest: Path
+    makefile: Path
+    kernel: ca.Function
+
+    @property
+    def flops(self) -> int:
+        """Arithmetic operations of one step of the kernel."""
+        return flop_count(self.kernel)
+
+
+def calibration_names() -> tuple[str, ...]:
+    """Fields of the runtime parameter struct: model parameters, tuning, initial std."""
+    return (*ModelParameters.names(), *TUNING, "initial_std")
+
+
+def packed(P: ca.SX) -> ca.SX:
+    """The upper triangle of ``P`` in :data:`PACKED` order."""
+    return ca.vertcat(*[P[i, j] for i, j in PACKED])
+
+
+def unpacked(values: ca.SX) -> ca.SX:
+    """The symmetric 4 x 4 matrix of a :data:`PACKED` vector."""
+    where = {pair: k for k, pair in enumerate(PACKED)}
+    return ca.vertcat(
+        *[ca.horzcat(*[values[where[min(i, j), max(i, j)]] for j in range(4)]) for i in range(4)]
+    )
+
+
+def kernel_function(
+    step: ca.Function,
+    mode: ParamMode,
+    p: np.ndarray,
+    tuning: np.ndarray,
+) -> ca.Function:
+    """The step on symmetric storage, without the outputs the C library does not use.
+
+    ``kernel(x, P[10], m, u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10],
+    m_next, std, residual, used, status, fault_statistic, fault)``; with
+    :attr:`ParamMode.BAKED` the numeric ``p`` and ``tuning`` are substituted
+    so that CasADi folds the constants.
+    """
+    x = ca.SX.sym("x", 4)
+    P = ca.SX.sym("P", len(PACKED))
+    m = ca.SX.sym("m", step.nnz_in(STEP_INPUT_NAMES.index("m")))
+    u = ca.SX.sym("u", step.nnz_in(STEP_INPUT_NAMES.index("u")))
+    valid = ca.SX.sym("u_valid", step.nnz_in(STEP_INPUT_NAMES.index("u_valid")))
+    dt = ca.SX.sym("dt")
+    inputs = [x, P, m, u, valid, dt]
+    if mode is ParamMode.RUNTIME:
+        p_in, tuning_in = ca.SX.sym("p", p.size), ca.SX.sym("tuning", tuning.size)
+        inputs += [p_in, tuning_in]
+    else:
+        p_in, tuning_in = ca.DM(p), ca.DM(tuning)
+    named = dict(zip(STEP_OUTPUT_NAMES, step(x, unpacked(P), m, u, valid, dt, p_in, tuning_in)))
+    named["P_next"] = packed(named["P_next"])
+    return ca.Function(
+        f"{step.name()}_kernel",
+        inputs,
+        ca.cse([named[name] for name in KERNEL_OUTPUTS]),
+        ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
+        list(KERNEL_OUTPUTS),
+    )
+
+
+#: Inputs of the C kernel, in order (``p`` and ``tuning`` with runtime parameters).
+KERNEL_INPUTS = ("x", "P", "m", "u", "u_valid", "dt", "p", "tuning")
+#: Kernel inputs that hold exactly 0 or 1 (the step sets ``u_valid`` to ONE or ZERO).
+BOOLEAN_INPUTS = (KERNEL_INPUTS.index("u_valid"),)
+#: Outputs of the C kernel, in order.
+KERNEL_OUTPUTS = (
+    "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
+)  # fmt: skip
+
+
+def representable(values: np.ndarray, precision: Precision) -> np.ndarray:
+    """``values`` saturated to the largest finite number of ``precision``.
+
+    A calibration value beyond the float range (e.g. a process noise density
+    of 1e300) becomes ``FLT_MAX``; the step's covariance ceiling then acts
+    as it would on the double value.
+    """
+    largest = np.finfo(np.float32 if precision is Precision.FLOAT else np.float64).max
+    return np.clip(np.asarray(values, float), -float(largest), float(largest))
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _template(name: str) -> string.Template:
+    text = (resources.files("wheelload.estimators.codegen") / "templates" / name).read_text("utf-8")
+    return string.Template(text)
+
+
+def _substitutions(
+    vehicle_path: Path,
+    vehicle: Vehicle,
+    options: CodegenOptions,
+    step: ca.Function,
+    kernel: ca.Function,
+) -> dict[str, str]:
+    parameters = ModelParameters.from_vehicle(vehicle)
+    p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
+    values = dict(
+        zip(
+            calibration_names(),
+            representable(np.array([*p, *tuning, vehicle.filter.initial_std]), options.precision),
+        )
+    )
+    precision, prefix = options.precision, options.prefix
+    real = precision.value
+    runtime = options.params is ParamMode.RUNTIME
+    fields = calibration_names() if runtime else ("initial_std",)
+
+    def param(name: str) -> str:
+        return f"params->{name}" if runtime else literal(values[name], precision)
+
+    inputs = ["x[{}]", "P[{}]", "m[{}]", "u[{}]", "u_valid[{}]", "dt"]
+    if runtime:
+        inputs += [
+            [f"params->{n}" for n in ModelParameters.names()],
+            [f"params->{n}" for n in TUNING],
+        ]
+    body = emit_statements(
+        kernel,
+        inputs,
+        [f"{name}[{{}}]" for name in KERNEL_OUTPUTS],
+        precision,
+        f"{prefix}_real",
+        boolean_inputs=BOOLEAN_INPUTS,
+        branch_free=options.branch_free,
+    )
+    checks = [
+        f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
+        for k, name in enumerate(fields)
+    ]
+    flags = [f"#define {prefix.upper()}_FLAG_{flag.name} {flag.value}u" for flag in StepFlag]
+    return {
+        "prefix": prefix,
+        "PREFIX": prefix.upper(),
+        "real": real,
+        "real_c": "x##f" if precision is Precision.FLOAT else "x",
+        "sqrt": "sqrtf" if precision is Precision.FLOAT else "sqrt",
+        "fabs": "fabsf" if precision is Precision.FLOAT else "fabs",
+        "real_max": "FLT_MAX" if precision is Precision.FLOAT else "DBL_MAX",
+        "digits": "%.9g" if precision is Precision.FLOAT else "%.17g",
+        "precision": real,
+        "params_mode": options.params.value,
+        "single_precision": str(int(precision is Precision.FLOAT)),
+        "runtime_params": str(int(runtime)),
+        "wheelload_version": version("wheelload"),
+        "casadi_version": ca.__version__,
+        "vehicle_name": vehicle_path.name,
+        "vehicle_sha256": _sha256(vehicle_path.read_bytes()),
+        "model_sha256": _sha256(step.serialize().encode()),
+        "step_name": step.name(),
+        "flops": str(flop_count(kernel)),
+        "kernel_flops": str(flop_count(kernel)),
+        "n_params": str(len(fields)),
+        "params_note": (
+            "Every calibration value; change them without regenerating."
+            if runtime
+            else "Vehicle and tuning are baked into the step; only the initial "
+            "standard deviation of reset is here."
+        ),
+        "param_fields": "\n".join(f"    {prefix}_real {name};" for name in fields),
+        "param_defaults": "\n".join(
+            f"    {literal(values[name], precision)}, /* {name} */" for name in fields
+        ),
+        "param_names": "\n".join(f'    "{name}",' for name in fields),
+        "param_cases": "\n".join(
+            f"    case {k}:\n        return &params->{name};" for k, name in enumerate(fields)
+        ),
+        "param_checks": "\n".join(checks),
+        "flag_defines": "\n".join(flags),
+        "n_inputs": str(len(INPUTS)),
+        "n_used": str(len(StepFlag.update_flags())),
+        "input_fields": "\n".join(
+            f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
+        ),
+        "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
+        "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
+        "input_cases": "\n".join(
+            f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)
+        ),
+        "input_copy": "\n".join(f"    u[{k}] = input->{name};" for k, name in enumerate(INPUTS)),
+        "update_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags()),
+        "guard_flags": ", ".join(f"{flag.value}u" for flag in StepFlag.guard_flags()),
+        "n_monitor": str(kernel.nnz_in(2)),
+        "n_status": str(kernel.nnz_out(KERNEL_OUTPUTS.index("status"))),
+        "n_faults": str(len(FAULT_CHANNELS)),
+        "fault_channels": ", ".join(FAULT_CHANNELS),
+        "kernel_params_doc": ", p, tuning" if runtime else " (vehicle and tuning baked in)",
+        "kernel_params_arg": f", const {prefix}_params *params" if runtime else "",
+        "kernel_params_call": ", params" if runtime else "",
+        "unused_params": "" if runtime else "    (void)params;",
+        "static_loads": "\n".join(
+            f"    state->x[{k}] = {param(f'static_{wheel}')};" for k, wheel in enumerate(WHEELS)
+        ),
+        "kernel_body": _indent(body),
+        "strict_cflags": " ".join(STRICT_CFLAGS),
+        "fast_cflags": " ".join(FAST_CFLAGS),
+        "batch_params": "\n".join(
+            f"    const {prefix}_real param_{name} = params->{name};"
+            for name in (*ModelParameters.names(), *TUNING)
+            if runtime
+        ),
+        "batch_rows": _batch_rows(kernel, prefix),
+        "batch_body": _indent(_batch_body(kernel, runtime, precision, prefix), 2),
+    }
+
+
+def _check(name: str) -> str:
+    """C condition of a valid calibration value (finite; positive where it must be)."""
+    value = f"params->{name}"
+    return f"isfinite({value}) && {value} > ZERO" if name in POSITIVE else f"isfinite({value})"
+
+
+def _indent(text: str, levels: int = 1) -> str:
+    return "\n".join(f"{'    ' * levels}{line}" for line in text.splitlines())
+
+
+def _batch_rows(kernel: ca.Function, prefix: str) -> str:
+    """Declarations of one ``restrict`` pointer per row of the batch's arrays.
+
+    Row ``k`` of an array of ``n`` filters starts at ``k * n``; a pointer per
+    row lets the compiler see that the rows do not overlap (it cannot prove
+    it for offsets ``k * n`` with ``n`` unknown), so it vectorises the loop.
+    """
+    rows = {
+        "x": ("x", 4, False),
+        "P": ("P", 10, False),
+        "monitor": ("monitor", kernel.nnz_in(KERNEL_INPUTS.index("m")), False),
+        "u": ("u", kernel.nnz_in(KERNEL_INPUTS.index("u")), True),
+        "std_out": ("std_out", 4, False),
+        "residual_out": ("residual_out", 3, False),
+        "statistic_out": ("statistic_out", len(FAULT_CHANNELS), False),
+    }
+    lines = []
+    for name, (array, size, const) in rows.items():
+        qualifier = "const " if const else ""
+        for k in range(size):
+            lines.append(f"    {qualifier}{prefix}_real *restrict {name}_{k} = {array} + {k} * n;")
+    return "\n".join(lines)
+
+
+def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix: str) -> str:
+    """Loop body of the batched step: filter ``b`` of ``n``, struct-of-arrays storage.
+
+    The same kernel statements as the single step, on scalars; the single
+    step's branches (input validity, acceptance of the result, flags) become
+    selects so that gcc can vectorise the loop over ``b``.
+    """
+    real = f"{prefix}_real"
+    zero, half = literal(0.0, precision), literal(0.5, precision)
+    n_u = kernel.nnz_in(KERNEL_INPUTS.index("u"))
+    lines = [f"const {real} dt_b = dt_in[b];"]
+    lines += [f"const {real} P_old{k} = P_{k}[b];" for k in (0, 4, 7, 9)]
+    for k in range(n_u):
+        lines.append(f"const {real} raw{k} = u_{k}[b];")
+        lines.append(f"const {real} valid{k} = FINITE(raw{k}) ? ONE : ZERO;")
+        lines.append(f"const {real} value{k} = FINITE(raw{k}) ? raw{k} : ZERO;")
+    sizes = {name: kernel.nnz_out(i) for i, name in enumerate(KERNEL_OUTPUTS)}
+    update_flags = StepFlag.update_flags()[: sizes["used"]]
+    guard_flags = StepFlag.guard_flags()[: sizes["status"]]
+    for name, size in sizes.items():
+        lines.append(f"{real} {', '.join(f'{name}{k}' for k in range(size))};")
+    inputs = [
+        "x_{}[b]",
+        "P_{}[b]",
+        "monitor_{}[b]",
+        [f"value{k}" for k in range(n_u)],
+        [f"valid{k}" for k in range(n_u)],
+        "dt_b",
+    ]
+    if runtime:  # copied into locals before the loop (batch_params): no aliasing with stores
+        inputs += [
+            [f"param_{n}" for n in ModelParameters.names()],
+            [f"param_{n}" for n in TUNING],
+        ]
+    lines.append("{")
+    body = emit_statements(
+        kernel,
+        inputs,
+        [f"{name}{{}}" for name in sizes],
+        precision,
+        real,
+        boolean_inputs=BOOLEAN_INPUTS,
+    )
+    lines += [f"    {line}" for line in body.splitlines()]
+    lines.append("}")
+    finite = [
+        f"FINITE({name}{k})"
+        for name in ("x_next", "P_next", "std", "residual", "m_next", "fault_statistic")
+        for k in range(sizes[name])
+    ]
+    positive = [f"P_next{k} > {zero}" for k in (0, 4, 7, 9)]
+    # Acceptance as a real 0/1 chained through selects (vectorises as blends).
+    lines.append(f"{real} accepted = (dt_b > ZERO) ? ONE : ZERO;")
+    lines.append("accepted = FINITE(dt_b) ? accepted : ZERO;")
+    lines += [f"accepted = ({c}) ? accepted : ZERO;" for c in finite + positive]
+    for name, state in (("x_next", "x"), ("P_next", "P"), ("m_next", "monitor")):
+        for k in range(sizes[name]):
+            lines.append(f"{state}_{k}[b] = accepted > HALF ? {name}{k} : {state}_{k}[b];")
+    for k, diagonal in enumerate((0, 4, 7, 9)):
+        lines.append(f"std_out_{k}[b] = accepted > HALF ? std{k} : SQRT(P_old{diagonal});")
+    for name, target in (("residual", "residual_out"), ("fault_statistic", "statistic_out")):
+        for k in range(sizes[name]):
+            lines.append(f"{target}_{k}[b] = accepted > HALF ? {name}{k} : {zero};")
+    # Flags summed as exact small integers in the real type, low and high 16
+    # bits apart (each sum below 2^16, exact in float), then converted: no
+    # integer or boolean logic in the loop.
+    flags = [
+        *[(f"used{k} < {half}", flag.value) for k, flag in enumerate(update_flags)],
+        *[(f"status{k} > {half}", flag.value) for k, flag in enumerate(guard_flags)],
+    ]
+    rejected = sum(flag.value for flag in update_flags) | StepFlag.STEP_REJECTED.value
+    for half_name, shift in (("low", 0), ("high", 16)):
+        terms = [
+            f"({condition} ? {literal((value >> shift) & 0xFFFF, precision)} : {zero})"
+            for condition, value in flags
+            if (value >> shift) & 0xFFFF
+        ] or [zero]
+        lines.append(
+            f"const {real} flags_{half_name} = accepted > HALF ? ("
+            + "\n    + ".join(terms)
+            + f") : {literal((rejected >> shift) & 0xFFFF, precision)};"
+        )
+    lines.append(
+        "flags_out[b] = (uint32_t)(int32_t)flags_low | ((uint32_t)(int32_t)flags_high << 16);"
+    )
+    fault_bits = [
+        f"(fault{k} > {half} ? {literal(1 << k, precision)} : {zero})"
+        for k in range(sizes["fault"])
+    ]
+    lines.append(
+        f"const {real} fault_sum = accepted > HALF ? (" + " + ".join(fault_bits) + f") : {zero};"
+    )
+    lines.append("faults_out[b] = (uint32_t)(int32_t)fault_sum;")
+    return "\n".join(lines)
+
+
+def generate(
+    vehicle_path: str | Path,
+    out_dir: str | Path,
+    options: CodegenOptions | None = None,
+    step: ca.Function | None = None,
+    *,
+    allow_unusual: bool = False,
+) -> GeneratedLibrary:
+    """Write the C library for a vehicle file; ``step`` defaults to :func:`step_function`.
+
+    ``step`` may be built with alternative model Functions
+    (``step_function(suspension=..., equilibrium=...)``); the emitted C
+    follows it. ``allow_unusual``: accept a vehicle outside the physical ranges.
+    """
+    options = options or CodegenOptions()
+    vehicle_path = Path(vehicle_path)
+    out_dir = Path(out_dir)
+    step = step or step_function(name=STEP_NAME)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=allow_unusual)
+    kernel = kernel_function(
+        step,
+        options.params,
+        representable(ModelParameters.from_vehicle(vehicle).vector(), options.precision),
+        representable(tuning_vector(vehicle, options.sample_interval), options.precision),
+    )
+    values = _substitutions(vehicle_path, vehicle, options, step, kernel)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    prefix = options.prefix
+    targets = {
+        "library.h": out_dir / f"{prefix}.h",
+        "library.c": out_dir / f"{prefix}.c",
+        "example.c": out_dir / f"{prefix}_example.c",
+        "selftest.c": out_dir / f"{prefix}_selftest.c",
+        "Makefile": out_dir / "Makefile",
+    }
+    for template, target in targets.items():
+        write_text(target, _template(template).substitute(values), replace=True)
+    return GeneratedLibrary(*targets.values(), kernel=kernel)
+
+
+def build_program(
+    library: GeneratedLibrary,
+    main_source: Path,
+    binary: str | Path,
+    *,
+    compiler: str = "gcc",
+    flags: tuple[str, ...] = STRICT_CFLAGS,
+) -> Path:
+    """Compile ``main_source`` (e.g. ``library.example``) with the library; errors show gcc."""
+    binary = Path(binary)
+    command = [compiler, *flags, "-o", str(binary), str(main_source), str(library.source), "-lm"]
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"{main_source}: {' '.join(command)} failed:\n{result.stderr}")
+    return binary

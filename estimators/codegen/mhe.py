@@ -1,0 +1,601 @@
+r"""Embedded MHE: OSQP's generated solver, the per-sample Functions and the window, in C.
+
+The emitted folder holds
+
+- ``osqp/``: OSQP's embedded code (``parameters="matrices"``) for the
+  window's QP, set up by :class:`~wheelload.estimators.mhe.estimator.MovingHorizonEstimator`
+  itself (its own workspace: the quadratic window's, or the extended window's of
+  :mod:`wheelload.estimators.mhe.window` with its fixed Hessian pattern);
+- ``wheelload_mhe_terms.c/.h``: the estimator's own per-sample CasADi
+  Functions (:func:`~wheelload.estimators.mhe.terms.terms_function`, and for
+  robust losses or bias states
+  :func:`~wheelload.estimators.mhe.terms.residual_function`) as straight-line C
+  from the KF's emitter (:func:`~wheelload.estimators.codegen.c_emitter.emit_statements`);
+  their row weights come from the filter's noise Function
+  (:mod:`wheelload.models.measurement_noise`, the vehicle file's input-dependent
+  densities included, through the ``TUNING`` table), as in Python;
+- ``wheelload_mhe.c/.h``: the window driver (``templates/mhe_shared.c``, then
+  ``templates/mhe_plain.c`` for quadratic losses, ``templates/mhe_window.c`` with
+  auxiliary variables for
+  the Huber/L1 losses and the bias states with their information
+  recursion), the lagged output, and the fallback filter;
+- ``wheelload_mhe_kf.c/.h`` (given the vehicle file): the fallback filter
+  of the Python MHE as a ``wheelload codegen`` library linked in (soft
+  constraint: the two-stage KF; hard: the projection KF with :math:`W =
+  P^{-1}`, from :func:`~wheelload.estimators.kf.projection.projection_step_function`):
+  the estimate of a sample whose QP is not solved (flagged ``fallback``), the
+  Kalman arrival cost (:attr:`Arrival.KALMAN`) and the reported standard
+  deviations.
+
+``wheelload_mhe_step(u, dt, &out)`` gives the loads of sample k - lag, the
+KF's standard deviations, the equilibrium residual :math:`b - A x` of that
+sample, the bias states (travel offsets [m], ax/ay [m/s²]), OSQP's status,
+iterations, a fallback flag and the ``StepFlag`` bits. Input guarding: a
+non-finite input is treated as missing, as in the KF: the rows that depend
+on it are dropped and flagged. Every file is written through
+:func:`~wheelload.estimators.logs.output_files.atomic_write`.
+
+Limits, against the Python MHE:
+
+- the cost scale (and the steady-state arrival weight) at the nominal
+  interval given at generation; each sample's own interval sets its weights
+  and random-walk link; a non-positive or non-finite interval holds the
+  estimate (flags 255), as in Python;
+- generated without the vehicle file (no filter linked): the arrival cost is
+  the steady-state one, a sample whose QP is not solved keeps the previous
+  estimate, a missing equilibrium input takes :math:`A x` of the previous MHE
+  estimate (Python: of its filter's), and no standard deviations are reported
+  (zeros);
+- the extended window's Hessian is assembled densely per sample
+  ((N w + n_b)² doubles; N = 10 with Huber and L1 on all rows and five bias
+  states: 185² = 274 kB).
+
+Precision: ``Precision.FLOAT`` generates OSQP with ``use_float``
+(``OSQPFloat``; the program reports ``sizeof(OSQPFloat)``) and the linked KF
+in float; the per-sample Functions and the window's assembly stay in
+double. OSQP's float path cannot meet the default 1e-6 tolerance on the
+extended window (at the iteration limit its solves end "solved
+inaccurate", e.g. 447 of 1353 samples with an L1 equilibrium loss), so the
+float build of that window runs at :data:`FLOAT_WINDOW_EPS` = 1e-5
+(:func:`embedded_settings` says what a build realises); measured figures
+are in ``tests/estimators/codegen/test_mhe_codegen_settings.py`` and
+``tests/estimators/codegen/test_cross_compiled.py``. :func:`build_mhe_program` builds a
+stand-alone program (any compiler, e.g. ``arm-linux-gnueabihf-gcc -static``).
+
+Example
+-------
+>>> library = build_mhe_library(vehicle, MheSettings(horizon=20), Path("build"), dt=0.01,
+...                             vehicle_path=Path("car.toml"))
+>>> result = library.run(signals)
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
+from wheelload.estimators.codegen.kf import CodegenOptions, generate
+from wheelload.estimators.kf.projection import Weighting, projection_step_function
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
+from wheelload.estimators.logs.output_files import atomic_write, check_output_folder, write_text
+from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.mhe.estimator import (
+    Arrival,
+    Constraint,
+    MheSettings,
+    MovingHorizonEstimator,
+    _csc_value_order,
+)
+from wheelload.estimators.mhe.quiet import quiet_stdout
+from wheelload.estimators.mhe.terms import LOAD_SCALE, TERMS_NAME, terms_function
+from wheelload.estimators.mhe.window import L1_CORE, TRAVEL_UNIT, Loss
+from wheelload.estimators.result import StepFlag
+from wheelload.models import INPUTS, Vehicle, load_vehicle
+
+
+def _array(name: str, values, kind: str = "double") -> str:
+    flat = np.asarray(values, dtype=float if kind == "double" else int).ravel()
+    if kind != "double":
+        body = ", ".join(str(int(v)) for v in flat)
+    else:
+        body = ", ".join(repr(float(v)) if np.isfinite(v) else ("1e30" if v > 0 else "-1e30")
+                         for v in flat)  # fmt: skip
+    return f"static const {kind} {name}[{max(flat.size, 1)}] = {{{body or '0'}}};\n"
+
+
+#: OSQP tolerance of the extended window in single precision: float32 cannot meet 1e-6 on
+#: its residuals (solves end "solved inaccurate" at the iteration limit; measured on the plant
+#: log with an L1 equilibrium loss: 447 of 1353 samples).
+FLOAT_WINDOW_EPS = 1e-5
+
+
+def embedded_settings(
+    settings: MheSettings,
+    *,
+    filter_linked: bool = False,
+    precision: Precision = Precision.DOUBLE,
+) -> MheSettings:
+    """The settings the embedded MHE realises (the Python MHE with these gives its numbers).
+
+    With the fallback filter linked in (a vehicle file), the arrival cost as
+    given; otherwise the steady-state one. In single precision the
+    extended window's OSQP tolerances are at least :data:`FLOAT_WINDOW_EPS`.
+    """
+    if not filter_linked:
+        settings = dataclasses.replace(settings, arrival=Arrival.STEADY_STATE)
+    if precision is Precision.FLOAT and settings.extended:
+        solver = settings.solver
+        solver = dataclasses.replace(solver, eps_abs=max(solver.eps_abs, FLOAT_WINDOW_EPS),
+                                     eps_rel=max(solver.eps_rel, FLOAT_WINDOW_EPS))  # fmt: skip
+        settings = dataclasses.replace(settings, solver=solver)
+    return settings
+
+
+def generate_mhe(
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    precision: Precision = Precision.DOUBLE,
+    *,
+    vehicle_path: Path | None = None,
+    force: bool = False,
+) -> Path:
+    """Write the embedded MHE's C sources to ``folder`` (see module docstring).
+
+    With ``vehicle_path`` (the file ``vehicle`` was read from), the Python
+    MHE's fallback filter generated from that file is linked in
+    (``wheelload_mhe_kf.c``; soft: the two-stage KF, hard: the projection KF):
+    the fallback, the Kalman arrival cost and the standard deviations.
+    Without it the fallback holds the last estimate and the arrival cost is
+    the steady-state one (:func:`embedded_settings`).
+
+    ``precision`` is OSQP's floating type (``OSQPFloat``: the solver, its
+    matrices and the QP vectors); the terms routine and the window stay in
+    double. ``folder`` must be new or empty unless ``force``; the files are
+    generated in a temporary folder inside it and each is renamed into place
+    once complete (:func:`~wheelload.estimators.logs.output_files.atomic_write`), so
+    an interrupted run leaves the old file or the new one, never a mix.
+    """
+    folder = Path(folder)
+    check_output_folder(folder, [], force=force)
+    folder.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=".wheelload_mhe-", dir=folder))
+    try:
+        _generate_into(vehicle, settings, staging, dt, precision, vehicle_path)
+        for source in sorted(p for p in staging.rglob("*") if p.is_file()):
+            target = folder / source.relative_to(staging)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_write(target, replace=force) as temporary:
+                shutil.copyfile(source, temporary)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return folder
+
+
+def _generate_into(
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    precision: Precision,
+    vehicle_path: Path | None,
+) -> None:
+    """Write every generated file into the (temporary) ``folder``."""
+    linked = vehicle_path is not None
+    settings = embedded_settings(settings, filter_linked=linked, precision=precision)
+    if linked:
+        hard = settings.constraint is Constraint.HARD
+        _write_filter(vehicle, Path(vehicle_path), folder, precision, hard)
+    mhe = MovingHorizonEstimator(vehicle, settings)
+    state = mhe.initial_state(dt)
+    P0 = mhe.filter.initial_state().P
+    if not np.allclose(P0, P0[0, 0] * np.eye(4), rtol=0, atol=0):
+        raise ValueError("the embedded MHE needs an isotropic initial covariance")
+    solver = mhe.window_qp.solver if settings.extended else mhe.workspace.solver
+    with quiet_stdout():  # OSQP reports the files it writes
+        solver.codegen(str(folder / "osqp"), prefix="wheelload_mhe_", parameters="matrices",
+                       force_rewrite=True, use_float=precision is Precision.FLOAT)  # fmt: skip
+    low, high = mhe.load_bounds  # C has no infinite literal: OSQP takes 1e30 as infinite
+    terms = terms_function(settings.constraint, null=mhe.null, pinv=mhe.pinv,
+                           lower_load=max(low, -1e33), upper_load=min(high, 1e33))  # fmt: skip
+    functions = [terms] + ([mhe.residuals] if settings.extended else [])
+    _write_functions(functions, folder)
+    n_bias = mhe.bias_report(np.zeros(mhe.beta_std.size)).size if settings.extended else 0
+    (folder / "wheelload_mhe.h").write_text(HEADER.replace("@N_BIAS@", str(max(n_bias, 0)))
+                                            .replace("@N_INPUTS@", str(len(INPUTS)))
+                                            .replace("@LAG@", str(settings.lag)))  # fmt: skip
+    common = _common_defines(mhe, settings, state, dt, float(P0[0, 0]))
+    kalman = settings.arrival is Arrival.KALMAN
+    common = common.replace("#define KALMAN_ARRIVAL 0", f"#define KALMAN_ARRIVAL {int(kalman)}")
+    if settings.extended:
+        specific, template = _window_defines(mhe, settings), "mhe_window.c"
+    else:
+        specific, template = _plain_defines(mhe, settings), "mhe_plain.c"
+    driver = (TEMPLATES / template).read_text()
+    fallback = (TEMPLATES / ("mhe_kf.c" if linked else "mhe_hold.c")).read_text()
+    tail = (TEMPLATES / "mhe_tail.c").read_text()
+    shared = (TEMPLATES / "mhe_shared.c").read_text()
+    source = PRELUDE + common + specific + shared + driver + fallback + tail
+    (folder / "wheelload_mhe.c").write_text(source)
+
+
+TEMPLATES = Path(__file__).with_name("templates")
+FILTER_PREFIX = "wheelload_mhe_kf"
+
+
+def _write_filter(
+    vehicle: Vehicle, vehicle_path: Path, folder: Path, precision: Precision, hard: bool
+) -> None:
+    """The MHE's fallback filter for ``vehicle_path`` as ``wheelload_mhe_kf.c/.h`` in ``folder``.
+
+    Soft constraint: the two-stage KF library; hard: the same library around the
+    projection KF's step (:math:`W = P^{-1}`), as the Python MHE's ``filter``.
+    """
+    if load_vehicle(vehicle_path, allow_unusual=True) != vehicle:
+        raise ValueError(
+            f"{vehicle_path}: is not the vehicle the MHE is generated for: give the file it "
+            "was read from"
+        )
+    with tempfile.TemporaryDirectory(dir=folder) as scratch:
+        options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX)
+        step = projection_step_function(Weighting.MAXIMUM_PROBABILITY) if hard else None
+        library = generate(vehicle_path, Path(scratch), options, step, allow_unusual=True)
+        for path in (library.header, library.source):
+            shutil.copyfile(path, folder / path.name)
+
+
+def _write_functions(functions: list[ca.Function], folder: Path) -> None:
+    """``wheelload_mhe_terms.c/.h``: each SX Function as one straight-line C function.
+
+    ``void NAME(const double *in0, ..., double *out0, ...)``, one pointer per
+    input and output of the Function (dense, column-major), emitted by
+    :func:`~wheelload.estimators.codegen.c_emitter.emit_statements` (as the KF's C).
+    """
+    header = ["/* generated by wheelload: the MHE's per-sample Functions (double). */",
+              "#ifndef WHEELLOAD_MHE_TERMS_H", "#define WHEELLOAD_MHE_TERMS_H"]  # fmt: skip
+    source = ["/* generated by wheelload from the CasADi Functions of wheelload.estimators."
+              "mhe_terms */", "#include <math.h>", f'#include "{TERMS_NAME}.h"']  # fmt: skip
+    for f in functions:
+        ins = [f"const double *{f.name_in(i)}" for i in range(f.n_in())]
+        outs = [f"double *{f.name_out(i)}" for i in range(f.n_out())]
+        signature = f"void {f.name()}({', '.join(ins + outs)})"
+        header += [f"/* {f} */", signature + ";"]
+        body = emit_statements(
+            f, [f"{f.name_in(i)}[{{}}]" for i in range(f.n_in())],
+            [f"{f.name_out(i)}[{{}}]" for i in range(f.n_out())], Precision.DOUBLE, "double",
+        )  # fmt: skip
+        unused = [
+            f"(void){f.name_in(i)};" for i in range(f.n_in()) if f"{f.name_in(i)}[" not in body
+        ]
+        lines = unused + body.splitlines()
+        source += ["", signature + " {", *("    " + line for line in lines), "}"]
+    header.append("#endif")
+    (folder / f"{TERMS_NAME}.h").write_text("\n".join(header) + "\n")
+    (folder / f"{TERMS_NAME}.c").write_text("\n".join(source) + "\n")
+
+
+def _common_defines(mhe, settings: MheSettings, state, dt: float, p0: float) -> str:
+    """Sizes, scales and tables both drivers use."""
+    low, high = mhe.load_bounds
+    x0 = np.array(mhe.filter.parameters.static(), dtype=float)
+    return "".join([
+        f"#define N {settings.horizon}\n#define W {mhe.width}\n#define HARD {int(mhe.hard)}\n",
+        f"#define LAG {settings.lag}\n#define NP {mhe.p.size}\n#define KALMAN_ARRIVAL 0\n",
+        f"#define LOAD_SCALE {LOAD_SCALE!r}\n#define DT {float(dt)!r}\n",
+        f"#define Q_DENSITY {float(mhe.tuning[0])!r}\n#define P0_VAR {p0!r}\n",
+        f"#define MAX_INTERVAL {float(MAX_INTERVAL)!r}\n",
+        f"#define COST {float(state.cost)!r}\n#define RHO0 {float(settings.solver.rho)!r}\n",
+        f"#define EPS_ABS {float(settings.solver.eps_abs)!r}\n",
+        f"#define EPS_REL {float(settings.solver.eps_rel)!r}\n",
+        f"#define LOW_LOAD {float(max(low, -1e30))!r}\n",
+        f"#define HIGH_LOAD {float(min(high, 1e30))!r}\n",
+        f"#define LOAD_LIMIT {float(mhe.load_limit)!r}\n",
+        f"#define N_INPUTS {len(INPUTS)}\n#define N_USED {len(StepFlag.update_flags())}\n",
+        "static const unsigned UPDATE_FLAGS[N_USED] = {"
+        + ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags())
+        + "};\n",
+        _array("ARRIVAL_STEADY", state.steady),
+        _array("P_VECTOR", mhe.p),
+        _array("TUNING", mhe.tuning),
+        _array("NULL_VECTOR", mhe.null) if mhe.hard else "",
+        _array("A_MATRIX", mhe.A),
+        _array("X0", x0),
+    ])  # fmt: skip
+
+
+def _plain_defines(mhe, settings: MheSettings) -> str:
+    """The quadratic window's layout: block-tridiagonal Hessian in OSQP's CSC order."""
+    N, width = settings.horizon, mhe.width
+    rows = N * width if settings.bounded else 0
+    order = _csc_value_order(N, width)
+    return "".join([
+        f"#define NX (N * W)\n#define NY {max(rows, 1)}\n#define HAS_Y {int(rows > 0)}\n",
+        f"#define NNZ {order.size}\n",
+        _array("ORDER", order, "int"),
+    ])  # fmt: skip
+
+
+def _window_defines(mhe, settings: MheSettings) -> str:
+    """The extended window's layout, losses and bias states (:mod:`mhe_window`).
+
+    The pattern is the one the Python MHE's OSQP workspace was set up with:
+    ``PATTERN[i]`` is the dense index (row-major) of its ``i``-th value in CSC order.
+    """
+    qp = mhe.window_qp
+    pattern = qp.rows[qp.order] * qp.n + qp.cols[qp.order]
+    nd = qp.travel_basis.shape[1] if qp.travel_bias else 0
+    # the acceleration biases: ax and ay, or ay alone (one column)
+    columns = [0, 1] if qp.n_bias - nd == 2 else [1]
+
+    def loss(group, name):
+        kappa, mu = group.weights() if group.robust else (1.0, 0.0)
+        corner = group.threshold if group.kind is Loss.HUBER else L1_CORE
+        scale = 1.0 if group.kind is Loss.HUBER else 1.0 / L1_CORE
+        return (f"#define {name}_ROBUST {int(group.robust)}\n#define KAPPA_{name[0]} {kappa!r}\n"
+                f"#define MU_{name[0]} {float(mu)!r}\n#define CORNER_{name[0]} {corner!r}\n"
+                f"#define SCALE_{name[0]} {scale!r}\n")  # fmt: skip
+
+    return "".join([
+        f"#define WIDTH {qp.width}\n#define NS {qp.ns}\n#define NC {qp.nc}\n",
+        f"#define NB {qp.n_bias}\n#define ND {nd}\n#define NNZ {pattern.size}\n",
+        f"#define TRAVEL_UNIT {TRAVEL_UNIT!r}\n",
+        loss(settings.suspension_loss, "SUSPENSION"),
+        loss(settings.constraint_loss, "CONSTRAINT"),
+        _array("PATTERN", pattern, "int"),
+        _array("PINV", mhe.pinv) if mhe.hard and qp.n_bias > nd else "",
+        _array("TRAVEL_BASIS", qp.travel_basis) if nd else "",
+        _array("ACC_COLS", columns, "int") if qp.n_bias > nd else "",
+        _array("BETA_BOUND", mhe.beta_bound),
+        _array("BETA_DENSITY", mhe.beta_density) if qp.n_bias else "",
+        _array("BETA_INFO0", 1.0 / mhe.beta_std**2),
+    ])  # fmt: skip
+
+
+PRELUDE = """/* wheelload_mhe.c: generated by wheelload (wheelload.estimators.codegen.mhe). */
+#define _POSIX_C_SOURCE 199309L /* clock_gettime */
+#include <math.h>
+#include <string.h>
+#include <time.h>
+#include "osqp.h"
+#include "wheelload_mhe_workspace.h"
+#include "wheelload_mhe_terms.h"
+#include "wheelload_mhe.h"
+"""
+
+
+HEADER = r"""/* wheelload_mhe.h: the embedded moving-horizon wheel-load estimator (generated). */
+#ifndef WHEELLOAD_MHE_H
+#define WHEELLOAD_MHE_H
+
+#define WHEELLOAD_MHE_N_INPUTS @N_INPUTS@ /* wheelload.models.INPUTS order */
+#define WHEELLOAD_MHE_N_BIAS @N_BIAS@     /* entries of bias in use */
+#define WHEELLOAD_MHE_LAG @LAG@           /* samples: loads are the estimate of sample k - LAG */
+
+typedef struct {
+    double loads[4];    /* wheel loads [N] of sample k - LAG */
+    double std[4];      /* the fallback filter's standard deviations [N] (0: no filter) */
+    double residual[3]; /* b - A x of that sample: vertical [N], pitch, roll [N m] */
+    double bias[6];     /* bias states: travel offsets FL..RR [m] and/or ax, ay [m/s^2] */
+    int iterations;     /* ADMM iterations */
+    int fallback;       /* 1: the QP was not solved or its loads out of bounds: the filter's */
+    unsigned flags;     /* skipped updates and dropped terms (StepFlag); 255: interval rejected */
+} wheelload_mhe_output;
+
+/* Start a new log: inert window, static loads. */
+void wheelload_mhe_reset(void);
+
+/* One sample u[WHEELLOAD_MHE_N_INPUTS] (non-finite entries: missing; the terms they feed are
+   dropped) after the interval dt [s] (0 < dt < the maximum interval, else nothing is solved:
+   the last estimate is held, status 0, flags 255). Returns OSQP's status (1 = solved). */
+int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out);
+
+void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, double *std,
+                       double *residual, double *bias, int *status, int *iterations,
+                       int *fallback, unsigned *flags, double *seconds);
+
+#endif
+"""
+
+
+@dataclass(frozen=True)
+class EmbeddedResult:
+    """The embedded MHE's outputs over a log, row k from sample k (the estimate of k - lag)."""
+
+    loads: np.ndarray  # (n, 4) N
+    std: np.ndarray  # (n, 4) N, the fallback filter's (0 without one)
+    residual: np.ndarray  # (n, 3) b - A x
+    bias: np.ndarray  # (n, nb) travel offsets [m], then ax, ay [m/s^2]
+    status: np.ndarray  # (n,) OSQP status value
+    flags: np.ndarray  # (n,) StepFlag bits of the skipped updates
+    iterations: np.ndarray  # (n,)
+    fallback: np.ndarray  # (n,) bool
+    solve_time: np.ndarray  # (n,) s
+
+
+class CompiledMhe:
+    """The generated embedded MHE compiled to a shared library and loaded with ctypes."""
+
+    def __init__(self, path: Path, n_bias: int) -> None:
+        self._lib = ctypes.CDLL(str(path))
+        self._lib.wheelload_mhe_run.restype = None
+        self.n_bias = n_bias
+
+    def run(self, signals: Signals) -> EmbeddedResult:
+        u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
+        dt = np.ascontiguousarray(sample_intervals(signals.t), dtype=float)
+        n = len(signals)
+        out = dict(
+            loads=np.zeros((n, 4)), std=np.zeros((n, 4)), residual=np.zeros((n, 3)),
+            bias=np.zeros((n, self.n_bias)), status=np.zeros(n, dtype=np.int32),
+            iterations=np.zeros(n, dtype=np.int32), fallback=np.zeros(n, dtype=np.int32),
+            flags=np.zeros(n, dtype=np.uint32), solve_time=np.zeros(n),
+        )  # fmt: skip
+        kinds = dict(status=ctypes.c_int, iterations=ctypes.c_int, fallback=ctypes.c_int,
+                     flags=ctypes.c_uint)  # fmt: skip
+        names = ["loads", "std", "residual", "bias", "status", "iterations", "fallback",
+                 "flags", "solve_time"]  # fmt: skip
+        pointers = [
+            out[name].ctypes.data_as(ctypes.POINTER(kinds.get(name, ctypes.c_double)))
+            for name in names
+        ]
+        self._lib.wheelload_mhe_run(
+            ctypes.c_int(n),
+            u.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            dt.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            *pointers,
+        )
+        out["flags"] = out["flags"].astype(np.int64)
+        out["fallback"] = out["fallback"].astype(bool)
+        return EmbeddedResult(**out)
+
+
+def build_mhe_library(
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    precision: Precision = Precision.DOUBLE,
+    *,
+    vehicle_path: Path | None = None,
+) -> CompiledMhe:
+    """Generate, compile with gcc -O2 into ``folder/libwheelload_mhe.so`` and load.
+
+    ``vehicle_path``: link the KF in (see :func:`generate_mhe`).
+    """
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
+                          vehicle_path=vehicle_path)  # fmt: skip
+    library = folder / "libwheelload_mhe.so"
+    command = ["gcc", "-O2", "-shared", "-fPIC", "-std=gnu99", "-o", str(library),
+               *mhe_includes(folder), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+    completed = subprocess.run(command, capture_output=True, text=True)
+    if completed.returncode != 0:
+        raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
+    return CompiledMhe(library, n_bias(folder))
+
+
+def n_bias(folder: Path) -> int:
+    """WHEELLOAD_MHE_N_BIAS of a generated embedded MHE."""
+    for line in (Path(folder) / "wheelload_mhe.h").read_text().splitlines():
+        if line.startswith("#define WHEELLOAD_MHE_N_BIAS "):
+            return int(line.split()[2])
+    raise ValueError(f"{folder}: not a generated embedded MHE (no wheelload_mhe.h)")
+
+
+MAIN = r"""
+/* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
+   Each row: the interval dt [s] before the sample, then the WHEELLOAD_MHE_N_INPUTS inputs in
+   wheelload.models.INPUTS order ('nan' = missing).
+   Output CSV: fz_fl..fz_rr (of sample k - lag), std_fl..std_rr, residual_0..2, status,
+   iterations, fallback, flags, osqp_float_bytes, bias_0..; exit 2 on bad use. */
+#include <stdio.h>
+#include "osqp.h"
+#include "wheelload_mhe.h"
+
+#define ROW_SIZE (1 + WHEELLOAD_MHE_N_INPUTS)
+
+int main(int argc, char **argv) {
+    if (argc != 3) {
+        fprintf(stderr, "usage: %s INPUTS.txt ESTIMATES.csv\n", argv[0]);
+        return 2;
+    }
+    FILE *in = fopen(argv[1], "r");
+    if (!in) {
+        fprintf(stderr, "%s: cannot open\n", argv[1]);
+        return 2;
+    }
+    FILE *out = fopen(argv[2], "w");
+    if (!out) {
+        fprintf(stderr, "%s: cannot write\n", argv[2]);
+        fclose(in);
+        return 2;
+    }
+    fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,std_fl,std_fr,std_rl,std_rr,residual_0,residual_1,"
+                 "residual_2,status,iterations,fallback,flags,osqp_float_bytes");
+    for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",bias_%d", i);
+    fprintf(out, "\n");
+    wheelload_mhe_reset();
+    double row[ROW_SIZE];
+    for (;;) {
+        int i;
+        for (i = 0; i < ROW_SIZE; ++i)
+            if (fscanf(in, "%lf", &row[i]) != 1) break;
+        if (i < ROW_SIZE) break;
+        wheelload_mhe_output o;
+        int status = wheelload_mhe_step(row + 1, row[0], &o);
+        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.loads[i]);
+        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.std[i]);
+        for (i = 0; i < 3; ++i) fprintf(out, "%.9g,", o.residual[i]);
+        fprintf(out, "%d,%d,%d,%u,%d", status, o.iterations, o.fallback, o.flags,
+                (int)sizeof(OSQPFloat));
+        for (i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",%.9g", o.bias[i]);
+        fprintf(out, "\n");
+    }
+    fclose(in);
+    return fclose(out) == 0 ? 0 : 1;
+}
+"""
+
+
+def mhe_sources(folder: Path) -> list[Path]:
+    """The C files of a generated embedded MHE (without a main)."""
+    osqp_dir = folder / "osqp"
+    linked = [folder / f"{FILTER_PREFIX}.c"] if (folder / f"{FILTER_PREFIX}.c").exists() else []
+    return [
+        folder / "wheelload_mhe.c",
+        folder / f"{TERMS_NAME}.c",
+        *linked,
+        osqp_dir / "wheelload_mhe_workspace.c",
+        *sorted((osqp_dir / "src").glob("*.c")),
+    ]
+
+
+def mhe_includes(folder: Path) -> list[str]:
+    osqp_dir = folder / "osqp"
+    return [f"-I{osqp_dir}", f"-I{osqp_dir / 'inc' / 'public'}",
+            f"-I{osqp_dir / 'inc' / 'private'}", f"-I{folder}"]  # fmt: skip
+
+
+def build_mhe_program(
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    *,
+    precision: Precision = Precision.DOUBLE,
+    compiler: str = "gcc",
+    flags: tuple[str, ...] = ("-O2",),
+    vehicle_path: Path | None = None,
+) -> Path:
+    """Generate the embedded MHE and compile it with :data:`MAIN` into ``folder/wheelload_mhe``.
+
+    ``compiler`` may be a cross compiler (e.g. ``arm-linux-gnueabihf-gcc`` with
+    ``-static`` among ``flags``, run under ``qemu-arm``).
+    """
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
+                          vehicle_path=vehicle_path)  # fmt: skip
+    main = folder / "wheelload_mhe_main.c"
+    write_text(main, MAIN, replace=True)
+    binary = folder / "wheelload_mhe"
+    command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
+               str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+    completed = subprocess.run(command, capture_output=True, text=True)
+    if completed.returncode != 0:
+        raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
+    return binary
+
+
+def write_inputs(signals: Signals, path: Path) -> Path:
+    """The log's intervals and inputs as text rows for :data:`MAIN` (17 digits, 'nan' missing)."""
+    rows = np.column_stack([sample_intervals(signals.t), input_matrix(signals).T])
+    np.savetxt(path, rows, fmt="%.17g")
+    return path

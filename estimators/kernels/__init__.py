@@ -1,0 +1,1 @@
+"""Numeric kernels: Kalman updates, discretisation, first-order and zero-phase filters."""

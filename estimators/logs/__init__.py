@@ -1,0 +1,1 @@
+"""Logs in and out: readers and channel maps, validated signals, checks, output files."""

@@ -1,0 +1,567 @@
+"""Logged signals: read a log into a validated :class:`Signals` set.
+
+Columns (SI units): ``t`` [s], ``ax ay`` [m/s^2, specific force in the body
+frame], optional ``az`` [m/s^2, gravity included], optional ``vx`` [m/s],
+optional ``wx wy wz`` [rad/s] and their derivative ``wx_dot wy_dot wz_dot``
+[rad/s^2, else derived by :func:`rate_derivatives` where needed], optional
+``d_fl d_fr d_rl d_rr`` [m, compression], optional ``v_fl v_fr v_rl v_rr``
+[m/s], optional hub accelerometers ``az_fl az_fr az_rl az_rr`` [m/s^2,
+specific force along the body z axis, +9.81 at rest], optional reference
+loads ``fz_fl fz_fr fz_rl fz_rr`` [N] (any of them), optional wheel speeds
+``ws_fl ..`` [m/s]. CSV and Parquet logs with these column names are read as
+they are; any other log (MDF4, CarMaker ERG, other names or units) through a
+channel map (``estimators/logs/readers``), ``read_log(path, channels=MAP)``.
+
+Partial sensor sets (:class:`TravelSensors`, named in summaries): without
+travel columns (or with a travel column empty) the suspension updates of
+those corners are skipped (IMU-only when none is left); without ``az``,
+:math:`a_z = g` is assumed (flag ``AZ_ASSUMED_G``); without ``vx`` it is the
+mean of the wheel speeds (``SPEED_FROM_WHEELS``) or, without those, zero, so
+that the aerodynamic terms are off (``AERO_OFF_NO_SPEED``). A model term whose
+optional input is missing is dropped for that sample (flag bits 16-19).
+
+Missing suspension velocities are derived by a causal first-order filtered
+differentiator, :math:`H(s) = \\omega_c s / (s + \\omega_c)` with
+:math:`f_c = 20` Hz (Tustin), which passes body and wheel-hop motion
+(1-15 Hz) and attenuates sensor noise above it.
+
+Example
+-------
+>>> signals = read_log("drive.csv")
+>>> signals.d.shape
+(n, 4)
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from wheelload.estimators.kernels import first_order
+from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
+from wheelload.estimators.result import StepFlag
+from wheelload.models.vehicle import GRAVITY
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from wheelload.models import ModelParameters
+
+WHEELS = ("fl", "fr", "rl", "rr")
+TRAVEL = tuple(f"d_{w}" for w in WHEELS)
+TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
+REFERENCE = tuple(f"fz_{w}" for w in WHEELS)
+WHEEL_SPEED = tuple(f"ws_{w}" for w in WHEELS)
+RATES = ("wx", "wy", "wz")
+HUB = tuple(f"az_{w}" for w in WHEELS)
+RATE_DERIVATIVES = ("wx_dot", "wy_dot", "wz_dot")
+REQUIRED = ("t", "ax", "ay")
+
+VELOCITY_CUTOFF = 20.0  # Hz, differentiator corner frequency
+MAX_SAMPLE_INTERVAL = 0.5  # s, longest median sample interval taken as seconds
+
+
+class LogError(ValueError):
+    """A log that cannot be used: names the file, the column and the row."""
+
+
+class TravelSensors(enum.Enum):
+    """Which suspension travel sensors a log has (a sensor with no finite sample is absent)."""
+
+    ALL = "four travel sensors"
+    DEAD_CORNER = "three travel sensors (one corner dead)"
+    TWO = "two travel sensors"
+    ONE = "one travel sensor"
+    NONE = "no travel sensors (IMU-only)"
+
+
+class SpeedSource(enum.Enum):
+    """Where ``vx`` comes from."""
+
+    LOGGED = "logged"
+    WHEEL_SPEEDS = "mean of the wheel speeds"
+    NONE = "none (aerodynamic terms off)"
+
+
+def sensor_mode(travel_present: np.ndarray, az_assumed: bool, speed_source: SpeedSource) -> str:
+    """The sensor set in words, for summaries (see :meth:`Signals.mode`)."""
+    count = int(np.sum(travel_present))
+    parts = [(TravelSensors.NONE, TravelSensors.ONE, TravelSensors.TWO,
+              TravelSensors.DEAD_CORNER, TravelSensors.ALL)[count].value]  # fmt: skip
+    if 0 < count < 4:
+        missing = [w.upper() for w, ok in zip(WHEELS, travel_present) if not ok]
+        parts[0] += f", missing {' '.join(missing)}"
+    if az_assumed:
+        parts.append("no az: g assumed")
+    if speed_source is not SpeedSource.LOGGED:
+        parts.append(f"vx: {speed_source.value}")
+    return "; ".join(parts)
+
+
+def input_bits(az_assumed: bool, speed_source: SpeedSource) -> int:
+    """:class:`StepFlag` bits of inputs the log did not have (az, vx)."""
+    bits = 0
+    if az_assumed:
+        bits |= StepFlag.AZ_ASSUMED_G
+    if speed_source is SpeedSource.WHEEL_SPEEDS:
+        bits |= StepFlag.SPEED_FROM_WHEELS
+    if speed_source is SpeedSource.NONE:
+        bits |= StepFlag.AERO_OFF_NO_SPEED
+    return int(bits)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Signals:
+    """A validated log: arrays of ``n`` samples, wheel order FL, FR, RL, RR."""
+
+    t: np.ndarray  # (n,)
+    vx: np.ndarray  # (n,)
+    acc: np.ndarray  # (n, 3) ax, ay, az
+    d: np.ndarray  # (n, 4)
+    v: np.ndarray  # (n, 4)
+    rates: np.ndarray | None = None  # (n, 3) wx, wy, wz
+    reference: np.ndarray | None = None  # (n, 4) fz
+    hub: np.ndarray | None = None  # (n, 4) hub specific force along body z
+    rate_dots: np.ndarray | None = None  # (n, 3) logged derivative of wx, wy, wz
+    velocities_derived: bool = False
+    source: str = "<memory>"
+    az_assumed: bool = False
+    speed_source: SpeedSource = SpeedSource.LOGGED
+    travel_quantum: np.ndarray | None = None  # (4,) logger step of d_* [m] (travel_quantum)
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
+        shapes = {"t": (n,), "vx": (n,), "acc": (n, 3), "d": (n, 4), "v": (n, 4),
+                  "rates": (n, 3), "reference": (n, 4), "hub": (n, 4),
+                  "rate_dots": (n, 3)}  # fmt: skip
+        for name, shape in shapes.items():
+            value = getattr(self, name)
+            if value is not None and np.shape(value) != shape:
+                raise LogError(
+                    f"{self.source}: '{name}' has shape {np.shape(value)}, expected {shape}"
+                )
+        _check_time(np.asarray(self.t, dtype=float), self.source)
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def travel_present(self) -> np.ndarray:
+        """(4,) True for each corner whose travel channel has a finite sample."""
+        return np.any(np.isfinite(self.d), axis=0)
+
+    @property
+    def travel_sensors(self) -> TravelSensors:
+        """The travel sensor set (see :class:`TravelSensors`)."""
+        count = int(self.travel_present.sum())
+        return (TravelSensors.NONE, TravelSensors.ONE, TravelSensors.TWO,
+                TravelSensors.DEAD_CORNER, TravelSensors.ALL)[count]  # fmt: skip
+
+    def mode(self) -> str:
+        """The sensor set in words, for summaries."""
+        return sensor_mode(self.travel_present, self.az_assumed, self.speed_source)
+
+    def input_flags(self) -> np.ndarray:
+        """(n,) :class:`StepFlag` bits of inputs the log did not have."""
+        bits = input_bits(self.az_assumed, self.speed_source)
+        return np.full(len(self.t), bits, dtype=np.int64)
+
+    @property
+    def sample_rate(self) -> float:
+        """Median sample rate [Hz]."""
+        return float(1.0 / np.median(np.diff(self.t)))
+
+    def to_frame(self) -> pd.DataFrame:
+        """The signals as a DataFrame with the log's column names."""
+        import pandas as pd
+
+        columns = {"t": self.t, "vx": self.vx}
+        columns.update(zip(("ax", "ay", "az"), self.acc.T))
+        if self.rates is not None:
+            columns.update(zip(RATES, self.rates.T))
+        columns.update(zip(TRAVEL, self.d.T))
+        columns.update(zip(TRAVEL_RATE, self.v.T))
+        if self.rate_dots is not None:
+            columns.update(zip(RATE_DERIVATIVES, self.rate_dots.T))
+        if self.hub is not None:
+            columns.update(zip(HUB, self.hub.T))
+        if self.reference is not None:
+            columns.update(zip(REFERENCE, self.reference.T))
+        return pd.DataFrame(columns)
+
+    def slice(self, start: int, stop: int) -> Signals:
+        """Samples ``start:stop`` as a new signal set."""
+
+        def cut(array):
+            return None if array is None else array[start:stop]
+
+        return Signals(
+            t=self.t[start:stop],
+            vx=self.vx[start:stop],
+            acc=self.acc[start:stop],
+            d=self.d[start:stop],
+            v=self.v[start:stop],
+            rates=cut(self.rates),
+            reference=cut(self.reference),
+            hub=cut(self.hub),
+            rate_dots=cut(self.rate_dots),
+            velocities_derived=self.velocities_derived,
+            source=self.source,
+            az_assumed=self.az_assumed,
+            speed_source=self.speed_source,
+            travel_quantum=self.travel_quantum,
+        )
+
+
+def travel_quantum(d: np.ndarray) -> np.ndarray:
+    """(4,) the logger step of each travel channel [m]: the smallest difference between
+    two of its distinct finite values (NaN with fewer than two).
+
+    A travel logged as integers (``int16`` mm, raw converter counts) moves in steps of
+    this size: a corner on a still body shows no change for long, or flickers by a step,
+    however still it is. The fault monitor's stuck test (``estimators/kf/guard.py``) needs
+    it to tell a quiet quantised channel from a stuck one.
+    """
+    steps = np.full(d.shape[1], np.nan)
+    for k in range(d.shape[1]):
+        values = np.unique(d[np.isfinite(d[:, k]), k])
+        if values.size > 1:
+            steps[k] = float(np.min(np.diff(values)))
+    return steps
+
+
+def coarse_travel_note(quantum: np.ndarray | None, stuck_motion: float) -> str | None:
+    """A line for a travel logged in steps above a quarter of the stuck test's motion
+    threshold (``GuardSettings.stuck_motion``, 4 steps of a 12-bit sensor), else None:
+    quiet corners of such a log may be isolated as stuck (``travel_fault``)."""
+    if quantum is None or not np.any(quantum > 0.25 * stuck_motion):
+        return None
+    shown = " ".join(
+        f"{w.upper()} {1000 * q:.3g} mm" for w, q in zip(WHEELS, quantum) if np.isfinite(q)
+    )
+    return (
+        f"travel logged in steps of {shown}: coarser than the stuck test expects "
+        f"({1000 * stuck_motion:.3g} mm = 4 steps); a quiet corner may be flagged travel_fault"
+    )
+
+
+def read_log(
+    path: str | Path,
+    velocity_cutoff: float = VELOCITY_CUTOFF,
+    *,
+    channels: str | Path | None = None,
+    wiring_checks: bool = True,
+) -> Signals:
+    """Read a log (CSV, Parquet, MDF4, ERG) and validate it (see module docstring).
+
+    ``channels`` is a channel-map TOML file (``wheelload channels --template``);
+    without it the log's channels must be named as ours, in SI units.
+    ``wiring_checks``: run :mod:`wheelload.estimators.logs.checks` (signs, units, wiring).
+    """
+    import pandas as pd
+
+    from wheelload.estimators.logs.readers import ChannelMapError, load_channel_map, read_frame
+
+    path = Path(path)
+    if not path.exists():
+        raise LogError(f"{path}: no such log file")
+    try:
+        channel_map = load_channel_map(channels) if channels is not None else None
+        frame = read_frame(path, channel_map)
+    except ChannelMapError as error:
+        raise LogError(str(error)) from None
+    except UnicodeDecodeError as error:
+        raise LogError(
+            f"{path}: is not UTF-8 text (byte {error.start}): save the log as UTF-8 CSV"
+        ) from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as error:
+        raise LogError(f"{path}: cannot be read: {error}") from None
+    except ValueError as error:  # pandas: a column named in a map is not in the file
+        raise LogError(f"{path}: cannot be read: {error}") from None
+    return signals_from_frame(
+        frame, source=str(path), velocity_cutoff=velocity_cutoff, wiring_checks=wiring_checks
+    )
+
+
+def signals_from_frame(
+    frame: pd.DataFrame,
+    source: str = "<frame>",
+    velocity_cutoff: float = VELOCITY_CUTOFF,
+    *,
+    wiring_checks: bool = True,
+) -> Signals:
+    """Validate a DataFrame with the log's columns and build :class:`Signals`."""
+    import pandas as pd
+
+    duplicate = duplicate_columns(frame.columns)
+    if duplicate is not None:
+        raise LogError(
+            f"{source}: column '{duplicate}' appears twice: keep one (which copy is meant?)"
+        )
+    frame = frame.rename(columns=lambda name: str(name).strip())
+    for name in REQUIRED:
+        if name not in frame.columns:
+            raise LogError(f"{source}: missing column '{name}'")
+
+    def column(name: str) -> np.ndarray:
+        kind = frame[name].dtype
+        if not (
+            pd.api.types.is_numeric_dtype(kind)
+            or pd.api.types.is_object_dtype(kind)
+            or pd.api.types.is_string_dtype(kind)
+        ) or pd.api.types.is_bool_dtype(kind):
+            raise LogError(
+                f"{source}: column '{name}' has type {kind}: give plain numbers in SI units"
+            )  # fmt: skip
+        if pd.api.types.is_numeric_dtype(kind):
+            return frame[name].to_numpy(dtype=float, na_value=np.nan)  # nothing to coerce
+        values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
+        bad = np.flatnonzero(np.isnan(values) & frame[name].notna().to_numpy())
+        if bad.size:
+            raise LogError(
+                f"{source}: column '{name}' is not numeric at row {bad[0]}: "
+                f"{frame[name].iloc[bad[0]]!r}"
+            )
+        return values
+
+    def group(names: tuple[str, ...], partial: bool = False) -> np.ndarray | None:
+        present = [name for name in names if name in frame.columns]
+        if not present:
+            return None
+        if partial:  # a missing column is a channel with no sample
+            return np.column_stack(
+                [column(n) if n in frame.columns else np.full(len(frame), np.nan) for n in names]
+            )
+        if len(present) != len(names):
+            missing = [name for name in names if name not in frame.columns]
+            raise LogError(
+                f"{source}: has column '{present[0]}' but not '{missing[0]}': "
+                f"give all of {', '.join(names)} or none"
+            )
+        return np.column_stack([column(name) for name in names])
+
+    t = column("t")
+    check_time_column(t, source)
+    missing = np.full((t.size, 4), np.nan)
+    az_assumed = "az" not in frame.columns
+    az = np.full(t.size, GRAVITY) if az_assumed else column("az")
+    acc = np.column_stack([column("ax"), column("ay"), az])
+    d = group(TRAVEL)
+    d = missing if d is None else d
+    v = group(TRAVEL_RATE)
+    if "vx" in frame.columns:
+        speed, speed_source = column("vx"), SpeedSource.LOGGED
+    elif any(name in frame.columns for name in WHEEL_SPEED):
+        wheels = np.column_stack([column(n) for n in WHEEL_SPEED if n in frame.columns])
+        finite = np.isfinite(wheels)
+        count = finite.sum(axis=1)
+        total = np.where(finite, wheels, 0.0).sum(axis=1)
+        speed = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        speed_source = SpeedSource.WHEEL_SPEEDS
+    else:
+        speed, speed_source = np.zeros(t.size), SpeedSource.NONE
+    check_units(acc, d, v, speed, source)
+    if wiring_checks:
+        raise_for_wiring(check_wiring(t, speed, acc, d, group(RATES)), source)
+    derived = v is None and bool(np.isfinite(d).any())
+    if derived:
+        v = derive_velocities(t, d, velocity_cutoff, source)
+    elif v is None:
+        v = missing.copy()
+    return Signals(
+        t=t,
+        vx=speed,
+        acc=acc,
+        d=d,
+        v=v,
+        rates=group(RATES),
+        reference=group(REFERENCE, partial=True),
+        hub=group(HUB),
+        rate_dots=group(RATE_DERIVATIVES),
+        velocities_derived=derived,
+        source=source,
+        az_assumed=az_assumed,
+        speed_source=speed_source,
+        travel_quantum=travel_quantum(d),
+    )
+
+
+def check_time_column(t: np.ndarray, source: str) -> None:
+    """A log's time column: finite, increasing, in seconds (one-line :class:`LogError`)."""
+    _check_time(t, source)
+    step = float(np.median(np.diff(t)))
+    if step > MAX_SAMPLE_INTERVAL:
+        raise LogError(
+            f"{source}: column 't' advances by {step:.4g} per sample: more than "
+            f"{MAX_SAMPLE_INTERVAL} s, it looks like milliseconds (give seconds)"
+        )
+
+
+def _check_time(t: np.ndarray, source: str) -> None:
+    if t.size < 2:
+        raise LogError(f"{source}: needs at least 2 samples, has {t.size}")
+    missing = np.flatnonzero(~np.isfinite(t))
+    if missing.size:
+        raise LogError(f"{source}: column 't' has no valid time stamp at row {missing[0]}")
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0.0)
+    if bad.size:
+        row = bad[0] + 1
+        raise LogError(
+            f"{source}: column 't' is not increasing at row {row} "
+            f"(t = {t[row - 1]!r} then {t[row]!r})"
+        )
+
+
+def check_units(acc, d, v, vx, source: str) -> None:
+    """Report values that look like the wrong unit rather than guess."""
+    az = np.nanmedian(acc[:, 2]) if np.any(np.isfinite(acc[:, 2])) else np.nan
+    if np.isfinite(az) and 0.5 < abs(az) < 2.0:
+        raise LogError(
+            f"{source}: column 'az' has median {az:.3g}: it looks like g units; "
+            "give specific force in m/s^2 (about +9.81 at rest)"
+        )
+    if np.isfinite(az) and not 4.0 < az < 20.0:
+        raise LogError(
+            f"{source}: column 'az' has median {az:.3g} m/s^2: expected specific force "
+            "including gravity, about +9.81 at rest with z up"
+        )
+    for name, values, limit, unit in (
+        ("d", d, 0.3, "mm"),
+        ("v", v, 10.0, "mm/s"),
+    ):
+        if values is None:
+            continue
+        peaks = np.nanmax(np.abs(values), axis=0, initial=0.0)
+        for wheel, peak in zip(WHEELS, peaks):
+            if peak > limit:
+                raise LogError(
+                    f"{source}: column '{name}_{wheel}' reaches {peak:.3g}: more than "
+                    f"{limit} in SI units, it looks like {unit}"
+                )
+    if np.nanmax(np.abs(vx), initial=0.0) > 120.0:
+        raise LogError(
+            f"{source}: column 'vx' reaches {np.nanmax(np.abs(vx)):.4g}: more than 120 m/s, "
+            "it looks like km/h"
+        )
+
+
+def derive_velocities(
+    t: np.ndarray, d: np.ndarray, cutoff: float = VELOCITY_CUTOFF, source: str = "<log>"
+) -> np.ndarray:
+    r"""Causal filtered derivative of the travel, :math:`\omega_c s/(s+\omega_c)` (Tustin).
+
+    Needs near-uniform sampling (jitter below 5 % of the median interval). A
+    missing travel sample gives a missing velocity, and the filter restarts at
+    rest on the first sample after a gap, so a gap makes no false velocity.
+    """
+    dt = np.diff(t)
+    median = float(np.median(dt))
+    if not np.isfinite(d).any():
+        return np.full(d.shape, np.nan)
+    differentiator = Differentiator(dt, d.shape[1], cutoff, source, median=median)
+    return differentiator(d)
+
+
+class Differentiator:
+    r"""The travel differentiator of :func:`derive_velocities` with its state carried.
+
+    Called on consecutive chunks of a log (2-D, one column per channel), it
+    returns what one call on the whole log returns, to the bit: each run of
+    finite samples is filtered by ``lfilter`` with the state it left at the
+    end of the previous chunk. ``dt`` are the whole log's sample intervals
+    (the uniformity and sample-rate checks need all of them).
+    """
+
+    def __init__(
+        self,
+        dt: np.ndarray,
+        channels: int,
+        cutoff: float = VELOCITY_CUTOFF,
+        source: str = "<log>",
+        *,
+        median: float | None = None,
+    ) -> None:
+        median = float(np.median(dt)) if median is None else median
+        if np.max(np.abs(dt - median)) > 0.05 * median:
+            raise LogError(
+                f"{source}: time stamps are not uniform enough to derive suspension velocities; "
+                "give columns v_fl v_fr v_rl v_rr"
+            )
+        nyquist = 0.5 / median
+        if cutoff >= 0.8 * nyquist:
+            raise LogError(
+                f"{source}: sample rate {1 / median:.4g} Hz is too low for the {cutoff} Hz "
+                "velocity differentiator; give columns v_fl v_fr v_rl v_rr"
+            )
+        omega = 2.0 * np.pi * cutoff
+        # scipy.signal's bilinear, lfilter_zi and lfilter to the bit, without its import.
+        self._b, self._a = first_order.bilinear_differentiator(omega, 1.0 / median)
+        self._rest = first_order.lfilter_zi(self._b, self._a)
+        self._lfilter = first_order.lfilter
+        self._state: list[np.ndarray | None] = [None] * channels  # None: not inside a run
+
+    def __call__(self, d: np.ndarray) -> np.ndarray:
+        """Velocities of the next chunk ``d`` (rows: samples, columns: channels)."""
+        v = np.full(d.shape, np.nan)
+        for channel in range(d.shape[1]):
+            valid = np.isfinite(d[:, channel])
+            carried = self._state[channel]
+            for start, stop in _valid_runs(valid):
+                run = d[start:stop, channel]
+                zi = carried if start == 0 and carried is not None else self._rest * run[0]
+                v[start:stop, channel], zf = self._lfilter(self._b, self._a, run, zi)
+                carried = zf
+            self._state[channel] = carried if valid.size and valid[-1] else None
+        return v
+
+
+def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
+    """``(start, stop)`` of each run of consecutive True values."""
+    edges = np.diff(np.concatenate([[0], valid.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def write_log(signals: Signals, path: str | Path) -> None:
+    """Write signals as ``.csv`` or ``.parquet`` with the log's column names."""
+    path = Path(path)
+    frame = signals.to_frame()
+    if path.suffix.lower() == ".csv":
+        frame.to_csv(path, index=False)
+    elif path.suffix.lower() in (".parquet", ".pq"):
+        frame.to_parquet(path, index=False)
+    else:
+        raise LogError(f"{path}: unknown log format '{path.suffix}' (use .csv or .parquet)")
+
+
+def rate_derivatives_used(parameters: ModelParameters) -> bool:
+    """Whether a model term switched on reads the body-rate derivatives ``wx_dot wy_dot wz_dot``.
+
+    Only the body inertia and the IMU lever arm do (their gates in
+    :func:`wheelload.models.terms.term_gates`); with both off a log's rate
+    derivatives change no number, so the lean path does not derive them (no
+    differentiator, no ``scipy.signal`` import) and feeds them as missing.
+    """
+    return bool(parameters.term_body_inertia) or bool(parameters.term_imu_lever_arm)
+
+
+def rate_derivatives(signals: Signals, cutoff: float = VELOCITY_CUTOFF) -> np.ndarray:
+    r"""Causal filtered derivative of the body rates ``wx wy wz``, shape (n, 3) [rad/s^2].
+
+    The logged ``wx_dot wy_dot wz_dot`` when present, else the same
+    differentiator as :func:`derive_velocities`. All NaN where the log has no
+    rates or its time stamps are too irregular to differentiate: the terms
+    that need them are then dropped and flagged, not guessed.
+    """
+    if signals.rate_dots is not None:
+        return signals.rate_dots
+    if signals.rates is None:
+        return np.full((len(signals), 3), np.nan)
+    try:
+        return derive_velocities(signals.t, signals.rates, cutoff, signals.source)
+    except LogError:
+        return np.full((len(signals), 3), np.nan)

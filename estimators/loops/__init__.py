@@ -1,0 +1,1 @@
+"""Step loops over a log: compiled whole-log, fast per-sample, chunked from a file."""

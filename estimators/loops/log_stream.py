@@ -1,0 +1,503 @@
+"""The two-stage KF over a log file in chunks: memory bounded by the chunk, not the log.
+
+The lean whole-log path of ``wheelload estimate``. Two passes over the file
+(``estimators/logs/readers/chunks.py``: Parquet record batches, CSV blocks):
+
+1. :func:`scan_log` reads the chunks once and keeps what the whole-log checks
+   need: the time column (8 bytes a sample: the nominal interval, the time and
+   sample-rate checks, the differentiators' uniformity check), the median of
+   ``az`` (unit check; freed after it), the channels' peaks and which
+   channels have a finite sample, the first :data:`~log_checks.WINDOW` s of
+   motion (wiring checks, exactly the window :func:`check_wiring` examines on
+   the whole log) and the first seconds (still period).
+2. :meth:`LogStream.chunks` reads the chunks again and runs the filter's
+   :class:`~wheelload.estimators.loops.compiled.ColumnLoop` on their column arrays
+   (validity, sample interval and ``uint32`` status bits computed in C; no
+   stacked copies), the filter state and the differentiators' state carried
+   from chunk to chunk, so the loads equal ``TwoStageKF.run`` on the whole log
+   to the bit.
+
+A log this path cannot read as plain numbers raises
+:class:`~wheelload.estimators.logs.readers.chunks.ChunkError` before any output,
+and the caller reads it the ordinary way (whose errors name the row).
+
+Example
+-------
+>>> stream = scan_log(Path("drive.parquet"), kf)
+>>> for chunk in stream.chunks():
+...     writer.write(chunk.columns())
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wheelload.estimators.kf import guard
+from wheelload.estimators.kf.two_stage import (
+    N_CARRIED,
+    STEP_OUTPUT_NAMES,
+    TwoStageKF,
+    nominal_interval,
+)
+from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring
+from wheelload.estimators.logs.readers.chunks import (
+    ChunkError,
+    chunk_columns,
+    read_chunks,
+    row_count,
+)
+from wheelload.estimators.logs.signals import (
+    HUB,
+    RATE_DERIVATIVES,
+    RATES,
+    REFERENCE,
+    REQUIRED,
+    TRAVEL,
+    TRAVEL_RATE,
+    VELOCITY_CUTOFF,
+    WHEEL_SPEED,
+    Differentiator,
+    LogError,
+    Signals,
+    SpeedSource,
+    check_time_column,
+    check_units,
+    input_bits,
+    rate_derivatives_used,
+    sensor_mode,
+)
+from wheelload.estimators.loops.compiled import ColumnLoop, FlagRule
+from wheelload.estimators.result import RESIDUALS, SensorFault, StepFlag
+from wheelload.models import GRAVITY, INPUTS
+
+WHEELS = ("fl", "fr", "rl", "rr")
+GROUPS = (TRAVEL, TRAVEL_RATE, RATES, HUB, RATE_DERIVATIVES)
+#: Output columns of the loop: loads, their std, residual, then the fault monitor's.
+LOOP_COLUMNS = ("x_next", "std", "residual", "fault", "fault_statistic")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EstimateChunk:
+    """Consecutive samples of the estimates; ``block`` rows: loads 0-3, std 4-7, residual 8-10.
+
+    ``reference`` is the log's ``fz_*`` (NaN where absent), or None without any.
+    """
+
+    t: np.ndarray
+    block: np.ndarray  # (11+, n) one contiguous row per output column
+    flags: np.ndarray  # (n,) uint32
+    reference: np.ndarray | None  # (n, 4)
+
+    @property
+    def loads(self) -> np.ndarray:
+        return self.block[0:4].T
+
+    @property
+    def std(self) -> np.ndarray:
+        return self.block[4:8].T
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.block[8:11].T
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The columns of ``Estimate.to_pandas`` (with std), by name."""
+        columns = {"t": self.t}
+        columns.update({f"fz_{w}": self.block[i] for i, w in enumerate(WHEELS)})
+        columns.update({f"fz_std_{w}": self.block[4 + i] for i, w in enumerate(WHEELS)})
+        columns.update({name: self.block[8 + i] for i, name in enumerate(RESIDUALS)})
+        columns["status"] = self.flags
+        return columns
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChannelStats:
+    """Per-wheel statistics of the travel and travel-rate channels (log warnings)."""
+
+    travel_count: np.ndarray  # finite samples of d_*
+    travel_peak: np.ndarray  # max |d_*| over them
+    rate_count: np.ndarray  # finite samples of v_* (logged)
+    rate_min: np.ndarray
+    rate_max: np.ndarray
+
+
+class _Store:
+    """A column gathered chunk by chunk: into one array if the row count is known."""
+
+    def __init__(self, rows: int | None) -> None:
+        self.filled = 0
+        self.whole = None if rows is None else np.empty(rows)
+        self.parts: list[np.ndarray] = []
+
+    def append(self, values: np.ndarray) -> None:
+        if self.whole is not None and self.filled + len(values) <= len(self.whole):
+            self.whole[self.filled : self.filled + len(values)] = values
+        else:
+            self.parts.append(values)
+        self.filled += len(values)
+
+    def array(self) -> np.ndarray:
+        if self.whole is not None and not self.parts:
+            return self.whole[: self.filled]
+        head = [] if self.whole is None else [self.whole[: self.filled - sum(map(len, self.parts))]]
+        return np.concatenate([*head, *self.parts]) if head or self.parts else np.array([])
+
+
+def _column_peak(values: np.ndarray) -> np.ndarray:
+    return np.nanmax(np.abs(values), axis=0, initial=0.0)
+
+
+class _Head:
+    """Samples collected while ``keep(t)`` holds, from a start chosen by ``begin``."""
+
+    def __init__(self) -> None:
+        self.parts: dict[str, list[np.ndarray]] = {}
+        self.done = False
+
+    def add(self, chunk: dict[str, np.ndarray], start: int, stop: int) -> None:
+        for name, values in chunk.items():
+            self.parts.setdefault(name, []).append(values[start:stop])
+
+    def array(self, name: str) -> np.ndarray:
+        return np.concatenate(self.parts[name])
+
+
+def _speed(chunk: dict[str, np.ndarray], n: int) -> tuple[np.ndarray, SpeedSource]:
+    """``vx`` as :func:`signals_from_frame` makes it (logged, wheel-speed mean, or 0)."""
+    if "vx" in chunk:
+        return chunk["vx"], SpeedSource.LOGGED
+    wheels = [chunk[name] for name in WHEEL_SPEED if name in chunk]
+    if wheels:
+        stacked = np.column_stack(wheels)
+        finite = np.isfinite(stacked)
+        count = finite.sum(axis=1)
+        total = np.where(finite, stacked, 0.0).sum(axis=1)
+        return np.where(count > 0, total / np.maximum(count, 1), np.nan), SpeedSource.WHEEL_SPEEDS
+    return np.zeros(n), SpeedSource.NONE
+
+
+def _travel(chunk: dict[str, np.ndarray], n: int) -> np.ndarray:
+    if TRAVEL[0] in chunk:
+        return np.column_stack([chunk[name] for name in TRAVEL])
+    return np.full((n, 4), np.nan)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class LogStream:
+    """A scanned log (see module docstring): its facts and :meth:`chunks` of estimates."""
+
+    path: Path
+    source: str
+    names: tuple[str, ...]  # our columns present in the file
+    t: np.ndarray
+    travel_present: np.ndarray  # (4,) bool
+    reference_present: np.ndarray | None  # (4,) bool, None: no fz_* column
+    velocities_derived: bool
+    az_assumed: bool
+    speed_source: SpeedSource
+    channel_stats: ChannelStats
+    wiring: Signals | None  # the first WINDOW s of motion, None if never moving
+    head: Signals  # the first samples (still period)
+    rows: int  # rows per chunk
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def sample_rate(self) -> float:
+        """Median sample rate [Hz]."""
+        return float(1.0 / np.median(np.diff(self.t)))
+
+    def mode(self) -> str:
+        """The sensor set in words (as :meth:`Signals.mode`)."""
+        return sensor_mode(self.travel_present, self.az_assumed, self.speed_source)
+
+    def wiring_report(self):
+        """:func:`check_wiring` on the log (its first WINDOW s of motion)."""
+        if self.wiring is None:
+            return check_wiring(self.t[:2], np.zeros(2), np.zeros((2, 3)), np.zeros((2, 4)))
+        w = self.wiring
+        return check_wiring(w.t, w.vx, w.acc, w.d, w.rates)
+
+    def chunks(
+        self, kf: TwoStageKF, *, faults: list[SensorFault] | None = None
+    ) -> Iterator[EstimateChunk]:
+        """The estimates, chunk by chunk; ``faults`` receives the isolated sensor faults."""
+        loop = column_loop(kf.step_function)
+        state0 = kf.initial_state()
+        state = [np.ascontiguousarray(np.ravel(a, order="F"), dtype=float)
+                 for a in (state0.x, state0.P, state0.m)]  # fmt: skip
+        tuning = kf.tuning_for(kf.sample_interval or nominal_interval(self.t))
+        dt = np.diff(self.t)
+        travel_rates = (
+            Differentiator(dt, 4, VELOCITY_CUTOFF, self.source) if self.velocities_derived else None
+        )
+        rate_dots = None
+        if (
+            RATE_DERIVATIVES[0] not in self.names
+            and RATES[0] in self.names
+            and rate_derivatives_used(kf.parameters)
+        ):
+            try:
+                rate_dots = Differentiator(dt, 3, VELOCITY_CUTOFF, self.source)
+            except LogError:
+                rate_dots = None  # too irregular: the terms that need them are dropped
+        base = input_bits(self.az_assumed, self.speed_source)
+        tracker = _FaultTracker()
+        start = 0
+        for chunk in read_chunks(self.path, list(self.names), rows=self.rows):
+            n = len(chunk["t"])
+            if n == 0:
+                continue
+            t = self.t[start : start + n]
+            if not np.array_equal(t, chunk["t"]):
+                raise LogError(f"{self.source}: changed while it was read: read it again")
+            values = self._values(chunk, n, travel_rates, rate_dots)
+            block = np.empty((loop.n_columns, n))
+            flags = np.empty(n, dtype=np.uint32)
+            dt_first = float(t[1] - t[0]) if start == 0 else float(t[0] - self.t[start - 1])
+            loop(state, [kf.p, tuning], values, t, dt_first, list(block), flags, base)
+            tracker.add(t, block[11:18], block[18:25])
+            reference = None
+            if self.reference_present is not None:
+                reference = np.column_stack(
+                    [chunk[name] if name in chunk else np.full(n, np.nan) for name in REFERENCE]
+                )
+            start += n
+            yield EstimateChunk(t=t, block=block, flags=flags, reference=reference)
+        if start != len(self.t):
+            raise LogError(f"{self.source}: changed while it was read: read it again")
+        if faults is not None:
+            faults.extend(tracker.finish())
+
+    def _values(self, chunk, n, travel_rates, rate_dots) -> list[np.ndarray | None]:
+        """The per-sample inputs in INPUTS order, one column each (None: missing)."""
+        columns: dict[str, np.ndarray | None] = {name: chunk.get(name) for name in INPUTS}
+        if travel_rates is not None:
+            derived = travel_rates(_travel(chunk, n))
+            columns.update({name: derived[:, i] for i, name in enumerate(TRAVEL_RATE)})
+        if self.az_assumed:
+            columns["az"] = np.broadcast_to(np.float64(GRAVITY), (n,))
+        columns["vx"] = _speed(chunk, n)[0]
+        if rate_dots is not None:
+            derived = rate_dots(np.column_stack([chunk[name] for name in RATES]))
+            columns.update({name: derived[:, i] for i, name in enumerate(RATE_DERIVATIVES)})
+        return [columns[name] for name in INPUTS]
+
+
+class _FaultTracker:
+    """:func:`~wheelload.estimators.kf.two_stage.sensor_faults` over consecutive chunks.
+
+    An interval still on at the end of a chunk stays open (start, peak, last time).
+    """
+
+    def __init__(self) -> None:
+        self.open: list[tuple[float, float, float] | None] = [None] * len(guard.FAULT_CHANNELS)
+        self.closed: list[list[SensorFault]] = [[] for _ in guard.FAULT_CHANNELS]
+
+    def add(self, t: np.ndarray, fault: np.ndarray, statistic: np.ndarray) -> None:
+        n = len(t)
+        for j, channel in enumerate(guard.FAULT_CHANNELS):
+            on = fault[j] > 0.5
+            carried = self.open[j]
+            if carried is not None and not on[0]:
+                self.closed[j].append(_fault(channel, carried[0], carried[2], carried[1]))
+                carried = None
+            self.open[j] = None
+            if not on.any():
+                continue
+            edges = np.concatenate([[False], on, [False]])
+            starts = np.flatnonzero(edges[1:] & ~edges[:-1])
+            ends = np.flatnonzero(~edges[1:] & edges[:-1])
+            for s, e in zip(starts, ends, strict=True):
+                peak = float(np.max(statistic[j, s:e]))
+                begun = float(t[s])
+                if s == 0 and carried is not None:
+                    begun, peak = carried[0], float(np.max([carried[1], peak]))
+                if e == n:
+                    self.open[j] = (begun, peak, float(t[n - 1]))
+                else:
+                    self.closed[j].append(_fault(channel, begun, float(t[e - 1]), peak))
+
+    def finish(self) -> list[SensorFault]:
+        rows = []
+        for j, channel in enumerate(guard.FAULT_CHANNELS):
+            rows += self.closed[j]
+            carried = self.open[j]
+            if carried is not None:
+                rows.append(_fault(channel, carried[0], carried[2], carried[1]))
+        return sorted(rows, key=lambda fault: fault.start)
+
+
+def _fault(channel: str, start: float, end: float, statistic: float) -> SensorFault:
+    return SensorFault(channel=channel, start=start, end=end, statistic=statistic)
+
+
+@functools.lru_cache(maxsize=4)
+def column_loop(step) -> ColumnLoop:
+    """The filter step over column arrays, with the status bits of ``TwoStageKF.run``."""
+    update = StepFlag.update_flags()
+    used = STEP_OUTPUT_NAMES.index("used")
+    rules = [FlagRule(output="used", element=i, below=True, bit=int(flag))
+             for i, flag in enumerate(update[: step.nnz_out(used)])]  # fmt: skip
+    rules += [FlagRule(output="status", element=i, below=False, bit=int(flag))
+              for i, flag in enumerate(StepFlag.guard_flags())]  # fmt: skip
+    return ColumnLoop(
+        step,
+        N_CARRIED,
+        values="u",
+        validity="u_valid",
+        interval="dt",
+        columns=LOOP_COLUMNS,
+        rules=tuple(rules),
+    )
+
+
+def scan_log(
+    path: Path,
+    *,
+    rows: int = 1 << 16,
+    still_period: float | None = None,
+    wiring_checks: bool = True,
+) -> LogStream:
+    """Pass 1 over a CSV or Parquet log named as ours (module docstring).
+
+    Raises :class:`ChunkError` where the ordinary reader must take the log
+    (and name the problem), :class:`LogError` for a log that cannot be used.
+    """
+    path = Path(path)
+    source = str(path)
+    present = chunk_columns(path)
+    for name in REQUIRED:
+        if name not in present:
+            raise ChunkError(f"{source}: missing column '{name}'")
+    for group in GROUPS:
+        if 0 < sum(name in present for name in group) < len(group):
+            raise ChunkError(f"{source}: a partial group of {group[0]}")
+    ours = {"t", "ax", "ay", "az", "vx", *WHEEL_SPEED, *REFERENCE, *(n for g in GROUPS for n in g)}
+    names = tuple(name for name in present if name in ours)
+    t_store, az_store = _Store(row_count(path)), _Store(row_count(path))
+    peaks = {"d": np.zeros(4), "v": np.zeros(4), "vx": 0.0}
+    travel_present = np.zeros(4, bool)
+    reference_present = np.zeros(4, bool)
+    stats = {"travel_count": np.zeros(4, np.int64), "travel_peak": np.zeros(4),
+             "rate_count": np.zeros(4, np.int64), "rate_min": np.full(4, np.inf),
+             "rate_max": np.full(4, -np.inf)}  # fmt: skip
+    wiring, head = _Head(), _Head()
+    wiring_end = None
+    t0 = None
+    speed_source = SpeedSource.LOGGED
+    for chunk in read_chunks(path, list(names), rows=rows):
+        n = len(chunk["t"])
+        if n == 0:
+            continue
+        t = chunk["t"]
+        t_store.append(t)
+        t0 = t[0] if t0 is None else t0
+        speed, speed_source = _speed(chunk, n)
+        if "az" in chunk:
+            az_store.append(chunk["az"])
+        d = _travel(chunk, n)
+        peaks["d"] = np.maximum(peaks["d"], _column_peak(d))
+        finite = np.isfinite(d)
+        travel_present |= finite.any(axis=0)
+        stats["travel_count"] += finite.sum(axis=0)
+        stats["travel_peak"] = np.maximum(
+            stats["travel_peak"], np.max(np.abs(np.where(finite, d, 0.0)), axis=0)
+        )
+        if TRAVEL_RATE[0] in chunk:
+            v = np.column_stack([chunk[name] for name in TRAVEL_RATE])
+            peaks["v"] = np.maximum(peaks["v"], _column_peak(v))
+            finite = np.isfinite(v)
+            stats["rate_count"] += finite.sum(axis=0)
+            stats["rate_min"] = np.minimum(
+                stats["rate_min"], np.min(np.where(finite, v, np.inf), 0)
+            )
+            stats["rate_max"] = np.maximum(
+                stats["rate_max"], np.max(np.where(finite, v, -np.inf), 0)
+            )
+        peaks["vx"] = max(peaks["vx"], float(np.nanmax(np.abs(speed), initial=0.0)))
+        for i, name in enumerate(REFERENCE):
+            if name in chunk:
+                reference_present[i] |= bool(np.isfinite(chunk[name]).any())
+        collected = dict(chunk, vx=speed)
+        if not head.done:
+            stop = int(np.searchsorted(t, t0 + (still_period or 0.0), side="right"))
+            head.add(collected, 0, min(stop + 1, n))  # one sample past the period
+            head.done = stop < n
+        if wiring_checks and not wiring.done:
+            first = 0
+            if wiring_end is None:
+                moving = np.flatnonzero(np.abs(np.nan_to_num(speed)) > MOVING)
+                if moving.size:
+                    first = int(moving[0])
+                    wiring_end = t[first] + WINDOW
+            if wiring_end is not None:
+                stop = int(np.searchsorted(t, wiring_end))
+                wiring.add(collected, first, stop)
+                wiring.done = stop < n
+    t = t_store.array()
+    if not t.size:
+        raise ChunkError(f"{source}: no rows")
+    check_time_column(t, source)
+    az_assumed = "az" not in names
+    az = az_store.array()
+    del az_store
+    az_median = np.nanmedian(az) if np.any(np.isfinite(az)) else np.nan
+    del az
+    check_units(
+        np.array([[0.0, 0.0, az_median]]),
+        peaks["d"][None, :],
+        peaks["v"][None, :] if TRAVEL_RATE[0] in names else None,
+        np.array([peaks["vx"]]),
+        source,
+    )
+    stream = LogStream(
+        path=path,
+        source=source,
+        names=names,
+        t=t,
+        travel_present=travel_present,
+        reference_present=reference_present if any(n in names for n in REFERENCE) else None,
+        velocities_derived=TRAVEL_RATE[0] not in names and bool(travel_present.any()),
+        az_assumed=az_assumed,
+        speed_source=speed_source,
+        channel_stats=ChannelStats(**stats),
+        wiring=_signals(wiring, source, az_assumed) if wiring.parts else None,
+        head=_signals(head, source, az_assumed),
+        rows=rows,
+    )
+    if stream.velocities_derived:
+        Differentiator(np.diff(t), 4, VELOCITY_CUTOFF, source)  # its checks, before any output
+    return stream
+
+
+def _signals(head: _Head, source: str, az_assumed: bool) -> Signals:
+    """A :class:`Signals` of the collected samples (what the checks read of it)."""
+    t = head.array("t")
+    n = t.size
+    az = np.full(n, GRAVITY) if az_assumed else head.array("az")
+    d = np.column_stack([head.array(name) for name in TRAVEL]) if TRAVEL[0] in head.parts else None
+    rates = np.column_stack([head.array(n) for n in RATES]) if RATES[0] in head.parts else None
+    if n < 2:  # a one-sample window: the checks find too little motion
+        t, az = np.array([t[0], t[0] + 1e-9]), np.resize(az, 2)
+        n = 2
+        d = None if d is None else np.resize(d, (2, 4))
+        rates = None if rates is None else np.resize(rates, (2, 3))
+        vx, ax, ay = (np.resize(head.array(k), 2) for k in ("vx", "ax", "ay"))
+    else:
+        vx, ax, ay = (head.array(k) for k in ("vx", "ax", "ay"))
+    return Signals(
+        t=t,
+        vx=vx,
+        acc=np.column_stack([ax, ay, az]),
+        d=np.full((n, 4), np.nan) if d is None else d,
+        v=np.full((n, 4), np.nan),
+        rates=rates,
+        source=source,
+    )

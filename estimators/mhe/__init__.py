@@ -1,0 +1,1 @@
+"""The moving-horizon estimator: settings, QP window, ring buffers, per-sample terms."""

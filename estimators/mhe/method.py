@@ -1,0 +1,50 @@
+"""The moving-horizon estimator behind the ``Estimator`` interface (estimators.protocol).
+
+:class:`~wheelload.estimators.mhe.estimator.MovingHorizonEstimator` needs the nominal
+sample interval to set up its window (cost scale, steady-state arrival);
+this adapter fixes it at construction so that ``initial_state()`` takes no
+argument. ``run`` uses the log's median interval, so ``run`` and repeated
+``step`` agree when ``interval`` is that median (e.g. 0.01 s at 100 Hz).
+"""
+
+from __future__ import annotations
+
+import math
+
+from wheelload.estimators.kf.two_stage import Sample
+from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.mhe.estimator import (
+    MheEstimate,
+    MheSettings,
+    MheState,
+    MovingHorizonEstimator,
+)
+from wheelload.models import Vehicle
+
+NOMINAL_INTERVAL = 0.01  # s, 100 Hz
+
+
+class MheMethod:
+    """:class:`MovingHorizonEstimator` with ``initial_state()`` at a fixed nominal interval."""
+
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        settings: MheSettings | None = None,
+        *,
+        interval: float = NOMINAL_INTERVAL,
+    ) -> None:
+        if not (math.isfinite(interval) and interval > 0):
+            raise ValueError(f"the nominal sample interval must be > 0, got {interval}")
+        self.mhe = MovingHorizonEstimator(vehicle, settings)
+        self.interval = interval
+        self.name = self.mhe.name
+
+    def initial_state(self) -> MheState:
+        return self.mhe.initial_state(self.interval)
+
+    def step(self, state: MheState, sample: Sample, dt: float) -> tuple[MheState, MheEstimate]:
+        return self.mhe.step(state, sample, dt)
+
+    def run(self, signals: Signals) -> MheEstimate:
+        return self.mhe.run(signals)

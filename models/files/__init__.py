@@ -1,0 +1,1 @@
+"""Files the library writes: the private build folder, owner-named temporaries."""

@@ -1,0 +1,191 @@
+"""Where generated code is compiled: a private folder of the current user.
+
+Compiled libraries are cached by the hash of their source, so the folder
+must be writable by this user alone: ``<system temp>/wheelload-build-<uid>``,
+mode 0700, owned by the user, not a symbolic link. Anything else is refused
+with a :class:`BuildFolderError` (one line on the command line) rather than
+trusted.
+
+A cached library is loaded only after a check: its size and SHA-256 are
+recorded at build time in a sidecar file (``<library>.sha256``, renamed into
+place before the library itself), and a library that does not match (truncated,
+damaged, or without its record) is built again with a one-line note, never
+mapped (a truncated library mapped into memory kills the process with SIGBUS).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import shutil
+import stat
+import subprocess
+import tempfile
+from pathlib import Path
+
+from wheelload.models.files.temporaries import remove_stale, temporary_file
+
+_log = logging.getLogger(__name__)
+
+
+class BuildFolderError(RuntimeError):
+    """The build folder cannot be trusted or no library can be built: names it and the fix."""
+
+
+def build_folder() -> Path:
+    """The private build folder, created on first use; a :class:`BuildFolderError` otherwise."""
+    folder = Path(tempfile.gettempdir()) / f"wheelload-build-{os.getuid()}"
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+    except OSError as error:
+        raise BuildFolderError(
+            f"{folder}: cannot make the build folder ({error.strerror}): "
+            "set TMPDIR to a folder of your own"
+        ) from None
+    info = folder.lstat()
+    mode = stat.S_IMODE(info.st_mode)
+    if stat.S_ISLNK(info.st_mode):
+        reason = "is a symbolic link"
+    elif not stat.S_ISDIR(info.st_mode):
+        reason = "is not a folder"
+    elif info.st_uid != os.getuid():
+        reason = f"is owned by user {info.st_uid}"
+    elif mode & 0o077:
+        reason = f"has mode {mode:o}: others may enter it"
+    else:
+        return folder
+    raise BuildFolderError(
+        f"{folder}: not a folder private to this user ({reason}): remove it "
+        f"(rm -r {folder}) so that it can be made again with mode 700"
+    )
+
+
+def jit_options() -> dict:
+    """CasADi JIT with the system C compiler, building in :func:`build_folder`."""
+    return {
+        "jit": True,
+        "compiler": "shell",
+        "jit_options": {"flags": ["-O2"], "directory": f"{build_folder()}{os.sep}"},
+    }
+
+
+#: Flags of the plant's compiled chunk (as the CasADi JIT it replaces: ``-O2``).
+CHUNK_FLAGS = ("-O2", "-fPIC", "-shared")
+
+
+def _record(data: bytes) -> str:
+    """The sidecar's text: size and SHA-256 of a library's bytes."""
+    return f"{len(data)} {hashlib.sha256(data).hexdigest()}\n"
+
+
+def _sidecar(library: Path) -> Path:
+    return library.with_name(library.name + ".sha256")
+
+
+def checked_library(library: Path) -> str | None:
+    """Why ``library`` may not be loaded (its record is missing or it does not match), or
+    None when its size and hash are those recorded at build time (module docstring)."""
+    try:
+        recorded = _sidecar(library).read_text(encoding="ascii")
+    except (OSError, UnicodeDecodeError):
+        return "it has no build record"
+    try:
+        data = library.read_bytes()
+    except OSError as error:
+        return f"it cannot be read ({error.strerror})"
+    if _record(data) != recorded:
+        return f"its {len(data)} bytes are not those recorded at build time"
+    return None
+
+
+def _put(folder: Path, target: Path, data: bytes) -> None:
+    """Write ``data`` to ``target`` through a temporary renamed into place."""
+    temporary = temporary_file(folder, target.stem, target.suffix)
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, target)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def _compile(source: str, library: Path, command: tuple[str, ...], purpose: str) -> bytes:
+    """The bytes of ``source`` compiled by ``command``, in a temporary folder of the build
+    folder (fixed file names inside it, so that the same source gives the same bytes)."""
+    folder = library.parent
+    work = temporary_file(folder, library.stem, ".d")
+    work.unlink()
+    work.mkdir(mode=0o700)
+    try:
+        c_file = work / library.with_suffix(".c").name
+        c_file.write_text(source)
+        output = work / library.name
+        try:
+            subprocess.run(
+                [*command, "-o", output.name, c_file.name, "-lm"],
+                check=True,
+                capture_output=True,
+                text=True,
+                cwd=work,
+            )
+        except FileNotFoundError:
+            raise BuildFolderError(
+                f"no C compiler 'gcc' found: it is needed to {purpose}; install gcc"
+            ) from None
+        except subprocess.CalledProcessError as error:
+            raise RuntimeError(f"compiling {library.stem} failed:\n{error.stderr}") from None
+        return output.read_bytes()
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
+    """``source`` compiled once by ``command`` (gcc and its flags) and loaded with ``load``.
+
+    The library is named by the hash of the source and the command, built
+    under :func:`build_folder`, its record (size and SHA-256) and then the
+    library renamed into place. A cached library is loaded only when it matches
+    its record (:func:`checked_library`); one that does not, or does not load,
+    is built again with a one-line note. ``purpose`` completes "gcc is needed to ...".
+    """
+    digest = hashlib.sha256((" ".join(command) + "\n" + source).encode()).hexdigest()[:16]
+    folder = build_folder()
+    library = folder / f"{name}_{digest}.so"
+    if library.exists():
+        problem = checked_library(library)
+        if problem is None:
+            try:
+                return load(library)
+            except (OSError, RuntimeError) as error:
+                first = (str(error) or type(error).__name__).splitlines()[0]
+                problem = f"it does not load ({first})"
+        _log.warning("wheelload: note: cached library %s is rebuilt: %s", library, problem)
+    remove_stale(folder)
+    data = _compile(source, library, command, purpose)
+    # The record first: a library in place always has its record, and a crash between
+    # the two renames leaves a record without its library (built again, never loaded).
+    _put(folder, _sidecar(library), _record(data).encode("ascii"))
+    _put(folder, library, data)
+    return load(library)
+
+
+def cached_function(function):
+    """``function`` as generated C, compiled once per source and loaded (``casadi.external``).
+
+    The library is named by the hash of its C source and flags (which hold
+    every parameter baked into the expressions), so a second process with the
+    same model loads it instead of compiling again (the CasADi JIT compiles on
+    every call); see :func:`cached_library`.
+    """
+    import casadi as ca
+
+    name = function.name()
+    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+    generator.add(function)
+    return cached_library(
+        generator.dump(),
+        name,
+        ("gcc", *CHUNK_FLAGS),
+        lambda library: ca.external(name, str(library)),
+        "compile the plant",
+    )

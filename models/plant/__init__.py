@@ -1,0 +1,1 @@
+"""The ground-truth plant: dynamics, equilibrium, tyre, slip control, road surface."""

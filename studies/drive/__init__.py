@@ -1,0 +1,1 @@
+"""The virtual test drive: roads, tracks, driver, speed profile, sensors, simulation, scenarios."""

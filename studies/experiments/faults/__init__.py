@@ -1,0 +1,1 @@
+"""Faulty and hostile logs: sensor faults, spikes, corruptions, and their studies."""

@@ -1,0 +1,1 @@
+"""Running the studies: units of work, cache, runner, context, output-folder lock."""

@@ -1,0 +1,1 @@
+"""Estimate one or many logs: batch, lean path, digest, warnings, method comparison."""

@@ -1,0 +1,443 @@
+"""Many logs: estimate each, write one output per log and one summary table.
+
+Logs are given as files, folders (every log file inside, not recursive) or
+glob patterns. :func:`run_logs` processes them serially, on local worker
+processes, or on an existing Dask cluster, with a progress bar; the summary
+rows are sorted by log path, so every way gives the same table.
+
+Example
+-------
+>>> table = run_logs(expand_logs(["fleet/"]), settings, workers=2)
+"""
+
+from __future__ import annotations
+
+import functools
+import glob
+import threading
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
+from wheelload.estimators.codegen.batched import run_batched
+from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators.kf.guard import guard_settings_for
+from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
+from wheelload.estimators.kf.two_stage import step_function
+from wheelload.estimators.logs.checks import check_wiring, describe, raise_for_wiring
+from wheelload.estimators.logs.output_files import write_frame
+from wheelload.estimators.logs.plausibility import (
+    check_plausibility,
+    describe_plausibility,
+    raise_for_plausibility,
+)
+from wheelload.estimators.logs.readers import SUFFIXES
+from wheelload.estimators.logs.signals import coarse_travel_note
+from wheelload.estimators.registry import build, method
+from wheelload.models import Vehicle, load_vehicle
+from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
+from wheelload.studies.workers import ignore_interrupts
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+WHEELS = ("fl", "fr", "rl", "rr")
+SUMMARY_NAME = "summary.csv"
+
+
+@dataclass(frozen=True, kw_only=True)
+class EstimateSettings:
+    """How each log is estimated (the command line's options)."""
+
+    vehicle: Path
+    method: str = "kf"
+    channels: Path | None = None
+    still_period: float | None = None
+    still_noise: float | None = None
+    corner_weights: str | None = None
+    allow_unusual: bool = False
+    wiring_checks: bool = True
+    smooth: bool = False  # offline RTS smoother over the KF (kf only)
+    suspension: SuspensionModel = DEFAULT_MODEL  # vehicle model of a family method
+
+
+@dataclass(frozen=True, kw_only=True)
+class LogResult:
+    """One log's signals, estimate and the lines to tell the user."""
+
+    signals: Signals
+    estimate: Estimate
+    vehicle: Vehicle
+    notes: tuple[str, ...]
+    warnings: tuple[str, ...]
+
+
+def expand_logs(patterns: list[str]) -> list[Path]:
+    """Log files named by files, folders or glob patterns, sorted, without repeats."""
+    found: list[Path] = []
+    for pattern in patterns:
+        path = Path(pattern)
+        if path.is_dir():
+            matches = [p for p in sorted(path.iterdir()) if p.suffix.lower() in SUFFIXES]
+            if not matches:
+                raise ValueError(f"{path}: folder has no log file ({', '.join(SUFFIXES)})")
+        elif path.exists():
+            matches = [path]
+        elif glob.has_magic(pattern):
+            matches = [Path(p) for p in sorted(glob.glob(pattern)) if Path(p).is_file()]
+            if not matches:
+                raise ValueError(f"{pattern}: no file matches")
+        else:
+            raise ValueError(f"{path}: no such log file")
+        found += matches
+    return sorted(dict.fromkeys(found))
+
+
+_lock = threading.Lock()
+
+
+@functools.lru_cache(maxsize=1)
+def _step():
+    return step_function()
+
+
+@functools.lru_cache(maxsize=4)
+def _vehicle(path: Path, allow_unusual: bool = False) -> Vehicle:
+    return load_vehicle(path, allow_unusual=allow_unusual)
+
+
+@functools.lru_cache(maxsize=8)
+def _filter(vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None) -> TwoStageKF:
+    """A filter whose compiled loop is built, cached per process."""
+    initial = None if static is None else np.array(static)
+    kf = TwoStageKF(_vehicle(vehicle, allow_unusual), static=initial, step=_step())
+    kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
+                   d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
+    return kf
+
+
+def _prepare_log(path: Path, settings: EstimateSettings):
+    """Read one log, run the wiring checks, set the static loads: ``(vehicle, signals, notes,
+    static)``."""
+    vehicle = _vehicle(settings.vehicle, settings.allow_unusual)
+    signals = read_log(path, channels=settings.channels, wiring_checks=False)
+    notes = []
+    coarse = coarse_travel_note(signals.travel_quantum, guard_settings_for(vehicle).stuck_motion)
+    if coarse is not None:
+        notes.append(coarse)
+    if settings.wiring_checks:
+        report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
+        raise_for_wiring(report, signals.source)
+        notes.append(describe(report))
+        plausibility = check_plausibility(signals, vehicle)
+        raise_for_plausibility(plausibility, signals.source)
+        notes.append(describe_plausibility(plausibility))
+    static = None
+    if settings.corner_weights is not None:
+        static = corner_weight_loads(settings.corner_weights)
+        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
+    if settings.still_period:
+        still = check_still_period(
+            signals, vehicle, settings.still_period, static=static, noise=settings.still_noise
+        )
+        static = still.static
+        notes.append(still.reason)
+    return vehicle, signals, notes, static
+
+
+def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
+    """Read one log, set the static loads, run the chosen estimator (default: the two-stage KF)."""
+    vehicle, signals, notes, static = _prepare_log(path, settings)
+    if settings.method == "kf":
+        key = None if static is None else tuple(float(f) for f in static)
+        with _lock:  # build (or load) the compiled loop once per process, not per thread
+            estimator = _filter(settings.vehicle, settings.allow_unusual, key)
+    elif static is not None:
+        raise ValueError(
+            "--still-period and --corner-weights apply to --method kf only, "
+            f"not {settings.method!r}"
+        )
+    elif settings.smooth:
+        raise ValueError(f"--smooth applies to --method kf only, not {settings.method!r}")
+    else:
+        estimator = build(settings.method, vehicle, settings.suspension)
+        if method(settings.method).model_choice:
+            notes.append(f"{settings.suspension.value} vehicle model (--suspension)")
+    if settings.smooth:
+        estimate = estimator.smooth(signals)
+        notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")
+    else:
+        estimate = estimator.run(signals)
+    warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
+    return LogResult(
+        signals=signals, estimate=estimate, vehicle=vehicle, notes=tuple(notes),
+        warnings=tuple(warnings),
+    )  # fmt: skip
+
+
+def output_path(log: Path, folder: Path) -> Path:
+    """``FOLDER/LOGNAME.estimates.csv``."""
+    return folder / f"{log.name}.estimates.csv"
+
+
+def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> None:
+    """Write a table as CSV or Parquet, by ``path``'s suffix, through a temporary file.
+
+    An existing file is replaced only with ``replace`` (``--force``); pyarrow
+    writes it (:func:`~wheelload.estimators.logs.output_files.write_frame`).
+    """
+    write_frame(frame, path, replace=replace)
+
+
+def _log_columns(path: Path, log) -> dict:
+    """The summary row's columns of the log itself; ``log`` a ``Signals`` or ``LogStream``."""
+    return {
+        "log": str(path),
+        "samples": len(log.t),
+        "duration_s": float(log.t[-1] - log.t[0]),
+        "rate_hz": log.sample_rate,
+        "mode": log.mode(),
+    }
+
+
+def summary_row(path: Path, result: LogResult) -> dict:
+    """One row of the summary table."""
+    estimate, signals = result.estimate, result.signals
+    row = _log_columns(path, signals)
+    for i, wheel in enumerate(WHEELS):
+        row[f"mean_fz_{wheel}"] = float(estimate.loads[:, i].mean())
+    for i, wheel in enumerate(WHEELS):
+        row[f"mean_std_{wheel}"] = float(estimate.std[:, i].mean())
+    row["skipped_samples"] = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
+    row["negative_samples"] = int((estimate.loads < 0).any(axis=1).sum())
+    row["min_fz"] = float(estimate.loads.min())
+    row["rmse_pooled"] = np.nan
+    if signals.reference is not None and np.isfinite(signals.reference).any():
+        try:
+            table = wheel_metrics(estimate.loads, signals.reference, source=str(path))
+            row["rmse_pooled"] = float(table.loc["pooled", "RMSE"])
+        except ValueError:
+            pass  # the row keeps NaN: no sample to score
+    row["warnings"] = len(result.warnings)
+    row["error"] = ""
+    return row
+
+
+#: Logs of more bytes than this run one at a time on the lean path (read in chunks,
+#: memory bounded by the chunk) instead of read whole and filtered side by side.
+LEAN_BYTES = 32 << 20
+
+
+def _goes_lean(path: Path, settings: EstimateSettings, lean_bytes: int) -> bool:
+    from wheelload.studies.pipeline.lean_estimate import takes_lean_path
+
+    try:
+        size = path.stat().st_size
+    except OSError:
+        return False  # the ordinary reader names the problem
+    return takes_lean_path(path, settings) and size > lean_bytes
+
+
+def lean_row(
+    path: Path, settings: EstimateSettings, folder: Path | None, force: bool = False
+) -> dict | None:
+    """:func:`process_log` on the lean path (``studies/pipeline/lean_estimate.py``): the same
+    estimates as :meth:`TwoStageKF.run` to the bit, memory bounded by the chunk; None where
+    the chunked reader cannot take the log (nothing written)."""
+    from wheelload.studies.pipeline.lean_estimate import estimate_lean
+
+    try:
+        out = None if folder is None else output_path(path, folder)
+        result = estimate_lean(path, settings, out, force=force)
+        if result is None:
+            return None
+        stream, digest = result.stream, result.digest
+        row = _log_columns(path, stream)
+        means, stds = digest.means(), digest.mean_std()
+        row.update({f"mean_fz_{wheel}": float(means[i]) for i, wheel in enumerate(WHEELS)})
+        row.update({f"mean_std_{wheel}": float(stds[i]) for i, wheel in enumerate(WHEELS)})
+        row["skipped_samples"] = digest.skipped
+        row["negative_samples"] = digest.negative_samples
+        row["min_fz"] = float(digest.load_min.min())
+        row["rmse_pooled"] = np.nan
+        if stream.reference_present is not None:
+            try:
+                row["rmse_pooled"] = float(digest.metrics(str(path)).loc["pooled", "RMSE"])
+            except ValueError:
+                pass  # the row keeps NaN: no sample to score
+        row["warnings"] = len(result.warnings)
+        row["error"] = ""
+        return row
+    except (ValueError, FileNotFoundError) as error:
+        return {"log": str(path), "error": str(error)}
+
+
+def process_log(
+    path: Path,
+    settings: EstimateSettings,
+    folder: Path | None,
+    force: bool = False,
+    lean_bytes: int = LEAN_BYTES,
+) -> dict:
+    """Estimate one log, write its output into ``folder``; its summary row.
+
+    A log that cannot be used gives a row with its one-line error, so one bad
+    file does not stop a fleet. A CSV or Parquet log over ``lean_bytes`` is
+    read in chunks (:func:`lean_row`).
+    """
+    if _goes_lean(path, settings, lean_bytes):
+        row = lean_row(path, settings, folder, force)
+        if row is not None:
+            return row
+    try:
+        result = estimate_log(path, settings)
+        if folder is not None:
+            write_table(result.estimate.to_pandas(), output_path(path, folder), replace=force)
+        return summary_row(path, result)
+    except (ValueError, FileNotFoundError) as error:
+        return {"log": str(path), "error": str(error)}
+
+
+def process_logs(
+    paths: list[Path],
+    settings: EstimateSettings,
+    folder: Path | None,
+    force: bool = False,
+    lean_bytes: int = LEAN_BYTES,
+) -> list[dict]:
+    """:func:`process_log` over a chunk of logs (one task on a worker).
+
+    With the two-stage KF (not smoothed), the chunk's logs are filtered side
+    by side in the generated C library's batched step (``estimators/codegen/batched.py``),
+    :data:`BATCH` at a time, a chunk of one log too: a log's estimates do not depend
+    on its batch, so serial, local processes and Dask give the same bits however
+    the logs are split. They equal :meth:`TwoStageKF.run` (a single log's path, the
+    compiled loop of the CasADi step) within :data:`BATCHED_TOLERANCE`: the
+    generated library evaluates the same equations in another order of
+    operations (a few units in the last place, measured by ``wheelload bench
+    logs``). A CSV or Parquet log over ``lean_bytes`` runs alone on the lean path
+    instead (:func:`lean_row`: memory bounded by the chunk, :meth:`TwoStageKF.run`'s
+    numbers to the bit).
+    """
+    if settings.method != "kf" or settings.smooth:
+        return [process_log(path, settings, folder, force, lean_bytes) for path in paths]
+    rows: dict[Path, dict] = {}
+    prepared: dict[tuple[float, ...] | None, list] = {}
+    for path in paths:
+        if _goes_lean(path, settings, lean_bytes):
+            row = lean_row(path, settings, folder, force)
+            if row is not None:
+                rows[path] = row
+                continue
+        try:
+            vehicle, signals, notes, static = _prepare_log(path, settings)
+        except (ValueError, FileNotFoundError) as error:
+            rows[path] = {"log": str(path), "error": str(error)}
+            continue
+        key = None if static is None else tuple(float(f) for f in static)
+        prepared.setdefault(key, []).append((path, vehicle, signals, notes))
+    for key, logs in prepared.items():
+        with _lock:
+            kf = _filter(settings.vehicle, settings.allow_unusual, key)
+        for start in range(0, len(logs), BATCH):
+            group = logs[start : start + BATCH]
+            estimates = run_batched(kf, settings.vehicle, [log[2] for log in group])
+            for (path, vehicle, signals, notes), estimate in zip(group, estimates, strict=True):
+                rows[path] = _finish_log(path, settings, folder, force, signals, estimate,
+                                         vehicle, notes)  # fmt: skip
+    return [rows[path] for path in paths]
+
+
+#: Logs filtered side by side at most (their inputs are held in memory together).
+BATCH = 16
+
+#: Largest relative difference of a batched estimate from :meth:`TwoStageKF.run`'s
+#: (loads and standard deviations): measured at 5e-16 (1.8e-12 N on 5 kN) by
+#: ``wheelload bench logs``, allowed with a margin for other logs and compilers.
+BATCHED_TOLERANCE = 1e-13
+
+
+def _finish_log(path, settings, folder, force, signals, estimate, vehicle, notes) -> dict:
+    """Warnings, the output file and the summary row of one estimated log."""
+    try:
+        warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
+        result = LogResult(signals=signals, estimate=estimate, vehicle=vehicle,
+                           notes=tuple(notes), warnings=tuple(warnings))  # fmt: skip
+        if folder is not None:
+            write_table(result.estimate.to_pandas(), output_path(path, folder), replace=force)
+        return summary_row(path, result)
+    except (ValueError, FileNotFoundError) as error:
+        return {"log": str(path), "error": str(error)}
+
+
+def chunks(paths: list[Path], workers: int) -> list[list[Path]]:
+    """About :data:`CHUNKS_PER_WORKER` chunks per worker: few tasks, balanced load."""
+    size = max(1, -(-len(paths) // (CHUNKS_PER_WORKER * workers)))
+    return [paths[i : i + size] for i in range(0, len(paths), size)]
+
+
+CHUNKS_PER_WORKER = 8
+
+
+def run_logs(
+    paths: list[Path],
+    settings: EstimateSettings,
+    folder: Path | None,
+    *,
+    workers: int = 1,
+    dask_address: str | None = None,
+    progress: bool = True,
+    force: bool = False,
+    lean_bytes: int = LEAN_BYTES,
+) -> pd.DataFrame:
+    """The summary table of many logs (module docstring); rows sorted by log path.
+
+    Logs go to the workers in chunks (:func:`chunks`), so that the cost of a
+    task is small beside the logs it carries. Logs over ``lean_bytes`` are read
+    in chunks (:func:`process_logs`).
+    """
+    import pandas as pd
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(paths), unit="log", disable=not progress or None)
+    rows = []
+    if dask_address is not None:
+        from distributed import Client
+        from distributed import as_completed as dask_completed
+
+        with Client(dask_address) as client:
+            threads = max(1, sum(client.nthreads().values()))
+            futures = [client.submit(process_logs, chunk, settings, folder, force, lean_bytes,
+                                     pure=False)
+                       for chunk in chunks(paths, threads)]  # fmt: skip
+            for future in dask_completed(futures):
+                done = future.result()
+                rows += done
+                bar.update(len(done))
+    elif workers > 1:
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_interrupts)
+        try:
+            futures = [pool.submit(process_logs, chunk, settings, folder, force, lean_bytes)
+                       for chunk in chunks(paths, workers)]  # fmt: skip
+            for future in as_completed(futures):
+                done = future.result()
+                rows += done
+                bar.update(len(done))
+        finally:  # on Ctrl-C or SIGTERM: the chunks not started are dropped
+            pool.shutdown(cancel_futures=True)
+    else:
+        for chunk in chunks(paths, 1):
+            done = process_logs(chunk, settings, folder, force, lean_bytes)
+            rows += done
+            bar.update(len(done))
+    bar.close()
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    table = pd.DataFrame(rows, columns=columns).sort_values("log", ignore_index=True)
+    if "error" in table.columns:
+        table["error"] = table["error"].fillna("")
+    return table

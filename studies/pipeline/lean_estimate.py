@@ -1,0 +1,146 @@
+"""One CSV or Parquet log through the lean whole-log path: memory bounded by the chunk.
+
+The log is scanned (:func:`~wheelload.estimators.loops.log_stream.scan_log`: time
+column, wiring window, sensor set), then read again chunk by chunk through
+the compiled column loop; each chunk is written (``out``) and summarised
+(:class:`~wheelload.studies.pipeline.estimate_digest.EstimateDigest`) before the next
+is read. The estimates are those of :meth:`TwoStageKF.run` on the whole log,
+to the bit. ``wheelload estimate`` takes this path for one log and, for long
+logs, for each log of many (:mod:`wheelload.studies.pipeline.batch`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from wheelload.estimators import TwoStageKF
+from wheelload.estimators.result import SensorFault
+from wheelload.models import Vehicle, load_vehicle
+from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+
+if TYPE_CHECKING:
+    from wheelload.estimators.loops.log_stream import LogStream
+
+
+@dataclass(frozen=True, kw_only=True)
+class LeanResult:
+    """A log estimated on the lean path: its scan, the digest of its estimates, the lines
+    to tell the user."""
+
+    stream: LogStream
+    vehicle: Vehicle
+    digest: EstimateDigest
+    faults: tuple[SensorFault, ...]
+    notes: tuple[str, ...]
+    warnings: tuple[str, ...]
+
+
+def takes_lean_path(path: Path, settings) -> bool:
+    """Whether the lean path can take this log (the KF, not smoothed, on a CSV/Parquet log
+    named as ours); ``settings`` an :class:`~wheelload.studies.pipeline.batch.EstimateSettings`."""
+    return (
+        settings.method == "kf"
+        and not settings.smooth
+        and settings.channels is None
+        and path.suffix.lower() in (".csv", ".parquet", ".pq")
+    )
+
+
+def estimate_lean(
+    path: Path, settings, out: Path | None, *, force: bool = False
+) -> LeanResult | None:
+    """Estimate ``path`` chunk by chunk, writing ``out`` (CSV or Parquet) if given.
+
+    None (nothing written) for a log the chunked reader cannot take as plain
+    numbers: the ordinary reader then reads it and names the problem.
+    """
+    from wheelload.estimators.logs.checks import describe, raise_for_wiring
+    from wheelload.estimators.logs.output_files import table_writer
+    from wheelload.estimators.logs.plausibility import (
+        check_plausibility,
+        describe_plausibility,
+        raise_for_plausibility,
+    )
+    from wheelload.estimators.logs.readers.chunks import ChunkError
+    from wheelload.estimators.loops.log_stream import scan_log
+    from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
+
+    try:
+        stream = scan_log(
+            path, still_period=settings.still_period, wiring_checks=settings.wiring_checks
+        )
+    except ChunkError:
+        return None
+    vehicle = load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual)
+    notes = []
+    if settings.wiring_checks:
+        report = stream.wiring_report()
+        raise_for_wiring(report, stream.source)
+        notes.append(describe(report))
+        plausibility = check_plausibility(stream.wiring or stream.head, vehicle)
+        raise_for_plausibility(plausibility, stream.source)
+        notes.append(describe_plausibility(plausibility))
+    static, reason = static_loads_for(stream, vehicle, settings)
+    notes += reason
+    kf = TwoStageKF(vehicle, static=static)
+    digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
+    faults: list[SensorFault] = []
+    with contextlib.ExitStack() as stack:
+        write = (
+            stack.enter_context(table_writer(Path(out), replace=force)) if out is not None else None
+        )
+        for chunk in stream.chunks(kf, faults=faults):
+            if write is not None:
+                write(chunk.columns())
+            digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
+    stats = stream.channel_stats
+    warnings = channel_warnings(
+        stream.source,
+        stream.sample_rate,
+        travel_count=stats.travel_count,
+        travel_peak=stats.travel_peak,
+        rate_count=stats.rate_count,
+        rate_min=stats.rate_min,
+        rate_max=stats.rate_max,
+        velocities_derived=stream.velocities_derived,
+    ) + negative_load_warnings(digest.negative_samples, digest.load_min, str(path))
+    return LeanResult(
+        stream=stream,
+        vehicle=vehicle,
+        digest=digest,
+        faults=tuple(faults),
+        notes=tuple(notes),
+        warnings=tuple(warnings),
+    )
+
+
+def static_loads_for(stream, vehicle, settings):
+    """Static loads from corner weights and a still period, as ``estimate_log`` sets them.
+
+    The still-period check reads the first samples only (``stream.head``); a travel
+    channel of the log with no sample in the period is refused as on the whole log.
+    """
+    from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
+
+    static, notes = None, []
+    if settings.corner_weights is not None:
+        static = corner_weight_loads(settings.corner_weights)
+        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
+    if settings.still_period:
+        head = stream.head
+        window = head.t <= head.t[0] + settings.still_period
+        if settings.still_period > 0 and np.any(
+            stream.travel_present & ~np.isfinite(head.d[window]).any(axis=0)
+        ):
+            raise ValueError(f"{stream.source}: a travel channel has no sample in the still period")
+        still = check_still_period(
+            head, vehicle, settings.still_period, static=static, noise=settings.still_noise
+        )
+        static = still.static
+        notes.append(still.reason)
+    return static, notes

@@ -1,0 +1,1 @@
+"""Figures of the command line: estimates, comparisons, scenarios, identification."""

@@ -1,0 +1,113 @@
+"""The generated library's batched step equals its single step; ``run_batched`` equals ``run``.
+
+- Built with the strict flags (``-std=c99``: no FMA contraction), the batched
+  step runs the same operations as the single step, so the self-test's
+  ``batch-check`` (16 filters side by side against 16 single filters on a
+  20 s scenario with lane changes, bumps into the stops and missing inputs)
+  must find them bit-identical, flags included, in double and float.
+- Built with ``FAST_CFLAGS`` the library compiles warning-free and gcc
+  vectorises the loop over filters.
+- :func:`run_batched` (the fast build: FMA contraction rounds once where the
+  compiled ``run`` rounds twice) equals :meth:`TwoStageKF.run` to 1e-12
+  relative, flag for flag, on logs of different lengths with missing and
+  implausible samples.
+"""
+
+import platform
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from wheelload.estimators import TwoStageKF
+from wheelload.estimators.codegen.batched import run_batched
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.models import example_vehicle_path
+
+
+@pytest.mark.parametrize("precision", list(Precision))
+def test_batched_step_is_bit_identical_to_the_single_step(tmp_path, precision):
+    library = generate(example_vehicle_path(), tmp_path, CodegenOptions(precision=precision))
+    binary = build_program(library, library.selftest, tmp_path / "selftest")
+    out = subprocess.run(
+        [str(binary), "batch-check", "3000", "16"], capture_output=True, text=True, check=True
+    ).stdout
+    values = dict(re.findall(r"(\w+) (\S+)", out))
+    assert float(values["max_relative"]) == 0.0, out
+    assert int(values["differing_flags"]) == 0, out
+    assert int(values["flagged"]) > 1000, out  # the guards and skipped updates were exercised
+
+
+@pytest.mark.skipif(platform.machine() != "x86_64", reason="vectoriser report checked on x86-64")
+def test_fast_build_is_warning_free_and_vectorises_the_batch(tmp_path):
+    library = generate(example_vehicle_path(), tmp_path, CodegenOptions())
+    result = subprocess.run(
+        ["gcc", *FAST_CFLAGS, "-fopt-info-vec-optimized", "-c", str(library.source),
+         "-o", str(tmp_path / "library.o")],
+        capture_output=True, text=True,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    text = library.source.read_text().splitlines()
+    loop = next(k for k, line in enumerate(text, start=1) if line.strip() == "IVDEP") + 1
+    assert re.search(rf":{loop}:\d+: optimized: loop vectorized", result.stderr), result.stderr
+
+
+def test_run_batched_equals_run_per_log(vehicle, plant_log):
+    signals = plant_log("iso-dlc")
+    logs = []
+    for start, length in ((0, 900), (200, 400), (500, 700)):
+        log = signals.slice(start, start + length)
+        logs.append(log)
+    d = logs[1].d.copy()
+    d[50:60, 2] = np.nan  # missing travel: suspension update skipped
+    d[120, 0] = 0.5  # implausible travel
+    acc = logs[1].acc.copy()
+    acc[300:, 1] = acc[299, 1]  # a stuck lateral accelerometer
+    logs[1] = type(logs[1])(t=logs[1].t, vx=logs[1].vx, acc=acc, d=d, v=logs[1].v,
+                            reference=logs[1].reference, source="edited")  # fmt: skip
+    kf = TwoStageKF(vehicle)
+    batched = run_batched(kf, example_vehicle_path(), logs)
+    flags = 0
+    for log, estimate in zip(logs, batched, strict=True):
+        expected = kf.run(log)
+        scale = np.abs(expected.loads).max()
+        np.testing.assert_allclose(estimate.loads, expected.loads, rtol=1e-12, atol=1e-12 * scale)
+        np.testing.assert_allclose(estimate.std, expected.std, rtol=1e-12)
+        np.testing.assert_allclose(estimate.residual, expected.residual, atol=1e-12 * scale)
+        np.testing.assert_array_equal(estimate.flags, expected.flags)
+        assert estimate.sensor_faults == expected.sensor_faults
+        flags |= np.bitwise_or.reduce(estimate.flags)
+    assert flags & 0xFF, "skipped updates were exercised"
+
+
+def test_monte_carlo_unit_equals_the_per_trial_unit(tmp_path):
+    from wheelload.studies.experiments.runs.cache import ResultCache, cache_key
+    from wheelload.studies.experiments.runs.units import (
+        TRUTH,
+        KfTrials,
+        TrialSpec,
+        TruthSpec,
+        run_kf_trials,
+        run_trial,
+        simulate_truth,
+    )
+
+    text = example_vehicle_path().read_text()
+    truth = TruthSpec(scenario="iso-dlc", vehicle_text=text)
+    key = cache_key(TRUTH, truth)
+    ResultCache(folder=tmp_path).store(key, simulate_truth(truth, tmp_path))
+    specs = tuple(
+        TrialSpec(
+            truth=truth, vehicle_text=text, methods=("kf",), noise=noise, seed=seed, truth_key=key
+        )  # fmt: skip
+        for noise, seed in ((0.0, 1000), (1.0, 1001), (4.0, 1002))
+    )
+    batched = run_kf_trials(KfTrials(specs=specs), tmp_path)
+    for spec, result in zip(specs, batched, strict=True):
+        expected = run_trial(spec, tmp_path).metrics["kf"]
+        # the loads agree to 1e-12 relative, so the metrics do to far better than 1e-9
+        np.testing.assert_allclose(result.metrics["kf"].to_numpy(), expected.to_numpy(),
+                                   rtol=1e-9)  # fmt: skip
+    assert not np.allclose(batched[0].metrics["kf"], batched[2].metrics["kf"])  # noise differs

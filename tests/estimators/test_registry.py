@@ -1,0 +1,69 @@
+"""The registry names every method once; each registered method meets the Estimator protocol."""
+
+import numpy as np
+import pytest
+
+from wheelload.estimators.kf.two_stage import TwoStageKF
+from wheelload.estimators.logs.signals import read_log
+from wheelload.estimators.protocol import Estimator, step_through
+from wheelload.estimators.registry import (
+    FAMILY_MODULES,
+    MethodInfo,
+    UnknownMethodError,
+    build,
+    method,
+    methods,
+)
+from wheelload.studies.commands.estimate import example_log_path
+
+
+@pytest.fixture(scope="module")
+def example_signals():
+    return read_log(example_log_path())
+
+
+def test_core_methods_registered_in_order():
+    names = list(methods())
+    assert names[:4] == ["kf", "projection-mp", "projection-ls", "mhe"]
+    assert len(set(names)) == len(names)
+
+
+def test_unknown_name_lists_the_known_ones():
+    with pytest.raises(UnknownMethodError) as error:
+        method("kalman")
+    message = str(error.value)
+    assert "\n" not in message
+    for name in methods():
+        assert name in message
+
+
+def test_lookup_is_case_insensitive_when_unambiguous():
+    assert method("KF") is method("kf")
+
+
+def test_method_info_rejects_bad_names():
+    with pytest.raises(ValueError):
+        MethodInfo(name="a b", description="", reference="", build=TwoStageKF)
+
+
+def test_family_modules_export_method_info():
+    # Every family module present in this build contributes exactly one entry.
+    import importlib.util
+
+    present = [
+        m for m in FAMILY_MODULES if importlib.util.find_spec(f"wheelload.estimators.family.{m}")
+    ]
+    assert len(methods()) == 4 + len(present)
+
+
+@pytest.mark.parametrize("name", ["kf", "projection-mp", "projection-ls", "mhe"])
+def test_core_filters_meet_the_protocol(name, vehicle, example_signals):
+    estimator = build(name, vehicle)
+    assert isinstance(estimator, Estimator)
+    signals = example_signals.slice(0, 50)
+    by_steps = step_through(estimator, signals)
+    whole = estimator.run(signals)
+    # Same CasADi Functions (and, for the MHE, the same QP sequence at the log's 0.01 s
+    # interval): rounding only, far below a newton.
+    np.testing.assert_allclose(whole.loads, by_steps.loads, rtol=0, atol=1e-8)
+    np.testing.assert_array_equal(whole.flags, by_steps.flags)
