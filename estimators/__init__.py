@@ -1,7 +1,8 @@
 """Estimators that turn logged signals into wheel-load estimates, and C code generation.
 
-The MHE's names are imported on first use (OSQP and scipy.sparse are slow to
-import, and a command that does not run the MHE should not pay for them).
+The settings and tools in ``_LAZY_MODULES`` are imported on first use (the MHE's
+OSQP and scipy.sparse are slow to import, and a command that does not run the MHE
+should not pay for them).
 """
 
 import importlib
@@ -17,14 +18,36 @@ from wheelload.estimators.logs.signals import (
 )
 from wheelload.estimators.result import Estimate, StepFlag
 
+#: Names imported on first use, by module: settings and tools the command line and the
+#: studies take from this face (they reach estimators through the registry).
+_LAZY_MODULES = {
+    "wheelload.estimators.mhe.estimator": (
+        "Arrival",
+        "BiasStates",
+        "Constraint",
+        "Loss",
+        "MheSettings",
+        "MovingHorizonEstimator",
+        "ResidualLoss",
+    ),
+    "wheelload.estimators.kf.guard": (
+        "FAULT_CHANNELS",
+        "GUARDS_OFF",
+        "GuardSettings",
+        "guard_settings_for",
+    ),
+    "wheelload.estimators.kf.offsets": ("check_still_period", "corner_weight_loads"),
+    "wheelload.estimators.family.suspension_model": ("DEFAULT_MODEL", "SuspensionModel"),
+    "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
+    "wheelload.estimators.loops.log_stream": ("LogStream", "scan_log"),
+}
+_LAZY = {name: module for module, names in _LAZY_MODULES.items() for name in names}
+
+
 __all__ = [
-    "Arrival",
-    "Constraint",
     "Estimate",
     "FilterState",
     "LogError",
-    "MheSettings",
-    "MovingHorizonEstimator",
     "ProjectionKF",
     "Sample",
     "Signals",
@@ -35,10 +58,8 @@ __all__ = [
     "signals_from_frame",
     "step_function",
     "write_log",
+    *sorted(_LAZY),
 ]
-
-_MHE_NAMES = ("Arrival", "Constraint", "MheSettings", "MovingHorizonEstimator")
-_LAZY = dict.fromkeys(_MHE_NAMES, "wheelload.estimators.mhe.estimator")
 
 
 def __getattr__(name: str):

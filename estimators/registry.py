@@ -53,6 +53,10 @@ class UnknownMethodError(ValueError):
     """A method name that is not registered (the message lists the known ones)."""
 
 
+class UnknownOptionError(TypeError):
+    """An option passed to :func:`build` that the method's constructor does not take."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class MethodInfo:
     """One registered method: its name, a one-line description, its source and its builder.
@@ -76,25 +80,25 @@ class MethodInfo:
             raise TypeError(f"method {self.name}: build must be callable")
 
 
-def _kf(vehicle: Vehicle) -> Estimator:
+def _kf(vehicle: Vehicle, **options) -> Estimator:
     from wheelload.estimators.kf.two_stage import TwoStageKF
 
-    return TwoStageKF(vehicle)
+    return TwoStageKF(vehicle, **options)
 
 
 def _projection(weighting_name: str) -> Callable[[Vehicle], Estimator]:
-    def build(vehicle: Vehicle) -> Estimator:
+    def build(vehicle: Vehicle, **options) -> Estimator:
         from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 
-        return ProjectionKF(vehicle, weighting=Weighting[weighting_name])
+        return ProjectionKF(vehicle, weighting=Weighting[weighting_name], **options)
 
     return build
 
 
-def _mhe(vehicle: Vehicle) -> Estimator:
+def _mhe(vehicle: Vehicle, **options) -> Estimator:
     from wheelload.estimators.mhe.method import MheMethod
 
-    return MheMethod(vehicle)
+    return MheMethod(vehicle, **options)
 
 
 CORE = (
@@ -164,13 +168,26 @@ def method(name: str) -> MethodInfo:
     raise UnknownMethodError(f"unknown method {name!r}; known methods: {', '.join(table)}")
 
 
-def build(name: str, vehicle: Vehicle, suspension: SuspensionModel = DEFAULT_MODEL) -> Estimator:
+def build(
+    name: str, vehicle: Vehicle, suspension: SuspensionModel = DEFAULT_MODEL, **options
+) -> Estimator:
     """The estimator ``name`` for ``vehicle``; an unknown name raises UnknownMethodError.
 
     ``suspension`` chooses the vehicle model of a family method (module
     docstring); the core estimators ignore it (:attr:`MethodInfo.model_choice`).
+    ``options`` go to the method's constructor as keyword arguments (the KF's
+    ``static``, ``step``, ``guard_settings``, ...); one the method does not take
+    raises :class:`UnknownOptionError` naming the method and the option.
     """
     info = method(name)
-    if info.model_choice:
-        return info.build(vehicle, suspension=suspension)
-    return info.build(vehicle)
+    try:
+        if info.model_choice:
+            return info.build(vehicle, suspension=suspension, **options)
+        return info.build(vehicle, **options)
+    except TypeError as error:
+        unknown = [key for key in options if f"'{key}'" in str(error)]
+        if unknown and "unexpected keyword argument" in str(error):
+            raise UnknownOptionError(
+                f"method {info.name!r} takes no option {unknown[0]!r}"
+            ) from None
+        raise

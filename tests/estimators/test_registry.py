@@ -10,6 +10,7 @@ from wheelload.estimators.registry import (
     FAMILY_MODULES,
     MethodInfo,
     UnknownMethodError,
+    UnknownOptionError,
     build,
     method,
     methods,
@@ -67,3 +68,20 @@ def test_core_filters_meet_the_protocol(name, vehicle, example_signals):
     # interval): rounding only, far below a newton.
     np.testing.assert_allclose(whole.loads, by_steps.loads, rtol=0, atol=1e-8)
     np.testing.assert_array_equal(whole.flags, by_steps.flags)
+
+
+def test_options_reach_the_constructor(vehicle, example_signals):
+    """``build(name, vehicle, **options)`` equals the constructor called with them."""
+    from wheelload.estimators import GUARDS_OFF
+
+    static = np.array([4000.0, 4100.0, 3500.0, 3550.0])
+    built = build("kf", vehicle, static=static, guard_settings=GUARDS_OFF).run(example_signals)
+    direct = TwoStageKF(vehicle, static=static, guard_settings=GUARDS_OFF).run(example_signals)
+    np.testing.assert_array_equal(built.loads, direct.loads)
+    np.testing.assert_array_equal(built.flags, direct.flags)
+
+
+@pytest.mark.parametrize("name", ["kf", "projection-mp", "C"])
+def test_an_option_the_method_does_not_take_is_named(name, vehicle):
+    with pytest.raises(UnknownOptionError, match=f"method '{name}' takes no option 'horizon'"):
+        build(name, vehicle, horizon=3)
