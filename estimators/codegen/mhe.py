@@ -88,16 +88,12 @@ from wheelload.estimators.kf.projection import Weighting, projection_step_functi
 from wheelload.estimators.kf.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
 from wheelload.estimators.logs.output_files import atomic_write, check_output_folder, write_text
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    Constraint,
-    MheSettings,
-    MovingHorizonEstimator,
-    _csc_value_order,
-)
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.qp import csc_value_order
 from wheelload.estimators.mhe.quiet import quiet_stdout
+from wheelload.estimators.mhe.settings import L1_CORE, Arrival, Constraint, Loss, MheSettings
 from wheelload.estimators.mhe.terms import LOAD_SCALE, TERMS_NAME, terms_function
-from wheelload.estimators.mhe.window import L1_CORE, TRAVEL_UNIT, Loss
+from wheelload.estimators.mhe.window import TRAVEL_UNIT
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, Vehicle, load_vehicle
 
@@ -317,7 +313,7 @@ def _plain_defines(mhe, settings: MheSettings) -> str:
     """The quadratic window's layout: block-tridiagonal Hessian in OSQP's CSC order."""
     N, width = settings.horizon, mhe.width
     rows = N * width if settings.bounded else 0
-    order = _csc_value_order(N, width)
+    order = csc_value_order(N, width)
     return "".join([
         f"#define NX (N * W)\n#define NY {max(rows, 1)}\n#define HAS_Y {int(rows > 0)}\n",
         f"#define NNZ {order.size}\n",

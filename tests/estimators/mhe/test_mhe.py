@@ -230,7 +230,7 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
         )
         ring = MovingHorizonEstimator(vehicle, settings).run(signals)
         reference = MovingHorizonEstimator(vehicle, settings)
-        reference._per_sample_states = True
+        reference.per_sample_states = True
         states = reference.run(signals)
         for name in ("loads", "std", "residual", "flags", "status", "iterations", "fallback"):
             np.testing.assert_array_equal(getattr(ring, name), getattr(states, name), err_msg=name)
