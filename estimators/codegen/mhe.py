@@ -18,7 +18,8 @@ The emitted folder holds
   ``templates/mhe_plain.c`` for quadratic losses, ``templates/mhe_window.c`` with
   auxiliary variables for
   the Huber/L1 losses and the bias states with their information
-  recursion), the lagged output, and the fallback filter;
+  recursion; the blocks both drivers share are spliced in from
+  ``templates/mhe_blocks.c``), the lagged output, and the fallback filter;
 - ``wheelload_mhe_kf.c/.h`` (given the vehicle file): the fallback filter
   of the Python MHE as a ``wheelload codegen`` library linked in (soft
   constraint: the two-stage KF; hard: the projection KF with :math:`W =
@@ -217,7 +218,7 @@ def _generate_into(
         specific, template = _window_defines(mhe, settings), "mhe_window.c"
     else:
         specific, template = _plain_defines(mhe, settings), "mhe_plain.c"
-    driver = (TEMPLATES / template).read_text()
+    driver = spliced(template)
     fallback = (TEMPLATES / ("mhe_kf.c" if linked else "mhe_hold.c")).read_text()
     tail = (TEMPLATES / "mhe_tail.c").read_text()
     shared = (TEMPLATES / "mhe_shared.c").read_text()
@@ -226,6 +227,25 @@ def _generate_into(
 
 
 TEMPLATES = Path(__file__).with_name("templates")
+#: The blocks both window drivers share (``@@ NAME`` lines, see :func:`spliced`)
+BLOCKS = "mhe_blocks.c"
+
+
+def spliced(template: str) -> str:
+    """The window driver ``template`` with each ``@@ NAME`` line replaced by that block.
+
+    The blocks are those of :data:`BLOCKS`: each runs from its ``@@ NAME`` line to the
+    next (the file's opening comment, before the first, is not emitted).
+    """
+    _, *parts = (TEMPLATES / BLOCKS).read_text().split("\n@@ ")
+    blocks = {}
+    for part in parts:
+        name, _, body = part.partition("\n")
+        blocks[f"@@ {name}\n"] = body if body.endswith("\n") else body + "\n"
+    lines = (TEMPLATES / template).read_text().splitlines(keepends=True)
+    return "".join(blocks[line] if line.startswith("@@ ") else line for line in lines)
+
+
 FILTER_PREFIX = "wheelload_mhe_kf"
 
 
