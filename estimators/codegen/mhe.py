@@ -342,7 +342,7 @@ def _plain_defines(mhe, settings: MheSettings) -> str:
 
 
 def _window_defines(mhe, settings: MheSettings) -> str:
-    """The extended window's layout, losses and bias states (:mod:`mhe_window`).
+    """The extended window's layout, losses and bias states (:mod:`.mhe.window`).
 
     The pattern is the one the Python MHE's OSQP workspace was set up with:
     ``PATTERN[i]`` is the dense index (row-major) of its ``i``-th value in CSC order.

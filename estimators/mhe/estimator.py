@@ -73,11 +73,11 @@ from wheelload.estimators.kf.two_stage import (
     FilterState,
     Sample,
     TwoStageKF,
-    flags_from_used,
     input_matrix,
     sample_intervals,
 )
 from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.mhe.extended import advance_extended, initial_extended
 from wheelload.estimators.mhe.qp import (
     LOAD_LIMIT,
     SOLVED,
@@ -106,17 +106,17 @@ from wheelload.estimators.mhe.state import (
     MheState,
     SampleTerms,
     estimate_from_reports,
+    mhe_estimate,
     shift,
 )
 from wheelload.estimators.mhe.terms import LOAD_SCALE, residual_function, terms_function
 from wheelload.estimators.mhe.window import (
+    TRAVEL_UNIT,
     WindowQP,
-    WindowSample,
     bias_scales,
     ride_height_basis,
     travel_basis,
 )
-from wheelload.estimators.result import StepFlag
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 
 #: The estimator with its settings and results (the settings live in
@@ -135,6 +135,14 @@ __all__ = [
     "MovingHorizonEstimator",
     "SolverSettings",
 ]
+
+
+#: m/s^2, the az of the made-up sample (level road, at rest) of the steady-state
+#: covariance recursion. It reaches the covariance (az = 0 gives another one; a vehicle
+#: file's hub-acceleration density weighs :math:`(a_{hub} - a_z)^2`), so it keeps the
+#: value the steady-state arrival weight has always been computed with, not
+#: :data:`~wheelload.models.GRAVITY` (9.80665).
+STEADY_AZ = 9.81
 
 
 class MovingHorizonEstimator:
@@ -224,7 +232,7 @@ class MovingHorizonEstimator:
         step = self.filter._step
         P = self.filter.initial_state().P
         u = np.zeros(len(INPUTS))
-        u[INPUTS.index("az")] = 9.81
+        u[INPUTS.index("az")] = STEADY_AZ
         valid = np.ones(len(INPUTS))
         for _ in range(samples):
             P_next = np.asarray(step(np.zeros(4), P, u, valid, dt, self.p, self.tuning)[1])
@@ -270,25 +278,8 @@ class MovingHorizonEstimator:
             kfx=np.tile(x0, (N, 1)),
         )
         if self.settings.extended:
-            state = replace(state, **self._initial_extended(x0))
+            state = replace(state, **initial_extended(self, x0))
         return state
-
-    def _initial_extended(self, x0: np.ndarray) -> dict:
-        """The extended window's inert samples, warm start and bias prior."""
-        qp, w = self.window_qp, self.width
-        inert = WindowSample(
-            z=x0, Jd=np.zeros((4, 4)), b=np.zeros(3),
-            Ba=np.zeros((3, len(self.acceleration_columns))), ls=np.zeros(4),
-            lc=np.zeros(3), xp=np.zeros(4), link=0.0, lower=np.zeros(w), upper=np.zeros(w),
-        )  # fmt: skip
-        return dict(
-            samples=(inert,) * self.settings.horizon,
-            local=(qp.local_terms(inert),) * self.settings.horizon,
-            x=np.zeros(qp.n),
-            y=np.zeros(qp.n),
-            beta=np.zeros(self.beta_std.size),
-            beta_info=np.diag(1.0 / self.beta_std**2),
-        )
 
     # -- per sample --------------------------------------------------------------------------
 
@@ -355,7 +346,7 @@ class MovingHorizonEstimator:
     def _advance(self, state: MheState, terms: SampleTerms, arrival: np.ndarray):
         """Push one sample's terms into the window, solve, and return the state and report."""
         if self.settings.extended:
-            return self._advance_extended(state, terms, arrival)
+            return advance_extended(self, state, terms, arrival)
         start = time.perf_counter()
         link = terms.link if state.k > 0 else 0.0  # the log's first sample: the arrival instead
         drift = link / LOAD_SCALE * float(self.null @ (terms.xp - state.xp[-1]))
@@ -440,110 +431,13 @@ class MovingHorizonEstimator:
             x = self.check.checked(block, state.lower[j], state.upper[j], state.xp[j])
         return self.check.fallback(state.kfx[j], state.history[-1]) if x is None else x
 
-    def _advance_extended(self, state: MheState, terms: SampleTerms, arrival: np.ndarray):
-        """:meth:`_advance` for the window with robust losses and bias states."""
-        start = time.perf_counter()
-        qp, N, w, c = self.window_qp, self.settings.horizon, self.width, state.cost
-        z, Jd, Ba, ls, lc = terms.rows
-        link = terms.link if state.k > 0 else 0.0
-        sample = WindowSample(
-            z=z, Jd=Jd, b=terms.b, Ba=Ba[:, self.acceleration_columns], ls=ls, lc=lc, xp=terms.xp,
-            link=link / (c * LOAD_SCALE**2), lower=terms.lower, upper=terms.upper,
-        )  # fmt: skip
-        samples = state.samples[1:] + (sample,)
-        local = state.local[1:] + (qp.local_terms(sample),)
-        arrivals = shift(state.arrival, arrival)
-        kfx = shift(state.kfx, terms.kf.x)
-        j0 = max(0, N - 1 - state.k)
-        if state.k == 0:
-            qp.setup()
-        width = qp.width
-        shifted = np.concatenate([state.x[width : N * width], state.x[(N - 1) * width : N * width]])
-        x_warm = np.concatenate([shifted, state.x[N * width :]])
-        shifted = np.concatenate([state.y[width : N * width], state.y[(N - 1) * width : N * width]])
-        y_warm = np.concatenate([shifted, state.y[N * width :]])
-        beta, info = state.beta, state.beta_info
-        x = None
-        if not any(np.any(s.ls) or np.any(s.lc) for s in samples[j0:]):
-            # no data in the window: hold, as in the plain window (see _advance)
-            loads = x_warm[: N * width].reshape(N, width)[:, :w].ravel()
-            window = dict(arrival=arrivals, xp=np.array([s.xp for s in samples]),
-                          lower=np.array([s.lower for s in samples]),
-                          upper=np.array([s.upper for s in samples]))  # fmt: skip
-            loads = prior_solution(window, j0, state.history[-1], self.null, self.hard, loads, w)
-            blocks = x_warm[: N * width].reshape(N, width).copy()
-            blocks[:, :w] = loads.reshape(N, w)
-            blocks[:, w:] = 0.0
-            x_warm = np.concatenate([blocks.ravel(), beta])
-            status, iterations = SOLVED, 0
-        else:
-            Px, g = qp.assemble_values(
-                samples,
-                j0,
-                state.history[0],
-                arrivals[j0] / (c * LOAD_SCALE**2),
-                beta,
-                info,
-                local,
-                c,
-            )
-            low, high = qp.bounds(samples, j0, self.beta_bound)  # fmt: skip
-            if finite_data(Px, g, low, high):
-                status, iterations, x_new, y_new = qp.solve_raw(Px, g, low, high, x_warm, y_warm)
-            else:
-                status, iterations = UNSOLVED, 0
-            if status == SOLVED:
-                x_warm, y_warm = np.array(x_new), np.array(y_new)
-        state = replace(state, samples=samples, local=local, x=x_warm, y=y_warm, kfx=kfx)
-        if status == SOLVED:
-            x = self.check.checked(x_warm[qp.y(N - 1)], sample.lower, sample.upper, sample.xp)
-        failed = x is None
-        if failed:
-            x = self.check.fallback(terms.kf.x, state.history[-1])
-        else:
-            beta = np.clip(x_warm[qp.beta], -self.beta_bound, self.beta_bound)
-            if state.k >= N - 1 and beta.size:  # the oldest sample leaves the window next
-                info = info + self._leaving_information(state, x_warm)
-        if beta.size:
-            dt = 1.0 / (self.tuning[0] * max(sample.link, 1e-300)) if sample.link else 0.0
-            info = np.linalg.inv(np.linalg.inv(info) + np.diag(self.beta_density * dt))
-        state = replace(
-            state,
-            k=state.k + 1,
-            kf=terms.kf,
-            history=shift(state.history, x),
-            rho=state.rho,
-            arrival=arrivals,
-            beta=beta,
-            beta_info=0.5 * (info + info.T),
-        )
-        lag = self.settings.lag
-        lagged = x if lag == 0 or failed else self.window_loads(state, N - 1 - lag)
-        report = (lagged, terms, status, iterations, failed, time.perf_counter() - start,
-                  self.bias_report(beta))  # fmt: skip
-        return state, report
-
     def bias_report(self, beta: np.ndarray) -> np.ndarray:
         """Bias states in reporting units: travel offsets FL..RR [m], then ax, ay [m/s^2]."""
         nd = self.settings.bias_states.travel_states
         if not nd:
             return beta
-        offsets = self.travel_basis @ beta[:nd] * 1e-3
+        offsets = self.travel_basis @ beta[:nd] * TRAVEL_UNIT
         return np.concatenate([offsets, beta[nd:]])
-
-    def _leaving_information(self, state: MheState, v: np.ndarray) -> np.ndarray:
-        """Bias information of the window's oldest sample at the solution ``v``."""
-        qp = self.window_qp
-        s = state.samples[0]
-        y = v[qp.y(0)]
-        beta = v[qp.beta]
-        x = s.xp + qp.X @ y
-        nd = qp.travel_basis.shape[1]
-        delta = qp.travel_basis @ beta[:nd] * 1e-3 if nd else np.zeros(4)
-        beta_a = beta[nd:]
-        rho_s = s.ls * (s.z - (s.Jd @ delta) - x)
-        rho_c = s.lc * (s.b - s.Ba @ beta_a - self.A @ x)
-        return qp.bias_information(s, rho_s, rho_c)
 
     # -- whole log ---------------------------------------------------------------------------
 
@@ -604,7 +498,7 @@ class MovingHorizonEstimator:
     qp_record: list | None = None
 
     def _run_ring(self, signals: Signals, state: MheState, out: tuple, fallback, arrival):
-        """The plain window's loop in preallocated ring buffers (:mod:`mhe_ring`)."""
+        """The plain window's loop in preallocated ring buffers (:mod:`.ring`)."""
         H, g, link, xp, lower, upper, b, used = out
         loads, status, iterations, failed, solve_time, final = run_ring(
             self, state, H, g, link, xp, lower, upper, fallback.loads, arrival, self.qp_record
@@ -613,16 +507,8 @@ class MovingHorizonEstimator:
         if lag:  # row i: the estimate of sample i; the log's last samples from its last window
             tail = [final(N - lag + m) for m in range(min(lag, n))]
             loads = np.vstack([loads[lag:], np.array(tail[max(0, lag - n) :]).reshape(-1, 4)])
-        return MheEstimate(
-            t=signals.t.copy(),
-            loads=loads,
-            std=fallback.std.reshape(-1, 4),
-            residual=b.reshape(-1, 3) - loads @ self.A.T,
-            flags=flags_from_used(used.reshape(-1, len(StepFlag.update_flags())).T),
-            status=status,
-            iterations=iterations,
-            fallback=failed,
-            solve_time=solve_time,
-            lag=lag,
-            bias=None,
-        )
+        return mhe_estimate(
+            signals.t.copy(), loads, fallback.std, b, used, self.A,
+            status=status, iterations=iterations, fallback=failed, solve_time=solve_time,
+            lag=lag, bias=None,
+        )  # fmt: skip

@@ -178,10 +178,7 @@ class MheWorkspace:
         else:
             solver.update(q=q)
         solver.warm_start(x=x, y=y if y.size else None)
-        if self.polish:
-            with quiet_stdout():
-                result = solver.solve(raise_error=False)
-        else:
+        with quiet_stdout(self.polish):
             result = solver.solve(raise_error=False)
         self.rho = self.low_level.get_settings().rho  # adapted during the solve
         return result, self.rho

@@ -94,10 +94,7 @@ class LowLevelSolver:
         else:
             solver.update_data_vec(q=q, l=None, u=None)
         solver.warm_start(x, y if y.size else None)
-        if self.polish:
-            with quiet_stdout():
-                solver.solve()
-        else:
+        with quiet_stdout(self.polish):
             solver.solve()
         # OSQP adapts rho during the solve; the window passes back what the solver holds,
         # so it is read once, when the workspace is handed back (release)
@@ -173,6 +170,12 @@ class HessianBuffers:
         return q.ravel()
 
 
+def report_arrays(n: int) -> tuple[np.ndarray, ...]:
+    """A log's per-sample outputs: loads (n, 4), status, iterations, fallback, solve time."""
+    int64 = np.int64
+    return np.empty((n, 4)), np.empty(n, int64), np.empty(n, int64), np.zeros(n, bool), np.empty(n)
+
+
 def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record=None):
     """The plain window over a log (see module docstring).
 
@@ -217,7 +220,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
              "upper": state.upper, "arrival": state.arrival.reshape(N, 16),
              "data": state.H.reshape(N, -1).any(axis=1)[:, None], "nW": np.zeros((N, 4)),
              "nWn": np.zeros((N, 1))}  # fmt: skip
-    if hard:  # n^T W and n^T W n of each arrival weight, as _hessian_values/_linear form them
+    if hard:  # n^T W and n^T W n of each arrival weight, as qp.hessian_values/linear_term form them
         for rows_, arrivals in ((parts, arrival), (previous, state.arrival)):
             for j in range(arrivals.shape[0]):
                 nW = null @ arrivals[j]
@@ -246,11 +249,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     bounded = state.y.size > 0
     buffers = HessianBuffers(N, w, csc_value_order(N, w))
     solver = None if state.k == 0 else LowLevelSolver(mhe.workspace)
-    loads = np.empty((n, 4))
-    status = np.empty(n, dtype=np.int64)
-    iterations = np.empty(n, dtype=np.int64)
-    failed_all = np.zeros(n, dtype=bool)
-    solve_time = np.empty(n)
+    loads, status, iterations, failed_all, solve_time = report_arrays(n)
     lag = s.lag
     x_warm = np.empty(N * w)
     y_warm = np.empty_like(y_sol)
@@ -411,11 +410,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     workspace = solver = None if k0 == 0 else mhe.workspace
     if solver is not None:
         solver = LowLevelSolver(workspace)
-    loads = np.empty((n, 4))
-    status = np.empty(n, dtype=np.int64)
-    iterations = np.empty(n, dtype=np.int64)
-    failed_all = np.zeros(n, dtype=bool)
-    solve_time = np.empty(n)
+    loads, status, iterations, failed_all, solve_time = report_arrays(n)
     lag = s.lag
     x_warm = np.empty(N)
     y_warm = np.empty_like(y_sol)
@@ -490,10 +485,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                 else:
                     osqp_solver.update_data_vec(q=q, l=None, u=None)
                 osqp_solver.warm_start(x_warm, y_warm if bounded else None)
-                if solver.polish:
-                    with quiet_stdout():
-                        osqp_solver.solve()
-                else:
+                with quiet_stdout(solver.polish):
                     osqp_solver.solve()
                 info = osqp_solver.info
                 code, iters = info.status_val, info.iter

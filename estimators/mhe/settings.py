@@ -17,17 +17,6 @@ import enum
 import math
 from dataclasses import dataclass, field
 
-__all__ = [
-    "L1_CORE",
-    "Arrival",
-    "BiasStates",
-    "Constraint",
-    "Loss",
-    "MheSettings",
-    "ResidualLoss",
-    "SolverSettings",
-]
-
 L1_CORE = 0.05  # σ, width of the quadratic core that realises the L1 loss
 
 

@@ -21,7 +21,14 @@ import numpy as np
 from wheelload.estimators.kf.two_stage import FilterState, flags_from_used
 from wheelload.estimators.result import Estimate, StepFlag
 
-__all__ = ["MheEstimate", "MheState", "SampleTerms", "estimate_from_reports", "shift"]
+__all__ = [
+    "MheEstimate",
+    "MheState",
+    "SampleTerms",
+    "estimate_from_reports",
+    "mhe_estimate",
+    "shift",
+]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -97,28 +104,43 @@ class SampleTerms:
     rows: tuple | None = None  # extended window: (z, Jd, Ba, ls, lc) of residual_function
 
 
+def mhe_estimate(t, loads, std, b, used, A, **report) -> MheEstimate:
+    r"""The :class:`MheEstimate` of the loads :math:`x`, with the residual :math:`b - A x`.
+
+    ``std``, ``b`` and ``used`` are the filter's standard deviations, the equilibrium's
+    right-hand sides and the rows' use flags per sample; ``report``: the solver's fields
+    (status, iterations, fallback, solve_time, lag, bias).
+    """
+    used = np.asarray(used).reshape(-1, len(StepFlag.update_flags()))
+    return MheEstimate(
+        t=t,
+        loads=loads,
+        std=np.asarray(std).reshape(-1, 4),
+        residual=np.asarray(b).reshape(-1, 3) - loads @ A.T,
+        flags=flags_from_used(used.T),
+        **report,
+    )
+
+
 def estimate_from_reports(t: np.ndarray, reports: list, A: np.ndarray, lag: int = 0) -> MheEstimate:
     """The :class:`MheEstimate` of the window's per-sample reports (``MovingHorizonEstimator``).
 
     Each report: (loads, :class:`SampleTerms`, status, iterations, fallback, solve time, bias).
     """
-    loads = np.array([r[0] for r in reports]).reshape(-1, 4)
     terms = [r[1] for r in reports]
-    bias = None if reports[0][6] is None else np.array([r[6] for r in reports])
-    b = np.array([s.b for s in terms]).reshape(-1, 3)
-    used = np.array([s.used for s in terms]).reshape(-1, len(StepFlag.update_flags()))
-    return MheEstimate(
-        t=t,
-        loads=loads,
-        std=np.array([s.std for s in terms]).reshape(-1, 4),
-        residual=b - loads @ A.T,
-        flags=flags_from_used(used.T),
+    return mhe_estimate(
+        t,
+        np.array([r[0] for r in reports]).reshape(-1, 4),
+        np.array([s.std for s in terms]),
+        np.array([s.b for s in terms]),
+        np.array([s.used for s in terms]),
+        A,
         status=np.array([r[2] for r in reports], dtype=np.int64),
         iterations=np.array([r[3] for r in reports], dtype=np.int64),
         fallback=np.array([r[4] for r in reports], dtype=bool),
         solve_time=np.array([r[5] for r in reports], dtype=float),
         lag=lag,
-        bias=bias,
+        bias=None if reports[0][6] is None else np.array([r[6] for r in reports]),
     )
 
 

@@ -378,10 +378,8 @@ class WindowQP:
         """Load values at the fixed pattern, warm-start and solve."""
         self.solver.update(Px=H[self.rows, self.cols][self.order], q=g, l=low, u=high)
         self.solver.warm_start(x=x, y=y)
-        if self.solver_settings.polish:
-            with quiet_stdout():
-                return self.solver.solve(raise_error=False)
-        return self.solver.solve(raise_error=False)
+        with quiet_stdout(self.solver_settings.polish):
+            return self.solver.solve(raise_error=False)
 
     def solve_raw(self, Px, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
         """:meth:`solve` through OSQP's solver object: ``(status, iterations, x, y)``.
@@ -395,10 +393,7 @@ class WindowQP:
         solver.update_data_vec(q=g, l=np.maximum(low, -infinity), u=np.minimum(high, infinity))
         solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
         solver.warm_start(x, y)
-        if self.solver_settings.polish:
-            with quiet_stdout():
-                solver.solve()
-        else:
+        with quiet_stdout(self.solver_settings.polish):
             solver.solve()
         info = solver.info
         return int(info.status_val), int(info.iter), solver.solution.x, solver.solution.y
