@@ -104,12 +104,13 @@ class SampleTerms:
     rows: tuple | None = None  # extended window: (z, Jd, Ba, ls, lc) of residual_function
 
 
-def mhe_estimate(t, loads, std, b, used, A, **report) -> MheEstimate:
+def mhe_estimate(
+    t, loads, std, b, used, A, *, status, iterations, fallback, solve_time, lag, bias
+) -> MheEstimate:
     r"""The :class:`MheEstimate` of the loads :math:`x`, with the residual :math:`b - A x`.
 
     ``std``, ``b`` and ``used`` are the filter's standard deviations, the equilibrium's
-    right-hand sides and the rows' use flags per sample; ``report``: the solver's fields
-    (status, iterations, fallback, solve_time, lag, bias).
+    right-hand sides and the rows' use flags per sample; the rest is the solver's report.
     """
     used = np.asarray(used).reshape(-1, len(StepFlag.update_flags()))
     return MheEstimate(
@@ -118,7 +119,12 @@ def mhe_estimate(t, loads, std, b, used, A, **report) -> MheEstimate:
         std=np.asarray(std).reshape(-1, 4),
         residual=np.asarray(b).reshape(-1, 3) - loads @ A.T,
         flags=flags_from_used(used.T),
-        **report,
+        status=status,
+        iterations=iterations,
+        fallback=fallback,
+        solve_time=solve_time,
+        lag=lag,
+        bias=bias,
     )
 
 
