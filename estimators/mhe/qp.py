@@ -112,6 +112,17 @@ def linear_term(
     return q.ravel()
 
 
+def low_level(solver: osqp.OSQP):
+    """OSQP's solver object behind its Python wrapper (``update_data_vec``, ``update_data_mat``).
+
+    The only reach into OSQP's private ``_solver``: the wrapper offers neither the
+    :math:`\\rho` it adapted during a solve nor updates and solves without building its
+    result namespace, which the ring buffers (:mod:`~wheelload.estimators.mhe.ring`) and
+    the extended window (:meth:`.window.WindowQP.solve_raw`) skip per sample.
+    """
+    return solver._solver
+
+
 class MheWorkspace:
     """The window's OSQP problem, set up once with placeholder values and updated per sample.
 
@@ -154,13 +165,8 @@ class MheWorkspace:
 
     @property
     def low_level(self):
-        """OSQP's solver object behind the wrapper (``update_data_vec``, ``update_data_mat``).
-
-        The only reach into OSQP's private ``_solver``: its wrapper offers neither the
-        adapted :math:`\\rho` after a solve nor updates without the result namespace, which
-        the ring buffers (:mod:`~wheelload.estimators.mhe.ring`) skip per sample.
-        """
-        return self.solver._solver
+        """OSQP's solver object behind this workspace's wrapper (:func:`low_level`)."""
+        return low_level(self.solver)
 
     def solve(self, Px, q, bounds, x, y, rho):
         """Load what changed, warm-start with ``x, y`` and solve; returns (result, rho)."""

@@ -52,6 +52,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators.mhe.qp import OSQP_INFINITY, low_level
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.settings import L1_CORE, BiasStates, Loss, ResidualLoss
 
@@ -388,9 +389,10 @@ class WindowQP:
         same calls in the same order as the wrapper makes them (vectors, then
         the matrix; bounds clamped to OSQP's infinity), without its result object.
         """
-        solver = self.solver._solver
-        infinity = osqp.constant("OSQP_INFTY")
-        solver.update_data_vec(q=g, l=np.maximum(low, -infinity), u=np.minimum(high, infinity))
+        solver = low_level(self.solver)
+        solver.update_data_vec(
+            q=g, l=np.maximum(low, -OSQP_INFINITY), u=np.minimum(high, OSQP_INFINITY)
+        )
         solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
         solver.warm_start(x, y)
         with quiet_stdout(self.solver_settings.polish):
