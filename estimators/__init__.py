@@ -21,15 +21,16 @@ from wheelload.estimators.result import Estimate, StepFlag
 #: Names imported on first use, by module: settings and tools the command line and the
 #: studies take from this face (they reach estimators through the registry).
 _LAZY_MODULES = {
-    "wheelload.estimators.mhe.estimator": (
+    "wheelload.estimators.mhe.settings": (
         "Arrival",
         "BiasStates",
         "Constraint",
         "Loss",
         "MheSettings",
-        "MovingHorizonEstimator",
         "ResidualLoss",
     ),
+    "wheelload.estimators.mhe.estimator": ("MovingHorizonEstimator",),
+    "wheelload.estimators.mhe.qp": ("OSQP_INFINITY", "MheWorkspace"),
     "wheelload.estimators.kf.guard": (
         "FAULT_CHANNELS",
         "GUARDS_OFF",

@@ -18,7 +18,8 @@ The emitted folder holds
   ``templates/mhe_plain.c`` for quadratic losses, ``templates/mhe_window.c`` with
   auxiliary variables for
   the Huber/L1 losses and the bias states with their information
-  recursion), the lagged output, and the fallback filter;
+  recursion; the blocks both drivers share are spliced in from
+  ``templates/mhe_blocks.c``), the lagged output, and the fallback filter;
 - ``wheelload_mhe_kf.c/.h`` (given the vehicle file): the fallback filter
   of the Python MHE as a ``wheelload codegen`` library linked in (soft
   constraint: the two-stage KF; hard: the projection KF with :math:`W =
@@ -88,16 +89,12 @@ from wheelload.estimators.kf.projection import Weighting, projection_step_functi
 from wheelload.estimators.kf.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
 from wheelload.estimators.logs.output_files import atomic_write, check_output_folder, write_text
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    Constraint,
-    MheSettings,
-    MovingHorizonEstimator,
-    _csc_value_order,
-)
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.qp import csc_value_order
 from wheelload.estimators.mhe.quiet import quiet_stdout
+from wheelload.estimators.mhe.settings import L1_CORE, Arrival, Constraint, Loss, MheSettings
 from wheelload.estimators.mhe.terms import LOAD_SCALE, TERMS_NAME, terms_function
-from wheelload.estimators.mhe.window import L1_CORE, TRAVEL_UNIT, Loss
+from wheelload.estimators.mhe.window import TRAVEL_UNIT
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, Vehicle, load_vehicle
 
@@ -221,7 +218,7 @@ def _generate_into(
         specific, template = _window_defines(mhe, settings), "mhe_window.c"
     else:
         specific, template = _plain_defines(mhe, settings), "mhe_plain.c"
-    driver = (TEMPLATES / template).read_text()
+    driver = spliced(template)
     fallback = (TEMPLATES / ("mhe_kf.c" if linked else "mhe_hold.c")).read_text()
     tail = (TEMPLATES / "mhe_tail.c").read_text()
     shared = (TEMPLATES / "mhe_shared.c").read_text()
@@ -230,6 +227,25 @@ def _generate_into(
 
 
 TEMPLATES = Path(__file__).with_name("templates")
+#: The blocks both window drivers share (``@@ NAME`` lines, see :func:`spliced`)
+BLOCKS = "mhe_blocks.c"
+
+
+def spliced(template: str) -> str:
+    """The window driver ``template`` with each ``@@ NAME`` line replaced by that block.
+
+    The blocks are those of :data:`BLOCKS`: each runs from its ``@@ NAME`` line to the
+    next (the file's opening comment, before the first, is not emitted).
+    """
+    _, *parts = (TEMPLATES / BLOCKS).read_text().split("\n@@ ")
+    blocks = {}
+    for part in parts:
+        name, _, body = part.partition("\n")
+        blocks[f"@@ {name}\n"] = body if body.endswith("\n") else body + "\n"
+    lines = (TEMPLATES / template).read_text().splitlines(keepends=True)
+    return "".join(blocks[line] if line.startswith("@@ ") else line for line in lines)
+
+
 FILTER_PREFIX = "wheelload_mhe_kf"
 
 
@@ -317,7 +333,7 @@ def _plain_defines(mhe, settings: MheSettings) -> str:
     """The quadratic window's layout: block-tridiagonal Hessian in OSQP's CSC order."""
     N, width = settings.horizon, mhe.width
     rows = N * width if settings.bounded else 0
-    order = _csc_value_order(N, width)
+    order = csc_value_order(N, width)
     return "".join([
         f"#define NX (N * W)\n#define NY {max(rows, 1)}\n#define HAS_Y {int(rows > 0)}\n",
         f"#define NNZ {order.size}\n",
@@ -326,7 +342,7 @@ def _plain_defines(mhe, settings: MheSettings) -> str:
 
 
 def _window_defines(mhe, settings: MheSettings) -> str:
-    """The extended window's layout, losses and bias states (:mod:`mhe_window`).
+    """The extended window's layout, losses and bias states (:mod:`.mhe.window`).
 
     The pattern is the one the Python MHE's OSQP workspace was set up with:
     ``PATTERN[i]`` is the dense index (row-major) of its ``i``-th value in CSC order.

@@ -1,1 +1,1 @@
-"""The moving-horizon estimator: settings, QP window, ring buffers, per-sample terms."""
+"""The moving-horizon estimator: settings, QP, per-sample state, ring buffers, windows, terms."""

@@ -7,7 +7,7 @@ out of tables that commands print for users to parse.
 
 Example
 -------
->>> with quiet_stdout():
+>>> with quiet_stdout(polish):  # polishing prints; a solve without it does not
 ...     solver.solve()
 """
 
@@ -19,7 +19,10 @@ from collections.abc import Iterator
 
 
 @contextlib.contextmanager
-def quiet_stdout() -> Iterator[None]:
-    """Discard everything written to ``sys.stdout`` inside the block."""
+def quiet_stdout(when: bool = True) -> Iterator[None]:
+    """Discard everything written to ``sys.stdout`` inside the block (only ``when`` true)."""
+    if not when:
+        yield
+        return
     with contextlib.redirect_stdout(io.StringIO()):
         yield

@@ -7,8 +7,8 @@ length :math:`2N`: sample :math:`k` is written at slots :math:`k \bmod N`
 and :math:`k \bmod N + N`, so the window, oldest first, is always the
 contiguous view ``ring[h + 1 : h + 1 + N]`` (no copy, no shift). The QP's
 Hessian values and linear term are written into preallocated arrays with the
-same arithmetic as :func:`wheelload.estimators.mhe.estimator._hessian_values` and
-:func:`~wheelload.estimators.mhe.estimator._linear`, and OSQP is driven through its
+same arithmetic as :func:`wheelload.estimators.mhe.qp.hessian_values` and
+:func:`~wheelload.estimators.mhe.qp.linear_term`, and OSQP is driven through its
 low-level solver object (``update_data_vec``, ``update_data_mat``,
 ``warm_start``, ``solve``), skipping the wrapper's result namespace. The
 numbers are those of the per-sample state path to the bit (tested).
@@ -24,13 +24,18 @@ import math
 import time
 
 import numpy as np
-import osqp
 
+from wheelload.estimators.mhe.qp import (
+    OSQP_INFINITY,
+    SOLVED,
+    UNSOLVED,
+    MheWorkspace,
+    csc_value_order,
+    finite_data,
+    prior_solution,
+)
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.terms import LOAD_SCALE
-
-SOLVED = osqp.SolverStatus.OSQP_SOLVED.value
-INFINITY = osqp.constant("OSQP_INFTY")
 
 
 class MirroredRing:
@@ -58,14 +63,14 @@ class MirroredRing:
 class LowLevelSolver:
     """The window's OSQP problem driven through the solver object, remembering what it holds.
 
-    Same update rules as :class:`wheelload.estimators.mhe.estimator._Workspace` (load only
+    Same update rules as :class:`wheelload.estimators.mhe.qp.MheWorkspace` (load only
     what differs, bounds clamped to OSQP's infinity as its wrapper does), so the
     solver sees the same data in the same order.
     """
 
     def __init__(self, workspace) -> None:
         self.workspace = workspace
-        self.solver = workspace.solver._solver
+        self.solver = workspace.low_level
         self.Px = workspace.Px.copy()
         self.bounds = (workspace.bounds[0].copy(), workspace.bounds[1].copy())
         self.rho = workspace.rho
@@ -82,17 +87,14 @@ class LowLevelSolver:
         if lower is not None and not (
             (lower == self.bounds[0]).all() and (upper == self.bounds[1]).all()
         ):
-            low = np.maximum(lower, -INFINITY)
-            high = np.minimum(upper, INFINITY)
+            low = np.maximum(lower, -OSQP_INFINITY)
+            high = np.minimum(upper, OSQP_INFINITY)
             solver.update_data_vec(q=q, l=low, u=high)
             self.bounds = (lower.copy(), upper.copy())
         else:
             solver.update_data_vec(q=q, l=None, u=None)
         solver.warm_start(x, y if y.size else None)
-        if self.polish:
-            with quiet_stdout():
-                solver.solve()
-        else:
+        with quiet_stdout(self.polish):
             solver.solve()
         # OSQP adapts rho during the solve; the window passes back what the solver holds,
         # so it is read once, when the workspace is handed back (release)
@@ -105,7 +107,7 @@ class LowLevelSolver:
         return solution.x, solution.y
 
     def release(self) -> None:
-        """Hand the remembered values back to the workspace (for :meth:`_Workspace.solve`)."""
+        """Hand the remembered values back to the workspace (for :meth:`.qp.MheWorkspace.solve`)."""
         self.rho = self.solver.get_settings().rho
         self.workspace.Px = self.Px.copy()
         self.workspace.bounds = self.bounds
@@ -128,7 +130,7 @@ class HessianBuffers:
         self.q = np.empty((N, width))
 
     def hessian(self, H, link, arrival_j0, j0, null, hard, nWn=None) -> np.ndarray:
-        """:func:`wheelload.estimators.mhe.estimator._hessian_values` into the buffers (same
+        """:func:`wheelload.estimators.mhe.qp.hessian_values` into the buffers (same
         arithmetic).
 
         ``nWn`` (hard): :math:`n^\top W n` of the arrival weight, computed beforehand.
@@ -152,7 +154,7 @@ class HessianBuffers:
         return self.values
 
     def linear(self, g, j0, prior, arrival_j0, drift, xp_j0, null, hard, scale) -> np.ndarray:
-        """:func:`wheelload.estimators.mhe.estimator._linear` into the buffers (same arithmetic).
+        """:func:`wheelload.estimators.mhe.qp.linear_term` into the buffers (same arithmetic).
 
         Hard: ``arrival_j0`` is :math:`n^\top W` (computed beforehand), soft: :math:`W`.
         """
@@ -168,6 +170,12 @@ class HessianBuffers:
         return q.ravel()
 
 
+def report_arrays(n: int) -> tuple[np.ndarray, ...]:
+    """A log's per-sample outputs: loads (n, 4), status, iterations, fallback, solve time."""
+    int64 = np.int64
+    return np.empty((n, 4)), np.empty(n, int64), np.empty(n, int64), np.zeros(n, bool), np.empty(n)
+
+
 def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record=None):
     """The plain window over a log (see module docstring).
 
@@ -179,15 +187,6 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     ``record``, a list, receives each solved QP's data ``(Px, q, l, u, x, y)``
     (``wheelload bench mhe`` replays them on bare OSQP).
     """
-    from wheelload.estimators.mhe.estimator import (
-        LOAD_SCALE,
-        UNSOLVED,
-        _csc_value_order,
-        _prior_solution,
-        _Workspace,
-        finite_data,
-    )
-
     s = mhe.settings
     N, w = s.horizon, mhe.width
     n = H.shape[0]
@@ -221,7 +220,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
              "upper": state.upper, "arrival": state.arrival.reshape(N, 16),
              "data": state.H.reshape(N, -1).any(axis=1)[:, None], "nW": np.zeros((N, 4)),
              "nWn": np.zeros((N, 1))}  # fmt: skip
-    if hard:  # n^T W and n^T W n of each arrival weight, as _hessian_values/_linear form them
+    if hard:  # n^T W and n^T W n of each arrival weight, as qp.hessian_values/linear_term form them
         for rows_, arrivals in ((parts, arrival), (previous, state.arrival)):
             for j in range(arrivals.shape[0]):
                 nW = null @ arrivals[j]
@@ -248,13 +247,9 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     kfx = MirroredRing(state.kfx)
     x_sol, y_sol, rho = state.x.copy(), state.y.copy(), state.rho
     bounded = state.y.size > 0
-    buffers = HessianBuffers(N, w, _csc_value_order(N, w))
+    buffers = HessianBuffers(N, w, csc_value_order(N, w))
     solver = None if state.k == 0 else LowLevelSolver(mhe.workspace)
-    loads = np.empty((n, 4))
-    status = np.empty(n, dtype=np.int64)
-    iterations = np.empty(n, dtype=np.int64)
-    failed_all = np.zeros(n, dtype=bool)
-    solve_time = np.empty(n)
+    loads, status, iterations, failed_all, solve_time = report_arrays(n)
     lag = s.lag
     x_warm = np.empty(N * w)
     y_warm = np.empty_like(y_sol)
@@ -274,7 +269,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
         if k == 0:
             if solver is not None:
                 solver.release()
-            mhe.workspace = _Workspace(s, w)
+            mhe.workspace = MheWorkspace(s, w)
             solver = LowLevelSolver(mhe.workspace)
         x_warm[:-w] = x_sol[w:]
         x_warm[-w:] = x_sol[-w:]
@@ -284,10 +279,10 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
         x = None
         if since >= min(k + 1, N):  # no sample of the window has a data term
             last = history.window[-1]
-            x_sol = _prior_solution(window, j0, last, null, hard, x_warm, w)
+            x_sol = prior_solution(window, j0, last, null, hard, x_warm, w)
             y_sol = y_warm.copy()
             code, iters = SOLVED, 0
-            x = mhe._loads(x_sol[-w:], window)
+            x = mhe.check.newest(x_sol[-w:], window)
         else:
             Px = buffers.hessian(window["H"], window["link"], window["arrival"][j0], j0, null,
                                  hard, window["nWn"][j0])  # fmt: skip
@@ -306,12 +301,12 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
                 code, iters = UNSOLVED, 0
             if code == SOLVED:
                 x_sol, y_sol = solver.solution()
-                x = mhe._loads(x_sol[-w:], window)
+                x = mhe.check.newest(x_sol[-w:], window)
             else:
                 x_sol, y_sol = x_warm.copy(), y_warm.copy()
         failed = x is None
         if failed:
-            x = mhe.fallback_loads(kf_loads[i], history.window[-1])
+            x = mhe.check.fallback(kf_loads[i], history.window[-1])
         kfx.push(kf_loads[i])
         history.push(x)
         if lag and not failed:
@@ -337,14 +332,14 @@ def _window_loads(mhe, x_sol, window, kfx, j, eps, held) -> np.ndarray:
     estimate)."""
     w = mhe.width
     block = x_sol[j * w : (j + 1) * w]
-    x = mhe._checked(block, window["lower"][j], window["upper"][j], window["xp"][j])
-    return mhe.fallback_loads(kfx[j], held) if x is None else x
+    x = mhe.check.checked(block, window["lower"][j], window["upper"][j], window["xp"][j])
+    return mhe.check.fallback(kfx[j], held) if x is None else x
 
 
 def _hard_loads(
     omega: float, low: float, high: float, xp, null, bounds, eps, limit: float
 ) -> list | None:
-    r"""``MovingHorizonEstimator._loads`` of the hard window in plain floats (same arithmetic).
+    r""":meth:`.qp.LoadCheck.newest` of the hard window in plain floats (same arithmetic).
 
     :math:`\omega` clipped to its interval within ten times OSQP's tolerance, then
     :math:`x = \bar x + n\,\omega` clipped to the load bounds within rounding (a
@@ -381,13 +376,6 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     are clamped to OSQP's infinity once. Only the estimate-dependent prior term
     is computed per sample.
     """
-    from wheelload.estimators.mhe.estimator import (
-        UNSOLVED,
-        _prior_solution,
-        _Workspace,
-        finite_data,
-    )
-
     s = mhe.settings
     N = s.horizon
     n = len(kf_loads)
@@ -406,8 +394,8 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     bounded = state.y.size > 0
     if bounded:
         lower, upper = rows["lower"][:, 0], rows["upper"][:, 0]
-        low_clamped = np.maximum(lower, -INFINITY)
-        high_clamped = np.minimum(upper, INFINITY)
+        low_clamped = np.maximum(lower, -OSQP_INFINITY)
+        high_clamped = np.minimum(upper, OSQP_INFINITY)
     H0l, Ll, Dl, Gl = H0.tolist(), L.tolist(), D.tolist(), G.tolist()
     lower_list = rows["lower"][:, 0].tolist()
     upper_list = rows["upper"][:, 0].tolist()
@@ -422,11 +410,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     workspace = solver = None if k0 == 0 else mhe.workspace
     if solver is not None:
         solver = LowLevelSolver(workspace)
-    loads = np.empty((n, 4))
-    status = np.empty(n, dtype=np.int64)
-    iterations = np.empty(n, dtype=np.int64)
-    failed_all = np.zeros(n, dtype=bool)
-    solve_time = np.empty(n)
+    loads, status, iterations, failed_all, solve_time = report_arrays(n)
     lag = s.lag
     x_warm = np.empty(N)
     y_warm = np.empty_like(y_sol)
@@ -449,7 +433,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
         if k == 0:
             if solver is not None:
                 solver.release()
-            mhe.workspace = workspace = _Workspace(s, 1)
+            mhe.workspace = workspace = MheWorkspace(s, 1)
             solver = LowLevelSolver(workspace)
             osqp_solver = solver.solver
             held_Px, held_low, held_high = solver.Px, *solver.bounds
@@ -465,10 +449,10 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
         newest = a + N - 1
         if since >= min(k + 1, N):  # no sample of the window has a data term
             current = window(i)
-            x_sol = _prior_solution(current, j0, history[i + N - 1], mhe.null, True, x_warm, 1)
+            x_sol = prior_solution(current, j0, history[i + N - 1], mhe.null, True, x_warm, 1)
             y_sol = y_warm.copy()
             code, iters = SOLVED, 0
-            x = mhe._loads(x_sol[-1:], current)
+            x = mhe.check.newest(x_sol[-1:], current)
         else:
             Px[:] = interleaved[2 * a + 1 : 2 * a + 2 * N]
             Px[0] = H0l[a] + (0.0 + Ll[a + 1])
@@ -501,10 +485,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                 else:
                     osqp_solver.update_data_vec(q=q, l=None, u=None)
                 osqp_solver.warm_start(x_warm, y_warm if bounded else None)
-                if solver.polish:
-                    with quiet_stdout():
-                        osqp_solver.solve()
-                else:
+                with quiet_stdout(solver.polish):
                     osqp_solver.solve()
                 info = osqp_solver.info
                 code, iters = info.status_val, info.iter
@@ -519,7 +500,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                 x_sol, y_sol = x_warm.copy(), y_warm.copy()
         failed = x is None
         if failed:
-            x = mhe.fallback_loads(kf_loads[i], history[N + i - 1])
+            x = mhe.check.fallback(kf_loads[i], history[N + i - 1])
         history[N + i] = x
         if lag and not failed:
             x = _window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)

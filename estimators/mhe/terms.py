@@ -32,8 +32,6 @@ Example
 
 from __future__ import annotations
 
-import enum
-
 import casadi as ca
 import numpy as np
 
@@ -46,6 +44,7 @@ from wheelload.estimators.kf.two_stage import (
     _sanitise,
     model_rows,
 )
+from wheelload.estimators.mhe.settings import Constraint
 from wheelload.models import (
     ModelParameters,
     equilibrium_function,
@@ -61,13 +60,6 @@ TERMS_INPUTS = ["u", "u_valid", "dt", "x_ref", "p", "tuning", "cost"]
 TERMS_OUTPUTS = ["H", "g", "link", "xp", "lower", "upper", "b", "used"]
 _DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
 _GUARD_INDEX = [TUNING_INDEX[name] for name in GuardSettings.names()]
-
-
-class Constraint(enum.Enum):
-    """How the equilibrium :math:`A x = b` enters the window."""
-
-    SOFT = "soft"  # penalty weighted by R_c^-1 (eq. 17)
-    HARD = "hard"  # equality on every sample
 
 
 def warp_interval(xp, null: np.ndarray, lower_load: float, upper_load: float):

@@ -45,7 +45,6 @@ constraints are the identity (bounds on every variable).
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass
 
@@ -53,82 +52,11 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators.mhe.qp import OSQP_INFINITY, low_level
 from wheelload.estimators.mhe.quiet import quiet_stdout
+from wheelload.estimators.mhe.settings import L1_CORE, BiasStates, Loss, ResidualLoss
 
-L1_CORE = 0.05  # σ, width of the quadratic core that realises the L1 loss
 TRAVEL_UNIT = 1e-3  # m: travel offsets are QP variables in mm
-
-
-class Loss(enum.Enum):
-    """Penalty on one residual group."""
-
-    QUADRATIC = "quadratic"
-    HUBER = "huber"
-    L1 = "l1"
-
-
-@dataclass(frozen=True, kw_only=True)
-class ResidualLoss:
-    """The loss of a residual group; ``threshold`` [σ] is Huber's corner."""
-
-    kind: Loss = Loss.QUADRATIC
-    threshold: float = 2.0
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.kind, Loss):
-            raise TypeError(f"kind must be a Loss, got {self.kind!r}")
-        if not (math.isfinite(self.threshold) and self.threshold > 0):
-            raise ValueError(f"threshold must be a positive number of sigma, got {self.threshold}")
-
-    @property
-    def robust(self) -> bool:
-        return self.kind is not Loss.QUADRATIC
-
-    def weights(self) -> tuple[float, float]:
-        """(kappa, mu): the cost kappa/2 (rho - e)^2 + mu |e| that realises the loss."""
-        if self.kind is Loss.HUBER:
-            return 1.0, self.threshold
-        return 1.0 / L1_CORE, 1.0
-
-    def label(self) -> str:
-        if self.kind is Loss.HUBER:
-            return f"huber {self.threshold:g}σ"
-        return self.kind.value
-
-
-class BiasStates(enum.Flag):
-    """Slow sensor errors estimated as states.
-
-    ``TRAVEL`` and ``RIDE_HEIGHT`` exclude each other, as do ``ACCELERATION`` and
-    ``LATERAL``. Travel offsets and both accelerometer biases together are five slow
-    unknowns against three equilibrium rows: an ay bias and a roll pattern of travel
-    offsets leave the same residual. ``RIDE_HEIGHT | LATERAL`` (three unknowns: the
-    front and rear ride heights, ay) is observable.
-    """
-
-    NONE = 0
-    TRAVEL = enum.auto()  # offsets of the four travel sensors [m] (three observable combinations)
-    ACCELERATION = enum.auto()  # ax, ay biases [m/s^2]
-    RIDE_HEIGHT = enum.auto()  # one offset per axle, both sensors alike [m]
-    LATERAL = enum.auto()  # ay bias only [m/s^2]
-
-    def label(self) -> str:
-        names = [name for name, flag in (("travel", BiasStates.TRAVEL),
-                 ("ride height", BiasStates.RIDE_HEIGHT), ("ax/ay", BiasStates.ACCELERATION),
-                 ("ay", BiasStates.LATERAL)) if flag in self]  # fmt: skip
-        return "+".join(names) + " bias" if names else ""
-
-    @property
-    def travel_states(self) -> int:
-        """Number of travel-offset variables."""
-        return 3 if BiasStates.TRAVEL in self else 2 if BiasStates.RIDE_HEIGHT in self else 0
-
-    @property
-    def acceleration_columns(self) -> list[int]:
-        """Columns of (ax, ay) with a bias state."""
-        if BiasStates.ACCELERATION in self:
-            return [0, 1]
-        return [1] if BiasStates.LATERAL in self else []
 
 
 def bias_scales(bias: BiasStates, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -451,10 +379,8 @@ class WindowQP:
         """Load values at the fixed pattern, warm-start and solve."""
         self.solver.update(Px=H[self.rows, self.cols][self.order], q=g, l=low, u=high)
         self.solver.warm_start(x=x, y=y)
-        if self.solver_settings.polish:
-            with quiet_stdout():
-                return self.solver.solve(raise_error=False)
-        return self.solver.solve(raise_error=False)
+        with quiet_stdout(self.solver_settings.polish):
+            return self.solver.solve(raise_error=False)
 
     def solve_raw(self, Px, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
         """:meth:`solve` through OSQP's solver object: ``(status, iterations, x, y)``.
@@ -463,15 +389,13 @@ class WindowQP:
         same calls in the same order as the wrapper makes them (vectors, then
         the matrix; bounds clamped to OSQP's infinity), without its result object.
         """
-        solver = self.solver._solver
-        infinity = osqp.constant("OSQP_INFTY")
-        solver.update_data_vec(q=g, l=np.maximum(low, -infinity), u=np.minimum(high, infinity))
+        solver = low_level(self.solver)
+        solver.update_data_vec(
+            q=g, l=np.maximum(low, -OSQP_INFINITY), u=np.minimum(high, OSQP_INFINITY)
+        )
         solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
         solver.warm_start(x, y)
-        if self.solver_settings.polish:
-            with quiet_stdout():
-                solver.solve()
-        else:
+        with quiet_stdout(self.solver_settings.polish):
             solver.solve()
         info = solver.info
         return int(info.status_val), int(info.iter), solver.solution.x, solver.solution.y

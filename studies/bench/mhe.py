@@ -18,9 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.estimators import Signals
-from wheelload.estimators.mhe.estimator import MheSettings, MovingHorizonEstimator, _Workspace
-from wheelload.estimators.mhe.ring import INFINITY
+from wheelload.estimators import (
+    OSQP_INFINITY,
+    MheSettings,
+    MheWorkspace,
+    MovingHorizonEstimator,
+    Signals,
+)
 from wheelload.models import Vehicle
 
 
@@ -36,7 +40,7 @@ class WindowTiming:
 
 def _replay(settings: MheSettings, width: int, record: list) -> np.ndarray:
     """Time each recorded QP on a fresh workspace, driven like the window drives it."""
-    solver = _Workspace(settings, width).solver._solver
+    solver = MheWorkspace(settings, width).low_level
     times = np.empty(len(record))
     held = None
     for i, (Px, q, low, high, x, y) in enumerate(record):
@@ -47,7 +51,9 @@ def _replay(settings: MheSettings, width: int, record: list) -> np.ndarray:
         if low is None:
             solver.update_data_vec(q=q, l=None, u=None)
         else:
-            solver.update_data_vec(q=q, l=np.maximum(low, -INFINITY), u=np.minimum(high, INFINITY))
+            solver.update_data_vec(
+                q=q, l=np.maximum(low, -OSQP_INFINITY), u=np.minimum(high, OSQP_INFINITY)
+            )
         solver.warm_start(x, y if y.size else None)
         solver.solve()
         solver.solution.x  # noqa: B018 - read the solution as the window does
@@ -65,9 +71,9 @@ def window_against_bare_osqp(
     for _ in range(repeats):
         estimate = mhe.run(signals)
         record: list = []
-        mhe._qp_record = record
+        mhe.qp_record = record
         mhe.run(signals)
-        mhe._qp_record = None
+        mhe.qp_record = None
         bare = _replay(settings, mhe.width, record)
         solved = estimate.iterations > 0
         mhe_times = estimate.solve_time[solved] * 1e6

@@ -28,7 +28,8 @@ from wheelload.estimators.codegen.mhe import (
     write_inputs,
 )
 from wheelload.estimators.logs.signals import Signals, read_log
-from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.models import GRAVITY, INPUTS, example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 

@@ -31,9 +31,7 @@ void wheelload_mhe_reset(void) {
         memcpy(HIST[j], X0, sizeof X0);
         memcpy(KFX[j], X0, sizeof X0);
     }
-    memcpy(FALLBACK, X0, sizeof X0);
-    kf_reset();
-    osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
+@@ reset_filter
 }
 
 static void shift(double *rows, const double *value, int width) {
@@ -78,17 +76,7 @@ static int checked(int j, double *loads) {
 int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     double u0[N_INPUTS], valid[N_INPUTS], cost = COST, previous_P[16];
     memset(out, 0, sizeof *out);
-    kf_covariance(previous_P);
-    if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
-        memcpy(out->loads, HIST[N - 1], sizeof out->loads);
-        kf_held(u, dt, HIST[N - 1], out->std, out->residual);
-        out->flags = 255u;
-        return 0;
-    }
-    for (int i = 0; i < N_INPUTS; ++i) {
-        valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
-        u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
-    }
+@@ interval_and_inputs
     double std[4];
     kf_step(u, dt, FALLBACK, std);
     double h[W * W], g[W], link, xp[4], lo[W], hi[W], b[3], used[N_USED], arrival[16];
@@ -185,12 +173,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
 #else
             osqp_warm_start(&wheelload_mhe_solver, XW, OSQP_NULL);
 #endif
-            osqp_solve(&wheelload_mhe_solver);
-            status = (int)wheelload_mhe_solver.info->status_val;
-            out->iterations = (int)wheelload_mhe_solver.info->iter;
-        } else {
-            status = OSQP_UNSOLVED; /* not handed to OSQP: the filter's estimate */
-        }
+@@ solve
         if (status == 1) {
             memcpy(XW, wheelload_mhe_solver.solution->x, sizeof XW);
 #if HAS_Y

@@ -46,9 +46,7 @@ void wheelload_mhe_reset(void) {
         memcpy(S[j].kfx, X0, sizeof X0);
         memcpy(HIST[j], X0, sizeof X0);
     }
-    memcpy(FALLBACK, X0, sizeof X0);
-    kf_reset();
-    osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
+@@ reset_filter
 }
 
 /* H[cols, cols] += M^T Wt M, g[cols] -= M^T Wt r; M is k x nc (row-major); Wt is k x k when
@@ -333,17 +331,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
     double u0[N_INPUTS], valid[N_INPUTS], cost = COST;
     memset(out, 0, sizeof *out);
     double previous_P[16];
-    kf_covariance(previous_P);
-    if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
-        memcpy(out->loads, HIST[N - 1], sizeof out->loads);
-        kf_held(u, dt, HIST[N - 1], out->std, out->residual);
-        out->flags = 255u;
-        return 0;
-    }
-    for (int i = 0; i < N_INPUTS; ++i) {
-        valid[i] = isfinite(u[i]) ? 1.0 : 0.0;
-        u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
-    }
+@@ interval_and_inputs
     double kf_std[4];
     kf_step(u, dt, FALLBACK, kf_std);
     sample_t *s = &S[0];
@@ -407,12 +395,7 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
                                  0);
             osqp_update_data_vec(&wheelload_mhe_solver, Q, L, U);
             osqp_warm_start(&wheelload_mhe_solver, XW, YW);
-            osqp_solve(&wheelload_mhe_solver);
-            status = (int)wheelload_mhe_solver.info->status_val;
-            out->iterations = (int)wheelload_mhe_solver.info->iter;
-        } else {
-            status = OSQP_UNSOLVED; /* not handed to OSQP: the filter's estimate */
-        }
+@@ solve
         if (status == 1) {
             memcpy(XW, wheelload_mhe_solver.solution->x, sizeof XW);
             memcpy(YW, wheelload_mhe_solver.solution->y, sizeof YW);

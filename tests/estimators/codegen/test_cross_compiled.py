@@ -18,7 +18,8 @@ from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_settings, write_inputs
-from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.models import example_vehicle_path
 from wheelload.studies.commands.estimate import example_log_path
 
@@ -110,7 +111,7 @@ def test_embedded_mhe_robust_bias_lag_on_arm_matches_x86(vehicle, plant_log, tmp
     The bundled plant log with a 20 mm spike on one travel sensor and a 4 mm
     offset on another; ARM double and float32 against the same C in double on x86.
     """
-    from wheelload.estimators.mhe.estimator import BiasStates, Loss, ResidualLoss
+    from wheelload.estimators.mhe.settings import BiasStates, Loss, ResidualLoss
 
     settings = MheSettings(
         horizon=6, bounded=True, suspension_loss=ResidualLoss(kind=Loss.HUBER),

@@ -8,13 +8,8 @@ import pytest
 
 from wheelload.estimators.codegen.mhe import build_mhe_library, embedded_settings
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    Constraint,
-    MheSettings,
-    MovingHorizonEstimator,
-    SolverSettings,
-)
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
 from wheelload.models import example_vehicle_path
 from wheelload.studies.drive.synthetic import SensorNoise, steady_cornering, synthetic_log
 

@@ -16,12 +16,12 @@ import pytest
 from wheelload.estimators import read_log
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.mhe import build_mhe_library, embedded_settings
-from wheelload.estimators.mhe.estimator import (
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import (
     BiasStates,
     Constraint,
     Loss,
     MheSettings,
-    MovingHorizonEstimator,
     ResidualLoss,
     SolverSettings,
 )

@@ -9,13 +9,8 @@ import pytest
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kf.projection import ProjectionKF
 from wheelload.estimators.kf.two_stage import sample_intervals
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    Constraint,
-    MheSettings,
-    MovingHorizonEstimator,
-    SolverSettings,
-)
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
 from wheelload.models import ModelParameters
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, steady_cornering, synthetic_log
@@ -230,7 +225,7 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
         )
         ring = MovingHorizonEstimator(vehicle, settings).run(signals)
         reference = MovingHorizonEstimator(vehicle, settings)
-        reference._per_sample_states = True
+        reference.per_sample_states = True
         states = reference.run(signals)
         for name in ("loads", "std", "residual", "flags", "status", "iterations", "fallback"):
             np.testing.assert_array_equal(getattr(ring, name), getattr(states, name), err_msg=name)

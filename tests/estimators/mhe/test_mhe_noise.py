@@ -31,13 +31,8 @@ from wheelload.estimators.codegen.mhe import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
 from wheelload.estimators.kf.two_stage import input_matrix, sample_intervals
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    Constraint,
-    MheSettings,
-    MovingHorizonEstimator,
-    SolverSettings,
-)
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
 from wheelload.estimators.mhe.terms import LOAD_SCALE, residual_function
 from wheelload.models import ModelParameters
 from wheelload.studies.bench.numpy_kf import joint_filter, measurement_noises, pseudo_measurements

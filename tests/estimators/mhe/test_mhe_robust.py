@@ -7,12 +7,12 @@ import pytest
 
 from wheelload.estimators import TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF
-from wheelload.estimators.mhe.estimator import (
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import (
     BiasStates,
     Constraint,
     Loss,
     MheSettings,
-    MovingHorizonEstimator,
     ResidualLoss,
 )
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from wheelload.estimators.kf.two_stage import input_matrix, sample_intervals
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.settings import Constraint, MheSettings
 
 ESTIMATORS = {}
 
