@@ -30,7 +30,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.conventions import GRAVITY
+from wheelload.models.vehicle import Vehicle
 
 
 def attitude_from_travel(d, track_front, track_rear, wheelbase):

@@ -57,17 +57,12 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.aero import aero_forces
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.terms import GATES, body_motion, gate, road_motion
 
 WHEEL_NAMES = ("fl", "fr", "rl", "rr")
-
-
-def aero_forces(vx, p: ModelParameters):
-    r"""Aerodynamic lift and drag magnitudes (eq. 18): :math:`\tfrac12 \rho V_x^2 A c`."""
-    pressure = 0.5 * p.air_density * vx**2 * p.reference_area
-    return pressure * p.lift_coefficient, pressure * p.drag_coefficient
 
 
 def roll_axis_height(p: ModelParameters):

@@ -43,32 +43,14 @@ import casadi as ca
 from wheelload.models.body_attitude import attitude_from_travel, road_frame
 from wheelload.models.equilibrium import equilibrium_matrix, paper_equilibrium_vector
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import travel_loads
+from wheelload.models.rigid_loads import algebraic_loads
+from wheelload.models.suspension_parts import travel_loads
 
 
 def body_attitude(d, p: ModelParameters):
     """Pitch and roll [rad] relative to the road from the travels (road-angle paper eq. 7)."""
     roll, pitch = attitude_from_travel(d, p.track_front, p.track_rear, p.lf + p.lr)
     return pitch, roll
-
-
-def algebraic_loads(acc, p: ModelParameters, front_share=None):
-    """Alatorre-style wheel loads from road-frame specific force ``acc`` (module docstring).
-
-    ``front_share`` (e.g. ``p.roll_split_front``) replaces the front axle's
-    share :math:`l_r / L` of the lateral load transfer :math:`m h f_y`.
-    """
-    fx, fy, fz = acc[0], acc[1], acc[2]
-    m, h, lf, lr = p.mass, p.cg_height, p.lf, p.lr
-    L = lf + lr
-    share = lr / L if front_share is None else front_share
-    front = m / (2 * L) * (lr * fz - h * fx)
-    rear = m / (2 * L) * (lf * fz + h * fx)
-    lateral_front = m * h * share / p.track_front * fy
-    lateral_rear = m * h * (1 - share) / p.track_rear * fy
-    return ca.vertcat(
-        front - lateral_front, front + lateral_front, rear - lateral_rear, rear + lateral_rear
-    )
 
 
 def suspension_stiffness(p: ModelParameters) -> ca.SX:

@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
+from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle import Vehicle
 
 
@@ -194,8 +195,6 @@ class ModelParameters:
         )
         if vehicle.suspension.roll_split_front is not None:
             return parameters
-        from wheelload.models.roll_split import roll_split_default
-
         share = roll_split_default(parameters)
         return dataclasses.replace(parameters, roll_split_front=share)
 

@@ -34,6 +34,7 @@ from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
     HUB_ACCELERATION,
+    INPUTS,
     SPECIFIC_FORCE,
     SPEED,
     TRAVEL,
@@ -112,8 +113,6 @@ def term_gates(valid, p: ModelParameters) -> tuple[ca.SX, ca.SX]:
 
 def gates_function(name: str = "model_gates") -> ca.Function:
     """``name(u_valid, p) -> (gates, dropped)`` (see :func:`term_gates`)."""
-    from wheelload.models.inputs import INPUTS
-
     valid = ca.SX.sym("u_valid", len(INPUTS))
     p_vector, p = ModelParameters.symbolic()
     gates, dropped = term_gates(valid, p)

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from wheelload.models.conventions import GRAVITY
 from wheelload.models.files.build_folder import cached_function
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.plant.params import DamperMap, Plant
@@ -57,7 +58,7 @@ from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
 from wheelload.models.suspension_elements import anti_roll_bar_forces, stop_force
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.vehicle import Vehicle
 
 STATE_NAMES = (
     ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")

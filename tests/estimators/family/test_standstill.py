@@ -6,8 +6,8 @@ import pytest
 from wheelload.estimators.family.standstill import WeighError, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import example_vehicle_path, load_vehicle, vehicle_mass_centre
+from wheelload.models.vehicle_file import edited_vehicle_text
 from wheelload.studies.cli import main
-from wheelload.studies.vehicle_file_edit import edited_vehicle_text
 
 
 @pytest.fixture(scope="module")
