@@ -58,11 +58,10 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.aero import aero_forces
+from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.terms import GATES, body_motion, gate, road_motion
-
-WHEEL_NAMES = ("fl", "fr", "rl", "rr")
 
 
 def roll_axis_height(p: ModelParameters):
@@ -94,7 +93,7 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     shift_y = -sprung_share * (p.sprung_cg_height - roll_centre) * phi
     unsprung = (p.unsprung_front, p.unsprung_front, p.unsprung_rear, p.unsprung_rear)
     heave_force = 0
-    for wheel, name in enumerate(WHEEL_NAMES):
+    for wheel, name in enumerate(WHEELS):
         on = gate(gates, f"unsprung_{name}")
         heave_force += on * unsprung[wheel] * (inputs.hub[wheel] - f_body[2])
     total = m * f[2] - lift + heave_force

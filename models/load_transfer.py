@@ -1,7 +1,7 @@
 r"""Algebraic and quasi-static load transfer (Siegloff & Choi §IV-B, methods B and C).
 
 Body attitude relative to the road from the four travels
-(:mod:`wheelload.models.body_attitude`, small angles, ISO 8855: pitch > 0
+(:func:`~wheelload.models.body_attitude.attitude_from_travel`, small angles, ISO 8855: pitch > 0
 nose down, roll > 0 right side down; wheelbase :math:`l_f + l_r` of the
 equilibrium):
 
@@ -40,17 +40,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.models.body_attitude import attitude_from_travel, road_frame
+from wheelload.models.body_attitude import road_frame
 from wheelload.models.equilibrium import equilibrium_matrix, paper_equilibrium_vector
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.rigid_loads import algebraic_loads
 from wheelload.models.suspension_parts import travel_loads
-
-
-def body_attitude(d, p: ModelParameters):
-    """Pitch and roll [rad] relative to the road from the travels (road-angle paper eq. 7)."""
-    roll, pitch = attitude_from_travel(d, p.track_front, p.track_rear, p.lf + p.lr)
-    return pitch, roll
 
 
 def suspension_stiffness(p: ModelParameters) -> ca.SX:
@@ -83,14 +77,6 @@ def quasi_static_loads(acc, vx, p: ModelParameters):
     x0 = ca.vertcat(*p.static())
     K = suspension_stiffness(p)
     return quasi_static_transfer(x0, K, A, b)
-
-
-def body_attitude_function(name: str = "body_attitude") -> ca.Function:
-    """``name(d[4], p) -> (pitch, roll)``: body attitude relative to the road from the travels."""
-    d = ca.SX.sym("d", 4)
-    p_vector, p = ModelParameters.symbolic()
-    pitch, roll = body_attitude(d, p)
-    return ca.Function(name, [d, p_vector], [pitch, roll], ["d", "p"], ["pitch", "roll"])
 
 
 def algebraic_function(name: str = "algebraic_load") -> ca.Function:

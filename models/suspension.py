@@ -52,7 +52,7 @@ import casadi as ca
 
 from wheelload.models.aero import aero_forces
 from wheelload.models.body_attitude import attitude_from_travel
-from wheelload.models.conventions import GRAVITY
+from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.rigid_loads import algebraic_loads
@@ -146,7 +146,7 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
             load += gate(gates, "stops") * stop_force(d[wheel], bump, rebound, k1, k2)
             load += gate(gates, "geometric_transfer") * links[wheel]
             hub = inputs.hub[wheel] - GRAVITY
-            load += gate(gates, f"unsprung_{('fl', 'fr', 'rl', 'rr')[wheel]}") * unsprung * hub
+            load += gate(gates, f"unsprung_{WHEELS[wheel]}") * unsprung * hub
             loads.append(load)
     return ca.vertcat(*loads)
 

@@ -201,12 +201,12 @@ def corner_deflection(d, p: ModelParameters) -> list:
     return result
 
 
-def body_attitude(d, p: ModelParameters):
+def attitude_from_deflection(d, p: ModelParameters):
     r"""Body roll, pitch (rad) and CG heave compression (m) relative to the road plane.
 
     Small angles (road-angle paper eq. 7,
     :func:`~wheelload.models.body_attitude.attitude_from_travel`, on the
-    corner deflections :math:`e` of :func:`corner_deflection`):
+    corner deflections :math:`e` of :func:`corner_deflection`, travel plus tyre):
 
     .. math::
         \phi = \tfrac12\left(\frac{e_{FR} - e_{FL}}{T_f} + \frac{e_{RR} - e_{RL}}{T_r}\right),
@@ -239,6 +239,6 @@ def road_motion(inputs: ModelInputs, gates, p: ModelParameters):
     """
     f, omega, omega_dot = body_motion(inputs, gates, p)
     on = gate(gates, "road_frame")
-    phi, theta, heave = (on * value for value in body_attitude(inputs.d, p))
+    phi, theta, heave = (on * value for value in attitude_from_deflection(inputs.d, p))
     f_road = road_frame(f, phi, theta, sine=small_sin, cosine=small_cos)
     return f_road, omega, omega_dot, phi, theta, heave

@@ -22,17 +22,25 @@ from __future__ import annotations
 
 import os
 import re
-import tomllib
 from importlib import resources
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
+from wheelload.models.files.toml_file import TomlFileKind, read_toml
 from wheelload.models.plausibility import check_vehicle_ranges
 from wheelload.models.vehicle import Vehicle, VehicleFileError, vehicle_from_dict
 
 #: A key's place in the file: its table's dotted parts, then the key.
 Key = tuple[str, ...]
 TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")
+VEHICLE_FILE = TomlFileKind(
+    error=VehicleFileError,
+    missing="no such vehicle file",
+    folder="is a folder: give a vehicle TOML file",
+    not_utf8="is not UTF-8 text (byte {byte}): save the vehicle file as UTF-8",
+    not_toml="not valid TOML: {error}",
+    unreadable="the vehicle file cannot be read: {error}",
+)
 ASSIGNMENT = re.compile(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)(\[[^\]]*\]|[^#\n]*?)(\s*)(#.*)?$")
 
 
@@ -43,19 +51,7 @@ def load_vehicle(path: str | Path, *, allow_unusual: bool = False) -> Vehicle:
     are refused unless ``allow_unusual``.
     """
     path = Path(path)
-    try:
-        with path.open("rb") as stream:
-            table = tomllib.load(stream)
-    except FileNotFoundError:
-        raise VehicleFileError(f"{path}: no such vehicle file") from None
-    except UnicodeDecodeError as error:
-        raise VehicleFileError(
-            f"{path}: is not UTF-8 text (byte {error.start}): save the vehicle file as UTF-8"
-        ) from None
-    except tomllib.TOMLDecodeError as error:
-        raise VehicleFileError(f"{path}: not valid TOML: {error}") from None
-    except IsADirectoryError:
-        raise VehicleFileError(f"{path}: is a folder: give a vehicle TOML file") from None
+    table = read_toml(path, VEHICLE_FILE)
     try:
         vehicle = vehicle_from_dict(table)
     except VehicleFileError as error:
