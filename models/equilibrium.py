@@ -106,17 +106,19 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     )  # fmt: skip
 
 
+def rows_function(name: str, inputs: dict[str, ca.SX], A: ca.SX, b: ca.SX) -> ca.Function:
+    """``name(*inputs) -> (A[3x4], b[3])``: equilibrium rows :math:`A x = b` as a Function."""
+    return ca.Function(name, list(inputs.values()), [A, b], list(inputs), ["A", "b"])
+
+
 def equilibrium_function(name: str = "equilibrium") -> ca.Function:
     """``name(u, gates, p) -> (A[3x4], b[3])`` as a CasADi Function."""
     u = ca.SX.sym("u", len(INPUTS))
     gates = ca.SX.sym("gates", len(GATES))
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(
-        name,
-        [u, gates, p_vector],
-        [equilibrium_matrix(p), equilibrium_vector(u, gates, p)],
-        ["u", "gates", "p"],
-        ["A", "b"],
+    A = equilibrium_matrix(p)
+    return rows_function(
+        name, {"u": u, "gates": gates, "p": p_vector}, A, equilibrium_vector(u, gates, p)
     )
 
 
@@ -133,10 +135,7 @@ def paper_equilibrium_function(name: str = "equilibrium_paper") -> ca.Function:
     acc = ca.SX.sym("acc", 3)
     vx = ca.SX.sym("vx")
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(
-        name,
-        [acc, vx, p_vector],
-        [equilibrium_matrix(p), paper_equilibrium_vector(acc, vx, p)],
-        ["acc", "vx", "p"],
-        ["A", "b"],
+    A = equilibrium_matrix(p)
+    return rows_function(
+        name, {"acc": acc, "vx": vx, "p": p_vector}, A, paper_equilibrium_vector(acc, vx, p)
     )

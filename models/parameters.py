@@ -208,3 +208,9 @@ class ModelParameters:
 
     def static(self) -> tuple[Any, Any, Any, Any]:
         return (self.static_fl, self.static_fr, self.static_rl, self.static_rr)
+
+    def axles(self, *names: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The per-axle parameters ``names``: ``((a_front, b_front, ...), (a_rear, ...))``."""
+        return tuple(
+            tuple(getattr(self, f"{n}_{axle}") for n in names) for axle in ("front", "rear")
+        )

@@ -133,12 +133,7 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     couples = link_loads(f_road, inputs.vx, p)
     tyres = tyre_force_loads(f_road, inputs.vx, d, p)
     links = [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
-    axles = (
-        (p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front, p.stop_progressive_front,
-         p.unsprung_front),
-        (p.bump_gap_rear, p.rebound_gap_rear, p.stop_rate_rear, p.stop_progressive_rear,
-         p.unsprung_rear),
-    )  # fmt: skip
+    axles = p.axles("bump_gap", "rebound_gap", "stop_rate", "stop_progressive", "unsprung")
     loads = []
     for axle, (bump, rebound, k1, k2, unsprung) in enumerate(axles):
         for wheel in (2 * axle, 2 * axle + 1):

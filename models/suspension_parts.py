@@ -26,12 +26,7 @@ def travel_loads(d, v, p, damper=None) -> ca.SX:
     ``damper(v, axle)`` replaces the linear push/pull damper of eq. 5 (axle 0
     front, 1 rear), e.g. a piecewise-linear map.
     """
-    axles = (
-        (p.spring_front, p.damper_push_front, p.damper_pull_front, p.arb_rate_front,
-         p.arb_ratio_front),
-        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear,
-         p.arb_ratio_rear),
-    )  # fmt: skip
+    axles = p.axles("spring", "damper_push", "damper_pull", "arb_rate", "arb_ratio")
     static = p.static()
     loads = []
     for axle, (spring, push, pull, arb_rate, arb_ratio) in enumerate(axles):

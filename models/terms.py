@@ -189,10 +189,7 @@ def corner_deflection(d, p: ModelParameters) -> list:
     left out: it is quasi-static).
     """
     result = []
-    axles = (
-        (p.spring_front, p.arb_rate_front, p.arb_ratio_front, p.tyre_rate_front),
-        (p.spring_rear, p.arb_rate_rear, p.arb_ratio_rear, p.tyre_rate_rear),
-    )
+    axles = p.axles("spring", "arb_rate", "arb_ratio", "tyre_rate")
     for axle, (spring, arb_rate, arb_ratio, tyre_rate) in enumerate(axles):
         left, right = 2 * axle, 2 * axle + 1
         arb = anti_roll_bar_forces(d[left], d[right], arb_rate, arb_ratio)
