@@ -114,7 +114,7 @@ def equilibrium_split(b, p: ModelParameters, front_share=None):
     (rows of :func:`~wheelload.models.equilibrium.equilibrium_matrix`:
     vertical force, pitch and roll moment); the front share :math:`\lambda`
     of the roll moment is ``front_share``, default :math:`l_r / L` as in
-    :func:`algebraic_loads`, which this equals for the paper's ``b``
+    :func:`~wheelload.models.rigid_loads.algebraic_loads`, which this equals for the paper's ``b``
     without aerodynamics.
     """
     L = p.lf + p.lr

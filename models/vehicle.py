@@ -10,6 +10,7 @@ Reading a file: :func:`wheelload.models.vehicle_file.load_vehicle`.
 
 Example
 -------
+>>> from wheelload.models.vehicle_file import vehicle_template
 >>> vehicle = vehicle_from_dict(tomllib.loads(vehicle_template()))
 >>> round(vehicle.mass.total, 1)
 1613.2
@@ -23,6 +24,8 @@ import types
 import typing
 from dataclasses import dataclass
 
+# Defined in models.conventions; named here too, so ``from wheelload.models.vehicle import
+# GRAVITY, WHEELS`` keeps working.
 from wheelload.models.conventions import GRAVITY as GRAVITY
 from wheelload.models.conventions import WHEELS as WHEELS
 from wheelload.models.plant.params import Plant
