@@ -14,10 +14,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from wheelload.models.conventions import WHEELS
+
 if TYPE_CHECKING:
     import pandas as pd
 
-WHEELS = ("fl", "fr", "rl", "rr")
 RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 
 

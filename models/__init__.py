@@ -1,5 +1,6 @@
 """Vehicle physics, written once, symbolically in CasADi."""
 
+from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.equilibrium import equilibrium_function, paper_equilibrium_function
 from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
 from wheelload.models.mass_properties import MassCentre, static_loads, vehicle_mass_centre
@@ -7,16 +8,12 @@ from wheelload.models.parameters import ModelParameters
 from wheelload.models.suspension import suspension_function, travel_function
 from wheelload.models.terms import DROPPABLE, GATES, gates_function
 from wheelload.models.vehicle import (
-    GRAVITY,
-    WHEELS,
     ModelTerms,
     Vehicle,
     VehicleFileError,
-    example_vehicle_path,
-    load_vehicle,
     vehicle_from_dict,
-    vehicle_template,
 )
+from wheelload.models.vehicle_file import example_vehicle_path, load_vehicle, vehicle_template
 
 __all__ = [
     "DROPPABLE",

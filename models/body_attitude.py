@@ -11,7 +11,8 @@ side, pitch :math:`\theta > 0` lowers the nose; travel ``d > 0`` in compression.
 
   (the paper prints the roll difference the other way round: with
   compression positive, a compressed left side is a left side *down*, which is
-  negative roll).
+  negative roll); :func:`body_attitude_function` is it as a CasADi Function of
+  the parameter vector.
 - :func:`road_frame` (eq. 4-5): specific force rotated from the body into the
   road frame, :math:`a_r = R_y(\theta) R_x(\phi) a_m` (the paper's labels of
   the two matrices are swapped: its :math:`R_\theta` is a rotation about x).
@@ -30,7 +31,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.conventions import GRAVITY
+from wheelload.models.parameters import ModelParameters
+from wheelload.models.vehicle import Vehicle
 
 
 def attitude_from_travel(d, track_front, track_rear, wheelbase):
@@ -38,6 +41,15 @@ def attitude_from_travel(d, track_front, track_rear, wheelbase):
     roll = 0.5 * ((d[1] - d[0]) / track_front + (d[3] - d[2]) / track_rear)
     pitch = (d[0] + d[1] - d[2] - d[3]) / (2.0 * wheelbase)
     return roll, pitch
+
+
+def body_attitude_function(name: str = "body_attitude") -> ca.Function:
+    """``name(d[4], p) -> (pitch, roll)``: :func:`attitude_from_travel` with the parameters'
+    tracks and wheelbase :math:`l_f + l_r` (whole-vehicle CG, as the equilibrium)."""
+    d = ca.SX.sym("d", 4)
+    p_vector, p = ModelParameters.symbolic()
+    roll, pitch = attitude_from_travel(d, p.track_front, p.track_rear, p.lf + p.lr)
+    return ca.Function(name, [d, p_vector], [pitch, roll], ["d", "p"], ["pitch", "roll"])
 
 
 def road_frame(acc, roll, pitch, sine=ca.sin, cosine=ca.cos):

@@ -57,17 +57,11 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.aero import aero_forces
+from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.terms import GATES, body_motion, gate, road_motion
-
-WHEEL_NAMES = ("fl", "fr", "rl", "rr")
-
-
-def aero_forces(vx, p: ModelParameters):
-    r"""Aerodynamic lift and drag magnitudes (eq. 18): :math:`\tfrac12 \rho V_x^2 A c`."""
-    pressure = 0.5 * p.air_density * vx**2 * p.reference_area
-    return pressure * p.lift_coefficient, pressure * p.drag_coefficient
 
 
 def roll_axis_height(p: ModelParameters):
@@ -99,7 +93,7 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     shift_y = -sprung_share * (p.sprung_cg_height - roll_centre) * phi
     unsprung = (p.unsprung_front, p.unsprung_front, p.unsprung_rear, p.unsprung_rear)
     heave_force = 0
-    for wheel, name in enumerate(WHEEL_NAMES):
+    for wheel, name in enumerate(WHEELS):
         on = gate(gates, f"unsprung_{name}")
         heave_force += on * unsprung[wheel] * (inputs.hub[wheel] - f_body[2])
     total = m * f[2] - lift + heave_force
@@ -112,17 +106,19 @@ def equilibrium_vector(u, gates, p: ModelParameters) -> ca.SX:
     )  # fmt: skip
 
 
+def rows_function(name: str, inputs: dict[str, ca.SX], A: ca.SX, b: ca.SX) -> ca.Function:
+    """``name(*inputs) -> (A[3x4], b[3])``: equilibrium rows :math:`A x = b` as a Function."""
+    return ca.Function(name, list(inputs.values()), [A, b], list(inputs), ["A", "b"])
+
+
 def equilibrium_function(name: str = "equilibrium") -> ca.Function:
     """``name(u, gates, p) -> (A[3x4], b[3])`` as a CasADi Function."""
     u = ca.SX.sym("u", len(INPUTS))
     gates = ca.SX.sym("gates", len(GATES))
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(
-        name,
-        [u, gates, p_vector],
-        [equilibrium_matrix(p), equilibrium_vector(u, gates, p)],
-        ["u", "gates", "p"],
-        ["A", "b"],
+    A = equilibrium_matrix(p)
+    return rows_function(
+        name, {"u": u, "gates": gates, "p": p_vector}, A, equilibrium_vector(u, gates, p)
     )
 
 
@@ -139,10 +135,7 @@ def paper_equilibrium_function(name: str = "equilibrium_paper") -> ca.Function:
     acc = ca.SX.sym("acc", 3)
     vx = ca.SX.sym("vx")
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(
-        name,
-        [acc, vx, p_vector],
-        [equilibrium_matrix(p), paper_equilibrium_vector(acc, vx, p)],
-        ["acc", "vx", "p"],
-        ["A", "b"],
+    A = equilibrium_matrix(p)
+    return rows_function(
+        name, {"acc": acc, "vx": vx, "p": p_vector}, A, paper_equilibrium_vector(acc, vx, p)
     )

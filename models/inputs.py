@@ -17,7 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-WHEELS = ("fl", "fr", "rl", "rr")
+from wheelload.models.conventions import WHEELS
+
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)  # m, compression
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)  # m/s
 SPECIFIC_FORCE = ("ax", "ay", "az")  # m/s^2, IMU sensor axes, gravity included

@@ -1,7 +1,7 @@
 r"""Algebraic and quasi-static load transfer (Siegloff & Choi §IV-B, methods B and C).
 
 Body attitude relative to the road from the four travels
-(:mod:`wheelload.models.body_attitude`, small angles, ISO 8855: pitch > 0
+(:func:`~wheelload.models.body_attitude.attitude_from_travel`, small angles, ISO 8855: pitch > 0
 nose down, roll > 0 right side down; wheelbase :math:`l_f + l_r` of the
 equilibrium):
 
@@ -40,35 +40,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.models.body_attitude import attitude_from_travel, road_frame
+from wheelload.models.body_attitude import road_frame
 from wheelload.models.equilibrium import equilibrium_matrix, paper_equilibrium_vector
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import travel_loads
-
-
-def body_attitude(d, p: ModelParameters):
-    """Pitch and roll [rad] relative to the road from the travels (road-angle paper eq. 7)."""
-    roll, pitch = attitude_from_travel(d, p.track_front, p.track_rear, p.lf + p.lr)
-    return pitch, roll
-
-
-def algebraic_loads(acc, p: ModelParameters, front_share=None):
-    """Alatorre-style wheel loads from road-frame specific force ``acc`` (module docstring).
-
-    ``front_share`` (e.g. ``p.roll_split_front``) replaces the front axle's
-    share :math:`l_r / L` of the lateral load transfer :math:`m h f_y`.
-    """
-    fx, fy, fz = acc[0], acc[1], acc[2]
-    m, h, lf, lr = p.mass, p.cg_height, p.lf, p.lr
-    L = lf + lr
-    share = lr / L if front_share is None else front_share
-    front = m / (2 * L) * (lr * fz - h * fx)
-    rear = m / (2 * L) * (lf * fz + h * fx)
-    lateral_front = m * h * share / p.track_front * fy
-    lateral_rear = m * h * (1 - share) / p.track_rear * fy
-    return ca.vertcat(
-        front - lateral_front, front + lateral_front, rear - lateral_rear, rear + lateral_rear
-    )
+from wheelload.models.rigid_loads import algebraic_loads
+from wheelload.models.suspension_parts import travel_loads
 
 
 def suspension_stiffness(p: ModelParameters) -> ca.SX:
@@ -101,14 +77,6 @@ def quasi_static_loads(acc, vx, p: ModelParameters):
     x0 = ca.vertcat(*p.static())
     K = suspension_stiffness(p)
     return quasi_static_transfer(x0, K, A, b)
-
-
-def body_attitude_function(name: str = "body_attitude") -> ca.Function:
-    """``name(d[4], p) -> (pitch, roll)``: body attitude relative to the road from the travels."""
-    d = ca.SX.sym("d", 4)
-    p_vector, p = ModelParameters.symbolic()
-    pitch, roll = body_attitude(d, p)
-    return ca.Function(name, [d, p_vector], [pitch, roll], ["d", "p"], ["pitch", "roll"])
 
 
 def algebraic_function(name: str = "algebraic_load") -> ca.Function:
@@ -146,7 +114,7 @@ def equilibrium_split(b, p: ModelParameters, front_share=None):
     (rows of :func:`~wheelload.models.equilibrium.equilibrium_matrix`:
     vertical force, pitch and roll moment); the front share :math:`\lambda`
     of the roll moment is ``front_share``, default :math:`l_r / L` as in
-    :func:`algebraic_loads`, which this equals for the paper's ``b``
+    :func:`~wheelload.models.rigid_loads.algebraic_loads`, which this equals for the paper's ``b``
     without aerodynamics.
     """
     L = p.lf + p.lr

@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.conventions import GRAVITY
+from wheelload.models.vehicle import Vehicle
 
 
 @dataclass(frozen=True, kw_only=True)

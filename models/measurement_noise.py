@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.conventions import GRAVITY  # the vertical row's reference specific force
 from wheelload.models.inputs import (
     HUB_ACCELERATION,
     INPUTS,
@@ -35,7 +36,6 @@ from wheelload.models.inputs import (
     TRAVEL_RATE,
     input_index,
 )
-from wheelload.models.vehicle import GRAVITY  # the vertical row's reference specific force
 
 #: The constant densities (the paper's): r_s, r_c vertical, pitch, roll.
 BASE_DENSITIES = (

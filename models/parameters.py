@@ -21,7 +21,25 @@ import casadi as ca
 import numpy as np
 
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
+from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle import Vehicle
+
+#: Per-axle parameters ``<name>_front``, ``<name>_rear`` and their
+#: :class:`~wheelload.models.vehicle.AxleSuspension` keys.
+AXLE_KEYS = {
+    "spring": "spring_rate",
+    "damper_push": "damper_push",
+    "damper_pull": "damper_pull",
+    "arb_rate": "arb_rate",
+    "arb_ratio": "arb_ratio",
+    "roll_centre": "roll_centre_height",
+    "anti_brake": "anti_pitch_brake",
+    "anti_drive": "anti_pitch_drive",
+    "bump_gap": "bump_gap",
+    "rebound_gap": "rebound_gap",
+    "stop_rate": "stop_rate",
+    "stop_progressive": "stop_progressive_rate",
+}
 
 
 def mounting_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
@@ -149,16 +167,6 @@ class ModelParameters:
             drag_coefficient=aero.drag_coefficient,
             aero_x=aero.application_point[0] - centre.offset_x,
             aero_z=aero.application_point[2] + vehicle.geometry.cg_height - centre.height,
-            spring_front=front.spring_rate,
-            spring_rear=rear.spring_rate,
-            damper_push_front=front.damper_push,
-            damper_pull_front=front.damper_pull,
-            damper_push_rear=rear.damper_push,
-            damper_pull_rear=rear.damper_pull,
-            arb_rate_front=front.arb_rate,
-            arb_rate_rear=rear.arb_rate,
-            arb_ratio_front=front.arb_ratio,
-            arb_ratio_rear=rear.arb_ratio,
             static_fl=float(static[0]),
             static_fr=float(static[1]),
             static_rl=float(static[2]),
@@ -172,30 +180,19 @@ class ModelParameters:
             unsprung_rear=0.5 * vehicle.mass.unsprung_rear,
             tyre_rate_front=vehicle.tyres.vertical_stiffness_front,
             tyre_rate_rear=vehicle.tyres.vertical_stiffness_rear,
-            roll_centre_front=front.roll_centre_height,
-            roll_centre_rear=rear.roll_centre_height,
-            anti_brake_front=front.anti_pitch_brake,
-            anti_brake_rear=rear.anti_pitch_brake,
-            anti_drive_front=front.anti_pitch_drive,
-            anti_drive_rear=rear.anti_pitch_drive,
-            bump_gap_front=front.bump_gap,
-            bump_gap_rear=rear.bump_gap,
-            rebound_gap_front=front.rebound_gap,
-            rebound_gap_rear=rear.rebound_gap,
-            stop_rate_front=front.stop_rate,
-            stop_rate_rear=rear.stop_rate,
-            stop_progressive_front=front.stop_progressive_rate,
-            stop_progressive_rear=rear.stop_progressive_rate,
             imu_x=vehicle.geometry.imu_position[0],
             imu_y=vehicle.geometry.imu_position[1],
             imu_z=vehicle.geometry.imu_position[2],
+            **{
+                f"{name}_{axle}": getattr(section, key)
+                for axle, section in (("front", front), ("rear", rear))
+                for name, key in AXLE_KEYS.items()
+            },
             **{f"imu_r{i + 1}{j + 1}": float(mounting[i, j]) for i in range(3) for j in range(3)},
             **{f"term_{key}": float(value) for key, value in terms.items()},
         )
         if vehicle.suspension.roll_split_front is not None:
             return parameters
-        from wheelload.models.roll_split import roll_split_default
-
         share = roll_split_default(parameters)
         return dataclasses.replace(parameters, roll_split_front=share)
 
@@ -211,3 +208,9 @@ class ModelParameters:
 
     def static(self) -> tuple[Any, Any, Any, Any]:
         return (self.static_fl, self.static_fr, self.static_rl, self.static_rr)
+
+    def axles(self, *names: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The per-axle parameters ``names``: ``((a_front, b_front, ...), (a_rear, ...))``."""
+        return tuple(
+            tuple(getattr(self, f"{n}_{axle}") for n in names) for axle in ("front", "rear")
+        )

@@ -17,12 +17,13 @@ F_R)/\partial\varphi`, taken from the suspension model's own Jacobian
 (springs and anti-roll bars). With the vehicle's ``geometric_transfer``
 term on, the roll moment :math:`m f_y h` splits into the part through the
 links, :math:`M_{g,a}` per axle from the model's own
-:func:`~wheelload.models.suspension.link_loads` (:math:`m f_y (l_r/l)
+:func:`~wheelload.models.suspension_parts.link_loads` (:math:`m f_y (l_r/l)
 h_{rc,f}` front), and the elastic rest, shared as :math:`\lambda_K`:
 
 .. math:: \lambda = \frac{M_{g,f} + \lambda_K (m f_y h - M_{g,f} - M_{g,r})}{m f_y h}
 
-The vehicle file's ``suspension.roll_split_front`` overrides it (a measured
+The default is :func:`wheelload.models.roll_stiffness.roll_split_default`; the
+vehicle file's ``suspension.roll_split_front`` overrides it (a measured
 split also holds the unsprung-mass transfer, which the default leaves out).
 
 The row is soft: its noise density is :data:`SPLIT_NOISE_RATIO` times the
@@ -33,10 +34,8 @@ roll row's, for the same unmodelled roll dynamics plus the error of
 from __future__ import annotations
 
 import casadi as ca
-import numpy as np
 
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import link_loads, travel_loads
 
 SPLIT_NOISE_RATIO = 4.0  # split-row noise density / roll-row noise density (sigma x 2)
 
@@ -52,36 +51,3 @@ def roll_split_function(name: str = "roll_split") -> ca.Function:
     """``name(p) -> h[1x4]`` as a CasADi Function."""
     p_vector, p = ModelParameters.symbolic()
     return ca.Function(name, [p_vector], [roll_split_row(p)], ["p"], ["h"])
-
-
-def roll_stiffness_share_front(p: ModelParameters) -> float:
-    """Front share of the roll stiffness of the suspension model (springs and bars)."""
-    d = ca.SX.sym("d", 4)
-    jacobian = ca.Function("J", [d], [ca.jacobian(travel_loads(d, ca.DM.zeros(4), p), d)])
-    J = np.asarray(jacobian(np.zeros(4)))
-    stiffness = []
-    for (left, right), track in (((0, 1), p.track_front), ((2, 3), p.track_rear)):
-        roll = np.zeros(4)
-        roll[[left, right]] = [0.5 * track, -0.5 * track]  # travel per radian of roll
-        loads = J @ roll
-        stiffness.append(0.5 * track * (loads[left] - loads[right]))
-    return float(stiffness[0] / sum(stiffness))
-
-
-def roll_split_default(p: ModelParameters) -> float:
-    """Default front share of the lateral load transfer (module docstring).
-
-    The roll-stiffness share, with the link (roll-centre) moments of
-    :func:`~wheelload.models.suspension.link_loads` added when the
-    ``geometric_transfer`` switch of ``p`` is on.
-    """
-    elastic = roll_stiffness_share_front(p)
-    if not float(p.term_geometric_transfer) > 0.5:
-        return elastic
-    lateral = 1.0  # m/s^2; the split does not depend on it (every part is linear in f_y)
-    links = [float(x) for x in link_loads(ca.DM([0.0, lateral, 0.0]), 0.0, p)]
-    # A left turn (f_y > 0) loads the right wheels: moments as right minus left.
-    moment_front = 0.5 * float(p.track_front) * (links[1] - links[0])
-    moment_rear = 0.5 * float(p.track_rear) * (links[3] - links[2])
-    total = float(p.mass) * lateral * float(p.cg_height)
-    return (moment_front + elastic * (total - moment_front - moment_rear)) / total

@@ -32,7 +32,7 @@ Terms beyond the paper, each times its gate (``wheelload.models.terms``):
   by :math:`F_{y,i} \sin\varphi - F_{x,i} \sin\theta`. The tyres share
   the axle's lateral and the car's longitudinal force in proportion to the
   rigid-body wheel loads of
-  :func:`~wheelload.models.load_transfer.algebraic_loads` with the roll
+  :func:`~wheelload.models.rigid_loads.algebraic_loads` with the roll
   split :math:`\lambda` of :mod:`~wheelload.models.roll_split` (equal friction
   use; mass, geometry and :math:`\lambda` only, so the model stays linear in the suspension
   parameters that identification fits);
@@ -50,18 +50,20 @@ from __future__ import annotations
 
 import casadi as ca
 
+from wheelload.models.aero import aero_forces
 from wheelload.models.body_attitude import attitude_from_travel
-from wheelload.models.equilibrium import aero_forces
+from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
+from wheelload.models.rigid_loads import algebraic_loads
 from wheelload.models.suspension_elements import (
     anti_roll_bar_forces,
     damper_force,
     piecewise_damper_force,
     stop_force,
 )
+from wheelload.models.suspension_parts import link_loads, travel_loads
 from wheelload.models.terms import GATES, gate, road_motion, small_sin
-from wheelload.models.vehicle import GRAVITY
 
 __all__ = [
     "anti_roll_bar_forces",
@@ -75,51 +77,6 @@ __all__ = [
 ]
 
 
-def travel_loads(d, v, p: ModelParameters, damper=None) -> ca.SX:
-    r"""Paper part of the pseudo-measurement FL, FR, RL, RR from travel ``d`` and rate ``v``.
-
-    .. math:: F_{z,i} = F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i \quad (eq. 9)
-
-    ``damper(v, axle)`` replaces the linear push/pull damper of eq. 5 (axle 0
-    front, 1 rear), e.g. a piecewise-linear map.
-    """
-    axles = (
-        (p.spring_front, p.damper_push_front, p.damper_pull_front, p.arb_rate_front,
-         p.arb_ratio_front),
-        (p.spring_rear, p.damper_push_rear, p.damper_pull_rear, p.arb_rate_rear,
-         p.arb_ratio_rear),
-    )  # fmt: skip
-    static = p.static()
-    loads = []
-    for axle, (spring, push, pull, arb_rate, arb_ratio) in enumerate(axles):
-        left, right = 2 * axle, 2 * axle + 1
-        arb = anti_roll_bar_forces(d[left], d[right], arb_rate, arb_ratio)
-        for side, wheel in enumerate((left, right)):
-            force = damper_force(v[wheel], push, pull) if damper is None else damper(v[wheel], axle)
-            loads.append(static[wheel] + spring * d[wheel] + force + arb[side])
-    return ca.vertcat(*loads)
-
-
-def link_loads(f_road, vx, p: ModelParameters) -> list:
-    """Load through the links per corner FL, FR, RL, RR (roll centre, anti-pitch) [N]."""
-    wheelbase = p.lf + p.lr
-    _, drag = aero_forces(vx, p)
-    force_y = p.mass * f_road[1]
-    force_x = p.mass * f_road[0] + drag
-    braking = force_x < 0
-    axles = (
-        (p.lr, p.roll_centre_front, p.track_front, p.anti_brake_front, p.anti_drive_front, -1),
-        (p.lf, p.roll_centre_rear, p.track_rear, p.anti_brake_rear, p.anti_drive_rear, 1),
-    )
-    loads = []
-    for arm, height, track, anti_brake, anti_drive, sign in axles:
-        lateral = force_y * arm / wheelbase * height / track
-        share = ca.if_else(braking, anti_brake, anti_drive)
-        longitudinal = 0.5 * share * sign * p.cg_height * force_x / wheelbase
-        loads += [longitudinal - lateral, longitudinal + lateral]
-    return loads
-
-
 def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
     r"""Jacking and body-tilt load per corner FL, FR, RL, RR [N] (module docstring).
 
@@ -131,7 +88,7 @@ def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
 
     with :math:`F_{y,f} = m \tilde f_y l_r / l`, :math:`F_x = m \tilde f_x + D`,
     :math:`F_{z,i}` the rigid-body loads of
-    :func:`~wheelload.models.load_transfer.algebraic_loads` at :math:`\tilde f`
+    :func:`~wheelload.models.rigid_loads.algebraic_loads` at :math:`\tilde f`
     with the front share ``p.roll_split_front`` of the lateral transfer (clipped at
     0) and :math:`\varphi, \theta` the body attitude relative to the road
     (ISO 8855: right side down, nose down) of
@@ -140,9 +97,6 @@ def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
     tyre deflection under the rigid-body loads, so that the attitude, too,
     holds no identified parameter).
     """
-    # load_transfer imports this module (travel_loads): import here, not at the top.
-    from wheelload.models.load_transfer import algebraic_loads
-
     wheelbase = p.lf + p.lr
     _, drag = aero_forces(vx, p)
     force_x = p.mass * f_road[0] + drag
@@ -179,12 +133,7 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     couples = link_loads(f_road, inputs.vx, p)
     tyres = tyre_force_loads(f_road, inputs.vx, d, p)
     links = [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
-    axles = (
-        (p.bump_gap_front, p.rebound_gap_front, p.stop_rate_front, p.stop_progressive_front,
-         p.unsprung_front),
-        (p.bump_gap_rear, p.rebound_gap_rear, p.stop_rate_rear, p.stop_progressive_rear,
-         p.unsprung_rear),
-    )  # fmt: skip
+    axles = p.axles("bump_gap", "rebound_gap", "stop_rate", "stop_progressive", "unsprung")
     loads = []
     for axle, (bump, rebound, k1, k2, unsprung) in enumerate(axles):
         for wheel in (2 * axle, 2 * axle + 1):
@@ -192,7 +141,7 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
             load += gate(gates, "stops") * stop_force(d[wheel], bump, rebound, k1, k2)
             load += gate(gates, "geometric_transfer") * links[wheel]
             hub = inputs.hub[wheel] - GRAVITY
-            load += gate(gates, f"unsprung_{('fl', 'fr', 'rl', 'rr')[wheel]}") * unsprung * hub
+            load += gate(gates, f"unsprung_{WHEELS[wheel]}") * unsprung * hub
             loads.append(load)
     return ca.vertcat(*loads)
 

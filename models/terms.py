@@ -34,6 +34,7 @@ from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
     HUB_ACCELERATION,
+    INPUTS,
     SPECIFIC_FORCE,
     SPEED,
     TRAVEL,
@@ -112,8 +113,6 @@ def term_gates(valid, p: ModelParameters) -> tuple[ca.SX, ca.SX]:
 
 def gates_function(name: str = "model_gates") -> ca.Function:
     """``name(u_valid, p) -> (gates, dropped)`` (see :func:`term_gates`)."""
-    from wheelload.models.inputs import INPUTS
-
     valid = ca.SX.sym("u_valid", len(INPUTS))
     p_vector, p = ModelParameters.symbolic()
     gates, dropped = term_gates(valid, p)
@@ -190,10 +189,7 @@ def corner_deflection(d, p: ModelParameters) -> list:
     left out: it is quasi-static).
     """
     result = []
-    axles = (
-        (p.spring_front, p.arb_rate_front, p.arb_ratio_front, p.tyre_rate_front),
-        (p.spring_rear, p.arb_rate_rear, p.arb_ratio_rear, p.tyre_rate_rear),
-    )
+    axles = p.axles("spring", "arb_rate", "arb_ratio", "tyre_rate")
     for axle, (spring, arb_rate, arb_ratio, tyre_rate) in enumerate(axles):
         left, right = 2 * axle, 2 * axle + 1
         arb = anti_roll_bar_forces(d[left], d[right], arb_rate, arb_ratio)
@@ -202,12 +198,12 @@ def corner_deflection(d, p: ModelParameters) -> list:
     return result
 
 
-def body_attitude(d, p: ModelParameters):
+def attitude_from_deflection(d, p: ModelParameters):
     r"""Body roll, pitch (rad) and CG heave compression (m) relative to the road plane.
 
     Small angles (road-angle paper eq. 7,
     :func:`~wheelload.models.body_attitude.attitude_from_travel`, on the
-    corner deflections :math:`e` of :func:`corner_deflection`):
+    corner deflections :math:`e` of :func:`corner_deflection`, travel plus tyre):
 
     .. math::
         \phi = \tfrac12\left(\frac{e_{FR} - e_{FL}}{T_f} + \frac{e_{RR} - e_{RL}}{T_r}\right),
@@ -240,6 +236,6 @@ def road_motion(inputs: ModelInputs, gates, p: ModelParameters):
     """
     f, omega, omega_dot = body_motion(inputs, gates, p)
     on = gate(gates, "road_frame")
-    phi, theta, heave = (on * value for value in body_attitude(inputs.d, p))
+    phi, theta, heave = (on * value for value in attitude_from_deflection(inputs.d, p))
     f_road = road_frame(f, phi, theta, sine=small_sin, cosine=small_cos)
     return f_road, omega, omega_dot, phi, theta, heave

@@ -6,9 +6,12 @@ unknown keys are rejected, and every error names the file and the key. SI
 units; positions relative to the sprung-mass CG in ISO 8855 axes (x forward,
 y left, z up).
 
+Reading a file: :func:`wheelload.models.vehicle_file.load_vehicle`.
+
 Example
 -------
->>> vehicle = load_vehicle(example_vehicle_path())
+>>> from wheelload.models.vehicle_file import vehicle_template
+>>> vehicle = vehicle_from_dict(tomllib.loads(vehicle_template()))
 >>> round(vehicle.mass.total, 1)
 1613.2
 """
@@ -17,16 +20,22 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 import types
 import typing
 from dataclasses import dataclass
-from importlib import resources
-from pathlib import Path
 
-GRAVITY = 9.80665  # m/s^2, standard gravity
+# Defined in models.conventions; named here too, so ``from wheelload.models.vehicle import
+# GRAVITY, WHEELS`` keeps working.
+from wheelload.models.conventions import GRAVITY as GRAVITY
+from wheelload.models.conventions import WHEELS as WHEELS
+from wheelload.models.plant.params import Plant
+from wheelload.models.section_checks import (
+    SectionKeyError,
+    require_non_negative,
+    require_positive,
+    require_share,
+)
 
-WHEELS = ("fl", "fr", "rl", "rr")
 TOTAL_MASS_TOLERANCE = 0.5  # kg, allowed |total - (sprung + unsprung)|
 
 
@@ -54,14 +63,14 @@ class Mass:
 
     def _check(self) -> None:
         for key in ("total", "sprung", "unsprung_front", "unsprung_rear"):
-            _positive(self, key)
+            require_positive(self, key)
         if min(self.inertia) <= 0.0:
-            raise _KeyError("inertia", f"must be > 0 on every axis, got {self.inertia}")
+            raise SectionKeyError("inertia", f"must be > 0 on every axis, got {self.inertia}")
         parts = self.sprung + self.unsprung_front + self.unsprung_rear
         # The equilibrium uses the total, the plant the parts: they must agree
         # to rounding, or every static load carries the difference.
         if abs(parts - self.total) > TOTAL_MASS_TOLERANCE:
-            raise _KeyError(
+            raise SectionKeyError(
                 "total",
                 f"is {self.total} kg but sprung + unsprung_front + unsprung_rear = {parts:.1f} kg",
             )
@@ -80,9 +89,9 @@ class Geometry:
 
     def _check(self) -> None:
         for key in ("wheelbase", "lf", "lr", "track_front", "track_rear", "cg_height"):
-            _positive(self, key)
+            require_positive(self, key)
         if abs(self.lf + self.lr - self.wheelbase) > 0.03 * self.wheelbase:
-            raise _KeyError(
+            raise SectionKeyError(
                 "lf",
                 f"+ lr = {self.lf + self.lr:.3f} m is more than 3 % away from "
                 f"wheelbase = {self.wheelbase} m",
@@ -98,7 +107,7 @@ class Tyres:
 
     def _check(self) -> None:
         for field in dataclasses.fields(self):
-            _positive(self, field.name)
+            require_positive(self, field.name)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -110,9 +119,9 @@ class Aero:
     application_point: Vector3  # m, relative to the sprung CG
 
     def _check(self) -> None:
-        _positive(self, "air_density")
-        _positive(self, "reference_area")
-        _non_negative(self, "drag_coefficient")
+        require_positive(self, "air_density")
+        require_positive(self, "reference_area")
+        require_non_negative(self, "drag_coefficient")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -131,17 +140,16 @@ class AxleSuspension:
     stop_progressive_rate: float  # N/m^2, k_2
 
     def _check(self) -> None:
-        _positive(self, "spring_rate")
+        require_positive(self, "spring_rate")
         for key in (
             "damper_push", "damper_pull", "arb_rate", "arb_ratio", "roll_centre_height",
             "stop_progressive_rate",
         ):  # fmt: skip
-            _non_negative(self, key)
+            require_non_negative(self, key)
         for key in ("bump_gap", "rebound_gap", "stop_rate"):
-            _positive(self, key)
+            require_positive(self, key)
         for key in ("anti_pitch_brake", "anti_pitch_drive"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise _KeyError(key, f"must be in [0, 1], got {getattr(self, key)}")
+            require_share(self, key)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -156,7 +164,7 @@ class Suspension:
     def _check(self) -> None:
         split = self.roll_split_front
         if split is not None and not 0.0 < split < 1.0:
-            raise _KeyError("roll_split_front", f"must be between 0 and 1, got {split}")
+            raise SectionKeyError("roll_split_front", f"must be between 0 and 1, got {split}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -172,7 +180,7 @@ class BiasTuning:
 
     def _check(self) -> None:
         for field in dataclasses.fields(self):
-            _positive(self, field.name)
+            require_positive(self, field.name)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -191,7 +199,7 @@ class FaultTuning:
 
     def _check(self) -> None:
         for field in dataclasses.fields(self):
-            _positive(self, field.name)
+            require_positive(self, field.name)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -231,13 +239,15 @@ class FilterTuning:
             values = getattr(self, key)
             values = values if isinstance(values, tuple) else (values,)
             if not all(math.isfinite(x) and x >= 0.0 for x in values):
-                raise _KeyError(key, f"must be finite and >= 0 (0: constant noise), got {values}")
-        _positive(self, "process_noise_density")
-        _positive(self, "suspension_noise_density")
-        _positive(self, "initial_std")
-        _positive(self, "gate_scale")
+                raise SectionKeyError(
+                    key, f"must be finite and >= 0 (0: constant noise), got {values}"
+                )
+        require_positive(self, "process_noise_density")
+        require_positive(self, "suspension_noise_density")
+        require_positive(self, "initial_std")
+        require_positive(self, "gate_scale")
         if min(self.constraint_noise_density) <= 0.0:
-            raise _KeyError("constraint_noise_density", "must be > 0 in every row")
+            raise SectionKeyError("constraint_noise_density", "must be > 0 in every row")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -283,22 +293,6 @@ class Vehicle:
         return new
 
 
-class _KeyError(ValueError):
-    def __init__(self, key: str, message: str) -> None:
-        super().__init__(message)
-        self.key = key
-
-
-def _positive(section: object, key: str) -> None:
-    if not getattr(section, key) > 0.0:
-        raise _KeyError(key, f"must be > 0, got {getattr(section, key)}")
-
-
-def _non_negative(section: object, key: str) -> None:
-    if not getattr(section, key) >= 0.0:
-        raise _KeyError(key, f"must be >= 0, got {getattr(section, key)}")
-
-
 def _validate(obj: object, prefix: str) -> None:
     for field in dataclasses.fields(obj):  # type: ignore[arg-type]
         value = getattr(obj, field.name)
@@ -306,7 +300,7 @@ def _validate(obj: object, prefix: str) -> None:
             _validate(value, f"{prefix}{field.name}.")
     try:
         obj._check()  # type: ignore[attr-defined]
-    except _KeyError as error:
+    except SectionKeyError as error:
         raise VehicleFileError(f"key '{prefix}{error.key}' {error}") from None
 
 
@@ -378,53 +372,3 @@ def vehicle_from_dict(table: dict) -> Vehicle:
     vehicle = _build(Vehicle, table, "")
     _validate(vehicle, "")
     return vehicle  # type: ignore[return-value]
-
-
-def load_vehicle(path: str | Path, *, allow_unusual: bool = False) -> Vehicle:
-    """Read a vehicle TOML file; errors name the file and the offending key.
-
-    Values outside the physical ranges of :mod:`wheelload.models.plausibility`
-    are refused unless ``allow_unusual``.
-    """
-    path = Path(path)
-    try:
-        with path.open("rb") as stream:
-            table = tomllib.load(stream)
-    except FileNotFoundError:
-        raise VehicleFileError(f"{path}: no such vehicle file") from None
-    except UnicodeDecodeError as error:
-        raise VehicleFileError(
-            f"{path}: is not UTF-8 text (byte {error.start}): save the vehicle file as UTF-8"
-        ) from None
-    except tomllib.TOMLDecodeError as error:
-        raise VehicleFileError(f"{path}: not valid TOML: {error}") from None
-    except IsADirectoryError:
-        raise VehicleFileError(f"{path}: is a folder: give a vehicle TOML file") from None
-    try:
-        vehicle = vehicle_from_dict(table)
-    except VehicleFileError as error:
-        raise VehicleFileError(f"{path}: {error}") from None
-    from wheelload.models.plausibility import check_vehicle_ranges  # uses this module
-
-    violations = [] if allow_unusual else check_vehicle_ranges(vehicle)
-    if violations:
-        raise VehicleFileError(
-            f"{path}: "
-            + "; ".join(str(v) for v in violations)
-            + "; correct the file, or give --allow-unusual for a special vehicle"
-        )
-    return vehicle
-
-
-def example_vehicle_path() -> Path:
-    """Path of the bundled reference vehicle (paper Table I sports car)."""
-    return Path(str(resources.files("wheelload.models") / "vehicles" / "sports_car.toml"))
-
-
-def vehicle_template() -> str:
-    """A fully commented vehicle file (the bundled reference vehicle) to edit."""
-    return example_vehicle_path().read_text(encoding="utf-8")
-
-
-# Imported last: the plant sections reuse the validation helpers above.
-from wheelload.models.plant.params import Plant  # noqa: E402

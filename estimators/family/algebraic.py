@@ -49,11 +49,8 @@ from wheelload.estimators.family.step_method import (
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
-from wheelload.models.load_transfer import (
-    algebraic_function,
-    body_attitude_function,
-    equilibrium_split,
-)
+from wheelload.models.body_attitude import body_attitude_function
+from wheelload.models.load_transfer import algebraic_function, equilibrium_split
 
 ATTITUDE_CUTOFF = 1.0  # Hz, "low-frequency suspension-derived pitch and roll"
 

@@ -36,8 +36,8 @@ from wheelload.estimators.logs.signals import (
     rate_derivatives,
     signals_from_frame,
 )
+from wheelload.models.conventions import WHEELS
 
-WHEELS = ("fl", "fr", "rl", "rr")
 AXLES = ("front", "rear")
 CORNER_COLUMNS = ("d", "v", "force")
 ARB_COLUMNS = ("d_left", "d_right", "force")

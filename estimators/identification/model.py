@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.models import GATES, ModelParameters, gates_function, suspension_function
+from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
 from wheelload.models.suspension import (
     piecewise_damper_names,
@@ -31,7 +32,7 @@ from wheelload.models.suspension import (
 )
 
 SEGMENT_SEPARATOR = "_"
-WHEELS = ("fl", "fr", "rl", "rr")
+
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 

@@ -52,9 +52,9 @@ from wheelload.models import (
     gates_function,
     suspension_function,
 )
+from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import TRAVEL, input_index
 
-WHEELS = ("fl", "fr", "rl", "rr")
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
 MOVING = 2.0  # m/s
 CUTOFF = 1.0  # Hz, quasi-static body response

@@ -44,6 +44,7 @@ import numpy as np
 from wheelload.estimators.kernels import first_order
 from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
+from wheelload.models.conventions import WHEELS
 from wheelload.models.vehicle import GRAVITY
 
 if TYPE_CHECKING:
@@ -51,7 +52,6 @@ if TYPE_CHECKING:
 
     from wheelload.models import ModelParameters
 
-WHEELS = ("fl", "fr", "rl", "rr")
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 REFERENCE = tuple(f"fz_{w}" for w in WHEELS)

@@ -74,8 +74,8 @@ from wheelload.estimators.logs.signals import (
 from wheelload.estimators.loops.compiled import ColumnLoop, FlagRule
 from wheelload.estimators.result import RESIDUALS, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS
+from wheelload.models.conventions import WHEELS
 
-WHEELS = ("fl", "fr", "rl", "rr")
 GROUPS = (TRAVEL, TRAVEL_RATE, RATES, HUB, RATE_DERIVATIVES)
 #: Output columns of the loop: loads, their std, residual, then the fault monitor's.
 LOOP_COLUMNS = ("x_next", "std", "residual", "fault", "fault_statistic")

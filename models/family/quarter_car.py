@@ -32,7 +32,7 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import travel_loads
+from wheelload.models.suspension_parts import travel_loads
 
 #: Order of the quarter-car parameter vector.
 QUARTER_CAR_PARAMETERS = ("sprung_mass", "unsprung_mass", "spring_rate", "damper_rate")

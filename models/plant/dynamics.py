@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.files.build_folder import cached_function
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.plant.params import DamperMap, Plant
@@ -57,27 +58,23 @@ from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
 from wheelload.models.suspension_elements import anti_roll_bar_forces, stop_force
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.vehicle import Vehicle
 
 STATE_NAMES = (
     ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")
-    + tuple(f"d_{w}" for w in ("fl", "fr", "rl", "rr"))
-    + tuple(f"dd_{w}" for w in ("fl", "fr", "rl", "rr"))
-    + tuple(f"omega_{w}" for w in ("fl", "fr", "rl", "rr"))
-    + tuple(f"kappa_{w}" for w in ("fl", "fr", "rl", "rr"))
-    + tuple(f"alpha_{w}" for w in ("fl", "fr", "rl", "rr"))
+    + tuple(f"d_{w}" for w in WHEELS)
+    + tuple(f"dd_{w}" for w in WHEELS)
+    + tuple(f"omega_{w}" for w in WHEELS)
+    + tuple(f"kappa_{w}" for w in WHEELS)
+    + tuple(f"alpha_{w}" for w in WHEELS)
 )
-INPUT_NAMES = (
-    ("steer",)
-    + tuple(f"drive_{w}" for w in ("fl", "fr", "rl", "rr"))
-    + tuple(f"brake_{w}" for w in ("fl", "fr", "rl", "rr"))
-)
+INPUT_NAMES = ("steer",) + tuple(f"drive_{w}" for w in WHEELS) + tuple(f"brake_{w}" for w in WHEELS)
 # Outputs of one chunk, sampled at its last step.
 OUTPUT_NAMES = (
-    tuple(f"fz_{w}" for w in ("fl", "fr", "rl", "rr"))
+    tuple(f"fz_{w}" for w in WHEELS)
     + ("ax", "ay", "az")  # specific force at the IMU, body axes
     + ("ax_cg", "ay_cg", "az_cg")  # kinematic acceleration of the sprung CG, body axes
-    + tuple(f"az_{w}" for w in ("fl", "fr", "rl", "rr"))  # hub specific force, body z
+    + tuple(f"az_{w}" for w in WHEELS)  # hub specific force, body z
     + ("wx", "wy", "wz")  # body rates in the IMU's sensor axes
 )
 STATE = {name: i for i, name in enumerate(STATE_NAMES)}

@@ -32,6 +32,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from wheelload.models.conventions import WHEELS
 from wheelload.models.plant.dynamics import (
     INPUT_NAMES,
     STATE,
@@ -44,7 +45,6 @@ from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.vehicle import Vehicle
 
 ROLLING = 0.5  # m/s, speed from which the tyre slips are solved too
-WHEELS = ("fl", "fr", "rl", "rr")
 SUSPENSION = ("z", "phi", "theta", "w") + tuple(f"d_{w}" for w in WHEELS)
 TYRES = ("psi", "v") + tuple(f"{k}_{w}" for k in ("omega", "kappa", "alpha") for w in WHEELS)
 # Residuals: the time derivatives (xdot entries) that vanish, besides the road-following one.

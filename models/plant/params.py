@@ -11,7 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from wheelload.models.vehicle import _KeyError, _non_negative, _positive
+from wheelload.models.section_checks import (
+    SectionKeyError,
+    require_non_negative,
+    require_positive,
+    require_share,
+)
 
 Pair = tuple[float, float]
 Quad = tuple[float, float, float, float]
@@ -22,7 +27,7 @@ class Body:
     width: float  # m, body width (cone lanes of ISO 3888-1)
 
     def _check(self) -> None:
-        _positive(self, "width")
+        require_positive(self, "width")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -31,8 +36,8 @@ class Wheels:
     spin_inertia_rear: float  # kg m^2
 
     def _check(self) -> None:
-        _positive(self, "spin_inertia_front")
-        _positive(self, "spin_inertia_rear")
+        require_positive(self, "spin_inertia_front")
+        require_positive(self, "spin_inertia_rear")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -75,11 +80,11 @@ class TyreForces:
             "relaxation_length_x",
             "relaxation_length_y",
         ):
-            _positive(self, key)
-        _non_negative(self, "rolling_resistance")
+            require_positive(self, key)
+        require_non_negative(self, "rolling_resistance")
         for key in ("curvature_x", "curvature_y"):
             if not getattr(self, key) < 1.0:
-                raise _KeyError(key, f"must be < 1, got {getattr(self, key)}")
+                raise SectionKeyError(key, f"must be < 1, got {getattr(self, key)}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -92,11 +97,13 @@ class DamperMap:
 
     def _check(self) -> None:
         if not 0.0 < self.velocities[0] < self.velocities[1]:
-            raise _KeyError("velocities", f"must be increasing and > 0, got {self.velocities}")
+            raise SectionKeyError(
+                "velocities", f"must be increasing and > 0, got {self.velocities}"
+            )
         for key in ("push", "pull"):
             force = getattr(self, key)
             if not 0.0 < force[0] < force[1]:
-                raise _KeyError(key, f"must be increasing and > 0, got {force}")
+                raise SectionKeyError(key, f"must be increasing and > 0, got {force}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -115,10 +122,9 @@ class Driveline:
     brake_share_front: float  # -, share of brake torque on the front axle
 
     def _check(self) -> None:
-        _positive(self, "max_power")
+        require_positive(self, "max_power")
         for key in ("drive_share_front", "brake_share_front"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise _KeyError(key, f"must be in [0, 1], got {getattr(self, key)}")
+            require_share(self, key)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -132,13 +138,13 @@ class Roughness:
     enveloping_length: float  # m, tyre contact-patch averaging length
 
     def _check(self) -> None:
-        _positive(self, "reference_frequency")
-        _positive(self, "waviness")
-        _positive(self, "enveloping_length")
+        require_positive(self, "reference_frequency")
+        require_positive(self, "waviness")
+        require_positive(self, "enveloping_length")
         if min(self.class_psd) <= 0.0:
-            raise _KeyError("class_psd", "must be > 0 for every class")
+            raise SectionKeyError("class_psd", "must be > 0 for every class")
         if not 0.0 < self.band[0] < self.band[1]:
-            raise _KeyError("band", f"must be increasing and > 0, got {self.band}")
+            raise SectionKeyError("band", f"must be increasing and > 0, got {self.band}")
 
 
 @dataclass(frozen=True, kw_only=True)

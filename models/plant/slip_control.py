@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from wheelload.models.conventions import WHEELS
 from wheelload.models.plant.dynamics import (
     INPUT_NAMES,
     OUTPUT_NAMES,
@@ -41,7 +42,7 @@ from wheelload.models.plant.road_surface import RoadSurface
 from wheelload.models.plant.tyre import peak_input
 from wheelload.models.vehicle import Vehicle
 
-FACTOR_NAMES = tuple(f"slip_factor_{w}" for w in ("fl", "fr", "rl", "rr"))
+FACTOR_NAMES = tuple(f"slip_factor_{w}" for w in WHEELS)
 # Outputs of the controlled plant: the plant outputs, then the applied inputs.
 CONTROLLED_OUTPUT_NAMES = OUTPUT_NAMES + tuple(f"applied_{name}" for name in INPUT_NAMES)
 

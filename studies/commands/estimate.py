@@ -23,7 +23,7 @@ from wheelload.estimators import Estimate, Signals
 from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
-from wheelload.models import example_vehicle_path
+from wheelload.models import conventions, example_vehicle_path
 from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
 from wheelload.studies.pipeline.batch import (
     SUMMARY_NAME,
@@ -39,7 +39,7 @@ from wheelload.studies.pipeline.lean_estimate import estimate_lean, takes_lean_p
 if TYPE_CHECKING:
     from wheelload.estimators.loops.log_stream import LogStream
 
-WHEELS = ("FL", "FR", "RL", "RR")
+WHEELS = tuple(wheel.upper() for wheel in conventions.WHEELS)
 
 
 def example_log_path() -> Path:

@@ -35,14 +35,14 @@ from wheelload.estimators.identification.report import (
     parameter_table,
     rmse_table,
 )
-from wheelload.estimators.identification.vehicle_writer import (
+from wheelload.models import ModelParameters, load_vehicle
+from wheelload.models.vehicle_file import (
     check_output_path,
     prepend_comment,
     set_values,
     write_text_atomically,
     write_vehicle_text,
 )
-from wheelload.models import ModelParameters, load_vehicle
 
 REPORT_FILES = (
     "report.md",

@@ -25,14 +25,14 @@ from wheelload.estimators.identification.tuning import (
     tune,
     tuned_vehicle,
 )
-from wheelload.estimators.identification.vehicle_writer import (
+from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
+from wheelload.models import load_vehicle
+from wheelload.models.vehicle_file import (
     add_values,
     check_output_path,
     prepend_comment,
     write_vehicle_text,
 )
-from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
-from wheelload.models import load_vehicle
 
 
 def register(subparsers) -> None:

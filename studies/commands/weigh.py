@@ -15,7 +15,11 @@ from pathlib import Path
 from wheelload.estimators.family.standstill import WeighSettings, sprung_geometry, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import load_vehicle, vehicle_mass_centre
-from wheelload.studies.vehicle_file_edit import check_target, write_vehicle_copy
+from wheelload.models.vehicle_file import (
+    check_output_path,
+    edited_vehicle_text,
+    write_vehicle_text,
+)
 
 
 def register(subparsers) -> None:
@@ -42,7 +46,7 @@ def handle(args: argparse.Namespace) -> int:
     vehicle = load_vehicle(vehicle_path)
     inputs = (vehicle_path, *(Path(p) for p in args.logs))
     if args.out:  # before the work: an output that would replace a file is refused at once
-        check_target(Path(args.out), inputs, force=args.force)
+        check_output_path(args.out, inputs, args.force)
     settings = WeighSettings(max_speed=args.max_speed, settle=args.settle)
     result = weigh([read_log(path) for path in args.logs], vehicle, settings)
     centre = vehicle_mass_centre(vehicle)
@@ -67,13 +71,8 @@ def handle(args: argparse.Namespace) -> int:
             ("geometry", "lr"): sprung["lr"],
             ("geometry", "cg_height"): sprung["cg_height"],
         }
-        write_vehicle_copy(
-            vehicle_path,
-            Path(args.out),
-            changes,
-            inputs=inputs,
-            force=args.force,
-        )
+        text = edited_vehicle_text(vehicle_path.read_text(encoding="utf-8"), changes)
+        write_vehicle_text(text, args.out, inputs=inputs, force=args.force)
         print(f"vehicle file written to {args.out} (sprung CG: lf {sprung['lf']:.4f} m, "
               f"height {sprung['cg_height']:.4f} m)")  # fmt: skip
     return 0

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.models.vehicle import WHEELS, load_vehicle
+from wheelload.models.conventions import WHEELS
+from wheelload.models.vehicle_file import load_vehicle
 from wheelload.studies.drive.scenario_log import file_hash
 from wheelload.studies.drive.scenarios import Options, scenario_run
 from wheelload.studies.drive.sensors import measure

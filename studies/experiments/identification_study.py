@@ -35,7 +35,6 @@ from wheelload.estimators.identification.file_keys import (
 from wheelload.estimators.identification.fit import FitSettings
 from wheelload.estimators.identification.report import file_changes
 from wheelload.estimators.identification.tuning import FilterRuns, tune, tuned_vehicle
-from wheelload.estimators.identification.vehicle_writer import set_values
 from wheelload.estimators.kf.two_stage import noise_densities
 from wheelload.models import (
     ModelParameters,
@@ -44,6 +43,7 @@ from wheelload.models import (
     load_vehicle,
     vehicle_from_dict,
 )
+from wheelload.models.vehicle_file import set_values
 from wheelload.studies.drive.scenario_log import file_hash, write_log
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.metrics import pooled_metrics

@@ -17,9 +17,9 @@ import pandas as pd
 
 from wheelload.estimators import TwoStageKF, signals_from_frame
 from wheelload.models import Vehicle
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.metrics import wheel_metrics
 
-WHEELS = ("fl", "fr", "rl", "rr")
 TRAVEL = [f"d_{w}" for w in WHEELS] + [f"v_{w}" for w in WHEELS]
 
 

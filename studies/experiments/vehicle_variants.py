@@ -16,14 +16,11 @@ Example
 
 from __future__ import annotations
 
-import re
 import tomllib
 from dataclasses import dataclass
 
 from wheelload.models.vehicle import vehicle_from_dict
-
-_TABLE = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")
-_KEY = re.compile(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)(\[[^\]]*\]|[^#\n]*?)(\s*)(#.*)?$")
+from wheelload.models.vehicle_file import replace_values
 
 Value = float | bool | tuple[float, ...]
 
@@ -53,28 +50,11 @@ class Variant:
 
     def apply(self, text: str) -> str:
         """``text`` with the edits made; every edited key must exist exactly once."""
-        wanted = {(e.table, e.key): e for e in self.edits}
-        found: set[tuple[str, str]] = set()
-        table = ""
-        lines = []
-        for line in text.splitlines(keepends=True):
-            body = line.rstrip("\n")
-            header = _TABLE.match(body)
-            match = None if header else _KEY.match(body)
-            if header:
-                table = header.group(1).strip()
-            elif match and (table, match.group(2)) in wanted:
-                name = (table, match.group(2))
-                if name in found:
-                    raise ValueError(f"key '{table}.{name[1]}' appears twice in the vehicle file")
-                found.add(name)
-                indent, key, equals, _, space, comment = match.groups()
-                body = f"{indent}{key}{equals}{wanted[name].text()}{space}{comment or ''}".rstrip()
-            lines.append(body + ("\n" if line.endswith("\n") else ""))
-        missing = [f"{t}.{k}" for t, k in wanted if (t, k) not in found]
-        if missing:
-            raise ValueError(f"variant '{self.label}': the vehicle file has no key '{missing[0]}'")
-        edited = "".join(lines)
+        values = {(*edit.table.split("."), edit.key): edit.text() for edit in self.edits}
+        try:
+            edited = replace_values(text, values)
+        except ValueError as error:
+            raise ValueError(f"variant '{self.label}': {error}") from None
         vehicle_from_dict(tomllib.loads(edited))  # the variant must be a valid vehicle
         return edited
 

@@ -39,6 +39,7 @@ from wheelload.estimators.logs.readers import SUFFIXES
 from wheelload.estimators.logs.signals import coarse_travel_note
 from wheelload.estimators.registry import build, method
 from wheelload.models import Vehicle, load_vehicle
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.metrics import wheel_metrics
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.workers import ignore_interrupts
@@ -46,7 +47,6 @@ from wheelload.studies.workers import ignore_interrupts
 if TYPE_CHECKING:
     import pandas as pd
 
-WHEELS = ("fl", "fr", "rl", "rr")
 SUMMARY_NAME = "summary.csv"
 
 

@@ -14,11 +14,11 @@ from __future__ import annotations
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals
+from wheelload.models.conventions import WHEELS
 
 MIN_RATE = 100.0  # Hz
 UNSIGNED_VELOCITY = 0.05  # m/s, a v_* channel reaching this and never negative is unsigned
 FLAT_TRAVEL = 1e-6  # m, a travel channel within this of zero throughout is flat
-WHEELS = ("fl", "fr", "rl", "rr")
 
 
 def signal_warnings(signals: Signals) -> list[str]:

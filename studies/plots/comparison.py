@@ -11,10 +11,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wheelload.estimators.logs.signals import Signals  # noqa: E402
+from wheelload.models.conventions import WHEELS
 from wheelload.models.files.temporaries import replacing
 from wheelload.studies.pipeline.comparison import Comparison  # noqa: E402
 
-WHEELS = ("fl", "fr", "rl", "rr")
 WHEEL_NAMES = ("front left", "front right", "rear left", "rear right")
 
 

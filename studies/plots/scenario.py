@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 
 from wheelload.estimators.logs.output_files import atomic_write
-from wheelload.models.vehicle import WHEELS
+from wheelload.models.conventions import GRAVITY, WHEELS
 
 
 def plot_scenario(
@@ -28,7 +28,7 @@ def plot_scenario(
     axes[0].set_ylabel("speed [km/h]")
     axes[1].plot(t, frame["ax"], label="$a_x$")
     axes[1].plot(t, frame["ay"], label="$a_y$")
-    axes[1].plot(t, frame["az"] - 9.80665, label="$a_z - g$", alpha=0.6)
+    axes[1].plot(t, frame["az"] - GRAVITY, label="$a_z - g$", alpha=0.6)
     axes[1].set_ylabel("specific force at IMU [m/s²]")
     axes[1].legend(loc="upper right", ncol=3)
     for wheel in WHEELS:

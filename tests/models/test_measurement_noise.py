@@ -18,7 +18,6 @@ import pytest
 from wheelload.estimators import Sample, TwoStageKF, read_log, write_log
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, build_program, generate
-from wheelload.estimators.identification.vehicle_writer import add_values
 from wheelload.estimators.kf.two_stage import (
     TUNED_DENSITIES,
     TUNING_INDEX,
@@ -30,6 +29,7 @@ from wheelload.models import INPUTS, example_vehicle_path, load_vehicle
 from wheelload.models.measurement_noise import DENSITIES, INPUT_DENSITIES
 from wheelload.models.measurement_noise import measurement_noise_function as noise_function
 from wheelload.models.plausibility import check_vehicle_ranges
+from wheelload.models.vehicle_file import add_values
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 G = 9.80665

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 from scipy.signal import butter, sosfiltfilt
 
-from wheelload.models import load_vehicle
+from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
 from wheelload.models.plant.dynamics import vehicle_plant
-from wheelload.models.vehicle import GRAVITY, example_vehicle_path
 from wheelload.studies.drive import tracks
 from wheelload.studies.drive.laps import GRIP_MARGIN
 from wheelload.studies.drive.scenarios import SCENARIOS, Options, scenario_run

@@ -7,11 +7,11 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF, signals_from_frame
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.cli import main
 from wheelload.studies.commands.estimate import row_use, summary
 from wheelload.studies.metrics import wheel_metrics
 
-WHEELS = ("fl", "fr", "rl", "rr")
 TRAVEL = [f"d_{w}" for w in WHEELS] + [f"v_{w}" for w in WHEELS]
 
 

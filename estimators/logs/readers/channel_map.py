@@ -30,7 +30,6 @@ or a unit of the wrong kind, is an error naming the file and the key.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -39,11 +38,11 @@ import numpy as np
 
 from wheelload.estimators.logs.readers.resample import Method, resample
 from wheelload.estimators.logs.readers.units import Kind, UnitError, unit_factor
+from wheelload.models.conventions import WHEELS
+from wheelload.models.files.toml_file import TomlFileKind, read_toml
 
 if TYPE_CHECKING:
     import pandas as pd
-
-WHEELS = ("fl", "fr", "rl", "rr")
 
 #: our channel name -> kind of quantity
 TARGETS: dict[str, Kind] = {
@@ -72,6 +71,16 @@ DEFAULT_MAX_GAP = 0.1  # s
 
 class ChannelMapError(ValueError):
     """A channel map that cannot be used: names the file and the key."""
+
+
+CHANNEL_MAP_FILE = TomlFileKind(
+    error=ChannelMapError,
+    missing="no such channel map",
+    folder="is a folder, not a channel map: give the map's .toml file",
+    not_utf8="the channel map is not UTF-8 text (byte {byte}): save it as UTF-8",
+    not_toml="the channel map is not valid TOML: {error}",
+    unreadable="the channel map cannot be read: {error}",
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -269,21 +278,7 @@ def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelM
 def load_channel_map(path: str | Path) -> ChannelMap:
     """Read and validate a channel-map TOML file."""
     path = Path(path)
-    if path.is_dir():
-        raise ChannelMapError(f"{path}: is a folder, not a channel map: give the map's .toml file")
-    try:
-        with path.open("rb") as stream:
-            table = tomllib.load(stream)
-    except FileNotFoundError:
-        raise ChannelMapError(f"{path}: no such channel map") from None
-    except UnicodeDecodeError as error:
-        raise ChannelMapError(
-            f"{path}: the channel map is not UTF-8 text (byte {error.start}): save it as UTF-8"
-        ) from None
-    except tomllib.TOMLDecodeError as error:
-        raise ChannelMapError(f"{path}: the channel map is not valid TOML: {error}") from None
-    except OSError as error:
-        raise ChannelMapError(f"{path}: the channel map cannot be read: {error}") from None
+    table = read_toml(path, CHANNEL_MAP_FILE)
     return channel_map_from_dict(table, str(path))
 
 

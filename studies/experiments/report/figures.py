@@ -9,9 +9,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.metrics import COLUMNS  # noqa: E402
 
-WHEELS = ("fl", "fr", "rl", "rr")
 UNITS = {"RMSE": "RMSE [N]", "RMSE %": "RMSE [%]", "P95": "P95 [N]", "Max": "Max [N]"}
 
 

@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import pandas as pd
 
+from wheelload.models.conventions import WHEELS
+
 PAPER_METHODS = {"A": "kf", "B": "B", "C": "C", "D": "D", "E": "E", "F": "F"}
 METRICS = ("RMSE", "RMSE %", "P95", "Max")
-WHEELS = ("fl", "fr", "rl", "rr")
 
 # As printed: one block per metric in METRICS order, one line per method A-F: FL FR RL RR.
 _TABLE_II = """

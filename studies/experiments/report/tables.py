@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.metrics import COLUMNS
 
-WHEELS = ("fl", "fr", "rl", "rr")
 UNITS = {"RMSE": "RMSE [N]", "RMSE %": "RMSE [%]", "P95": "P95 [N]", "Max": "Max [N]"}
 
 

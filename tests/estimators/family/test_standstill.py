@@ -6,8 +6,8 @@ import pytest
 from wheelload.estimators.family.standstill import WeighError, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import example_vehicle_path, load_vehicle, vehicle_mass_centre
+from wheelload.models.vehicle_file import edited_vehicle_text
 from wheelload.studies.cli import main
-from wheelload.studies.vehicle_file_edit import edited_vehicle_text
 
 
 @pytest.fixture(scope="module")
@@ -80,11 +80,3 @@ def test_weigh_command_writes_a_valid_copy_and_never_replaces(logs, vehicle_path
     assert out.read_bytes() == before
     assert main([*args[:-1], str(logs[0]), "--force"]) == 2  # an input, even with --force
     assert main([*args, "--force"]) == 0
-
-
-def test_text_edit_keeps_comments_and_names_a_missing_key():
-    text = "[mass]\nsprung = 1.0   # kg\n[geometry]\nlf = 2.0\n"
-    edited = edited_vehicle_text(text, {("mass", "sprung"): 3.5, ("geometry", "lf"): 1.25})
-    assert edited == "[mass]\nsprung = 3.5   # kg\n[geometry]\nlf = 1.25\n"
-    with pytest.raises(ValueError, match="geometry.lr"):
-        edited_vehicle_text(text, {("geometry", "lr"): 1.0})

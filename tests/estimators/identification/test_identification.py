@@ -25,10 +25,9 @@ from wheelload.estimators.identification import (
 from wheelload.estimators.identification.model import TRAVEL, TRAVEL_RATE
 from wheelload.estimators.identification.regressors import prediction
 from wheelload.models import ModelParameters, travel_function
+from wheelload.models.conventions import WHEELS
 from wheelload.models.plant.dynamics import damper_map_force
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
-
-WHEELS = ("fl", "fr", "rl", "rr")
 
 
 @pytest.fixture(scope="module")

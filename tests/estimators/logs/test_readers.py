@@ -12,8 +12,8 @@ from wheelload.estimators.logs.readers import Method, channel_map_template
 from wheelload.estimators.logs.readers.erg import write_erg
 from wheelload.estimators.logs.readers.resample import resample
 from wheelload.models import GRAVITY
+from wheelload.models.conventions import WHEELS
 
-WHEELS = ("fl", "fr", "rl", "rr")
 RATIO = {"fl": 0.7, "fr": 0.7, "rl": 0.75, "rr": 0.75}  # damper / wheel travel
 DURATION = 2.0
 IMU_RATE, TRAVEL_RATE, CAN_RATE = 1000, 100, 50

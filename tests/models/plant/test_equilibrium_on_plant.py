@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from wheelload.models import GRAVITY, load_vehicle
-from wheelload.models.vehicle import example_vehicle_path
+from wheelload.models.vehicle_file import example_vehicle_path
 from wheelload.studies.drive.scenarios import Options, scenario_run
 from wheelload.studies.drive.simulation import simulate
 from wheelload.studies.experiments.equilibrium_residuals import (

@@ -19,7 +19,7 @@ from wheelload.models.plant.dynamics import (
     stop_force,
 )
 from wheelload.models.plant.equilibrium import initial_state
-from wheelload.models.vehicle import example_vehicle_path
+from wheelload.models.vehicle_file import example_vehicle_path
 from wheelload.studies.drive.roads import build_road
 from wheelload.studies.drive.scenarios import Options, scenario_run
 from wheelload.studies.drive.simulation import simulate
