@@ -46,8 +46,7 @@ from wheelload.estimators.family.step_method import (
     step_name,
     step_symbols,
 )
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.load_transfer import (
     algebraic_function,

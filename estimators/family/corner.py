@@ -38,22 +38,15 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    interval_ok,
-    sanitise,
-    step_flags,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-)
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.step_method import StepMethod, step_flags
+from wheelload.estimators.family.suspension_model import equilibrium
+from wheelload.estimators.kf.two_stage import interval_is_valid
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.models.equilibrium import roll_axis_height
 from wheelload.models.family.corner_loads import corner_load_function
+from wheelload.models.input_validity import sanitise
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -111,7 +104,7 @@ def step_function(
     lever = vehicle.mass.sprung * arm
     stationary = ca.vertcat(lever * acc[1] / k.roll, -lever * acc[0] / k.pitch)
     acc_ok = valid[8] * valid[9] * valid[10]
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1e-3)
     gain = settings.observer_gain
     decay = ca.exp(-gain * dt_safe)

@@ -53,13 +53,8 @@ from wheelload.estimators.family.step_method import (
     step_name,
     step_symbols,
 )
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    suspension_loads,
-    suspension_mask,
-)
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.suspension_model import suspension_loads, suspension_mask
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_vertical_acceleration
 from wheelload.models.family.quarter_car import unsprung_balance

@@ -41,10 +41,9 @@ from wheelload.estimators.family.step_method import (
     step_name,
     step_symbols,
 )
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
 from wheelload.estimators.kf.two_stage import TUNING, TUNING_INDEX, tuning_vector
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 

@@ -41,13 +41,8 @@ from wheelload.estimators.family.step_method import (
     step_name,
     step_symbols,
 )
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.inputs import TRAVEL, TRAVEL_RATE, input_index
 from wheelload.models.load_transfer import quasi_static_function, quasi_static_transfer

@@ -45,26 +45,17 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    interval_ok,
-    sanitise,
-    step_flags,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
+from wheelload.estimators.family.step_method import StepMethod, step_flags
+from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
 from wheelload.estimators.kernels.kalman import sequential_update
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import Estimate
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.family.road_angle import STATE_NAMES, BodyInertia, road_angle_model
+from wheelload.models.input_validity import sanitise
 
 N = len(STATE_NAMES)
 #: Measured states (eq. 16): roll, roll rate, pitch, pitch rate, 4 loads, 3 road-frame
@@ -115,7 +106,7 @@ def step_function(
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
     d, acc, vx, rates = u[0:4], u[8:11], u[11], u[12:15]
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1.0)
 
     roll, pitch, acc_road = attitude_function(vehicle)(d, acc)

@@ -58,15 +58,10 @@ from wheelload.estimators.family.step_method import (
     step_name,
     step_symbols,
 )
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    suspension_loads,
-    suspension_mask,
-)
+from wheelload.estimators.family.suspension_model import suspension_loads, suspension_mask
 from wheelload.estimators.family.unscented import sigma_points, unscented_transform
 from wheelload.estimators.kernels.kalman import sequential_update, symmetrise
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import ModelParameters, Vehicle
 
 #: Process noise densities of d [m^2/s] and v [(m/s)^2/s]: unmodelled corner kinematics, about

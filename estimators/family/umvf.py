@@ -62,23 +62,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    interval_ok,
-    sanitise,
-    step_flags,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.step_method import StepMethod, step_flags
+from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.family.quarter_car import reduced_quarter_car_function
+from wheelload.models.input_validity import sanitise
 
 RANK_TOLERANCE = 1e-9
 
@@ -240,7 +231,7 @@ def step_function(
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
     d, v, acc, rates = u[0:4], u[4:8], u[8:11], u[12:15]
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1.0)
     u_prev, load_prev, rates_prev, started = memory[0:4], memory[4:8], memory[8:10], memory[10]
     rates_ok = valid[12] * valid[13] * started

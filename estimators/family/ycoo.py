@@ -55,24 +55,16 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    flag_sum,
-    interval_ok,
-    sanitise,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
+from wheelload.estimators.family.step_method import StepMethod, flag_sum
+from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
 from wheelload.estimators.kernels.discretise import first_order_hold, trapezoidal
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.kf.two_stage import interval_is_valid
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.family.quarter_car import unsprung_balance
+from wheelload.models.input_validity import sanitise
 from wheelload.models.vehicle import GRAVITY
 
 #: Filtered channels: four travels, vertical specific force minus g, roll and pitch rate.
@@ -151,7 +143,7 @@ def step_function(
     # The first sample starts every channel's filter in steady state on its input.
     u_prev = ca.if_else(started, u_prev_stored, held)
     steady = ca.vertcat(held.T, held.T, held.T, ca.DM.zeros(1, CHANNELS))
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1e-3)
     A, B = filter_matrices(settings)
     Xm = ca.if_else(started, ca.reshape(X, STATES, CHANNELS), steady)

@@ -75,11 +75,9 @@ from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
     MAX_INTERVAL,
     FilterState,
-    Sample,
     TwoStageKF,
     flags_from_used,
     input_matrix,
-    sample_intervals,
 )
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.quiet import quiet_stdout
@@ -100,6 +98,7 @@ from wheelload.estimators.mhe.window import (
     ride_height_basis,
     travel_basis,
 )
+from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 

@@ -8,7 +8,6 @@ import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kf.projection import ProjectionKF
-from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.mhe.estimator import (
     Arrival,
     Constraint,
@@ -16,6 +15,7 @@ from wheelload.estimators.mhe.estimator import (
     MovingHorizonEstimator,
     SolverSettings,
 )
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import ModelParameters
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, steady_cornering, synthetic_log

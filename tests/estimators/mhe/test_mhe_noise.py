@@ -30,7 +30,7 @@ from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.mhe import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
-from wheelload.estimators.kf.two_stage import input_matrix, sample_intervals
+from wheelload.estimators.kf.two_stage import input_matrix
 from wheelload.estimators.mhe.estimator import (
     Arrival,
     Constraint,
@@ -39,6 +39,7 @@ from wheelload.estimators.mhe.estimator import (
     SolverSettings,
 )
 from wheelload.estimators.mhe.terms import LOAD_SCALE, residual_function
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import ModelParameters
 from wheelload.studies.bench.numpy_kf import joint_filter, measurement_noises, pseudo_measurements
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
