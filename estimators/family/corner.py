@@ -38,7 +38,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import StepMethod, step_flags
+from wheelload.estimators.family.flat_step import step_flags, step_name
+from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium
 from wheelload.estimators.kf.two_stage import interval_is_valid
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
@@ -121,7 +122,7 @@ def step_function(
     missing = ca.fmax(1 - acc_ok, rejected)
     flags = step_flags([rejected] * 4, missing, rejected)
     return ca.Function(
-        "wheelload_corner_step" if model is SuspensionModel.FULL else "wheelload_corner_step_paper",
+        step_name("wheelload_corner_step", model),
         [angles, held, u_raw, valid, dt, cp, p],
         [new_angles, loads, loads, ca.DM.zeros(4), residual, flags],
         ["angles", "loads_held", "u", "u_valid", "dt", "cp", "p"],
@@ -129,7 +130,7 @@ def step_function(
     )
 
 
-class CornerBased(StepMethod):
+class CornerBased(FamilyMethod):
     """Eq. 17-18 with a drift-compensated roll / pitch rate observer; compiled loop."""
 
     name = "corner-based"
@@ -142,13 +143,20 @@ class CornerBased(StepMethod):
         *,
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.vehicle = vehicle
         self.settings = settings
-        self.suspension = suspension
-        parameters = ModelParameters.from_vehicle(vehicle)
-        initial = (np.zeros(2), np.array(parameters.static(), float))
-        fixed = (corner_parameters(vehicle, settings, suspension), parameters.vector())
-        super().__init__(step_function(vehicle, settings, suspension), initial, fixed)
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return step_function(self.vehicle, self.settings, self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        """The angles (zero) and the loads held for a rejected sample (static)."""
+        return (np.zeros(2), *super().initial_arrays())
+
+    def fixed_arrays(self) -> tuple[np.ndarray, ...]:
+        """The corner parameters (eq. 17-18) and the model parameters."""
+        corner = corner_parameters(self.vehicle, self.settings, self.suspension)
+        return (corner, self.parameters.vector())
 
 
 INFO = MethodInfo(

@@ -55,7 +55,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import StepMethod, flag_sum
+from wheelload.estimators.family.flat_step import flag_sum, step_name
+from wheelload.estimators.family.quarter_car import unsprung_masses
+from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
 from wheelload.estimators.kernels.discretise import first_order_hold, trapezoidal
 from wheelload.estimators.kf.two_stage import interval_is_valid
@@ -183,7 +185,7 @@ def step_function(
         ]
     )
     return ca.Function(
-        "wheelload_ycoo_step" if model is SuspensionModel.FULL else "wheelload_ycoo_step_paper",
+        step_name("wheelload_ycoo_step", model),
         [X, memory, u_raw, valid, dt, p, mu],
         [ca.vec(Xn), u_next, loads, ca.DM.zeros(4), residual, flags],
         ["X", "u_prev", "u", "u_valid", "dt", "p", "m_u"],
@@ -191,13 +193,7 @@ def step_function(
     )
 
 
-def unsprung_masses(vehicle: Vehicle) -> np.ndarray:
-    """Unsprung mass of each corner [kg], order FL, FR, RL, RR."""
-    m = vehicle.mass
-    return np.array([m.unsprung_front, m.unsprung_front, m.unsprung_rear, m.unsprung_rear]) / 2
-
-
-class Ycoo(StepMethod):
+class Ycoo(FamilyMethod):
     """YCOO tyre-load observer on each corner (eq. 15); compiled loop."""
 
     name = "YCOO"
@@ -210,13 +206,17 @@ class Ycoo(StepMethod):
         *,
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.vehicle = vehicle
         self.settings = settings
-        self.suspension = suspension
-        p = ModelParameters.from_vehicle(vehicle).vector()
-        initial = (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS + 1))
-        step = step_function(vehicle, settings, suspension)
-        super().__init__(step, initial, (p, unsprung_masses(vehicle)))
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return step_function(self.vehicle, self.settings, self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        return (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS + 1))
+
+    def constants(self) -> np.ndarray:
+        return unsprung_masses(self.vehicle)
 
 
 INFO = MethodInfo(
