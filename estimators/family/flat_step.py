@@ -1,10 +1,11 @@
-r"""Building blocks of a family step on one flat state vector ``s`` and constants ``c``.
+r"""The residual :math:`b - A \hat x` and update flags of a family step on one flat state ``s``.
 
-The symbols of the runner's layout (:mod:`~wheelload.estimators.family.step_method`)
+Building blocks of a step with one flat state vector ``s`` and constants ``c``:
+the symbols of the runner's layout (:mod:`~wheelload.estimators.family.step_method`)
 with the inputs sanitised and the interval checked (:func:`step_symbols`), and
 the step Function (:func:`step_function`) that adds the residual of the
-equilibrium :math:`b - A \hat x` and the flags of the KF's seven update rows
-(:class:`~wheelload.estimators.result.StepFlag`).
+method's loads against the equilibrium and the flags of the KF's seven update
+rows (:class:`~wheelload.estimators.result.StepFlag`).
 """
 
 from __future__ import annotations

@@ -38,7 +38,7 @@ Adaptations, each kept as small as the signals allow:
   logs' 100 Hz: first-order hold on the travels (FOH's sinc^2 droop is
   partly offset by the aliased :math:`m_u s^2` term), Tustin on the
   accelerations and rates (FOH alone droops 1.1 dB at 20 Hz). Both paths are
-  within 1 dB of eq. (14) up to 20 Hz (tests/estimators/family/test_ycoo.py).
+  within 1 dB of eq. (14) up to 20 Hz (tests/equivalence/test_ycoo.py).
 
 The filter is realised as a cascade (two first-order lags, then the
 second-order section) with states

@@ -1,9 +1,10 @@
-"""The two-stage KF and the projection KFs as registered methods (``INFO`` for the registry).
+r"""Method A, the two-stage KF (Siegloff & Choi §III, eq. 12-25), and its projection variants.
 
-The KF is method A of Siegloff & Choi §III (eq. 12-25); the projection KFs
-replace its soft equilibrium update by an exact projection onto
-:math:`A x = b` (Simon & Chia 2002) with :math:`W = P^{-1}` or :math:`W = I`.
-The builders import the filters where used, so that listing the methods stays fast.
+The registry's entries (``INFO``, in table order) of the core Kalman filters:
+the two-stage KF with its soft equilibrium update, and the projection KFs that
+replace that update by an exact projection onto :math:`A x = b` (Simon & Chia
+2002) with :math:`W = P^{-1}` or :math:`W = I`. The builders import the filters
+where used, so that listing the methods stays fast.
 """
 
 from __future__ import annotations
