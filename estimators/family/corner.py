@@ -40,7 +40,7 @@ import numpy as np
 
 from wheelload.estimators.family.flat_step import step_flags, step_name
 from wheelload.estimators.family.step_method import FamilyMethod
-from wheelload.estimators.family.suspension_model import equilibrium
+from wheelload.estimators.family.suspension_model import equilibrium_residual
 from wheelload.estimators.kf.two_stage import interval_is_valid
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
@@ -116,8 +116,7 @@ def step_function(
     new_angles = ca.if_else(ok, ca.if_else(acc_ok, with_acc, only_rates), angles)
     loads = corner_load_function()(acc, new_angles[0], new_angles[1], cp)
     loads = ca.if_else(ca.logic_and(ok, acc_ok), loads, held)
-    A_eq, b_eq = equilibrium(model, u, valid, p)
-    residual = ca.if_else(acc_ok * valid[11], b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    residual, _ = equilibrium_residual(model, u, valid, p, loads)
     rejected = 1 - ok
     missing = ca.fmax(1 - acc_ok, rejected)
     flags = step_flags([rejected] * 4, missing, rejected)

@@ -47,7 +47,7 @@ import numpy as np
 
 from wheelload.estimators.family.flat_step import step_flags, step_name
 from wheelload.estimators.family.step_method import FamilyMethod
-from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
+from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
 from wheelload.estimators.kernels.kalman import sequential_update
 from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
 from wheelload.estimators.logs.signals import Signals
@@ -157,9 +157,7 @@ def step_function(
 
     loads = x_new[4:8]
     std = ca.sqrt(ca.fmax(ca.diag(P_new)[4:8], 0))
-    A_eq, b_eq = equilibrium(model, u, valid, p)
-    eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
-    residual = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    residual, eq_ok = equilibrium_residual(model, u, valid, p, loads)
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
     flags = step_flags([ca.fmax(1 - wheel_ok[i], rejected) for i in range(4)], missing, rejected)

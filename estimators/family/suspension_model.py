@@ -90,6 +90,17 @@ def equilibrium(model: SuspensionModel, u, valid, p_vector) -> tuple[ca.SX, ca.S
     return equilibrium_function()(u, _gates(valid, p_vector, True), p_vector)
 
 
+def equilibrium_residual(model: SuspensionModel, u, valid, p_vector, loads) -> tuple[ca.SX, ca.SX]:
+    r"""Residual :math:`b - A \hat x` of ``loads`` in ``model``'s equilibrium, and its availability.
+
+    The residual is 0 where a specific-force axis or the speed is missing; the
+    availability is 1 where all four are valid.
+    """
+    A, b = equilibrium(model, u, valid, p_vector)
+    available = valid[8] * valid[9] * valid[10] * valid[11]
+    return ca.if_else(available, b - ca.mtimes(A, loads), ca.DM.zeros(3)), available
+
+
 def suspension_mask(u_raw, valid, p_vector) -> ca.SX:
     """1 per wheel whose pseudo-measurement's paper inputs (travel, rate, bar partner) are valid."""
     return dependency_mask(travel_function()(u_raw[0:4], u_raw[4:8], p_vector), u_raw, valid)

@@ -65,7 +65,7 @@ import numpy as np
 from wheelload.estimators.family.flat_step import step_flags, step_name
 from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.family.step_method import FamilyMethod
-from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
+from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
 from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
@@ -269,9 +269,7 @@ def step_function(
     memory_new = ca.vertcat(
         *columns["u"], loads, rates_new, ca.if_else(ok * valid[12] * valid[13], 1, started)
     )
-    A_eq, b_eq = equilibrium(model, u, valid, p)
-    eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
-    residual_eq = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    residual_eq, eq_ok = equilibrium_residual(model, u, valid, p, loads)
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
     flag_value = step_flags(wheel_skipped, missing, rejected)
