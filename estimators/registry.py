@@ -33,7 +33,7 @@ import importlib
 from wheelload.estimators.protocol import DEFAULT_MODEL, Estimator, MethodInfo, SuspensionModel
 from wheelload.models import Vehicle
 
-#: Modules of the core estimators, in table order; each exports ``INFO``.
+#: Modules of the core estimators, in table order; each exports ``INFO`` (one or a tuple).
 CORE_MODULES = (
     "wheelload.estimators.kf.method",  # kf, projection-mp, projection-ls
     "wheelload.estimators.mhe.method",  # mhe
