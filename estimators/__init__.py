@@ -8,7 +8,7 @@ should not pay for them).
 import importlib
 
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-from wheelload.estimators.kf.two_stage import FilterState, Sample, TwoStageKF, step_function
+from wheelload.estimators.kf.two_stage import FilterState, TwoStageKF, step_function
 from wheelload.estimators.logs.signals import (
     LogError,
     Signals,
@@ -16,6 +16,7 @@ from wheelload.estimators.logs.signals import (
     signals_from_frame,
     write_log,
 )
+from wheelload.estimators.protocol import Sample
 from wheelload.estimators.result import Estimate, StepFlag
 
 #: Names imported on first use, by module: settings and tools the command line and the
@@ -38,7 +39,7 @@ _LAZY_MODULES = {
         "guard_settings_for",
     ),
     "wheelload.estimators.kf.offsets": ("check_still_period", "corner_weight_loads"),
-    "wheelload.estimators.family.suspension_model": ("DEFAULT_MODEL", "SuspensionModel"),
+    "wheelload.estimators.protocol": ("DEFAULT_MODEL", "SuspensionModel"),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
     "wheelload.estimators.loops.log_stream": ("LogStream", "scan_log"),
 }

@@ -9,7 +9,13 @@ registry, :mod:`wheelload.estimators.registry`) and offers
 - ``step(state, sample, dt) -> (state, estimate)``: one sample; the estimate
   has one row and ``t = [nan]`` (a :class:`Sample` carries no time stamp);
 - ``run(signals) -> Estimate``: a whole log from a fresh ``initial_state()``,
-  the same numbers as :func:`step_through` (repeated ``step``).
+  the same numbers as repeated ``step``
+  (:func:`~wheelload.estimators.logs.samples.step_through`).
+
+Beside the protocol: the :class:`Sample` a ``step`` takes and the intervals
+between samples (:func:`sample_intervals`), the :class:`MethodInfo` each
+registered method exports as ``INFO``, and the :class:`SuspensionModel` a
+family method is built on.
 
 Conventions shared by every member:
 
@@ -27,19 +33,72 @@ Example
 -------
 >>> estimator = build("C", vehicle)
 >>> estimate = estimator.run(signals)
->>> state, one = estimator.step(estimator.initial_state(), next(samples(signals)), 0.01)
+>>> state, one = estimator.step(estimator.initial_state(), sample, 0.01)
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from wheelload.estimators.kf.two_stage import Sample, sample_intervals
-from wheelload.estimators.logs.signals import Signals, rate_derivatives
+from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.result import Estimate
+
+
+@dataclass(frozen=True, kw_only=True)
+class Sample:
+    """One sample of the signals used by the filter (SI units).
+
+    ``rates`` (wx wy wz), ``rate_dots`` (their derivative) and ``hub``
+    (az_fl .. az_rr) are optional; an absent group is missing (NaN) in
+    :meth:`vector`, which drops the terms that need it.
+    """
+
+    d: np.ndarray  # (4,) travel
+    v: np.ndarray  # (4,) travel rate
+    acc: np.ndarray  # (3,) ax, ay, az specific force
+    vx: float
+    rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
+    rate_dots: np.ndarray | None = None  # (3,) their derivative [rad/s^2], if logged
+    hub: np.ndarray | None = None  # (4,) az_fl..az_rr hub specific force, if logged
+
+    def vector(self) -> np.ndarray:
+        def given(values: np.ndarray | None, size: int) -> np.ndarray:
+            return np.full(size, np.nan) if values is None else np.asarray(values, float)
+
+        return np.concatenate(
+            [
+                self.d,
+                self.v,
+                self.acc,
+                [self.vx],
+                given(self.rates, 3),
+                given(self.rate_dots, 3),
+                given(self.hub, 4),
+            ]
+        ).astype(float)
+
+    def parts(self) -> tuple[tuple[np.ndarray | float | None, int], ...]:
+        """``(values, size)`` per group in :meth:`vector` order; None for an absent group."""
+        return (
+            (self.d, 4),
+            (self.v, 4),
+            (self.acc, 3),
+            ((self.vx,), 1),
+            (self.rates, 3),
+            (self.rate_dots, 3),
+            (self.hub, 4),
+        )
+
+
+def sample_intervals(t: np.ndarray) -> np.ndarray:
+    """Interval before each sample; the first sample reuses the first interval."""
+    dt = np.diff(t)
+    return np.concatenate([dt[:1], dt])
 
 
 @runtime_checkable
@@ -61,43 +120,48 @@ class Estimator(Protocol):
         ...
 
 
-def samples(signals: Signals) -> Iterator[Sample]:
-    """The log's samples in order, with the body rates, their (causal, filtered)
-    derivative and the hub accelerometers where the log has them."""
-    rate_dots = rate_derivatives(signals) if signals.rates is not None else signals.rate_dots
-    for k in range(len(signals)):
-        yield Sample(
-            d=signals.d[k],
-            v=signals.v[k],
-            acc=signals.acc[k],
-            vx=float(signals.vx[k]),
-            rates=None if signals.rates is None else signals.rates[k],
-            rate_dots=None if rate_dots is None else rate_dots[k],
-            hub=None if signals.hub is None else signals.hub[k],
-        )
+class SuspensionModel(enum.Enum):
+    """The vehicle model of a family method (:mod:`wheelload.estimators.family.suspension_model`).
 
-
-def concatenate(estimates: Sequence[Estimate], t: np.ndarray) -> Estimate:
-    """One :class:`Estimate` of the 1-row estimates of consecutive steps, time stamps ``t``."""
-    return Estimate(
-        t=np.asarray(t, float).copy(),
-        loads=np.concatenate([e.loads for e in estimates]),
-        std=np.concatenate([e.std for e in estimates]),
-        residual=np.concatenate([e.residual for e in estimates]),
-        flags=np.concatenate([np.atleast_1d(e.flags) for e in estimates]).astype(np.int64),
-        has_std=all(e.has_std for e in estimates),
-    )
-
-
-def step_through(estimator: Estimator, signals: Signals, state: Any = None) -> Estimate:
-    """``estimator.step`` over every sample from ``state`` (default: a fresh initial state).
-
-    The reference that ``run`` must reproduce; intervals as in the KF's ``run``
-    (the first sample reuses the first interval).
+    ``FULL``: the KF's own suspension pseudo-measurement and equilibrium with every
+    term the vehicle file switches on; ``PAPER``: the papers' bare eq. 9 and eq. 15-16.
     """
-    state = estimator.initial_state() if state is None else state
-    estimates = []
-    for sample, dt in zip(samples(signals), sample_intervals(signals.t)):
-        state, estimate = estimator.step(state, sample, float(dt))
-        estimates.append(estimate)
-    return concatenate(estimates, signals.t)
+
+    FULL = "full"  # the KF's model, every term the vehicle file switches on
+    PAPER = "paper"  # the papers' bare eq. 9 and eq. 15-16
+
+    @classmethod
+    def parse(cls, text: str) -> SuspensionModel:
+        """``"full"`` or ``"paper"`` (command line); anything else names the choices."""
+        for member in cls:
+            if member.value == text:
+                return member
+        raise ValueError(f"unknown suspension model {text!r}; choose 'full' or 'paper'")
+
+
+#: A fair comparison: every method on the KF's own model.
+DEFAULT_MODEL = SuspensionModel.FULL
+
+
+@dataclass(frozen=True, kw_only=True)
+class MethodInfo:
+    """One registered method: its name, a one-line description, its source and its builder.
+
+    ``build(vehicle, **options)``; a method with ``model_choice`` also takes
+    ``build(vehicle, suspension=SuspensionModel...)``. Each method's module exports
+    its ``INFO`` (:mod:`wheelload.estimators.registry` collects them).
+    """
+
+    name: str
+    description: str
+    reference: str
+    build: Callable[..., Estimator]
+    model_choice: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.name or any(c.isspace() or c == "," for c in self.name):
+            raise ValueError(
+                f"method name must be non-empty without spaces or commas: {self.name!r}"
+            )
+        if not callable(self.build):
+            raise TypeError(f"method {self.name}: build must be callable")

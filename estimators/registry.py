@@ -1,10 +1,13 @@
 """The registry of wheel-load estimators: every method named once, with its paper reference.
 
-The four core estimators are registered here; each comparison method lives
-in its own module ``wheelload.estimators.family.<module>`` that exports
-``INFO: MethodInfo``. The modules are listed in :data:`FAMILY_MODULES`; one
-that is not (yet) installed is left out, any other import error is raised.
-Studies and the command line reach estimators only through :func:`build`.
+Each method lives in its own module, which exports ``INFO``: a
+:class:`~wheelload.estimators.protocol.MethodInfo`, or a tuple of them for a
+module with variants (the KF and its projection variants). The modules are
+listed in table order, the core estimators (:data:`CORE_MODULES`) then the
+papers' comparison methods (:data:`FAMILY_MODULES`, in
+``wheelload.estimators.family``); one that is not (yet) installed is left
+out, any other import error is raised. Studies and the command line reach
+estimators only through :func:`build`.
 
 Vehicle model: the family methods take the suspension pseudo-measurement and
 the rigid-body equilibrium from the same model Functions as the two-stage KF
@@ -26,13 +29,15 @@ from __future__ import annotations
 
 import functools
 import importlib
-from collections.abc import Callable
-from dataclasses import dataclass
 
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
-from wheelload.estimators.protocol import Estimator
+from wheelload.estimators.protocol import DEFAULT_MODEL, Estimator, MethodInfo, SuspensionModel
 from wheelload.models import Vehicle
 
+#: Modules of the core estimators, in table order; each exports ``INFO`` (one or a tuple).
+CORE_MODULES = (
+    "wheelload.estimators.kf.method",  # kf, projection-mp, projection-ls
+    "wheelload.estimators.mhe.method",  # mhe
+)
 #: Modules of ``wheelload.estimators.family``, in table order; each exports ``INFO``.
 FAMILY_MODULES = (
     "algebraic",  # B
@@ -57,100 +62,36 @@ class UnknownOptionError(TypeError):
     """An option passed to :func:`build` that the method's constructor does not take."""
 
 
-@dataclass(frozen=True, kw_only=True)
-class MethodInfo:
-    """One registered method: its name, a one-line description, its source and its builder.
-
-    ``build(vehicle)``; a method with ``model_choice`` also takes
-    ``build(vehicle, suspension=SuspensionModel...)``.
-    """
-
-    name: str
-    description: str
-    reference: str
-    build: Callable[..., Estimator]
-    model_choice: bool = False
-
-    def __post_init__(self) -> None:
-        if not self.name or any(c.isspace() or c == "," for c in self.name):
-            raise ValueError(
-                f"method name must be non-empty without spaces or commas: {self.name!r}"
-            )
-        if not callable(self.build):
-            raise TypeError(f"method {self.name}: build must be callable")
-
-
-def _kf(vehicle: Vehicle, **options) -> Estimator:
-    from wheelload.estimators.kf.two_stage import TwoStageKF
-
-    return TwoStageKF(vehicle, **options)
-
-
-def _projection(weighting_name: str) -> Callable[[Vehicle], Estimator]:
-    def build(vehicle: Vehicle, **options) -> Estimator:
-        from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-
-        return ProjectionKF(vehicle, weighting=Weighting[weighting_name], **options)
-
-    return build
-
-
-def _mhe(vehicle: Vehicle, **options) -> Estimator:
-    from wheelload.estimators.mhe.method import MheMethod
-
-    return MheMethod(vehicle, **options)
-
-
-CORE = (
-    MethodInfo(
-        name="kf",
-        description="two-stage physics-constrained KF: suspension update + soft equilibrium",
-        reference="Siegloff & Choi §III, eq. 12-25 (method A)",
-        build=_kf,
-    ),
-    MethodInfo(
-        name="projection-mp",
-        description="KF with exact projection onto the equilibrium, W = P^-1",
-        reference="Simon & Chia 2002; Siegloff & Choi eq. 14-16",
-        build=_projection("MAXIMUM_PROBABILITY"),
-    ),
-    MethodInfo(
-        name="projection-ls",
-        description="KF with exact projection onto the equilibrium, W = I",
-        reference="Simon & Chia 2002; Siegloff & Choi eq. 14-16",
-        build=_projection("LEAST_SQUARES"),
-    ),
-    MethodInfo(
-        name="mhe",
-        description="moving-horizon estimator N=10, soft equilibrium, OSQP",
-        reference="Rao, Rawlings & Lee 2001; Siegloff & Choi eq. 12-17",
-        build=_mhe,
-    ),
-)
-
-
-def _family_infos() -> list[MethodInfo]:
+def _module_infos(modules: tuple[str, ...]) -> list[MethodInfo]:
+    """The ``INFO`` entries of the installed ``modules``, in order."""
     infos = []
-    for module in FAMILY_MODULES:
-        full = f"{FAMILY_PACKAGE}.{module}"
+    for full in modules:
         try:
             loaded = importlib.import_module(full)
         except ModuleNotFoundError as error:
             if error.name == full:
                 continue  # not installed in this build
             raise
-        info = loaded.INFO
-        if not isinstance(info, MethodInfo):
-            raise TypeError(f"{full}.INFO must be a MethodInfo, got {type(info).__name__}")
-        infos.append(info)
+        entries = loaded.INFO if isinstance(loaded.INFO, tuple) else (loaded.INFO,)
+        for info in entries:
+            if not isinstance(info, MethodInfo):
+                raise TypeError(f"{full}.INFO must be a MethodInfo, got {type(info).__name__}")
+        infos.extend(entries)
     return infos
+
+
+@functools.cache
+def core() -> tuple[MethodInfo, ...]:
+    """The core estimators (KF, projection KFs, MHE), in table order."""
+    return tuple(_module_infos(CORE_MODULES))
 
 
 @functools.cache
 def methods() -> dict[str, MethodInfo]:
     """Every registered method by name, in table order (core first)."""
+    family = tuple(f"{FAMILY_PACKAGE}.{module}" for module in FAMILY_MODULES)
     table: dict[str, MethodInfo] = {}
-    for info in (*CORE, *_family_infos()):
+    for info in (*core(), *_module_infos(family)):
         if info.name in table:
             raise ValueError(f"method name {info.name!r} is registered twice")
         table[info.name] = info

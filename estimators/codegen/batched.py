@@ -39,11 +39,11 @@ from wheelload.estimators.kf.two_stage import (
     TwoStageKF,
     input_matrix,
     nominal_interval,
-    sample_intervals,
     sensor_faults,
 )
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import _shared_library
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import Estimate
 from wheelload.models.files.build_folder import build_folder
 

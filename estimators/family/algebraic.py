@@ -38,17 +38,15 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
+from wheelload.estimators.family.flat_step import (
     hold,
     model_equilibrium,
     step_function,
-    step_name,
     step_symbols,
 )
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
-from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
+from wheelload.models import Vehicle
 from wheelload.models.body_attitude import body_attitude_function
 from wheelload.models.load_transfer import algebraic_function, equilibrium_split
 
@@ -72,7 +70,8 @@ def algebraic_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     loads_ok = ca.mmin(sym.mask(sym.acc))
     loads = hold(ca.repmat(loads_ok, 4, 1), x, held)
     return step_function(
-        step_name("wheelload_algebraic_step", model),
+        "wheelload_algebraic_step",
+        model,
         sym,
         ca.vertcat(loads, filtered),
         loads,
@@ -82,7 +81,7 @@ def algebraic_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     )
 
 
-class Algebraic(StepMethod):
+class Algebraic(FamilyMethod):
     """Method B: Alatorre-style algebraic load transfer (module docstring)."""
 
     name = "B algebraic"
@@ -97,13 +96,17 @@ class Algebraic(StepMethod):
     ) -> None:
         if not attitude_cutoff > 0:
             raise ValueError(f"attitude_cutoff must be > 0 Hz, got {attitude_cutoff}")
-        parameters = ModelParameters.from_vehicle(vehicle)
-        self.suspension = suspension
-        super().__init__(
-            algebraic_step(suspension),
-            (np.array([*parameters.static(), 0.0, 0.0], float),),
-            (parameters.vector(), np.array([attitude_cutoff])),
-        )
+        self.attitude_cutoff = attitude_cutoff
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return algebraic_step(self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        return (np.array([*self.parameters.static(), 0.0, 0.0], float),)
+
+    def constants(self) -> np.ndarray:
+        return np.array([self.attitude_cutoff])
 
 
 INFO = MethodInfo(

@@ -38,22 +38,16 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    interval_ok,
-    sanitise,
-    step_flags,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-)
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.flat_step import step_flags, step_name
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import equilibrium_residual
+from wheelload.estimators.kf.two_stage import interval_is_valid
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.models.equilibrium import roll_axis_height
 from wheelload.models.family.corner_loads import corner_load_function
+from wheelload.models.input_validity import sanitise
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -111,7 +105,7 @@ def step_function(
     lever = vehicle.mass.sprung * arm
     stationary = ca.vertcat(lever * acc[1] / k.roll, -lever * acc[0] / k.pitch)
     acc_ok = valid[8] * valid[9] * valid[10]
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1e-3)
     gain = settings.observer_gain
     decay = ca.exp(-gain * dt_safe)
@@ -122,13 +116,12 @@ def step_function(
     new_angles = ca.if_else(ok, ca.if_else(acc_ok, with_acc, only_rates), angles)
     loads = corner_load_function()(acc, new_angles[0], new_angles[1], cp)
     loads = ca.if_else(ca.logic_and(ok, acc_ok), loads, held)
-    A_eq, b_eq = equilibrium(model, u, valid, p)
-    residual = ca.if_else(acc_ok * valid[11], b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    residual, _ = equilibrium_residual(model, u, valid, p, loads)
     rejected = 1 - ok
     missing = ca.fmax(1 - acc_ok, rejected)
     flags = step_flags([rejected] * 4, missing, rejected)
     return ca.Function(
-        "wheelload_corner_step" if model is SuspensionModel.FULL else "wheelload_corner_step_paper",
+        step_name("wheelload_corner_step", model),
         [angles, held, u_raw, valid, dt, cp, p],
         [new_angles, loads, loads, ca.DM.zeros(4), residual, flags],
         ["angles", "loads_held", "u", "u_valid", "dt", "cp", "p"],
@@ -136,7 +129,7 @@ def step_function(
     )
 
 
-class CornerBased(StepMethod):
+class CornerBased(FamilyMethod):
     """Eq. 17-18 with a drift-compensated roll / pitch rate observer; compiled loop."""
 
     name = "corner-based"
@@ -149,13 +142,20 @@ class CornerBased(StepMethod):
         *,
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.vehicle = vehicle
         self.settings = settings
-        self.suspension = suspension
-        parameters = ModelParameters.from_vehicle(vehicle)
-        initial = (np.zeros(2), np.array(parameters.static(), float))
-        fixed = (corner_parameters(vehicle, settings, suspension), parameters.vector())
-        super().__init__(step_function(vehicle, settings, suspension), initial, fixed)
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return step_function(self.vehicle, self.settings, self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        """The angles (zero) and the loads held for a rejected sample (static)."""
+        return (np.zeros(2), *super().initial_arrays())
+
+    def fixed_arrays(self) -> tuple[np.ndarray, ...]:
+        """The corner parameters (eq. 17-18) and the model parameters."""
+        corner = corner_parameters(self.vehicle, self.settings, self.suspension)
+        return (corner, self.parameters.vector())
 
 
 INFO = MethodInfo(

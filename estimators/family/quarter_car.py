@@ -44,22 +44,10 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    StepSymbols,
-    hold,
-    model_equilibrium,
-    step_function,
-    step_name,
-    step_symbols,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    suspension_loads,
-    suspension_mask,
-)
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.flat_step import StepSymbols, hold, step_function, step_symbols
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import suspension_loads, suspension_mask
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_vertical_acceleration
 from wheelload.models.family.quarter_car import unsprung_balance
@@ -70,14 +58,19 @@ FRONT_END_STATES = 16
 FRONT_END_CONSTANTS = 13  # m_u[4], corner x[4], corner y[4] from the IMU, bandwidth
 
 
+def unsprung_masses(vehicle: Vehicle) -> np.ndarray:
+    """Unsprung mass of each corner [kg], order FL, FR, RL, RR (half the axle's)."""
+    m = vehicle.mass
+    return np.array([m.unsprung_front, m.unsprung_front, m.unsprung_rear, m.unsprung_rear]) / 2
+
+
 def corner_geometry(vehicle: Vehicle) -> np.ndarray:
     """Unsprung mass [kg] and position relative to the IMU (x, y) [m] of each corner (12 values)."""
-    g, m = vehicle.geometry, vehicle.mass
+    g = vehicle.geometry
     imu = np.asarray(g.imu_position, float)
     x = np.array([g.lf, g.lf, -g.lr, -g.lr]) - imu[0]
     y = np.array([g.track_front, -g.track_front, g.track_rear, -g.track_rear]) / 2 - imu[1]
-    m_u = np.array([m.unsprung_front, m.unsprung_front, m.unsprung_rear, m.unsprung_rear]) / 2
-    return np.concatenate([m_u, x, y])
+    return np.concatenate([unsprung_masses(vehicle), x, y])
 
 
 def corner_constants(vehicle: Vehicle, bandwidth: float) -> np.ndarray:
@@ -150,13 +143,10 @@ def quarter_car_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state and constants of :func:`front_end`; loads = observed tyre loads."""
     sym = step_symbols(FRONT_END_STATES, FRONT_END_CONSTANTS)
     s_next, F, used = front_end(sym, sym.s, sym.c, model)
-    return step_function(
-        step_name("wheelload_quarter_car_step", model), sym, s_next, F, ca.SX.zeros(4), used,
-        model_equilibrium(model, sym),
-    )  # fmt: skip
+    return step_function("wheelload_quarter_car_step", model, sym, s_next, F, ca.SX.zeros(4), used)
 
 
-class QuarterCarObserver(StepMethod):
+class QuarterCarObserver(FamilyMethod):
     """Method E: four independent quarter-car tyre-force observers (module docstring)."""
 
     name = "E quarter-car observer"
@@ -169,13 +159,17 @@ class QuarterCarObserver(StepMethod):
         bandwidth: float = OBSERVER_BANDWIDTH,
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        parameters = ModelParameters.from_vehicle(vehicle)
-        self.suspension = suspension
-        super().__init__(
-            quarter_car_step(suspension),
-            (front_end_initial(parameters),),
-            (parameters.vector(), corner_constants(vehicle, bandwidth)),
-        )
+        self.bandwidth = bandwidth
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return quarter_car_step(self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        return (front_end_initial(self.parameters),)
+
+    def constants(self) -> np.ndarray:
+        return corner_constants(self.vehicle, self.bandwidth)
 
 
 INFO = MethodInfo(

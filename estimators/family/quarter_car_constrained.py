@@ -26,26 +26,16 @@ import functools
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.family.flat_step import model_equilibrium, step_function, step_symbols
 from wheelload.estimators.family.quarter_car import (
     FRONT_END_CONSTANTS,
     FRONT_END_STATES,
-    OBSERVER_BANDWIDTH,
-    corner_constants,
+    QuarterCarObserver,
     front_end,
-    front_end_initial,
 )
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    model_equilibrium,
-    step_function,
-    step_name,
-    step_symbols,
-)
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
 from wheelload.estimators.kf.two_stage import TUNING, TUNING_INDEX, tuning_vector
-from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 
 N_STATES = FRONT_END_STATES + 4 + 16  # observer, x, P (column-major)
@@ -73,32 +63,27 @@ def constrained_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     s_next = ca.vertcat(observer, x_new, ca.vec(P_new))
     return step_function(
-        step_name("wheelload_quarter_car_constrained_step", model), sym, s_next, x_new, std,
-        used_s, (A, b, mask_c),
+        "wheelload_quarter_car_constrained_step", model, sym, s_next, x_new, std, used_s,
+        (A, b, mask_c),
     )  # fmt: skip
 
 
-class ConstrainedQuarterCar(StepMethod):
+class ConstrainedQuarterCar(QuarterCarObserver):
     """Method E+C: quarter-car observers + the two-stage KF's updates (module docstring)."""
 
     name = "E+C quarter-car + constraint"
     has_std = True
 
-    def __init__(
-        self,
-        vehicle: Vehicle,
-        *,
-        bandwidth: float = OBSERVER_BANDWIDTH,
-        suspension: SuspensionModel = DEFAULT_MODEL,
-    ) -> None:
-        parameters = ModelParameters.from_vehicle(vehicle)
-        P0 = vehicle.filter.initial_std**2 * np.eye(4)
-        self.suspension = suspension
-        initial = np.concatenate(
-            [front_end_initial(parameters), parameters.static(), P0.ravel(order="F")]
-        )
-        constants = np.concatenate([corner_constants(vehicle, bandwidth), tuning_vector(vehicle)])
-        super().__init__(constrained_step(suspension), (initial,), (parameters.vector(), constants))
+    def build_step(self) -> ca.Function:
+        return constrained_step(self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        (observer,) = super().initial_arrays()
+        P0 = self.vehicle.filter.initial_std**2 * np.eye(4)
+        return (np.concatenate([observer, self.parameters.static(), P0.ravel(order="F")]),)
+
+    def constants(self) -> np.ndarray:
+        return np.concatenate([super().constants(), tuning_vector(self.vehicle)])
 
 
 INFO = MethodInfo(

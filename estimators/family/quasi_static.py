@@ -30,25 +30,11 @@ from __future__ import annotations
 import functools
 
 import casadi as ca
-import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    StepSymbols,
-    hold,
-    model_equilibrium,
-    step_function,
-    step_name,
-    step_symbols,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
-from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle
+from wheelload.estimators.family.flat_step import StepSymbols, hold, step_function, step_symbols
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models.inputs import TRAVEL, TRAVEL_RATE, input_index
 from wheelload.models.load_transfer import quasi_static_function, quasi_static_transfer
 
@@ -80,25 +66,18 @@ def quasi_static_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     ok = ca.mmin(sym.mask(paper))
     loads = hold(ca.repmat(ok, 4, 1), x, sym.s)
     return step_function(
-        step_name("wheelload_quasi_static_step", model), sym, loads, loads, ca.SX.zeros(4),
-        ca.DM.ones(4), model_equilibrium(model, sym),
-    )  # fmt: skip
+        "wheelload_quasi_static_step", model, sym, loads, loads, ca.SX.zeros(4), ca.DM.ones(4)
+    )
 
 
-class QuasiStatic(StepMethod):
+class QuasiStatic(FamilyMethod):
     """Method C: quasi-static rigid-body load transfer (module docstring)."""
 
     name = "C quasi-static"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle, *, suspension: SuspensionModel = DEFAULT_MODEL) -> None:
-        parameters = ModelParameters.from_vehicle(vehicle)
-        self.suspension = suspension
-        super().__init__(
-            quasi_static_step(suspension),
-            (np.array(parameters.static(), float),),
-            (parameters.vector(), np.zeros(0)),
-        )
+    def build_step(self) -> ca.Function:
+        return quasi_static_step(self.suspension)
 
 
 INFO = MethodInfo(

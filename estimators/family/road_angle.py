@@ -45,26 +45,18 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    interval_ok,
-    sanitise,
-    step_flags,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
+from wheelload.estimators.family.flat_step import step_flags, step_name
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
 from wheelload.estimators.kernels.kalman import sequential_update
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import Estimate
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.family.road_angle import STATE_NAMES, BodyInertia, road_angle_model
+from wheelload.models.input_validity import sanitise
 
 N = len(STATE_NAMES)
 #: Measured states (eq. 16): roll, roll rate, pitch, pitch rate, 4 loads, 3 road-frame
@@ -115,7 +107,7 @@ def step_function(
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
     d, acc, vx, rates = u[0:4], u[8:11], u[11], u[12:15]
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1.0)
 
     roll, pitch, acc_road = attitude_function(vehicle)(d, acc)
@@ -165,16 +157,12 @@ def step_function(
 
     loads = x_new[4:8]
     std = ca.sqrt(ca.fmax(ca.diag(P_new)[4:8], 0))
-    A_eq, b_eq = equilibrium(model, u, valid, p)
-    eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
-    residual = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    residual, eq_ok = equilibrium_residual(model, u, valid, p, loads)
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
     flags = step_flags([ca.fmax(1 - wheel_ok[i], rejected) for i in range(4)], missing, rejected)
     return ca.Function(
-        "wheelload_road_angle_step"
-        if model is SuspensionModel.FULL
-        else "wheelload_road_angle_step_paper",
+        step_name("wheelload_road_angle_step", model),
         [x, P, angle, u_raw, valid, dt, F, Q, p],
         [x_new, P_new, angles_new, loads, std, residual, flags],
         ["x", "P", "angle_state", "u", "u_valid", "dt", "F", "Q", "p"],
@@ -182,7 +170,7 @@ def step_function(
     )
 
 
-class RoadAngleKF(StepMethod):
+class RoadAngleKF(FamilyMethod):
     """14-state road-angle KF; loads with standard deviations, and road grade and bank.
 
     The step is one CasADi Function; ``run`` loops it in compiled C, with the
@@ -202,11 +190,8 @@ class RoadAngleKF(StepMethod):
         tuning: RoadAngleTuning = RoadAngleTuning(),
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.vehicle = vehicle
-        self.suspension = suspension
         self.inertia = inertia
         self.tuning = tuning
-        parameters = ModelParameters.from_vehicle(vehicle)
         model = road_angle_model(vehicle, inertia)
         x = ca.SX.sym("x", N)
         self.A = np.asarray(ca.DM(ca.jacobian(model(x)[0], x)), float)
@@ -214,16 +199,24 @@ class RoadAngleKF(StepMethod):
         self._noise[[1, 3]] = tuning.angle_acceleration_density
         self._noise[4:8] = vehicle.filter.process_noise_density
         self._noise[[9, 11, 13]] = tuning.jerk_density
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return step_function(self.vehicle, self.tuning, self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        """``x`` at rest on the static loads, its ``P``, and the road-angle filters' state."""
         x0 = np.zeros(N)
-        x0[4:8] = parameters.static()
+        x0[4:8] = self.parameters.static()
         x0[12] = GRAVITY
         std = np.zeros(N)
         std[[0, 2]], std[[1, 3]] = 0.02, 0.1
-        std[4:8] = vehicle.filter.initial_std
+        std[4:8] = self.vehicle.filter.initial_std
         std[[8, 10, 12]], std[[9, 11, 13]] = 2.0, 5.0
-        initial = (x0, np.diag(std**2), np.zeros(len(ANGLE_STATE)))
-        step = step_function(vehicle, tuning, suspension)
-        super().__init__(step, initial, (parameters.vector(),))
+        return (x0, np.diag(std**2), np.zeros(len(ANGLE_STATE)))
+
+    def fixed_arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.parameters.vector(),)
 
     @functools.lru_cache(maxsize=64)  # noqa: B019  (one model per sample interval)
     def _discrete(self, dt: float) -> tuple[np.ndarray, np.ndarray]:

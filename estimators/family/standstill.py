@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.family.quarter_car import tyre_load_function
@@ -95,11 +96,6 @@ class WeighResult:
         raise AttributeError(name)
 
 
-def _unsprung(vehicle: Vehicle) -> np.ndarray:
-    m = vehicle.mass
-    return np.array([m.unsprung_front, m.unsprung_front, m.unsprung_rear, m.unsprung_rear]) / 2
-
-
 def at_rest(signals: Signals, vehicle: Vehicle, settings: WeighSettings) -> Attitude:
     """The mean loads and specific force of the still samples of one log."""
     still = np.abs(signals.vx) < settings.max_speed
@@ -121,7 +117,7 @@ def at_rest(signals: Signals, vehicle: Vehicle, settings: WeighSettings) -> Atti
     a_u = np.repeat(acc[:, 2:3] - GRAVITY, 4, axis=1)
     loads_of = tyre_load_function().map(count)
     loads = np.asarray(
-        loads_of(signals.d[usable].T, signals.v[usable].T, a_u.T, _unsprung(vehicle), p)
+        loads_of(signals.d[usable].T, signals.v[usable].T, a_u.T, unsprung_masses(vehicle), p)
     ).T
     return Attitude(
         source=signals.source,

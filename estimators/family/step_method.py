@@ -20,171 +20,28 @@ it in generated C (:class:`~wheelload.estimators.loops.compiled.CompiledLoop`, a
 the KF), in chunks of :data:`CHUNK` samples with the state carried; both give
 the same numbers.
 
-Methods with one flat state vector ``s`` and constants ``c`` build their step
-with :func:`step_symbols` and :func:`step_function`, which add the
-equilibrium residual and the flags of the KF's seven update rows.
+:class:`FamilyMethod` is the one constructor of the package's methods
+(built from a vehicle and a :class:`~wheelload.estimators.protocol.SuspensionModel`);
+methods with one flat state vector build their step with
+:mod:`~wheelload.estimators.family.flat_step`.
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.suspension_model import (
-    SuspensionModel,
-    equilibrium,
-    equilibrium_mask,
-)
-from wheelload.estimators.kf.two_stage import (
-    INPUTS,
-    Sample,
-    _dependency_mask,
-    _sanitise,
-    input_matrix,
-    interval_is_valid,
-    sample_intervals,
-)
+from wheelload.estimators.kf.two_stage import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
-from wheelload.estimators.result import Estimate, StepFlag
-from wheelload.models import ModelParameters
+from wheelload.estimators.protocol import DEFAULT_MODEL, Sample, SuspensionModel, sample_intervals
+from wheelload.estimators.result import Estimate
+from wheelload.models import ModelParameters, Vehicle
 
 PER_SAMPLE = ("u", "u_valid", "dt")
 CHUNK = 20_000  # samples per call of the compiled loop
-STEP_INPUT_NAMES = ["s", "u", "u_valid", "dt", "p", "c"]
-STEP_OUTPUT_NAMES = ["s_next", "loads", "std", "residual", "flags"]
-
-
-def sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
-    """Invalid inputs replaced by zero, so that no NaN or Inf enters the arithmetic."""
-    return _sanitise(u, valid)
-
-
-def interval_ok(dt):
-    """1 where the sample interval is finite, positive and below MAX_INTERVAL."""
-    return interval_is_valid(dt)
-
-
-def flag_sum(conditions: list[tuple[object, StepFlag]]):
-    """Sum of the flag values whose condition (an SX 0/1) is set."""
-    total = 0
-    for condition, flag in conditions:
-        total = total + condition * float(flag.value)
-    return total
-
-
-def step_flags(wheel_skipped, equilibrium_skipped, rejected):
-    """Status of a family step: the four wheels' skips, the three equilibrium rows, rejection.
-
-    ``wheel_skipped``: four 0/1 conditions (FL, FR, RL, RR); the others single conditions.
-    """
-    wheels = list(zip(wheel_skipped, StepFlag.update_flags()[:4]))
-    rows = [(equilibrium_skipped, flag) for flag in StepFlag.update_flags()[4:7]]
-    return flag_sum([*wheels, *rows, (rejected, StepFlag.STEP_REJECTED)])
-
-
-def used_flags(used, rejected):
-    """Flags of the seven update rows' ``used`` (0 = skipped) and of a rejected interval."""
-    rows = [(used[i] < 0.5, flag) for i, flag in enumerate(StepFlag.update_flags()[:7])]
-    return flag_sum([*rows, (rejected, StepFlag.STEP_REJECTED)])
-
-
-@dataclass(frozen=True, kw_only=True)
-class StepSymbols:
-    """Symbolic inputs of a flat-state step and the expressions every method needs.
-
-    ``u`` has invalid entries replaced by 0; ``dt_ok`` is 1 for a valid
-    interval and ``dt`` is then the interval (1 otherwise, never used).
-    """
-
-    s: ca.SX
-    u_raw: ca.SX
-    valid: ca.SX
-    dt_raw: ca.SX
-    p_vector: ca.SX
-    p: ModelParameters
-    c: ca.SX
-    u: ca.SX
-    dt_ok: ca.SX
-    dt: ca.SX
-
-    @property
-    def d(self) -> ca.SX:
-        return self.u[0:4]
-
-    @property
-    def v(self) -> ca.SX:
-        return self.u[4:8]
-
-    @property
-    def acc(self) -> ca.SX:
-        return self.u[8:11]
-
-    @property
-    def vx(self) -> ca.SX:
-        return self.u[11]
-
-    @property
-    def rates(self) -> ca.SX:
-        return self.u[12:15]
-
-    def mask(self, outputs: ca.SX) -> ca.SX:
-        """1 per output whose every needed input is valid and whose interval is valid."""
-        return _dependency_mask(outputs, self.u_raw, self.valid) * self.dt_ok
-
-
-def step_symbols(n_state: int, n_constants: int) -> StepSymbols:
-    """Fresh symbols for a step with ``n_state`` states and ``n_constants`` constants."""
-    u_raw = ca.SX.sym("u", len(INPUTS))
-    valid = ca.SX.sym("u_valid", len(INPUTS))
-    dt_raw = ca.SX.sym("dt")
-    p_vector, p = ModelParameters.symbolic()
-    dt_ok = interval_is_valid(dt_raw)
-    return StepSymbols(
-        s=ca.SX.sym("s", n_state),
-        u_raw=u_raw,
-        valid=valid,
-        dt_raw=dt_raw,
-        p_vector=p_vector,
-        p=p,
-        c=ca.SX.sym("c", n_constants),
-        u=_sanitise(u_raw, valid),
-        dt_ok=dt_ok,
-        dt=ca.if_else(dt_ok, dt_raw, 1.0),
-    )
-
-
-def step_function(
-    name: str, sym: StepSymbols, s_next, loads, std, used_suspension, equilibrium
-) -> ca.Function:
-    """A flat-state method's step Function in the runner's layout (module docstring).
-
-    ``equilibrium``: ``(A, b, mask)`` of the equilibrium the residual
-    :math:`b - A \\hat x` is reported against (``mask`` 1 per row whose inputs
-    are valid; a row that cannot be formed is reported as 0 and flagged). A
-    rejected interval holds the state (``s_next = s``).
-    """
-    A, b, mask = equilibrium
-    mask_c = mask * sym.dt_ok
-    residual = (b - ca.mtimes(A, loads)) * mask_c
-    s_next = ca.if_else(sym.dt_ok, s_next, sym.s)
-    used = ca.vertcat(used_suspension, mask_c)
-    flags = used_flags(used, 1 - sym.dt_ok)
-    return ca.Function(
-        name,
-        [sym.s, sym.u_raw, sym.valid, sym.dt_raw, sym.p_vector, sym.c],
-        [s_next, loads, std, residual, flags],
-        STEP_INPUT_NAMES,
-        STEP_OUTPUT_NAMES,
-    )
-
-
-def hold(valid, new, old):
-    """``new`` where ``valid`` else ``old`` (elementwise; no arithmetic on ``new`` when invalid)."""
-    return ca.vertcat(*[ca.if_else(valid[i], new[i], old[i]) for i in range(new.shape[0])])
 
 
 class StepMethod:
@@ -315,12 +172,35 @@ def _compiled_loop(
     return CompiledLoop(step, n_accum, PER_SAMPLE + interval_names)
 
 
-def step_name(base: str, model: SuspensionModel) -> str:
-    """The step Function's name: ``base`` for the full model, ``base_paper`` for the paper's."""
-    return base if model is SuspensionModel.FULL else f"{base}_paper"
+class FamilyMethod(StepMethod):
+    """The one constructor of the family's methods: a vehicle and its vehicle model.
 
+    ``Method(vehicle, suspension=...)`` reads the model parameters once and asks
+    the method for its step Function (:meth:`build_step`), the carried arrays
+    before the first sample (:meth:`initial_arrays`, default the static loads)
+    and the fixed inputs (:meth:`fixed_arrays`, default the model parameters and
+    :meth:`constants`). A method with options checks and keeps them, then calls
+    this constructor.
+    """
 
-def model_equilibrium(model: SuspensionModel, sym: StepSymbols):
-    """``(A, b, mask)`` of ``model``'s equilibrium for :func:`step_function`."""
-    A, b = equilibrium(model, sym.u, sym.valid, sym.p_vector)
-    return A, b, equilibrium_mask(sym.u_raw, sym.valid, sym.p_vector)
+    def __init__(self, vehicle: Vehicle, *, suspension: SuspensionModel = DEFAULT_MODEL) -> None:
+        self.vehicle = vehicle
+        self.suspension = suspension
+        self.parameters = ModelParameters.from_vehicle(vehicle)
+        super().__init__(self.build_step(), self.initial_arrays(), self.fixed_arrays())
+
+    def build_step(self) -> ca.Function:
+        """The method's step Function for :attr:`vehicle` and :attr:`suspension`."""
+        raise NotImplementedError
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        """The carried arrays before the first sample: by default the static loads."""
+        return (np.array(self.parameters.static(), float),)
+
+    def constants(self) -> np.ndarray:
+        """The method's constant vector ``c`` (default none)."""
+        return np.zeros(0)
+
+    def fixed_arrays(self) -> tuple[np.ndarray, ...]:
+        """The fixed inputs: by default the model parameters and :meth:`constants`."""
+        return (self.parameters.vector(), self.constants())

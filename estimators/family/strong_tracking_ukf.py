@@ -45,29 +45,18 @@ import functools
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.family.flat_step import hold, step_function, step_symbols
 from wheelload.estimators.family.quarter_car import (
     body_corner_accelerations,
     corner_geometry,
     unsprung_acceleration,
 )
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    hold,
-    model_equilibrium,
-    step_function,
-    step_name,
-    step_symbols,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    suspension_loads,
-    suspension_mask,
-)
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import suspension_loads, suspension_mask
 from wheelload.estimators.family.unscented import sigma_points, unscented_transform
 from wheelload.estimators.kernels.kalman import sequential_update, symmetrise
-from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
+from wheelload.models import Vehicle
 
 #: Process noise densities of d [m^2/s] and v [(m/s)^2/s]: unmodelled corner kinematics, about
 #: 0.5 m/s^2 of body-corner acceleration error at 100 Hz ((0.5 * 0.01)^2 / 0.01).
@@ -142,17 +131,17 @@ def strong_tracking_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
         loads.append(ca.if_else(ok[i], F, s_i[2]))
         stds.append(ca.if_else(ok[i], std, ca.sqrt(ca.fmax(s_i[3 + 8], 0))))
     return step_function(
-        step_name("wheelload_strong_tracking_ukf_step", model),
+        "wheelload_strong_tracking_ukf_step",
+        model,
         sym,
         ca.vertcat(*states, rate_state),
         ca.vertcat(*loads),
         ca.vertcat(*stds),
         ok,
-        model_equilibrium(model, sym),
     )
 
 
-class StrongTrackingUKF(StepMethod):
+class StrongTrackingUKF(FamilyMethod):
     """Method F: four strong-tracking UKFs on compression and rate (module docstring)."""
 
     name = "F strong-tracking UKF"
@@ -167,29 +156,27 @@ class StrongTrackingUKF(StepMethod):
     ) -> None:
         if not max_fading >= 1:
             raise ValueError(f"max_fading must be >= 1, got {max_fading}")
-        parameters = ModelParameters.from_vehicle(vehicle)
-        q = [*PROCESS_NOISE, vehicle.filter.process_noise_density]
-        constants = np.concatenate(
-            [
-                corner_geometry(vehicle),
-                q,
-                MEASUREMENT_NOISE,
-                [FORGETTING, WEAKENING, max_fading],
-            ]
-        )
-        P0 = np.diag([INITIAL_STD[0] ** 2, INITIAL_STD[1] ** 2, vehicle.filter.initial_std**2])
+        self.max_fading = max_fading
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return strong_tracking_step(self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        initial_std = self.vehicle.filter.initial_std
+        P0 = np.diag([INITIAL_STD[0] ** 2, INITIAL_STD[1] ** 2, initial_std**2])
         corners = [
             np.concatenate(
                 [[0.0, 0.0, load], P0.ravel(order="F"), np.diag(MEASUREMENT_NOISE).ravel()]
             )
-            for load in parameters.static()
+            for load in self.parameters.static()
         ]
-        self.suspension = suspension
-        super().__init__(
-            strong_tracking_step(suspension),
-            (np.concatenate([*corners, np.zeros(4)]),),
-            (parameters.vector(), constants),
-        )
+        return (np.concatenate([*corners, np.zeros(4)]),)
+
+    def constants(self) -> np.ndarray:
+        q = [*PROCESS_NOISE, self.vehicle.filter.process_noise_density]
+        fading = [FORGETTING, WEAKENING, self.max_fading]
+        return np.concatenate([corner_geometry(self.vehicle), q, MEASUREMENT_NOISE, fading])
 
 
 INFO = MethodInfo(

@@ -25,11 +25,9 @@ rates, hub accelerometers) drops only the term that needs it.
 
 from __future__ import annotations
 
-import enum
-
 import casadi as ca
 
-from wheelload.estimators.kf.two_stage import _dependency_mask
+from wheelload.estimators.protocol import SuspensionModel
 from wheelload.models import (
     GATES,
     equilibrium_function,
@@ -38,30 +36,12 @@ from wheelload.models import (
     suspension_function,
     travel_function,
 )
+from wheelload.models.input_validity import dependency_mask
 from wheelload.models.inputs import TRAVEL, TRAVEL_RATE, input_index
 
 _UNSPRUNG_GATES = tuple(GATES.index(f"unsprung_{w}") for w in ("fl", "fr", "rl", "rr"))
 _TRAVEL_INDEX = input_index(TRAVEL)
 _RATE_INDEX = input_index(TRAVEL_RATE)
-
-
-class SuspensionModel(enum.Enum):
-    """The vehicle model of a family method (module docstring)."""
-
-    FULL = "full"  # the KF's model, every term the vehicle file switches on
-    PAPER = "paper"  # the papers' bare eq. 9 and eq. 15-16
-
-    @classmethod
-    def parse(cls, text: str) -> SuspensionModel:
-        """``"full"`` or ``"paper"`` (command line); anything else names the choices."""
-        for member in cls:
-            if member.value == text:
-                return member
-        raise ValueError(f"unknown suspension model {text!r}; choose 'full' or 'paper'")
-
-
-#: A fair comparison: every method on the KF's own model.
-DEFAULT_MODEL = SuspensionModel.FULL
 
 
 def _gates(valid, p_vector, unsprung_inertia: bool) -> ca.SX:
@@ -110,12 +90,23 @@ def equilibrium(model: SuspensionModel, u, valid, p_vector) -> tuple[ca.SX, ca.S
     return equilibrium_function()(u, _gates(valid, p_vector, True), p_vector)
 
 
+def equilibrium_residual(model: SuspensionModel, u, valid, p_vector, loads) -> tuple[ca.SX, ca.SX]:
+    r"""Residual :math:`b - A \hat x` of ``loads`` in ``model``'s equilibrium, and its availability.
+
+    The residual is 0 where a specific-force axis or the speed is missing; the
+    availability is 1 where all four are valid.
+    """
+    A, b = equilibrium(model, u, valid, p_vector)
+    available = valid[8] * valid[9] * valid[10] * valid[11]
+    return ca.if_else(available, b - ca.mtimes(A, loads), ca.DM.zeros(3)), available
+
+
 def suspension_mask(u_raw, valid, p_vector) -> ca.SX:
     """1 per wheel whose pseudo-measurement's paper inputs (travel, rate, bar partner) are valid."""
-    return _dependency_mask(travel_function()(u_raw[0:4], u_raw[4:8], p_vector), u_raw, valid)
+    return dependency_mask(travel_function()(u_raw[0:4], u_raw[4:8], p_vector), u_raw, valid)
 
 
 def equilibrium_mask(u_raw, valid, p_vector) -> ca.SX:
     """1 per equilibrium row whose paper inputs (specific force, speed) are valid."""
     b = paper_equilibrium_function()(u_raw[8:11], u_raw[11], p_vector)[1]
-    return _dependency_mask(b, u_raw, valid)
+    return dependency_mask(b, u_raw, valid)

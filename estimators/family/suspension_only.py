@@ -17,24 +17,11 @@ from __future__ import annotations
 import functools
 
 import casadi as ca
-import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    hold,
-    model_equilibrium,
-    step_function,
-    step_name,
-    step_symbols,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    suspension_loads,
-    suspension_mask,
-)
-from wheelload.estimators.registry import MethodInfo
-from wheelload.models import ModelParameters, Vehicle
+from wheelload.estimators.family.flat_step import hold, step_function, step_symbols
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import suspension_loads, suspension_mask
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 
 
 @functools.cache
@@ -45,25 +32,18 @@ def suspension_only_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     mask = suspension_mask(sym.u_raw, sym.valid, sym.p_vector) * sym.dt_ok
     loads = hold(mask, z, sym.s)
     return step_function(
-        step_name("wheelload_suspension_only_step", model), sym, loads, loads, ca.SX.zeros(4),
-        mask, model_equilibrium(model, sym),
-    )  # fmt: skip
+        "wheelload_suspension_only_step", model, sym, loads, loads, ca.SX.zeros(4), mask
+    )
 
 
-class SuspensionOnly(StepMethod):
+class SuspensionOnly(FamilyMethod):
     """Method D: the suspension pseudo-measurement as the estimate (module docstring)."""
 
     name = "D suspension-only"
     has_std = False
 
-    def __init__(self, vehicle: Vehicle, *, suspension: SuspensionModel = DEFAULT_MODEL) -> None:
-        parameters = ModelParameters.from_vehicle(vehicle)
-        self.suspension = suspension
-        super().__init__(
-            suspension_only_step(suspension),
-            (np.array(parameters.static(), float),),
-            (parameters.vector(), np.zeros(0)),
-        )
+    def build_step(self) -> ca.Function:
+        return suspension_only_step(self.suspension)
 
 
 INFO = MethodInfo(

@@ -62,23 +62,16 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    interval_ok,
-    sanitise,
-    step_flags,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.family.flat_step import step_flags, step_name
+from wheelload.estimators.family.quarter_car import unsprung_masses
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
+from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.family.quarter_car import reduced_quarter_car_function
+from wheelload.models.input_validity import sanitise
 
 RANK_TOLERANCE = 1e-9
 
@@ -240,7 +233,7 @@ def step_function(
     p = ca.SX.sym("p", len(ModelParameters.names()))
     u = sanitise(u_raw, valid)
     d, v, acc, rates = u[0:4], u[4:8], u[8:11], u[12:15]
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1.0)
     u_prev, load_prev, rates_prev, started = memory[0:4], memory[4:8], memory[8:10], memory[10]
     rates_ok = valid[12] * valid[13] * started
@@ -276,14 +269,12 @@ def step_function(
     memory_new = ca.vertcat(
         *columns["u"], loads, rates_new, ca.if_else(ok * valid[12] * valid[13], 1, started)
     )
-    A_eq, b_eq = equilibrium(model, u, valid, p)
-    eq_ok = valid[8] * valid[9] * valid[10] * valid[11]
-    residual_eq = ca.if_else(eq_ok, b_eq - ca.mtimes(A_eq, loads), ca.DM.zeros(3))
+    residual_eq, eq_ok = equilibrium_residual(model, u, valid, p, loads)
     rejected = 1 - ok
     missing = ca.fmax(1 - eq_ok, rejected)
     flag_value = step_flags(wheel_skipped, missing, rejected)
     return ca.Function(
-        "wheelload_umvf_step" if model is SuspensionModel.FULL else "wheelload_umvf_step_paper",
+        step_name("wheelload_umvf_step", model),
         [x, P, residual, memory, u_raw, valid, dt, models, p],
         [
             ca.horzcat(*columns["x"]), ca.horzcat(*columns["P"]),
@@ -296,7 +287,7 @@ def step_function(
     )  # fmt: skip
 
 
-class Umvf(StepMethod):
+class Umvf(FamilyMethod):
     """UMVF tyre-load estimator on each corner (eq. 17-30); compiled loop.
 
     The discrete model of each corner (``A, B, H``: a matrix exponential) is
@@ -314,42 +305,68 @@ class Umvf(StepMethod):
         *,
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.vehicle = vehicle
         self.tuning = tuning
-        self.suspension = suspension
-        parameters = ModelParameters.from_vehicle(vehicle)
-        self.static = np.array(parameters.static(), float)
-        mass = vehicle.mass
-        self.unsprung = np.array([mass.unsprung_front] * 2 + [mass.unsprung_rear] * 2) / 2
-        self.sprung = self.static / GRAVITY - self.unsprung
-        axles = [vehicle.suspension.front] * 2 + [vehicle.suspension.rear] * 2
+        super().__init__(vehicle, suspension=suspension)
+
+    @functools.cached_property
+    def static(self) -> np.ndarray:
+        """Static load of each corner [N]."""
+        return np.array(self.parameters.static(), float)
+
+    @functools.cached_property
+    def unsprung(self) -> np.ndarray:
+        return unsprung_masses(self.vehicle)
+
+    @functools.cached_property
+    def sprung(self) -> np.ndarray:
+        """Sprung mass each corner carries [kg]: its static load less its unsprung mass."""
+        return self.static / GRAVITY - self.unsprung
+
+    @functools.cached_property
+    def _linear_suspension(self) -> tuple[np.ndarray, np.ndarray]:
+        """Spring rate and mean damper rate of each corner (the reduced model's ``k_s, b_s``)."""
+        axles = [self.vehicle.suspension.front] * 2 + [self.vehicle.suspension.rear] * 2
         spring = np.array([a.spring_rate for a in axles])
         damper = np.array([0.5 * (a.damper_push + a.damper_pull) for a in axles])
+        return spring, damper
+
+    @functools.cached_property
+    def _continuous(self) -> list[tuple[np.ndarray, ...]]:
+        """Per corner the continuous reduced quarter car ``(A, H, C, G, B, D)``."""
+        spring, damper = self._linear_suspension
         reduced = reduced_quarter_car_function()
-        self._continuous = [
+        continuous = [
             tuple(
                 np.asarray(m, float).ravel() if m.shape[1] == 1 else np.asarray(m, float)
                 for m in reduced([self.sprung[i], self.unsprung[i], spring[i], damper[i]])
             )
             for i in range(4)
         ]
-        for _, H, _, G, _, _ in self._continuous:
+        for _, H, _, G, _, _ in continuous:
             if np.any(G[:, 0]) or np.linalg.matrix_rank(H) != 1:
                 raise ValueError("UMVF: the reduced quarter car lost its input structure")
+        return continuous
+
+    def build_step(self) -> ca.Function:
+        spring, damper = self._linear_suspension
         constants = {
             "spring": ca.DM(spring),
             "damper": ca.DM(damper),
             "CGD": [(ca.DM(C), ca.DM(G), ca.DM(D)) for _, _, C, G, _, D in self._continuous],
         }
-        P0 = np.diag(np.square(tuning.initial_std))
-        initial = (
+        return step_function(self.vehicle, self.tuning, constants, self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        P0 = np.diag(np.square(self.tuning.initial_std))
+        return (
             np.zeros((2, 4)),
             np.tile(P0, (1, 4)),
             np.zeros((3, 4)),
             np.concatenate([np.zeros(4), self.static, np.zeros(3)]),
         )
-        step = step_function(vehicle, tuning, constants, suspension)
-        super().__init__(step, initial, (parameters.vector(),))
+
+    def fixed_arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.parameters.vector(),)
 
     @functools.lru_cache(maxsize=64)  # noqa: B019  (one model per sample interval)
     def _models(self, dt: float) -> np.ndarray:

@@ -38,7 +38,7 @@ Adaptations, each kept as small as the signals allow:
   logs' 100 Hz: first-order hold on the travels (FOH's sinc^2 droop is
   partly offset by the aliased :math:`m_u s^2` term), Tustin on the
   accelerations and rates (FOH alone droops 1.1 dB at 20 Hz). Both paths are
-  within 1 dB of eq. (14) up to 20 Hz (tests/estimators/family/test_ycoo.py).
+  within 1 dB of eq. (14) up to 20 Hz (tests/equivalence/test_ycoo.py).
 
 The filter is realised as a cascade (two first-order lags, then the
 second-order section) with states
@@ -55,24 +55,18 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.step_method import (
-    StepMethod,
-    flag_sum,
-    interval_ok,
-    sanitise,
-)
-from wheelload.estimators.family.suspension_model import (
-    DEFAULT_MODEL,
-    SuspensionModel,
-    equilibrium,
-    suspension_loads,
-)
+from wheelload.estimators.family.flat_step import flag_sum, step_name
+from wheelload.estimators.family.quarter_car import unsprung_masses
+from wheelload.estimators.family.step_method import FamilyMethod
+from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
 from wheelload.estimators.kernels.discretise import first_order_hold, trapezoidal
-from wheelload.estimators.registry import MethodInfo
+from wheelload.estimators.kf.two_stage import interval_is_valid
+from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.family.quarter_car import unsprung_balance
+from wheelload.models.input_validity import sanitise
 from wheelload.models.vehicle import GRAVITY
 
 #: Filtered channels: four travels, vertical specific force minus g, roll and pitch rate.
@@ -151,7 +145,7 @@ def step_function(
     # The first sample starts every channel's filter in steady state on its input.
     u_prev = ca.if_else(started, u_prev_stored, held)
     steady = ca.vertcat(held.T, held.T, held.T, ca.DM.zeros(1, CHANNELS))
-    ok = interval_ok(dt)
+    ok = interval_is_valid(dt)
     dt_safe = ca.if_else(ok, dt, 1e-3)
     A, B = filter_matrices(settings)
     Xm = ca.if_else(started, ca.reshape(X, STATES, CHANNELS), steady)
@@ -191,7 +185,7 @@ def step_function(
         ]
     )
     return ca.Function(
-        "wheelload_ycoo_step" if model is SuspensionModel.FULL else "wheelload_ycoo_step_paper",
+        step_name("wheelload_ycoo_step", model),
         [X, memory, u_raw, valid, dt, p, mu],
         [ca.vec(Xn), u_next, loads, ca.DM.zeros(4), residual, flags],
         ["X", "u_prev", "u", "u_valid", "dt", "p", "m_u"],
@@ -199,13 +193,7 @@ def step_function(
     )
 
 
-def unsprung_masses(vehicle: Vehicle) -> np.ndarray:
-    """Unsprung mass of each corner [kg], order FL, FR, RL, RR."""
-    m = vehicle.mass
-    return np.array([m.unsprung_front, m.unsprung_front, m.unsprung_rear, m.unsprung_rear]) / 2
-
-
-class Ycoo(StepMethod):
+class Ycoo(FamilyMethod):
     """YCOO tyre-load observer on each corner (eq. 15); compiled loop."""
 
     name = "YCOO"
@@ -218,13 +206,17 @@ class Ycoo(StepMethod):
         *,
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.vehicle = vehicle
         self.settings = settings
-        self.suspension = suspension
-        p = ModelParameters.from_vehicle(vehicle).vector()
-        initial = (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS + 1))
-        step = step_function(vehicle, settings, suspension)
-        super().__init__(step, initial, (p, unsprung_masses(vehicle)))
+        super().__init__(vehicle, suspension=suspension)
+
+    def build_step(self) -> ca.Function:
+        return step_function(self.vehicle, self.settings, self.suspension)
+
+    def initial_arrays(self) -> tuple[np.ndarray, ...]:
+        return (np.zeros(STATES * CHANNELS), np.zeros(CHANNELS + 1))
+
+    def constants(self) -> np.ndarray:
+        return unsprung_masses(self.vehicle)
 
 
 INFO = MethodInfo(

@@ -43,6 +43,7 @@ from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.logs.signals import Signals, rate_derivatives
 from wheelload.estimators.loops.compiled import CompiledLoop
+from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
 from wheelload.models import (
     GATES,
@@ -54,6 +55,7 @@ from wheelload.models import (
     gates_function,
     suspension_function,
 )
+from wheelload.models.input_validity import dependency_mask, sanitise
 from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
@@ -144,29 +146,11 @@ def nominal_interval(t: np.ndarray) -> float:
     return float(np.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL
 
 
-def _dependency_mask(outputs: ca.SX, inputs: ca.SX, valid: ca.SX) -> ca.SX:
-    """1 for each output whose every structurally needed input is valid, else 0."""
-    pattern = ca.jacobian(outputs, inputs).sparsity()
-    masks = []
-    for row in range(outputs.shape[0]):
-        needed = [col for col in range(inputs.shape[0]) if pattern.has_nz(row, col)]
-        mask = 1
-        for col in needed:
-            mask = mask * valid[col]
-        masks.append(mask)
-    return ca.vertcat(*masks)
-
-
 def _required(valid: ca.SX) -> ca.SX:
     """Validity of the inputs an update cannot do without (optional inputs count as valid)."""
     return ca.vertcat(
         *[1 if name in OPTIONAL_INPUTS else valid[i] for i, name in enumerate(INPUTS)]
     )
-
-
-def _sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
-    """Replace invalid inputs by zero so that no NaN or Inf enters the arithmetic."""
-    return ca.vertcat(*[ca.if_else(valid[i], u[i], 0) for i in range(u.shape[0])])
 
 
 MAX_INTERVAL = 1e6  # s, longest sample interval taken as valid
@@ -208,7 +192,7 @@ def model_rows(suspension: ca.Function, equilibrium: ca.Function, u_raw, valid, 
     for the sample instead, and ``dropped`` (``wheelload.models.DROPPABLE``
     order) says which.
     """
-    u = _sanitise(u_raw, valid)
+    u = sanitise(u_raw, valid)
     z, A, b, dropped = model_equations(suspension, equilibrium, u, valid, p)
     mask_s, mask_c = row_masks(suspension, equilibrium, u, u_raw, valid, p)
     return z, A, b, mask_s, mask_c, dropped
@@ -225,8 +209,8 @@ def model_equations(suspension: ca.Function, equilibrium: ca.Function, u, valid,
 def row_masks(suspension: ca.Function, equilibrium: ca.Function, u, u_raw, valid, p):
     """``(mask_s, mask_c)``: 1 for each row whose paper-model inputs are all valid."""
     paper = ca.DM.zeros(gates_function().size_out(0))
-    mask_s = _dependency_mask(suspension(u, paper, p), u_raw, _required(valid))
-    mask_c = _dependency_mask(equilibrium(u, paper, p)[1], u_raw, _required(valid))
+    mask_s = dependency_mask(suspension(u, paper, p), u_raw, _required(valid))
+    mask_c = dependency_mask(equilibrium(u, paper, p)[1], u_raw, _required(valid))
     return mask_s, mask_c
 
 
@@ -270,14 +254,14 @@ def step_expressions(
 
     # Missing or implausible inputs are replaced by zero and skip the updates they feed;
     # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
-    u_finite = _sanitise(u_raw, valid_raw)
+    u_finite = sanitise(u_raw, valid_raw)
     in_range = guard.plausible_for(u_finite, p, settings)
     consistent, settle_next = guard.rate_consistency(
         u_finite, valid_raw, in_range, m, dt_used, settings
     )
     in_range = in_range * consistent
     valid_plausible = valid_raw * in_range
-    u = _sanitise(u_raw, valid_plausible)
+    u = sanitise(u_raw, valid_plausible)
     # The model terms take each missing or gated input's last valid value for
     # ``hold_time``, then drop; the rows needing the input are skipped. ``dropped`` (the
     # flags) marks a term without a live input, held or dropped.
@@ -495,52 +479,6 @@ class FilterState:
     x: np.ndarray
     P: np.ndarray
     m: np.ndarray = field(default_factory=lambda: np.zeros(guard.MONITOR_SIZE))
-
-
-@dataclass(frozen=True, kw_only=True)
-class Sample:
-    """One sample of the signals used by the filter (SI units).
-
-    ``rates`` (wx wy wz), ``rate_dots`` (their derivative) and ``hub``
-    (az_fl .. az_rr) are optional; an absent group is missing (NaN) in
-    :meth:`vector`, which drops the terms that need it.
-    """
-
-    d: np.ndarray  # (4,) travel
-    v: np.ndarray  # (4,) travel rate
-    acc: np.ndarray  # (3,) ax, ay, az specific force
-    vx: float
-    rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
-    rate_dots: np.ndarray | None = None  # (3,) their derivative [rad/s^2], if logged
-    hub: np.ndarray | None = None  # (4,) az_fl..az_rr hub specific force, if logged
-
-    def vector(self) -> np.ndarray:
-        def given(values: np.ndarray | None, size: int) -> np.ndarray:
-            return np.full(size, np.nan) if values is None else np.asarray(values, float)
-
-        return np.concatenate(
-            [
-                self.d,
-                self.v,
-                self.acc,
-                [self.vx],
-                given(self.rates, 3),
-                given(self.rate_dots, 3),
-                given(self.hub, 4),
-            ]
-        ).astype(float)
-
-    def parts(self) -> tuple[tuple[np.ndarray | float | None, int], ...]:
-        """``(values, size)`` per group in :meth:`vector` order; None for an absent group."""
-        return (
-            (self.d, 4),
-            (self.v, 4),
-            (self.acc, 3),
-            ((self.vx,), 1),
-            (self.rates, 3),
-            (self.rate_dots, 3),
-            (self.hub, 4),
-        )
 
 
 def input_matrix(signals: Signals) -> np.ndarray:
@@ -855,9 +793,3 @@ def sensor_faults(
                 )
             )
     return tuple(sorted(rows, key=lambda fault: fault.start))
-
-
-def sample_intervals(t: np.ndarray) -> np.ndarray:
-    """Interval before each sample; the first sample reuses the first interval."""
-    dt = np.diff(t)
-    return np.concatenate([dt[:1], dt])

@@ -71,10 +71,8 @@ from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
     MAX_INTERVAL,
     FilterState,
-    Sample,
     TwoStageKF,
     input_matrix,
-    sample_intervals,
 )
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.extended import advance_extended, initial_extended
@@ -117,6 +115,7 @@ from wheelload.estimators.mhe.window import (
     ride_height_basis,
     travel_basis,
 )
+from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 
 #: The estimator with its settings and results (the settings live in

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 
-from wheelload.estimators.kf.two_stage import Sample
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.estimator import (
     MheEstimate,
@@ -19,6 +18,7 @@ from wheelload.estimators.mhe.estimator import (
     MheState,
     MovingHorizonEstimator,
 )
+from wheelload.estimators.protocol import MethodInfo, Sample
 from wheelload.models import Vehicle
 
 NOMINAL_INTERVAL = 0.01  # s, 100 Hz
@@ -48,3 +48,11 @@ class MheMethod:
 
     def run(self, signals: Signals) -> MheEstimate:
         return self.mhe.run(signals)
+
+
+INFO = MethodInfo(
+    name="mhe",
+    description="moving-horizon estimator N=10, soft equilibrium, OSQP",
+    reference="Rao, Rawlings & Lee 2001; Siegloff & Choi eq. 12-17",
+    build=MheMethod,
+)

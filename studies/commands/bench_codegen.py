@@ -23,7 +23,7 @@ import numpy as np
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
 from wheelload.studies.commands.options import add_allow_unusual

@@ -37,7 +37,7 @@ from pathlib import Path
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.bench_codegen import cpu_mhz, filterpy_step
 from wheelload.studies.commands.c_step_bounds import compiled_mix, measured_clock_mhz

@@ -19,8 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals
-from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators import Estimate, Signals, SuspensionModel
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
 from wheelload.models import conventions, example_vehicle_path

@@ -11,7 +11,7 @@ import argparse
 import time
 from pathlib import Path
 
-from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators import SuspensionModel
 from wheelload.models import example_vehicle_path
 from wheelload.studies.commands.options import add_suspension_option
 from wheelload.studies.experiments.catalog import NAMES, run_study

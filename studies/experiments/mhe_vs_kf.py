@@ -33,7 +33,6 @@ import pandas as pd
 from wheelload.estimators import Sample, Signals, TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.mhe.estimator import (
     Arrival,
     BiasStates,
@@ -43,6 +42,7 @@ from wheelload.estimators.mhe.estimator import (
     MovingHorizonEstimator,
     ResidualLoss,
 )
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import Vehicle
 from wheelload.studies.experiments.faults.sensor_faults import Fault, inject
 from wheelload.studies.metrics import pooled_metrics

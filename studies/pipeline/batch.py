@@ -22,9 +22,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
+from wheelload.estimators import (
+    DEFAULT_MODEL,
+    Estimate,
+    Signals,
+    StepFlag,
+    SuspensionModel,
+    TwoStageKF,
+    read_log,
+)
 from wheelload.estimators.codegen.batched import run_batched
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kf.guard import guard_settings_for
 from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.kf.two_stage import step_function

@@ -19,9 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.registry import MethodInfo, build, method
+from wheelload.estimators.protocol import MethodInfo
+from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import Estimate
 from wheelload.models import Vehicle
 from wheelload.studies.metrics import COLUMNS, wheel_metrics

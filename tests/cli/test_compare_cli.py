@@ -82,7 +82,7 @@ def test_compare_rejects_an_empty_window(tmp_path, capsys):
 @pytest.mark.parametrize("choice", ["full", "paper"])
 def test_compare_and_estimate_take_the_family_model(tmp_path, capsys, choice):
     from wheelload.estimators import read_log
-    from wheelload.estimators.family.suspension_model import SuspensionModel
+    from wheelload.estimators.protocol import SuspensionModel
     from wheelload.estimators.registry import build
     from wheelload.models import load_vehicle
 

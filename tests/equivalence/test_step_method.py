@@ -19,17 +19,17 @@ import pytest
 
 from wheelload.estimators.family import step_method
 from wheelload.estimators.family.road_angle import RoadAngleKF
-from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import read_log
-from wheelload.estimators.protocol import step_through
-from wheelload.estimators.registry import CORE, build, methods
+from wheelload.estimators.protocol import SuspensionModel
+from wheelload.estimators.registry import build, core, methods
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.estimate import example_log_path
 
 REFERENCE = Path(__file__).parent / "data" / "family_paper_model_reference.npz"
 #: Methods whose numbers pass through a third-party kernel that may change its last bits.
 THIRD_PARTY_KERNELS = {"road-angle"}
-FAMILY = [name for name in methods() if name not in {info.name for info in CORE}]
+FAMILY = [name for name in methods() if name not in {info.name for info in core()}]
 
 
 @pytest.fixture(scope="module")

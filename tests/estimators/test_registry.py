@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.kf.two_stage import TwoStageKF
+from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import read_log
-from wheelload.estimators.protocol import Estimator, step_through
+from wheelload.estimators.protocol import Estimator, MethodInfo
 from wheelload.estimators.registry import (
     FAMILY_MODULES,
-    MethodInfo,
     UnknownMethodError,
     UnknownOptionError,
     build,

@@ -22,9 +22,9 @@ from wheelload.estimators.kf.two_stage import (
     TUNED_DENSITIES,
     TUNING_INDEX,
     noise_densities,
-    sample_intervals,
     step_function,
 )
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import INPUTS, example_vehicle_path, load_vehicle
 from wheelload.models.measurement_noise import DENSITIES, INPUT_DENSITIES
 from wheelload.models.measurement_noise import measurement_noise_function as noise_function

@@ -3,7 +3,7 @@ the report names it."""
 
 import pandas as pd
 
-from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators.protocol import SuspensionModel
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.experiments import catalog, cheon_structural

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.models.files.temporaries import replacing
 from wheelload.studies.experiments.runs.runner import Runner
 

@@ -11,8 +11,8 @@ paper's model, E 0.82 / 1.00, E+C 0.74 / 1.01, F 1.10 / 1.46, ycoo 0.82 / 1.03, 
 import numpy as np
 import pytest
 
-from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.logs.signals import signals_from_frame
+from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.registry import build, method, methods
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.drive.scenario_runner import run_scenario

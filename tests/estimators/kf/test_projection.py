@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting, project
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 

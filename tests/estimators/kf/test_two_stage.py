@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kernels.kalman import update
 from wheelload.estimators.kf.offsets import check_still_period, still_period_static_loads
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import static_loads
 from wheelload.studies.bench.numpy_kf import joint_filter
 from wheelload.studies.drive.synthetic import (

@@ -14,7 +14,7 @@ import pytest
 
 from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.kf.projection import ProjectionKF
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 
 
 def samples_with_trouble(signals, n):

@@ -8,9 +8,9 @@ import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kf.projection import ProjectionKF
-from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import ModelParameters
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, steady_cornering, synthetic_log

@@ -213,7 +213,7 @@ def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle, iso_dlc
 
 def test_step_equals_run_for_the_extended_window(vehicle, drive):
     from wheelload.estimators import Sample
-    from wheelload.estimators.kf.two_stage import sample_intervals
+    from wheelload.estimators.protocol import sample_intervals
 
     signals = drive.slice(0, 40)
     settings = MheSettings(

@@ -11,10 +11,11 @@ import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators.kf.two_stage import input_matrix, sample_intervals
+from wheelload.estimators.kf.two_stage import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
+from wheelload.estimators.protocol import sample_intervals
 
 ESTIMATORS = {}
 

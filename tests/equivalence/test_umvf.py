@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.umvf import (
     Umvf,
     UmvfTuning,
@@ -18,8 +17,9 @@ from wheelload.estimators.family.umvf import (
     umvf_update,
     unknown_input,
 )
+from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.protocol import Estimator, step_through
+from wheelload.estimators.protocol import Estimator, SuspensionModel
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.family.quarter_car import quarter_car_function, reduced_quarter_car_function
 

@@ -13,11 +13,11 @@ from wheelload.estimators.family.strong_tracking_ukf import (
     PROCESS_NOISE,
     StrongTrackingUKF,
 )
-from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.suspension_only import SuspensionOnly
-from wheelload.estimators.kf.two_stage import sample_intervals, tuning_vector
+from wheelload.estimators.kf.two_stage import tuning_vector
+from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import Signals, read_log
-from wheelload.estimators.protocol import step_through
+from wheelload.estimators.protocol import SuspensionModel, sample_intervals
 from wheelload.estimators.result import StepFlag
 from wheelload.models import GRAVITY, ModelParameters, paper_equilibrium_function, static_loads
 from wheelload.studies.commands.estimate import example_log_path

@@ -7,9 +7,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.ycoo import Ycoo, YcooSettings
-from wheelload.estimators.protocol import Estimator, step_through
+from wheelload.estimators.logs.samples import step_through
+from wheelload.estimators.protocol import Estimator, SuspensionModel
 from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, load_vehicle
 
 
