@@ -12,12 +12,8 @@ from __future__ import annotations
 import math
 
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.mhe.estimator import (
-    MheEstimate,
-    MheSettings,
-    MheState,
-    MovingHorizonEstimator,
-)
+from wheelload.estimators.mhe.settings import MheSettings
+from wheelload.estimators.mhe.state import MheEstimate, MheState
 from wheelload.estimators.protocol import MethodInfo, Sample
 from wheelload.models import Vehicle
 
@@ -25,7 +21,7 @@ NOMINAL_INTERVAL = 0.01  # s, 100 Hz
 
 
 class MheMethod:
-    """:class:`MovingHorizonEstimator` with ``initial_state()`` at a fixed nominal interval."""
+    """The MHE with ``initial_state()`` at a fixed nominal interval (module docstring)."""
 
     def __init__(
         self,
@@ -36,6 +32,9 @@ class MheMethod:
     ) -> None:
         if not (math.isfinite(interval) and interval > 0):
             raise ValueError(f"the nominal sample interval must be > 0, got {interval}")
+        # OSQP and scipy.sparse load here, not when the registry lists the methods.
+        from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+
         self.mhe = MovingHorizonEstimator(vehicle, settings)
         self.interval = interval
         self.name = self.mhe.name
