@@ -8,7 +8,8 @@ should not pay for them).
 import importlib
 
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-from wheelload.estimators.kf.two_stage import FilterState, Sample, TwoStageKF, step_function
+from wheelload.estimators.kf.step import step_function
+from wheelload.estimators.kf.two_stage import FilterState, Sample, TwoStageKF
 from wheelload.estimators.logs.signals import (
     LogError,
     Signals,
@@ -37,6 +38,9 @@ _LAZY_MODULES = {
         "guard_settings_for",
     ),
     "wheelload.estimators.kf.offsets": ("check_still_period", "corner_weight_loads"),
+    "wheelload.estimators.kf.step": ("UPDATE_ROWS",),
+    "wheelload.estimators.kf.tuning": ("TUNED_DENSITIES", "TUNING_INDEX", "noise_densities"),
+    "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.suspension_model": ("DEFAULT_MODEL", "SuspensionModel"),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
     "wheelload.estimators.loops.log_stream": ("LogStream", "scan_log"),

@@ -35,13 +35,9 @@ import numpy as np
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, PACKED, CodegenOptions, generate
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
-from wheelload.estimators.kf.two_stage import (
-    TwoStageKF,
-    input_matrix,
-    nominal_interval,
-    sample_intervals,
-    sensor_faults,
-)
+from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import TwoStageKF, sample_intervals, sensor_faults
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import _shared_library
 from wheelload.estimators.result import Estimate

@@ -84,8 +84,10 @@ import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
+from wheelload.estimators.kernels.validity import MAX_INTERVAL
 from wheelload.estimators.kf.projection import Weighting, projection_step_function
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL, input_matrix, sample_intervals
+from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.output_files import atomic_write, check_output_folder, write_text
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.estimator import (

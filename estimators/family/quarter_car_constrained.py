@@ -43,7 +43,7 @@ from wheelload.estimators.family.step_method import (
 )
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
-from wheelload.estimators.kf.two_stage import TUNING, TUNING_INDEX, tuning_vector
+from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX, tuning_vector
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function

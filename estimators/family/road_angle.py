@@ -58,7 +58,7 @@ from wheelload.estimators.family.suspension_model import (
     suspension_loads,
 )
 from wheelload.estimators.kernels.kalman import sequential_update
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL
+from wheelload.estimators.kernels.validity import MAX_INTERVAL
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.registry import MethodInfo
 from wheelload.estimators.result import Estimate

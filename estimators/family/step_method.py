@@ -38,29 +38,18 @@ from wheelload.estimators.family.suspension_model import (
     equilibrium,
     equilibrium_mask,
 )
-from wheelload.estimators.kf.two_stage import (
-    INPUTS,
-    Sample,
-    _dependency_mask,
-    _sanitise,
-    input_matrix,
-    interval_is_valid,
-    sample_intervals,
-)
+from wheelload.estimators.kernels.validity import dependency_mask, interval_is_valid, sanitise
+from wheelload.estimators.kf.two_stage import Sample, sample_intervals
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.result import Estimate, StepFlag
-from wheelload.models import ModelParameters
+from wheelload.models import INPUTS, ModelParameters
 
 PER_SAMPLE = ("u", "u_valid", "dt")
 CHUNK = 20_000  # samples per call of the compiled loop
 STEP_INPUT_NAMES = ["s", "u", "u_valid", "dt", "p", "c"]
 STEP_OUTPUT_NAMES = ["s_next", "loads", "std", "residual", "flags"]
-
-
-def sanitise(u: ca.SX, valid: ca.SX) -> ca.SX:
-    """Invalid inputs replaced by zero, so that no NaN or Inf enters the arithmetic."""
-    return _sanitise(u, valid)
 
 
 def interval_ok(dt):
@@ -133,7 +122,7 @@ class StepSymbols:
 
     def mask(self, outputs: ca.SX) -> ca.SX:
         """1 per output whose every needed input is valid and whose interval is valid."""
-        return _dependency_mask(outputs, self.u_raw, self.valid) * self.dt_ok
+        return dependency_mask(outputs, self.u_raw, self.valid) * self.dt_ok
 
 
 def step_symbols(n_state: int, n_constants: int) -> StepSymbols:
@@ -151,7 +140,7 @@ def step_symbols(n_state: int, n_constants: int) -> StepSymbols:
         p_vector=p_vector,
         p=p,
         c=ca.SX.sym("c", n_constants),
-        u=_sanitise(u_raw, valid),
+        u=sanitise(u_raw, valid),
         dt_ok=dt_ok,
         dt=ca.if_else(dt_ok, dt_raw, 1.0),
     )

@@ -29,7 +29,7 @@ import enum
 
 import casadi as ca
 
-from wheelload.estimators.kf.two_stage import _dependency_mask
+from wheelload.estimators.kernels.validity import dependency_mask
 from wheelload.models import (
     GATES,
     equilibrium_function,
@@ -112,10 +112,10 @@ def equilibrium(model: SuspensionModel, u, valid, p_vector) -> tuple[ca.SX, ca.S
 
 def suspension_mask(u_raw, valid, p_vector) -> ca.SX:
     """1 per wheel whose pseudo-measurement's paper inputs (travel, rate, bar partner) are valid."""
-    return _dependency_mask(travel_function()(u_raw[0:4], u_raw[4:8], p_vector), u_raw, valid)
+    return dependency_mask(travel_function()(u_raw[0:4], u_raw[4:8], p_vector), u_raw, valid)
 
 
 def equilibrium_mask(u_raw, valid, p_vector) -> ca.SX:
     """1 per equilibrium row whose paper inputs (specific force, speed) are valid."""
     b = paper_equilibrium_function()(u_raw[8:11], u_raw[11], p_vector)[1]
-    return _dependency_mask(b, u_raw, valid)
+    return dependency_mask(b, u_raw, valid)

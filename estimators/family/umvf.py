@@ -74,7 +74,7 @@ from wheelload.estimators.family.suspension_model import (
     equilibrium,
     suspension_loads,
 )
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL
+from wheelload.estimators.kernels.validity import MAX_INTERVAL
 from wheelload.estimators.registry import MethodInfo
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration

@@ -1,7 +1,7 @@
 r"""Guards of the filter step: plausibility, innovation gate, covariance limits, fault monitor.
 
 Everything here builds CasADi expressions inside the symbolic filter step
-(:func:`wheelload.estimators.kf.two_stage.step_expressions`), so the Python
+(:func:`wheelload.estimators.kf.step.step_expressions`), so the Python
 step, the compiled loop and the generated C share one implementation.
 
 - **Plausibility** (input ranges from the vehicle): :math:`|a| \le a_{max}`,

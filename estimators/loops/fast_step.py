@@ -86,7 +86,7 @@ void {name}_fast_carry(double *buffer)
 
 
 class CompiledStep:
-    """``step`` (a :func:`~wheelload.estimators.kf.two_stage.step_function`) in compiled C.
+    """``step`` (a :func:`~wheelload.estimators.kf.step.step_function`) in compiled C.
 
     One buffer holds every input and output; :meth:`__call__` writes the
     state and the sample into it, calls the C step and returns views

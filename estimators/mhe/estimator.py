@@ -71,16 +71,16 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators.kernels.validity import MAX_INTERVAL
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
-    MAX_INTERVAL,
     FilterState,
     Sample,
     TwoStageKF,
     flags_from_used,
-    input_matrix,
     sample_intervals,
 )
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.ring import run_ring

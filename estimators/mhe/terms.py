@@ -37,16 +37,13 @@ import enum
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.kernels.validity import sanitise
 from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.guard import GuardSettings
-from wheelload.estimators.kf.two_stage import (
-    INPUTS,
-    TUNING,
-    TUNING_INDEX,
-    _sanitise,
-    model_rows,
-)
+from wheelload.estimators.kf.step import model_rows
+from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX
 from wheelload.models import (
+    INPUTS,
     ModelParameters,
     equilibrium_function,
     gates_function,
@@ -96,7 +93,7 @@ def plausible_inputs(u_raw, valid, p, tuning) -> ca.SX:
     MHE and its generated C share it.
     """
     settings = guard.unpack(ca.vertcat(*[tuning[k] for k in _GUARD_INDEX]))
-    in_range = guard.plausible_for(_sanitise(u_raw, valid), p, settings)
+    in_range = guard.plausible_for(sanitise(u_raw, valid), p, settings)
     return valid * in_range
 
 
@@ -109,7 +106,7 @@ def row_densities(u_raw, valid, tuning) -> tuple[ca.SX, ca.SX]:
     The window weighs a row by :math:`dt / r` with the sample's own interval.
     """
     densities = ca.vertcat(*[tuning[k] for k in _DENSITY_INDEX])
-    return measurement_noise_function()(_sanitise(u_raw, valid), valid, densities, 1.0)
+    return measurement_noise_function()(sanitise(u_raw, valid), valid, densities, 1.0)
 
 
 def terms_function(
@@ -208,7 +205,7 @@ def residual_function(
     valid = plausible_inputs(u_raw, valid, p, tuning)
     z, _, b, mask_s, mask_c, _ = model_rows(suspension, equilibrium, u_raw, valid, p)
     gates, _ = gates_function()(valid, p)
-    u = _sanitise(u_raw, valid)
+    u = sanitise(u_raw, valid)
     d, acc = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
     travel, axes = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
     d_now = ca.vertcat(*[u[k] for k in travel])

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.estimators.kf.two_stage import TUNING_INDEX, input_matrix, sample_intervals
+from wheelload.estimators import TUNING_INDEX, input_matrix
+from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models import equilibrium_function, gates_function, suspension_function
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function

@@ -22,12 +22,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log
+from wheelload.estimators import Estimate, Signals, StepFlag, TwoStageKF, read_log, step_function
 from wheelload.estimators.codegen.batched import run_batched
 from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.kf.guard import guard_settings_for
 from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
-from wheelload.estimators.kf.two_stage import step_function
 from wheelload.estimators.logs.checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.logs.output_files import write_frame
 from wheelload.estimators.logs.plausibility import (

@@ -17,7 +17,7 @@ import pytest
 from wheelload.estimators.family.algebraic import Algebraic
 from wheelload.estimators.family.quasi_static import QuasiStatic
 from wheelload.estimators.family.suspension_model import SuspensionModel
-from wheelload.estimators.kf.two_stage import input_matrix
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.registry import build
 from wheelload.models import (

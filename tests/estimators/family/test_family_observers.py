@@ -15,7 +15,8 @@ from wheelload.estimators.family.strong_tracking_ukf import (
 )
 from wheelload.estimators.family.suspension_model import SuspensionModel
 from wheelload.estimators.family.suspension_only import SuspensionOnly
-from wheelload.estimators.kf.two_stage import sample_intervals, tuning_vector
+from wheelload.estimators.kf.tuning import tuning_vector
+from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.protocol import step_through
 from wheelload.estimators.result import StepFlag

@@ -15,7 +15,9 @@ import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GRAVITY, GuardSettings
-from wheelload.estimators.kf.two_stage import input_matrix, nominal_interval, sample_intervals
+from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.models import equilibrium_function, gates_function, suspension_function
 from wheelload.studies.experiments.faults.fault_injection import GUARDS_OFF, pooled_rmse
 

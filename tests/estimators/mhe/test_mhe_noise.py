@@ -30,7 +30,8 @@ from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.mhe import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
-from wheelload.estimators.kf.two_stage import input_matrix, sample_intervals
+from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.mhe.estimator import (
     Arrival,
     Constraint,
