@@ -14,7 +14,7 @@ from wheelload.estimators.identification.data import (
 )
 from wheelload.estimators.identification.fit import FitSettings, Identification, Loss, identify
 from wheelload.estimators.identification.model import (
-    SuspensionModel,
+    SuspensionFitModel,
     default_model,
     piecewise_model,
 )
@@ -25,7 +25,7 @@ __all__ = [
     "FitSettings",
     "Identification",
     "Loss",
-    "SuspensionModel",
+    "SuspensionFitModel",
     "default_model",
     "drive_gates",
     "identify",

@@ -42,7 +42,7 @@ import numpy as np
 from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
-from wheelload.estimators.identification.model import SuspensionModel
+from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import Rows, evaluate, linear_free_set
 from wheelload.models import ModelParameters
 
@@ -183,7 +183,7 @@ def _variance_factor(r, sigma, group, free: int, loss: Loss) -> float:
 
 
 def identify(
-    model: SuspensionModel,
+    model: SuspensionFitModel,
     sets: tuple[DataSet, ...],
     p: ModelParameters,
     settings: FitSettings = FitSettings(),

@@ -27,9 +27,17 @@ from wheelload.estimators.kernels.kalman import (
     upper,
 )
 from wheelload.estimators.kernels.validity import dependency_mask, interval_is_valid, sanitise
-from wheelload.estimators.kf import guard
+from wheelload.estimators.kf import (
+    fault_monitor,
+    guard,
+    innovation_gate,
+    limits,
+    monitor_state,
+    plausibility,
+)
 from wheelload.estimators.kf.tuning import GUARD_TUNING, TUNING, TUNING_INDEX
 from wheelload.models import (
+    GRAVITY,
     INPUTS,
     OPTIONAL_INPUTS,
     ModelParameters,
@@ -138,7 +146,7 @@ def step_expressions(
     """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", 4, 4)
-    m = ca.SX.sym("m", guard.MONITOR_SIZE)
+    m = ca.SX.sym("m", monitor_state.MONITOR_SIZE)
     u_raw = ca.SX.sym("u", len(INPUTS))
     valid_raw = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
@@ -155,8 +163,8 @@ def step_expressions(
     # Missing or implausible inputs are replaced by zero and skip the updates they feed;
     # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
     u_finite = sanitise(u_raw, valid_raw)
-    in_range = guard.plausible_for(u_finite, p, settings)
-    consistent, settle_next = guard.rate_consistency(
+    in_range = plausibility.plausible_for(u_finite, p, settings)
+    consistent, settle_next = plausibility.rate_consistency(
         u_finite, valid_raw, in_range, m, dt_used, settings
     )
     in_range = in_range * consistent
@@ -165,7 +173,7 @@ def step_expressions(
     # The model terms take each missing or gated input's last valid value for
     # ``hold_time``, then drop; the rows needing the input are skipped. ``dropped`` (the
     # flags) marks a term without a live input, held or dropped.
-    u_term, valid_term, held, hold_state = guard.hold_inputs(
+    u_term, valid_term, held, hold_state = plausibility.hold_inputs(
         u, valid_plausible, m, dt_used, settings
     )
     z, A, b, _ = model_equations(suspension, equilibrium, u_term, valid_term, p)
@@ -174,10 +182,10 @@ def step_expressions(
     # Fault monitor: an isolated channel is dropped like a missing one. Its parity test
     # uses every model term the inputs allow (held inputs included), whatever the
     # [model] switches.
-    parity = guard.parity_model(suspension, equilibrium, u_term, valid_term, p)
+    parity = fault_monitor.parity_model(suspension, equilibrium, u_term, valid_term, p)
     # The fault monitor's parity test weighs the constant densities (the paper's R_c).
     rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
-    watch = guard.monitor(m, u, valid_plausible, *parity, dt_used, rc_density, settings)
+    watch = fault_monitor.monitor(m, u, valid_plausible, *parity, dt_used, rc_density, settings)
     valid = valid_plausible * _channel_drop(watch.channel_ok)
     # The updates the channels left after the guards feed (an isolated channel's rows are
     # skipped; the model terms keep their inputs, as for the monitor).
@@ -186,7 +194,7 @@ def step_expressions(
     mask_c = mask_c * dt_ok
 
     # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
-    weight = p[_P_INDEX["mass"]] * guard.GRAVITY
+    weight = p[_P_INDEX["mass"]] * GRAVITY
     ceiling = weight * weight
     Q = ca.fmin(tuning[TUNING_INDEX["process_noise_density"]] * dt_used, ceiling) * ca.DM.eye(4)
     # R_s, R_c from the inputs (models/measurement_noise.py; constant with the default zeros).
@@ -195,16 +203,18 @@ def step_expressions(
     rs, rc = noise(u, valid_plausible, densities, dt_nominal)
 
     # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
-    reject, spread = m[guard.reject_slice()], m[guard.spread_slice()]
+    reject, spread = m[monitor_state.REJECT], m[monitor_state.SPREAD]
     x_pred, P_pred = predict(x, upper(P), Q)
-    P_pred, limited_pred = guard.limit_covariance(P_pred, settings.covariance_floor, ceiling)
+    P_pred, limited_pred = limits.limit_covariance(P_pred, settings.covariance_floor, ceiling)
     H = ca.vertcat(ca.DM.eye(4), A)
     y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
     S_prior = ca.vertcat(
         *[ca.mtimes(ca.mtimes(H[i, :], P_pred), H[i, :].T) for i in range(7)]
     ) + ca.vertcat(rs, rc)
-    prior = guard.prior_failures(y_prior, S_prior, ca.vertcat(mask_s, mask_c), spread, settings)
-    gate, record = guard.gate_rows(reject, spread, settings, prior)
+    prior = innovation_gate.prior_failures(
+        y_prior, S_prior, ca.vertcat(mask_s, mask_c), spread, settings
+    )
+    gate, record = innovation_gate.gate_rows(reject, spread, settings, prior)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
         x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s, gate
     )
@@ -220,11 +230,11 @@ def step_expressions(
     x_new, P_new = sequential_update(
         x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
     )
-    P_new, limited_new = guard.floor_covariance(P_new, settings.covariance_floor)
+    P_new, limited_new = limits.floor_covariance(P_new, settings.covariance_floor)
     # An update that would take a load out of +-load_limit m g (or to a non-finite value)
     # is not taken: the sample is the prediction, so no hostile sample poisons the state.
-    total = guard.total_range(m, b[0], mask_c[0], weight)
-    bounded = guard.within_load_limit(x_new, x_pred, total, weight, settings)
+    total = limits.total_range(m, b[0], mask_c[0], weight)
+    bounded = limits.within_load_limit(x_new, x_pred, total, weight, settings)
     x_new = ca.if_else(bounded, x_new, x_pred)
     P_new = ca.if_else(bounded, P_new, P_pred)
     use_s, use_c = use_s * bounded, use_c * bounded
@@ -235,12 +245,12 @@ def step_expressions(
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
-    m_next = guard.with_gate_state(
+    m_next = monitor_state.with_gate_state(
         watch.m_next,
-        guard.reject_times(reject, record, available, dt_used),
-        guard.next_spread(spread, record, available, dt_used, settings),
+        innovation_gate.reject_times(reject, record, available, dt_used),
+        innovation_gate.next_spread(spread, record, available, dt_used, settings),
     )
-    m_next = guard.with_hold_state(m_next, hold_state, settle_next, total)
+    m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,

@@ -26,6 +26,7 @@ import numpy as np
 from wheelload.estimators.kernels.validity import MAX_INTERVAL
 from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.kf.monitor_state import MONITOR_SIZE
 from wheelload.estimators.kf.step import N_CARRIED, STEP_OUTPUT_NAMES, UPDATE_ROWS, without_monitor
 from wheelload.estimators.kf.step_cache import default_step_function
 from wheelload.estimators.kf.tuning import (
@@ -38,7 +39,7 @@ from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
-from wheelload.models import GATES, INPUTS, ModelParameters, Vehicle, equilibrium_function
+from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -77,7 +78,7 @@ class FilterState:
 
     x: np.ndarray
     P: np.ndarray
-    m: np.ndarray = field(default_factory=lambda: np.zeros(guard.MONITOR_SIZE))
+    m: np.ndarray = field(default_factory=lambda: np.zeros(MONITOR_SIZE))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -200,7 +201,7 @@ class TwoStageKF:
     def initial_state(self) -> FilterState:
         """Static loads with covariance ``initial_std^2 I`` (at most ``(m g)^2``)."""
         x0 = np.array(self.parameters.static(), dtype=float)
-        weight = self.parameters.mass * guard.GRAVITY
+        weight = self.parameters.mass * GRAVITY
         variance = min(self.vehicle.filter.initial_std, weight) ** 2
         return FilterState(x0, variance * np.eye(4))
 

@@ -80,7 +80,7 @@ def _loop_source(
     )
 
 
-def _shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
+def shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
     """Compile ``source`` once (cached by its hash and ``compiler``) and load it
     (:func:`~wheelload.models.files.build_folder.cached_library`)."""
     return cached_library(
@@ -123,7 +123,7 @@ class CompiledLoop:
         source = generator.dump() + _loop_source(
             step, n_accum, self.per_sample, self.fixed, self.outputs
         )
-        self._loop = getattr(_shared_library(source, step.name()), f"{step.name()}_loop")
+        self._loop = getattr(shared_library(source, step.name()), f"{step.name()}_loop")
         self._loop.restype = ctypes.c_int
 
     def __call__(self, init, fixed, per_sample, record=()):
@@ -319,7 +319,7 @@ class ColumnLoop:
         source = generator.dump() + _column_source(
             step, n_accum, inputs, self.fixed, self.columns, rules
         )
-        library = _shared_library(source, f"{step.name()}_columns")
+        library = shared_library(source, f"{step.name()}_columns")
         self._loop = getattr(library, f"{step.name()}_columns")
         self._loop.restype = ctypes.c_int
 

@@ -145,7 +145,8 @@ def white_noise_signals(vehicle, base, seed: int, settings=None):
     Every sample passes the plausibility check; together they are nothing a car
     does, which is what the envelope property is about.
     """
-    from wheelload.estimators.kf.guard import GRAVITY, GuardSettings
+    from wheelload.estimators.kf.guard import GuardSettings
+    from wheelload.models import GRAVITY
 
     g = settings or GuardSettings()
     rng = np.random.default_rng(seed)

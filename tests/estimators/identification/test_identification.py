@@ -16,7 +16,7 @@ from wheelload.estimators.identification import (
     DataSet,
     FitSettings,
     Loss,
-    SuspensionModel,
+    SuspensionFitModel,
     default_model,
     identify,
     piecewise_model,
@@ -167,7 +167,7 @@ def progressive_spring_model():
     springs = ca.vertcat(p.spring_front, p.spring_front, p.spring_rear, p.spring_rear)
     z = travel_function()(d, v, p_vector) + 20.0 * springs * d**2
     function = ca.Function("suspension_progressive", [d, v, p_vector], [z], ["d", "v", "p"], ["z"])
-    return SuspensionModel(
+    return SuspensionFitModel(
         function=function,
         parameters={"p": ModelParameters.names()},
         channels={"d": TRAVEL, "v": TRAVEL_RATE},
@@ -204,7 +204,7 @@ def stacked_input_model():
     side = ca.DM([-1.0, 1.0, -1.0, 1.0])
     z = travel_function()(u[0:4], u[4:8], p_vector) + side * 800.0 * u[9] * p.cg_height
     function = ca.Function("suspension_links", [u, p_vector], [z], ["u", "p"], ["z"])
-    return SuspensionModel(
+    return SuspensionFitModel(
         function=function,
         parameters={"p": ModelParameters.names()},
         channels={"u": TRAVEL + TRAVEL_RATE + ("ax", "ay", "az", "vx")},

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GRAVITY, GuardSettings
+from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.models import equilibrium_function, gates_function, suspension_function
+from wheelload.models import GRAVITY, equilibrium_function, gates_function, suspension_function
 from wheelload.studies.experiments.faults.fault_injection import GUARDS_OFF, pooled_rmse
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())
