@@ -12,7 +12,7 @@ from wheelload.estimators.identification.data import (
     read_drive,
     read_rig,
 )
-from wheelload.estimators.identification.fit import FitSettings, Identification, Loss, identify
+from wheelload.estimators.identification.fit import FitLoss, FitSettings, Identification, identify
 from wheelload.estimators.identification.model import (
     SuspensionFitModel,
     default_model,
@@ -22,9 +22,9 @@ from wheelload.estimators.identification.model import (
 __all__ = [
     "DataKind",
     "DataSet",
+    "FitLoss",
     "FitSettings",
     "Identification",
-    "Loss",
     "SuspensionFitModel",
     "default_model",
     "drive_gates",

@@ -43,6 +43,21 @@ CASADI_SYMBOL_EXPORT int {name}_loop(long n, const double** init, const double**
 """
 
 
+def _carried(
+    step: ca.Function, n_accum: int, initial: str, final: str
+) -> tuple[list[str], list[str], list[str]]:
+    """C lines of the carried state: two buffers per carried output (this sample's and the
+    next, swapped each sample) filled from ``initial[i]``, the step's argument and result
+    pointers into them, and the copy of the last state to ``final[i]``."""
+    buffers, assign, finish = [], [], []
+    for i in range(n_accum):
+        buffers.append(f"    casadi_real acc{i}[2][{step.nnz_out(i)}];")
+        buffers.append(f"    memcpy(acc{i}[0], {initial}[{i}], sizeof acc{i}[0]);")
+        assign.append(f"        arg[{i}] = acc{i}[cur]; res[{i}] = acc{i}[nxt];")
+        finish.append(f"    memcpy({final}[{i}], acc{i}[n & 1], sizeof acc{i}[0]);")
+    return buffers, assign, finish
+
+
 def _loop_source(
     step: ca.Function,
     n_accum: int,
@@ -50,17 +65,12 @@ def _loop_source(
     fixed: tuple[int, ...],
     outputs: tuple[int, ...],
 ) -> str:
-    buffers, assign, record, finish = [], [], [], []
-    for i in range(n_accum):
-        size = step.nnz_out(i)
-        buffers.append(f"    casadi_real acc{i}[2][{size}];")
-        buffers.append(f"    memcpy(acc{i}[0], init[{i}], sizeof acc{i}[0]);")
-        assign.append(f"        arg[{i}] = acc{i}[cur]; res[{i}] = acc{i}[nxt];")
-        record.append(
-            f"        if (history[{i}]) memcpy(history[{i}] + k * {size}, acc{i}[nxt], "
-            f"sizeof acc{i}[0]);"
-        )
-        finish.append(f"    memcpy(final[{i}], acc{i}[n & 1], sizeof acc{i}[0]);")
+    buffers, assign, finish = _carried(step, n_accum, "init", "final")
+    record = [
+        f"        if (history[{i}]) memcpy(history[{i}] + k * {step.nnz_out(i)}, acc{i}[nxt], "
+        f"sizeof acc{i}[0]);"
+        for i in range(n_accum)
+    ]
     for j, i in enumerate(fixed):
         assign.append(f"        arg[{i}] = fixed[{j}];")
     for j, i in enumerate(per_sample):
@@ -228,13 +238,8 @@ def _column_source(
 ) -> str:
     values, validity, interval = inputs
     names_out = step.name_out()
-    buffers, assign, record, finish = [], [], [], []
-    for i in range(n_accum):
-        size = step.nnz_out(i)
-        buffers.append(f"    casadi_real acc{i}[2][{size}];")
-        buffers.append(f"    memcpy(acc{i}[0], state[{i}], sizeof acc{i}[0]);")
-        assign.append(f"        arg[{i}] = acc{i}[cur]; res[{i}] = acc{i}[nxt];")
-        finish.append(f"    memcpy(state[{i}], acc{i}[n & 1], sizeof acc{i}[0]);")
+    buffers, assign, finish = _carried(step, n_accum, "state", "state")
+    record = []
     wanted = set(columns) | {names_out.index(rule.output) for rule in rules}
     for i in sorted(wanted - set(range(n_accum))):
         buffers.append(f"    casadi_real out{i}[{step.nnz_out(i)}];")

@@ -14,8 +14,8 @@ import pytest
 from wheelload.estimators.identification import (
     DataKind,
     DataSet,
+    FitLoss,
     FitSettings,
-    Loss,
     SuspensionFitModel,
     default_model,
     identify,
@@ -126,7 +126,7 @@ def within_bounds(result, vehicle):
     return max(errors) <= 1.0
 
 
-@pytest.mark.parametrize("loss", [Loss.HUBER, Loss.SOFT_L1])
+@pytest.mark.parametrize("loss", [FitLoss.HUBER, FitLoss.SOFT_L1])
 def test_robust_fit_survives_outliers_that_break_least_squares(vehicle, rig_sets, parameters, loss):
     bad = corrupted(rig_sets)
     plain = identify(default_model(), bad, parameters)
