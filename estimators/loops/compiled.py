@@ -43,6 +43,17 @@ CASADI_SYMBOL_EXPORT int {name}_loop(long n, const double** init, const double**
 """
 
 
+def _step_fields(step: ca.Function) -> dict[str, object]:
+    """The template fields of the step itself: its C name and work-vector sizes."""
+    return {
+        "name": step.name(),
+        "sz_arg": step.sz_arg(),
+        "sz_res": step.sz_res(),
+        "sz_iw": step.sz_iw(),
+        "sz_w": step.sz_w(),
+    }
+
+
 def _carried(
     step: ca.Function, n_accum: int, initial: str, final: str
 ) -> tuple[list[str], list[str], list[str]]:
@@ -78,11 +89,7 @@ def _loop_source(
     for j, i in enumerate(outputs):
         assign.append(f"        res[{i}] = out[{j}] + k * {step.nnz_out(i)};")
     return LOOP.format(
-        name=step.name(),
-        sz_arg=step.sz_arg(),
-        sz_res=step.sz_res(),
-        sz_iw=step.sz_iw(),
-        sz_w=step.sz_w(),
+        **_step_fields(step),
         buffers="\n".join(buffers),
         assign="\n".join(assign),
         record="\n".join(record),
@@ -262,11 +269,7 @@ def _column_source(
             f"            if ({source}[{rule.element}] {test} 0.5) f |= (uint32_t){rule.bit}u;"
         )
     return COLUMN_LOOP.format(
-        name=step.name(),
-        sz_arg=step.sz_arg(),
-        sz_res=step.sz_res(),
-        sz_iw=step.sz_iw(),
-        sz_w=step.sz_w(),
+        **_step_fields(step),
         n_values=step.nnz_in(values),
         buffers="\n".join(buffers),
         assign="\n".join(assign),
