@@ -8,7 +8,8 @@ should not pay for them).
 import importlib
 
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-from wheelload.estimators.kf.two_stage import FilterState, TwoStageKF, step_function
+from wheelload.estimators.kf.step import step_function
+from wheelload.estimators.kf.two_stage import FilterState, TwoStageKF
 from wheelload.estimators.logs.signals import (
     LogError,
     Signals,
@@ -40,6 +41,9 @@ _LAZY_MODULES = {
     ),
     "wheelload.estimators.kf.offsets": ("check_still_period", "corner_weight_loads"),
     "wheelload.estimators.protocol": ("DEFAULT_MODEL", "SuspensionModel"),
+    "wheelload.estimators.kf.step": ("UPDATE_ROWS",),
+    "wheelload.estimators.kf.tuning": ("TUNED_DENSITIES", "TUNING_INDEX", "noise_densities"),
+    "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
     "wheelload.estimators.loops.log_stream": ("LogStream", "scan_log"),
 }

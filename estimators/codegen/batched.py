@@ -35,15 +35,11 @@ import numpy as np
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, PACKED, CodegenOptions, generate
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
-from wheelload.estimators.kf.two_stage import (
-    TwoStageKF,
-    input_matrix,
-    nominal_interval,
-    sensor_faults,
-)
+from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import TwoStageKF, sample_intervals, sensor_faults
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.loops.compiled import _shared_library
-from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.loops.compiled import shared_library
 from wheelload.estimators.result import Estimate
 from wheelload.models.files.build_folder import build_folder
 
@@ -152,7 +148,7 @@ def _library(step: ca.Function, vehicle_path: Path) -> ctypes.CDLL:
         .replace("${PREFIX}", PREFIX.upper())
         .replace("${max_filters}", str(MAX_FILTERS))
     )
-    shared = _shared_library(source + driver, PREFIX, SHARED_FLAGS)
+    shared = shared_library(source + driver, PREFIX, SHARED_FLAGS)
     function = getattr(shared, f"{PREFIX}_run_batch")
     function.restype = None
     return shared

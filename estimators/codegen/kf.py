@@ -1,7 +1,7 @@
 """Generate the two-stage KF as a self-contained, allocation-free C99 library.
 
 The C step is emitted from the CasADi step Function the Python filter runs
-(:func:`wheelload.estimators.kf.two_stage.step_function`), so a change of the
+(:func:`wheelload.estimators.kf.step.step_function`), so a change of the
 suspension or equilibrium model in ``wheelload.models`` changes the C with no
 other edit. The covariance is kept in symmetric storage (upper triangle, row
 by row); the step reads only that triangle of ``P``.
@@ -43,16 +43,13 @@ import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count, literal
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
-from wheelload.estimators.kf.two_stage import (
-    DEFAULT_SAMPLE_INTERVAL,
-    INPUT_DENSITIES,
+from wheelload.estimators.kf.step import (
     STEP_INPUT_NAMES,
     STEP_NAME,
     STEP_OUTPUT_NAMES,
-    TUNING,
     step_function,
-    tuning_vector,
 )
+from wheelload.estimators.kf.tuning import DEFAULT_SAMPLE_INTERVAL, TUNING, tuning_vector
 from wheelload.estimators.logs.output_files import write_text
 from wheelload.estimators.result import StepFlag
 from wheelload.models import (
@@ -64,6 +61,7 @@ from wheelload.models import (
     load_vehicle,
 )
 from wheelload.models.inputs import input_description
+from wheelload.models.measurement_noise import INPUT_DENSITIES
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))

@@ -86,7 +86,7 @@ import numpy as np
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
 from wheelload.estimators.kf.projection import Weighting, projection_step_function
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL, input_matrix
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.output_files import atomic_write, check_output_folder, write_text
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
@@ -98,6 +98,7 @@ from wheelload.estimators.mhe.window import TRAVEL_UNIT
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, Vehicle, load_vehicle
+from wheelload.models.input_validity import MAX_INTERVAL
 
 
 def _array(name: str, values, kind: str = "double") -> str:

@@ -15,11 +15,10 @@ from dataclasses import dataclass
 import casadi as ca
 
 from wheelload.estimators.family.suspension_model import equilibrium, equilibrium_mask
-from wheelload.estimators.kf.two_stage import INPUTS, interval_is_valid
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.result import StepFlag
-from wheelload.models import ModelParameters
-from wheelload.models.input_validity import dependency_mask, sanitise
+from wheelload.models import INPUTS, ModelParameters
+from wheelload.models.input_validity import dependency_mask, interval_is_valid, sanitise
 
 STEP_INPUT_NAMES = ["s", "u", "u_valid", "dt", "p", "c"]
 STEP_OUTPUT_NAMES = ["s_next", "loads", "std", "residual", "flags"]

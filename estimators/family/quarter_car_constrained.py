@@ -34,7 +34,7 @@ from wheelload.estimators.family.quarter_car import (
     front_end,
 )
 from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
-from wheelload.estimators.kf.two_stage import TUNING, TUNING_INDEX, tuning_vector
+from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX, tuning_vector
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 

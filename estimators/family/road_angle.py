@@ -49,14 +49,13 @@ from wheelload.estimators.family.flat_step import step_flags, step_name
 from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
 from wheelload.estimators.kernels.kalman import sequential_update
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import Estimate
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.family.road_angle import STATE_NAMES, BodyInertia, road_angle_model
-from wheelload.models.input_validity import sanitise
+from wheelload.models.input_validity import MAX_INTERVAL, interval_is_valid, sanitise
 
 N = len(STATE_NAMES)
 #: Measured states (eq. 16): roll, roll rate, pitch, pitch rate, 4 loads, 3 road-frame

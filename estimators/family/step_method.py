@@ -33,7 +33,7 @@ import functools
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf.two_stage import input_matrix
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.protocol import DEFAULT_MODEL, Sample, SuspensionModel, sample_intervals

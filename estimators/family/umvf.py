@@ -66,12 +66,11 @@ from wheelload.estimators.family.flat_step import step_flags, step_name
 from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
-from wheelload.estimators.kf.two_stage import MAX_INTERVAL, interval_is_valid
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.family.quarter_car import reduced_quarter_car_function
-from wheelload.models.input_validity import sanitise
+from wheelload.models.input_validity import MAX_INTERVAL, interval_is_valid, sanitise
 
 RANK_TOLERANCE = 1e-9
 

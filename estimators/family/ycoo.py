@@ -60,13 +60,12 @@ from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
 from wheelload.estimators.kernels.discretise import first_order_hold, trapezoidal
-from wheelload.estimators.kf.two_stage import interval_is_valid
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
 from wheelload.models.family.quarter_car import unsprung_balance
-from wheelload.models.input_validity import sanitise
+from wheelload.models.input_validity import interval_is_valid, sanitise
 from wheelload.models.vehicle import GRAVITY
 
 #: Filtered channels: four travels, vertical specific force minus g, roll and pitch rate.

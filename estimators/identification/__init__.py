@@ -12,9 +12,9 @@ from wheelload.estimators.identification.data import (
     read_drive,
     read_rig,
 )
-from wheelload.estimators.identification.fit import FitSettings, Identification, Loss, identify
+from wheelload.estimators.identification.fit import FitLoss, FitSettings, Identification, identify
 from wheelload.estimators.identification.model import (
-    SuspensionModel,
+    SuspensionFitModel,
     default_model,
     piecewise_model,
 )
@@ -22,10 +22,10 @@ from wheelload.estimators.identification.model import (
 __all__ = [
     "DataKind",
     "DataSet",
+    "FitLoss",
     "FitSettings",
     "Identification",
-    "Loss",
-    "SuspensionModel",
+    "SuspensionFitModel",
     "default_model",
     "drive_gates",
     "identify",

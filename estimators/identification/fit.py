@@ -42,7 +42,7 @@ import numpy as np
 from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
-from wheelload.estimators.identification.model import SuspensionModel
+from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import Rows, evaluate, linear_free_set
 from wheelload.models import ModelParameters
 
@@ -52,7 +52,7 @@ INLIER = 3.0  # |r| / sigma below which a row counts for a robust fit's covarian
 ZERO_FORCE = 1e-6  # N, largest regressor effect still taken as no excitation
 
 
-class Loss(enum.Enum):
+class FitLoss(enum.Enum):
     """Residual loss of the fit."""
 
     LINEAR = "linear"
@@ -62,7 +62,7 @@ class Loss(enum.Enum):
 
 @dataclass(frozen=True, kw_only=True)
 class FitSettings:
-    loss: Loss = Loss.LINEAR
+    loss: FitLoss = FitLoss.LINEAR
     fixed: frozenset[str] = frozenset()  # held at the file value
     precision: float = 0.25  # largest 1-sigma relative precision of a fitted direction
     warn_precision: float = 0.10  # relative standard error above which a fitted value is flagged
@@ -90,7 +90,7 @@ class Identification:
     rows: Rows  # at the solution
     scale: np.ndarray  # robust residual scale per data set [N]
     autocorrelation: np.ndarray  # lag-one residual autocorrelation per data set
-    loss: Loss
+    loss: FitLoss
 
     def residual(self) -> np.ndarray:
         return self.rows.y - self.rows.y_hat
@@ -137,10 +137,10 @@ def _scales(r: np.ndarray, rows: Rows, count: int) -> tuple[np.ndarray, np.ndarr
     return sigma, rho
 
 
-def _solve(A, b, lower, upper, loss: Loss) -> np.ndarray:
+def _solve(A, b, lower, upper, loss: FitLoss) -> np.ndarray:
     """Bounded (robust) least squares of ``A u = b``."""
     first = optimize.lsq_linear(A, b, bounds=(lower, upper), method="bvls").x
-    if loss is Loss.LINEAR:
+    if loss is FitLoss.LINEAR:
         return first
     result = optimize.least_squares(
         lambda u: A @ u - b,
@@ -170,12 +170,12 @@ def _instrument_columns(Z: np.ndarray, cols, scale, weight) -> np.ndarray:
     return block.reshape(block.shape[0], -1)
 
 
-def _inliers(weighted: np.ndarray, loss: Loss) -> np.ndarray:
+def _inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:
     """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
-    return np.ones(weighted.size, bool) if loss is Loss.LINEAR else np.abs(weighted) < INLIER
+    return np.ones(weighted.size, bool) if loss is FitLoss.LINEAR else np.abs(weighted) < INLIER
 
 
-def _variance_factor(r, sigma, group, free: int, loss: Loss) -> float:
+def _variance_factor(r, sigma, group, free: int, loss: FitLoss) -> float:
     """s^2: mean squared scaled residual of the rows that count, per degree of freedom."""
     weighted = r / sigma[group]
     inliers = _inliers(weighted, loss)
@@ -183,7 +183,7 @@ def _variance_factor(r, sigma, group, free: int, loss: Loss) -> float:
 
 
 def identify(
-    model: SuspensionModel,
+    model: SuspensionFitModel,
     sets: tuple[DataSet, ...],
     p: ModelParameters,
     settings: FitSettings = FitSettings(),

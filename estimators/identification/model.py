@@ -38,7 +38,7 @@ TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class SuspensionModel:
+class SuspensionFitModel:
     """A suspension Function ``z[4] = f(inputs...)`` and what each of its inputs is."""
 
     function: ca.Function
@@ -164,13 +164,13 @@ def model_gates(p: ModelParameters, absent: frozenset[str] = frozenset()) -> tup
 PAPER_GATES = (0.0,) * len(GATES)
 
 
-def default_model(gates: tuple[float, ...] = PAPER_GATES) -> SuspensionModel:
+def default_model(gates: tuple[float, ...] = PAPER_GATES) -> SuspensionFitModel:
     """The bundled suspension model with the linear push/pull damper.
 
     ``gates`` (constants, :func:`model_gates`) switch the terms beyond the
     paper's eq. 3-9; by default they are off.
     """
-    return SuspensionModel(
+    return SuspensionFitModel(
         function=suspension_function(),
         parameters={"p": ModelParameters.names()},
         channels={"u": INPUTS},
@@ -182,12 +182,12 @@ def default_model(gates: tuple[float, ...] = PAPER_GATES) -> SuspensionModel:
 
 def piecewise_model(
     knots: tuple[float, ...], gates: tuple[float, ...] = PAPER_GATES
-) -> SuspensionModel:
+) -> SuspensionFitModel:
     """The suspension model with a piecewise-linear damper map over velocity ``knots`` [m/s].
 
     Segment ``j`` of ``damper_push_front`` is the entry ``damper_push_front_j``.
     """
-    return SuspensionModel(
+    return SuspensionFitModel(
         function=piecewise_damper_suspension_function(knots),
         parameters={"p": ModelParameters.names(), "damper": piecewise_damper_names(knots)},
         channels={"u": INPUTS},

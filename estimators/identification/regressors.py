@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.identification.data import DataKind, DataSet
-from wheelload.estimators.identification.model import WHEELS, SuspensionModel
+from wheelload.estimators.identification.model import WHEELS, SuspensionFitModel
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -44,17 +44,17 @@ def _finish(name: str, s: ca.SX, theta: ca.SX, y: ca.SX, columns) -> Prediction:
     return Prediction(function=function, jacobian=jacobian, columns=tuple(columns))
 
 
-def _theta(model: SuspensionModel) -> ca.SX:
+def _theta(model: SuspensionFitModel) -> ca.SX:
     return ca.SX.sym("theta", len(model.parameter_names()))
 
 
-def _require(model: SuspensionModel, names: tuple[str, ...], what: str) -> None:
+def _require(model: SuspensionFitModel, names: tuple[str, ...], what: str) -> None:
     missing = [n for n in names if n not in model.channel_names()]
     if missing:
         raise ValueError(f"a {what} needs a model with signal '{missing[0]}'")
 
 
-def drive_prediction(model: SuspensionModel) -> Prediction:
+def drive_prediction(model: SuspensionFitModel) -> Prediction:
     """All four model loads from the log's channels."""
     theta = _theta(model)
     names = model.channel_names()
@@ -63,7 +63,7 @@ def drive_prediction(model: SuspensionModel) -> Prediction:
     return _finish("drive", s, theta, model.loads(channels, theta), names)
 
 
-def corner_prediction(model: SuspensionModel, wheel: int) -> Prediction:
+def corner_prediction(model: SuspensionFitModel, wheel: int) -> Prediction:
     """Load change of one corner driven alone on a rig (bar not twisted, other signals 0)."""
     theta = _theta(model)
     d, v = ca.SX.sym("d"), ca.SX.sym("v")
@@ -74,7 +74,7 @@ def corner_prediction(model: SuspensionModel, wheel: int) -> Prediction:
     return _finish(f"corner_rig_{wheel}", ca.vertcat(d, v), theta, y, ("d", "v"))
 
 
-def bar_prediction(model: SuspensionModel, axle: int) -> Prediction:
+def bar_prediction(model: SuspensionFitModel, axle: int) -> Prediction:
     """Load the bar adds to the left wheel for a travel difference."""
     theta = _theta(model)
     left_d, right_d = ca.SX.sym("d_left"), ca.SX.sym("d_right")
@@ -89,7 +89,7 @@ def bar_prediction(model: SuspensionModel, axle: int) -> Prediction:
 
 
 @functools.lru_cache(maxsize=64)
-def _prediction(model: SuspensionModel, kind: DataKind, location: int) -> Prediction:
+def _prediction(model: SuspensionFitModel, kind: DataKind, location: int) -> Prediction:
     if kind is DataKind.DRIVE:
         return drive_prediction(model)
     if kind is DataKind.CORNER_RIG:
@@ -97,7 +97,7 @@ def _prediction(model: SuspensionModel, kind: DataKind, location: int) -> Predic
     return bar_prediction(model, location)
 
 
-def prediction(model: SuspensionModel, data: DataSet) -> Prediction:
+def prediction(model: SuspensionFitModel, data: DataSet) -> Prediction:
     """The :class:`Prediction` for a data set."""
     return _prediction(model, data.kind, data.location)
 
@@ -146,7 +146,7 @@ def instruments(s: np.ndarray, lag: int) -> np.ndarray:
     return 0.5 * (before + after)
 
 
-def _signal(model: SuspensionModel, data: DataSet, name: str) -> np.ndarray:
+def _signal(model: SuspensionFitModel, data: DataSet, name: str) -> np.ndarray:
     """A data set's samples of signal ``name``; an optional channel it lacks is 0."""
     if name in data.signals or name not in model.optional:
         return data.signals[name]
@@ -161,7 +161,7 @@ def _jacobian(pred: Prediction, s: np.ndarray, theta: np.ndarray) -> np.ndarray:
 
 
 def evaluate(
-    model: SuspensionModel,
+    model: SuspensionFitModel,
     sets: tuple[DataSet, ...],
     theta: np.ndarray,
     instrumented: bool = False,
@@ -247,7 +247,7 @@ def _row_signals(data: DataSet, keep, sample, row):
     return d[wheel], v[wheel], d[wheel[0], left] - d[wheel[0], left + 1]
 
 
-def structure(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray):
+def structure(model: SuspensionFitModel, sets: tuple[DataSet, ...], theta: np.ndarray):
     """Which parameters the kinds of data in ``sets`` can see, and the symbolic Jacobians.
 
     ``visible[j]`` is true when the Jacobian column of parameter ``j`` is
@@ -275,7 +275,7 @@ def structure(model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarr
 
 
 def linear_free_set(
-    model: SuspensionModel, sets: tuple[DataSet, ...], theta: np.ndarray, fixed: frozenset[str]
+    model: SuspensionFitModel, sets: tuple[DataSet, ...], theta: np.ndarray, fixed: frozenset[str]
 ) -> tuple[list[int], list[int]]:
     """Parameters to fit, and those held because the model is not linear in them jointly.
 

@@ -52,15 +52,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-from wheelload.estimators.kf.two_stage import (
-    NOISE_DENSITIES,
-    TUNED_DENSITIES,
-    TUNING,
-    TUNING_INDEX,
-    UPDATE_ROWS,
-    TwoStageKF,
-    step_function,
-)
+from wheelload.estimators.kf.step import UPDATE_ROWS, step_function
+from wheelload.estimators.kf.tuning import NOISE_DENSITIES, TUNED_DENSITIES, TUNING, TUNING_INDEX
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle import FilterTuning, Vehicle

@@ -30,7 +30,8 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.kernels.kalman import ldl_solve, symmetrise
-from wheelload.estimators.kf.two_stage import TwoStageKF, step_function
+from wheelload.estimators.kf.step import step_function
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import Vehicle
 
 

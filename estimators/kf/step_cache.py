@@ -1,6 +1,6 @@
 """The default filter step Function kept on disk between runs (serialised CasADi).
 
-Building :func:`~wheelload.estimators.kf.two_stage.step_function` (the models'
+Building :func:`~wheelload.estimators.kf.step.step_function` (the models'
 expressions, Jacobians, guards, common subexpressions) takes about 0.2 s of
 every ``wheelload estimate``; loading its serialised form takes about 15 ms.
 The file is named by a hash of the code it is built from (every ``.py`` file
@@ -26,6 +26,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from wheelload.estimators.kf.step import STEP_NAME, step_function
 from wheelload.models.files.build_folder import build_folder
 from wheelload.models.files.temporaries import temporary_file
 
@@ -48,10 +49,8 @@ def _code_digest() -> str:
 
 @functools.cache
 def default_step_function() -> ca.Function:
-    """:func:`~wheelload.estimators.kf.two_stage.step_function` with its defaults, loaded from
+    """:func:`~wheelload.estimators.kf.step.step_function` with its defaults, loaded from
     the build folder when this code built it before (module docstring)."""
-    from wheelload.estimators.kf.two_stage import STEP_NAME, step_function
-
     path = build_folder() / f"{STEP_NAME}_{_code_digest()}.casadi"
     if path.exists():
         try:

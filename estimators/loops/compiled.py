@@ -43,6 +43,32 @@ CASADI_SYMBOL_EXPORT int {name}_loop(long n, const double** init, const double**
 """
 
 
+def _step_fields(step: ca.Function) -> dict[str, object]:
+    """The template fields of the step itself: its C name and work-vector sizes."""
+    return {
+        "name": step.name(),
+        "sz_arg": step.sz_arg(),
+        "sz_res": step.sz_res(),
+        "sz_iw": step.sz_iw(),
+        "sz_w": step.sz_w(),
+    }
+
+
+def _carried(
+    step: ca.Function, n_accum: int, initial: str, final: str
+) -> tuple[list[str], list[str], list[str]]:
+    """C lines of the carried state: two buffers per carried output (this sample's and the
+    next, swapped each sample) filled from ``initial[i]``, the step's argument and result
+    pointers into them, and the copy of the last state to ``final[i]``."""
+    buffers, assign, finish = [], [], []
+    for i in range(n_accum):
+        buffers.append(f"    casadi_real acc{i}[2][{step.nnz_out(i)}];")
+        buffers.append(f"    memcpy(acc{i}[0], {initial}[{i}], sizeof acc{i}[0]);")
+        assign.append(f"        arg[{i}] = acc{i}[cur]; res[{i}] = acc{i}[nxt];")
+        finish.append(f"    memcpy({final}[{i}], acc{i}[n & 1], sizeof acc{i}[0]);")
+    return buffers, assign, finish
+
+
 def _loop_source(
     step: ca.Function,
     n_accum: int,
@@ -50,17 +76,12 @@ def _loop_source(
     fixed: tuple[int, ...],
     outputs: tuple[int, ...],
 ) -> str:
-    buffers, assign, record, finish = [], [], [], []
-    for i in range(n_accum):
-        size = step.nnz_out(i)
-        buffers.append(f"    casadi_real acc{i}[2][{size}];")
-        buffers.append(f"    memcpy(acc{i}[0], init[{i}], sizeof acc{i}[0]);")
-        assign.append(f"        arg[{i}] = acc{i}[cur]; res[{i}] = acc{i}[nxt];")
-        record.append(
-            f"        if (history[{i}]) memcpy(history[{i}] + k * {size}, acc{i}[nxt], "
-            f"sizeof acc{i}[0]);"
-        )
-        finish.append(f"    memcpy(final[{i}], acc{i}[n & 1], sizeof acc{i}[0]);")
+    buffers, assign, finish = _carried(step, n_accum, "init", "final")
+    record = [
+        f"        if (history[{i}]) memcpy(history[{i}] + k * {step.nnz_out(i)}, acc{i}[nxt], "
+        f"sizeof acc{i}[0]);"
+        for i in range(n_accum)
+    ]
     for j, i in enumerate(fixed):
         assign.append(f"        arg[{i}] = fixed[{j}];")
     for j, i in enumerate(per_sample):
@@ -68,11 +89,7 @@ def _loop_source(
     for j, i in enumerate(outputs):
         assign.append(f"        res[{i}] = out[{j}] + k * {step.nnz_out(i)};")
     return LOOP.format(
-        name=step.name(),
-        sz_arg=step.sz_arg(),
-        sz_res=step.sz_res(),
-        sz_iw=step.sz_iw(),
-        sz_w=step.sz_w(),
+        **_step_fields(step),
         buffers="\n".join(buffers),
         assign="\n".join(assign),
         record="\n".join(record),
@@ -80,7 +97,7 @@ def _loop_source(
     )
 
 
-def _shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
+def shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
     """Compile ``source`` once (cached by its hash and ``compiler``) and load it
     (:func:`~wheelload.models.files.build_folder.cached_library`)."""
     return cached_library(
@@ -123,7 +140,7 @@ class CompiledLoop:
         source = generator.dump() + _loop_source(
             step, n_accum, self.per_sample, self.fixed, self.outputs
         )
-        self._loop = getattr(_shared_library(source, step.name()), f"{step.name()}_loop")
+        self._loop = getattr(shared_library(source, step.name()), f"{step.name()}_loop")
         self._loop.restype = ctypes.c_int
 
     def __call__(self, init, fixed, per_sample, record=()):
@@ -228,13 +245,8 @@ def _column_source(
 ) -> str:
     values, validity, interval = inputs
     names_out = step.name_out()
-    buffers, assign, record, finish = [], [], [], []
-    for i in range(n_accum):
-        size = step.nnz_out(i)
-        buffers.append(f"    casadi_real acc{i}[2][{size}];")
-        buffers.append(f"    memcpy(acc{i}[0], state[{i}], sizeof acc{i}[0]);")
-        assign.append(f"        arg[{i}] = acc{i}[cur]; res[{i}] = acc{i}[nxt];")
-        finish.append(f"    memcpy(state[{i}], acc{i}[n & 1], sizeof acc{i}[0]);")
+    buffers, assign, finish = _carried(step, n_accum, "state", "state")
+    record = []
     wanted = set(columns) | {names_out.index(rule.output) for rule in rules}
     for i in sorted(wanted - set(range(n_accum))):
         buffers.append(f"    casadi_real out{i}[{step.nnz_out(i)}];")
@@ -257,11 +269,7 @@ def _column_source(
             f"            if ({source}[{rule.element}] {test} 0.5) f |= (uint32_t){rule.bit}u;"
         )
     return COLUMN_LOOP.format(
-        name=step.name(),
-        sz_arg=step.sz_arg(),
-        sz_res=step.sz_res(),
-        sz_iw=step.sz_iw(),
-        sz_w=step.sz_w(),
+        **_step_fields(step),
         n_values=step.nnz_in(values),
         buffers="\n".join(buffers),
         assign="\n".join(assign),
@@ -319,7 +327,7 @@ class ColumnLoop:
         source = generator.dump() + _column_source(
             step, n_accum, inputs, self.fixed, self.columns, rules
         )
-        library = _shared_library(source, f"{step.name()}_columns")
+        library = shared_library(source, f"{step.name()}_columns")
         self._loop = getattr(library, f"{step.name()}_columns")
         self._loop.restype = ctypes.c_int
 

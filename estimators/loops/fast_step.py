@@ -33,7 +33,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
-from wheelload.estimators.loops.compiled import _shared_library
+from wheelload.estimators.loops.compiled import shared_library
 from wheelload.estimators.result import StepFlag
 
 #: Step inputs and outputs the wrapper expects, in the step Function's order.
@@ -86,7 +86,7 @@ void {name}_fast_carry(double *buffer)
 
 
 class CompiledStep:
-    """``step`` (a :func:`~wheelload.estimators.kf.two_stage.step_function`) in compiled C.
+    """``step`` (a :func:`~wheelload.estimators.kf.step.step_function`) in compiled C.
 
     One buffer holds every input and output; :meth:`__call__` writes the
     state and the sample into it, calls the C step and returns views
@@ -139,7 +139,7 @@ class CompiledStep:
             next_offset=self._out["x_next"].start,
             n_state=self._in["m"].stop - self._in["x"].start,
         )
-        library = _shared_library(source, f"{step.name()}_fast")
+        library = shared_library(source, f"{step.name()}_fast")
         function = getattr(library, f"{step.name()}_fast")
         carry = getattr(library, f"{step.name()}_fast_carry")
         for c_function in (function, carry):

@@ -38,12 +38,9 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.kf import guard
-from wheelload.estimators.kf.two_stage import (
-    N_CARRIED,
-    STEP_OUTPUT_NAMES,
-    TwoStageKF,
-    nominal_interval,
-)
+from wheelload.estimators.kf.step import N_CARRIED, STEP_OUTPUT_NAMES
+from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring
 from wheelload.estimators.logs.readers.chunks import (
     ChunkError,

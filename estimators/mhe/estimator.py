@@ -69,11 +69,10 @@ import numpy as np
 
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
-    MAX_INTERVAL,
     FilterState,
     TwoStageKF,
-    input_matrix,
 )
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.extended import advance_extended, initial_extended
 from wheelload.estimators.mhe.qp import (
@@ -117,6 +116,7 @@ from wheelload.estimators.mhe.window import (
 )
 from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
+from wheelload.models.input_validity import MAX_INTERVAL
 
 #: The estimator with its settings and results (the settings live in
 #: :mod:`~wheelload.estimators.mhe.settings`, the state and results in

@@ -35,16 +35,13 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf import guard
+from wheelload.estimators.kf import fault_monitor, guard, plausibility
 from wheelload.estimators.kf.guard import GuardSettings
-from wheelload.estimators.kf.two_stage import (
-    INPUTS,
-    TUNING,
-    TUNING_INDEX,
-    model_rows,
-)
+from wheelload.estimators.kf.step import model_rows
+from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX
 from wheelload.estimators.mhe.settings import Constraint
 from wheelload.models import (
+    INPUTS,
     ModelParameters,
     equilibrium_function,
     gates_function,
@@ -78,7 +75,7 @@ def warp_interval(xp, null: np.ndarray, lower_load: float, upper_load: float):
 
 
 def plausible_inputs(u_raw, valid, p, tuning) -> ca.SX:
-    r"""``valid`` times the KF's plausibility of each input (:func:`.guard.plausible`).
+    r"""``valid`` times the KF's plausibility of each input (:func:`.plausibility.plausible`).
 
     The ranges are the filter's guard settings in ``tuning`` (:math:`|a| \le a_{max}`,
     :math:`|v_x| \le v_{max}`, :math:`|d_i| \le c\,m g / k_i`, :math:`|\dot d_i| \le
@@ -88,7 +85,7 @@ def plausible_inputs(u_raw, valid, p, tuning) -> ca.SX:
     MHE and its generated C share it.
     """
     settings = guard.unpack(ca.vertcat(*[tuning[k] for k in _GUARD_INDEX]))
-    in_range = guard.plausible_for(sanitise(u_raw, valid), p, settings)
+    in_range = plausibility.plausible_for(sanitise(u_raw, valid), p, settings)
     return valid * in_range
 
 
@@ -206,9 +203,9 @@ def residual_function(
     d_now = ca.vertcat(*[u[k] for k in travel])
     acc_now = ca.vertcat(*[u[k] for k in axes])
     Jd = ca.substitute(
-        ca.jacobian(suspension(guard.with_entries(u, travel, d), gates, p), d), d, d_now
+        ca.jacobian(suspension(fault_monitor.with_entries(u, travel, d), gates, p), d), d, d_now
     )
-    b_sym = equilibrium(guard.with_entries(u, axes, acc), gates, p)[1]
+    b_sym = equilibrium(fault_monitor.with_entries(u, axes, acc), gates, p)[1]
     Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, acc_now)
     r_s, r_c = row_densities(u_raw, valid, tuning)
     ls = ca.sqrt(mask_s * dt / r_s)

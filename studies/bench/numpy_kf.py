@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.estimators.kf.two_stage import TUNING_INDEX, input_matrix
+from wheelload.estimators import TUNING_INDEX, input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import equilibrium_function, gates_function, suspension_function

@@ -28,9 +28,8 @@ import pandas as pd
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.kf.guard import GRAVITY
 from wheelload.estimators.logs.signals import derive_velocities, signals_from_frame
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.experiments.faults import hostile
 

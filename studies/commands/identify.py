@@ -13,8 +13,8 @@ import tomllib
 from pathlib import Path
 
 from wheelload.estimators.identification import (
+    FitLoss,
     FitSettings,
-    Loss,
     default_model,
     drive_gates,
     identify,
@@ -128,7 +128,7 @@ def handle(args: argparse.Namespace) -> int:
     low, high = plausible_bounds(vehicle)
     bounds |= low
     settings = FitSettings(
-        loss=Loss(args.robust) if args.robust else Loss.LINEAR,
+        loss=FitLoss(args.robust) if args.robust else FitLoss.LINEAR,
         fixed=frozenset(name.strip() for name in args.fix.split(",") if name.strip()),
         precision=args.precision,
         lower={

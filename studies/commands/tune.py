@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators import read_log
+from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities, read_log
 from wheelload.estimators.identification.tuning import (
     NIS_BAND,
     RATIO_AGREEMENT,
@@ -25,7 +25,6 @@ from wheelload.estimators.identification.tuning import (
     tune,
     tuned_vehicle,
 )
-from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
 from wheelload.models.vehicle_file import (
     add_values,

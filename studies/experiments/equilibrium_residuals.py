@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.kf.two_stage import input_matrix
+from wheelload.estimators import input_matrix
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import (
     ModelParameters,

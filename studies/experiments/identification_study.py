@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import TwoStageKF, noise_densities, read_log
 from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
 from wheelload.estimators.identification.file_keys import (
     lower_bounds,
@@ -35,7 +35,6 @@ from wheelload.estimators.identification.file_keys import (
 from wheelload.estimators.identification.fit import FitSettings
 from wheelload.estimators.identification.report import file_changes
 from wheelload.estimators.identification.tuning import FilterRuns, tune, tuned_vehicle
-from wheelload.estimators.kf.two_stage import noise_densities
 from wheelload.models import (
     ModelParameters,
     Vehicle,

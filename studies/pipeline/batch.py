@@ -30,11 +30,11 @@ from wheelload.estimators import (
     SuspensionModel,
     TwoStageKF,
     read_log,
+    step_function,
 )
 from wheelload.estimators.codegen.batched import run_batched
 from wheelload.estimators.kf.guard import guard_settings_for
 from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
-from wheelload.estimators.kf.two_stage import step_function
 from wheelload.estimators.logs.checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.logs.output_files import write_frame
 from wheelload.estimators.logs.plausibility import (

@@ -13,7 +13,7 @@ import pytest
 
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.identification.tuning import with_tuning
-from wheelload.estimators.kf.two_stage import noise_densities
+from wheelload.estimators.kf.tuning import noise_densities
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 from wheelload.studies.experiments.identification_study import StudySettings, wrong_vehicle_text
@@ -151,7 +151,7 @@ def test_tuning_likelihood_keeps_the_rows_the_gate_would_skip(folder):
     over every row with inputs from a filter whose gate is out of reach (to 1e-9 relative:
     the same compiled step); the coverage runs with the file's own guards."""
     from wheelload.estimators.identification.tuning import SETTLE, FilterRuns
-    from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, TUNING, TUNING_INDEX
+    from wheelload.estimators.kf.tuning import TUNED_DENSITIES, TUNING, TUNING_INDEX
 
     vehicle = load_vehicle(example_vehicle_path())
     signals = read_log(folder / "iso-dlc.csv")

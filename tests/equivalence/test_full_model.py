@@ -16,7 +16,7 @@ import pytest
 
 from wheelload.estimators.family.algebraic import Algebraic
 from wheelload.estimators.family.quasi_static import QuasiStatic
-from wheelload.estimators.kf.two_stage import input_matrix
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.registry import build

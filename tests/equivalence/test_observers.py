@@ -14,7 +14,7 @@ from wheelload.estimators.family.strong_tracking_ukf import (
     StrongTrackingUKF,
 )
 from wheelload.estimators.family.suspension_only import SuspensionOnly
-from wheelload.estimators.kf.two_stage import tuning_vector
+from wheelload.estimators.kf.tuning import tuning_vector
 from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.protocol import SuspensionModel, sample_intervals

@@ -16,9 +16,8 @@ import pytest
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.kf.guard import GRAVITY
 from wheelload.estimators.logs.signals import signals_from_frame
-from wheelload.models import example_vehicle_path
+from wheelload.models import GRAVITY, example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.experiments.faults import hostile

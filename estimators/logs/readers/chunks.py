@@ -107,11 +107,11 @@ def _floats(batch, columns: list[str]) -> dict:
         array = batch.column(name)
         if array.type != pa.float64():  # float16/32, (u)int8-64: exact in float64 but int64
             array = array.cast(pa.float64(), safe=False)
-        result[name] = _float_values(array)
+        result[name] = float_values(array)
     return result
 
 
-def _float_values(array) -> np.ndarray:
+def float_values(array) -> np.ndarray:
     """A float64 arrow array as numpy, nulls as NaN: what ``to_numpy`` gives (a read-only
     view without nulls, a copy with them), without the pandas import ``to_numpy`` makes."""
     n, offset = len(array), array.offset

@@ -145,7 +145,8 @@ def white_noise_signals(vehicle, base, seed: int, settings=None):
     Every sample passes the plausibility check; together they are nothing a car
     does, which is what the envelope property is about.
     """
-    from wheelload.estimators.kf.guard import GRAVITY, GuardSettings
+    from wheelload.estimators.kf.guard import GuardSettings
+    from wheelload.models import GRAVITY
 
     g = settings or GuardSettings()
     rng = np.random.default_rng(seed)
@@ -172,7 +173,7 @@ def total_envelope(kf, signals) -> tuple[float, float]:
     An independent evaluation of :func:`wheelload.models.equilibrium_function`
     on the log's inputs (missing channels gate their terms off), not the filter's.
     """
-    from wheelload.estimators.kf.two_stage import input_matrix
+    from wheelload.estimators import input_matrix
     from wheelload.models import equilibrium_function, gates_function
 
     u = input_matrix(signals)

@@ -24,7 +24,7 @@ from wheelload.estimators.codegen.kf import (
     calibration_names,
     generate,
 )
-from wheelload.estimators.kf.two_stage import step_function
+from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.result import RESIDUALS, WHEELS
 from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, suspension_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

@@ -14,9 +14,9 @@ import pytest
 from wheelload.estimators.identification import (
     DataKind,
     DataSet,
+    FitLoss,
     FitSettings,
-    Loss,
-    SuspensionModel,
+    SuspensionFitModel,
     default_model,
     identify,
     piecewise_model,
@@ -125,7 +125,7 @@ def within_bounds(result, vehicle):
     return max(errors) <= 1.0
 
 
-@pytest.mark.parametrize("loss", [Loss.HUBER, Loss.SOFT_L1])
+@pytest.mark.parametrize("loss", [FitLoss.HUBER, FitLoss.SOFT_L1])
 def test_robust_fit_survives_outliers_that_break_least_squares(vehicle, rig_sets, parameters, loss):
     bad = corrupted(rig_sets)
     plain = identify(default_model(), bad, parameters)
@@ -166,7 +166,7 @@ def progressive_spring_model():
     springs = ca.vertcat(p.spring_front, p.spring_front, p.spring_rear, p.spring_rear)
     z = travel_function()(d, v, p_vector) + 20.0 * springs * d**2
     function = ca.Function("suspension_progressive", [d, v, p_vector], [z], ["d", "v", "p"], ["z"])
-    return SuspensionModel(
+    return SuspensionFitModel(
         function=function,
         parameters={"p": ModelParameters.names()},
         channels={"d": TRAVEL, "v": TRAVEL_RATE},
@@ -203,7 +203,7 @@ def stacked_input_model():
     side = ca.DM([-1.0, 1.0, -1.0, 1.0])
     z = travel_function()(u[0:4], u[4:8], p_vector) + side * 800.0 * u[9] * p.cg_height
     function = ca.Function("suspension_links", [u, p_vector], [z], ["u", "p"], ["z"])
-    return SuspensionModel(
+    return SuspensionFitModel(
         function=function,
         parameters={"p": ModelParameters.names()},
         channels={"u": TRAVEL + TRAVEL_RATE + ("ax", "ay", "az", "vx")},

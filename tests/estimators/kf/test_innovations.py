@@ -10,7 +10,8 @@ other order).
 import numpy as np
 
 from wheelload.estimators import TwoStageKF
-from wheelload.estimators.kf.two_stage import UPDATE_ROWS, input_matrix
+from wheelload.estimators.kf.step import UPDATE_ROWS
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import gates_function, suspension_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.kf import step_cache
-from wheelload.estimators.kf.two_stage import step_function
+from wheelload.estimators.kf.step import step_function
 
 
 def _c_source(function: ca.Function) -> str:

@@ -229,14 +229,14 @@ def test_arrow_columns_read_as_to_numpy_reads_them():
     NaN for nulls, sliced arrays, and a read-only view where there is no null."""
     import pyarrow as pa
 
-    from wheelload.estimators.logs.readers.chunks import _float_values
+    from wheelload.estimators.logs.readers.chunks import float_values
 
     with_nulls = pa.array([1.0, None, 3.0, 4.0, None, 6.0, 7.0, 8.0, 9.0, None, 11.0])
     plain = pa.array(np.arange(20.0))
     for array in (with_nulls, with_nulls.slice(1, 7), with_nulls.slice(9, 2),
                   with_nulls.slice(5, 3), plain, plain.slice(5, 7), plain.slice(0, 0),
                   pa.nulls(5, pa.float64())):  # fmt: skip
-        got, expected = _float_values(array), array.to_numpy(zero_copy_only=False)
+        got, expected = float_values(array), array.to_numpy(zero_copy_only=False)
         assert got.dtype == np.float64
         assert np.array_equal(got, expected, equal_nan=True)
         assert got.flags.writeable == expected.flags.writeable

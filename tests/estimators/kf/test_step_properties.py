@@ -16,10 +16,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GRAVITY, GuardSettings
-from wheelload.estimators.kf.two_stage import input_matrix, nominal_interval
-from wheelload.estimators.protocol import sample_intervals
-from wheelload.models import equilibrium_function, gates_function, suspension_function
+from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.models import GRAVITY, equilibrium_function, gates_function, suspension_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -104,7 +105,7 @@ def measurements(vehicle, kf, u, dt):
     return z, np.asarray(A).reshape(3, n, 4).transpose(1, 0, 2), np.asarray(b).T
 
 
-def reference_step(kf, x, P, z, A, b, dt, nominal, rows):
+def reference_step(numpy_step, kf, x, P, z, A, b, dt, nominal, rows):
     """Numpy step: predict, then the scalar updates of ``rows`` (0-6) only, and the
     roll-split row (y = 0, noise SPLIT_NOISE_RATIO x the roll row's) when no travel row
     is used but the roll row is (the IMU-only mode of models/roll_split.py)."""
@@ -114,20 +115,14 @@ def reference_step(kf, x, P, z, A, b, dt, nominal, rows):
     r = np.concatenate([np.full(4, r_s), r_c, [SPLIT_NOISE_RATIO * r_c[2]]]) / nominal
     if 6 in rows and not set(rows) & {0, 1, 2, 3}:
         rows = [*rows, 7]
-    P = P + q * dt * np.eye(4)
-    for i in rows:
-        h = H[i]
-        S = h @ P @ h + r[i]
-        K = P @ h / S
-        x = x + K * (y_all[i] - h @ x)
-        I_KH = np.eye(4) - np.outer(K, h)
-        P = I_KH @ P @ I_KH.T + r[i] * np.outer(K, K)
-    return x, P
+    return numpy_step(x, P, q, dt, H, y_all, r, rows)
 
 
 @HYPOTHESIS
 @given(faults=faults)
-def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(vehicle, base, kf, faults):
+def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(
+    vehicle, base, kf, numpy_step, faults
+):
     signals = with_faults(base, faults)
     estimate, P = kf.run_with_covariance(signals)
     assert np.isfinite(estimate.loads).all() and np.isfinite(estimate.std).all()
@@ -150,7 +145,7 @@ def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(vehicle, ba
     for k in range(1, len(signals)):
         rows = [i for i in range(7) if not flags[k] & skipped[i]]
         x, P_k = reference_step(
-            kf, estimate.loads[k - 1], P[k - 1], z[k], A[k], b[k], dt[k], nominal, rows
+            numpy_step, kf, estimate.loads[k - 1], P[k - 1], z[k], A[k], b[k], dt[k], nominal, rows
         )
         np.testing.assert_allclose(estimate.loads[k], x, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(P[k], P_k, rtol=1e-8, atol=1e-6)

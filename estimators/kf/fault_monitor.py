@@ -1,0 +1,254 @@
+r"""The filter step's sensor-fault monitor: detection and isolation, carried in ``m``.
+
+A travel channel that does not change for ``stuck_time`` while ``stuck_corners``
+other corners move is *stuck*; the parity residual :math:`r = b - A z` of the raw
+suspension loads (every model term the inputs allow, :func:`parity_model`),
+low-pass filtered, is matched against the signature of
+each channel (a travel fault :math:`f` in corner :math:`i` gives
+:math:`r = -A (\partial z / \partial d_i) f`, through the anti-roll bar
+also in the other wheel of the axle; an accelerometer bias :math:`g`
+gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
+its signature explains ``isolation_fraction`` of the residual energy and
+its estimated fault exceeds the limit (at least ``parity_spread_factor`` times
+the fault the residual's own spread looks like, :func:`parity_spread`) for
+``fault_confirm_time``
+(generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
+Engineering Systems*, 1998, ch. 5). An isolated channel is dropped from
+the updates until it has been clean for ``fault_clear_time``.
+
+Example
+-------
+>>> watch = monitor(m, u, valid, *parity_model(suspension, equilibrium, u, valid, p), dt, r_c, g)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from wheelload.estimators.kf.guard import FAULT_CHANNELS, GuardSettings
+from wheelload.estimators.kf.monitor_state import (
+    ANCHOR,
+    CLEAR,
+    D_PREV,
+    FAULT,
+    FROZEN,
+    JUMP,
+    MOVED,
+    PARITY_MEAN,
+    PARITY_VARIANCE,
+    PARITY_WEIGHT,
+    PERSIST,
+    RBAR,
+    REJECT,
+    SPREAD,
+)
+from wheelload.models import ModelParameters, gates_function
+from wheelload.models.inputs import (
+    INPUTS,
+    SPECIFIC_FORCE,
+    TRAVEL,
+    TRAVEL_RATE,
+    input_index,
+)
+
+#: The [model] switches in the parameter vector: on for the monitor's parity test.
+_TERM_SWITCHES = [k for k, name in enumerate(ModelParameters.names()) if name.startswith("term_")]
+
+
+def parity_model(suspension: ca.Function, equilibrium: ca.Function, u, valid, p):
+    r"""``(z, A, b, signatures)`` of the parity test, with every model term switched on.
+
+    The monitor checks the travels and the IMU against the vehicle's complete physics
+    (each term whose inputs are valid in the sample), whatever the vehicle file's
+    ``[model]`` switches choose for the estimator's updates: a model without the link
+    or road-frame terms (the paper's) leaves a parity residual of several hundred N
+    on a clean lap, which the signatures of the travel faults explain. ``u``: the
+    sanitised inputs, ``valid`` their validity, ``p`` the parameter vector.
+
+    Signatures in the parity space from the models' Jacobians: a travel fault moves
+    :math:`b - A z` by :math:`-A\,\partial z / \partial d`, an accelerometer fault by
+    :math:`\partial b / \partial a`.
+    """
+    p = ca.vertcat(*[1 if k in _TERM_SWITCHES else p[k] for k in range(p.shape[0])])
+    gates, _ = gates_function()(valid, p)
+    z = suspension(u, gates, p)
+    A, b = equilibrium(u, gates, p)
+    travel, acc = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
+    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+    u_d = with_entries(u, travel, d_sym)
+    u_acc = with_entries(u, acc, acc_sym)
+    d_now = ca.vertcat(*[u[k] for k in travel])
+    acc_now = ca.vertcat(*[u[k] for k in acc])
+    Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
+    B = ca.substitute(ca.jacobian(equilibrium(u_acc, gates, p)[1], acc_sym), acc_sym, acc_now)
+    return z, A, b, ca.horzcat(-ca.mtimes(A, Jd), B)
+
+
+def with_entries(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
+    """``u`` with the entries at ``index`` replaced by ``values``."""
+    entries = [u[k] for k in range(u.shape[0])]
+    for j, k in enumerate(index):
+        entries[k] = values[j]
+    return ca.vertcat(*entries)
+
+
+@dataclass(frozen=True)
+class MonitorOutput:
+    """Symbolic results of :func:`monitor`."""
+
+    m_next: ca.SX  # next monitor state
+    channel_ok: ca.SX  # (7,) 0 for an isolated channel (FAULT_CHANNELS order)
+    statistic: ca.SX  # (7,) test statistic, >= 1 where the channel's test fires
+    fault: ca.SX  # (7,) 1 while a channel is isolated
+    jump: ca.SX  # (4,) 1 while a travel that jumped faster than max_travel_rate is frozen
+
+
+def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> MonitorOutput:
+    r"""One sample of the fault monitor (module docstring).
+
+    ``valid`` (:data:`~wheelload.models.INPUTS`): inputs finite and plausible;
+    ``z`` (4) raw suspension loads; ``A``, ``b`` the equilibrium (:func:`parity_model`);
+    ``signatures`` (3 x 7): the change
+    of :math:`b - A z` per unit fault of each channel, :math:`-A\,\partial
+    z / \partial d` for the travels [per m] and :math:`\partial b /
+    \partial a` for the accelerometer [per m/s^2]; ``dt`` 0 for a rejected
+    step; ``r_c`` the constraint noise densities (the residual metric
+    :math:`W = \mathrm{diag}(1/r_c)`).
+    """
+    d = ca.vertcat(*[u[INPUTS.index(name)] for name in TRAVEL])
+    d_prev, frozen, rbar = m[D_PREV], m[FROZEN], m[RBAR]
+    persist, clear, fault = m[PERSIST], m[CLEAR], m[FAULT]
+    # Stuck / dead travel channels: no change at all while another corner moves.
+    d_valid = [valid[INPUTS.index(name)] * (dt > 0) for name in TRAVEL]
+    changed = [d_valid[i] * (d[i] != d_prev[i]) for i in range(4)]
+    frozen_next = ca.vertcat(
+        *[ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * dt) for i in range(4)]
+    )
+    d_prev_next = ca.vertcat(*[ca.if_else(d_valid[i], d[i], d_prev[i]) for i in range(4)])
+    # A corner "moves" when its travel leaves +-stuck_motion of its anchor (then re-anchored):
+    # a quantised sensor on a still body flickers by a step or two, which is no evidence.
+    anchor, moved = m[ANCHOR], m[MOVED]
+    far = [d_valid[i] * (ca.fabs(d[i] - anchor[i]) > g.stuck_motion) for i in range(4)]
+    anchor_next = ca.vertcat(*[ca.if_else(far[i], d[i], anchor[i]) for i in range(4)])
+    moved_next = ca.vertcat(*[ca.if_else(far[i], 0, moved[i] + dt) for i in range(4)])
+    # A reading that jumped faster than max_travel_rate (a dead sensor falling to its rail)
+    # and has not changed since is dropped at once, and is stuck after stuck_time even
+    # when the body is still.
+    jump = [
+        ca.if_else(changed[i], ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt, m[JUMP][i])
+        for i in range(4)
+    ]
+    # The body moves for corner i when ``stuck_corners`` other corners moved within
+    # stuck_time: one other corner alone (a spike, a bad sample) is no evidence that i
+    # should have changed too.
+    stuck = []
+    for i in range(4):
+        movers, others_changing = 0, 0
+        for j in range(4):
+            if j != i:
+                movers = movers + (moved_next[j] < g.stuck_time)
+                others_changing = ca.logic_or(others_changing, frozen_next[j] < 0.5 * g.stuck_time)
+        others_moving = ca.logic_or(jump[i], movers >= g.stuck_corners)
+        moving = ca.logic_and(frozen_next[i] >= g.stuck_time, others_moving)
+        still = ca.logic_and(frozen_next[i] >= g.stuck_time_still, others_changing)
+        stuck.append(ca.logic_or(moving, still))
+    # Parity residual of the raw suspension loads, low-pass filtered.
+    all_valid = 1
+    for name in TRAVEL + TRAVEL_RATE + SPECIFIC_FORCE + ("vx",):
+        all_valid = all_valid * valid[INPUTS.index(name)]
+    alpha = all_valid * dt / (g.parity_time_constant + dt)
+    r = b - ca.mtimes(A, z)
+    rbar_next = rbar + alpha * (r - rbar)
+    # W = diag(1/r_c) up to a scale (the tests are scale-free): the products of the
+    # other two densities, so that no division is repeated at every use.
+    w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
+    energy = ca.sum1(w * rbar_next * rbar_next)
+    spread, *spread_next = parity_spread(m, rbar_next, all_valid * dt, m[FAULT], g)
+    limits = [g.travel_fault] * 4 + [g.ax_fault, g.ay_fault, g.az_fault]
+    inverse_stuck_time = 1 / g.stuck_time
+    statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
+    for j in range(7):
+        s = signatures[:, j]
+        norm = ca.sum1(w * s * s)
+        projection = ca.sum1(w * s * rbar_next)
+        # A channel without signature (norm 0) can never be isolated; no 0/0.
+        inverse_norm = 1 / ca.if_else(norm > 0, norm, 1) * (norm > 0)
+        magnitude = projection * inverse_norm
+        isolated = projection * magnitude > g.isolation_fraction * energy
+        # The fault the model's own clean residual would look like on this channel:
+        # sqrt(sum (w s)^2 spread) / (s' W s), the spread of the magnitude estimate.
+        floor_j = ca.sqrt(ca.sum1(w * w * s * s * spread)) * inverse_norm
+        limit_j = ca.fmax(limits[j], g.parity_spread_factor * floor_j)
+        candidate = ca.logic_and(ca.fabs(magnitude) > limit_j, isolated)
+        persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)
+        parity_fault = persist_j >= g.fault_confirm_time
+        level = ca.fabs(magnitude) / limit_j * isolated
+        if j < 4:
+            now = ca.logic_or(stuck[j], parity_fault)
+            level = ca.fmax(level, frozen_next[j] * inverse_stuck_time * stuck[j])
+        else:
+            now = parity_fault
+        clear_j = ca.if_else(now, 0, clear[j] + dt)
+        fault_j = ca.logic_or(now, ca.logic_and(fault[j], clear_j < g.fault_clear_time))
+        statistic.append(level)
+        persist_next.append(persist_j)
+        clear_next.append(clear_j)
+        fault_next.append(fault_j)
+        active.append((1 - fault_j) * (1 - jump[j]) if j < 4 else 1 - fault_j)
+    m_next = ca.vertcat(
+        d_prev_next,
+        frozen_next,
+        rbar_next,
+        *persist_next,
+        *clear_next,
+        *fault_next,
+        m[REJECT],
+        m[SPREAD],
+        anchor_next,
+        moved_next,
+        *jump,
+        *spread_next,
+    )
+    return MonitorOutput(
+        m_next,
+        ca.vertcat(*active),
+        ca.vertcat(*statistic),
+        ca.vertcat(*fault_next),
+        ca.vertcat(*jump),
+    )
+
+
+def parity_spread(m, rbar, dt, fault, g: GuardSettings):
+    r"""The model's own parity spread per row; and the next monitor slots it needs.
+
+    .. math:: w \leftarrow w + \beta (1 - w), \quad
+        \mu \leftarrow \mu + \beta (\bar r - \mu), \quad
+        v \leftarrow v + \beta \big((\bar r - \mu / w)^2 - v\big), \quad
+        \sigma_r^2 = v / w, \quad \beta = \Delta t / (\tau_q + \Delta t)
+
+    the exponentially weighted variance of the low-passed parity residual
+    :math:`\bar r` about its own mean over ``parity_spread_time``
+    (:math:`\tau_q`), bias-corrected by the weight :math:`w` (0 at the start, so
+    the first samples count in full). It is held while any channel is isolated
+    (a fault is not learnt as model mismatch). The variance, not the mean square:
+    a steady offset of the model says nothing about how far the residual wanders
+    on clean driving. A model that explains less of the motion (the paper's,
+    without links or road frame) has a larger spread, hence larger effective fault
+    limits (:func:`monitor`). ``dt`` is 0 for a sample whose residual is not updated.
+
+    Returns ``(spread, mean, variance, weight)``: :math:`\sigma_r^2` (3) and the next
+    :math:`\mu, v, w`.
+    """
+    mean, variance, weight = m[PARITY_MEAN], m[PARITY_VARIANCE], m[PARITY_WEIGHT]
+    isolated = 0
+    for j in range(len(FAULT_CHANNELS)):
+        isolated = ca.logic_or(isolated, fault[j])
+    beta = (1 - isolated) * dt / (g.parity_spread_time + dt)
+    weight_next = weight + beta * (1 - weight)
+    inverse_weight = 1 / ca.if_else(weight_next > 0, weight_next, 1)
+    mean_next = mean + beta * (rbar - mean)
+    deviation = rbar - mean_next * inverse_weight
+    variance_next = variance + beta * (deviation * deviation - variance)
+    return variance_next * inverse_weight, mean_next, variance_next, weight_next

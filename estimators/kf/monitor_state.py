@@ -1,0 +1,44 @@
+"""Layout of the filter step's carried guard state ``m`` (fault monitor, gate, held inputs).
+
+One vector carried from sample to sample by the step (input ``m``, output ``m_next``): the
+fault monitor's slots (:mod:`.fault_monitor`), the innovation gate's rejection times and
+spreads (:mod:`.innovation_gate`), then each input's held value and hold time, the rate
+derivatives' settle times (:mod:`.plausibility`) and the range of the vertical row
+(:mod:`.limits`). It starts at zero.
+
+Example
+-------
+>>> m = np.zeros(MONITOR_SIZE)
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from wheelload.models.inputs import BODY_RATES, INPUTS
+
+# Layout of the monitor state ``m``.
+D_PREV, FROZEN, RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
+PERSIST, CLEAR, FAULT, REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
+SPREAD, ANCHOR, MOVED, JUMP = slice(39, 46), slice(46, 50), slice(50, 54), slice(54, 58)
+PARITY_MEAN, PARITY_VARIANCE, PARITY_WEIGHT = slice(58, 61), slice(61, 64), slice(64, 65)
+#: Slots of the fault monitor proper; the held inputs follow (:func:`hold_inputs`).
+MONITOR_END = 65
+# Each input's last valid value, its remaining hold time, and each rate derivative's
+# remaining settle time after a gated rate.
+HELD = slice(MONITOR_END, MONITOR_END + len(INPUTS))
+CREDIT = slice(HELD.stop, HELD.stop + len(INPUTS))
+SETTLE = slice(CREDIT.stop, CREDIT.stop + len(BODY_RATES))
+# Lowest and highest vertical-row b seen so far, less the weight (0 at the start).
+TOTAL = slice(SETTLE.stop, SETTLE.stop + 2)
+MONITOR_SIZE = TOTAL.stop
+
+
+def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.SX) -> ca.SX:
+    """The fault monitor's next state, then the held inputs, settle times and total range."""
+    return ca.vertcat(m_next[0:MONITOR_END], hold_state, settle, total)
+
+
+def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:
+    """The monitor state with the rows' rejection times and innovation spreads replaced."""
+    return ca.vertcat(m_next[0 : REJECT.start], times, spread, m_next[SPREAD.stop :])

@@ -1,0 +1,90 @@
+r"""The two-stage KF's tuning vector: noise densities, nominal interval, guard settings.
+
+Tuning is per second (white-noise densities): :math:`Q = q\,dt\,I`,
+:math:`R_s = r_s/\Delta t_{nom}\,I`, :math:`R_c = \mathrm{diag}(r_c)/\Delta t_{nom}` with the
+log's nominal (median) interval (:func:`nominal_interval`), so that a gap grows the covariance
+and never shrinks the measurement noise (Siegloff & Choi §III, eq. 19-25). The vector is a
+runtime input of the step Function and of the generated C, in :data:`TUNING` order.
+
+Example
+-------
+>>> tuning = tuning_vector(load_vehicle("sports_car.toml"), nominal_interval(signals.t))
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
+from wheelload.models import Vehicle
+from wheelload.models.input_validity import MAX_INTERVAL
+from wheelload.models.measurement_noise import INPUT_DENSITIES
+
+#: Order of the tuning vector.
+TUNING = (
+    "process_noise_density",
+    "suspension_noise_density",
+    "constraint_noise_vertical",
+    "constraint_noise_pitch",
+    "constraint_noise_roll",
+    "sample_interval",
+    *GuardSettings.names(),
+    *INPUT_DENSITIES,
+)
+#: The filter's constant noise densities: the first entries of the tuning vector (vehicle
+#: file [filter]); the input-dependent ones (default 0) are :data:`INPUT_DENSITIES`, last.
+NOISE_DENSITIES = TUNING[:5]
+#: Every density ``wheelload tune`` fits: the constant ones, then the input-dependent ones.
+TUNED_DENSITIES = NOISE_DENSITIES + INPUT_DENSITIES
+#: Position of each entry of the tuning vector.
+TUNING_INDEX = {name: k for k, name in enumerate(TUNING)}
+#: Nominal sample interval [s] where no log gives one (100 Hz).
+DEFAULT_SAMPLE_INTERVAL = 0.01
+#: The guard settings' entries of the tuning vector (:meth:`GuardSettings.names` order).
+_GUARD_START = TUNING_INDEX["sample_interval"] + 1
+GUARD_TUNING = slice(_GUARD_START, _GUARD_START + len(GuardSettings.names()))
+_VARIANCE_SCALE = TUNING_INDEX["innovation_variance_scale"]
+
+
+def tuning_vector(
+    vehicle: Vehicle,
+    sample_interval: float = DEFAULT_SAMPLE_INTERVAL,
+    settings: GuardSettings | None = None,
+) -> np.ndarray:
+    r"""The filter tuning in :data:`TUNING` order: the vehicle file's, interval, guards.
+
+    ``sample_interval`` is the log's nominal interval [s]: the measurement
+    noise is :math:`R = r / \Delta t_{nominal}` whatever the gap before a
+    sample. ``settings``: default the vehicle's
+    (:func:`~wheelload.estimators.kf.guard.guard_settings_for`).
+    """
+    settings = guard_settings_for(vehicle) if settings is None else settings
+    tuning = vehicle.filter
+    if not 0.0 < sample_interval < MAX_INTERVAL:
+        raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
+    vector = np.array(
+        [
+            tuning.process_noise_density,
+            tuning.suspension_noise_density,
+            *tuning.constraint_noise_density,
+            sample_interval,
+            *settings.vector(),
+            *tuning.input_densities(),
+        ]
+    )
+    # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate's S.
+    vector[_VARIANCE_SCALE] *= tuning.gate_scale
+    return vector
+
+
+def noise_densities(vehicle: Vehicle) -> np.ndarray:
+    """The vehicle file's noise densities in :data:`TUNED_DENSITIES` order (constant, then
+    input-dependent)."""
+    return tuning_vector(vehicle)[[TUNING_INDEX[name] for name in TUNED_DENSITIES]]
+
+
+def nominal_interval(t: np.ndarray) -> float:
+    """Median of the positive finite sample intervals of a log (default if none)."""
+    dt = np.diff(np.asarray(t, float))
+    dt = dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)]
+    return float(np.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL
