@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.estimators import Signals
-from wheelload.estimators.mhe.estimator import MheSettings, MovingHorizonEstimator, _Workspace
+from wheelload.estimators import MheSettings, MovingHorizonEstimator, Signals
+from wheelload.estimators.mhe.estimator import _Workspace
 from wheelload.estimators.mhe.ring import INFINITY
 from wheelload.models import Vehicle
 

@@ -24,6 +24,7 @@ from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
 from wheelload.studies.commands.options import add_allow_unusual
@@ -161,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
             args.repeats,
             args.allow_unusual,
         )
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     signals = synthetic_log(
         vehicle, slalom(duration=30.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
     )

@@ -25,12 +25,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.kf.guard import GRAVITY
 from wheelload.estimators.logs.signals import derive_velocities, signals_from_frame
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.estimators.registry import build
+from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.experiments.faults import hostile
 
@@ -78,8 +78,8 @@ def _c_kf(vehicle_path, frame, folder: Path, precision: Precision) -> hostile.Ho
 
 
 def _c_mhe(vehicle, vehicle_path, signals, folder: Path) -> hostile.HostileSummary:
+    from wheelload.estimators import Constraint, MheSettings
     from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_settings, write_inputs
-    from wheelload.estimators.mhe.estimator import Constraint, MheSettings
 
     settings = embedded_settings(MheSettings(horizon=10, constraint=Constraint.SOFT, bounded=True))
     dt = float(np.median(np.diff(signals.t)))
@@ -114,7 +114,7 @@ def _ranges(vehicle_paths) -> None:
           " samples, flagged")  # fmt: skip
     worst = np.zeros(3)
     for path in vehicle_paths:
-        kf = TwoStageKF(load_vehicle(path))
+        kf = build("kf", load_vehicle(path))
         for name in SCENARIOS:
             for roughness in (None, "D"):
                 options = Options(roughness=roughness) if roughness else Options()
@@ -135,7 +135,7 @@ def _ranges(vehicle_paths) -> None:
 def _envelope(vehicle, runs: int) -> None:
     from wheelload.studies.drive.synthetic import slalom, synthetic_log
 
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     base = synthetic_log(vehicle, slalom(duration=3.0), seed=1)
     seeds = np.random.SeedSequence().generate_state(runs)
     excess = [
@@ -168,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
         bad_signals = hostile.with_inputs(signals, bad)
         start = time.perf_counter()
         rows = []
-        estimate = TwoStageKF(vehicle).run(bad_signals)
+        estimate = build("kf", vehicle).run(bad_signals)
         rows.append(hostile.summarise("KF Python", estimate.loads, estimate.std,
                                       estimate.flags, None))  # fmt: skip
         with tempfile.TemporaryDirectory(prefix="wheelload-hostile-") as folder:

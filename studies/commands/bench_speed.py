@@ -38,6 +38,7 @@ from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.bench_codegen import cpu_mhz, filterpy_step
 from wheelload.studies.commands.c_step_bounds import compiled_mix, measured_clock_mhz
@@ -170,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--logs >= 1 and --log-samples >= 100 are needed")
     vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     signals = synthetic_log(
         vehicle, slalom(duration=30.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
     )

@@ -13,17 +13,10 @@ import argparse
 import enum
 from pathlib import Path
 
+from wheelload.estimators import Arrival, BiasStates, Constraint, Loss, MheSettings, ResidualLoss
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
 from wheelload.estimators.logs.output_files import check_output_folder
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    BiasStates,
-    Constraint,
-    Loss,
-    MheSettings,
-    ResidualLoss,
-)
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
 

@@ -12,8 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators import read_log
-from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators import SuspensionModel, read_log
 from wheelload.models import load_vehicle
 from wheelload.studies.commands.options import add_suspension_option
 from wheelload.studies.pipeline.comparison import (

@@ -17,7 +17,7 @@ def add_allow_unusual(parser: argparse.ArgumentParser) -> None:
 
 def add_suspension_option(parser: argparse.ArgumentParser) -> None:
     """``--suspension full|paper``: the vehicle model of the family methods."""
-    from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+    from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 
     parser.add_argument(
         "--suspension",

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
 from wheelload.studies.pipeline.batch import expand_logs
@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     frame = pd.read_parquet(path) if path.suffix != ".csv" else pd.read_csv(path, comment="#")
     table = sensor_set_table(frame, vehicle, Path(path).name)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
-    default = float(TwoStageKF(vehicle).parameters.roll_split_front)
+    default = float(build("kf", vehicle).parameters.roll_split_front)
     truth = reference_split(frame, vehicle)
     print(
         f"\nroll split: default {default:.4f} (springs, bars and roll centres), "

@@ -6,7 +6,7 @@ import time
 from collections.abc import Callable
 from functools import partial
 
-from wheelload.estimators.family.suspension_model import SuspensionModel
+from wheelload.estimators import SuspensionModel
 from wheelload.studies.experiments import (
     ablation,
     cheon_structural,

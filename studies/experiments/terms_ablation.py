@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
+from wheelload.estimators.registry import build
 from wheelload.models import ModelTerms, Vehicle, load_vehicle
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.scenarios import Options
@@ -59,7 +59,7 @@ def ablation(
             result = run_scenario(name, path, options=options, noise=noise)
             signals = signals_from_frame(result.log, source=f"{vehicle.name}/{name}")
             for label, variant in configurations(vehicle).items():
-                estimate = TwoStageKF(variant).run(signals)
+                estimate = build("kf", variant).run(signals)
                 metrics = pooled_metrics(estimate.loads, signals.reference)
                 rows.append(
                     {"vehicle": vehicle.name, "scenario": name, "configuration": label,

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.registry import MethodInfo, build, method
 from wheelload.estimators.result import Estimate
@@ -87,7 +87,7 @@ def compare_methods(
 
     ``suspension``: the vehicle model of the family methods (default the KF's
     full model, so that the table compares estimators on one model;
-    :mod:`wheelload.estimators.family.suspension_model`).
+    :class:`~wheelload.estimators.SuspensionModel`).
     """
     if signals.reference is None:
         raise ValueError(

@@ -17,7 +17,7 @@ from wheelload.estimators.logs.readers.erg import read_erg_channels, write_erg
 from wheelload.estimators.logs.signals import read_log, travel_quantum
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 WHEELS = ("fl", "fr", "rl", "rr")
 FLOATS = ("float16", "float32", "float64")

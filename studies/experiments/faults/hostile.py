@@ -140,12 +140,13 @@ def with_inputs(signals, frame: pd.DataFrame):
 
 def white_noise_signals(vehicle, base, seed: int, settings=None):
     """``base`` with travels, rates, specific force and speed white noise over their whole
-    plausible ranges (:class:`~wheelload.estimators.kf.guard.GuardSettings`), uniform.
+    plausible ranges (:class:`~wheelload.estimators.GuardSettings`), uniform.
 
     Every sample passes the plausibility check; together they are nothing a car
     does, which is what the envelope property is about.
     """
-    from wheelload.estimators.kf.guard import GRAVITY, GuardSettings
+    from wheelload.estimators import GuardSettings
+    from wheelload.models import GRAVITY
 
     g = settings or GuardSettings()
     rng = np.random.default_rng(seed)

@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.registry import method, methods
 from wheelload.studies.experiments.runs.cache import cache_key
 from wheelload.studies.experiments.runs.context import Context

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.family.suspension_model import DEFAULT_MODEL, SuspensionModel
+from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models.vehicle import Vehicle, vehicle_from_dict

@@ -20,7 +20,7 @@ from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build
 from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_settings, write_inputs
 from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.models import example_vehicle_path
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 CROSS = "arm-linux-gnueabihf-gcc"
 MISSING = [tool for tool in (CROSS, "qemu-arm", "gcc") if shutil.which(tool) is None]

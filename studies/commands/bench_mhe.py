@@ -1,10 +1,7 @@
-"""``wheelload study mhe-vs-kf`` and ``wheelload bench mhe``.
+"""``wheelload bench mhe``: the MHE's time per sample beside the KF's.
 
-``study mhe-vs-kf`` scores the KF, projection KF and MHE family on logs
-(``--logs``) or on plant scenarios it simulates first (``--scenarios``).
-``bench mhe`` prints the MHE's time per sample beside the KF's, in the same
-run, from Python and (when a C compiler is found) from the generated C.
-The embedded MHE's C is written by ``wheelload codegen --estimator mhe``.
+In the same run, from Python and (when a C compiler is found) from the
+generated C. The embedded MHE's C is written by ``wheelload codegen --estimator mhe``.
 """
 
 from __future__ import annotations
@@ -17,82 +14,19 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import TwoStageKF, read_log
-from wheelload.estimators.logs.output_files import atomic_write, check_outputs
-from wheelload.estimators.mhe.estimator import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators import (
+    Constraint,
+    MheSettings,
+    MovingHorizonEstimator,
+)
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
-from wheelload.studies.experiments import catalog as experiments
-from wheelload.studies.experiments import command as experiment_command
-from wheelload.studies.experiments.faults.sensor_faults import Fault
 from wheelload.studies.experiments.mhe_vs_kf import (
-    HORIZONS,
-    PLAIN_KF,
-    StudySettings,
-    against_kf,
-    mhe_vs_kf,
     robust_candidates,
-    robust_sweep,
     step_times,
 )
-
-STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
-
-
-def register(subparsers: argparse._SubParsersAction) -> None:
-    study = subparsers.add_parser("study", help="run a comparison study and print its table")
-    study.add_argument(
-        "name",
-        choices=["mhe-vs-kf", *experiments.NAMES],
-        help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
-    )
-    study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
-    study.add_argument("--channels", help="channel map TOML for --logs (wheelload channels)")
-    study.add_argument(
-        "--scenarios",
-        nargs="*",
-        default=None,
-        help="simulate these plant scenarios first (no names: "
-        + ", ".join(STUDY_SCENARIOS) + ", those that exist)",
-    )  # fmt: skip
-    study.add_argument(
-        "--sweep",
-        choices=["robust", "equivalence"],
-        default="robust",
-        help="robust (default): robust losses, bias states, lagged output and the RTS smoother "
-        "on clean and faulted logs; equivalence: KF, projection KF and the plain MHE family",
-    )
-    study.add_argument(
-        "--faults",
-        nargs="+",
-        choices=[fault.value for fault in Fault],
-        default=[fault.value for fault in Fault],
-        help="robust sweep: the faults injected (default: all)",
-    )
-    study.add_argument("--horizon", type=int, default=10, help="robust sweep: window length")
-    study.add_argument(
-        "--quick",
-        action="store_true",
-        help="short segments, few trials; mhe-vs-kf robust sweep: the KF with and without its "
-        "guards, RTS, the lagged and the Huber 0.5σ MHE only",
-    )
-    study.add_argument(
-        "--horizons", type=int, nargs="+", default=list(HORIZONS), help="equivalence sweep"
-    )
-    study.add_argument(
-        "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
-    )
-    study.add_argument(
-        "--force", action="store_true", help="replace existing output files (never an input)"
-    )
-    study.add_argument(
-        "--skip-wiring-checks", action="store_true", help="accept logs whose wiring looks wrong"
-    )
-    study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    add_allow_unusual(study)
-    experiment_command.add_arguments(study)
-    study.set_defaults(handler=run_study)
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -112,105 +46,13 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     bench.set_defaults(handler=run_bench)
 
 
-def _simulate(
-    names: list[str], folder: Path, vehicle_path: Path, allow_unusual: bool
-) -> list[Path]:
-    """Simulate the scenarios on the plant with the study's vehicle; the log paths."""
-    from wheelload.studies.drive.scenario_log import write_log
-    from wheelload.studies.drive.scenario_runner import run_scenario
-    from wheelload.studies.drive.scenarios import SCENARIOS
-
-    names = names or [name for name in STUDY_SCENARIOS if name in SCENARIOS]
-    unknown = [name for name in names if name not in SCENARIOS]
-    if unknown:
-        raise ValueError(f"unknown scenario '{unknown[0]}'; choose from {', '.join(SCENARIOS)}")
-    paths = []
-    for name in names:
-        result = run_scenario(name, vehicle_path, allow_unusual=allow_unusual)
-        path = folder / f"{name}.parquet"
-        write_log(result.log, path, result.metadata)
-        print(f"{name}: {len(result.log)} samples simulated")
-        paths.append(path)
-    return paths
-
-
-def run_study(args: argparse.Namespace) -> int:
-    if args.name != "mhe-vs-kf":
-        return experiment_command.run(args)
-    vehicle_path = Path(args.vehicle or example_vehicle_path())
-    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    paths = [Path(p) for p in args.logs]
-    given = set(paths)
-    out = Path(args.out or "mhe-vs-kf")
-    second = (
-        out.with_name(out.name + "-vs-kf.csv")
-        if args.sweep == "robust"
-        else out.with_suffix(".png")
-    )
-    outputs = [out.with_suffix(".csv"), second]
-    check_outputs(outputs, [*paths, vehicle_path], force=args.force)
-    with tempfile.TemporaryDirectory() as folder:
-        if args.scenarios is not None:
-            paths += _simulate(args.scenarios, Path(folder), vehicle_path, args.allow_unusual)
-        if not paths:
-            raise ValueError("give --logs or --scenarios")
-        logs = [
-            read_log(
-                path,
-                channels=args.channels if path in given else None,
-                wiring_checks=not args.skip_wiring_checks,
-            )
-            for path in paths
-        ]
-    if args.sweep == "robust":
-        return _robust(args, logs, paths, vehicle)
-    table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
-    from wheelload.studies.experiments.mhe_vs_kf import plot_accuracy_against_time
-
-    with atomic_write(outputs[0], replace=args.force) as temporary:
-        table.to_csv(temporary)
-    with atomic_write(outputs[1], replace=args.force) as temporary:
-        plot_accuracy_against_time(table, temporary)
-    print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
-    print(table.to_string(float_format=lambda v: f"{v:.1f}"))
-    print(f"written {out.with_suffix('.csv')} and {out.with_suffix('.png')}")
-    return 0
-
-
-def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
-    """The robust sweep: RMSE table, change against the KF, written as CSV."""
-    if args.horizon < 2:
-        raise ValueError("--horizon must be >= 2 for the robust sweep (the lagged output)")
-    faults = tuple(Fault(name) for name in args.faults)
-    candidates = robust_candidates(args.horizon, quick=args.quick)
-    table = robust_sweep(logs, vehicle, faults, candidates)
-    change = against_kf(table, faults)
-    out = Path(args.out or "mhe-vs-kf")
-    for frame, path in (
-        (table, out.with_suffix(".csv")),
-        (change, out.with_name(out.name + "-vs-kf.csv")),
-    ):
-        with atomic_write(path, replace=args.force) as temporary:
-            frame.to_csv(temporary)
-    print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
-    print("pooled RMSE [N] per injected fault (reference: the clean log's loads)")
-    print(table.to_string(float_format=lambda v: f"{v:.1f}"))
-    print("change against the two-stage KF (with its guards) on the same fault [%]")
-    print(change.to_string())
-    if PLAIN_KF in table.index:
-        print("change against the plain KF (no guards) on the same fault [%]")
-        print(against_kf(table, faults, PLAIN_KF).to_string())
-    print(f"written {out.with_suffix('.csv')} and {out.with_name(out.name + '-vs-kf.csv')}")
-    return 0
-
-
 def run_bench(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle or example_vehicle_path())
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     duration = args.samples / 100.0
     signals = synthetic_log(vehicle, slalom(duration=duration), noise=SensorNoise(
         acceleration=0.05, travel=0.0003), spring_error=0.08)  # fmt: skip
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     kf.run(signals.slice(0, 10))
     start = time.perf_counter()
     kf.run(signals)
