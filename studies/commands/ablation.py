@@ -1,4 +1,7 @@
-"""``wheelload ablation``: each model term on and off, both bundled vehicles, every scenario."""
+"""``wheelload ablation``: each model term on and off, both bundled vehicles, every scenario.
+
+The study is :mod:`~wheelload.studies.experiments.model_terms_ablation`.
+"""
 
 from __future__ import annotations
 
@@ -6,16 +9,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from wheelload.models import example_vehicle_path
 from wheelload.models.files.temporaries import replacing
 from wheelload.studies.drive.scenarios import SCENARIOS, Options
-from wheelload.studies.experiments.terms_ablation import ALL, PAPER, TERMS, ablation, wide_table
-
-
-def bundled_vehicles() -> list[Path]:
-    """The bundled sports car and SUV."""
-    sports = example_vehicle_path()
-    return [sports, sports.with_name("suv.toml")]
+from wheelload.studies.experiments.model_terms_ablation import (
+    ablation,
+    bundled_vehicles,
+    label_groups,
+    wide_table,
+)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -52,10 +53,8 @@ def run(args: argparse.Namespace) -> int:
         paths, scenarios, options, noise=args.noise,
         progress=lambda text: print(text, file=sys.stderr, flush=True),
     )  # fmt: skip
-    alone = [PAPER, *(f"+{term}" for term in TERMS), ALL]
-    but = [ALL, *(f"-{term}" for term in TERMS)]
     for vehicle in dict.fromkeys(table["vehicle"]):
-        for title, labels in (("each term alone", alone), ("every term but one", but)):
+        for title, labels in label_groups().items():
             print(f"\n{vehicle}: pooled RMSE / Max [N], {title}")
             print(wide_table(table, vehicle, labels).to_string())
     if out is not None:
