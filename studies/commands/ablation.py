@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
+from wheelload.studies.commands.options import command_parser
 from wheelload.studies.drive.scenarios import SCENARIOS, Options
 from wheelload.studies.experiments.model_terms_ablation import (
     ablation,
@@ -20,10 +21,11 @@ from wheelload.studies.experiments.model_terms_ablation import (
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
+    parser = command_parser(
+        subparsers,
         "ablation",
-        help="pooled RMSE / Max of the KF with each model term on and off",
-        description=__doc__.splitlines()[0],
+        "pooled RMSE / Max of the KF with each model term on and off",
+        __doc__,
     )
     parser.add_argument(
         "--vehicle", action="append", help="vehicle file (repeatable; default: both bundled)"

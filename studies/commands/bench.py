@@ -17,7 +17,7 @@ from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import joint_filter
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.commands.options import add_vehicle_file_options
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
@@ -46,8 +46,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=20_000,
         help="samples for the per-sample Python loops (default 2e4)",
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    add_allow_unusual(parser)
+    add_vehicle_file_options(parser)
     parser.set_defaults(handler=run)
     for module in BENCHMARKS:
         importlib.import_module(module).register_bench(benchmarks)

@@ -16,14 +16,14 @@ from pathlib import Path
 
 from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
 from wheelload.estimators.registry import build
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models import load_vehicle
 from wheelload.studies.bench.step_timing import (
     c_step_ns,
     cpu_mhz,
     filterpy_step_ns,
     python_step_ns,
 )
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 TARGET_NS = 150.0
@@ -37,7 +37,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "codegen", help="generated C step (double, float) against Python and filterpy"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
     parser.add_argument("--repeats", type=int, default=51, help="C repeats (median taken)")
     parser.add_argument("--python-samples", type=int, default=2000, help="Python steps timed")
@@ -46,7 +46,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle_path = vehicle_file(args)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     with tempfile.TemporaryDirectory(prefix="wheelload_bench_") as folder:
         c_double, c_double_min, library = c_step_ns(

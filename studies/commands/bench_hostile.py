@@ -31,7 +31,7 @@ from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build
 from wheelload.estimators.logs.signals import derive_velocities, signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option
 from wheelload.studies.experiments.faults import hostile
 
 SCENARIOS = (
@@ -45,7 +45,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "hostile", help="KF Python / C double / C float and MHE C on hostile inputs"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument("--scenario", default="iso-dlc", help="plant scenario (default iso-dlc)")
     parser.add_argument(
         "--fractions", default="0.001,0.01,0.1", help="shares of corrupted samples (0.1-10 %%)"

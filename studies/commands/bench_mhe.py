@@ -20,8 +20,11 @@ from wheelload.estimators import (
     MovingHorizonEstimator,
 )
 from wheelload.estimators.registry import build
-from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.models import load_vehicle
+from wheelload.studies.commands.options import (
+    add_vehicle_file_options,
+    vehicle_file,
+)
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 from wheelload.studies.experiments.mhe_vs_kf import (
     robust_candidates,
@@ -41,13 +44,12 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         default=3,
         help="runs of each generated C and of the window against bare OSQP (default 3)",
     )
-    bench.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    add_allow_unusual(bench)
+    add_vehicle_file_options(bench)
     bench.set_defaults(handler=run_bench)
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    vehicle_path = Path(args.vehicle or example_vehicle_path())
+    vehicle_path = vehicle_file(args)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     duration = args.samples / 100.0
     signals = synthetic_log(vehicle, slalom(duration=duration), noise=SensorNoise(

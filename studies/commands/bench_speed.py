@@ -34,7 +34,7 @@ from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions
 from wheelload.estimators.registry import build
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models import load_vehicle
 from wheelload.studies.bench.c_step_bounds import compiled_mix, measured_clock_mhz
 from wheelload.studies.bench.step_timing import (
     batched_against_run,
@@ -46,7 +46,7 @@ from wheelload.studies.bench.step_timing import (
     selftest_ns,
     spread,
 )
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 STEP_TARGET = 10.0  # µs per TwoStageKF.step
@@ -63,7 +63,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "speed", help="step vs filterpy, batched C vs single C step, C step vs its chain bound"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
     parser.add_argument(
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--repeats >= 1, --steps >= 10 and --samples >= 100 are needed")
     if args.logs < 1 or args.log_samples < 100:
         raise ValueError("--logs >= 1 and --log-samples >= 100 are needed")
-    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle_path = vehicle_file(args)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     kf = build("kf", vehicle)
     signals = synthetic_log(

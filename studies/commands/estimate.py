@@ -17,8 +17,11 @@ from pathlib import Path
 from wheelload.estimators import SuspensionModel
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
-from wheelload.models import example_vehicle_path
-from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
+from wheelload.studies.commands.options import (
+    add_allow_unusual,
+    add_suspension_option,
+    vehicle_file,
+)
 from wheelload.studies.pipeline.batch import (
     SUMMARY_NAME,
     EstimateSettings,
@@ -116,7 +119,7 @@ def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
 def run(args: argparse.Namespace) -> int:
     if args.example:
         logs = args.log or [str(example_log_path())]
-        vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+        vehicle_path = vehicle_file(args)
     else:
         if not args.log or not args.vehicle:
             raise ValueError("give a LOG and --vehicle FILE, or --example")

@@ -24,6 +24,7 @@ from wheelload.estimators.identification.vehicle_writer import (
     write_vehicle_text,
 )
 from wheelload.models import load_vehicle
+from wheelload.studies.commands.options import command_parser
 from wheelload.studies.pipeline.identification import identify_vehicle
 
 REPORT_FILES = (
@@ -37,10 +38,11 @@ REPORT_FILES = (
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    parser = command_parser(
+        subparsers,
         "identify",
-        help="identify spring, damper and anti-roll-bar maps from rig data and drive logs",
-        description=__doc__.splitlines()[0],
+        "identify spring, damper and anti-roll-bar maps from rig data and drive logs",
+        __doc__,
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
     parser.add_argument("--out", required=True, help="new vehicle file (.toml)")

@@ -18,7 +18,11 @@ from pathlib import Path
 from wheelload.estimators import SuspensionModel, read_log
 from wheelload.estimators.logs.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
+from wheelload.studies.commands.options import (
+    add_suspension_option,
+    add_vehicle_file_options,
+    vehicle_file,
+)
 from wheelload.studies.experiments import catalog as experiments
 from wheelload.studies.experiments.faults.sensor_faults import Fault
 from wheelload.studies.experiments.mhe_vs_kf import (
@@ -86,8 +90,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument(
         "--skip-wiring-checks", action="store_true", help="accept logs whose wiring looks wrong"
     )
-    study.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    add_allow_unusual(study)
+    add_vehicle_file_options(study)
     # the experiments' own options (--quick, --force and --out are shared with mhe-vs-kf)
     study.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
     study.add_argument("--dask", metavar="ADDRESS", help="run on this Dask scheduler")
@@ -105,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _mhe_vs_kf(args: argparse.Namespace) -> int:
     """The mhe-vs-kf study: the robust sweep (default) or the equivalence sweep and figure."""
-    vehicle_path = Path(args.vehicle or example_vehicle_path())
+    vehicle_path = vehicle_file(args)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     paths = [Path(p) for p in args.logs]
     given = set(paths)
@@ -198,7 +201,7 @@ def _experiment(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, out: Path) -> int:
-    vehicle_path = Path(args.vehicle or example_vehicle_path())
+    vehicle_path = vehicle_file(args)
     if not vehicle_path.is_file():
         raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")
     if args.dask is not None:

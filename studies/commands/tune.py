@@ -33,13 +33,15 @@ from wheelload.estimators.identification.vehicle_writer import (
 )
 from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
+from wheelload.studies.commands.options import command_parser
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    parser = command_parser(
+        subparsers,
         "tune",
-        help="fit the filter's noise densities to logs (innovation likelihood)",
-        description=__doc__.splitlines()[0],
+        "fit the filter's noise densities to logs (innovation likelihood)",
+        __doc__,
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")

@@ -191,16 +191,20 @@ class Candidate:
 
 PLAIN_KF = "two-stage KF, no guards"
 
+#: Huber at 0.5σ on the suspension rows: leaves this plant's model residuals (0.1-0.2σ)
+#: quadratic and discounts faults.
+SUSPENSION_HUBER = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
+#: Huber at 0.2σ: discounts more of both.
+TIGHT_HUBER = ResidualLoss(kind=Loss.HUBER, threshold=0.2)
+
 
 def robust_candidates(horizon: int = 10, quick: bool = False) -> list[Candidate]:
     """The KF with and without its guards, its RTS smoother, and the MHE settings a KF lacks.
 
-    Huber 0.5σ on the suspension rows leaves this plant's model residuals
-    (0.1-0.2σ) quadratic and discounts faults; 0.2σ discounts more of both.
+    Huber 0.5σ on the suspension rows (:data:`SUSPENSION_HUBER`), 0.2σ
+    (:data:`TIGHT_HUBER`), L1.
     """
-    huber = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
-    tight = ResidualLoss(kind=Loss.HUBER, threshold=0.2)
-    l1 = ResidualLoss(kind=Loss.L1)
+    huber, tight, l1 = SUSPENSION_HUBER, TIGHT_HUBER, ResidualLoss(kind=Loss.L1)
     lag = min(5, horizon - 1)
     rows = [
         Candidate(name="two-stage KF", settings=None),
