@@ -17,12 +17,7 @@ from pathlib import Path
 from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
-from wheelload.studies.bench.step_timing import (
-    c_step_ns,
-    cpu_mhz,
-    filterpy_step_ns,
-    python_step_ns,
-)
+from wheelload.studies.bench.step_timing import c_step_ns, cpu_mhz, filterpy_step_ns, python_step_ns
 from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 

@@ -14,22 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import (
-    Constraint,
-    MheSettings,
-    MovingHorizonEstimator,
-)
+from wheelload.estimators import Constraint, MheSettings, MovingHorizonEstimator
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import (
-    add_vehicle_file_options,
-    vehicle_file,
-)
+from wheelload.studies.commands.options import add_vehicle_file_options, vehicle_file
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
-from wheelload.studies.experiments.mhe_vs_kf import (
-    robust_candidates,
-    step_times,
-)
+from wheelload.studies.experiments.mhe_vs_kf import robust_candidates, step_times
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:

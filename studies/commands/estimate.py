@@ -156,14 +156,8 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
         title = f"{path.name} — {result.vehicle.name}"
         with atomic_write(Path(args.plot), replace=args.force) as temporary:
             plot_estimate(estimate, signals, temporary, title=title)
-    print(f"method {settings.method}: {method(settings.method).description}")
-    print(summary(estimate, signals, result.vehicle.name))
-    for note in result.notes:
-        print(note)
-    for warning in result.warnings:
-        print(f"warning: {warning}")
-    if args.out:
-        print(f"estimates written to {args.out}")
+    text = summary(estimate, signals, result.vehicle.name)
+    _print_summary(settings, text, result.notes, result.warnings, args)
     if args.plot:
         print(f"figure written to {args.plot}")
     return 0
@@ -182,15 +176,21 @@ def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) 
         return False
     stream = result.stream
     header = LogHeader.of(stream, has_reference=stream.reference_present is not None)
+    text = summary_text(header, result.digest, result.faults, result.vehicle.name)
+    _print_summary(settings, text, result.notes, result.warnings, args)
+    return True
+
+
+def _print_summary(settings: EstimateSettings, text: str, notes, warnings, args) -> None:
+    """The method, the log's summary, its notes and warnings, and where the estimates went."""
     print(f"method {settings.method}: {method(settings.method).description}")
-    print(summary_text(header, result.digest, result.faults, result.vehicle.name))
-    for note in result.notes:
+    print(text)
+    for note in notes:
         print(note)
-    for warning in result.warnings:
+    for warning in warnings:
         print(f"warning: {warning}")
     if args.out:
         print(f"estimates written to {args.out}")
-    return True
 
 
 def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Namespace) -> int:

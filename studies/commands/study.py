@@ -197,10 +197,10 @@ def _experiment(args: argparse.Namespace) -> int:
         raise ValueError(f"{out}: exists and is not a folder; give a folder to --out")
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):  # before any work: a second study into ``out`` refuses at once
-        return _run(args, out)
+        return _run_experiment(args, out)
 
 
-def _run(args: argparse.Namespace, out: Path) -> int:
+def _run_experiment(args: argparse.Namespace, out: Path) -> int:
     vehicle_path = vehicle_file(args)
     if not vehicle_path.is_file():
         raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")

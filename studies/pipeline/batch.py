@@ -237,7 +237,7 @@ def lean_row(
         figures = LoadFigures.of_digest(result.digest, str(path))
         return summary_row(str(path), header, figures, len(result.warnings))
     except (ValueError, FileNotFoundError) as error:
-        return {"log": str(path), "error": str(error)}
+        return _error_row(path, error)
 
 
 def process_log(
@@ -260,7 +260,12 @@ def process_log(
     try:
         return _written_row(path, estimate_log(path, settings), folder, force)
     except (ValueError, FileNotFoundError) as error:
-        return {"log": str(path), "error": str(error)}
+        return _error_row(path, error)
+
+
+def _error_row(path: Path, error: Exception) -> dict:
+    """The summary row of a log that could not be used: its one-line error."""
+    return {"log": str(path), "error": str(error)}
 
 
 def _written_row(path: Path, result: LogResult, folder: Path | None, force: bool) -> dict:
@@ -304,7 +309,7 @@ def process_logs(
         try:
             vehicle, signals, notes, static = _prepare_log(path, settings)
         except (ValueError, FileNotFoundError) as error:
-            rows[path] = {"log": str(path), "error": str(error)}
+            rows[path] = _error_row(path, error)
             continue
         key = None if static is None else tuple(float(f) for f in static)
         prepared.setdefault(key, []).append((path, vehicle, signals, notes))
@@ -335,7 +340,7 @@ def _finish_log(path, folder, force, vehicle, signals, notes, estimate) -> dict:
             path, _log_result(path, vehicle, signals, notes, estimate), folder, force
         )
     except (ValueError, FileNotFoundError) as error:
-        return {"log": str(path), "error": str(error)}
+        return _error_row(path, error)
 
 
 def chunks(paths: list[Path], workers: int) -> list[list[Path]]:

@@ -17,10 +17,9 @@ from typing import Protocol
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals, StepFlag
+from wheelload.models import WHEELS
 from wheelload.studies.metrics import wheel_metrics
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
-
-WHEELS = ("FL", "FR", "RL", "RR")
 
 
 class ScannedLog(Protocol):
@@ -61,7 +60,8 @@ def row_use(estimate: Estimate) -> str:
 
 def _row_use(digest: EstimateDigest) -> str:
     shares = ", ".join(
-        f"{w} {100 * (1 - s / digest.n):.0f} %" for w, s in zip(WHEELS, digest.suspension_skipped)
+        f"{w.upper()} {100 * (1 - s / digest.n):.0f} %"
+        for w, s in zip(WHEELS, digest.suspension_skipped)
     )
     split = 100 * digest.split / digest.n
     return f"suspension rows used: {shares}; roll-split row used: {split:.0f} %"
@@ -139,7 +139,7 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
     for i, wheel in enumerate(WHEELS):
         std = f"{stds[i]:12.0f}" if digest.has_std else f"{'n/a':>12}"
         lines.append(
-            f"{wheel:>6} {means[i]:10.0f} {digest.load_min[i]:10.0f} "
+            f"{wheel.upper():>6} {means[i]:10.0f} {digest.load_min[i]:10.0f} "
             f"{digest.load_max[i]:10.0f} {std}"
         )
     lines.append(f"sensor set: {header.mode}")
@@ -226,9 +226,9 @@ def summary_row(log: str, header: LogHeader, figures: LoadFigures, warnings: int
         "mode": header.mode,
     }
     for i, wheel in enumerate(WHEELS):
-        row[f"mean_fz_{wheel.lower()}"] = float(figures.mean[i])
+        row[f"mean_fz_{wheel}"] = float(figures.mean[i])
     for i, wheel in enumerate(WHEELS):
-        row[f"mean_std_{wheel.lower()}"] = float(figures.mean_std[i])
+        row[f"mean_std_{wheel}"] = float(figures.mean_std[i])
     row["skipped_samples"] = figures.skipped
     row["negative_samples"] = figures.negative
     row["min_fz"] = figures.minimum
