@@ -22,7 +22,7 @@ from wheelload.estimators.registry import build
 from wheelload.estimators.result import SensorFault
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
-from wheelload.studies.pipeline.static_loads import static_loads
+from wheelload.studies.pipeline.measured_static import corner_weights, still_period
 
 if TYPE_CHECKING:
     from wheelload.estimators import LogStream
@@ -126,6 +126,7 @@ def static_loads_for(stream: LogStream, vehicle: Vehicle, settings):
     The still-period check reads the first samples only (``stream.head``); a travel
     channel of the log with no sample in the period is refused as on the whole log.
     """
+    static, notes = corner_weights(settings)
     head = stream.head
     if settings.still_period:
         window = head.t <= head.t[0] + settings.still_period
@@ -133,4 +134,5 @@ def static_loads_for(stream: LogStream, vehicle: Vehicle, settings):
             stream.travel_present & ~np.isfinite(head.d[window]).any(axis=0)
         ):
             raise ValueError(f"{stream.source}: a travel channel has no sample in the still period")
-    return static_loads(head, vehicle, settings)
+    static, still = still_period(head, vehicle, settings, static)
+    return static, notes + still
