@@ -10,22 +10,15 @@ import sys
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
-from wheelload.studies.commands.options import command_parser
 from wheelload.studies.drive.scenarios import SCENARIOS, Options
-from wheelload.studies.experiments.model_terms_ablation import (
-    ablation,
-    bundled_vehicles,
-    label_groups,
-    wide_table,
-)
+from wheelload.studies.experiments import model_terms_ablation
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = command_parser(
-        subparsers,
+    parser = subparsers.add_parser(
         "ablation",
-        "pooled RMSE / Max of the KF with each model term on and off",
-        __doc__,
+        help="pooled RMSE / Max of the KF with each model term on and off",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument(
         "--vehicle", action="append", help="vehicle file (repeatable; default: both bundled)"
@@ -48,17 +41,19 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not args.force:
         raise ValueError(f"{out} exists: choose another --out or add --force")
-    paths = [Path(p) for p in args.vehicle] if args.vehicle else bundled_vehicles()
+    paths = (
+        [Path(p) for p in args.vehicle] if args.vehicle else model_terms_ablation.bundled_vehicles()
+    )
     scenarios = args.scenario or list(SCENARIOS)
     options = Options(seed=args.seed, shorten=0.1 if args.quick else 1.0)
-    table = ablation(
+    table = model_terms_ablation.ablation(
         paths, scenarios, options, noise=args.noise,
         progress=lambda text: print(text, file=sys.stderr, flush=True),
     )  # fmt: skip
     for vehicle in dict.fromkeys(table["vehicle"]):
-        for title, labels in label_groups().items():
+        for title, labels in model_terms_ablation.label_groups().items():
             print(f"\n{vehicle}: pooled RMSE / Max [N], {title}")
-            print(wide_table(table, vehicle, labels).to_string())
+            print(model_terms_ablation.wide_table(table, vehicle, labels).to_string())
     if out is not None:
         with replacing(out) as temporary:
             table.to_csv(temporary, index=False, float_format="%.1f")

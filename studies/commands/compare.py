@@ -14,7 +14,7 @@ from pathlib import Path
 
 from wheelload.estimators import SuspensionModel, read_log
 from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import add_suspension_option, command_parser
+from wheelload.studies.commands.options import add_suspension_option
 from wheelload.studies.pipeline.comparison import (
     compare_methods,
     format_table,
@@ -30,11 +30,10 @@ from wheelload.studies.plots.comparison import (
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = command_parser(
-        subparsers,
+    parser = subparsers.add_parser(
         "compare",
-        "compare estimators on a log with reference loads (paper-style table, figures)",
-        __doc__,
+        help="compare estimators on a log with reference loads (paper-style table, figures)",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument("log", help="log file (.csv or .parquet) with fz_fl..fz_rr reference")
     parser.add_argument("--vehicle", required=True, help="vehicle TOML file")

@@ -22,14 +22,7 @@ from wheelload.studies.commands.options import (
     add_suspension_option,
     vehicle_file,
 )
-from wheelload.studies.pipeline.batch import (
-    SUMMARY_NAME,
-    EstimateSettings,
-    estimate_log,
-    expand_logs,
-    run_logs,
-    write_table,
-)
+from wheelload.studies.pipeline import batch
 from wheelload.studies.pipeline.example_log import example_log_path
 from wheelload.studies.pipeline.lean_estimate import estimate_lean, takes_lean_path
 from wheelload.studies.pipeline.summary import LogHeader, summary, summary_text
@@ -101,8 +94,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
-    return EstimateSettings(
+def _settings(args: argparse.Namespace, vehicle_path: Path) -> batch.EstimateSettings:
+    return batch.EstimateSettings(
         vehicle=vehicle_path,
         method=method(args.method).name,
         channels=Path(args.channels) if args.channels else None,
@@ -127,14 +120,14 @@ def run(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")
     settings = _settings(args, vehicle_path)
-    paths = expand_logs(logs)
+    paths = batch.expand_logs(logs)
     single = len(paths) == 1 and Path(logs[0]).is_file() and len(logs) == 1
     if single:
         return _run_one(paths[0], settings, args)
     return _run_many(paths, settings, args)
 
 
-def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> int:
+def _run_one(path: Path, settings: batch.EstimateSettings, args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in (args.out, args.plot) if p]
     inputs = [path, settings.vehicle, *([settings.channels] if settings.channels else [])]
     check_outputs(outputs, inputs, force=args.force)
@@ -145,10 +138,10 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
     lean = not (args.plot or args.in_memory) and takes_lean_path(path, settings)
     if lean and _run_lean(path, settings, args):
         return 0
-    result = estimate_log(path, settings)
+    result = batch.estimate_log(path, settings)
     estimate, signals = result.estimate, result.signals
     if args.out:
-        write_table(estimate.to_pandas(), Path(args.out), replace=args.force)
+        batch.write_table(estimate.to_pandas(), Path(args.out), replace=args.force)
     if args.plot:
         from wheelload.estimators.logs.output_files import atomic_write
         from wheelload.studies.plots.estimate import plot_estimate
@@ -163,7 +156,7 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
     return 0
 
 
-def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> bool:
+def _run_lean(path: Path, settings: batch.EstimateSettings, args: argparse.Namespace) -> bool:
     """``_run_one`` on the lean whole-log path (``studies/pipeline/lean_estimate.py``).
 
     Memory is bounded by the chunk (plus 8 bytes a sample for the time column
@@ -181,7 +174,7 @@ def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) 
     return True
 
 
-def _print_summary(settings: EstimateSettings, text: str, notes, warnings, args) -> None:
+def _print_summary(settings: batch.EstimateSettings, text: str, notes, warnings, args) -> None:
     """The method, the log's summary, its notes and warnings, and where the estimates went."""
     print(f"method {settings.method}: {method(settings.method).description}")
     print(text)
@@ -193,7 +186,7 @@ def _print_summary(settings: EstimateSettings, text: str, notes, warnings, args)
         print(f"estimates written to {args.out}")
 
 
-def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Namespace) -> int:
+def _run_many(paths: list[Path], settings: batch.EstimateSettings, args: argparse.Namespace) -> int:
     if args.plot:
         raise ValueError("--plot is for one log; with many logs give --out FOLDER")
     folder = Path(args.out) if args.out else None
@@ -201,15 +194,15 @@ def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Name
         folder.mkdir(parents=True, exist_ok=True)
     if folder is not None and folder.resolve() in {p.parent.resolve() for p in paths}:
         raise ValueError(f"{folder}: holds the input logs: write the estimates into another folder")
-    table = run_logs(
+    table = batch.run_logs(
         paths, settings, folder, workers=args.workers, dask_address=args.dask, force=args.force
     )
     columns = ["log", "samples", "mode", "mean_fz_fl", "mean_fz_rr", "min_fz", "rmse_pooled"]
     shown = table[[c for c in columns + ["error"] if c in table.columns]]
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     if folder is not None:
-        write_table(table, folder / SUMMARY_NAME, replace=args.force)
-        print(f"{len(paths)} logs: estimates and {SUMMARY_NAME} written to {folder}")
+        batch.write_table(table, folder / batch.SUMMARY_NAME, replace=args.force)
+        print(f"{len(paths)} logs: estimates and {batch.SUMMARY_NAME} written to {folder}")
     failed = int((table["error"] != "").sum()) if "error" in table.columns else 0
     if failed:
         print(f"{failed} of {len(paths)} logs failed (see the error column)")

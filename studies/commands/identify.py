@@ -24,7 +24,6 @@ from wheelload.estimators.identification.vehicle_writer import (
     write_vehicle_text,
 )
 from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import command_parser
 from wheelload.studies.pipeline.identification import identify_vehicle
 
 REPORT_FILES = (
@@ -38,11 +37,10 @@ REPORT_FILES = (
 
 
 def register(subparsers) -> None:
-    parser = command_parser(
-        subparsers,
+    parser = subparsers.add_parser(
         "identify",
-        "identify spring, damper and anti-roll-bar maps from rig data and drive logs",
-        __doc__,
+        help="identify spring, damper and anti-roll-bar maps from rig data and drive logs",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
     parser.add_argument("--out", required=True, help="new vehicle file (.toml)")

@@ -14,7 +14,6 @@ import dataclasses
 from pathlib import Path
 
 from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import command_parser
 from wheelload.studies.drive.scenarios import SCENARIOS as SCENARIO_TABLE
 from wheelload.studies.experiments.identification_study import StudySettings, run_study
 
@@ -23,11 +22,10 @@ QUICK = ("accel-in-turn", "iso-dlc", "slope-20")  # identified from accel-in-tur
 
 
 def register(subparsers) -> None:
-    parser = command_parser(
-        subparsers,
+    parser = subparsers.add_parser(
         "identify-study",
-        "identify and tune from a wrong vehicle file on plant logs; print the tables",
-        __doc__,
+        help="identify and tune from a wrong vehicle file on plant logs; print the tables",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument("--out", default="identify-study", help="folder for logs and tables")
     parser.add_argument("--quick", action="store_true", help="three scenarios only")

@@ -43,13 +43,6 @@ def vehicle_file(args: argparse.Namespace) -> Path:
     return Path(args.vehicle) if args.vehicle else example_vehicle_path()
 
 
-def command_parser(
-    subparsers: argparse._SubParsersAction, name: str, help: str, doc: str
-) -> argparse.ArgumentParser:
-    """The sub-command ``name``, described by the first line of its module's ``doc``."""
-    return subparsers.add_parser(name, help=help, description=doc.splitlines()[0])
-
-
 def add_vehicle_file_options(parser: argparse.ArgumentParser) -> None:
     """``--vehicle FILE`` (:func:`add_vehicle_option`) and ``--allow-unusual``."""
     add_vehicle_option(parser)

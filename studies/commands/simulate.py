@@ -10,7 +10,7 @@ from pathlib import Path
 
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.vehicle import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual, command_parser
+from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.drive.roads import ISO_CLASSES
 from wheelload.studies.drive.scenario_log import metadata_path, write_log
@@ -22,8 +22,10 @@ RIG_SWEEP = "rig-sweep"
 
 
 def register(subparsers) -> None:
-    parser = command_parser(
-        subparsers, "simulate", "simulate a scenario and write a log with reference loads", __doc__
+    parser = subparsers.add_parser(
+        "simulate",
+        help="simulate a scenario and write a log with reference loads",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument(
         "name",

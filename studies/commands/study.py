@@ -24,17 +24,8 @@ from wheelload.studies.commands.options import (
     vehicle_file,
 )
 from wheelload.studies.experiments import catalog as experiments
+from wheelload.studies.experiments import mhe_vs_kf
 from wheelload.studies.experiments.faults.sensor_faults import Fault
-from wheelload.studies.experiments.mhe_vs_kf import (
-    HORIZONS,
-    PLAIN_KF,
-    STUDY_SCENARIOS,
-    StudySettings,
-    against_kf,
-    mhe_vs_kf,
-    robust_candidates,
-    robust_sweep,
-)
 from wheelload.studies.experiments.runs.cache import ResultCache
 from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
 from wheelload.studies.experiments.runs.folder_lock import folder_lock
@@ -55,7 +46,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         nargs="*",
         default=None,
         help="simulate these plant scenarios first (no names: "
-        + ", ".join(STUDY_SCENARIOS) + ", those that exist)",
+        + ", ".join(mhe_vs_kf.STUDY_SCENARIOS) + ", those that exist)",
     )  # fmt: skip
     study.add_argument(
         "--sweep",
@@ -79,7 +70,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "guards, RTS, the lagged and the Huber 0.5σ MHE only",
     )
     study.add_argument(
-        "--horizons", type=int, nargs="+", default=list(HORIZONS), help="equivalence sweep"
+        "--horizons",
+        type=int,
+        nargs="+",
+        default=list(mhe_vs_kf.HORIZONS),
+        help="equivalence sweep",
     )
     study.add_argument(
         "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
@@ -125,7 +120,9 @@ def _mhe_vs_kf(args: argparse.Namespace) -> int:
             from wheelload.studies.drive.scenario_runner import simulate_logs
             from wheelload.studies.drive.scenarios import SCENARIOS
 
-            names = args.scenarios or [name for name in STUDY_SCENARIOS if name in SCENARIOS]
+            names = args.scenarios or [
+                name for name in mhe_vs_kf.STUDY_SCENARIOS if name in SCENARIOS
+            ]
             simulated = simulate_logs(names, Path(folder), vehicle_path, args.allow_unusual)
             for name, path, samples in simulated:
                 print(f"{name}: {samples} samples simulated")
@@ -142,13 +139,13 @@ def _mhe_vs_kf(args: argparse.Namespace) -> int:
         ]
     if args.sweep == "robust":
         return _robust(args, logs, paths, vehicle)
-    table = mhe_vs_kf(logs, vehicle, StudySettings(horizons=tuple(args.horizons)))
-    from wheelload.studies.experiments.mhe_vs_kf import plot_accuracy_against_time
-
+    table = mhe_vs_kf.mhe_vs_kf(
+        logs, vehicle, mhe_vs_kf.StudySettings(horizons=tuple(args.horizons))
+    )
     with atomic_write(outputs[0], replace=args.force) as temporary:
         table.to_csv(temporary)
     with atomic_write(outputs[1], replace=args.force) as temporary:
-        plot_accuracy_against_time(table, temporary)
+        mhe_vs_kf.plot_accuracy_against_time(table, temporary)
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
     print(table.to_string(float_format=lambda v: f"{v:.1f}"))
     print(f"written {out.with_suffix('.csv')} and {out.with_suffix('.png')}")
@@ -160,9 +157,9 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     if args.horizon < 2:
         raise ValueError("--horizon must be >= 2 for the robust sweep (the lagged output)")
     faults = tuple(Fault(name) for name in args.faults)
-    candidates = robust_candidates(args.horizon, quick=args.quick)
-    table = robust_sweep(logs, vehicle, faults, candidates)
-    change = against_kf(table, faults)
+    candidates = mhe_vs_kf.robust_candidates(args.horizon, quick=args.quick)
+    table = mhe_vs_kf.robust_sweep(logs, vehicle, faults, candidates)
+    change = mhe_vs_kf.against_kf(table, faults)
     out = Path(args.out or "mhe-vs-kf")
     for frame, path in (
         (table, out.with_suffix(".csv")),
@@ -175,9 +172,9 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     print(table.to_string(float_format=lambda v: f"{v:.1f}"))
     print("change against the two-stage KF (with its guards) on the same fault [%]")
     print(change.to_string())
-    if PLAIN_KF in table.index:
+    if mhe_vs_kf.PLAIN_KF in table.index:
         print("change against the plain KF (no guards) on the same fault [%]")
-        print(against_kf(table, faults, PLAIN_KF).to_string())
+        print(mhe_vs_kf.against_kf(table, faults, mhe_vs_kf.PLAIN_KF).to_string())
     print(f"written {out.with_suffix('.csv')} and {out.with_name(out.name + '-vs-kf.csv')}")
     return 0
 

@@ -33,15 +33,13 @@ from wheelload.estimators.identification.vehicle_writer import (
 )
 from wheelload.estimators.kf.two_stage import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import command_parser
 
 
 def register(subparsers) -> None:
-    parser = command_parser(
-        subparsers,
+    parser = subparsers.add_parser(
         "tune",
-        "fit the filter's noise densities to logs (innovation likelihood)",
-        __doc__,
+        help="fit the filter's noise densities to logs (innovation likelihood)",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")

@@ -15,16 +15,14 @@ from pathlib import Path
 from wheelload.estimators import WeighSettings, sprung_geometry, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import load_vehicle, vehicle_mass_centre
-from wheelload.studies.commands.options import command_parser
 from wheelload.studies.vehicle_file_edit import check_target, write_vehicle_copy
 
 
 def register(subparsers) -> None:
-    parser = command_parser(
-        subparsers,
+    parser = subparsers.add_parser(
         "weigh",
-        "vehicle mass and CG position from logs at rest on one or more slopes",
-        __doc__,
+        help="vehicle mass and CG position from logs at rest on one or more slopes",
+        description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="logs at rest (.csv or .parquet)")
     parser.add_argument("--vehicle", required=True, help="vehicle TOML file (suspension, geometry)")
