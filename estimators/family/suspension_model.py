@@ -36,10 +36,11 @@ from wheelload.models import (
     suspension_function,
     travel_function,
 )
+from wheelload.models.conventions import WHEELS
 from wheelload.models.input_validity import dependency_mask
 from wheelload.models.inputs import TRAVEL, TRAVEL_RATE, input_index
 
-_UNSPRUNG_GATES = tuple(GATES.index(f"unsprung_{w}") for w in ("fl", "fr", "rl", "rr"))
+_UNSPRUNG_GATES = tuple(GATES.index(f"unsprung_{w}") for w in WHEELS)
 _TRAVEL_INDEX = input_index(TRAVEL)
 _RATE_INDEX = input_index(TRAVEL_RATE)
 

@@ -69,6 +69,7 @@ from wheelload.estimators.family.suspension_model import equilibrium_residual, s
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
+from wheelload.models.conventions import WHEELS
 from wheelload.models.family.quarter_car import reduced_quarter_car_function
 from wheelload.models.input_validity import MAX_INTERVAL, interval_is_valid, sanitise
 
@@ -238,7 +239,7 @@ def step_function(
     rates_ok = valid[12] * valid[13] * started
     rate_acc = ca.if_else(rates_ok, (rates[0:2] - rates_prev) / dt_safe, ca.DM.zeros(2))
     names = ModelParameters.names()
-    static = ca.vertcat(*[p[names.index(f"static_{w}")] for w in ("fl", "fr", "rl", "rr")])
+    static = ca.vertcat(*[p[names.index(f"static_{w}")] for w in WHEELS])
     spring, damper = constants["spring"], constants["damper"]
     z = suspension_loads(model, u, valid, p, unsprung_inertia=False)
     extra = z - static - spring * d - damper * v

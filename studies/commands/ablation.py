@@ -1,4 +1,7 @@
-"""``wheelload ablation``: each model term on and off, both bundled vehicles, every scenario."""
+"""``wheelload ablation``: each model term on and off, both bundled vehicles, every scenario.
+
+The study is :mod:`~wheelload.studies.experiments.model_terms_ablation`.
+"""
 
 from __future__ import annotations
 
@@ -6,16 +9,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from wheelload.models import example_vehicle_path
 from wheelload.models.files.temporaries import replacing
 from wheelload.studies.drive.scenarios import SCENARIOS, Options
-from wheelload.studies.experiments.terms_ablation import ALL, PAPER, TERMS, ablation, wide_table
-
-
-def bundled_vehicles() -> list[Path]:
-    """The bundled sports car and SUV."""
-    sports = example_vehicle_path()
-    return [sports, sports.with_name("suv.toml")]
+from wheelload.studies.experiments import model_terms_ablation
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -45,19 +41,19 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not args.force:
         raise ValueError(f"{out} exists: choose another --out or add --force")
-    paths = [Path(p) for p in args.vehicle] if args.vehicle else bundled_vehicles()
+    paths = (
+        [Path(p) for p in args.vehicle] if args.vehicle else model_terms_ablation.bundled_vehicles()
+    )
     scenarios = args.scenario or list(SCENARIOS)
     options = Options(seed=args.seed, shorten=0.1 if args.quick else 1.0)
-    table = ablation(
+    table = model_terms_ablation.ablation(
         paths, scenarios, options, noise=args.noise,
         progress=lambda text: print(text, file=sys.stderr, flush=True),
     )  # fmt: skip
-    alone = [PAPER, *(f"+{term}" for term in TERMS), ALL]
-    but = [ALL, *(f"-{term}" for term in TERMS)]
     for vehicle in dict.fromkeys(table["vehicle"]):
-        for title, labels in (("each term alone", alone), ("every term but one", but)):
+        for title, labels in model_terms_ablation.label_groups().items():
             print(f"\n{vehicle}: pooled RMSE / Max [N], {title}")
-            print(wide_table(table, vehicle, labels).to_string())
+            print(model_terms_ablation.wide_table(table, vehicle, labels).to_string())
     if out is not None:
         with replacing(out) as temporary:
             table.to_csv(temporary, index=False, float_format="%.1f")

@@ -12,17 +12,18 @@ import time
 
 import numpy as np
 
-from wheelload.estimators import Sample, TwoStageKF
-from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators import Sample
+from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import joint_filter
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.commands.options import add_vehicle_file_options
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
     "wheelload.studies.commands.bench_codegen",
     "wheelload.studies.commands.bench_speed",
-    "wheelload.studies.commands.mhe",
+    "wheelload.studies.commands.bench_mhe",
     "wheelload.studies.bench.scenarios",
     "wheelload.studies.commands.bench_logs",
     "wheelload.studies.experiments.faults.fault_injection",
@@ -45,8 +46,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=20_000,
         help="samples for the per-sample Python loops (default 2e4)",
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
-    add_allow_unusual(parser)
+    add_vehicle_file_options(parser)
     parser.set_defaults(handler=run)
     for module in BENCHMARKS:
         importlib.import_module(module).register_bench(benchmarks)
@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         rate=1000.0,
         noise=SensorNoise(acceleration=0.05, travel=0.0002),
     )
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     start = time.perf_counter()
     kf.run(base.slice(0, 10))
     compile_time = time.perf_counter() - start

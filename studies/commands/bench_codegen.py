@@ -11,22 +11,14 @@ the machine's scalar peak. Printed, never asserted.
 from __future__ import annotations
 
 import argparse
-import re
-import statistics
-import subprocess
 import tempfile
-import time
 from pathlib import Path
 
-import numpy as np
-
-from wheelload.estimators import Sample, TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
-from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
-from wheelload.estimators.protocol import sample_intervals
-from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.bench.numpy_kf import pseudo_measurements
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.estimators.registry import build
+from wheelload.models import load_vehicle
+from wheelload.studies.bench.step_timing import c_step_ns, cpu_mhz, filterpy_step_ns, python_step_ns
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 TARGET_NS = 150.0
@@ -40,7 +32,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "codegen", help="generated C step (double, float) against Python and filterpy"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
     parser.add_argument("--repeats", type=int, default=51, help="C repeats (median taken)")
     parser.add_argument("--python-samples", type=int, default=2000, help="Python steps timed")
@@ -48,101 +40,8 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def c_step_ns(
-    vehicle_path: Path,
-    precision: Precision,
-    folder: Path,
-    samples: int,
-    repeats: int,
-    allow_unusual: bool = False,
-):
-    """Median and minimum ns per step of the library's self-test benchmark, and the library."""
-    library = generate(
-        vehicle_path,
-        folder / precision.value,
-        CodegenOptions(precision=precision),
-        allow_unusual=allow_unusual,
-    )
-    binary = build_program(library, library.selftest, folder / precision.value / "selftest")
-    out = subprocess.run(
-        [str(binary), "bench", str(samples), str(repeats)], capture_output=True, text=True,
-        check=True,
-    ).stdout  # fmt: skip
-    median, least = (
-        float(re.search(rf"{key} (\S+)", out).group(1)) for key in ("median_ns", "min_ns")
-    )
-    return median, least, library
-
-
-def _median_ns(step, n: int) -> float:
-    times = []
-    for k in range(n):
-        start = time.perf_counter_ns()
-        step(k)
-        times.append(time.perf_counter_ns() - start)
-    return float(statistics.median(times))
-
-
-def python_step_ns(kf: TwoStageKF, signals, n: int) -> float:
-    """Median ns of one :meth:`TwoStageKF.step` (CasADi virtual machine)."""
-    dt = sample_intervals(signals.t)
-    state = [kf.initial_state()]
-    samples = [
-        Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
-        for k in range(n)
-    ]
-
-    def step(k):
-        state[0], _ = kf.step(state[0], samples[k], dt[k])
-
-    return _median_ns(step, n)
-
-
-def filterpy_step(kf: TwoStageKF, signals):
-    """filterpy's predict + suspension update + equilibrium update as a per-sample
-    callable ``step(k)`` (None if filterpy is not installed).
-
-    The pseudo-measurements z and b are computed here, beforehand, and not timed.
-    """
-    try:
-        from filterpy.kalman import KalmanFilter
-    except ImportError:
-        return None
-    z, A, b = pseudo_measurements(signals, kf.p)
-    dt = sample_intervals(signals.t)
-    q, rs, rc = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
-    filt = KalmanFilter(dim_x=4, dim_z=4)
-    initial = kf.initial_state()
-    filt.x, filt.P, filt.F = initial.x[:, None].copy(), initial.P.copy(), np.eye(4)
-    H_s = np.eye(4)
-
-    def step(k):
-        filt.Q = q * dt[k] * np.eye(4)
-        filt.predict()
-        filt.update(z[k][:, None], R=rs / dt[k] * np.eye(4), H=H_s)
-        filt.update(b[k][:, None], R=np.diag(rc / dt[k]), H=A)
-
-    return step
-
-
-def filterpy_step_ns(kf: TwoStageKF, signals, n: int) -> float | None:
-    """Median ns of :func:`filterpy_step` (None if filterpy is not installed)."""
-    step = filterpy_step(kf, signals)
-    return None if step is None else _median_ns(step, n)
-
-
-def cpu_mhz() -> float | None:
-    """Clock frequency from /proc/cpuinfo (Linux), or None."""
-    try:
-        text = Path("/proc/cpuinfo").read_text()
-    except OSError:
-        return None
-    match = re.search(r"cpu MHz\s*:\s*([\d.]+)", text)
-    return float(match.group(1)) if match else None
-
-
 def run(args: argparse.Namespace) -> int:
-    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle_path = vehicle_file(args)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     with tempfile.TemporaryDirectory(prefix="wheelload_bench_") as folder:
         c_double, c_double_min, library = c_step_ns(
@@ -161,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
             args.repeats,
             args.allow_unusual,
         )
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     signals = synthetic_log(
         vehicle, slalom(duration=30.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
     )

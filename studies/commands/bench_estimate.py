@@ -57,7 +57,7 @@ def write_tiled_log(path: Path, samples: int) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     base = pd.read_csv(example_log_path())
     rate = round(1.0 / float(np.median(np.diff(base["t"].to_numpy()))))  # Hz

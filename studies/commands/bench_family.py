@@ -8,7 +8,7 @@ in turn, so that all meet the same machine load. A method's figure is its wall
 time per sample in µs, min / median / max over the rounds, and its time over the
 two-stage KF's (``kf``, always timed) in the same round, min / median / max.
 The family methods run on the vehicle model(s) of ``--suspension``
-(:mod:`wheelload.estimators.family.suspension_model`); ``both`` times each on
+(:class:`~wheelload.estimators.SuspensionModel`); ``both`` times each on
 either. The load average (1 min) is printed at the start and the end.
 
 Printed, never asserted.
@@ -130,7 +130,7 @@ def load_average() -> str:
 def run(args: argparse.Namespace) -> int:
     from wheelload.estimators import read_log
     from wheelload.models import example_vehicle_path, load_vehicle
-    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     if args.repeats < 1:
         raise ValueError(f"--repeats must be >= 1, got {args.repeats}")

@@ -25,12 +25,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.logs.signals import derive_velocities, signals_from_frame
+from wheelload.estimators.registry import build
 from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.models.conventions import WHEELS
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option
 from wheelload.studies.experiments.faults import hostile
 
 SCENARIOS = (
@@ -44,7 +46,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "hostile", help="KF Python / C double / C float and MHE C on hostile inputs"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument("--scenario", default="iso-dlc", help="plant scenario (default iso-dlc)")
     parser.add_argument(
         "--fractions", default="0.001,0.01,0.1", help="shares of corrupted samples (0.1-10 %%)"
@@ -69,7 +71,7 @@ def _c_kf(vehicle_path, frame, folder: Path, precision: Precision) -> hostile.Ho
     if done.returncode != 0:
         raise RuntimeError(f"{binary} failed ({done.returncode}): {done.stderr[-2000:]}")
     out = pd.read_csv(folder / "estimates.csv")
-    std = out[[f"fz_std_{w}" for w in ("fl", "fr", "rl", "rr")]]
+    std = out[[f"fz_std_{w}" for w in WHEELS]]
     return hostile.summarise(
         f"KF C {precision.value}", out[hostile.LOADS], std, out["status"],
         hostile.sanitizer_reports(done.stderr),
@@ -77,8 +79,8 @@ def _c_kf(vehicle_path, frame, folder: Path, precision: Precision) -> hostile.Ho
 
 
 def _c_mhe(vehicle, vehicle_path, signals, folder: Path) -> hostile.HostileSummary:
+    from wheelload.estimators import Constraint, MheSettings
     from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_settings, write_inputs
-    from wheelload.estimators.mhe.estimator import Constraint, MheSettings
 
     settings = embedded_settings(MheSettings(horizon=10, constraint=Constraint.SOFT, bounded=True))
     dt = float(np.median(np.diff(signals.t)))
@@ -92,7 +94,7 @@ def _c_mhe(vehicle, vehicle_path, signals, folder: Path) -> hostile.HostileSumma
     if done.returncode != 0 and not reports:
         raise RuntimeError(f"{binary} failed ({done.returncode}): {done.stderr[-2000:]}")
     out = pd.read_csv(folder / "mhe.csv")
-    std = out[[f"std_{w}" for w in ("fl", "fr", "rl", "rr")]]
+    std = out[[f"std_{w}" for w in WHEELS]]
     return hostile.summarise("MHE C (embedded)", out[hostile.LOADS], std, out["flags"], reports)
 
 
@@ -113,7 +115,7 @@ def _ranges(vehicle_paths) -> None:
           " samples, flagged")  # fmt: skip
     worst = np.zeros(3)
     for path in vehicle_paths:
-        kf = TwoStageKF(load_vehicle(path))
+        kf = build("kf", load_vehicle(path))
         for name in SCENARIOS:
             for roughness in (None, "D"):
                 options = Options(roughness=roughness) if roughness else Options()
@@ -134,7 +136,7 @@ def _ranges(vehicle_paths) -> None:
 def _envelope(vehicle, runs: int) -> None:
     from wheelload.studies.drive.synthetic import slalom, synthetic_log
 
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     base = synthetic_log(vehicle, slalom(duration=3.0), seed=1)
     seeds = np.random.SeedSequence().generate_state(runs)
     excess = [
@@ -167,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
         bad_signals = hostile.with_inputs(signals, bad)
         start = time.perf_counter()
         rows = []
-        estimate = TwoStageKF(vehicle).run(bad_signals)
+        estimate = build("kf", vehicle).run(bad_signals)
         rows.append(hostile.summarise("KF Python", estimate.loads, estimate.std,
                                       estimate.flags, None))  # fmt: skip
         with tempfile.TemporaryDirectory(prefix="wheelload-hostile-") as folder:

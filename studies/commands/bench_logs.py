@@ -23,7 +23,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from wheelload.models import example_vehicle_path
@@ -34,6 +33,8 @@ from wheelload.studies.pipeline.batch import (
     process_log,
     run_logs,
 )
+from wheelload.studies.pipeline.example_log import example_log_path
+from wheelload.studies.pipeline.summary_compare import compare
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -47,8 +48,6 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _write_logs(folder: Path, count: int, samples: int) -> list[Path]:
-    from wheelload.studies.commands.estimate import example_log_path
-
     source = pd.read_csv(example_log_path())
     span = len(source) - samples
     if span < 1:
@@ -57,26 +56,6 @@ def _write_logs(folder: Path, count: int, samples: int) -> list[Path]:
         start = (k * 37) % span
         source.iloc[start : start + samples].to_csv(folder / f"log{k:04d}.csv", index=False)
     return expand_logs([str(folder)])
-
-
-def compare(table: pd.DataFrame, reference: pd.DataFrame) -> tuple[str, float]:
-    """``same``, ``within`` or ``NO`` (module docstring) and the largest difference of the
-    numbers (inf when the tables differ in shape, columns or text)."""
-    if table.equals(reference):
-        return "same", 0.0
-    numbers = reference.select_dtypes("number").columns
-    text = [c for c in reference.columns if c not in numbers]
-    if list(table.columns) != list(reference.columns) or len(table) != len(reference):
-        return "NO", float("inf")
-    if not table[text].equals(reference[text]):
-        return "NO", float("inf")
-    a, b = table[numbers].to_numpy(float), reference[numbers].to_numpy(float)
-    if not np.array_equal(np.isnan(a), np.isnan(b)):
-        return "NO", float("inf")
-    difference = np.abs(np.nan_to_num(a - b))
-    scale = np.nanmax(np.abs(b), axis=0, initial=0.0)
-    within = (difference <= BATCHED_TOLERANCE * scale).all()
-    return ("within" if within else "NO"), float(difference.max(initial=0.0))
 
 
 def _line(label: str, samples: int, times: list[float], serial: float | None, same) -> str:

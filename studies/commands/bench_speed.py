@@ -17,7 +17,7 @@ over ``--repeats`` alternating repeats (min / median / max of the ratio):
   dependency-chain bound (the longest chain of the kernel's instructions at
   :data:`~wheelload.estimators.codegen.c_emitter.LATENCY` cycles each) and its
   throughput bound (the compiled kernel's instruction mix,
-  :mod:`~wheelload.studies.commands.c_step_bounds`), in cycles of the
+  :mod:`~wheelload.studies.bench.c_step_bounds`), in cycles of the
   measured clock; and against the same step with plain C99 selects built
   without ``-freciprocal-math`` (the step before the branch-free selects).
 
@@ -27,21 +27,26 @@ Printed, never asserted.
 from __future__ import annotations
 
 import argparse
-import re
-import statistics
-import subprocess
 import tempfile
-import time
 from pathlib import Path
 
-from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.c_emitter import Precision, critical_path, flop_count
-from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
-from wheelload.estimators.protocol import sample_intervals
-from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.bench_codegen import cpu_mhz, filterpy_step
-from wheelload.studies.commands.c_step_bounds import compiled_mix, measured_clock_mhz
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions
+from wheelload.estimators.registry import build
+from wheelload.models import load_vehicle
+from wheelload.studies.bench.c_step_bounds import compiled_mix, measured_clock_mhz
+from wheelload.studies.bench.step_timing import (
+    batched_against_run,
+    cpu_mhz,
+    fast_selftest,
+    live_steps,
+    per_call_us,
+    python_steps,
+    selftest_ns,
+    spread,
+)
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 STEP_TARGET = 10.0  # µs per TwoStageKF.step
@@ -58,7 +63,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "speed", help="step vs filterpy, batched C vs single C step, C step vs its chain bound"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
     parser.add_argument(
@@ -78,63 +83,8 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def spread(values: list[float]) -> str:
-    """``min / median / max`` of ``values``."""
-    return f"{min(values):.3g} / {statistics.median(values):.3g} / {max(values):.3g}"
-
-
-def _per_call_us(function, n: int) -> float:
-    start = time.perf_counter()
-    for k in range(n):
-        function(k)
-    return (time.perf_counter() - start) / n * 1e6
-
-
-def python_steps(kf: TwoStageKF, signals, n: int):
-    """Per-step callables: fast step, reference step, filterpy (None if not installed)."""
-    dt = sample_intervals(signals.t)
-    samples = [
-        Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
-        for k in range(n)
-    ]
-    states = {"fast": kf.initial_state(), "reference": kf.initial_state()}
-
-    def fast(k):
-        states["fast"], _ = kf.step(states["fast"], samples[k], dt[k])
-
-    def reference(k):
-        states["reference"], _ = kf.reference_step(states["reference"], samples[k], dt[k])
-
-    return fast, reference, filterpy_step(kf, signals)
-
-
-def live_steps(kf: TwoStageKF, signals, n: int):
-    """Per-step callable of the lean path: :meth:`TwoStageKF.live`'s ``update``."""
-    dt = sample_intervals(signals.t)
-    samples = [
-        Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
-        for k in range(n)
-    ]
-    live = kf.live()
-
-    def lean(k):
-        live.update(samples[k], dt[k])
-
-    return lean
-
-
-def _selftest_ns(binary: Path, *arguments) -> float:
-    """Fastest of the self-test's internal repeats [ns per (filter-)step]."""
-    out = subprocess.run(
-        [str(binary), *map(str, arguments)], capture_output=True, text=True, check=True
-    ).stdout
-    return float(re.search(r"min_ns (\S+)", out).group(1))
-
-
 def logs_vs_run(vehicle_path: Path, kf: TwoStageKF, args: argparse.Namespace) -> None:
     """Print run_batched over many logs against run on each, us per sample."""
-    from wheelload.estimators.codegen.batched import run_batched
-
     vehicle = kf.vehicle
     duration = args.log_samples / 1000.0
     logs = [
@@ -142,18 +92,7 @@ def logs_vs_run(vehicle_path: Path, kf: TwoStageKF, args: argparse.Namespace) ->
                       noise=SensorNoise(acceleration=0.05, travel=0.0003))
         for seed in range(args.logs)
     ]  # fmt: skip
-    samples = sum(len(log) for log in logs)
-    run_batched(kf, vehicle_path, logs[:2])  # build (or load) the library
-    kf.run(logs[0].slice(0, 10))
-    batched, single = [], []
-    for _ in range(args.repeats):
-        start = time.perf_counter()
-        run_batched(kf, vehicle_path, logs)
-        batched.append((time.perf_counter() - start) / samples * 1e6)
-        start = time.perf_counter()
-        for log in logs:
-            kf.run(log)
-        single.append((time.perf_counter() - start) / samples * 1e6)
+    batched, single = batched_against_run(kf, vehicle_path, logs, args.repeats)
     ratios = [s / b for s, b in zip(single, batched)]
     print(f"{args.logs} logs of {args.log_samples} samples [us per sample]")
     print(f"  run_batched (side by side, batched C): {spread(batched)}")
@@ -168,9 +107,9 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--repeats >= 1, --steps >= 10 and --samples >= 100 are needed")
     if args.logs < 1 or args.log_samples < 100:
         raise ValueError("--logs >= 1 and --log-samples >= 100 are needed")
-    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle_path = vehicle_file(args)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
-    kf = TwoStageKF(vehicle)
+    kf = build("kf", vehicle)
     signals = synthetic_log(
         vehicle, slalom(duration=30.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
     )
@@ -182,11 +121,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"Python step (x {n} steps, {args.repeats} repeats) [us per step]")
     timings: dict[str, list[float]] = {"fast": [], "reference": [], "filterpy": [], "lean": []}
     for _ in range(args.repeats):
-        timings["fast"].append(_per_call_us(fast, n))
-        timings["lean"].append(_per_call_us(lean, n))
-        timings["reference"].append(_per_call_us(reference, min(n, 500)))
+        timings["fast"].append(per_call_us(fast, n))
+        timings["lean"].append(per_call_us(lean, n))
+        timings["reference"].append(per_call_us(reference, min(n, 500)))
         if filterpy is not None:
-            timings["filterpy"].append(_per_call_us(filterpy, n))
+            timings["filterpy"].append(per_call_us(filterpy, n))
     print(f"  TwoStageKF.step (compiled, buffers): {spread(timings['fast'])}"
           f"  (target <= {STEP_TARGET:g} us)")  # fmt: skip
     print(f"  reference_step (CasADi VM + numpy): {spread(timings['reference'])}")
@@ -213,23 +152,17 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fast_selftest(vehicle_path: Path, folder: Path, options: CodegenOptions, flags, args):
-    library = generate(vehicle_path, folder, options, allow_unusual=args.allow_unusual)
-    binary = build_program(library, library.selftest, folder / "selftest_fast", flags=flags)
-    return library, binary
-
-
 def batch_vs_single(vehicle_path: Path, folder: Path, precision: Precision, args) -> None:
     """Print the batched step against the single step (both FAST_CFLAGS) in ``precision``."""
-    _, binary = _fast_selftest(
+    _, binary = fast_selftest(
         vehicle_path, folder / precision.value, CodegenOptions(precision=precision), FAST_CFLAGS,
-        args,
+        args.allow_unusual,
     )  # fmt: skip
     single, batched = [], []
     for _ in range(args.repeats):
-        single.append(_selftest_ns(binary, "bench", args.samples, PASSES))
+        single.append(selftest_ns(binary, "bench", args.samples, PASSES))
         batched.append(
-            _selftest_ns(
+            selftest_ns(
                 binary, "batch-bench", max(args.samples // args.batch, 1), PASSES, args.batch
             )
         )
@@ -261,13 +194,13 @@ def single_step_vs_bounds(vehicle_path: Path, folder: Path, args) -> None:
         ),
     }
     built = {
-        name: _fast_selftest(vehicle_path, folder / f"single{k}", options, flags, args)
+        name: fast_selftest(vehicle_path, folder / f"single{k}", options, flags, args.allow_unusual)
         for k, (name, (options, flags)) in enumerate(variants.items())
     }
     times: dict[str, list[float]] = {name: [] for name in variants}
     for _ in range(args.repeats):
         for name, (_, binary) in built.items():
-            times[name].append(_selftest_ns(binary, "bench", args.samples, PASSES))
+            times[name].append(selftest_ns(binary, "bench", args.samples, PASSES))
     kernel = next(iter(built.values()))[0].kernel
     chain = critical_path(kernel)
     mhz = clock or nominal

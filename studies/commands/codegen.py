@@ -13,19 +13,12 @@ import argparse
 import enum
 from pathlib import Path
 
+from wheelload.estimators import Arrival, BiasStates, Constraint, Loss, MheSettings, ResidualLoss
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
 from wheelload.estimators.logs.output_files import check_output_folder
-from wheelload.estimators.mhe.estimator import (
-    Arrival,
-    BiasStates,
-    Constraint,
-    Loss,
-    MheSettings,
-    ResidualLoss,
-)
-from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.models import load_vehicle
+from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
 
 
 class Estimator(enum.Enum):
@@ -81,7 +74,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=Estimator.KF.value,
         help="kf: two-stage KF (default); mhe: moving-horizon estimator on OSQP",
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument(
         "--out", required=True, help="output folder: new or empty (created if missing)"
     )
@@ -138,7 +131,7 @@ def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estima
 
 def run(args: argparse.Namespace) -> int:
     estimator = Estimator(args.estimator)
-    vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    vehicle_path = vehicle_file(args)
     check_output_folder(Path(args.out), [vehicle_path], force=args.force)
     if estimator is Estimator.MHE:
         return _run_mhe(args, vehicle_path)

@@ -12,38 +12,20 @@ local processes or on a Dask cluster (``--dask ADDRESS``), with a progress bar.
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-import numpy as np
-
-from wheelload.estimators import Estimate, Signals, SuspensionModel
+from wheelload.estimators import SuspensionModel
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
-from wheelload.models import conventions, example_vehicle_path
-from wheelload.studies.commands.options import add_allow_unusual, add_suspension_option
-from wheelload.studies.pipeline.batch import (
-    SUMMARY_NAME,
-    EstimateSettings,
-    estimate_log,
-    expand_logs,
-    run_logs,
-    write_table,
+from wheelload.studies.commands.options import (
+    add_allow_unusual,
+    add_suspension_option,
+    vehicle_file,
 )
-from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline import batch
+from wheelload.studies.pipeline.example_log import example_log_path
 from wheelload.studies.pipeline.lean_estimate import estimate_lean, takes_lean_path
-
-if TYPE_CHECKING:
-    from wheelload.estimators.loops.log_stream import LogStream
-
-WHEELS = tuple(wheel.upper() for wheel in conventions.WHEELS)
-
-
-def example_log_path() -> Path:
-    """The bundled example log (sports car, see studies/data/README.md)."""
-    return Path(str(resources.files("wheelload.studies") / "data" / "example_drive.csv"))
+from wheelload.studies.pipeline.summary import LogHeader, summary, summary_text
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -112,8 +94,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
-    return EstimateSettings(
+def _settings(args: argparse.Namespace, vehicle_path: Path) -> batch.EstimateSettings:
+    return batch.EstimateSettings(
         vehicle=vehicle_path,
         method=method(args.method).name,
         channels=Path(args.channels) if args.channels else None,
@@ -130,7 +112,7 @@ def _settings(args: argparse.Namespace, vehicle_path: Path) -> EstimateSettings:
 def run(args: argparse.Namespace) -> int:
     if args.example:
         logs = args.log or [str(example_log_path())]
-        vehicle_path = Path(args.vehicle) if args.vehicle else example_vehicle_path()
+        vehicle_path = vehicle_file(args)
     else:
         if not args.log or not args.vehicle:
             raise ValueError("give a LOG and --vehicle FILE, or --example")
@@ -138,14 +120,14 @@ def run(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")
     settings = _settings(args, vehicle_path)
-    paths = expand_logs(logs)
+    paths = batch.expand_logs(logs)
     single = len(paths) == 1 and Path(logs[0]).is_file() and len(logs) == 1
     if single:
         return _run_one(paths[0], settings, args)
     return _run_many(paths, settings, args)
 
 
-def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> int:
+def _run_one(path: Path, settings: batch.EstimateSettings, args: argparse.Namespace) -> int:
     outputs = [Path(p) for p in (args.out, args.plot) if p]
     inputs = [path, settings.vehicle, *([settings.channels] if settings.channels else [])]
     check_outputs(outputs, inputs, force=args.force)
@@ -156,10 +138,10 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
     lean = not (args.plot or args.in_memory) and takes_lean_path(path, settings)
     if lean and _run_lean(path, settings, args):
         return 0
-    result = estimate_log(path, settings)
+    result = batch.estimate_log(path, settings)
     estimate, signals = result.estimate, result.signals
     if args.out:
-        write_table(estimate.to_pandas(), Path(args.out), replace=args.force)
+        batch.write_table(estimate.to_pandas(), Path(args.out), replace=args.force)
     if args.plot:
         from wheelload.estimators.logs.output_files import atomic_write
         from wheelload.studies.plots.estimate import plot_estimate
@@ -167,20 +149,14 @@ def _run_one(path: Path, settings: EstimateSettings, args: argparse.Namespace) -
         title = f"{path.name} — {result.vehicle.name}"
         with atomic_write(Path(args.plot), replace=args.force) as temporary:
             plot_estimate(estimate, signals, temporary, title=title)
-    print(f"method {settings.method}: {method(settings.method).description}")
-    print(summary(estimate, signals, result.vehicle.name))
-    for note in result.notes:
-        print(note)
-    for warning in result.warnings:
-        print(f"warning: {warning}")
-    if args.out:
-        print(f"estimates written to {args.out}")
+    text = summary(estimate, signals, result.vehicle.name)
+    _print_summary(settings, text, result.notes, result.warnings, args)
     if args.plot:
         print(f"figure written to {args.plot}")
     return 0
 
 
-def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) -> bool:
+def _run_lean(path: Path, settings: batch.EstimateSettings, args: argparse.Namespace) -> bool:
     """``_run_one`` on the lean whole-log path (``studies/pipeline/lean_estimate.py``).
 
     Memory is bounded by the chunk (plus 8 bytes a sample for the time column
@@ -193,18 +169,24 @@ def _run_lean(path: Path, settings: EstimateSettings, args: argparse.Namespace) 
         return False
     stream = result.stream
     header = LogHeader.of(stream, has_reference=stream.reference_present is not None)
-    print(f"method {settings.method}: {method(settings.method).description}")
-    print(summary_text(header, result.digest, result.faults, result.vehicle.name))
-    for note in result.notes:
-        print(note)
-    for warning in result.warnings:
-        print(f"warning: {warning}")
-    if args.out:
-        print(f"estimates written to {args.out}")
+    text = summary_text(header, result.digest, result.faults, result.vehicle.name)
+    _print_summary(settings, text, result.notes, result.warnings, args)
     return True
 
 
-def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Namespace) -> int:
+def _print_summary(settings: batch.EstimateSettings, text: str, notes, warnings, args) -> None:
+    """The method, the log's summary, its notes and warnings, and where the estimates went."""
+    print(f"method {settings.method}: {method(settings.method).description}")
+    print(text)
+    for note in notes:
+        print(note)
+    for warning in warnings:
+        print(f"warning: {warning}")
+    if args.out:
+        print(f"estimates written to {args.out}")
+
+
+def _run_many(paths: list[Path], settings: batch.EstimateSettings, args: argparse.Namespace) -> int:
     if args.plot:
         raise ValueError("--plot is for one log; with many logs give --out FOLDER")
     folder = Path(args.out) if args.out else None
@@ -212,148 +194,16 @@ def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Name
         folder.mkdir(parents=True, exist_ok=True)
     if folder is not None and folder.resolve() in {p.parent.resolve() for p in paths}:
         raise ValueError(f"{folder}: holds the input logs: write the estimates into another folder")
-    table = run_logs(
+    table = batch.run_logs(
         paths, settings, folder, workers=args.workers, dask_address=args.dask, force=args.force
     )
     columns = ["log", "samples", "mode", "mean_fz_fl", "mean_fz_rr", "min_fz", "rmse_pooled"]
     shown = table[[c for c in columns + ["error"] if c in table.columns]]
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     if folder is not None:
-        write_table(table, folder / SUMMARY_NAME, replace=args.force)
-        print(f"{len(paths)} logs: estimates and {SUMMARY_NAME} written to {folder}")
+        batch.write_table(table, folder / batch.SUMMARY_NAME, replace=args.force)
+        print(f"{len(paths)} logs: estimates and {batch.SUMMARY_NAME} written to {folder}")
     failed = int((table["error"] != "").sum()) if "error" in table.columns else 0
     if failed:
         print(f"{failed} of {len(paths)} logs failed (see the error column)")
     return 1 if failed else 0
-
-
-def digest_of(estimate: Estimate, signals: Signals) -> EstimateDigest:
-    """The summary figures of a whole-log estimate (one chunk)."""
-    reference = signals.reference
-    wheels = None if reference is None else np.any(np.isfinite(reference), axis=0)
-    digest = EstimateDigest(
-        samples=len(estimate), reference_wheels=wheels, has_std=estimate.has_std
-    )
-    digest.add(estimate.loads, estimate.std, estimate.flags, reference)
-    return digest
-
-
-def row_use(estimate: Estimate) -> str:
-    """Share of samples in which each suspension row and the roll-split row were used.
-
-    A suspension row needs both travel sensors of its axle (the anti-roll bar
-    couples them); the roll-split row is used when no suspension row is.
-    """
-    digest = EstimateDigest(samples=len(estimate), reference_wheels=None)
-    digest.add(estimate.loads, estimate.std, estimate.flags)
-    return _row_use(digest)
-
-
-def _row_use(digest: EstimateDigest) -> str:
-    shares = ", ".join(
-        f"{w} {100 * (1 - s / digest.n):.0f} %" for w, s in zip(WHEELS, digest.suspension_skipped)
-    )
-    split = 100 * digest.split / digest.n
-    return f"suspension rows used: {shares}; roll-split row used: {split:.0f} %"
-
-
-def guard_lines(estimate: Estimate) -> list[str]:
-    """Summary lines of the guards: gated and implausible samples, isolated sensor faults."""
-    digest = EstimateDigest(samples=len(estimate), reference_wheels=None)
-    digest.add(estimate.loads, estimate.std, estimate.flags)
-    return _guard_lines(digest, estimate.sensor_faults)
-
-
-def _guard_lines(digest: EstimateDigest, faults) -> list[str]:
-    lines = []
-    named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in digest.guards.items() if n)
-    if named:
-        lines.append(f"samples flagged by the guards: {named}")
-    for fault in faults:
-        lines.append(
-            f"sensor fault: {fault.channel} from {fault.start:.2f} s to {fault.end:.2f} s "
-            f"(test statistic {fault.statistic:.1f}); the channel was left out of the updates"
-        )
-    return lines
-
-
-def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
-    """A per-wheel text summary, with the paper's metrics where reference loads exist.
-
-    A metrics problem is reported in the text, never raised: the estimates
-    stand on their own.
-    """
-    header = LogHeader.of(signals, has_reference=signals.reference is not None)
-    return summary_text(header, digest_of(estimate, signals), estimate.sensor_faults, vehicle_name)
-
-
-@dataclass(frozen=True, kw_only=True)
-class LogHeader:
-    """What the summary says of the log itself."""
-
-    source: str
-    samples: int
-    duration: float
-    sample_rate: float
-    velocities_derived: bool
-    mode: str
-    has_reference: bool
-
-    @classmethod
-    def of(cls, log: Signals | LogStream, *, has_reference: bool) -> LogHeader:
-        """The header of a log read whole (:class:`Signals`) or scanned for the lean path
-        (:class:`~wheelload.estimators.loops.log_stream.LogStream`): both give the source, time
-        column, sample rate, sensor set and whether velocities were derived."""
-        return cls(
-            source=log.source,
-            samples=len(log.t),
-            duration=float(log.t[-1] - log.t[0]),
-            sample_rate=log.sample_rate,
-            velocities_derived=log.velocities_derived,
-            mode=log.mode(),
-            has_reference=has_reference,
-        )
-
-
-def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name: str) -> str:
-    """The text of :func:`summary` from a log's header and its :class:`EstimateDigest`."""
-    lines = [
-        f"{header.source}: {header.samples} samples, {header.duration:.2f} s at "
-        f"{header.sample_rate:.0f} Hz, vehicle '{vehicle_name}'"
-        + (
-            ", suspension velocities derived (20 Hz differentiator)"
-            if header.velocities_derived
-            else ""
-        ),
-        f"{'wheel':>6} {'mean [N]':>10} {'min [N]':>10} {'max [N]':>10} {'mean 1σ [N]':>12}",
-    ]
-    means, stds = digest.means(), digest.mean_std()
-    for i, wheel in enumerate(WHEELS):
-        std = f"{stds[i]:12.0f}" if digest.has_std else f"{'n/a':>12}"
-        lines.append(
-            f"{wheel:>6} {means[i]:10.0f} {digest.load_min[i]:10.0f} "
-            f"{digest.load_max[i]:10.0f} {std}"
-        )
-    lines.append(f"sensor set: {header.mode}")
-    lines.append(_row_use(digest))
-    lines.append(f"samples with a skipped update (missing or guarded input): {digest.skipped}")
-    if digest.assumed:
-        lines.append(f"samples with an assumed input (status bits 20-22): {digest.assumed}")
-    lines.extend(_guard_lines(digest, faults))
-    for flag, dropped in digest.dropped.items():
-        if dropped:
-            name = str(flag.name).lower().replace("_", " ")
-            lines.append(f"samples with a model term dropped ({name}): {dropped}")
-    if header.has_reference:
-        try:
-            names, rows = digest.metric_rows(header.source)
-        except ValueError as error:
-            lines.append(f"no error metrics: {error}")
-            return "\n".join(lines)
-        lines.append("error against the log's reference loads (Siegloff & Choi eq. 26-34):")
-        lines.append(f"{'':>8}{'RMSE [N]':>10}{'RMSE [%]':>10}{'P95 [N]':>10}{'Max [N]':>10}")
-        for name, (rmse, rmse_percent, p95, peak) in zip(names, rows, strict=True):
-            lines.append(
-                f"{name.upper():>8}{rmse:10.1f}{rmse_percent:10.2f}{p95:10.1f}{peak:10.1f}"
-            )
-    return "\n".join(lines)

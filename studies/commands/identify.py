@@ -9,40 +9,22 @@ formats: ``wheelload.estimators.identification.data``.
 from __future__ import annotations
 
 import argparse
-import tomllib
 from pathlib import Path
 
-from wheelload.estimators.identification import (
-    FitLoss,
-    FitSettings,
-    default_model,
-    drive_gates,
-    identify,
-    piecewise_model,
-    read_drive,
-    read_rig,
-)
-from wheelload.estimators.identification.file_keys import (
-    lower_bounds,
-    parameter_keys,
-    plausible_bounds,
-)
-from wheelload.estimators.identification.model import base_parameter
+from wheelload.estimators.identification import FitLoss
 from wheelload.estimators.identification.report import (
     correlation_table,
-    file_changes,
     markdown_report,
     parameter_table,
     rmse_table,
 )
-from wheelload.models import ModelParameters, load_vehicle
+from wheelload.models import load_vehicle
 from wheelload.models.vehicle_file import (
     check_output_path,
-    prepend_comment,
-    set_values,
     write_text_atomically,
     write_vehicle_text,
 )
+from wheelload.studies.pipeline.identification import identify_vehicle
 
 REPORT_FILES = (
     "report.md",
@@ -106,9 +88,7 @@ def _knots(args: argparse.Namespace) -> tuple[float, ...]:
 
 def handle(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle)
-    vehicle = load_vehicle(vehicle_path)
-    text = vehicle_path.read_text(encoding="utf-8")
-    table = tomllib.loads(text)
+    load_vehicle(vehicle_path)  # the vehicle file's errors before the outputs'
     inputs = (vehicle_path, *map(Path, args.rig), *map(Path, args.drive))
     out = check_output_path(args.out, inputs, args.force)
     report = Path(args.report) if args.report else None
@@ -116,40 +96,20 @@ def handle(args: argparse.Namespace) -> int:
         existing = [name for name in REPORT_FILES if (report / name).exists()]
         if existing:
             raise ValueError(f"{report / existing[0]} exists: choose another --report or --force")
-    knots = _knots(args)
-    model = piecewise_model(knots) if knots else default_model()
-    sets = tuple(s for path in args.rig for s in read_rig(path))
-    sets += tuple(read_drive(path, model.channel_names(), model.optional) for path in args.drive)
-    # The terms the vehicle file switches on, where the drive logs carry their inputs.
-    gates = drive_gates(ModelParameters.from_vehicle(vehicle), sets)
-    model = piecewise_model(knots, gates) if knots else default_model(gates)
-    keys = parameter_keys(table)
-    bounds = lower_bounds(table, keys)
-    low, high = plausible_bounds(vehicle)
-    bounds |= low
-    settings = FitSettings(
+    identified = identify_vehicle(
+        vehicle_path,
+        rig=args.rig,
+        drive=args.drive,
+        knots=_knots(args),
         loss=FitLoss(args.robust) if args.robust else FitLoss.LINEAR,
         fixed=frozenset(name.strip() for name in args.fix.split(",") if name.strip()),
         precision=args.precision,
-        lower={
-            name: bounds[base_parameter(name)]
-            for name in model.parameter_names()
-            if base_parameter(name) in bounds
-        },
-        upper={name: high[name] for name in model.parameter_names() if name in high},
         instrumental=args.instrumental,
     )
-    result = identify(model, sets, ModelParameters.from_vehicle(vehicle), settings)
-    changes = file_changes(result, keys)
-    header = (
-        f"Identified by `wheelload identify` from {vehicle_path.name} with "
-        + ", ".join(data.label() for data in sets)
-        + f" ({result.loss.value} loss). Changed keys carry an 'identified' comment.\n"
-    )
-    new_text = prepend_comment(set_values(text, changes), header) if changes else text
-    write_vehicle_text(new_text, out, inputs=inputs, force=args.force)
+    result, keys = identified.result, identified.keys
+    write_vehicle_text(identified.text, out, inputs=inputs, force=args.force)
     params = parameter_table(result, keys)
-    print(f"identified {len(result.free)} parameters from {len(sets)} data sets:")
+    print(f"identified {len(result.free)} parameters from {len(identified.sets)} data sets:")
     print(params.drop(columns=["sources"]).to_string(index=False, float_format="%.5g"))
     for warning in result.warnings:
         print(f"warning: {warning}")

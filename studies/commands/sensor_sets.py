@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import add_vehicle_option
 from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
 from wheelload.studies.pipeline.batch import expand_logs
 
@@ -18,7 +19,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "sensor-sets", help="partial sensor sets and the roll-split sweep on a log"
     )
     parser.add_argument("log", help="log (CSV or Parquet) with all channels and reference loads")
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    add_vehicle_option(parser)
     parser.add_argument(
         "--splits", type=float, nargs="+", default=[0.3, 0.4, 0.45, 0.55, 0.6, 0.7],
         help="roll_split_front values for the IMU-only sweep (the default split is added)",
@@ -32,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     frame = pd.read_parquet(path) if path.suffix != ".csv" else pd.read_csv(path, comment="#")
     table = sensor_set_table(frame, vehicle, Path(path).name)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
-    default = float(TwoStageKF(vehicle).parameters.roll_split_front)
+    default = float(build("kf", vehicle).parameters.roll_split_front)
     truth = reference_split(frame, vehicle)
     print(
         f"\nroll split: default {default:.4f} (springs, bars and roll centres), "

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators.family.standstill import WeighSettings, sprung_geometry, weigh
+from wheelload.estimators import WeighSettings, sprung_geometry, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import load_vehicle, vehicle_mass_centre
 from wheelload.models.vehicle_file import (

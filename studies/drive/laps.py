@@ -11,16 +11,12 @@ data and licences: ``studies/data/tracks/README.md``.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from wheelload.models.vehicle import Vehicle
 from wheelload.studies.drive import tracks
 from wheelload.studies.drive.roads import Road
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.simulation import Run
 from wheelload.studies.drive.speed_profile import lap_speed_profile
-
-if TYPE_CHECKING:
-    from wheelload.studies.drive.scenarios import Options
 
 GRIP_MARGIN = 0.8  # -, share of the cornering friction the profile plans with
 RUN_IN = 200.0  # m driven before the start line

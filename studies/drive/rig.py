@@ -71,41 +71,34 @@ def bar_force_function(vehicle: Vehicle, axle: int) -> ca.Function:
     return ca.Function("rig_bar", [left, right], [force], ["d_left", "d_right"], ["F"])
 
 
+def _record(t, key: str, name: str, travels: dict, force) -> pd.DataFrame:
+    """One rig record: time, which corner or axle, the measured travels and force."""
+    return pd.DataFrame({"t": t, key: name, **travels, "force": force})
+
+
 def rig_sweep(vehicle: Vehicle, settings: RigSettings) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Corner-rig and bar-rig records of all four corners and both axles."""
     rng = np.random.default_rng(np.random.SeedSequence([settings.seed, 4711]))
     t, d, v = _sweep(settings)
     n = t.size
+    noisy = lambda x, scale: x + scale * rng.standard_normal(n)  # noqa: E731
     corner_frames = []
     for wheel, name in enumerate(WHEELS):
         force = np.asarray(corner_force_function(vehicle, wheel).map(n)(d, v)).ravel()
+        travels = {"d": noisy(d, settings.travel_noise), "v": v}
         corner_frames.append(
-            pd.DataFrame(
-                {
-                    "t": t,
-                    "corner": name,
-                    "d": d + settings.travel_noise * rng.standard_normal(n),
-                    "v": v,
-                    "force": force + settings.force_noise * rng.standard_normal(n),
-                }
-            )
+            _record(t, "corner", name, travels, noisy(force, settings.force_noise))
         )
     bar_frames = []
     for axle, name in enumerate(AXLES):
         left = settings.amplitude * np.sin(2 * np.pi * 0.5 * t)
         right = settings.amplitude * np.sin(2 * np.pi * 0.8 * t + 1.0)
         force = np.asarray(bar_force_function(vehicle, axle).map(n)(left, right)).ravel()
-        bar_frames.append(
-            pd.DataFrame(
-                {
-                    "t": t,
-                    "axle": name,
-                    "d_left": left + settings.travel_noise * rng.standard_normal(n),
-                    "d_right": right + settings.travel_noise * rng.standard_normal(n),
-                    "force": force + settings.force_noise * rng.standard_normal(n),
-                }
-            )
-        )
+        travels = {
+            "d_left": noisy(left, settings.travel_noise),
+            "d_right": noisy(right, settings.travel_noise),
+        }
+        bar_frames.append(_record(t, "axle", name, travels, noisy(force, settings.force_noise)))
     return pd.concat(corner_frames, ignore_index=True), pd.concat(bar_frames, ignore_index=True)
 
 

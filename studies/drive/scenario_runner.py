@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 from dataclasses import dataclass
 from importlib.metadata import version
 from pathlib import Path
@@ -12,8 +13,8 @@ import pandas as pd
 
 from wheelload.models.conventions import WHEELS
 from wheelload.models.vehicle_file import load_vehicle
-from wheelload.studies.drive.scenario_log import file_hash
-from wheelload.studies.drive.scenarios import Options, scenario_run
+from wheelload.studies.drive.scenario_log import file_hash, write_log
+from wheelload.studies.drive.scenarios import SCENARIOS, Options, scenario_run
 from wheelload.studies.drive.sensors import measure
 from wheelload.studies.drive.simulation import Truth, simulate
 
@@ -80,3 +81,18 @@ def run_scenario(
         "summary": summary(truth.frame),
     }
     return ScenarioResult(log=log, truth=truth, metadata=metadata)
+
+
+def simulate_logs(
+    names: list[str], folder: Path, vehicle_path: Path, allow_unusual: bool = False
+) -> Iterator[tuple[str, Path, int]]:
+    """Simulate the named scenarios on the plant, one after the other, each written to
+    ``folder/NAME.parquet``: ``(name, path, samples)`` as each is written."""
+    unknown = [name for name in names if name not in SCENARIOS]
+    if unknown:
+        raise ValueError(f"unknown scenario '{unknown[0]}'; choose from {', '.join(SCENARIOS)}")
+    for name in names:
+        result = run_scenario(name, vehicle_path, allow_unusual=allow_unusual)
+        path = folder / f"{name}.parquet"
+        write_log(result.log, path, result.metadata)
+        yield name, path, len(result.log)

@@ -17,7 +17,6 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,22 +24,11 @@ from wheelload.models.plant.dynamics import vehicle_plant
 from wheelload.models.vehicle import GRAVITY, Vehicle
 from wheelload.studies.drive import laps
 from wheelload.studies.drive.roads import Road, build_road, iso8608_profile, smooth_step
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.simulation import Run
 
 KMH = 1.0 / 3.6
 GRID = 0.25  # m, road table spacing of the short scenarios
-
-
-@dataclass(frozen=True, kw_only=True)
-class Options:
-    """Scenario settings recorded in the log metadata."""
-
-    roughness: str | None = None  # ISO 8608 class A-D, or None for a smooth road
-    seed: int = 0
-    min_wavelength: float = 1.6  # m, bounce-sweep only
-    shorten: float = 1.0  # fraction of a lap to drive (tests); 1 = full lap
-    grade: float = 0.0  # standstill only: rise over run, > 0 uphill
-    bank: float = 0.0  # standstill only: rise over run, > 0 left edge higher
 
 
 #: The roughness fades in (cosine ramp) from RUN_IN[0] to RUN_IN[0] + RUN_IN[1] metres after
@@ -229,8 +217,9 @@ SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
 }
 
 
-def scenario_run(name: str, vehicle: Vehicle, options: Options = Options()) -> Run:
-    """The :class:`Run` of a named scenario, or an error listing the names."""
+def scenario_run(name: str, vehicle: Vehicle, options: Options | None = None) -> Run:
+    """The :class:`Run` of a named scenario (default options), or an error listing the names."""
+    options = Options() if options is None else options
     if name not in SCENARIOS:
         raise ValueError(f"unknown scenario '{name}'; choose from {', '.join(SCENARIOS)}")
     return SCENARIOS[name](vehicle, options)

@@ -48,6 +48,18 @@ DEG = np.pi / 180.0
 
 
 @dataclass(frozen=True, kw_only=True)
+class InertialNoise:
+    """One inertial channel's errors: white noise to its bandwidth, a turn-on bias and a
+    bias random walk that reaches ``bias_instability`` after ``instability_time``."""
+
+    noise_density: float  # unit/sqrt(Hz)
+    bandwidth: float  # Hz
+    bias: float  # 1 sigma turn-on bias
+    bias_instability: float
+    instability_time: float = 100.0  # s
+
+
+@dataclass(frozen=True, kw_only=True)
 class ImuModel:
     accel_noise_density: float = 120.0 * MICRO_G  # m/s^2/sqrt(Hz)
     accel_bandwidth: float = 324.0  # Hz
@@ -59,9 +71,31 @@ class ImuModel:
     gyro_bias_instability: float = 10.0 * DEG / 3600.0  # rad/s
     instability_time: float = 100.0  # s, horizon over which the walk reaches the instability
 
+    @property
+    def accelerometer(self) -> InertialNoise:
+        """The errors of each accelerometer axis."""
+        return InertialNoise(
+            noise_density=self.accel_noise_density,
+            bandwidth=self.accel_bandwidth,
+            bias=self.accel_bias,
+            bias_instability=self.accel_bias_instability,
+            instability_time=self.instability_time,
+        )
+
+    @property
+    def gyroscope(self) -> InertialNoise:
+        """The errors of each gyroscope axis."""
+        return InertialNoise(
+            noise_density=self.gyro_noise_density,
+            bandwidth=self.gyro_bandwidth,
+            bias=self.gyro_bias,
+            bias_instability=self.gyro_bias_instability,
+            instability_time=self.instability_time,
+        )
+
 
 @dataclass(frozen=True, kw_only=True)
-class HubAccelerometerModel:
+class HubAccelerometerModel(InertialNoise):
     noise_density: float = 1000.0 * MICRO_G  # m/s^2/sqrt(Hz)
     bandwidth: float = 1000.0  # Hz
     bias: float = 5000.0 * MICRO_G  # m/s^2, 1 sigma residual bias after zeroing
@@ -77,11 +111,13 @@ class TravelSensorModel:
     bits: int = 12
 
 
-def _imu_channel(clean, rng, dt, density, bandwidth, bias, instability, horizon, scale):
+def _inertial_channel(clean, rng, dt, noise: InertialNoise, scale):
     count = clean.size
-    white = density * np.sqrt(min(bandwidth, 0.5 / dt)) * rng.standard_normal(count)
-    walk = np.cumsum(instability / np.sqrt(horizon) * np.sqrt(dt) * rng.standard_normal(count))
-    return clean + scale * (bias * rng.standard_normal() + walk + white)
+    white = noise.noise_density * np.sqrt(min(noise.bandwidth, 0.5 / dt))
+    white = white * rng.standard_normal(count)
+    step = noise.bias_instability / np.sqrt(noise.instability_time) * np.sqrt(dt)
+    walk = np.cumsum(step * rng.standard_normal(count))
+    return clean + scale * (noise.bias * rng.standard_normal() + walk + white)
 
 
 def measure(
@@ -100,30 +136,12 @@ def measure(
         raise ValueError(f"noise scale must be >= 0, got {scale}")
     dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
     log = truth.copy()
-    for axis in ("ax", "ay", "az"):
-        log[axis] = _imu_channel(
-            truth[axis].to_numpy(),
-            rng,
-            dt,
-            imu.accel_noise_density,
-            imu.accel_bandwidth,
-            imu.accel_bias,
-            imu.accel_bias_instability,
-            imu.instability_time,
-            scale,
-        )
-    for axis in ("wx", "wy", "wz"):
-        log[axis] = _imu_channel(
-            truth[axis].to_numpy(),
-            rng,
-            dt,
-            imu.gyro_noise_density,
-            imu.gyro_bandwidth,
-            imu.gyro_bias,
-            imu.gyro_bias_instability,
-            imu.instability_time,
-            scale,
-        )
+    for axes, noise in (
+        (("ax", "ay", "az"), imu.accelerometer),
+        (("wx", "wy", "wz"), imu.gyroscope),
+    ):
+        for axis in axes:
+            log[axis] = _inertial_channel(truth[axis].to_numpy(), rng, dt, noise, scale)
     step = scale * travel.full_scale / 2**travel.bits
     for wheel in WHEELS:
         d = truth[f"d_{wheel}"].to_numpy()
@@ -142,15 +160,5 @@ def measure(
     for wheel in WHEELS:
         if f"az_{wheel}" not in truth.columns:
             continue
-        log[f"az_{wheel}"] = _imu_channel(
-            truth[f"az_{wheel}"].to_numpy(),
-            rng,
-            dt,
-            hub.noise_density,
-            hub.bandwidth,
-            hub.bias,
-            hub.bias_instability,
-            hub.instability_time,
-            scale,
-        )
+        log[f"az_{wheel}"] = _inertial_channel(truth[f"az_{wheel}"].to_numpy(), rng, dt, hub, scale)
     return log

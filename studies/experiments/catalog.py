@@ -8,11 +8,11 @@ from functools import partial
 
 from wheelload.estimators import SuspensionModel
 from wheelload.studies.experiments import (
-    ablation,
     cheon_structural,
     headline,
     mismatch,
     monte_carlo,
+    vehicle_file_ablation,
     vehicles,
 )
 from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
@@ -22,7 +22,7 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "iso-dlc": partial(headline.run, scenario="iso-dlc"),
     "nordschleife": partial(headline.run, scenario="nordschleife"),
     "hockenheim": partial(headline.run, scenario="hockenheim"),
-    "ablation": ablation.run,
+    "ablation": vehicle_file_ablation.run,
     "cheon-structural": cheon_structural.run,
     "monte-carlo": monte_carlo.run,
     "mismatch": mismatch.run,

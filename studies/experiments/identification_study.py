@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF, noise_densities, read_log
+from wheelload.estimators import noise_densities, read_log
 from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
 from wheelload.estimators.identification.file_keys import (
     lower_bounds,
@@ -35,6 +35,7 @@ from wheelload.estimators.identification.file_keys import (
 from wheelload.estimators.identification.fit import FitSettings
 from wheelload.estimators.identification.report import file_changes
 from wheelload.estimators.identification.tuning import FilterRuns, tune, tuned_vehicle
+from wheelload.estimators.registry import build
 from wheelload.models import (
     ModelParameters,
     Vehicle,
@@ -179,7 +180,7 @@ def run_study(settings: StudySettings, folder: Path) -> tuple[pd.DataFrame, pd.D
         signals = read_log(logs[name])
         row = {"scenario": name}
         for label, vehicle in vehicles.items():
-            loads = TwoStageKF(vehicle).run(signals).loads
+            loads = build("kf", vehicle).run(signals).loads
             row[f"rmse_{label}"] = pooled_metrics(loads, signals.reference)["RMSE"]
         row["identified_vs_true_pct"] = 100 * (row["rmse_identified"] / row["rmse_true"] - 1)
         rows.append(row)

@@ -30,10 +30,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import Sample, Signals, TwoStageKF
-from wheelload.estimators.kf.guard import GUARDS_OFF
-from wheelload.estimators.kf.projection import ProjectionKF, Weighting
-from wheelload.estimators.mhe.estimator import (
+from wheelload.estimators import (
+    GUARDS_OFF,
     Arrival,
     BiasStates,
     Constraint,
@@ -41,13 +39,20 @@ from wheelload.estimators.mhe.estimator import (
     MheSettings,
     MovingHorizonEstimator,
     ResidualLoss,
+    Sample,
+    Signals,
+    TwoStageKF,
 )
-from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.registry import build
 from wheelload.models import Vehicle
 from wheelload.studies.experiments.faults.sensor_faults import Fault, inject
 from wheelload.studies.metrics import pooled_metrics
 
 HORIZONS = (1, 5, 10, 20, 50)
+
+#: The plant scenarios the study simulates when ``--scenarios`` names none.
+STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -59,9 +64,9 @@ class StudySettings:
 def estimators(vehicle: Vehicle, horizons: tuple[int, ...]) -> list:
     """The compared estimators, filters first."""
     family = [
-        TwoStageKF(vehicle),
-        ProjectionKF(vehicle, weighting=Weighting.MAXIMUM_PROBABILITY),
-        ProjectionKF(vehicle, weighting=Weighting.LEAST_SQUARES),
+        build("kf", vehicle),
+        build("projection-mp", vehicle),
+        build("projection-ls", vehicle),
     ]
     for constraint in Constraint:
         for bounded in (False, True):
@@ -186,16 +191,20 @@ class Candidate:
 
 PLAIN_KF = "two-stage KF, no guards"
 
+#: Huber at 0.5σ on the suspension rows: leaves this plant's model residuals (0.1-0.2σ)
+#: quadratic and discounts faults.
+SUSPENSION_HUBER = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
+#: Huber at 0.2σ: discounts more of both.
+TIGHT_HUBER = ResidualLoss(kind=Loss.HUBER, threshold=0.2)
+
 
 def robust_candidates(horizon: int = 10, quick: bool = False) -> list[Candidate]:
     """The KF with and without its guards, its RTS smoother, and the MHE settings a KF lacks.
 
-    Huber 0.5σ on the suspension rows leaves this plant's model residuals
-    (0.1-0.2σ) quadratic and discounts faults; 0.2σ discounts more of both.
+    Huber 0.5σ on the suspension rows (:data:`SUSPENSION_HUBER`), 0.2σ
+    (:data:`TIGHT_HUBER`), L1.
     """
-    huber = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
-    tight = ResidualLoss(kind=Loss.HUBER, threshold=0.2)
-    l1 = ResidualLoss(kind=Loss.L1)
+    huber, tight, l1 = SUSPENSION_HUBER, TIGHT_HUBER, ResidualLoss(kind=Loss.L1)
     lag = min(5, horizon - 1)
     rows = [
         Candidate(name="two-stage KF", settings=None),
@@ -267,7 +276,7 @@ def robust_sweep(
             raise ValueError(f"{signals.source}: the log has no reference loads (fz_* columns)")
     candidates = candidates or robust_candidates()
     reference = np.vstack([signals.reference for signals in logs])
-    filters = {True: TwoStageKF(vehicle), False: TwoStageKF(vehicle, guard_settings=GUARDS_OFF)}
+    filters = {True: build("kf", vehicle), False: build("kf", vehicle, guard_settings=GUARDS_OFF)}
     rows = []
     for candidate in candidates:
         kf = filters[candidate.guards]

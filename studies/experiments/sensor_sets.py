@@ -15,7 +15,8 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF, signals_from_frame
+from wheelload.estimators import signals_from_frame
+from wheelload.estimators.registry import build
 from wheelload.models import Vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.studies.metrics import wheel_metrics
@@ -50,7 +51,7 @@ def sensor_set_table(frame: pd.DataFrame, vehicle: Vehicle, source: str) -> pd.D
     rows = []
     for name, edit in MODES.items():
         signals = signals_from_frame(edit(frame), source=f"{source} ({name})")
-        estimate = TwoStageKF(vehicle).run(signals)
+        estimate = build("kf", vehicle).run(signals)
         metrics = wheel_metrics(estimate.loads, signals.reference, source=source)
         rows.append({
             "mode": name,
@@ -71,7 +72,7 @@ def split_sweep(frame: pd.DataFrame, vehicle: Vehicle, splits: list[float]) -> p
     rows = []
     for split in splits:
         suspension = dataclasses.replace(vehicle.suspension, roll_split_front=split)
-        estimate = TwoStageKF(vehicle.replace(suspension=suspension)).run(signals)
+        estimate = build("kf", vehicle.replace(suspension=suspension)).run(signals)
         row = {"roll_split_front": split}
         for axle, (left, right) in (("front", (0, 1)), ("rear", (2, 3))):
             truth = reference[:, left] - reference[:, right]

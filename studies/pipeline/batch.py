@@ -26,15 +26,12 @@ from wheelload.estimators import (
     DEFAULT_MODEL,
     Estimate,
     Signals,
-    StepFlag,
     SuspensionModel,
-    TwoStageKF,
+    guard_settings_for,
     read_log,
     step_function,
 )
 from wheelload.estimators.codegen.batched import run_batched
-from wheelload.estimators.kf.guard import guard_settings_for
-from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
 from wheelload.estimators.logs.checks import check_wiring, describe, raise_for_wiring
 from wheelload.estimators.logs.output_files import write_frame
 from wheelload.estimators.logs.plausibility import (
@@ -44,11 +41,12 @@ from wheelload.estimators.logs.plausibility import (
 )
 from wheelload.estimators.logs.readers import SUFFIXES
 from wheelload.estimators.logs.signals import coarse_travel_note
+from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method
 from wheelload.models import Vehicle, load_vehicle
-from wheelload.models.conventions import WHEELS
-from wheelload.studies.metrics import wheel_metrics
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
+from wheelload.studies.pipeline.measured_static import measured_static_loads
+from wheelload.studies.pipeline.summary import LoadFigures, LogHeader, summary_row
 from wheelload.studies.workers import ignore_interrupts
 
 if TYPE_CHECKING:
@@ -119,10 +117,10 @@ def _vehicle(path: Path, allow_unusual: bool = False) -> Vehicle:
 
 
 @functools.lru_cache(maxsize=8)
-def _filter(vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None) -> TwoStageKF:
-    """A filter whose compiled loop is built, cached per process."""
+def _filter(vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None) -> Estimator:
+    """The two-stage KF (``kf``) whose compiled loop is built, cached per process."""
     initial = None if static is None else np.array(static)
-    kf = TwoStageKF(_vehicle(vehicle, allow_unusual), static=initial, step=_step())
+    kf = build("kf", _vehicle(vehicle, allow_unusual), static=initial, step=_step())
     kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
                    d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
     return kf
@@ -144,16 +142,8 @@ def _prepare_log(path: Path, settings: EstimateSettings):
         plausibility = check_plausibility(signals, vehicle)
         raise_for_plausibility(plausibility, signals.source)
         notes.append(describe_plausibility(plausibility))
-    static = None
-    if settings.corner_weights is not None:
-        static = corner_weight_loads(settings.corner_weights)
-        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
-    if settings.still_period:
-        still = check_still_period(
-            signals, vehicle, settings.still_period, static=static, noise=settings.still_noise
-        )
-        static = still.static
-        notes.append(still.reason)
+    static, reasons = measured_static_loads(signals, vehicle, settings)
+    notes += reasons
     return vehicle, signals, notes, static
 
 
@@ -180,6 +170,11 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
         notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")
     else:
         estimate = estimator.run(signals)
+    return _log_result(path, vehicle, signals, notes, estimate)
+
+
+def _log_result(path: Path, vehicle: Vehicle, signals: Signals, notes, estimate) -> LogResult:
+    """A log's estimate with the warnings its signals and loads give."""
     warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
     return LogResult(
         signals=signals, estimate=estimate, vehicle=vehicle, notes=tuple(notes),
@@ -201,38 +196,12 @@ def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> No
     write_frame(frame, path, replace=replace)
 
 
-def _log_columns(path: Path, log) -> dict:
-    """The summary row's columns of the log itself; ``log`` a ``Signals`` or ``LogStream``."""
-    return {
-        "log": str(path),
-        "samples": len(log.t),
-        "duration_s": float(log.t[-1] - log.t[0]),
-        "rate_hz": log.sample_rate,
-        "mode": log.mode(),
-    }
-
-
-def summary_row(path: Path, result: LogResult) -> dict:
-    """One row of the summary table."""
-    estimate, signals = result.estimate, result.signals
-    row = _log_columns(path, signals)
-    for i, wheel in enumerate(WHEELS):
-        row[f"mean_fz_{wheel}"] = float(estimate.loads[:, i].mean())
-    for i, wheel in enumerate(WHEELS):
-        row[f"mean_std_{wheel}"] = float(estimate.std[:, i].mean())
-    row["skipped_samples"] = int(np.count_nonzero(estimate.flags & StepFlag.skipped_mask()))
-    row["negative_samples"] = int((estimate.loads < 0).any(axis=1).sum())
-    row["min_fz"] = float(estimate.loads.min())
-    row["rmse_pooled"] = np.nan
-    if signals.reference is not None and np.isfinite(signals.reference).any():
-        try:
-            table = wheel_metrics(estimate.loads, signals.reference, source=str(path))
-            row["rmse_pooled"] = float(table.loc["pooled", "RMSE"])
-        except ValueError:
-            pass  # the row keeps NaN: no sample to score
-    row["warnings"] = len(result.warnings)
-    row["error"] = ""
-    return row
+def log_row(path: Path, result: LogResult) -> dict:
+    """One row of the summary table (:func:`~wheelload.studies.pipeline.summary.summary_row`)."""
+    signals = result.signals
+    header = LogHeader.of(signals, has_reference=signals.reference is not None)
+    figures = LoadFigures.of_estimate(result.estimate, signals, str(path))
+    return summary_row(str(path), header, figures, len(result.warnings))
 
 
 #: Logs of more bytes than this run one at a time on the lean path (read in chunks,
@@ -263,25 +232,12 @@ def lean_row(
         result = estimate_lean(path, settings, out, force=force)
         if result is None:
             return None
-        stream, digest = result.stream, result.digest
-        row = _log_columns(path, stream)
-        means, stds = digest.means(), digest.mean_std()
-        row.update({f"mean_fz_{wheel}": float(means[i]) for i, wheel in enumerate(WHEELS)})
-        row.update({f"mean_std_{wheel}": float(stds[i]) for i, wheel in enumerate(WHEELS)})
-        row["skipped_samples"] = digest.skipped
-        row["negative_samples"] = digest.negative_samples
-        row["min_fz"] = float(digest.load_min.min())
-        row["rmse_pooled"] = np.nan
-        if stream.reference_present is not None:
-            try:
-                row["rmse_pooled"] = float(digest.metrics(str(path)).loc["pooled", "RMSE"])
-            except ValueError:
-                pass  # the row keeps NaN: no sample to score
-        row["warnings"] = len(result.warnings)
-        row["error"] = ""
-        return row
+        stream = result.stream
+        header = LogHeader.of(stream, has_reference=stream.reference_present is not None)
+        figures = LoadFigures.of_digest(result.digest, str(path))
+        return summary_row(str(path), header, figures, len(result.warnings))
     except (ValueError, FileNotFoundError) as error:
-        return {"log": str(path), "error": str(error)}
+        return _error_row(path, error)
 
 
 def process_log(
@@ -302,12 +258,21 @@ def process_log(
         if row is not None:
             return row
     try:
-        result = estimate_log(path, settings)
-        if folder is not None:
-            write_table(result.estimate.to_pandas(), output_path(path, folder), replace=force)
-        return summary_row(path, result)
+        return _written_row(path, estimate_log(path, settings), folder, force)
     except (ValueError, FileNotFoundError) as error:
-        return {"log": str(path), "error": str(error)}
+        return _error_row(path, error)
+
+
+def _error_row(path: Path, error: Exception) -> dict:
+    """The summary row of a log that could not be used: its one-line error."""
+    return {"log": str(path), "error": str(error)}
+
+
+def _written_row(path: Path, result: LogResult, folder: Path | None, force: bool) -> dict:
+    """Write a log's estimates into ``folder`` (if given); its summary row."""
+    if folder is not None:
+        write_table(result.estimate.to_pandas(), output_path(path, folder), replace=force)
+    return log_row(path, result)
 
 
 def process_logs(
@@ -344,7 +309,7 @@ def process_logs(
         try:
             vehicle, signals, notes, static = _prepare_log(path, settings)
         except (ValueError, FileNotFoundError) as error:
-            rows[path] = {"log": str(path), "error": str(error)}
+            rows[path] = _error_row(path, error)
             continue
         key = None if static is None else tuple(float(f) for f in static)
         prepared.setdefault(key, []).append((path, vehicle, signals, notes))
@@ -355,8 +320,7 @@ def process_logs(
             group = logs[start : start + BATCH]
             estimates = run_batched(kf, settings.vehicle, [log[2] for log in group])
             for (path, vehicle, signals, notes), estimate in zip(group, estimates, strict=True):
-                rows[path] = _finish_log(path, settings, folder, force, signals, estimate,
-                                         vehicle, notes)  # fmt: skip
+                rows[path] = _finish_log(path, folder, force, vehicle, signals, notes, estimate)
     return [rows[path] for path in paths]
 
 
@@ -369,17 +333,14 @@ BATCH = 16
 BATCHED_TOLERANCE = 1e-13
 
 
-def _finish_log(path, settings, folder, force, signals, estimate, vehicle, notes) -> dict:
-    """Warnings, the output file and the summary row of one estimated log."""
+def _finish_log(path, folder, force, vehicle, signals, notes, estimate) -> dict:
+    """Warnings, the output file and the summary row of one log estimated in a batch."""
     try:
-        warnings = signal_warnings(signals) + load_warnings(estimate, str(path))
-        result = LogResult(signals=signals, estimate=estimate, vehicle=vehicle,
-                           notes=tuple(notes), warnings=tuple(warnings))  # fmt: skip
-        if folder is not None:
-            write_table(result.estimate.to_pandas(), output_path(path, folder), replace=force)
-        return summary_row(path, result)
+        return _written_row(
+            path, _log_result(path, vehicle, signals, notes, estimate), folder, force
+        )
     except (ValueError, FileNotFoundError) as error:
-        return {"log": str(path), "error": str(error)}
+        return _error_row(path, error)
 
 
 def chunks(paths: list[Path], workers: int) -> list[list[Path]]:

@@ -88,7 +88,7 @@ def compare_methods(
 
     ``suspension``: the vehicle model of the family methods (default the KF's
     full model, so that the table compares estimators on one model;
-    :mod:`wheelload.estimators.family.suspension_model`).
+    :class:`~wheelload.estimators.SuspensionModel`).
     """
     if signals.reference is None:
         raise ValueError(

@@ -1,6 +1,6 @@
 """One CSV or Parquet log through the lean whole-log path: memory bounded by the chunk.
 
-The log is scanned (:func:`~wheelload.estimators.loops.log_stream.scan_log`: time
+The log is scanned (:func:`~wheelload.estimators.scan_log`: time
 column, wiring window, sensor set), then read again chunk by chunk through
 the compiled column loop; each chunk is written (``out``) and summarised
 (:class:`~wheelload.studies.pipeline.estimate_digest.EstimateDigest`) before the next
@@ -18,13 +18,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.registry import build
 from wheelload.estimators.result import SensorFault
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline.measured_static import corner_weights, still_period
 
 if TYPE_CHECKING:
-    from wheelload.estimators.loops.log_stream import LogStream
+    from wheelload.estimators import LogStream
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -59,6 +60,7 @@ def estimate_lean(
     None (nothing written) for a log the chunked reader cannot take as plain
     numbers: the ordinary reader then reads it and names the problem.
     """
+    from wheelload.estimators import scan_log
     from wheelload.estimators.logs.checks import describe, raise_for_wiring
     from wheelload.estimators.logs.output_files import table_writer
     from wheelload.estimators.logs.plausibility import (
@@ -67,7 +69,6 @@ def estimate_lean(
         raise_for_plausibility,
     )
     from wheelload.estimators.logs.readers.chunks import ChunkError
-    from wheelload.estimators.loops.log_stream import scan_log
     from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
 
     try:
@@ -87,7 +88,7 @@ def estimate_lean(
         notes.append(describe_plausibility(plausibility))
     static, reason = static_loads_for(stream, vehicle, settings)
     notes += reason
-    kf = TwoStageKF(vehicle, static=static)
+    kf = build("kf", vehicle, static=static)
     digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
     faults: list[SensorFault] = []
     with contextlib.ExitStack() as stack:
@@ -119,28 +120,19 @@ def estimate_lean(
     )
 
 
-def static_loads_for(stream, vehicle, settings):
+def static_loads_for(stream: LogStream, vehicle: Vehicle, settings):
     """Static loads from corner weights and a still period, as ``estimate_log`` sets them.
 
     The still-period check reads the first samples only (``stream.head``); a travel
     channel of the log with no sample in the period is refused as on the whole log.
     """
-    from wheelload.estimators.kf.offsets import check_still_period, corner_weight_loads
-
-    static, notes = None, []
-    if settings.corner_weights is not None:
-        static = corner_weight_loads(settings.corner_weights)
-        notes.append(f"static loads from corner weights {settings.corner_weights} kg")
+    static, notes = corner_weights(settings)
+    head = stream.head
     if settings.still_period:
-        head = stream.head
         window = head.t <= head.t[0] + settings.still_period
         if settings.still_period > 0 and np.any(
             stream.travel_present & ~np.isfinite(head.d[window]).any(axis=0)
         ):
             raise ValueError(f"{stream.source}: a travel channel has no sample in the still period")
-        still = check_still_period(
-            head, vehicle, settings.still_period, static=static, noise=settings.still_noise
-        )
-        static = still.static
-        notes.append(still.reason)
-    return static, notes
+    static, still = still_period(head, vehicle, settings, static)
+    return static, notes + still

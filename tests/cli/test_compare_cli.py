@@ -7,8 +7,8 @@ import pytest
 from wheelload.estimators.registry import methods
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.pipeline.example_log import example_log_path
 
 VEHICLE = str(example_vehicle_path())
 

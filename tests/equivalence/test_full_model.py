@@ -27,7 +27,7 @@ from wheelload.models import (
     gates_function,
     suspension_function,
 )
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 MODEL_METHODS = ["C", "D", "E", "E+C", "F", "ycoo", "umvf", "road-angle"]
 

@@ -20,7 +20,7 @@ from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.protocol import SuspensionModel, sample_intervals
 from wheelload.estimators.result import StepFlag
 from wheelload.models import GRAVITY, ModelParameters, paper_equilibrium_function, static_loads
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 
 def rms(a):

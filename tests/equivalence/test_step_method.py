@@ -24,7 +24,7 @@ from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.registry import build, core, methods
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 REFERENCE = Path(__file__).parent / "data" / "family_paper_model_reference.npz"
 #: Methods whose numbers pass through a third-party kernel that may change its last bits.

@@ -15,7 +15,7 @@ from wheelload.estimators.registry import (
     method,
     methods,
 )
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,10 @@ import shutil
 import pytest
 
 from wheelload.models import example_vehicle_path
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.drive.scenario_log import write_log
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.experiments.faults.log_corruptions import SHORT_SCENARIOS
+from wheelload.studies.pipeline.example_log import example_log_path
 
 
 @pytest.fixture(scope="session")

@@ -23,7 +23,7 @@ import pytest
 
 from wheelload.models import example_vehicle_path
 from wheelload.models.files.build_folder import checked_library
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 COMMAND = [sys.executable, "-m", "wheelload.studies.cli"]
 

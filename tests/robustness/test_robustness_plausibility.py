@@ -21,10 +21,10 @@ from wheelload.estimators.logs.signals import read_log
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.drive.scenario_log import write_log
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.experiments.faults.log_corruptions import SHORT_SCENARIOS
+from wheelload.studies.pipeline.example_log import example_log_path
 
 SUV = Path(example_vehicle_path()).with_name("suv.toml")
 UNITS = {"vx": "m/s", "ax": "m/s^2", "ay": "m/s^2", "az": "m/s^2"}

@@ -18,7 +18,7 @@ from wheelload.estimators.logs.signals import read_log, travel_quantum
 from wheelload.models import example_vehicle_path
 from wheelload.models.conventions import WHEELS
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 FLOATS = ("float16", "float32", "float64")
 INTEGERS = ("int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64")

@@ -14,8 +14,6 @@ import pytest
 from wheelload.estimators import read_log
 from wheelload.estimators.result import read_estimates
 from wheelload.models import example_vehicle_path
-from wheelload.studies.commands.bench_logs import compare
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.pipeline.batch import (
     BATCHED_TOLERANCE,
     EstimateSettings,
@@ -24,6 +22,8 @@ from wheelload.studies.pipeline.batch import (
     output_path,
     process_logs,
 )
+from wheelload.studies.pipeline.example_log import example_log_path
+from wheelload.studies.pipeline.summary_compare import compare
 
 SETTINGS = EstimateSettings(vehicle=example_vehicle_path())
 

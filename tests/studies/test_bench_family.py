@@ -5,7 +5,7 @@ import re
 
 from wheelload.estimators.registry import method, methods
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 NUMBER = r"([0-9.]+)"
 TRIPLE = rf"{NUMBER} / {NUMBER} / {NUMBER}"

@@ -8,8 +8,8 @@ from wheelload.estimators import Estimate, signals_from_frame
 from wheelload.estimators.result import read_estimates
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.pipeline.batch import EstimateSettings, expand_logs, run_logs
+from wheelload.studies.pipeline.example_log import example_log_path
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
 
 VEHICLE = str(example_vehicle_path())

@@ -16,8 +16,8 @@ import pytest
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.result import read_estimates
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.pipeline.batch import EstimateSettings, output_path, run_logs
+from wheelload.studies.pipeline.example_log import example_log_path
 
 
 @pytest.fixture(scope="module")

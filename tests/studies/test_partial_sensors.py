@@ -9,8 +9,8 @@ import pytest
 from wheelload.estimators import StepFlag, TwoStageKF, signals_from_frame
 from wheelload.models.conventions import WHEELS
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import row_use, summary
 from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.pipeline.summary import row_use, summary
 
 TRAVEL = [f"d_{w}" for w in WHEELS] + [f"v_{w}" for w in WHEELS]
 
@@ -102,8 +102,8 @@ def test_imu_only_front_lateral_transfer_with_the_right_split(vehicle, plant_log
 
 
 def test_sensor_sets_command_prints_every_mode_and_the_sweep(capsys):
-    from wheelload.studies.commands.estimate import example_log_path
     from wheelload.studies.experiments.sensor_sets import MODES
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     assert main(["sensor-sets", str(example_log_path()), "--splits", "0.4"]) == 0
     text = capsys.readouterr().out

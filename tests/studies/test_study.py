@@ -5,8 +5,8 @@ import pandas as pd
 
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import example_log_path
 from wheelload.studies.metrics import pooled_metrics
+from wheelload.studies.pipeline.example_log import example_log_path
 
 
 def test_study_table_and_figure(tmp_path, capsys, vehicle):

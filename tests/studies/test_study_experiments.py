@@ -12,7 +12,6 @@ from wheelload.estimators.registry import build, methods
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.experiments.ablation import ablation_variants, model_switches
 from wheelload.studies.experiments.catalog import run_study
 from wheelload.studies.experiments.mismatch import mismatch_variants
 from wheelload.studies.experiments.runs.cache import ResultCache, cache_key
@@ -20,6 +19,7 @@ from wheelload.studies.experiments.runs.common import ISO_DLC_WINDOW, truth_spec
 from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
 from wheelload.studies.experiments.runs.runner import Runner
 from wheelload.studies.experiments.runs.units import TRUTH
+from wheelload.studies.experiments.vehicle_file_ablation import ablation_variants, model_switches
 from wheelload.studies.experiments.vehicle_variants import Edit, Variant, value
 from wheelload.studies.metrics import wheel_metrics
 

@@ -43,14 +43,15 @@ import numpy as np
 import pandas as pd
 from scipy.stats import chi2
 
-from wheelload.estimators import Signals, TwoStageKF
-from wheelload.estimators.kf.guard import (
+from wheelload.estimators import (
     FAULT_CHANNELS,
     GUARDS_OFF,
     GuardSettings,
+    Signals,
     guard_settings_for,
 )
 from wheelload.estimators.logs.signals import signals_from_frame
+from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.scenarios import SCENARIOS, Options
@@ -176,8 +177,8 @@ def fault_table(
     """One row per scenario and fault: RMSE before and after, delay, isolations."""
     path = example_vehicle_path() if vehicle_path is None else vehicle_path
     vehicle = load_vehicle(path)
-    guarded = TwoStageKF(vehicle, guard_settings=vehicle_guards(vehicle, overrides))
-    unguarded = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
+    guarded = build("kf", vehicle, guard_settings=vehicle_guards(vehicle, overrides))
+    unguarded = build("kf", vehicle, guard_settings=GUARDS_OFF)
     rows = []
     for scenario in scenarios:
         clean = scenario_signals(scenario, seed, path)
@@ -244,10 +245,10 @@ def false_alarms(
         filters = {}
         for model in models:
             vehicle = MODELS[model](base)
-            kf = TwoStageKF(vehicle, guard_settings=vehicle_guards(base, overrides))
-            plain = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
-            probe = TwoStageKF(
-                vehicle, guard_settings=dataclasses.replace(kf.guard_settings, **_TINY_LIMITS)
+            kf = build("kf", vehicle, guard_settings=vehicle_guards(base, overrides))
+            plain = build("kf", vehicle, guard_settings=GUARDS_OFF)
+            probe = build(
+                "kf", vehicle, guard_settings=dataclasses.replace(kf.guard_settings, **_TINY_LIMITS)
             )
             filters[model] = (kf, plain, probe)
         for seed in seeds:
@@ -382,7 +383,7 @@ def _print_spikes(paths, overrides, models) -> None:
     for path in paths:
         base = load_vehicle(path)
         for model in models:
-            kf = TwoStageKF(MODELS[model](base), guard_settings=vehicle_guards(base, overrides))
+            kf = build("kf", MODELS[model](base), guard_settings=vehicle_guards(base, overrides))
             for scenario in SPIKE_SCENARIOS:
                 table = spike_table(kf, scenario_signals(scenario, 0, path), scenario, pooled_rmse)
                 tables.append(table.assign(model=model))

@@ -27,12 +27,13 @@ import pandas as pd
 from wheelload.estimators import StepFlag
 from wheelload.estimators.logs.signals import rate_derivatives
 from wheelload.models import INPUTS
+from wheelload.models.conventions import WHEELS
 
 #: The C compilers' sanitizer flags of the hostile builds.
 SANITIZE = ("-fsanitize=address,undefined", "-fno-omit-frame-pointer")
 #: Lines by which AddressSanitizer and UndefinedBehaviorSanitizer report a finding.
 SANITIZER_MARKS = ("runtime error:", "ERROR: AddressSanitizer", "ERROR: LeakSanitizer")
-LOADS = [f"fz_{w}" for w in ("fl", "fr", "rl", "rr")]
+LOADS = [f"fz_{w}" for w in WHEELS]
 HUGE = 1e30
 
 
@@ -125,11 +126,11 @@ def with_inputs(signals, frame: pd.DataFrame):
     """``signals`` with the input channels of ``frame`` (same rows)."""
     rates = frame[["wx", "wy", "wz"]].to_numpy(float) if "wx" in frame else signals.rates
     dots = frame[["wx_dot", "wy_dot", "wz_dot"]].to_numpy(float) if "wx_dot" in frame else None
-    hub = [f"az_{w}" for w in ("fl", "fr", "rl", "rr")]
+    hub = [f"az_{w}" for w in WHEELS]
     return dataclasses.replace(
         signals,
-        d=frame[[f"d_{w}" for w in ("fl", "fr", "rl", "rr")]].to_numpy(float),
-        v=frame[[f"v_{w}" for w in ("fl", "fr", "rl", "rr")]].to_numpy(float),
+        d=frame[[f"d_{w}" for w in WHEELS]].to_numpy(float),
+        v=frame[[f"v_{w}" for w in WHEELS]].to_numpy(float),
         acc=frame[["ax", "ay", "az"]].to_numpy(float),
         vx=frame["vx"].to_numpy(float),
         rates=rates,
@@ -140,12 +141,12 @@ def with_inputs(signals, frame: pd.DataFrame):
 
 def white_noise_signals(vehicle, base, seed: int, settings=None):
     """``base`` with travels, rates, specific force and speed white noise over their whole
-    plausible ranges (:class:`~wheelload.estimators.kf.guard.GuardSettings`), uniform.
+    plausible ranges (:class:`~wheelload.estimators.GuardSettings`), uniform.
 
     Every sample passes the plausibility check; together they are nothing a car
     does, which is what the envelope property is about.
     """
-    from wheelload.estimators.kf.guard import GuardSettings
+    from wheelload.estimators import GuardSettings
     from wheelload.models import GRAVITY
 
     g = settings or GuardSettings()

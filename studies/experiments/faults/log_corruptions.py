@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators.logs.checks import Outcome, WiringReport, check_wiring
+from wheelload.models.conventions import WHEELS
 from wheelload.models.vehicle import GRAVITY
 
 TRAVEL = ("d_fl", "d_fr", "d_rl", "d_rr")
@@ -61,7 +62,7 @@ CORRUPTIONS: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
     "ay sign": _scaled("ay", -1.0),
     "ax sign": _scaled("ax", -1.0),
     "wz in deg/s": _scaled("wz", 180.0 / np.pi),
-    "travel sign": _travel_sign(("fl", "fr", "rl", "rr")),
+    "travel sign": _travel_sign(WHEELS),
     "d_fl sign": _travel_sign(("fl",)),
     "d_rr sign": _travel_sign(("rr",)),
     "left/right swapped": _swapped((("fl", "fr"), ("rl", "rr"))),

@@ -9,6 +9,7 @@ import pandas as pd
 
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.registry import method, methods
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.experiments.runs.cache import cache_key
 from wheelload.studies.experiments.runs.context import Context
 from wheelload.studies.experiments.runs.runner import Job
@@ -129,7 +130,7 @@ def pooled(result: TrialResult, column: str) -> dict[str, float]:
 
 
 def mean_over_wheels(table: pd.DataFrame, column: str) -> float:
-    return float(np.mean([table.loc[w, column] for w in ("fl", "fr", "rl", "rr")]))
+    return float(np.mean([table.loc[w, column] for w in WHEELS]))
 
 
 def errors_markdown(result: TrialResult) -> str:

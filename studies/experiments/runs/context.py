@@ -22,7 +22,7 @@ QUICK_TRIALS = 2  # Monte Carlo trials per noise scale in --quick mode
 @dataclass(frozen=True, kw_only=True)
 class Settings:
     """A study's inputs: the plant's (and the estimators') vehicle file, the mode and the
-    vehicle model of the family methods (:mod:`wheelload.estimators.family.suspension_model`)."""
+    vehicle model of the family methods (:class:`~wheelload.estimators.SuspensionModel`)."""
 
     vehicle_path: Path
     vehicles_folder: Path  # every *.toml here is a bundled vehicle (study `vehicles`)

@@ -125,3 +125,16 @@ class Runner:
         }
         for future in dask_completed(list(futures)):
             yield futures[future], future.result()
+
+
+def check_scheduler(address: str) -> None:
+    """A one-line error when no Dask scheduler answers at ``address``."""
+    from distributed import Client
+
+    try:
+        Client(address, timeout=10).close()
+    except (OSError, TimeoutError, ValueError) as error:
+        raise ValueError(
+            f"--dask {address}: no Dask scheduler answers ({type(error).__name__}); "
+            "start one (dask scheduler) or give its address as tcp://HOST:PORT"
+        ) from None

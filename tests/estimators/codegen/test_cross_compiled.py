@@ -21,7 +21,7 @@ from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_setting
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.models import example_vehicle_path
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 CROSS = "arm-linux-gnueabihf-gcc"
 MISSING = [tool for tool in (CROSS, "qemu-arm", "gcc") if shutil.which(tool) is None]

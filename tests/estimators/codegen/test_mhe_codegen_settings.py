@@ -26,7 +26,7 @@ from wheelload.estimators.mhe.settings import (
     SolverSettings,
 )
 from wheelload.models import example_vehicle_path
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
 

@@ -14,7 +14,7 @@ from wheelload.models import (
     paper_equilibrium_function,
 )
 from wheelload.models.body_attitude import roll_pitch_stiffness
-from wheelload.studies.commands.estimate import example_log_path
+from wheelload.studies.pipeline.example_log import example_log_path
 
 
 def constant_log(acc, rates=(0.0, 0.0, 0.0), seconds=20.0):

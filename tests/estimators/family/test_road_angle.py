@@ -52,7 +52,7 @@ def test_recovers_the_30_percent_bank_within_1_deg():
 
 def test_step_through_equals_run():
     from wheelload.estimators.logs.signals import read_log
-    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     signals = read_log(example_log_path()).slice(0, 150)
     kf = RoadAngleKF(load_vehicle(example_vehicle_path()))

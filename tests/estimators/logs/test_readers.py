@@ -248,7 +248,7 @@ def test_erg_with_mixed_types_padding_and_big_endian(tmp_path):
 def test_csv_with_its_own_names_and_units_through_a_map(tmp_path):
     # A Formula Student style CSV: time in ms, acceleration in g with y pointing right,
     # damper potentiometers in mm (motion ratio 0.8), no az, no vx, no body rates.
-    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     si = pd.read_csv(example_log_path())
     raw = pd.DataFrame({

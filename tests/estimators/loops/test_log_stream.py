@@ -16,8 +16,9 @@ from wheelload.estimators.logs.signals import Differentiator, derive_velocities
 from wheelload.estimators.loops.log_stream import scan_log
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
-from wheelload.studies.commands.estimate import digest_of, example_log_path
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline.example_log import example_log_path
+from wheelload.studies.pipeline.summary import digest_of
 
 VEHICLE = str(example_vehicle_path())
 ROWS = 37  # a prime: chunk boundaries fall inside gaps, faults and runs

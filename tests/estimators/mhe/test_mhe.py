@@ -209,7 +209,7 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
     import dataclasses
 
     from wheelload.estimators import read_log
-    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     signals = read_log(example_log_path()).slice(0, 300)
     d, acc = signals.d.copy(), signals.acc.copy()

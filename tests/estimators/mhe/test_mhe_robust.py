@@ -74,7 +74,7 @@ def test_l1_loss_runs_and_stays_finite(vehicle, drive):
 def iso_dlc():
     """The bundled plant log (iso-dlc, sports car, every model term on)."""
     from wheelload.estimators import read_log
-    from wheelload.studies.commands.estimate import example_log_path
+    from wheelload.studies.pipeline.example_log import example_log_path
 
     return read_log(example_log_path())
 

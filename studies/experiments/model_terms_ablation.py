@@ -20,9 +20,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
-from wheelload.models import ModelTerms, Vehicle, load_vehicle
+from wheelload.estimators.registry import build
+from wheelload.models import ModelTerms, Vehicle, example_vehicle_path, load_vehicle
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.scenarios import Options
 from wheelload.studies.experiments.equilibrium_residuals import paper_model, with_terms
@@ -31,6 +31,20 @@ from wheelload.studies.metrics import pooled_metrics
 TERMS = tuple(field.name for field in dataclasses.fields(ModelTerms))
 PAPER = "paper"
 ALL = "all"
+
+
+def bundled_vehicles() -> list[Path]:
+    """The bundled sports car and SUV."""
+    sports = example_vehicle_path()
+    return [sports, sports.with_name("suv.toml")]
+
+
+def label_groups() -> dict[str, list[str]]:
+    """The configurations shown side by side: each term alone, every term but one."""
+    return {
+        "each term alone": [PAPER, *(f"+{term}" for term in TERMS), ALL],
+        "every term but one": [ALL, *(f"-{term}" for term in TERMS)],
+    }
 
 
 def configurations(vehicle: Vehicle) -> dict[str, Vehicle]:
@@ -59,7 +73,7 @@ def ablation(
             result = run_scenario(name, path, options=options, noise=noise)
             signals = signals_from_frame(result.log, source=f"{vehicle.name}/{name}")
             for label, variant in configurations(vehicle).items():
-                estimate = TwoStageKF(variant).run(signals)
+                estimate = build("kf", variant).run(signals)
                 metrics = pooled_metrics(estimate.loads, signals.reference)
                 rows.append(
                     {"vehicle": vehicle.name, "scenario": name, "configuration": label,

@@ -4,7 +4,7 @@ import pandas as pd
 
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
-from wheelload.studies.experiments.terms_ablation import configurations
+from wheelload.studies.experiments.model_terms_ablation import configurations
 
 
 def test_ablation_on_the_bounce_sweep_credits_the_stops(tmp_path, capsys):

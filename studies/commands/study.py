@@ -1,0 +1,226 @@
+"""``wheelload study NAME``: one comparison study, its table printed and written.
+
+``mhe-vs-kf`` scores the KF, projection KF and MHE family on logs (``--logs``)
+or on plant scenarios it simulates first (``--scenarios``); every other name is
+an experiment of :mod:`~wheelload.studies.experiments.catalog`, run into the
+folder ``--out DIR``, which is locked before any work
+(:mod:`~wheelload.studies.experiments.runs.folder_lock`), so a second study into
+it refuses at once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+from wheelload.estimators import SuspensionModel, read_log
+from wheelload.estimators.logs.output_files import atomic_write, check_outputs
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands.options import (
+    add_suspension_option,
+    add_vehicle_file_options,
+    vehicle_file,
+)
+from wheelload.studies.experiments import catalog as experiments
+from wheelload.studies.experiments import mhe_vs_kf
+from wheelload.studies.experiments.faults.sensor_faults import Fault
+from wheelload.studies.experiments.runs.cache import ResultCache
+from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
+from wheelload.studies.experiments.runs.folder_lock import folder_lock
+from wheelload.studies.experiments.runs.runner import Runner, check_scheduler
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    study = subparsers.add_parser("study", help="run a comparison study and print its table")
+    study.add_argument(
+        "name",
+        choices=["mhe-vs-kf", *experiments.NAMES],
+        help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
+    )
+    study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
+    study.add_argument("--channels", help="channel map TOML for --logs (wheelload channels)")
+    study.add_argument(
+        "--scenarios",
+        nargs="*",
+        default=None,
+        help="simulate these plant scenarios first (no names: "
+        + ", ".join(mhe_vs_kf.STUDY_SCENARIOS) + ", those that exist)",
+    )  # fmt: skip
+    study.add_argument(
+        "--sweep",
+        choices=["robust", "equivalence"],
+        default="robust",
+        help="robust (default): robust losses, bias states, lagged output and the RTS smoother "
+        "on clean and faulted logs; equivalence: KF, projection KF and the plain MHE family",
+    )
+    study.add_argument(
+        "--faults",
+        nargs="+",
+        choices=[fault.value for fault in Fault],
+        default=[fault.value for fault in Fault],
+        help="robust sweep: the faults injected (default: all)",
+    )
+    study.add_argument("--horizon", type=int, default=10, help="robust sweep: window length")
+    study.add_argument(
+        "--quick",
+        action="store_true",
+        help="short segments, few trials; mhe-vs-kf robust sweep: the KF with and without its "
+        "guards, RTS, the lagged and the Huber 0.5σ MHE only",
+    )
+    study.add_argument(
+        "--horizons",
+        type=int,
+        nargs="+",
+        default=list(mhe_vs_kf.HORIZONS),
+        help="equivalence sweep",
+    )
+    study.add_argument(
+        "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
+    )
+    study.add_argument(
+        "--force", action="store_true", help="replace existing output files (never an input)"
+    )
+    study.add_argument(
+        "--skip-wiring-checks", action="store_true", help="accept logs whose wiring looks wrong"
+    )
+    add_vehicle_file_options(study)
+    # the experiments' own options (--quick, --force and --out are shared with mhe-vs-kf)
+    study.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
+    study.add_argument("--dask", metavar="ADDRESS", help="run on this Dask scheduler")
+    study.add_argument("--cache", help="cache folder (default DIR/.cache)")
+    study.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_suspension_option(study)
+    study.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.name != "mhe-vs-kf":
+        return _experiment(args)
+    return _mhe_vs_kf(args)
+
+
+def _mhe_vs_kf(args: argparse.Namespace) -> int:
+    """The mhe-vs-kf study: the robust sweep (default) or the equivalence sweep and figure."""
+    vehicle_path = vehicle_file(args)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
+    paths = [Path(p) for p in args.logs]
+    given = set(paths)
+    out = Path(args.out or "mhe-vs-kf")
+    second = (
+        out.with_name(out.name + "-vs-kf.csv")
+        if args.sweep == "robust"
+        else out.with_suffix(".png")
+    )
+    outputs = [out.with_suffix(".csv"), second]
+    check_outputs(outputs, [*paths, vehicle_path], force=args.force)
+    with tempfile.TemporaryDirectory() as folder:
+        if args.scenarios is not None:
+            from wheelload.studies.drive.scenario_runner import simulate_logs
+            from wheelload.studies.drive.scenarios import SCENARIOS
+
+            names = args.scenarios or [
+                name for name in mhe_vs_kf.STUDY_SCENARIOS if name in SCENARIOS
+            ]
+            simulated = simulate_logs(names, Path(folder), vehicle_path, args.allow_unusual)
+            for name, path, samples in simulated:
+                print(f"{name}: {samples} samples simulated")
+                paths.append(path)
+        if not paths:
+            raise ValueError("give --logs or --scenarios")
+        logs = [
+            read_log(
+                path,
+                channels=args.channels if path in given else None,
+                wiring_checks=not args.skip_wiring_checks,
+            )
+            for path in paths
+        ]
+    if args.sweep == "robust":
+        return _robust(args, logs, paths, vehicle)
+    table = mhe_vs_kf.mhe_vs_kf(
+        logs, vehicle, mhe_vs_kf.StudySettings(horizons=tuple(args.horizons))
+    )
+    with atomic_write(outputs[0], replace=args.force) as temporary:
+        table.to_csv(temporary)
+    with atomic_write(outputs[1], replace=args.force) as temporary:
+        mhe_vs_kf.plot_accuracy_against_time(table, temporary)
+    print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
+    print(table.to_string(float_format=lambda v: f"{v:.1f}"))
+    print(f"written {out.with_suffix('.csv')} and {out.with_suffix('.png')}")
+    return 0
+
+
+def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
+    """The robust sweep: RMSE table, change against the KF, written as CSV."""
+    if args.horizon < 2:
+        raise ValueError("--horizon must be >= 2 for the robust sweep (the lagged output)")
+    faults = tuple(Fault(name) for name in args.faults)
+    candidates = mhe_vs_kf.robust_candidates(args.horizon, quick=args.quick)
+    table = mhe_vs_kf.robust_sweep(logs, vehicle, faults, candidates)
+    change = mhe_vs_kf.against_kf(table, faults)
+    out = Path(args.out or "mhe-vs-kf")
+    for frame, path in (
+        (table, out.with_suffix(".csv")),
+        (change, out.with_name(out.name + "-vs-kf.csv")),
+    ):
+        with atomic_write(path, replace=args.force) as temporary:
+            frame.to_csv(temporary)
+    print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
+    print("pooled RMSE [N] per injected fault (reference: the clean log's loads)")
+    print(table.to_string(float_format=lambda v: f"{v:.1f}"))
+    print("change against the two-stage KF (with its guards) on the same fault [%]")
+    print(change.to_string())
+    if mhe_vs_kf.PLAIN_KF in table.index:
+        print("change against the plain KF (no guards) on the same fault [%]")
+        print(mhe_vs_kf.against_kf(table, faults, mhe_vs_kf.PLAIN_KF).to_string())
+    print(f"written {out.with_suffix('.csv')} and {out.with_name(out.name + '-vs-kf.csv')}")
+    return 0
+
+
+def _experiment(args: argparse.Namespace) -> int:
+    """Run experiment ``args.name`` into ``args.out``; print what was computed and cached."""
+    if args.name not in experiments.NAMES:
+        raise ValueError(
+            f"unknown study '{args.name}'; choose from mhe-vs-kf, {', '.join(experiments.NAMES)}"
+        )
+    if args.out is None:
+        raise ValueError(f"study {args.name} needs --out DIR (a folder for tables and figures)")
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out}: exists and is not a folder; give a folder to --out")
+    out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out):  # before any work: a second study into ``out`` refuses at once
+        return _run_experiment(args, out)
+
+
+def _run_experiment(args: argparse.Namespace, out: Path) -> int:
+    vehicle_path = vehicle_file(args)
+    if not vehicle_path.is_file():
+        raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")
+    if args.dask is not None:
+        check_scheduler(args.dask)
+    settings = Settings(
+        vehicle_path=vehicle_path,
+        vehicles_folder=example_vehicle_path().parent,
+        quick=args.quick,
+        suspension=SuspensionModel.parse(args.suspension),
+    )
+    runner = Runner(
+        cache=ResultCache(folder=Path(args.cache) if args.cache else out / ".cache"),
+        workers=args.workers,
+        dask_address=args.dask,
+        progress=not args.no_progress,
+    )
+    outputs = Outputs(folder=out, force=args.force)
+    start = time.perf_counter()
+    with runner:
+        experiments.run_study(args.name, Context(settings=settings, runner=runner, outputs=outputs))
+    print(
+        f"study {args.name}: {runner.computed} jobs computed, {runner.cached} from the cache, "
+        f"{time.perf_counter() - start:.1f} s; {len(outputs.written)} files in {out}"
+    )
+    return 0
