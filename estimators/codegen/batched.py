@@ -36,10 +36,11 @@ from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, PACKED, CodegenOptions, generate
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
 from wheelload.estimators.kf.tuning import nominal_interval
-from wheelload.estimators.kf.two_stage import TwoStageKF, sample_intervals, sensor_faults
+from wheelload.estimators.kf.two_stage import TwoStageKF, sensor_faults
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import shared_library
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import Estimate
 from wheelload.models.files.build_folder import build_folder
 

@@ -11,8 +11,9 @@ import argparse
 from collections.abc import Sequence
 
 from wheelload.models.vehicle_file import example_vehicle_path
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import SCENARIOS, Options
+from wheelload.studies.drive.scenarios import SCENARIOS
 
 
 def bench(names: Sequence[str], internal_rate: float, output_rate: float) -> list[dict]:

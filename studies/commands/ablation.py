@@ -10,7 +10,8 @@ import sys
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
-from wheelload.studies.drive.scenarios import SCENARIOS, Options
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenarios import SCENARIOS
 from wheelload.studies.experiments import model_terms_ablation
 
 

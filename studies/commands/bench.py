@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from wheelload.estimators import Sample
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import joint_filter

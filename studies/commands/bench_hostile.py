@@ -108,8 +108,8 @@ _CLEAN_BITS = (
 def _ranges(vehicle_paths) -> None:
     """Largest |w|, |dw|/dt and differentiator |w_dot| per scenario, smooth and rough D,
     and the clean samples the KF flags as implausible, held or load-limited."""
+    from wheelload.studies.drive.scenario_options import Options
     from wheelload.studies.drive.scenario_runner import run_scenario
-    from wheelload.studies.drive.scenarios import Options
 
     print("scenario, vehicle, roughness: max |w| [rad/s], max |dw|/dt, max |w_dot| [rad/s^2],"
           " samples, flagged")  # fmt: skip

@@ -14,8 +14,9 @@ from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.drive.roads import ISO_CLASSES
 from wheelload.studies.drive.scenario_log import metadata_path, write_log
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import SCENARIOS, Options
+from wheelload.studies.drive.scenarios import SCENARIOS
 from wheelload.studies.plots.scenario import plot_scenario
 
 RIG_SWEEP = "rig-sweep"

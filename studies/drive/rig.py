@@ -27,7 +27,7 @@ import pandas as pd
 
 from wheelload.estimators.logs.output_files import check_outputs, write_text
 from wheelload.models.plant.dynamics import corner_suspension_force, corners
-from wheelload.models.suspension import anti_roll_bar_forces
+from wheelload.models.suspension_elements import anti_roll_bar_forces
 from wheelload.models.vehicle import WHEELS, Vehicle
 
 AXLES = ("front", "rear")

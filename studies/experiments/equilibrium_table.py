@@ -10,7 +10,8 @@ from __future__ import annotations
 import sys
 
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.drive.scenarios import Options, scenario_run
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.simulation import simulate
 from wheelload.studies.experiments.equilibrium_residuals import ROWS, paper_model, residual_rms
 

@@ -43,7 +43,7 @@ from wheelload.estimators import (
     Signals,
     TwoStageKF,
 )
-from wheelload.estimators.kf.two_stage import sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.registry import build
 from wheelload.models import Vehicle
 from wheelload.studies.experiments.faults.sensor_faults import Fault, inject

@@ -23,8 +23,8 @@ import pandas as pd
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models import ModelTerms, Vehicle, example_vehicle_path, load_vehicle
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import Options
 from wheelload.studies.experiments.equilibrium_residuals import paper_model, with_terms
 from wheelload.studies.metrics import pooled_metrics
 

@@ -12,7 +12,8 @@ from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
 from wheelload.models.plant.dynamics import vehicle_plant
 from wheelload.studies.drive import tracks
 from wheelload.studies.drive.laps import GRIP_MARGIN
-from wheelload.studies.drive.scenarios import SCENARIOS, Options, scenario_run
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenarios import SCENARIOS, scenario_run
 from wheelload.studies.drive.simulation import simulate
 from wheelload.studies.drive.speed_profile import cornering_friction, lap_speed_profile
 

@@ -12,7 +12,8 @@ from wheelload.models import load_vehicle
 from wheelload.models.vehicle_file import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.drive.scenario_log import LOG_COLUMNS, metadata_path
-from wheelload.studies.drive.scenarios import SCENARIOS, Options, dlc_lanes, scenario_run
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenarios import SCENARIOS, dlc_lanes, scenario_run
 from wheelload.studies.drive.simulation import simulate
 
 

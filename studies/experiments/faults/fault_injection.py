@@ -53,8 +53,9 @@ from wheelload.estimators import (
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import SCENARIOS, Options
+from wheelload.studies.drive.scenarios import SCENARIOS
 from wheelload.studies.experiments.equilibrium_residuals import paper_model
 from wheelload.studies.experiments.faults.fault_spikes import SPIKE_SCENARIOS, spike_table
 from wheelload.studies.metrics import wheel_metrics

@@ -26,8 +26,8 @@ from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models.vehicle import Vehicle, vehicle_from_dict
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import Options
 from wheelload.studies.drive.sensors import measure
 from wheelload.studies.experiments.runs.cache import ResultCache
 from wheelload.studies.metrics import wheel_metrics

@@ -15,8 +15,8 @@ from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.registry import build, method, methods
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import Options
 from wheelload.studies.metrics import wheel_metrics
 
 # The full lap (14 000 samples) is in the closing note's table; here 8 % of it (~11 s).

@@ -13,8 +13,9 @@ from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.protocol import Estimator
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.scenarios import Options, scenario_run
+from wheelload.studies.drive.scenarios import scenario_run
 
 
 def angles_on(name: str):

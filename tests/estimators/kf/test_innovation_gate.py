@@ -11,12 +11,12 @@ import dataclasses
 import numpy as np
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval
-from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import equilibrium_function, gates_function, suspension_function
-from wheelload.studies.experiments.faults.fault_injection import GUARDS_OFF, pooled_rmse
+from wheelload.studies.experiments.faults.fault_injection import pooled_rmse
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
-from wheelload.studies.experiments.faults.fault_injection import GUARDS_OFF
+from wheelload.estimators.kf.guard import GUARDS_OFF
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())
 

@@ -53,11 +53,8 @@ def test_estimate_smooth_writes_the_smoothed_loads(tmp_path, capsys):
 def test_mhe_lagged_output_is_the_rts_smoother(vehicle):
     """Linear-Gaussian window with the Kalman arrival: its lag-L output is the fixed-lag
     smoother, equal to RTS once the smoother gain has decayed within L samples."""
-    from wheelload.estimators.mhe.estimator import (
-        MheSettings,
-        MovingHorizonEstimator,
-        SolverSettings,
-    )
+    from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+    from wheelload.estimators.mhe.settings import MheSettings, SolverSettings
 
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
     signals = synthetic_log(vehicle, slalom(duration=3.0), noise=noise, spring_error=0.08, seed=9)

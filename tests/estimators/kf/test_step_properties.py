@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval
-from wheelload.estimators.kf.two_stage import sample_intervals
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import GRAVITY, equilibrium_function, gates_function, suspension_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

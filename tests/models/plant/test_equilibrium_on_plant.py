@@ -24,7 +24,8 @@ import pytest
 
 from wheelload.models import GRAVITY, load_vehicle
 from wheelload.models.vehicle_file import example_vehicle_path
-from wheelload.studies.drive.scenarios import Options, scenario_run
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.simulation import simulate
 from wheelload.studies.experiments.equilibrium_residuals import (
     paper_model,

@@ -16,12 +16,13 @@ from wheelload.models.plant.dynamics import (
     chunk_function,
     corners,
     damper_map_force,
-    stop_force,
 )
 from wheelload.models.plant.equilibrium import initial_state
+from wheelload.models.suspension_elements import stop_force
 from wheelload.models.vehicle_file import example_vehicle_path
 from wheelload.studies.drive.roads import build_road
-from wheelload.studies.drive.scenarios import Options, scenario_run
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.simulation import simulate
 
 LOADS = ["fz_fl", "fz_fr", "fz_rl", "fz_rr"]
