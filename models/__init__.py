@@ -7,13 +7,13 @@ from wheelload.models.mass_properties import MassCentre, static_loads, vehicle_m
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.suspension import suspension_function, travel_function
 from wheelload.models.terms import DROPPABLE, GATES, gates_function
-from wheelload.models.vehicle import (
+from wheelload.models.vehicle.description import (
     ModelTerms,
     Vehicle,
     VehicleFileError,
     vehicle_from_dict,
 )
-from wheelload.models.vehicle_file import example_vehicle_path, load_vehicle, vehicle_template
+from wheelload.models.vehicle.file import example_vehicle_path, load_vehicle, vehicle_template
 
 __all__ = [
     "DROPPABLE",

@@ -33,7 +33,7 @@ import numpy as np
 
 from wheelload.models.conventions import GRAVITY
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 
 def attitude_from_travel(d, track_front, track_rear, wheelbase):

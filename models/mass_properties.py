@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.models.conventions import GRAVITY
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -22,10 +22,10 @@ import numpy as np
 
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.roll_stiffness import roll_split_default
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 #: Per-axle parameters ``<name>_front``, ``<name>_rear`` and their
-#: :class:`~wheelload.models.vehicle.AxleSuspension` keys.
+#: :class:`~wheelload.models.vehicle.description.AxleSuspension` keys.
 AXLE_KEYS = {
     "spring": "spring_rate",
     "damper_push": "damper_push",

@@ -64,9 +64,9 @@ from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionM
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import corner_positions, corner_vertical_acceleration
+from wheelload.models.conventions import GRAVITY
 from wheelload.models.family.quarter_car import unsprung_balance
 from wheelload.models.input_validity import interval_is_valid, sanitise
-from wheelload.models.vehicle import GRAVITY
 
 #: Filtered channels: four travels, vertical specific force minus g, roll and pitch rate.
 CHANNELS = 7

@@ -21,7 +21,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from wheelload.models import ModelParameters, Vehicle, VehicleFileError, vehicle_from_dict
-from wheelload.models.plausibility import RANGES
+from wheelload.models.vehicle.plausibility import RANGES
 
 Key = tuple[str, ...]
 SKIPPED_SECTIONS = ("plant", "filter")  # never model parameters of the suspension or equilibrium
@@ -99,7 +99,7 @@ SHARED_KEYS = {
 
 def plausible_bounds(vehicle: Vehicle) -> tuple[dict[str, float], dict[str, float]]:
     """Lower and upper bounds of :data:`SHARED_KEYS` from the physical ranges of their keys
-    (``wheelload.models.plausibility``): e.g. an unsprung corner mass between 1 % and
+    (``wheelload.models.vehicle.plausibility``): e.g. an unsprung corner mass between 1 % and
     12.5 % of the total mass, never negative."""
     lower, upper = {}, {}
     for name, (key, share) in SHARED_KEYS.items():

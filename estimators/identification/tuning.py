@@ -57,7 +57,7 @@ from wheelload.estimators.kf.tuning import NOISE_DENSITIES, TUNED_DENSITIES, TUN
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
-from wheelload.models.vehicle import FilterTuning, Vehicle
+from wheelload.models.vehicle.description import FilterTuning, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out of the objective (initial covariance)
 SPAN = 1e3  # each density stays within input / SPAN .. input * SPAN

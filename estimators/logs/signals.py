@@ -44,8 +44,7 @@ import numpy as np
 from wheelload.estimators.kernels import first_order
 from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
-from wheelload.models.conventions import WHEELS
-from wheelload.models.vehicle import GRAVITY
+from wheelload.models.conventions import GRAVITY, WHEELS
 
 if TYPE_CHECKING:
     import pandas as pd

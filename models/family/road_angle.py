@@ -41,7 +41,7 @@ import casadi as ca
 
 from wheelload.models.body_attitude import roll_pitch_stiffness
 from wheelload.models.mass_properties import vehicle_mass_centre
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 STATE_NAMES = (
     "roll", "roll_rate", "pitch", "pitch_rate", "fz_fl", "fz_fr", "fz_rl", "fz_rr",

@@ -58,7 +58,7 @@ from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
 from wheelload.models.suspension_elements import anti_roll_bar_forces, stop_force
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 STATE_NAMES = (
     ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")

@@ -42,7 +42,7 @@ from wheelload.models.plant.dynamics import (
     plant_dynamics,
 )
 from wheelload.models.plant.road_surface import RoadSurface, road_lookup
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 ROLLING = 0.5  # m/s, speed from which the tyre slips are solved too
 SUSPENSION = ("z", "phi", "theta", "w") + tuple(f"d_{w}" for w in WHEELS)

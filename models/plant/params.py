@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from wheelload.models.section_checks import (
+from wheelload.models.vehicle.section_checks import (
     SectionKeyError,
     require_non_negative,
     require_positive,

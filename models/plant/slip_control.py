@@ -40,7 +40,7 @@ from wheelload.models.plant.dynamics import (
 from wheelload.models.plant.params import TyreForces
 from wheelload.models.plant.road_surface import RoadSurface
 from wheelload.models.plant.tyre import peak_input
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 FACTOR_NAMES = tuple(f"slip_factor_{w}" for w in WHEELS)
 # Outputs of the controlled plant: the plant outputs, then the applied inputs.

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
-from wheelload.models.vehicle_file import example_vehicle_path
+from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.scenarios import SCENARIOS

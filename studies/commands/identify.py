@@ -19,7 +19,7 @@ from wheelload.estimators.identification.report import (
     rmse_table,
 )
 from wheelload.models import load_vehicle
-from wheelload.models.vehicle_file import (
+from wheelload.models.vehicle.file import (
     check_output_path,
     write_text_atomically,
     write_vehicle_text,

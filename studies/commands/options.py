@@ -14,7 +14,7 @@ def add_allow_unusual(parser: argparse.ArgumentParser) -> None:
         "--allow-unusual",
         action="store_true",
         help="accept a vehicle file whose values lie outside the physical ranges "
-        "(models/plausibility.py), for a special vehicle",
+        "(models/vehicle/plausibility.py), for a special vehicle",
     )
 
 

@@ -9,7 +9,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
-from wheelload.models.vehicle_file import example_vehicle_path, load_vehicle
+from wheelload.models.vehicle.file import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.drive.roads import ISO_CLASSES

@@ -26,7 +26,7 @@ from wheelload.estimators.identification.tuning import (
     tuned_vehicle,
 )
 from wheelload.models import load_vehicle
-from wheelload.models.vehicle_file import (
+from wheelload.models.vehicle.file import (
     add_values,
     check_output_path,
     prepend_comment,

@@ -15,7 +15,7 @@ from pathlib import Path
 from wheelload.estimators import WeighSettings, sprung_geometry, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import load_vehicle, vehicle_mass_centre
-from wheelload.models.vehicle_file import (
+from wheelload.models.vehicle.file import (
     check_output_path,
     edited_vehicle_text,
     write_vehicle_text,

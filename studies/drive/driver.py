@@ -47,8 +47,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from wheelload.models.conventions import GRAVITY
 from wheelload.models.plant.dynamics import INPUT_NAMES, STATE, corners, vehicle_plant
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive.roads import Road, integrate_centre_line
 from wheelload.studies.drive.speed_profile import cornering_friction
 

@@ -11,7 +11,7 @@ data and licences: ``studies/data/tracks/README.md``.
 
 from __future__ import annotations
 
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive import tracks
 from wheelload.studies.drive.roads import Road
 from wheelload.studies.drive.scenario_options import Options

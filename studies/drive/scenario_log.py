@@ -13,7 +13,7 @@ from pathlib import Path
 import pandas as pd
 
 from wheelload.estimators.logs.output_files import atomic_write, write_text
-from wheelload.models.vehicle import WHEELS
+from wheelload.models.conventions import WHEELS
 
 LOG_COLUMNS = (
     ("t", "vx", "ax", "ay", "az", "wx", "wy", "wz")

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.models.conventions import WHEELS
-from wheelload.models.vehicle_file import load_vehicle
+from wheelload.models.vehicle.file import load_vehicle
 from wheelload.studies.drive.scenario_log import file_hash, write_log
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS, scenario_run

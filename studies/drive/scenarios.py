@@ -20,8 +20,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from wheelload.models.conventions import GRAVITY
 from wheelload.models.plant.dynamics import vehicle_plant
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive import laps
 from wheelload.studies.drive.roads import Road, build_road, iso8608_profile, smooth_step
 from wheelload.studies.drive.scenario_options import Options

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from wheelload.models.vehicle import GRAVITY, WHEELS
+from wheelload.models.conventions import GRAVITY, WHEELS
 
 MICRO_G = 1e-6 * GRAVITY
 DEG = np.pi / 180.0

@@ -15,10 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from wheelload.models.conventions import WHEELS
 from wheelload.models.plant.dynamics import INPUT_NAMES, OUTPUT, OUTPUT_NAMES, STATE, STATE_NAMES
 from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
-from wheelload.models.vehicle import WHEELS, Vehicle
+from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive.driver import Driver, DriverTuning
 from wheelload.studies.drive.roads import Road
 

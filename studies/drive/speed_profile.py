@@ -31,9 +31,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from wheelload.models.conventions import GRAVITY
 from wheelload.models.mass_properties import static_loads
 from wheelload.models.plant.dynamics import vehicle_plant
-from wheelload.models.vehicle import GRAVITY, Vehicle
+from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive.roads import Road
 
 

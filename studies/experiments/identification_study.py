@@ -43,7 +43,7 @@ from wheelload.models import (
     load_vehicle,
     vehicle_from_dict,
 )
-from wheelload.models.vehicle_file import set_values
+from wheelload.models.vehicle.file import set_values
 from wheelload.studies.drive.scenario_log import file_hash, write_log
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.metrics import pooled_metrics

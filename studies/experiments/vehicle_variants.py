@@ -3,7 +3,7 @@
 A :class:`Variant` is a label and a tuple of :class:`Edit` s; each edit sets
 one ``[table] key`` of the file to a number, a list of numbers or a boolean.
 The edited text keeps every other line (and comment) of the file; it is
-checked by building a :class:`~wheelload.models.vehicle.Vehicle` from it.
+checked by building a :class:`~wheelload.models.vehicle.description.Vehicle` from it.
 The studies hash this text, so a variant is cached like any other input.
 
 Example
@@ -19,8 +19,8 @@ from __future__ import annotations
 import tomllib
 from dataclasses import dataclass
 
-from wheelload.models.vehicle import vehicle_from_dict
-from wheelload.models.vehicle_file import replace_values
+from wheelload.models.vehicle.description import vehicle_from_dict
+from wheelload.models.vehicle.file import replace_values
 
 Value = float | bool | tuple[float, ...]
 

@@ -31,7 +31,7 @@ from wheelload.estimators.identification.file_keys import (
 from wheelload.estimators.identification.model import base_parameter
 from wheelload.estimators.identification.report import file_changes
 from wheelload.models import ModelParameters, load_vehicle
-from wheelload.models.vehicle_file import prepend_comment, set_values
+from wheelload.models.vehicle.file import prepend_comment, set_values
 
 
 @dataclass(frozen=True, kw_only=True)

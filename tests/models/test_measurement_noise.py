@@ -24,8 +24,8 @@ from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import INPUTS, example_vehicle_path, load_vehicle
 from wheelload.models.measurement_noise import DENSITIES, INPUT_DENSITIES
 from wheelload.models.measurement_noise import measurement_noise_function as noise_function
-from wheelload.models.plausibility import check_vehicle_ranges
-from wheelload.models.vehicle_file import add_values
+from wheelload.models.vehicle.file import add_values
+from wheelload.models.vehicle.plausibility import check_vehicle_ranges
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 G = 9.80665

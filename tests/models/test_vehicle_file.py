@@ -2,7 +2,7 @@
 
 import pytest
 
-from wheelload.models.vehicle_file import (
+from wheelload.models.vehicle.file import (
     add_values,
     edited_vehicle_text,
     example_vehicle_path,

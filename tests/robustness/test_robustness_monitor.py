@@ -22,7 +22,7 @@ from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.kf.guard import GUARDS_OFF
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.models.vehicle import ModelTerms
+from wheelload.models.vehicle.description import ModelTerms
 from wheelload.studies.cli import main
 from wheelload.studies.experiments.faults.fault_injection import bundled_vehicles, pooled_rmse
 

@@ -5,7 +5,7 @@ import re
 import pytest
 
 from wheelload.models import example_vehicle_path, load_vehicle, vehicle_template
-from wheelload.models.plausibility import RANGES, check_vehicle_ranges, vehicle_keys
+from wheelload.models.vehicle.plausibility import RANGES, check_vehicle_ranges, vehicle_keys
 from wheelload.studies.cli import build_parser, main
 
 #: The issue's absurd files: (replacement in the bundled file, the key the error names).

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from wheelload.models import load_vehicle
-from wheelload.models.vehicle_file import example_vehicle_path
+from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.drive.scenario_log import LOG_COLUMNS, metadata_path
 from wheelload.studies.drive.scenario_options import Options

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.models.vehicle import GRAVITY, WHEELS
+from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.studies.drive.scenario_log import LOG_COLUMNS
 from wheelload.studies.drive.sensors import ImuModel, TravelSensorModel, measure
 

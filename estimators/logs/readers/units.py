@@ -16,7 +16,7 @@ from __future__ import annotations
 import enum
 import math
 
-from wheelload.models.vehicle import GRAVITY
+from wheelload.models.conventions import GRAVITY
 
 
 class Kind(enum.Enum):

@@ -18,8 +18,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators.logs.checks import Outcome, WiringReport, check_wiring
-from wheelload.models.conventions import WHEELS
-from wheelload.models.vehicle import GRAVITY
+from wheelload.models.conventions import GRAVITY, WHEELS
 
 TRAVEL = ("d_fl", "d_fr", "d_rl", "d_rr")
 #: The bundled scenarios short enough to simulate in the test suite (a few

@@ -25,7 +25,7 @@ import pandas as pd
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
-from wheelload.models.vehicle import Vehicle, vehicle_from_dict
+from wheelload.models.vehicle.description import Vehicle, vehicle_from_dict
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.sensors import measure

@@ -6,7 +6,7 @@ import pytest
 from wheelload.estimators.family.standstill import WeighError, weigh
 from wheelload.estimators.logs.signals import read_log
 from wheelload.models import example_vehicle_path, load_vehicle, vehicle_mass_centre
-from wheelload.models.vehicle_file import edited_vehicle_text
+from wheelload.models.vehicle.file import edited_vehicle_text
 from wheelload.studies.cli import main
 
 

@@ -16,7 +16,7 @@ from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings, guard_settings_for
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.models.vehicle import VehicleFileError
+from wheelload.models.vehicle.description import VehicleFileError
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.experiments.faults import fault_injection as fi
 

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from wheelload.models import GRAVITY, load_vehicle
-from wheelload.models.vehicle_file import example_vehicle_path
+from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.simulation import simulate

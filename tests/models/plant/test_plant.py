@@ -19,7 +19,7 @@ from wheelload.models.plant.dynamics import (
 )
 from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.suspension_elements import stop_force
-from wheelload.models.vehicle_file import example_vehicle_path
+from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.roads import build_road
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import scenario_run

@@ -9,7 +9,7 @@ import pytest
 
 from wheelload.models import GRAVITY, load_vehicle, vehicle_mass_centre
 from wheelload.models.plant.dynamics import vehicle_plant
-from wheelload.models.vehicle_file import example_vehicle_path
+from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.roads import iso8608_profile
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import scenario_run

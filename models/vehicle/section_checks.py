@@ -1,7 +1,7 @@
 """Checks of one vehicle-file section's values: each error names the offending key.
 
 A section's ``_check`` raises :class:`SectionKeyError` with the key; the reader
-prefixes the section path and the file name (``wheelload.models.vehicle``).
+prefixes the section path and the file name (``wheelload.models.vehicle.description``).
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ import numpy as np
 
 from wheelload.models.conventions import GRAVITY
 from wheelload.models.mass_properties import static_loads
-from wheelload.models.vehicle import Vehicle
+from wheelload.models.vehicle.description import Vehicle
 
 TUNING_RATE = 100.0  # Hz, the sample rate at which tuning sigmas are judged
 

@@ -1,8 +1,8 @@
 """The vehicle file: read it, and write a copy with values changed, keeping its comments.
 
 Reading: :func:`load_vehicle` (TOML, then the sections of
-:mod:`wheelload.models.vehicle`, then the ranges of
-:mod:`wheelload.models.plausibility`); every error names the file and the key.
+:mod:`wheelload.models.vehicle.description`, then the ranges of
+:mod:`wheelload.models.vehicle.plausibility`); every error names the file and the key.
 
 Writing: the copy is the original text with the value of each named
 ``[table] key`` line replaced (:func:`replace_values`), everything else kept
@@ -27,8 +27,8 @@ from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
 from wheelload.models.files.toml_file import TomlFileKind, read_toml
-from wheelload.models.plausibility import check_vehicle_ranges
-from wheelload.models.vehicle import Vehicle, VehicleFileError, vehicle_from_dict
+from wheelload.models.vehicle.description import Vehicle, VehicleFileError, vehicle_from_dict
+from wheelload.models.vehicle.plausibility import check_vehicle_ranges
 
 #: A key's place in the file: its table's dotted parts, then the key.
 Key = tuple[str, ...]
@@ -47,7 +47,7 @@ ASSIGNMENT = re.compile(r"^(\s*)([A-Za-z0-9_]+)(\s*=\s*)(\[[^\]]*\]|[^#\n]*?)(\s
 def load_vehicle(path: str | Path, *, allow_unusual: bool = False) -> Vehicle:
     """Read a vehicle TOML file; errors name the file and the offending key.
 
-    Values outside the physical ranges of :mod:`wheelload.models.plausibility`
+    Values outside the physical ranges of :mod:`wheelload.models.vehicle.plausibility`
     are refused unless ``allow_unusual``.
     """
     path = Path(path)

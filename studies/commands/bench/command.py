@@ -21,15 +21,15 @@ from wheelload.studies.commands.options import add_vehicle_file_options
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
-    "wheelload.studies.commands.bench_codegen",
-    "wheelload.studies.commands.bench_speed",
-    "wheelload.studies.commands.bench_mhe",
+    "wheelload.studies.commands.bench.codegen",
+    "wheelload.studies.commands.bench.speed",
+    "wheelload.studies.commands.bench.mhe",
     "wheelload.studies.bench.scenarios",
-    "wheelload.studies.commands.bench_logs",
+    "wheelload.studies.commands.bench.logs",
     "wheelload.studies.experiments.faults.fault_injection",
-    "wheelload.studies.commands.bench_estimate",
-    "wheelload.studies.commands.bench_family",
-    "wheelload.studies.commands.bench_hostile",
+    "wheelload.studies.commands.bench.estimate",
+    "wheelload.studies.commands.bench.family",
+    "wheelload.studies.commands.bench.hostile",
 )
 
 

@@ -6,11 +6,11 @@ unknown keys are rejected, and every error names the file and the key. SI
 units; positions relative to the sprung-mass CG in ISO 8855 axes (x forward,
 y left, z up).
 
-Reading a file: :func:`wheelload.models.vehicle_file.load_vehicle`.
+Reading a file: :func:`wheelload.models.vehicle.file.load_vehicle`.
 
 Example
 -------
->>> from wheelload.models.vehicle_file import vehicle_template
+>>> from wheelload.models.vehicle.file import vehicle_template
 >>> vehicle = vehicle_from_dict(tomllib.loads(vehicle_template()))
 >>> round(vehicle.mass.total, 1)
 1613.2
@@ -24,12 +24,8 @@ import types
 import typing
 from dataclasses import dataclass
 
-# Defined in models.conventions; named here too, so ``from wheelload.models.vehicle import
-# GRAVITY, WHEELS`` keeps working.
-from wheelload.models.conventions import GRAVITY as GRAVITY
-from wheelload.models.conventions import WHEELS as WHEELS
 from wheelload.models.plant.params import Plant
-from wheelload.models.section_checks import (
+from wheelload.models.vehicle.section_checks import (
     SectionKeyError,
     require_non_negative,
     require_positive,

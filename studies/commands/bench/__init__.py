@@ -1,0 +1,1 @@
+"""``wheelload bench WHAT``: one front end per benchmark (``command`` holds the group)."""
