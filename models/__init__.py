@@ -5,7 +5,7 @@ from wheelload.models.equilibrium import equilibrium_function, paper_equilibrium
 from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
 from wheelload.models.mass_properties import MassCentre, static_loads, vehicle_mass_centre
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension import suspension_function, travel_function
+from wheelload.models.suspension.pseudo_measurement import suspension_function, travel_function
 from wheelload.models.terms import DROPPABLE, GATES, gates_function
 from wheelload.models.vehicle.description import (
     ModelTerms,

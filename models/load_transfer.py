@@ -44,7 +44,7 @@ from wheelload.models.body_attitude import road_frame
 from wheelload.models.equilibrium import equilibrium_matrix, paper_equilibrium_vector
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.rigid_loads import algebraic_loads
-from wheelload.models.suspension_parts import travel_loads
+from wheelload.models.suspension.parts import travel_loads
 
 
 def suspension_stiffness(p: ModelParameters) -> ca.SX:

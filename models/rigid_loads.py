@@ -6,7 +6,8 @@ r"""Alatorre-style algebraic wheel loads of a rigid body (Siegloff & Choi §IV-B
 
 from the specific force :math:`f` (:math:`\lambda = l_r / L` by default). Used by
 the algebraic and quasi-static methods (:mod:`wheelload.models.load_transfer`) and
-by the tyre-force term of the pseudo-measurement (:mod:`wheelload.models.suspension`);
+by the tyre-force term of the pseudo-measurement
+(:mod:`wheelload.models.suspension.pseudo_measurement`);
 ``p`` is a :class:`~wheelload.models.parameters.ModelParameters` (numbers or symbols).
 """
 

@@ -17,7 +17,7 @@ F_R)/\partial\varphi`, taken from the suspension model's own Jacobian
 (springs and anti-roll bars). With the vehicle's ``geometric_transfer``
 term on, the roll moment :math:`m f_y h` splits into the part through the
 links, :math:`M_{g,a}` per axle from the model's own
-:func:`~wheelload.models.suspension_parts.link_loads` (:math:`m f_y (l_r/l)
+:func:`~wheelload.models.suspension.parts.link_loads` (:math:`m f_y (l_r/l)
 h_{rc,f}` front), and the elastic rest, shared as :math:`\lambda_K`:
 
 .. math:: \lambda = \frac{M_{g,f} + \lambda_K (m f_y h - M_{g,f} - M_{g,r})}{m f_y h}

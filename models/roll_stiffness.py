@@ -16,7 +16,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from wheelload.models.suspension_parts import link_loads, travel_loads
+from wheelload.models.suspension.parts import link_loads, travel_loads
 
 
 def roll_stiffness_share_front(p) -> float:
@@ -37,7 +37,7 @@ def roll_split_default(p) -> float:
     """Default front share of the lateral load transfer (:mod:`wheelload.models.roll_split`).
 
     The roll-stiffness share, with the link (roll-centre) moments of
-    :func:`~wheelload.models.suspension_parts.link_loads` added when the
+    :func:`~wheelload.models.suspension.parts.link_loads` added when the
     ``geometric_transfer`` switch of ``p`` is on.
     """
     elastic = roll_stiffness_share_front(p)

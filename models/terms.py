@@ -42,7 +42,7 @@ from wheelload.models.inputs import (
     input_index,
 )
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension_elements import anti_roll_bar_forces
+from wheelload.models.suspension.elements import anti_roll_bar_forces
 
 #: Order of the gate vector taken by the suspension and equilibrium models.
 GATES = (

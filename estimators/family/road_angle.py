@@ -7,7 +7,7 @@ Van Loan for the process noise), measured (eq. 16-17) by
 - roll and pitch relative to the road from the four travels (eq. 7),
 - roll and pitch rate from the gyro (rows skipped when the log has no rates),
 - the four loads from the suspension pseudo-measurement
-  (:mod:`wheelload.models.suspension`; the paper lists the loads in its output
+  (:mod:`wheelload.models.suspension.pseudo_measurement`; the paper lists the loads in its output
   vector without saying what measures them): by default the KF's own, with
   the vehicle file's model terms, with ``suspension=SuspensionModel.PAPER``
   eq. 9 alone (:mod:`~wheelload.estimators.family.suspension_model`),

@@ -17,7 +17,7 @@ Hz and :math:`\zeta = 1/\sqrt2` (the paper's); the paper does not give
 Adaptations, each kept as small as the signals allow:
 
 - :math:`k_s \tilde q + b_s \dot{\tilde q}` is the suspension pseudo-measurement of
-  :mod:`wheelload.models.suspension` (spring, asymmetric damper, anti-roll
+  :mod:`wheelload.models.suspension.pseudo_measurement` (spring, asymmetric damper, anti-roll
   bar, static load) evaluated on the filtered travel and its filtered
   derivative; with a linear damper and no bar it is exactly eq. (14). The
   paper assumes no anti-roll bar (§2); ours has one, and it is kept. By

@@ -26,7 +26,7 @@ import numpy as np
 from wheelload.models import GATES, ModelParameters, gates_function, suspension_function
 from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
-from wheelload.models.suspension import (
+from wheelload.models.suspension.pseudo_measurement import (
     piecewise_damper_names,
     piecewise_damper_suspension_function,
 )

@@ -23,7 +23,7 @@ Jacobians, not written a second time.
 Unsprung balance (eq. 3 with eq. 4 differentiated) gives the tyre load from
 the suspension force and the unsprung acceleration
 :math:`a_u = a_s + \ddot q`: :func:`tyre_load_function`, on top of the
-suspension pseudo-measurement of :mod:`wheelload.models.suspension` (spring,
+suspension pseudo-measurement of :mod:`wheelload.models.suspension.pseudo_measurement` (spring,
 asymmetric damper, anti-roll bar and the static load).
 """
 
@@ -32,7 +32,7 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension_parts import travel_loads
+from wheelload.models.suspension.parts import travel_loads
 
 #: Order of the quarter-car parameter vector.
 QUARTER_CAR_PARAMETERS = ("sprung_mass", "unsprung_mass", "spring_rate", "damper_rate")

@@ -36,7 +36,7 @@ and its longitudinal force along the side-view anti-pitch line
 s_a)` with the vehicle file's anti-pitch share :math:`\epsilon_a` and the
 axle's brake or drive share :math:`s_a` (0 where the share is 0), so that the
 links carry :math:`\epsilon_a` of the axle's rigid load transfer as the
-estimators' model assumes (``wheelload.models.suspension``). The unsprung
+estimators' model assumes (``wheelload.models.suspension.pseudo_measurement``). The unsprung
 equation carries :math:`-J_i` with :math:`F_{s,i}`.
 The tyre force :math:`F_{t,i} = F_x e_x + F_y e_y + F_z n` acts along the
 local road normal and in the road plane; :math:`F_z = k_t \max(0, r_0 -
@@ -56,7 +56,7 @@ from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.plant.params import DamperMap, Plant
 from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
-from wheelload.models.suspension_elements import anti_roll_bar_forces, stop_force
+from wheelload.models.suspension.elements import anti_roll_bar_forces, stop_force
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
 from wheelload.models.vehicle.description import Vehicle
 

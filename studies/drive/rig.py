@@ -28,7 +28,7 @@ import pandas as pd
 from wheelload.estimators.logs.output_files import check_outputs, write_text
 from wheelload.models.conventions import WHEELS
 from wheelload.models.plant.dynamics import corner_suspension_force, corners
-from wheelload.models.suspension_elements import anti_roll_bar_forces
+from wheelload.models.suspension.elements import anti_roll_bar_forces
 from wheelload.models.vehicle.description import Vehicle
 
 AXLES = ("front", "rear")

@@ -101,7 +101,8 @@ def test_body_inertia_signs(vehicle):
 
 
 def _tyre_force_terms(vehicle, acc):
-    """Jacking and tilt per wheel at zero travel, by hand (models/suspension.py docstring).
+    """Jacking and tilt per wheel at zero travel, by hand (the docstring of
+    models/suspension/pseudo_measurement.py).
 
     Tyre forces shared by rigid-body loads with the roll split; attitude from the
     tyre deflections under those loads; the specific force ``acc`` in road axes.

@@ -18,7 +18,7 @@ from wheelload.models.plant.dynamics import (
     damper_map_force,
 )
 from wheelload.models.plant.equilibrium import initial_state
-from wheelload.models.suspension_elements import stop_force
+from wheelload.models.suspension.elements import stop_force
 from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.roads import build_road
 from wheelload.studies.drive.scenario_options import Options

@@ -1,6 +1,6 @@
 """Force laws of the suspension elements at the wheel (Siegloff & Choi eq. 5-8; stops).
 
-Shared by the pseudo-measurement (:mod:`wheelload.models.suspension`), the
+Shared by the pseudo-measurement (:mod:`wheelload.models.suspension.pseudo_measurement`), the
 road-frame attitude (:mod:`wheelload.models.terms`) and the plant.
 """
 

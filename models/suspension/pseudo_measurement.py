@@ -11,7 +11,7 @@ pushes the left wheel down and lifts the right, so ``F_L = +k_arb eta``.)
 
 Terms beyond the paper, each times its gate (``wheelload.models.terms``):
 
-- stops: :func:`~wheelload.models.suspension_elements.stop_force` per axle;
+- stops: :func:`~wheelload.models.suspension.elements.stop_force` per axle;
 - geometric (link) load transfer, quasi-static, driven by the specific force
   :math:`\tilde f` at the CG (road axes when ``road_frame`` is on): the
   lateral tyre force of an axle :math:`F_{y,f} = m \tilde f_y l_r / l`
@@ -56,13 +56,13 @@ from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.rigid_loads import algebraic_loads
-from wheelload.models.suspension_elements import (
+from wheelload.models.suspension.elements import (
     anti_roll_bar_forces,
     damper_force,
     piecewise_damper_force,
     stop_force,
 )
-from wheelload.models.suspension_parts import link_loads, travel_loads
+from wheelload.models.suspension.parts import link_loads, travel_loads
 from wheelload.models.terms import GATES, gate, road_motion, small_sin
 
 __all__ = [

@@ -3,7 +3,7 @@ r"""The suspension's loads that need only the parameters: springs, dampers, bars
 - :func:`travel_loads`: the paper part of the pseudo-measurement (Siegloff &
   Choi eq. 9), :math:`F_{z,i,0} + k_a d_i + F^{dam}_a(v_i) + F^{arb}_i`;
 - :func:`link_loads`: the load through the links (roll centre, anti-pitch),
-  the quasi-static geometric transfer of :mod:`wheelload.models.suspension`.
+  the quasi-static geometric transfer of :mod:`wheelload.models.suspension.pseudo_measurement`.
 
 ``p`` is a :class:`~wheelload.models.parameters.ModelParameters` (numbers or
 symbols); this module sits below it, since the parameters' default roll split
@@ -15,7 +15,7 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.aero import aero_forces
-from wheelload.models.suspension_elements import anti_roll_bar_forces, damper_force
+from wheelload.models.suspension.elements import anti_roll_bar_forces, damper_force
 
 
 def travel_loads(d, v, p, damper=None) -> ca.SX:
