@@ -1,5 +1,5 @@
 /* The embedded MHE with robust losses, bias states and lagged output (wheelload.estimators.
- * mhe_window): one QP per sample on OSQP's embedded solver, set up once with the fixed
+ * mhe.window): one QP per sample on OSQP's embedded solver, set up once with the fixed
  * upper-triangular pattern of the Python MHE's window (PATTERN: dense index of each value in
  * OSQP's CSC order).
  *
