@@ -212,3 +212,23 @@ def test_tests_import_no_command_module():
                 offending.append(str(path.relative_to(ROOT)))
                 break
     assert not offending, f"tests importing command modules: {offending}"
+
+
+@pytest.mark.parametrize("constant", ["WHEELS", "GRAVITY"])
+def test_a_shared_constant_is_defined_once(constant):
+    """The wheel order and gravity live in ``models/conventions.py``; everyone imports them."""
+    homes = sorted(
+        module
+        for module, path in modules().items()
+        for node in ast.parse(path.read_text()).body
+        if isinstance(node, ast.Assign)
+        and any(isinstance(t, ast.Name) and t.id == constant for t in node.targets)
+    )
+    assert homes == ["wheelload.models.conventions"]
+
+
+def test_the_estimators_face_hands_out_every_name():
+    import wheelload.estimators as face
+
+    missing = [name for name in face.__all__ if not hasattr(face, name)]
+    assert not missing, f"listed in wheelload.estimators.__all__ but not importable: {missing}"
