@@ -93,10 +93,7 @@ from wheelload.estimators.mhe.settings import (
     Arrival,
     BiasStates,
     Constraint,
-    Loss,
     MheSettings,
-    ResidualLoss,
-    SolverSettings,
 )
 from wheelload.estimators.mhe.state import (
     MheEstimate,
@@ -117,24 +114,6 @@ from wheelload.estimators.mhe.window import (
 from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 from wheelload.models.input_validity import MAX_INTERVAL
-
-#: The estimator with its settings and results (the settings live in
-#: :mod:`~wheelload.estimators.mhe.settings`, the state and results in
-#: :mod:`~wheelload.estimators.mhe.state`)
-__all__ = [
-    "LOAD_SCALE",
-    "Arrival",
-    "BiasStates",
-    "Constraint",
-    "Loss",
-    "ResidualLoss",
-    "MheEstimate",
-    "MheSettings",
-    "MheState",
-    "MovingHorizonEstimator",
-    "SolverSettings",
-]
-
 
 #: m/s^2, the az of the made-up sample (level road, at rest) of the steady-state
 #: covariance recursion. It reaches the covariance (az = 0 gives another one; a vehicle
