@@ -60,24 +60,20 @@ inaccurate", e.g. 447 of 1353 samples with an L1 equilibrium loss), so the
 float build of that window runs at :data:`FLOAT_WINDOW_EPS` = 1e-5
 (:func:`embedded_settings` says what a build realises); measured figures
 are in ``tests/estimators/codegen/test_mhe_codegen_settings.py`` and
-``tests/estimators/codegen/test_cross_compiled.py``. :func:`build_mhe_program` builds a
-stand-alone program (any compiler, e.g. ``arm-linux-gnueabihf-gcc -static``).
+``tests/estimators/codegen/test_cross_compiled.py``. Compiling and running the generated
+C: :mod:`~wheelload.estimators.codegen.mhe_build`.
 
 Example
 -------
->>> library = build_mhe_library(vehicle, MheSettings(horizon=20), Path("build"), dt=0.01,
-...                             vehicle_path=Path("car.toml"))
->>> result = library.run(signals)
+>>> folder = generate_mhe(vehicle, MheSettings(horizon=20), Path("out"), dt=0.01,
+...                       vehicle_path=Path("car.toml"))
 """
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import shutil
-import subprocess
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -86,16 +82,13 @@ import numpy as np
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
 from wheelload.estimators.kf.projection import Weighting, projection_step_function
-from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.output_files import atomic_write, check_output_folder, write_text
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.logs.output_files import atomic_write, check_output_folder
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.qp import csc_value_order
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.settings import L1_CORE, Arrival, Constraint, Loss, MheSettings
 from wheelload.estimators.mhe.terms import LOAD_SCALE, TERMS_NAME, terms_function
 from wheelload.estimators.mhe.window import TRAVEL_UNIT
-from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, Vehicle, load_vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
@@ -423,197 +416,3 @@ void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, 
 
 #endif
 """
-
-
-@dataclass(frozen=True)
-class EmbeddedResult:
-    """The embedded MHE's outputs over a log, row k from sample k (the estimate of k - lag)."""
-
-    loads: np.ndarray  # (n, 4) N
-    std: np.ndarray  # (n, 4) N, the fallback filter's (0 without one)
-    residual: np.ndarray  # (n, 3) b - A x
-    bias: np.ndarray  # (n, nb) travel offsets [m], then ax, ay [m/s^2]
-    status: np.ndarray  # (n,) OSQP status value
-    flags: np.ndarray  # (n,) StepFlag bits of the skipped updates
-    iterations: np.ndarray  # (n,)
-    fallback: np.ndarray  # (n,) bool
-    solve_time: np.ndarray  # (n,) s
-
-
-class CompiledMhe:
-    """The generated embedded MHE compiled to a shared library and loaded with ctypes."""
-
-    def __init__(self, path: Path, n_bias: int) -> None:
-        self._lib = ctypes.CDLL(str(path))
-        self._lib.wheelload_mhe_run.restype = None
-        self.n_bias = n_bias
-
-    def run(self, signals: Signals) -> EmbeddedResult:
-        u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
-        dt = np.ascontiguousarray(sample_intervals(signals.t), dtype=float)
-        n = len(signals)
-        out = dict(
-            loads=np.zeros((n, 4)), std=np.zeros((n, 4)), residual=np.zeros((n, 3)),
-            bias=np.zeros((n, self.n_bias)), status=np.zeros(n, dtype=np.int32),
-            iterations=np.zeros(n, dtype=np.int32), fallback=np.zeros(n, dtype=np.int32),
-            flags=np.zeros(n, dtype=np.uint32), solve_time=np.zeros(n),
-        )  # fmt: skip
-        kinds = dict(status=ctypes.c_int, iterations=ctypes.c_int, fallback=ctypes.c_int,
-                     flags=ctypes.c_uint)  # fmt: skip
-        names = ["loads", "std", "residual", "bias", "status", "iterations", "fallback",
-                 "flags", "solve_time"]  # fmt: skip
-        pointers = [
-            out[name].ctypes.data_as(ctypes.POINTER(kinds.get(name, ctypes.c_double)))
-            for name in names
-        ]
-        self._lib.wheelload_mhe_run(
-            ctypes.c_int(n),
-            u.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-            dt.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-            *pointers,
-        )
-        out["flags"] = out["flags"].astype(np.int64)
-        out["fallback"] = out["fallback"].astype(bool)
-        return EmbeddedResult(**out)
-
-
-def build_mhe_library(
-    vehicle: Vehicle,
-    settings: MheSettings,
-    folder: Path,
-    dt: float,
-    precision: Precision = Precision.DOUBLE,
-    *,
-    vehicle_path: Path | None = None,
-) -> CompiledMhe:
-    """Generate, compile with gcc -O2 into ``folder/libwheelload_mhe.so`` and load.
-
-    ``vehicle_path``: link the KF in (see :func:`generate_mhe`).
-    """
-    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
-                          vehicle_path=vehicle_path)  # fmt: skip
-    library = folder / "libwheelload_mhe.so"
-    command = ["gcc", "-O2", "-shared", "-fPIC", "-std=gnu99", "-o", str(library),
-               *mhe_includes(folder), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
-    completed = subprocess.run(command, capture_output=True, text=True)
-    if completed.returncode != 0:
-        raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
-    return CompiledMhe(library, n_bias(folder))
-
-
-def n_bias(folder: Path) -> int:
-    """WHEELLOAD_MHE_N_BIAS of a generated embedded MHE."""
-    for line in (Path(folder) / "wheelload_mhe.h").read_text().splitlines():
-        if line.startswith("#define WHEELLOAD_MHE_N_BIAS "):
-            return int(line.split()[2])
-    raise ValueError(f"{folder}: not a generated embedded MHE (no wheelload_mhe.h)")
-
-
-MAIN = r"""
-/* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
-   Each row: the interval dt [s] before the sample, then the WHEELLOAD_MHE_N_INPUTS inputs in
-   wheelload.models.INPUTS order ('nan' = missing).
-   Output CSV: fz_fl..fz_rr (of sample k - lag), std_fl..std_rr, residual_0..2, status,
-   iterations, fallback, flags, osqp_float_bytes, bias_0..; exit 2 on bad use. */
-#include <stdio.h>
-#include "osqp.h"
-#include "wheelload_mhe.h"
-
-#define ROW_SIZE (1 + WHEELLOAD_MHE_N_INPUTS)
-
-int main(int argc, char **argv) {
-    if (argc != 3) {
-        fprintf(stderr, "usage: %s INPUTS.txt ESTIMATES.csv\n", argv[0]);
-        return 2;
-    }
-    FILE *in = fopen(argv[1], "r");
-    if (!in) {
-        fprintf(stderr, "%s: cannot open\n", argv[1]);
-        return 2;
-    }
-    FILE *out = fopen(argv[2], "w");
-    if (!out) {
-        fprintf(stderr, "%s: cannot write\n", argv[2]);
-        fclose(in);
-        return 2;
-    }
-    fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,std_fl,std_fr,std_rl,std_rr,residual_0,residual_1,"
-                 "residual_2,status,iterations,fallback,flags,osqp_float_bytes");
-    for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",bias_%d", i);
-    fprintf(out, "\n");
-    wheelload_mhe_reset();
-    double row[ROW_SIZE];
-    for (;;) {
-        int i;
-        for (i = 0; i < ROW_SIZE; ++i)
-            if (fscanf(in, "%lf", &row[i]) != 1) break;
-        if (i < ROW_SIZE) break;
-        wheelload_mhe_output o;
-        int status = wheelload_mhe_step(row + 1, row[0], &o);
-        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.loads[i]);
-        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.std[i]);
-        for (i = 0; i < 3; ++i) fprintf(out, "%.9g,", o.residual[i]);
-        fprintf(out, "%d,%d,%d,%u,%d", status, o.iterations, o.fallback, o.flags,
-                (int)sizeof(OSQPFloat));
-        for (i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",%.9g", o.bias[i]);
-        fprintf(out, "\n");
-    }
-    fclose(in);
-    return fclose(out) == 0 ? 0 : 1;
-}
-"""
-
-
-def mhe_sources(folder: Path) -> list[Path]:
-    """The C files of a generated embedded MHE (without a main)."""
-    osqp_dir = folder / "osqp"
-    linked = [folder / f"{FILTER_PREFIX}.c"] if (folder / f"{FILTER_PREFIX}.c").exists() else []
-    return [
-        folder / "wheelload_mhe.c",
-        folder / f"{TERMS_NAME}.c",
-        *linked,
-        osqp_dir / "wheelload_mhe_workspace.c",
-        *sorted((osqp_dir / "src").glob("*.c")),
-    ]
-
-
-def mhe_includes(folder: Path) -> list[str]:
-    osqp_dir = folder / "osqp"
-    return [f"-I{osqp_dir}", f"-I{osqp_dir / 'inc' / 'public'}",
-            f"-I{osqp_dir / 'inc' / 'private'}", f"-I{folder}"]  # fmt: skip
-
-
-def build_mhe_program(
-    vehicle: Vehicle,
-    settings: MheSettings,
-    folder: Path,
-    dt: float,
-    *,
-    precision: Precision = Precision.DOUBLE,
-    compiler: str = "gcc",
-    flags: tuple[str, ...] = ("-O2",),
-    vehicle_path: Path | None = None,
-) -> Path:
-    """Generate the embedded MHE and compile it with :data:`MAIN` into ``folder/wheelload_mhe``.
-
-    ``compiler`` may be a cross compiler (e.g. ``arm-linux-gnueabihf-gcc`` with
-    ``-static`` among ``flags``, run under ``qemu-arm``).
-    """
-    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
-                          vehicle_path=vehicle_path)  # fmt: skip
-    main = folder / "wheelload_mhe_main.c"
-    write_text(main, MAIN, replace=True)
-    binary = folder / "wheelload_mhe"
-    command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
-               str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
-    completed = subprocess.run(command, capture_output=True, text=True)
-    if completed.returncode != 0:
-        raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
-    return binary
-
-
-def write_inputs(signals: Signals, path: Path) -> Path:
-    """The log's intervals and inputs as text rows for :data:`MAIN` (17 digits, 'nan' missing)."""
-    rows = np.column_stack([sample_intervals(signals.t), input_matrix(signals).T])
-    np.savetxt(path, rows, fmt="%.17g")
-    return path

@@ -80,7 +80,8 @@ def _c_kf(vehicle_path, frame, folder: Path, precision: Precision) -> hostile.Ho
 
 def _c_mhe(vehicle, vehicle_path, signals, folder: Path) -> hostile.HostileSummary:
     from wheelload.estimators import Constraint, MheSettings
-    from wheelload.estimators.codegen.mhe import build_mhe_program, embedded_settings, write_inputs
+    from wheelload.estimators.codegen.mhe import embedded_settings
+    from wheelload.estimators.codegen.mhe_build import build_mhe_program, write_inputs
 
     settings = embedded_settings(MheSettings(horizon=10, constraint=Constraint.SOFT, bounded=True))
     dt = float(np.median(np.diff(signals.t)))

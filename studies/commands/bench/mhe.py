@@ -150,7 +150,7 @@ def _bench_c(
 
     Soft windows link the two-stage KF library in (its step is in the time).
     """
-    from wheelload.estimators.codegen.mhe import build_mhe_library
+    from wheelload.estimators.codegen.mhe_build import build_mhe_library
 
     with tempfile.TemporaryDirectory() as folder:
         library = build_mhe_library(vehicle, settings, Path(folder), dt=0.01,

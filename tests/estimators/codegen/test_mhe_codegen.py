@@ -6,7 +6,8 @@ import shutil
 import numpy as np
 import pytest
 
-from wheelload.estimators.codegen.mhe import build_mhe_library, embedded_settings
+from wheelload.estimators.codegen.mhe import embedded_settings
+from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import TwoStageKF
-from wheelload.estimators.codegen.mhe import build_mhe_library
+from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
 from wheelload.estimators.logs.inputs import input_matrix

@@ -1,0 +1,226 @@
+r"""The embedded MHE compiled and run: a shared library over a log, a stand-alone program.
+
+:func:`build_mhe_library` generates the C (:func:`~wheelload.estimators.codegen.mhe.generate_mhe`),
+compiles it with gcc -O2 and loads it with ctypes (:class:`CompiledMhe`);
+:func:`build_mhe_program` builds a stand-alone program reading input rows from a text file
+(any compiler, e.g. ``arm-linux-gnueabihf-gcc -static``), :func:`write_inputs` writes them.
+
+Example
+-------
+>>> library = build_mhe_library(vehicle, MheSettings(horizon=20), Path("build"), dt=0.01,
+...                             vehicle_path=Path("car.toml"))
+>>> result = library.run(signals)
+"""
+
+from __future__ import annotations
+
+import ctypes
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators.codegen.mhe import FILTER_PREFIX, generate_mhe
+from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.output_files import write_text
+from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.mhe.settings import MheSettings
+from wheelload.estimators.mhe.terms import TERMS_NAME
+from wheelload.estimators.protocol import sample_intervals
+from wheelload.models import Vehicle
+
+
+@dataclass(frozen=True)
+class EmbeddedResult:
+    """The embedded MHE's outputs over a log, row k from sample k (the estimate of k - lag)."""
+
+    loads: np.ndarray  # (n, 4) N
+    std: np.ndarray  # (n, 4) N, the fallback filter's (0 without one)
+    residual: np.ndarray  # (n, 3) b - A x
+    bias: np.ndarray  # (n, nb) travel offsets [m], then ax, ay [m/s^2]
+    status: np.ndarray  # (n,) OSQP status value
+    flags: np.ndarray  # (n,) StepFlag bits of the skipped updates
+    iterations: np.ndarray  # (n,)
+    fallback: np.ndarray  # (n,) bool
+    solve_time: np.ndarray  # (n,) s
+
+
+class CompiledMhe:
+    """The generated embedded MHE compiled to a shared library and loaded with ctypes."""
+
+    def __init__(self, path: Path, n_bias: int) -> None:
+        self._lib = ctypes.CDLL(str(path))
+        self._lib.wheelload_mhe_run.restype = None
+        self.n_bias = n_bias
+
+    def run(self, signals: Signals) -> EmbeddedResult:
+        u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
+        dt = np.ascontiguousarray(sample_intervals(signals.t), dtype=float)
+        n = len(signals)
+        out = dict(
+            loads=np.zeros((n, 4)), std=np.zeros((n, 4)), residual=np.zeros((n, 3)),
+            bias=np.zeros((n, self.n_bias)), status=np.zeros(n, dtype=np.int32),
+            iterations=np.zeros(n, dtype=np.int32), fallback=np.zeros(n, dtype=np.int32),
+            flags=np.zeros(n, dtype=np.uint32), solve_time=np.zeros(n),
+        )  # fmt: skip
+        kinds = dict(status=ctypes.c_int, iterations=ctypes.c_int, fallback=ctypes.c_int,
+                     flags=ctypes.c_uint)  # fmt: skip
+        names = ["loads", "std", "residual", "bias", "status", "iterations", "fallback",
+                 "flags", "solve_time"]  # fmt: skip
+        pointers = [
+            out[name].ctypes.data_as(ctypes.POINTER(kinds.get(name, ctypes.c_double)))
+            for name in names
+        ]
+        self._lib.wheelload_mhe_run(
+            ctypes.c_int(n),
+            u.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            dt.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            *pointers,
+        )
+        out["flags"] = out["flags"].astype(np.int64)
+        out["fallback"] = out["fallback"].astype(bool)
+        return EmbeddedResult(**out)
+
+
+def build_mhe_library(
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    precision: Precision = Precision.DOUBLE,
+    *,
+    vehicle_path: Path | None = None,
+) -> CompiledMhe:
+    """Generate, compile with gcc -O2 into ``folder/libwheelload_mhe.so`` and load.
+
+    ``vehicle_path``: link the KF in (see :func:`generate_mhe`).
+    """
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
+                          vehicle_path=vehicle_path)  # fmt: skip
+    library = folder / "libwheelload_mhe.so"
+    command = ["gcc", "-O2", "-shared", "-fPIC", "-std=gnu99", "-o", str(library),
+               *mhe_includes(folder), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+    completed = subprocess.run(command, capture_output=True, text=True)
+    if completed.returncode != 0:
+        raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
+    return CompiledMhe(library, n_bias(folder))
+
+
+def n_bias(folder: Path) -> int:
+    """WHEELLOAD_MHE_N_BIAS of a generated embedded MHE."""
+    for line in (Path(folder) / "wheelload_mhe.h").read_text().splitlines():
+        if line.startswith("#define WHEELLOAD_MHE_N_BIAS "):
+            return int(line.split()[2])
+    raise ValueError(f"{folder}: not a generated embedded MHE (no wheelload_mhe.h)")
+
+
+MAIN = r"""
+/* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
+   Each row: the interval dt [s] before the sample, then the WHEELLOAD_MHE_N_INPUTS inputs in
+   wheelload.models.INPUTS order ('nan' = missing).
+   Output CSV: fz_fl..fz_rr (of sample k - lag), std_fl..std_rr, residual_0..2, status,
+   iterations, fallback, flags, osqp_float_bytes, bias_0..; exit 2 on bad use. */
+#include <stdio.h>
+#include "osqp.h"
+#include "wheelload_mhe.h"
+
+#define ROW_SIZE (1 + WHEELLOAD_MHE_N_INPUTS)
+
+int main(int argc, char **argv) {
+    if (argc != 3) {
+        fprintf(stderr, "usage: %s INPUTS.txt ESTIMATES.csv\n", argv[0]);
+        return 2;
+    }
+    FILE *in = fopen(argv[1], "r");
+    if (!in) {
+        fprintf(stderr, "%s: cannot open\n", argv[1]);
+        return 2;
+    }
+    FILE *out = fopen(argv[2], "w");
+    if (!out) {
+        fprintf(stderr, "%s: cannot write\n", argv[2]);
+        fclose(in);
+        return 2;
+    }
+    fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,std_fl,std_fr,std_rl,std_rr,residual_0,residual_1,"
+                 "residual_2,status,iterations,fallback,flags,osqp_float_bytes");
+    for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",bias_%d", i);
+    fprintf(out, "\n");
+    wheelload_mhe_reset();
+    double row[ROW_SIZE];
+    for (;;) {
+        int i;
+        for (i = 0; i < ROW_SIZE; ++i)
+            if (fscanf(in, "%lf", &row[i]) != 1) break;
+        if (i < ROW_SIZE) break;
+        wheelload_mhe_output o;
+        int status = wheelload_mhe_step(row + 1, row[0], &o);
+        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.loads[i]);
+        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.std[i]);
+        for (i = 0; i < 3; ++i) fprintf(out, "%.9g,", o.residual[i]);
+        fprintf(out, "%d,%d,%d,%u,%d", status, o.iterations, o.fallback, o.flags,
+                (int)sizeof(OSQPFloat));
+        for (i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",%.9g", o.bias[i]);
+        fprintf(out, "\n");
+    }
+    fclose(in);
+    return fclose(out) == 0 ? 0 : 1;
+}
+"""
+
+
+def mhe_sources(folder: Path) -> list[Path]:
+    """The C files of a generated embedded MHE (without a main)."""
+    osqp_dir = folder / "osqp"
+    linked = [folder / f"{FILTER_PREFIX}.c"] if (folder / f"{FILTER_PREFIX}.c").exists() else []
+    return [
+        folder / "wheelload_mhe.c",
+        folder / f"{TERMS_NAME}.c",
+        *linked,
+        osqp_dir / "wheelload_mhe_workspace.c",
+        *sorted((osqp_dir / "src").glob("*.c")),
+    ]
+
+
+def mhe_includes(folder: Path) -> list[str]:
+    osqp_dir = folder / "osqp"
+    return [f"-I{osqp_dir}", f"-I{osqp_dir / 'inc' / 'public'}",
+            f"-I{osqp_dir / 'inc' / 'private'}", f"-I{folder}"]  # fmt: skip
+
+
+def build_mhe_program(
+    vehicle: Vehicle,
+    settings: MheSettings,
+    folder: Path,
+    dt: float,
+    *,
+    precision: Precision = Precision.DOUBLE,
+    compiler: str = "gcc",
+    flags: tuple[str, ...] = ("-O2",),
+    vehicle_path: Path | None = None,
+) -> Path:
+    """Generate the embedded MHE and compile it with :data:`MAIN` into ``folder/wheelload_mhe``.
+
+    ``compiler`` may be a cross compiler (e.g. ``arm-linux-gnueabihf-gcc`` with
+    ``-static`` among ``flags``, run under ``qemu-arm``).
+    """
+    folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
+                          vehicle_path=vehicle_path)  # fmt: skip
+    main = folder / "wheelload_mhe_main.c"
+    write_text(main, MAIN, replace=True)
+    binary = folder / "wheelload_mhe"
+    command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
+               str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+    completed = subprocess.run(command, capture_output=True, text=True)
+    if completed.returncode != 0:
+        raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
+    return binary
+
+
+def write_inputs(signals: Signals, path: Path) -> Path:
+    """The log's intervals and inputs as text rows for :data:`MAIN` (17 digits, 'nan' missing)."""
+    rows = np.column_stack([sample_intervals(signals.t), input_matrix(signals).T])
+    np.savetxt(path, rows, fmt="%.17g")
+    return path
