@@ -45,7 +45,7 @@ _LAZY_MODULES = {
     "wheelload.estimators.kf.tuning": ("TUNED_DENSITIES", "TUNING_INDEX", "noise_densities"),
     "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
-    "wheelload.estimators.loops.log_stream": ("LogStream", "scan_log"),
+    "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
 }
 _LAZY = {name: module for module, names in _LAZY_MODULES.items() for name in names}
 

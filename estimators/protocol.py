@@ -10,7 +10,7 @@ registry, :mod:`wheelload.estimators.registry`) and offers
   has one row and ``t = [nan]`` (a :class:`Sample` carries no time stamp);
 - ``run(signals) -> Estimate``: a whole log from a fresh ``initial_state()``,
   the same numbers as repeated ``step``
-  (:func:`~wheelload.estimators.logs.samples.step_through`).
+  (:func:`~wheelload.estimators.samples.step_through`).
 
 Beside the protocol: the :class:`Sample` a ``step`` takes and the intervals
 between samples (:func:`sample_intervals`), the :class:`MethodInfo` each

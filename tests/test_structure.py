@@ -232,3 +232,25 @@ def test_the_estimators_face_hands_out_every_name():
 
     missing = [name for name in face.__all__ if not hasattr(face, name)]
     assert not missing, f"listed in wheelload.estimators.__all__ but not importable: {missing}"
+
+
+def room(module: str) -> str:
+    """The package (folder) a module stands in; a package's own ``__init__`` is its room."""
+    path = modules()[module]
+    return module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+
+def test_no_two_rooms_import_each_other():
+    """Folders show the layers: between two sub-packages the arrows run one way only."""
+    between = defaultdict(set)
+    for module, targets in arrows().items():
+        for target in targets:
+            a, b = room(module), room(target)
+            if a != b and not a.startswith(b + ".") and not b.startswith(a + "."):
+                between[a, b].add(f"{module} -> {target}")
+    both = sorted(
+        f"{a} <-> {b}: {sorted(between[a, b])[0]}; {sorted(between[b, a])[0]}"
+        for a, b in between
+        if (b, a) in between and a < b
+    )
+    assert not both, "\n".join(both)

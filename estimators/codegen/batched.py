@@ -39,10 +39,9 @@ from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF, sensor_faults
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.loops.compiled import shared_library
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import Estimate
-from wheelload.models.files.build_folder import build_folder
+from wheelload.models.files.build_folder import build_folder, shared_library
 
 PREFIX = "wheelload_batch"
 #: The fast build of the library as a shared object (warnings are not errors here).

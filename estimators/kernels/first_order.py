@@ -27,9 +27,7 @@ import functools
 
 import numpy as np
 
-from wheelload.models.files.build_folder import cached_library
-
-COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")  # -std=c99: no FMA contraction
+from wheelload.models.files.build_folder import COMPILER, cached_library
 
 SOURCE = """
 /* y_k = z + b0 x_k; z = x_k b1 - y_k a1 (transposed direct form II, first order). */

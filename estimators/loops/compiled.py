@@ -16,9 +16,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.models.files.build_folder import cached_library
-
-COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
+from wheelload.models.files.build_folder import shared_library
 
 LOOP = """
 #include <string.h>
@@ -94,18 +92,6 @@ def _loop_source(
         assign="\n".join(assign),
         record="\n".join(record),
         finish="\n".join(finish),
-    )
-
-
-def shared_library(source: str, name: str, compiler: tuple[str, ...] = COMPILER) -> ctypes.CDLL:
-    """Compile ``source`` once (cached by its hash and ``compiler``) and load it
-    (:func:`~wheelload.models.files.build_folder.cached_library`)."""
-    return cached_library(
-        source,
-        name,
-        compiler,
-        lambda library: ctypes.CDLL(str(library)),
-        "run the filter over a log in compiled code",
     )
 
 

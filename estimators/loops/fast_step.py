@@ -33,8 +33,8 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
-from wheelload.estimators.loops.compiled import shared_library
 from wheelload.estimators.result import StepFlag
+from wheelload.models.files.build_folder import shared_library
 
 #: Step inputs and outputs the wrapper expects, in the step Function's order.
 INPUTS = ("x", "P", "m", "u", "u_valid", "dt", "p", "tuning")

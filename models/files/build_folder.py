@@ -15,6 +15,7 @@ mapped (a truncated library mapped into memory kills the process with SIGBUS).
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import logging
 import os
@@ -139,6 +140,11 @@ def _compile(source: str, library: Path, command: tuple[str, ...], purpose: str)
         shutil.rmtree(work, ignore_errors=True)
 
 
+#: gcc and its flags for the small shared libraries of the compiled loops and kernels
+#: (-std=c99: no FMA contraction, so C gives Python's numbers).
+COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
+
+
 def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
     """``source`` compiled once by ``command`` (gcc and its flags) and loaded with ``load``.
 
@@ -188,4 +194,16 @@ def cached_function(function):
         ("gcc", *CHUNK_FLAGS),
         lambda library: ca.external(name, str(library)),
         "compile the plant",
+    )
+
+
+def shared_library(
+    source: str,
+    name: str,
+    compiler: tuple[str, ...] = COMPILER,
+    purpose: str = "run the filter over a log in compiled code",
+) -> ctypes.CDLL:
+    """``source`` compiled once (:func:`cached_library`) and loaded with ctypes."""
+    return cached_library(
+        source, name, compiler, lambda library: ctypes.CDLL(str(library)), purpose
     )

@@ -53,12 +53,12 @@ import casadi as ca
 from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.files.build_folder import cached_function
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
-from wheelload.models.plant.params import DamperMap, Plant
 from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
 from wheelload.models.suspension.elements import anti_roll_bar_forces, stop_force
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
 from wheelload.models.vehicle.description import Vehicle
+from wheelload.models.vehicle.plant_section import DamperMap, Plant
 
 STATE_NAMES = (
     ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")

@@ -37,10 +37,10 @@ from wheelload.models.plant.dynamics import (
     plant_functions,
     vehicle_plant,
 )
-from wheelload.models.plant.params import TyreForces
 from wheelload.models.plant.road_surface import RoadSurface
 from wheelload.models.plant.tyre import peak_input
 from wheelload.models.vehicle.description import Vehicle
+from wheelload.models.vehicle.plant_section import TyreForces
 
 FACTOR_NAMES = tuple(f"slip_factor_{w}" for w in WHEELS)
 # Outputs of the controlled plant: the plant outputs, then the applied inputs.

@@ -20,7 +20,7 @@ import math
 
 import casadi as ca
 
-from wheelload.models.plant.params import TyreForces
+from wheelload.models.vehicle.plant_section import TyreForces
 
 
 def peak_input(shape: float, curvature: float) -> float:

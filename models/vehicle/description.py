@@ -24,7 +24,7 @@ import types
 import typing
 from dataclasses import dataclass
 
-from wheelload.models.plant.params import Plant
+from wheelload.models.vehicle.plant_section import Plant
 from wheelload.models.vehicle.section_checks import (
     SectionKeyError,
     require_non_negative,
@@ -277,7 +277,7 @@ class Vehicle:
     suspension: Suspension
     model: ModelTerms
     filter: FilterTuning
-    plant: Plant | None = None  # ground-truth simulator only (models/plant/params.py)
+    plant: Plant | None = None  # ground-truth simulator only (models/vehicle/plant_section.py)
 
     def _check(self) -> None:
         pass

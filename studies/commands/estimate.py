@@ -1,7 +1,7 @@
 """``wheelload estimate``: run an estimator (default: the two-stage KF) on one log or many.
 
 One log: a summary on screen, ``--out`` estimates CSV, ``--plot`` figure. A CSV or
-Parquet log with the KF runs on the lean whole-log path (``estimators/loops/log_stream.py``:
+Parquet log with the KF runs on the lean whole-log path (``estimators/kf/log_stream.py``:
 read, filtered, written and summarised in chunks, memory bounded by the chunk, the
 numbers of the in-memory run to the bit); ``--in-memory`` reads it whole.
 Many logs (a folder, a glob, or several names): ``--out FOLDER`` gets one

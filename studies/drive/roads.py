@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.models.plant.params import Roughness
 from wheelload.models.plant.road_surface import RoadSurface
+from wheelload.models.vehicle.plant_section import Roughness
 
 
 @dataclass(frozen=True, kw_only=True)

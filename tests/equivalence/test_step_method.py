@@ -19,10 +19,10 @@ import pytest
 
 from wheelload.estimators.family import step_method
 from wheelload.estimators.family.road_angle import RoadAngleKF
-from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.registry import build, core, methods
+from wheelload.estimators.samples import step_through
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.pipeline.example_log import example_log_path
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.family.ycoo import Ycoo, YcooSettings
-from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.protocol import Estimator, SuspensionModel
+from wheelload.estimators.samples import step_through
 from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, load_vehicle
 
 

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.kf.two_stage import TwoStageKF
-from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.protocol import Estimator, MethodInfo
 from wheelload.estimators.registry import (
@@ -15,6 +14,7 @@ from wheelload.estimators.registry import (
     method,
     methods,
 )
+from wheelload.estimators.samples import step_through
 from wheelload.studies.pipeline.example_log import example_log_path
 
 

@@ -1,6 +1,6 @@
 """CSV and Parquet logs read in chunks of rows, as float64 column arrays (pyarrow).
 
-The lean whole-log path (``estimators/loops/log_stream.py``) reads a long log
+The lean whole-log path (``estimators/kf/log_stream.py``) reads a long log
 chunk by chunk so that its memory is bounded by the chunk: Parquet by record
 batches (within row groups), CSV by blocks of about :data:`CSV_BLOCK` bytes.
 Every value becomes a float64 (a null or empty field is NaN). A file this

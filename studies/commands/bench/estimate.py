@@ -5,7 +5,7 @@ memory from ``wait4``), on a log made by repeating the bundled example log
 (time kept increasing; written as Parquet in row groups). Two ways, in turn
 so that both meet the same machine load, ``--repeat`` times each:
 
-- ``lean``: the default, the chunked whole-log path (``estimators/loops/log_stream.py``);
+- ``lean``: the default, the chunked whole-log path (``estimators/kf/log_stream.py``);
 - ``in-memory``: ``--in-memory``, the whole log read into memory (pandas),
   ``TwoStageKF.run``, ``Estimate.to_pandas`` written by pyarrow.
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.family.road_angle import RoadAngleKF
-from wheelload.estimators.logs.samples import step_through
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.protocol import Estimator
+from wheelload.estimators.samples import step_through
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
