@@ -9,7 +9,8 @@ moment from the old to the new one with a cosine ramp :math:`w(t)` over :data:`R
 so the combined centre of mass moves smoothly and ends at the new payload's. The
 plant takes ``[m, r]`` as inputs, held over each output sample
 (:func:`~wheelload.studies.drive.simulation.simulate`). The mass is taken on at the
-body's velocity: meant for a car standing still (checked by the simulation).
+body's velocity: meant for a car standing still (the simulation checks that the
+scenario stands then).
 """
 
 from __future__ import annotations
@@ -23,7 +24,6 @@ from wheelload.models.payload import Payload
 from wheelload.studies.drive.roads import smooth_step
 
 RAMP = 1.5  # s, a passenger getting in
-STANDING = 0.3  # m/s, the largest speed at which the payload may change
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -21,7 +21,7 @@ from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive.driver import Driver, DriverTuning
-from wheelload.studies.drive.payload_schedule import STANDING, PayloadSchedule
+from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.roads import Road
 
 
@@ -40,6 +40,11 @@ class Run:
     max_time: float  # s
     record_from: float | None = None  # m, drop samples before this arc length
     hold: float = 0.0  # s, the driver holds the car at rest this long before driving
+
+    @property
+    def stands_until(self) -> float:
+        """Time [s] until which the car stands still: the whole run if no speed is asked."""
+        return self.max_time if not np.any(self.speed) else self.hold
     tuning: DriverTuning = DriverTuning()
     slip_control: SlipControl = SlipControl()
 
@@ -65,12 +70,25 @@ def simulate(
 
     With ``payload`` the plant's sprung body carries it (the vehicle file keeps its
     springs and preloads: the payload shows as static compression); a change must fall
-    where the car stands still, else a :class:`SimulationError` names its time.
+    where the car stands still (:attr:`Run.stands_until`), else a ``ValueError`` names
+    its time.
     """
     steps = internal_rate / output_rate
     if abs(steps - round(steps)) > 1e-9 or steps < 1:
         raise ValueError(
             f"internal rate {internal_rate} Hz must be a multiple of output rate {output_rate} Hz"
+        )
+    moving = None if payload is None else payload.moving()
+    if moving is not None and moving[1] > run.stands_until:
+        latest = run.stands_until - (moving[1] - moving[0])
+        hint = (
+            f"choose a change time <= {latest:g} s"
+            if latest >= 0.0
+            else "the car never stands still here: use the standstill or stop-and-go scenario"
+        )
+        raise ValueError(
+            f"the payload changes from t = {moving[0]:g} s to {moving[1]:g} s, but the car "
+            f"stands still only until t = {run.stands_until:g} s: {hint}"
         )
     tic = time.perf_counter()
     if payload == PayloadSchedule():
@@ -102,7 +120,6 @@ def simulate(
     driver = Driver(
         vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning, hold=run.hold
     )
-    moving = None if payload is None else payload.moving()
     z = np.concatenate([x, np.ones(len(FACTOR_NAMES))])
     count = int(np.ceil(run.max_time * output_rate))
     n_x, n_y = len(STATE_NAMES), len(OUTPUT_NAMES)
@@ -115,13 +132,7 @@ def simulate(
     for k in range(count):
         request = driver.inputs(z[:n_x], dt)
         if payload is not None:
-            t = k * dt
-            if moving and moving[0] <= t <= moving[1] and abs(z[STATE["u"]]) > STANDING:
-                raise SimulationError(
-                    f"the payload changes at t = {moving[0]:g} s but the car moves then "
-                    f"({z[STATE['u']]:.2f} m/s at t = {t:.2f} s): choose a time it stands still"
-                )
-            request = np.concatenate([request, payload.at(t)])
+            request = np.concatenate([request, payload.at(k * dt)])
         z_dm, y_dm = chunk(z, request)
         z, y = z_dm.full().ravel(), y_dm.full().ravel()
         states[k], outputs[k], inputs[k] = z[:n_x], y[:n_y], y[n_y : n_y + len(INPUT_NAMES)]
