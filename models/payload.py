@@ -29,7 +29,7 @@ _SYMBOLIC = (ca.SX, ca.MX, ca.DM)
 
 @dataclass(frozen=True, kw_only=True)
 class Payload:
-    """A point mass rigidly on the sprung body [kg; m from the file's sprung CG, x fwd, y left, z up]."""
+    """A point mass on the sprung body: kg; m from the file's sprung CG (x fwd, y left, z up)."""
 
     mass: float
     x: float = 0.0

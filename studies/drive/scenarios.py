@@ -10,7 +10,7 @@
 | chicane-incline-20 | road-angle paper §V | the same on a 20 % incline |
 | wheel-lift | this project | 0.8 g turn; the inner wheels cross a kerb and lift off |
 | standstill | ycoo paper §5 | held at rest for 5 s on a plane of ``grade`` and ``bank`` (options) |
-| stop-and-go | this project | at rest 10 s (a passenger may get in), then off to 80 km/h and a lane change |
+| stop-and-go | this project | 10 s at rest (a passenger gets in), then 80 km/h and a lane change |
 | hockenheim | main paper Table IV; issue 4 | flying lap of the Hockenheim GP circuit, 4.57 km |
 | nordschleife | main paper Table III; issue 4 | flying lap of the Nordschleife, 20.7 km |
 """

@@ -45,6 +45,7 @@ class Run:
     def stands_until(self) -> float:
         """Time [s] until which the car stands still: the whole run if no speed is asked."""
         return self.max_time if not np.any(self.speed) else self.hold
+
     tuning: DriverTuning = DriverTuning()
     slip_control: SlipControl = SlipControl()
 
