@@ -481,12 +481,18 @@ def chunk_from_ode(
 
 
 def chunk_function(
-    vehicle: Vehicle, road: RoadSurface, internal_rate: float, steps: int, jit: bool = True
+    vehicle: Vehicle,
+    road: RoadSurface,
+    internal_rate: float,
+    steps: int,
+    jit: bool = True,
+    payload: bool = False,
 ) -> ca.Function:
     """``plant_chunk(x0, u) -> (x, y)``: ``steps`` RK4 steps at ``internal_rate`` with input held.
 
     ``y`` holds :data:`OUTPUT_NAMES` at the final state. Compiled with the
-    system C compiler when ``jit`` is true.
+    system C compiler when ``jit`` is true. With ``payload`` the input ends with
+    :data:`PAYLOAD_INPUT_NAMES` (:func:`plant_dynamics`).
     """
-    ode, _ = plant_functions(vehicle, road)
+    ode, _ = plant_functions(vehicle, road, payload=payload)
     return chunk_from_ode(ode, internal_rate, steps, "plant_chunk", jit)
