@@ -42,6 +42,12 @@ The tyre force :math:`F_{t,i} = F_x e_x + F_y e_y + F_z n` acts along the
 local road normal and in the road plane; :math:`F_z = k_t \max(0, r_0 -
 \text{distance from wheel centre to road plane})`, so a tyre can leave the
 ground. Integration: classical RK4 with a fixed step, compiled.
+
+A plant built with ``payload`` (:func:`plant_dynamics`) takes a point mass on the
+sprung body as four more inputs; its body equations are
+:func:`loaded_body_accelerations` (Newton-Euler about the file's sprung CG), the file's
+springs and preloads unchanged, so that travel stays measured from the file's
+reference state.
 """
 
 from __future__ import annotations
