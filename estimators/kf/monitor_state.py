@@ -3,8 +3,8 @@
 One vector carried from sample to sample by the step (input ``m``, output ``m_next``): the
 fault monitor's slots (:mod:`.fault_monitor`), the innovation gate's rejection times and
 spreads (:mod:`.innovation_gate`), then each input's held value and hold time, the rate
-derivatives' settle times (:mod:`.plausibility`) and the range of the vertical row
-(:mod:`.limits`). It starts at zero.
+derivatives' settle times (:mod:`.plausibility`), the range of the vertical row
+(:mod:`.limits`) and the payload filter (:mod:`.payload`). It starts at zero.
 
 Example
 -------
@@ -31,12 +31,22 @@ CREDIT = slice(HELD.stop, HELD.stop + len(INPUTS))
 SETTLE = slice(CREDIT.stop, CREDIT.stop + len(BODY_RATES))
 # Lowest and highest vertical-row b seen so far, less the weight (0 at the start).
 TOTAL = slice(SETTLE.stop, SETTLE.stop + 2)
-MONITOR_SIZE = TOTAL.stop
+# The payload filter (:mod:`.payload`): its state, covariance (column-major) and whether it
+# has started (0: the prior is taken on the next sample).
+PAYLOAD = slice(TOTAL.stop, TOTAL.stop + 4)
+PAYLOAD_COVARIANCE = slice(PAYLOAD.stop, PAYLOAD.stop + 16)
+PAYLOAD_STARTED = PAYLOAD_COVARIANCE.stop
+MONITOR_SIZE = PAYLOAD_STARTED + 1
 
 
 def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.SX) -> ca.SX:
     """The fault monitor's next state, then the held inputs, settle times and total range."""
     return ca.vertcat(m_next[0:MONITOR_END], hold_state, settle, total)
+
+
+def with_payload_state(m_next: ca.SX, theta: ca.SX, P: ca.SX) -> ca.SX:
+    """The guards' next state (up to :data:`PAYLOAD`), then the payload filter's, started."""
+    return ca.vertcat(m_next[0 : PAYLOAD.start], theta, ca.vec(P), 1)
 
 
 def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:

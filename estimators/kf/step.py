@@ -32,9 +32,10 @@ from wheelload.estimators.kf import (
     innovation_gate,
     limits,
     monitor_state,
+    payload,
     plausibility,
 )
-from wheelload.estimators.kf.tuning import GUARD_TUNING, TUNING, TUNING_INDEX
+from wheelload.estimators.kf.tuning import GUARD_TUNING, PAYLOAD_SLICE, TUNING, TUNING_INDEX
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -45,6 +46,7 @@ from wheelload.models import (
     suspension_function,
 )
 from wheelload.models.input_validity import dependency_mask, interval_is_valid, sanitise
+from wheelload.models.loaded_vehicle import loaded_parameters_function
 from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
@@ -150,15 +152,29 @@ def step_expressions(
     u_raw = ca.SX.sym("u", len(INPUTS))
     valid_raw = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
-    p = ca.SX.sym("p", len(ModelParameters.names()))
+    p_file = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
     settings = guard.unpack(tuning[GUARD_TUNING])
     dt_nominal = tuning[TUNING_INDEX["sample_interval"]]
+    payload_tuning = tuning[PAYLOAD_SLICE]
 
     # A non-positive or non-finite interval skips the whole step: the state is held.
     dt_ok = interval_is_valid(dt)
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
     dt_used = dt_safe * dt_ok
+
+    # The payload the file does not know (.payload), predicted to this sample: every row
+    # below sees the loaded vehicle; the suspension's offsets stay the reference state's.
+    theta, P_theta = payload.predict(
+        m[monitor_state.PAYLOAD],
+        ca.reshape(m[monitor_state.PAYLOAD_COVARIANCE], 4, 4),
+        m[monitor_state.PAYLOAD_STARTED],
+        sanitise(u_raw, valid_raw),
+        valid_raw,
+        dt_used,
+        payload_tuning,
+    )
+    p = loaded_parameters_function()(p_file, theta)
 
     # Missing or implausible inputs are replaced by zero and skip the updates they feed;
     # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
@@ -239,6 +255,16 @@ def step_expressions(
     P_new = ca.if_else(bounded, P_new, P_pred)
     use_s, use_c = use_s * bounded, use_c * bounded
 
+    # The payload filter on the equilibrium at the pseudo-measured loads (every wheel's
+    # suspension row and the equilibrium row available).
+    all_travel = mask_s[0] * mask_s[1] * mask_s[2] * mask_s[3]
+    gates_term = gates_function()(valid_term, p)[0]
+    loaded = payload.update(
+        theta, P_theta, z, u_term, gates_term, p_file, all_travel * mask_c * bounded,
+        dt_nominal, payload_tuning, payload.residual_function(equilibrium),
+    )  # fmt: skip
+    mass_properties, mass_properties_std = payload.reported(loaded.theta, loaded.P, p_file)
+
     std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
     residual = b - ca.mtimes(A, x_new)
     used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
@@ -251,14 +277,15 @@ def step_expressions(
         innovation_gate.next_spread(spread, record, available, dt_used, settings),
     )
     m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
+    m_next = monitor_state.with_payload_state(m_next, loaded.theta, loaded.P)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
     )  # fmt: skip
-    inputs = [x, P, m, u_raw, valid_raw, dt, p, tuning]
+    inputs = [x, P, m, u_raw, valid_raw, dt, p_file, tuning]
     outputs = [
         x_new, P_new, m_next, std, residual, used, z, innovation, innovation_variance,
-        status, watch.statistic, watch.fault,
+        status, watch.statistic, watch.fault, mass_properties, mass_properties_std,
     ]  # fmt: skip
     return inputs, outputs
 
@@ -294,7 +321,8 @@ def _status(record, available, valid_raw, in_range, fault, limited, jump, held, 
 STEP_INPUT_NAMES = ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"]
 STEP_OUTPUT_NAMES = [
     "x_next", "P_next", "m_next", "std", "residual", "used", "z", "innovation",
-    "innovation_variance", "status", "fault_statistic", "fault",
+    "innovation_variance", "status", "fault_statistic", "fault", "mass_properties",
+    "mass_properties_std",
 ]  # fmt: skip
 #: The step's carried state: x, P and the monitor m.
 N_CARRIED = 3
@@ -336,7 +364,9 @@ def without_monitor(step: ca.Function) -> ca.Function:
     kept = [
         name
         for name in STEP_OUTPUT_NAMES
-        if name not in ("m_next", "status", "fault_statistic", "fault")
+        if name
+        not in ("m_next", "status", "fault_statistic", "fault", "mass_properties",
+                "mass_properties_std")  # fmt: skip
     ]
     names_in = [name for name in STEP_INPUT_NAMES if name != "m"]
     return ca.Function(

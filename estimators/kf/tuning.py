@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
+from wheelload.estimators.kf.payload import PAYLOAD_TUNING, payload_tuning
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.measurement_noise import INPUT_DENSITIES
@@ -30,6 +31,7 @@ TUNING = (
     "sample_interval",
     *GuardSettings.names(),
     *INPUT_DENSITIES,
+    *PAYLOAD_TUNING,
 )
 #: The filter's constant noise densities: the first entries of the tuning vector (vehicle
 #: file [filter]); the input-dependent ones (default 0) are :data:`INPUT_DENSITIES`, last.
@@ -44,6 +46,8 @@ DEFAULT_SAMPLE_INTERVAL = 0.01
 _GUARD_START = TUNING_INDEX["sample_interval"] + 1
 GUARD_TUNING = slice(_GUARD_START, _GUARD_START + len(GuardSettings.names()))
 _VARIANCE_SCALE = TUNING_INDEX["innovation_variance_scale"]
+#: The payload filter's entries of the tuning vector (:data:`PAYLOAD_TUNING` order).
+PAYLOAD_SLICE = slice(TUNING_INDEX[PAYLOAD_TUNING[0]], TUNING_INDEX[PAYLOAD_TUNING[-1]] + 1)
 
 
 def tuning_vector(
@@ -70,6 +74,7 @@ def tuning_vector(
             sample_interval,
             *settings.vector(),
             *tuning.input_densities(),
+            *payload_tuning(vehicle),
         ]
     )
     # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate's S.

@@ -199,6 +199,35 @@ class FaultTuning:
 
 
 @dataclass(frozen=True, kw_only=True)
+class PayloadTuning:
+    """Online payload mass and CG ([filter.payload], optional; estimators/kf/payload.py).
+
+    ``travel_from_reference``: the travel sensors read 0 in the file's reference state
+    (its masses, on level ground), so a payload shows as static compression; false when
+    the logger zeroes the travel at the start of a log (a payload is then invisible to
+    the springs and is not estimated: give measured static loads, ``--corner-weights``).
+    """
+
+    estimate: bool = True
+    travel_from_reference: bool = True
+    mass_std: float = 300.0  # kg, prior std of the payload mass
+    position_std: Vector3 = (1.0, 0.5, 0.3)  # m, prior std of its position about the CG
+    residual_density: Vector3 = (3.0e4, 3.0e4, 2.0e4)  # N^2 s, N^2 m^2 s, N^2 m^2 s
+    drift_density: float = 0.01  # kg^2/s, random walk of the mass while driving
+    standstill_density: float = 500.0  # kg^2/s, random walk while standing (loading)
+    standstill_speed: float = 0.5  # m/s, |vx| below which the car is standing
+    gate: float = 16.0  # chi^2_1 threshold of a residual row (4 sigma)
+
+    def _check(self) -> None:
+        for key in ("mass_std", "drift_density", "standstill_density", "standstill_speed",
+                    "gate"):  # fmt: skip
+            require_positive(self, key)
+        for key in ("position_std", "residual_density"):
+            if min(getattr(self, key)) <= 0.0:
+                raise SectionKeyError(key, "must be > 0 in every entry")
+
+
+@dataclass(frozen=True, kw_only=True)
 class FilterTuning:
     process_noise_density: float  # N^2/s:  Q = q dt I
     suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
@@ -206,6 +235,7 @@ class FilterTuning:
     initial_std: float  # N
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
     faults: FaultTuning = FaultTuning()  # [filter.faults], optional: fault-monitor limits
+    payload: PayloadTuning = PayloadTuning()  # [filter.payload], optional: online mass and CG
     # Optional: the innovation variance S the gate compares against (estimators/kf/guard.py,
     # innovation_variance_scale) times this factor. ``wheelload tune`` writes 1/c when it
     # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
