@@ -69,13 +69,18 @@ from wheelload.estimators.logs.signals import (
     sensor_mode,
 )
 from wheelload.estimators.loops.compiled import ColumnLoop, FlagRule
-from wheelload.estimators.result import RESIDUALS, SensorFault, StepFlag
+from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS
 from wheelload.models.conventions import WHEELS
 
 GROUPS = (TRAVEL, TRAVEL_RATE, RATES, HUB, RATE_DERIVATIVES)
 #: Output columns of the loop: loads, their std, residual, then the fault monitor's.
-LOOP_COLUMNS = ("x_next", "std", "residual", "fault", "fault_statistic")
+LOOP_COLUMNS = (
+    "x_next", "std", "residual", "fault", "fault_statistic", "mass_properties",
+    "mass_properties_std",
+)  # fmt: skip
+#: The first block row of the mass properties (after loads, std, residual, 2 x 7 monitor).
+_MASS_ROW = 4 + 4 + 3 + 7 + 7
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -108,6 +113,9 @@ class EstimateChunk:
         columns.update({f"fz_{w}": self.block[i] for i, w in enumerate(WHEELS)})
         columns.update({f"fz_std_{w}": self.block[4 + i] for i, w in enumerate(WHEELS)})
         columns.update({name: self.block[8 + i] for i, name in enumerate(RESIDUALS)})
+        columns.update(
+            {name: self.block[_MASS_ROW + i] for i, name in enumerate(MASS_PROPERTY_COLUMNS)}
+        )
         columns["status"] = self.flags
         return columns
 

@@ -31,12 +31,14 @@ CREDIT = slice(HELD.stop, HELD.stop + len(INPUTS))
 SETTLE = slice(CREDIT.stop, CREDIT.stop + len(BODY_RATES))
 # Lowest and highest vertical-row b seen so far, less the weight (0 at the start).
 TOTAL = slice(SETTLE.stop, SETTLE.stop + 2)
-# The payload filter (:mod:`.payload`): its state, covariance (column-major) and whether it
-# has started (0: the prior is taken on the next sample).
+# The payload filter (:mod:`.payload`): its state and covariance (column-major); whether the
+# step has taken a sample (0: the payload prior is taken on the next one); whether each
+# travel channel has had a valid sample (0: it has no previous value to jump from).
 PAYLOAD = slice(TOTAL.stop, TOTAL.stop + 4)
 PAYLOAD_COVARIANCE = slice(PAYLOAD.stop, PAYLOAD.stop + 16)
-PAYLOAD_STARTED = PAYLOAD_COVARIANCE.stop
-MONITOR_SIZE = PAYLOAD_STARTED + 1
+STARTED = PAYLOAD_COVARIANCE.stop
+TRAVEL_SEEN = slice(STARTED + 1, STARTED + 5)
+MONITOR_SIZE = TRAVEL_SEEN.stop
 
 
 def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.SX) -> ca.SX:
@@ -44,9 +46,10 @@ def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.S
     return ca.vertcat(m_next[0:MONITOR_END], hold_state, settle, total)
 
 
-def with_payload_state(m_next: ca.SX, theta: ca.SX, P: ca.SX) -> ca.SX:
-    """The guards' next state (up to :data:`PAYLOAD`), then the payload filter's, started."""
-    return ca.vertcat(m_next[0 : PAYLOAD.start], theta, ca.vec(P), 1)
+def with_payload_state(m_next: ca.SX, theta: ca.SX, P: ca.SX, seen: ca.SX) -> ca.SX:
+    """The guards' next state (up to :data:`PAYLOAD`), the payload filter's, started, and
+    the travel channels seen."""
+    return ca.vertcat(m_next[0 : PAYLOAD.start], theta, ca.vec(P), 1, seen)
 
 
 def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:

@@ -13,8 +13,11 @@ measurement is the equilibrium at the pseudo-measured loads,
           w \sim N(0, \mathrm{diag}(r_\vartheta) / \Delta t_{nom}),
 
 linearised at the prediction (an extended Kalman update, one row at a time, each gated
-at :math:`y^2 \le g\,S`). Its residual density covers the model's own mismatch, which is
-coloured, so the estimate averages over many seconds; a sensor bias the equilibrium can
+at :math:`y^2 \le g\,S`), with :math:`r_\vartheta` times
+:math:`(1 + (a_x^2 + a_y^2) / a_s^2)^2`: the model's mismatch grows with the square of the
+load transfer (the second-order terms, :math:`a_y \sin\phi`, the links). The residual
+density covers that mismatch, which is coloured, so the estimate averages over many
+seconds; a sensor bias the equilibrium can
 see (:math:`a_z`, a lateral or longitudinal offset) is absorbed as a small mass or CG
 shift, and the loads' rows stay consistent with the springs. The prior is
 :math:`\Delta m \sim N(0, \sigma_m^2)`, :math:`S \sim N(0, \sigma_m^2 \sigma_x^2)`; the
@@ -51,9 +54,10 @@ PAYLOAD_TUNING = (
     "payload_standstill_density",
     "payload_standstill_speed",
     "payload_gate",
+    "payload_acceleration_scale",
 )
 N_PAYLOAD = len(PAYLOAD_STATES)
-_VX = INPUTS.index("vx")
+_VX, _AX, _AY = (INPUTS.index(name) for name in ("vx", "ax", "ay"))
 
 
 def payload_tuning(vehicle: Vehicle) -> np.ndarray:
@@ -65,8 +69,15 @@ def payload_tuning(vehicle: Vehicle) -> np.ndarray:
     on = t.estimate and t.travel_from_reference
     return np.array(
         [
-            float(on), t.mass_std, *t.position_std, *t.residual_density,
-            t.drift_density, t.standstill_density, t.standstill_speed, t.gate,
+            float(on),
+            t.mass_std,
+            *t.position_std,
+            *t.residual_density,
+            t.drift_density,
+            t.standstill_density,
+            t.standstill_speed,
+            t.gate,
+            t.acceleration_scale,
         ]  # fmt: skip
     )
 
@@ -118,8 +129,12 @@ def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Func
     r0, J = residual(theta, z, u, gates, p)
     # r(theta) ~ r0 + J (theta' - theta) = 0: the measurement J theta' = J theta - r0.
     target = ca.mtimes(J, theta) - r0
+    # The model's mismatch grows with the load transfer it must explain: while the car
+    # corners or brakes the residual says less about the payload.
+    horizontal = (u[_AX] ** 2 + u[_AY] ** 2) / s["payload_acceleration_scale"] ** 2
     r = (
         ca.vertcat(*[s[f"payload_residual_density_{row}"] for row in ("vertical", "pitch", "roll")])
+        * (1 + horizontal) ** 2
         / dt_nominal
     )
     gate = s["payload_gate"]

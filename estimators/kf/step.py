@@ -46,7 +46,6 @@ from wheelload.models import (
     suspension_function,
 )
 from wheelload.models.input_validity import dependency_mask, interval_is_valid, sanitise
-from wheelload.models.loaded_vehicle import loaded_parameters_function
 from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
@@ -56,6 +55,7 @@ from wheelload.models.inputs import (
     TRAVEL_RATE,
     input_index,
 )
+from wheelload.models.loaded_vehicle import loaded_parameters_function
 from wheelload.models.measurement_noise import DENSITIES as NOISE_DENSITY_ORDER
 from wheelload.models.measurement_noise import measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
@@ -168,7 +168,7 @@ def step_expressions(
     theta, P_theta = payload.predict(
         m[monitor_state.PAYLOAD],
         ca.reshape(m[monitor_state.PAYLOAD_COVARIANCE], 4, 4),
-        m[monitor_state.PAYLOAD_STARTED],
+        m[monitor_state.STARTED],
         sanitise(u_raw, valid_raw),
         valid_raw,
         dt_used,
@@ -222,6 +222,9 @@ def step_expressions(
     reject, spread = m[monitor_state.REJECT], m[monitor_state.SPREAD]
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = limits.limit_covariance(P_pred, settings.covariance_floor, ceiling)
+    # Start where the car is: the first sample sees no prior information, so its rows set
+    # the loads (a log that starts in a turn carries no start-up transient).
+    P_pred = ca.if_else(m[monitor_state.STARTED], P_pred, ceiling * ca.DM.eye(4))
     H = ca.vertcat(ca.DM.eye(4), A)
     y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
     S_prior = ca.vertcat(
@@ -277,7 +280,7 @@ def step_expressions(
         innovation_gate.next_spread(spread, record, available, dt_used, settings),
     )
     m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
-    m_next = monitor_state.with_payload_state(m_next, loaded.theta, loaded.P)
+    m_next = monitor_state.with_payload_state(m_next, loaded.theta, loaded.P, watch.seen)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
@@ -365,8 +368,14 @@ def without_monitor(step: ca.Function) -> ca.Function:
         name
         for name in STEP_OUTPUT_NAMES
         if name
-        not in ("m_next", "status", "fault_statistic", "fault", "mass_properties",
-                "mass_properties_std")  # fmt: skip
+        not in (
+            "m_next",
+            "status",
+            "fault_statistic",
+            "fault",
+            "mass_properties",
+            "mass_properties_std",
+        )  # fmt: skip
     ]
     names_in = [name for name in STEP_INPUT_NAMES if name != "m"]
     return ca.Function(
