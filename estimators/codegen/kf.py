@@ -150,7 +150,8 @@ def kernel_function(
     """The step on symmetric storage, without the outputs the C library does not use.
 
     ``kernel(x, P[10], m, u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10],
-    m_next, std, residual, used, status, fault_statistic, fault)``; with
+    m_next, std, residual, used, status, fault_statistic, fault, mass_properties,
+    mass_properties_std)``; with
     :attr:`ParamMode.BAKED` the numeric ``p`` and ``tuning`` are substituted
     so that CasADi folds the constants.
     """
@@ -184,7 +185,10 @@ BOOLEAN_INPUTS = (KERNEL_INPUTS.index("u_valid"),)
 #: Outputs of the C kernel, in order.
 KERNEL_OUTPUTS = (
     "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
+    "mass_properties", "mass_properties_std",
 )  # fmt: skip
+#: Kernel outputs the batched step does not report (the single step does).
+_SINGLE_STEP_ONLY = ("mass_properties", "mass_properties_std")
 
 
 def representable(values: np.ndarray, precision: Precision) -> np.ndarray:
@@ -403,6 +407,7 @@ def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix
         boolean_inputs=BOOLEAN_INPUTS,
     )
     lines += [f"    {line}" for line in body.splitlines()]
+    lines += [f"    (void){name}{k};" for name in _SINGLE_STEP_ONLY for k in range(sizes[name])]
     lines.append("}")
     finite = [
         f"FINITE({name}{k})"

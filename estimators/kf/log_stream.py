@@ -107,6 +107,11 @@ class EstimateChunk:
     def residual(self) -> np.ndarray:
         return self.block[8:11].T
 
+    @property
+    def mass_properties(self) -> np.ndarray:
+        """The online mass properties (n, 4) and, after them, their std (n, 4): (n, 8)."""
+        return self.block[_MASS_ROW : _MASS_ROW + 8].T
+
     def columns(self) -> dict[str, np.ndarray]:
         """The columns of ``Estimate.to_pandas`` (with std), by name."""
         columns = {"t": self.t}

@@ -45,7 +45,7 @@ from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
-from wheelload.studies.pipeline.measured_static import measured_static_loads
+from wheelload.studies.pipeline.measured_static import measured_static_loads, payload_reference
 from wheelload.studies.pipeline.summary import LoadFigures, LogHeader, summary_row
 from wheelload.studies.workers import ignore_interrupts
 
@@ -143,6 +143,8 @@ def _prepare_log(path: Path, settings: EstimateSettings):
         raise_for_plausibility(plausibility, signals.source)
         notes.append(describe_plausibility(plausibility))
     static, reasons = measured_static_loads(signals, vehicle, settings)
+    notes += reasons
+    vehicle, reasons = payload_reference(vehicle, settings)
     notes += reasons
     return vehicle, signals, notes, static
 
