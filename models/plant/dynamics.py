@@ -42,6 +42,12 @@ The tyre force :math:`F_{t,i} = F_x e_x + F_y e_y + F_z n` acts along the
 local road normal and in the road plane; :math:`F_z = k_t \max(0, r_0 -
 \text{distance from wheel centre to road plane})`, so a tyre can leave the
 ground. Integration: classical RK4 with a fixed step, compiled.
+
+A plant built with ``payload`` (:func:`plant_dynamics`) takes a point mass on the
+sprung body as four more inputs; its body equations are
+:func:`loaded_body_accelerations` (Newton-Euler about the file's sprung CG), the file's
+springs and preloads unchanged, so that travel stays measured from the file's
+reference state.
 """
 
 from __future__ import annotations
@@ -53,6 +59,7 @@ import casadi as ca
 from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.models.files.build_folder import cached_function
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
+from wheelload.models.payload import inertia_about, sprung_body, with_point_mass
 from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
 from wheelload.models.suspension.elements import anti_roll_bar_forces, stop_force
@@ -69,6 +76,8 @@ STATE_NAMES = (
     + tuple(f"alpha_{w}" for w in WHEELS)
 )
 INPUT_NAMES = ("steer",) + tuple(f"drive_{w}" for w in WHEELS) + tuple(f"brake_{w}" for w in WHEELS)
+# Inputs of a plant built to carry a payload, after INPUT_NAMES (models/payload.py).
+PAYLOAD_INPUT_NAMES = ("payload_mass", "payload_x", "payload_y", "payload_z")
 # Outputs of one chunk, sampled at its last step.
 OUTPUT_NAMES = (
     tuple(f"fz_{w}" for w in WHEELS)
@@ -227,12 +236,58 @@ def _unit(vector):
     return vector / ca.norm_2(vector)
 
 
-def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
-    """SX expressions ``(x, u, xdot, y)`` of the plant on one road (see module docstring)."""
+def _skew(r):
+    """:math:`[r]_\times`, so that :math:`[r]_\times v = r \times v`."""
+    return ca.vertcat(
+        ca.horzcat(0, -r[2], r[1]), ca.horzcat(r[2], 0, -r[0]), ca.horzcat(-r[1], r[0], 0)
+    )
+
+
+def loaded_body_accelerations(vehicle: Vehicle, payload, force, moment, unsprung, omega, g_body):
+    r"""Acceleration of the file's sprung CG and :math:`\dot\omega` with a payload on the body.
+
+    The sprung body carries the point mass of ``payload = (m_p, r_p)``
+    (:func:`~wheelload.models.payload.with_point_mass`: :math:`m'`, centre :math:`c`,
+    inertia :math:`I_O` about the file's sprung CG O). Newton-Euler about O:
+
+    .. math::
+        M a + m' (\dot\omega \times c + \omega \times \omega \times c) &= F + M g_b \\
+        I_O \dot\omega + \omega \times I_O \omega + m' c \times a &= M_O(a) + m' c \times g_b
+
+    with :math:`M = \mathrm{diag}(m' + m_u, m' + m_u, m')` (the unsprung masses move
+    in-plane with the body, as without payload), ``force`` F the tyre, aerodynamic and
+    suspension forces, and :math:`M_O(a) = M_0 - U a` the moment of the corners with
+    ``unsprung`` :math:`U = \sum m_{u,i} [r_{W,i}]_\times \mathrm{diag}(1, 1, 0)` the
+    in-plane inertia of the unsprung masses; ``moment`` is :math:`M_0`. Eliminating
+    :math:`a` leaves a 3 x 3 system for :math:`\dot\omega`. With :math:`m_p = 0` it is the
+    plant's own body equations (module docstring).
+    """
+    body = with_point_mass(sprung_body(vehicle), payload[0], payload[1:4])
+    first = body.mass * body.centre  # m' c
+    inertia = inertia_about(body, ca.DM.zeros(3))
+    in_plane = vehicle.mass.total - vehicle.mass.sprung + body.mass
+    mass = ca.vertcat(in_plane, in_plane, body.mass)
+    cross_c = _skew(first)
+    f1 = force + mass * g_body - ca.cross(omega, ca.cross(omega, first))
+    f2 = moment + ca.cross(first, g_body) - ca.cross(omega, inertia @ omega)
+    coupling = cross_c + unsprung
+    lhs = inertia + coupling @ ca.diag(1.0 / mass) @ cross_c
+    omega_dot = ca.solve(lhs, f2 - coupling @ (f1 / mass))
+    acc = (f1 + cross_c @ omega_dot) / mass
+    return acc, omega_dot
+
+
+def plant_dynamics(vehicle: Vehicle, road: RoadSurface, payload: bool = False):
+    """SX expressions ``(x, u, xdot, y)`` of the plant on one road (see module docstring).
+
+    With ``payload`` the input ends with :data:`PAYLOAD_INPUT_NAMES`: the sprung body
+    carries that point mass (:func:`loaded_body_accelerations`); springs, preloads and
+    geometry stay the file's, so the payload shows as static compression.
+    """
     plant = vehicle_plant(vehicle)
     lookup = road_lookup(road)
     x = ca.SX.sym("x", len(STATE_NAMES))
-    inp = ca.SX.sym("u", len(INPUT_NAMES))
+    inp = ca.SX.sym("u", len(INPUT_NAMES) + (len(PAYLOAD_INPUT_NAMES) if payload else 0))
     s, n, z, phi, theta, psi = (x[i] for i in range(6))
     vel = x[6:9]
     omega = x[9:12]
@@ -313,16 +368,31 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface):
 
     tyre_sum = sum(tyre_vectors[1:], tyre_vectors[0])
     coriolis = ca.cross(omega, vel)
-    acc_xy = (tyre_sum[0:2] + f_aero[0:2]) / m + g_body[0:2]
-    acc_z = (sum(susp_forces) + lift) / m_s + g_body[2]
-    acc = ca.vertcat(acc_xy, acc_z)  # kinematic acceleration of the sprung CG
-    moment = ca.cross(r_aero, f_aero)
-    for i, c in enumerate(items):
-        link = ca.vertcat(
-            tyre_vectors[i][0:2] + c.unsprung * (g_body[0:2] - acc[0:2]), susp_forces[i]
-        )
-        moment += ca.cross(centres[i], link) + ca.cross(contacts[i] - centres[i], tyre_vectors[i])
-    omega_dot = (moment - ca.cross(omega, inertia * omega)) / inertia
+
+    def corner_moment(acc):
+        moment = ca.cross(r_aero, f_aero)
+        for i, c in enumerate(items):
+            link = ca.vertcat(
+                tyre_vectors[i][0:2] + c.unsprung * (g_body[0:2] - acc[0:2]), susp_forces[i]
+            )
+            moment += ca.cross(centres[i], link) + ca.cross(
+                contacts[i] - centres[i], tyre_vectors[i]
+            )
+        return moment
+
+    if payload:
+        force = ca.vertcat(tyre_sum[0:2] + f_aero[0:2], sum(susp_forces) + lift)
+        in_plane = ca.diag(ca.DM([1.0, 1.0, 0.0]))
+        unsprung = sum(c.unsprung * _skew(centres[i]) @ in_plane for i, c in enumerate(items))
+        acc, omega_dot = loaded_body_accelerations(
+            vehicle, inp[len(INPUT_NAMES) :], force, corner_moment(ca.DM.zeros(3)), unsprung,
+            omega, g_body,
+        )  # fmt: skip
+    else:
+        acc_xy = (tyre_sum[0:2] + f_aero[0:2]) / m + g_body[0:2]
+        acc_z = (sum(susp_forces) + lift) / m_s + g_body[2]
+        acc = ca.vertcat(acc_xy, acc_z)  # kinematic acceleration of the sprung CG
+        omega_dot = (corner_moment(acc) - ca.cross(omega, inertia * omega)) / inertia
 
     d_ddot = []
     for i, c in enumerate(items):
@@ -383,9 +453,12 @@ def rk4_function(ode: ca.Function, name: str) -> ca.Function:
     return ca.Function(name, [x, inp, dt], [x_next], ["x", "u", "dt"], ["x_next"])
 
 
-def plant_functions(vehicle: Vehicle, road: RoadSurface, name: str = "plant"):
-    """``(name_ode(x, u) -> (xdot, y), name_rk4(x, u, dt) -> x_next)`` as SX Functions."""
-    x, inp, xdot, y = plant_dynamics(vehicle, road)
+def plant_functions(
+    vehicle: Vehicle, road: RoadSurface, name: str = "plant", payload: bool = False
+):
+    """``(name_ode(x, u) -> (xdot, y), name_rk4(x, u, dt) -> x_next)`` as SX Functions
+    (``payload``: :func:`plant_dynamics`)."""
+    x, inp, xdot, y = plant_dynamics(vehicle, road, payload)
     ode = ca.Function(f"{name}_ode", [x, inp], [xdot, y], ["x", "u"], ["xdot", "y"])
     return ode, rk4_function(ode, f"{name}_rk4")
 
@@ -414,12 +487,18 @@ def chunk_from_ode(
 
 
 def chunk_function(
-    vehicle: Vehicle, road: RoadSurface, internal_rate: float, steps: int, jit: bool = True
+    vehicle: Vehicle,
+    road: RoadSurface,
+    internal_rate: float,
+    steps: int,
+    jit: bool = True,
+    payload: bool = False,
 ) -> ca.Function:
     """``plant_chunk(x0, u) -> (x, y)``: ``steps`` RK4 steps at ``internal_rate`` with input held.
 
     ``y`` holds :data:`OUTPUT_NAMES` at the final state. Compiled with the
-    system C compiler when ``jit`` is true.
+    system C compiler when ``jit`` is true. With ``payload`` the input ends with
+    :data:`PAYLOAD_INPUT_NAMES` (:func:`plant_dynamics`).
     """
-    ode, _ = plant_functions(vehicle, road)
+    ode, _ = plant_functions(vehicle, road, payload=payload)
     return chunk_from_ode(ode, internal_rate, steps, "plant_chunk", jit)

@@ -33,6 +33,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.models.conventions import WHEELS
+from wheelload.models.payload import Payload
 from wheelload.models.plant.dynamics import (
     INPUT_NAMES,
     STATE,
@@ -100,21 +101,25 @@ def initial_state(
     n: float = 0.0,
     request: np.ndarray | None = None,
     solve: bool = True,
+    payload: Payload | None = None,
 ) -> np.ndarray:
     """Plant state in steady motion at ``(s, n)`` and ``speed`` under ``request`` (zero if None).
 
-    ``solve=False`` returns the level-ground guess. Raises :class:`PlantError`
+    ``solve=False`` returns the level-ground guess. With ``payload`` the plant carries it
+    (:func:`~wheelload.models.plant.dynamics.plant_dynamics`). Raises :class:`PlantError`
     naming ``s`` if Newton's method does not converge.
     """
     x0 = guess_state(vehicle, road, s, speed, n)
     if not solve:
         return x0
     u = np.zeros(len(INPUT_NAMES)) if request is None else np.asarray(request, float)
+    if payload is not None:
+        u = np.concatenate([u, payload.values])
     rolling = abs(speed) >= ROLLING
     unknowns = SUSPENSION + (TYRES if rolling else ())
     balance = BALANCE + (TYRE_BALANCE if rolling else ())
     index = [STATE[k] for k in unknowns]
-    x, inp, xdot, _ = plant_dynamics(vehicle, road)
+    x, inp, xdot, _ = plant_dynamics(vehicle, road, payload is not None)
     q = ca.SX.sym("q", len(index))
     fixed = ca.DM(x0)
     fixed[index] = 0.0

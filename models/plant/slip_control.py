@@ -80,16 +80,25 @@ def factor_rate(kappa, factor, peak_slip: float, control: SlipControl):
     return apply - release
 
 
-def controlled_ode(vehicle: Vehicle, road: RoadSurface, control: SlipControl) -> ca.Function:
-    """``controlled_plant_ode([x; lambda], request) -> (d/dt [x; lambda], [y; applied input])``."""
-    ode, _ = plant_functions(vehicle, road)
+def controlled_ode(
+    vehicle: Vehicle, road: RoadSurface, control: SlipControl, payload: bool = False
+) -> ca.Function:
+    """``controlled_plant_ode([x; lambda], request) -> (d/dt [x; lambda], [y; applied input])``.
+
+    With ``payload`` the request ends with the payload inputs
+    (:data:`~wheelload.models.plant.dynamics.PAYLOAD_INPUT_NAMES`), passed on unscaled;
+    the applied input is the plant's own nine.
+    """
+    ode, _ = plant_functions(vehicle, road, payload=payload)
     n_x = ode.size1_in(0)
     state = ca.SX.sym("x", n_x + len(FACTOR_NAMES))
-    request = ca.SX.sym("u", len(INPUT_NAMES))
+    request = ca.SX.sym("u", ode.size1_in(1))
     x, factor = state[:n_x], state[n_x:]
-    scale = ca.vertcat(1.0, factor, factor)  # steer, drive, brake
-    applied = request * scale
-    xdot, y = ode(x, applied)
+    applied = request[: len(INPUT_NAMES)] * ca.vertcat(1.0, factor, factor)  # steer, drive, brake
+    if payload:
+        xdot, y = ode(x, ca.vertcat(applied, request[len(INPUT_NAMES) :]))
+    else:
+        xdot, y = ode(x, applied)
     kappa = x[STATE["kappa_fl"] : STATE["kappa_fl"] + 4]
     peak = peak_slip_ratio(vehicle_plant(vehicle).tyre)
     rate = factor_rate(kappa, factor, peak, control)
@@ -109,11 +118,12 @@ def controlled_chunk_function(
     internal_rate: float,
     steps: int,
     jit: bool = True,
+    payload: bool = False,
 ) -> ca.Function:
     """``controlled_plant_chunk([x; lambda], request) -> ([x; lambda], [y; applied])``.
 
     ``steps`` RK4 steps at ``internal_rate`` of :func:`controlled_ode` with
     the request held: the slip control acts at every internal step.
     """
-    ode = controlled_ode(vehicle, road, control)
+    ode = controlled_ode(vehicle, road, control, payload)
     return chunk_from_ode(ode, internal_rate, steps, "controlled_plant_chunk", jit)

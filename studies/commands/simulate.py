@@ -9,8 +9,10 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
+from wheelload.models.payload import Payload
 from wheelload.models.vehicle.file import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.drive.payload_schedule import PayloadChange, PayloadSchedule
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.drive.roads import ISO_CLASSES
 from wheelload.studies.drive.scenario_log import metadata_path, write_log
@@ -73,14 +75,71 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--bank", type=float, default=0.0, help="standstill: road bank, rise over run, left up > 0"
     )
+    parser.add_argument(
+        "--payload",
+        metavar="KG[,X,Y,Z]",
+        help="the plant carries a point mass KG [kg] at X,Y,Z [m] from the vehicle file's "
+        "sprung CG (x forward, y left, z up; default 0,0,0); the file does not know it",
+    )
+    parser.add_argument(
+        "--payload-change",
+        metavar="T,KG[,X,Y,Z]",
+        help="the payload becomes KG at X,Y,Z from time T [s] on, over 1.5 s, while the car "
+        "stands still (standstill, stop-and-go)",
+    )
     add_allow_unusual(parser)
     parser.set_defaults(handler=handle)
+
+
+def parse_payload(text: str, option: str = "--payload") -> Payload:
+    """``KG[,X,Y,Z]`` as a :class:`Payload`, or a one-line error naming ``option``."""
+    form = f"{option} expects KG[,X,Y,Z] (kg, then m from the sprung CG), e.g. 150,0.3,0.4,0.1"
+    parts = text.split(",")
+    try:
+        numbers = [float(part) for part in parts]
+    except ValueError:
+        raise ValueError(f"{option} '{text}': not numbers; {form}") from None
+    if len(numbers) not in (1, 4):
+        raise ValueError(f"{option} '{text}': {len(numbers)} values; {form}")
+    mass, x, y, z = numbers if len(numbers) == 4 else (numbers[0], 0.0, 0.0, 0.0)
+    try:
+        return Payload(mass=mass, x=x, y=y, z=z)
+    except ValueError as error:
+        raise ValueError(f"{option} '{text}': {error}") from None
+
+
+def parse_payload_change(text: str) -> PayloadChange:
+    """``T,KG[,X,Y,Z]`` as a :class:`PayloadChange`, or a one-line error."""
+    option = "--payload-change"
+    time, _, rest = text.partition(",")
+    form = f"{option} expects T,KG[,X,Y,Z] (s, kg, m), e.g. 5,80,0.2,-0.4,0.1"
+    try:
+        at = float(time)
+    except ValueError:
+        raise ValueError(f"{option} '{text}': time '{time}' is not a number; {form}") from None
+    if not rest:
+        raise ValueError(f"{option} '{text}': no payload after the time; {form}")
+    payload = parse_payload(rest, option)
+    try:
+        return PayloadChange(time=at, payload=payload)
+    except ValueError as error:
+        raise ValueError(f"{option} '{text}': {error}") from None
+
+
+def payload_schedule(args: argparse.Namespace) -> PayloadSchedule | None:
+    """The payload options as a schedule, or None without them."""
+    if args.payload is None and args.payload_change is None:
+        return None
+    initial = Payload(mass=0.0) if args.payload is None else parse_payload(args.payload)
+    change = None if args.payload_change is None else parse_payload_change(args.payload_change)
+    return PayloadSchedule(initial=initial, change=change)
 
 
 def handle(args: argparse.Namespace) -> int:
     vehicle = args.vehicle or example_vehicle_path()
     if args.name == RIG_SWEEP:
         return _rig(args, vehicle)
+    payload = payload_schedule(args)
     out = Path(args.out)
     outputs = [out, metadata_path(out), *([Path(args.plot)] if args.plot else [])]
     check_outputs(outputs, [Path(vehicle)], force=args.force)
@@ -98,6 +157,7 @@ def handle(args: argparse.Namespace) -> int:
         output_rate=args.rate,
         internal_rate=args.internal_rate,
         allow_unusual=args.allow_unusual,
+        payload=payload,
     )
     sidecar = write_log(result.log, out, result.metadata, replace=args.force)
     if args.plot:
@@ -113,8 +173,10 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def _rig(args: argparse.Namespace, vehicle) -> int:
-    if args.noise != 1.0 or args.roughness or args.plot:
-        raise ValueError(f"--noise, --roughness and --plot do not apply to {RIG_SWEEP}")
+    if args.noise != 1.0 or args.roughness or args.plot or args.payload or args.payload_change:
+        raise ValueError(
+            f"--noise, --roughness, --plot and the payload options do not apply to {RIG_SWEEP}"
+        )
     settings = RigSettings(seed=args.seed, rate=args.rate)
     corner, bar = rig_sweep(load_vehicle(vehicle), settings)
     paths = write_rig(corner, bar, args.out, force=args.force)

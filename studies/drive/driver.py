@@ -96,6 +96,8 @@ class Driver:
     road: Road
     speed: np.ndarray  # m/s, target speed on the road grid
     tuning: DriverTuning = field(default_factory=DriverTuning)
+    hold: float = 0.0  # s, target speed zero until then (a stop before driving off)
+    time: float = 0.0  # s, advanced by each call of inputs()
     integral: float = 0.0
     path_integral: float = 0.0
     last_force: float | None = None
@@ -150,6 +152,8 @@ class Driver:
         ahead = s + self.tuning.speed_preview * max(u, 0.0)
         target = np.interp(ahead, self.road.s, self.speed)
         accel = np.interp(ahead, self.road.s, self._accel)
+        if self.time < self.hold:
+            target, accel = 0.0, 0.0
         error = target - u
         aero = self.vehicle.aero
         drag = 0.5 * aero.air_density * aero.reference_area * aero.drag_coefficient * u * abs(u)
@@ -177,6 +181,7 @@ class Driver:
         """Input request (steer, four drive and four brake torques), before slip control."""
         line = vehicle_plant(self.vehicle).driveline
         force = self.force(state, dt)
+        self.time += dt
         u = max(state[STATE["u"]], 1.0)
         inp = np.zeros(len(INPUT_NAMES))
         inp[0] = self.steer(state, dt)

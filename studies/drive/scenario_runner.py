@@ -13,6 +13,7 @@ import pandas as pd
 
 from wheelload.models.conventions import WHEELS
 from wheelload.models.vehicle.file import load_vehicle
+from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.scenario_log import file_hash, write_log
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS, scenario_run
@@ -54,12 +55,16 @@ def run_scenario(
     output_rate: float = 100.0,
     internal_rate: float = 1000.0,
     allow_unusual: bool = False,
+    payload: PayloadSchedule | None = None,
 ) -> ScenarioResult:
-    """Simulate scenario ``name`` with the vehicle file at ``vehicle_path``."""
+    """Simulate scenario ``name`` with the vehicle file at ``vehicle_path``; with ``payload``
+    the plant carries it (recorded in the metadata's ``payload``), the file does not."""
     options = Options() if options is None else options
     vehicle = load_vehicle(vehicle_path, allow_unusual=allow_unusual)
     run = scenario_run(name, vehicle, options)
-    truth = simulate(vehicle, run, internal_rate=internal_rate, output_rate=output_rate)
+    truth = simulate(
+        vehicle, run, internal_rate=internal_rate, output_rate=output_rate, payload=payload
+    )
     rng = np.random.default_rng(np.random.SeedSequence([options.seed, 1]))
     log = measure(truth.frame, noise, rng)
     metadata = {
@@ -81,6 +86,8 @@ def run_scenario(
         "build_time_s": truth.build_time,
         "summary": summary(truth.frame),
     }
+    if payload is not None:
+        metadata["payload"] = payload.describe()
     return ScenarioResult(log=log, truth=truth, metadata=metadata)
 
 

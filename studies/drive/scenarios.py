@@ -10,6 +10,7 @@
 | chicane-incline-20 | road-angle paper §V | the same on a 20 % incline |
 | wheel-lift | this project | 0.8 g turn; the inner wheels cross a kerb and lift off |
 | standstill | ycoo paper §5 | held at rest for 5 s on a plane of ``grade`` and ``bank`` (options) |
+| stop-and-go | this project | 10 s at rest (a passenger gets in), then 80 km/h and a lane change |
 | hockenheim | main paper Table IV; issue 4 | flying lap of the Hockenheim GP circuit, 4.57 km |
 | nordschleife | main paper Table III; issue 4 | flying lap of the Nordschleife, 20.7 km |
 """
@@ -61,6 +62,11 @@ def dlc_lanes(vehicle: Vehicle, entry: float = 100.0):
     )
 
 
+def _dlc_target(s: np.ndarray, entry: float) -> np.ndarray:
+    """Target path of the double lane change whose first lane starts at ``entry``."""
+    return 3.5 * (smooth_step(s, entry + 12.0, 36.0) - smooth_step(s, entry + 67.0, 32.0))
+
+
 def iso_dlc(vehicle: Vehicle, options: Options) -> Run:
     """Double lane change: sections 15/30/25/25/15/15 m, lane 3 offset 3.5 m to the left.
 
@@ -71,7 +77,7 @@ def iso_dlc(vehicle: Vehicle, options: Options) -> Run:
     """
     entry = 100.0
     s = np.arange(0.0, 400.0, GRID)
-    target = 3.5 * (smooth_step(s, entry + 12.0, 36.0) - smooth_step(s, entry + 67.0, 32.0))
+    target = _dlc_target(s, entry)
     road = build_road(s, target=target, half_width=3.5 + 5.0, roughness=_rough(s, vehicle, options))
     return Run(
         road=road, speed=_constant(road, 80.0 * KMH), start=0.0, stop=entry + 200.0, max_time=20.0
@@ -203,6 +209,34 @@ def standstill(vehicle: Vehicle, options: Options) -> Run:
     return Run(road=road, speed=np.zeros_like(s), start=50.0, stop=95.0, max_time=5.0)
 
 
+#: stop-and-go: seconds at rest before driving off.
+STOP_AND_GO_HOLD = 10.0
+
+
+def stop_and_go(vehicle: Vehicle, options: Options) -> Run:
+    """At rest for 10 s, then off at 2.5 m/s^2 to 80 km/h and the ISO double lane change.
+
+    The car starts at s = 20 m; the lane change's first lane starts at 160 m (40 m of
+    steady speed after the run-up), and the car drives on straight to 30 s after driving
+    off. A payload change in the first 10 s (``wheelload simulate --payload-change``) is a
+    passenger getting in at a stop.
+    """
+    start, entry, accel = 20.0, 160.0, 2.5
+    s = np.arange(0.0, 700.0, GRID)
+    road = build_road(
+        s, target=_dlc_target(s, entry), half_width=3.5 + 5.0, roughness=_rough(s, vehicle, options)
+    )
+    speed = np.sqrt(np.clip(2.0 * accel * (s - start), 0.0, (80.0 * KMH) ** 2))
+    return Run(
+        road=road,
+        speed=speed,
+        start=start,
+        stop=680.0,
+        max_time=STOP_AND_GO_HOLD + 30.0,
+        hold=STOP_AND_GO_HOLD,
+    )
+
+
 SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
     "iso-dlc": iso_dlc,
     "brake-in-turn": brake_in_turn,
@@ -213,6 +247,7 @@ SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
     "chicane-incline-20": chicane_incline_20,
     "wheel-lift": wheel_lift,
     "standstill": standstill,
+    "stop-and-go": stop_and_go,
     "hockenheim": laps.hockenheim,
     "nordschleife": laps.nordschleife,
 }

@@ -21,6 +21,7 @@ from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive.driver import Driver, DriverTuning
+from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.roads import Road
 
 
@@ -38,6 +39,13 @@ class Run:
     stop: float  # m, arc length that ends the run
     max_time: float  # s
     record_from: float | None = None  # m, drop samples before this arc length
+    hold: float = 0.0  # s, the driver holds the car at rest this long before driving
+
+    @property
+    def stands_until(self) -> float:
+        """Time [s] until which the car stands still: the whole run if no speed is asked."""
+        return self.max_time if not np.any(self.speed) else self.hold
+
     tuning: DriverTuning = DriverTuning()
     slip_control: SlipControl = SlipControl()
 
@@ -57,17 +65,44 @@ def simulate(
     *,
     internal_rate: float = 1000.0,
     output_rate: float = 100.0,
+    payload: PayloadSchedule | None = None,
 ) -> Truth:
-    """Drive the plant along ``run``; return the true signals (see :func:`truth_columns`)."""
+    """Drive the plant along ``run``; return the true signals (see :func:`truth_columns`).
+
+    With ``payload`` the plant's sprung body carries it (the vehicle file keeps its
+    springs and preloads: the payload shows as static compression); a change must fall
+    where the car stands still (:attr:`Run.stands_until`), else a ``ValueError`` names
+    its time.
+    """
     steps = internal_rate / output_rate
     if abs(steps - round(steps)) > 1e-9 or steps < 1:
         raise ValueError(
             f"internal rate {internal_rate} Hz must be a multiple of output rate {output_rate} Hz"
         )
+    moving = None if payload is None else payload.moving()
+    if moving is not None and moving[1] > run.stands_until:
+        latest = run.stands_until - (moving[1] - moving[0])
+        hint = (
+            f"choose a change time <= {latest:g} s"
+            if latest >= 0.0
+            else "the car never stands still here: use the standstill or stop-and-go scenario"
+        )
+        raise ValueError(
+            f"the payload changes from t = {moving[0]:g} s to {moving[1]:g} s, but the car "
+            f"stands still only until t = {run.stands_until:g} s: {hint}"
+        )
     tic = time.perf_counter()
+    if payload == PayloadSchedule():
+        payload = None  # nothing on board: the plant of the file itself
     chunk = controlled_chunk_function(
-        vehicle, run.road.surface, run.slip_control, internal_rate, int(round(steps))
+        vehicle,
+        run.road.surface,
+        run.slip_control,
+        internal_rate,
+        int(round(steps)),
+        payload=payload is not None,
     )
+    initial = None if payload is None else payload.initial
     build_time = time.perf_counter() - tic
     speed0 = float(np.interp(run.start, run.road.s, run.speed))
     target0 = float(np.interp(run.start, run.road.s, run.road.target))
@@ -76,10 +111,16 @@ def simulate(
     # depends on the start (heading, rates), so solve twice with fresh drivers.
     x = initial_state(vehicle, run.road.surface, run.start, speed0, target0, solve=False)
     for _ in range(2):
-        probe = Driver(vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning)
+        probe = Driver(
+            vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning, hold=run.hold
+        )
         request = probe.inputs(x, dt)
-        x = initial_state(vehicle, run.road.surface, run.start, speed0, target0, request=request)
-    driver = Driver(vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning)
+        x = initial_state(
+            vehicle, run.road.surface, run.start, speed0, target0, request=request, payload=initial
+        )
+    driver = Driver(
+        vehicle=vehicle, road=run.road, speed=run.speed, tuning=run.tuning, hold=run.hold
+    )
     z = np.concatenate([x, np.ones(len(FACTOR_NAMES))])
     count = int(np.ceil(run.max_time * output_rate))
     n_x, n_y = len(STATE_NAMES), len(OUTPUT_NAMES)
@@ -91,9 +132,11 @@ def simulate(
     tic = time.perf_counter()
     for k in range(count):
         request = driver.inputs(z[:n_x], dt)
+        if payload is not None:
+            request = np.concatenate([request, payload.at(k * dt)])
         z_dm, y_dm = chunk(z, request)
         z, y = z_dm.full().ravel(), y_dm.full().ravel()
-        states[k], outputs[k], inputs[k] = z[:n_x], y[:n_y], y[n_y:]
+        states[k], outputs[k], inputs[k] = z[:n_x], y[:n_y], y[n_y : n_y + len(INPUT_NAMES)]
         recorded = k + 1
         if not np.all(np.isfinite(z)):
             raise SimulationError(f"plant state not finite at t = {(k + 1) * dt:.3f} s")

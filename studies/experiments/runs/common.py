@@ -113,6 +113,9 @@ def merge(parts: list[TrialResult]) -> TrialResult:
     estimates = None
     if first.estimates is not None:
         estimates = {k: v for p in parts for k, v in (p.estimates or {}).items()}
+    masses = None
+    if first.mass_properties is not None:
+        masses = {k: v for p in parts for k, v in (p.mass_properties or {}).items()}
     return TrialResult(
         metrics={k: v for p in parts for k, v in p.metrics.items()},
         errors={k: v for p in parts for k, v in p.errors.items()},
@@ -121,6 +124,7 @@ def merge(parts: list[TrialResult]) -> TrialResult:
         s=first.s,
         reference=first.reference,
         estimates=estimates,
+        mass_properties=masses,
     )
 
 

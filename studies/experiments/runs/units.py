@@ -26,6 +26,7 @@ from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models.vehicle.description import Vehicle, vehicle_from_dict
+from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.sensors import measure
@@ -39,12 +40,14 @@ KF_TRIALS = "kf-trials"
 
 @dataclass(frozen=True, kw_only=True)
 class TruthSpec:
-    """A plant run: scenario, the plant's vehicle file (its text), lap share, seed."""
+    """A plant run: scenario, the plant's vehicle file (its text), lap share, seed, and the
+    payload the plant carries (the vehicle file does not know it)."""
 
     scenario: str
     vehicle_text: str
     shorten: float = 1.0
     seed: int = 0
+    payload: PayloadSchedule | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -60,6 +63,7 @@ class TrialSpec:
     keep_estimates: bool = False  # keep the loads for figures
     suspension: SuspensionModel = DEFAULT_MODEL  # vehicle model of the family methods
     truth_key: str = ""  # cache key of ``truth``, set by the process that plans the jobs
+    mass_properties_at: float | None = None  # s, keep the estimated mass properties then
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -73,6 +77,22 @@ class TrialResult:
     s: np.ndarray | None = None  # distance along the road [m]
     reference: np.ndarray | None = None
     estimates: dict[str, np.ndarray] | None = None
+    # per method estimating them: [mass, cg_x, cg_y, cg_height] and their std at
+    # ``TrialSpec.mass_properties_at`` (:func:`mass_properties_at`)
+    mass_properties: dict[str, np.ndarray] | None = None
+
+
+def mass_properties_at(estimate, t: np.ndarray, time: float) -> np.ndarray | None:
+    """``[mass, cg_x, cg_y, cg_height, their four std]`` of ``estimate`` at the last sample
+    at or before ``time`` [s]; None for an estimator that does not estimate them (no
+    ``mass_properties``); a missing std is NaN."""
+    values = getattr(estimate, "mass_properties", None)
+    if values is None:
+        return None
+    k = max(int(np.searchsorted(t, time, side="right")) - 1, 0)
+    std = getattr(estimate, "mass_properties_std", None)
+    spread = np.full(4, np.nan) if std is None else np.asarray(std, float)[k]
+    return np.concatenate([np.asarray(values, float)[k], spread])
 
 
 def simulate_truth(spec: TruthSpec, folder: Path) -> pd.DataFrame:
@@ -81,7 +101,7 @@ def simulate_truth(spec: TruthSpec, folder: Path) -> pd.DataFrame:
         path = Path(temporary) / "vehicle.toml"
         path.write_text(spec.vehicle_text, encoding="utf-8")
         options = Options(seed=spec.seed, shorten=spec.shorten)
-        result = run_scenario(spec.scenario, path, options=options, noise=0.0)
+        result = run_scenario(spec.scenario, path, options=options, noise=0.0, payload=spec.payload)
     return result.truth.frame
 
 
@@ -120,7 +140,7 @@ def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:
         if not mask.any():
             raise ValueError(f"{spec.truth.scenario}: window {spec.window} holds no sample")
     vehicle = _vehicle(spec.vehicle_text)
-    metrics, errors, seconds, estimates = {}, {}, {}, {}
+    metrics, errors, seconds, estimates, masses = {}, {}, {}, {}, {}
     for name in spec.methods:
         try:
             estimator = build(name, vehicle, spec.suspension)
@@ -130,10 +150,17 @@ def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:
             metrics[name] = wheel_metrics(estimate.loads[mask], signals.reference[mask])
             if spec.keep_estimates:
                 estimates[name] = estimate.loads[mask].astype(np.float32)
+            if spec.mass_properties_at is not None:
+                found = mass_properties_at(estimate, t, spec.mass_properties_at)
+                if found is not None:
+                    masses[name] = found
         except (ValueError, ArithmeticError, RuntimeError) as error:
             errors[name] = f"{type(error).__name__}: {error}".splitlines()[0]
+    kept = masses if spec.mass_properties_at is not None else None
     if not spec.keep_estimates:
-        return TrialResult(metrics=metrics, errors=errors, seconds_per_sample=seconds)
+        return TrialResult(
+            metrics=metrics, errors=errors, seconds_per_sample=seconds, mass_properties=kept
+        )
     return TrialResult(
         metrics=metrics,
         errors=errors,
@@ -142,6 +169,7 @@ def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:
         s=log["s"].to_numpy()[mask],
         reference=signals.reference[mask],
         estimates=estimates,
+        mass_properties=kept,
     )
 
 
