@@ -217,7 +217,7 @@ class PayloadTuning:
     standstill_density: float = 500.0  # kg^2/s, random walk while standing (loading)
     standstill_speed: float = 0.5  # m/s, |vx| below which the car is standing
     gate: float = 16.0  # chi^2_1 threshold of a residual row (4 sigma)
-    acceleration_scale: float = 1.0  # m/s^2: residual density x (1 + (ax^2 + ay^2) / a_s^2)^2
+    acceleration_scale: float = 3.0  # m/s^2: residual density x (1 + (ax^2 + ay^2) / a_s^2)^2
 
     def _check(self) -> None:
         for key in ("mass_std", "drift_density", "standstill_density", "standstill_speed",
