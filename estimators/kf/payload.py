@@ -13,9 +13,11 @@ measurement is the equilibrium at the pseudo-measured loads,
           w \sim N(0, \mathrm{diag}(r_\vartheta) / \Delta t_{nom}),
 
 linearised at the prediction (an extended Kalman update, one row at a time, each gated
-at :math:`y^2 \le g\,S`), with :math:`r_\vartheta` times
+at :math:`y^2 \le g\,S`), with each row's :math:`r_\vartheta` times
 :math:`(1 + (a_x^2 + a_y^2) / a_s^2)^2`: the model's mismatch grows with the square of the
-load transfer (the second-order terms, :math:`a_y \sin\phi`, the links). The residual
+load transfer (the second-order terms, :math:`a_y \sin\phi`, the links). The vertical
+row, which those terms bias in a turn, has the smaller scale :math:`a_s`; the moment rows
+keep the turns in which they see the CG height. The residual
 density covers that mismatch, which is coloured, so the estimate averages over many
 seconds; a sensor bias the equilibrium can
 see (:math:`a_z`, a lateral or longitudinal offset) is absorbed as a small mass or CG
@@ -54,7 +56,9 @@ PAYLOAD_TUNING = (
     "payload_standstill_density",
     "payload_standstill_speed",
     "payload_gate",
-    "payload_acceleration_scale",
+    "payload_acceleration_scale_vertical",
+    "payload_acceleration_scale_pitch",
+    "payload_acceleration_scale_roll",
 )
 N_PAYLOAD = len(PAYLOAD_STATES)
 _VX, _AX, _AY = (INPUTS.index(name) for name in ("vx", "ax", "ay"))
@@ -77,7 +81,7 @@ def payload_tuning(vehicle: Vehicle) -> np.ndarray:
             t.standstill_density,
             t.standstill_speed,
             t.gate,
-            t.acceleration_scale,
+            *t.acceleration_scale,
         ]  # fmt: skip
     )
 
@@ -127,15 +131,22 @@ def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Func
     """
     s = _settings(tuning)
     r0, J = residual(theta, z, u, gates, p)
+    # The mass is weighed by the vertical row alone: the moment rows see it only through
+    # m h a in a turn or under braking, where their own mismatch is largest, so they
+    # update the first moments (column 0 of their Jacobian left out of the gain).
+    J = ca.vertcat(J[0, :], ca.horzcat(ca.DM.zeros(2, 1), J[1:3, 1:]))
     # r(theta) ~ r0 + J (theta' - theta) = 0: the measurement J theta' = J theta - r0.
     target = ca.mtimes(J, theta) - r0
     # The model's mismatch grows with the load transfer it must explain: while the car
     # corners or brakes the residual says less about the payload.
-    horizontal = (u[_AX] ** 2 + u[_AY] ** 2) / s["payload_acceleration_scale"] ** 2
-    r = (
-        ca.vertcat(*[s[f"payload_residual_density_{row}"] for row in ("vertical", "pitch", "roll")])
-        * (1 + horizontal) ** 2
-        / dt_nominal
+    horizontal = u[_AX] ** 2 + u[_AY] ** 2
+    r = ca.vertcat(
+        *[
+            s[f"payload_residual_density_{row}"]
+            * (1 + horizontal / s[f"payload_acceleration_scale_{row}"] ** 2) ** 2
+            / dt_nominal
+            for row in ("vertical", "pitch", "roll")
+        ]
     )
     gate = s["payload_gate"]
     mask = mask * s["payload_estimate"]

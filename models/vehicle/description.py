@@ -217,13 +217,14 @@ class PayloadTuning:
     standstill_density: float = 500.0  # kg^2/s, random walk while standing (loading)
     standstill_speed: float = 0.5  # m/s, |vx| below which the car is standing
     gate: float = 16.0  # chi^2_1 threshold of a residual row (4 sigma)
-    acceleration_scale: float = 3.0  # m/s^2: residual density x (1 + (ax^2 + ay^2) / a_s^2)^2
+    # m/s^2 per row: residual density x (1 + (ax^2 + ay^2) / a_s^2)^2
+    acceleration_scale: Vector3 = (1.0, 3.0, 3.0)
 
     def _check(self) -> None:
         for key in ("mass_std", "drift_density", "standstill_density", "standstill_speed",
-                    "gate", "acceleration_scale"):  # fmt: skip
+                    "gate"):  # fmt: skip
             require_positive(self, key)
-        for key in ("position_std", "residual_density"):
+        for key in ("position_std", "residual_density", "acceleration_scale"):
             if min(getattr(self, key)) <= 0.0:
                 raise SectionKeyError(key, "must be > 0 in every entry")
 
