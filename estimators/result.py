@@ -61,9 +61,9 @@ class StepFlag(enum.IntFlag):
     # updates themselves went ahead.
     BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
     UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
-    ROAD_FRAME_OR_LINKS_DROPPED = (
-        1 << 18
-    )  # road frame or link loads: a travel, IMU axis or vx missing
+    # road frame or link loads dropped (an IMU axis or vx missing), or the road frame's
+    # attitude from the equilibrium instead of the travels (a travel missing)
+    ROAD_FRAME_OR_LINKS_DROPPED = 1 << 18
     IMU_TERMS_DROPPED = 1 << 19  # lever arm (no rates) or mounting (an IMU axis missing)
     # Bits 20-23: inputs the log did not have (estimators/logs/signals.py).
     AZ_ASSUMED_G = 1 << 20

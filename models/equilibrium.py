@@ -58,15 +58,11 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.aero import aero_forces
+from wheelload.models.body_attitude import roll_axis_height
 from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.terms import GATES, body_motion, gate, road_motion
-
-
-def roll_axis_height(p: ModelParameters):
-    r"""Height of the roll axis under the CG: :math:`h_{rc} = (l_r h_{rc,f} + l_f h_{rc,r}) / l`."""
-    return (p.lr * p.roll_centre_front + p.lf * p.roll_centre_rear) / (p.lf + p.lr)
 
 
 def equilibrium_matrix(p: ModelParameters) -> ca.SX:
