@@ -17,6 +17,7 @@ from wheelload.studies.drive.scenario_log import metadata_path, write_log
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.scenarios import SCENARIOS
+from wheelload.studies.drive.sensors import GRADES, MTI_1, sensor_grade
 from wheelload.studies.plots.scenario import plot_scenario
 
 RIG_SWEEP = "rig-sweep"
@@ -50,6 +51,12 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
     parser.add_argument(
         "--noise", type=float, default=1.0, help="sensor noise scale s (0 = clean signals)"
+    )
+    parser.add_argument(
+        "--sensors",
+        choices=list(GRADES),
+        default=MTI_1.name,
+        help=f"sensor grade (default {MTI_1.name}; clean: noise-free)",
     )
     parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz]")
     parser.add_argument(
@@ -98,6 +105,7 @@ def handle(args: argparse.Namespace) -> int:
         output_rate=args.rate,
         internal_rate=args.internal_rate,
         allow_unusual=args.allow_unusual,
+        sensors=sensor_grade(args.sensors),
     )
     sidecar = write_log(result.log, out, result.metadata, replace=args.force)
     if args.plot:
@@ -113,8 +121,10 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def _rig(args: argparse.Namespace, vehicle) -> int:
-    if args.noise != 1.0 or args.roughness or args.plot:
-        raise ValueError(f"--noise, --roughness and --plot do not apply to {RIG_SWEEP}")
+    if args.noise != 1.0 or args.roughness or args.plot or args.sensors != MTI_1.name:
+        raise ValueError(
+            f"--noise, --sensors, --roughness and --plot do not apply to {RIG_SWEEP}"
+        )
     settings = RigSettings(seed=args.seed, rate=args.rate)
     corner, bar = rig_sweep(load_vehicle(vehicle), settings)
     paths = write_rig(corner, bar, args.out, force=args.force)

@@ -52,7 +52,7 @@ def test_travel_error_is_bounded_by_datasheet_figures():
     truth = _truth()
     log = measure(truth, 1.0, np.random.default_rng(3))
     model = TravelSensorModel()
-    step = model.full_scale / 2**model.bits
+    step = model.resolution
     bound = model.linearity * model.full_scale + 5 * model.repeatability + step
     for wheel in WHEELS:
         error = log[f"d_{wheel}"] - truth[f"d_{wheel}"]
