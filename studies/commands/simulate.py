@@ -122,9 +122,7 @@ def handle(args: argparse.Namespace) -> int:
 
 def _rig(args: argparse.Namespace, vehicle) -> int:
     if args.noise != 1.0 or args.roughness or args.plot or args.sensors != MTI_1.name:
-        raise ValueError(
-            f"--noise, --sensors, --roughness and --plot do not apply to {RIG_SWEEP}"
-        )
+        raise ValueError(f"--noise, --sensors, --roughness and --plot do not apply to {RIG_SWEEP}")
     settings = RigSettings(seed=args.seed, rate=args.rate)
     corner, bar = rig_sweep(load_vehicle(vehicle), settings)
     paths = write_rig(corner, bar, args.out, force=args.force)
