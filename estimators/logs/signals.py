@@ -549,7 +549,7 @@ class RateDerivativeFilter:
     :math:`r = N^2 / (2 T)`: its bandwidth follows the sample rate and the noise.
     """
 
-    jerk_density: float = 0.03  # q [(rad/s^3)^2/Hz], from plant logs at 100-1000 Hz
+    jerk_density: float = 0.1  # q [(rad/s^3)^2/Hz], from plant logs at 100-1000 Hz
     gyro_noise_density: float = 0.007 * np.pi / 180.0  # N [rad/s/sqrt(Hz)], MTi-1 class
 
     def gain(self, interval: float) -> np.ndarray:
