@@ -12,6 +12,7 @@ from wheelload.studies.experiments import (
     headline,
     mismatch,
     monte_carlo,
+    sensor_errors,
     vehicle_file_ablation,
     vehicles,
 )
@@ -27,6 +28,7 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "monte-carlo": monte_carlo.run,
     "mismatch": mismatch.run,
     "vehicles": vehicles.run,
+    "sensor-errors": sensor_errors.run,
 }
 NAMES = (*STUDIES, "all")
 
