@@ -31,7 +31,7 @@ import functools
 
 import numpy as np
 
-from wheelload.models.files.build_folder import COMPILER, cached_library
+from wheelload.estimators.kernels.c_function import c_function
 
 SOURCE = """
 /* alpha-beta filter: x- = F x; x = x- + K (z - x-_0); y = x_1 (the derivative). */
@@ -73,17 +73,8 @@ def steady_gain(T: float, q: float, r: float) -> np.ndarray:
 
 @functools.cache
 def _kernel():
-    library = cached_library(
-        SOURCE,
-        "wheelload_kinematic",
-        COMPILER,
-        lambda path: ctypes.CDLL(str(path)),
-        "estimate body-rate derivatives",
-    )
-    function = library.wheelload_kinematic
-    function.restype = None
-    function.argtypes = [ctypes.c_long, ctypes.c_double] + [ctypes.c_void_p] * 4
-    return function
+    argtypes = [ctypes.c_long, ctypes.c_double] + [ctypes.c_void_p] * 4
+    return c_function(SOURCE, "wheelload_kinematic", "estimate body-rate derivatives", argtypes)
 
 
 def kinematic_filter(
