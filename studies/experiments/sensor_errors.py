@@ -10,9 +10,10 @@ the KF with each model term of the vehicle file's ``[model]`` switched off in tu
 (the mechanism of :mod:`~wheelload.studies.experiments.model_terms_ablation`).
 
 Columns: whether the KF is first of kf, C, D or within :data:`WITHIN` of the best;
-per term and (grade, rate), the KF's RMSE with the term against without it pooled
-over scenarios and vehicles: a term *helps or is neutral* when switching it on
-costs at most :data:`NEUTRAL` at every grade and rate.
+per term and (grade, rate), the KF's RMSE with the term against without it, the
+geometric mean over scenarios and vehicles: a term *helps or is neutral* when switching
+it on costs at most :data:`NEUTRAL` at every grade and rate; beside it, the rows
+(vehicle, scenario, grade, rate) where it costs more.
 """
 
 from __future__ import annotations
@@ -140,17 +141,20 @@ def row_table(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def term_table(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per term and (grade, rate): the KF's pooled RMSE with the term against without it
-    [%, > 0: the term costs], over every scenario and vehicle; and the verdict."""
-    pooled = frame.groupby(["grade", "rate"], sort=False).mean(numeric_only=True)
-    cells = {}
+    """Per term and (grade, rate): the KF's RMSE with the term against without it [%, > 0:
+    the term costs], the geometric mean of the rows' ratios (every scenario and vehicle
+    weighs the same); the rows where it costs more than :data:`NEUTRAL`; the verdict."""
+    rows = row_table(frame)
+    cells, costly = {}, {}
     for term in TERMS:
-        change = 100.0 * (pooled["kf"] / pooled[f"kf -{term}"] - 1.0)
+        ratio = np.log(rows["kf"] / rows[f"kf -{term}"])
+        change = 100.0 * np.expm1(ratio.groupby(level=["grade", "rate"], sort=False).mean())
         cells[term] = {f"{g} {r:.0f} Hz": c for (g, r), c in change.items()}
+        costly[term] = int((ratio > np.log1p(NEUTRAL)).sum())
     table = pd.DataFrame(cells).T
-    table["helps or neutral everywhere"] = np.where(
-        (table.to_numpy() <= 100.0 * NEUTRAL).all(axis=1), "yes", "no"
-    )
+    verdict = (table.to_numpy() <= 100.0 * NEUTRAL).all(axis=1)
+    table[f"rows costing > {100 * NEUTRAL:.0f} %"] = [f"{costly[t]} of {len(rows)}" for t in TERMS]
+    table["helps or neutral everywhere"] = np.where(verdict, "yes", "no")
     table.index.name = "term"
     return table
 
@@ -173,8 +177,9 @@ def run(context: Context) -> Section:
             f"The KF is first of kf, C, D or within 5 % of the best on {first} of "
             f"{len(rows)} rows.",
             "## Model terms: the KF's RMSE with the term against without it [%]",
-            "Over every scenario and vehicle, per grade and output rate; > 0: the term "
-            f"costs. A term helps or is neutral where it costs at most {100 * NEUTRAL:.0f} %.",
+            "Geometric mean over every scenario and vehicle, per grade and output rate; > 0: "
+            f"the term costs. A term helps or is neutral where it costs at most "
+            f"{100 * NEUTRAL:.0f} %; the rows where it costs more are counted beside.",
             markdown(terms, digits=1),
         ]
     )  # fmt: skip

@@ -64,7 +64,7 @@ def test_the_quick_table_holds_every_row_and_matches_a_direct_run(tmp_path, caps
     # the term table: a change per grade and rate, and the verdict
     terms = term_table(trials)
     assert list(terms.index) == list(TERMS)
-    assert terms.shape[1] == 3 * len(QUICK_RATES) + 1
+    assert terms.shape[1] == 3 * len(QUICK_RATES) + 2
 
 
 def test_simulate_writes_the_chosen_grade(tmp_path, capsys):
