@@ -60,6 +60,7 @@ from wheelload.estimators.logs.signals import (
     WHEEL_SPEED,
     Differentiator,
     LogError,
+    RateEstimator,
     Signals,
     SpeedSource,
     check_time_column,
@@ -254,7 +255,7 @@ class LogStream:
             and rate_derivatives_used(kf.parameters)
         ):
             try:
-                rate_dots = Differentiator(dt, 3, VELOCITY_CUTOFF, self.source)
+                rate_dots = RateEstimator(dt, 3, self.source)
             except LogError:
                 rate_dots = None  # too irregular: the terms that need them are dropped
         base = input_bits(self.az_assumed, self.speed_source)

@@ -13,6 +13,7 @@ from wheelload.studies.experiments import (
     mismatch,
     monte_carlo,
     payload,
+    sensor_errors,
     vehicle_file_ablation,
     vehicles,
 )
@@ -29,6 +30,7 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "mismatch": mismatch.run,
     "payload": payload.run,
     "vehicles": vehicles.run,
+    "sensor-errors": sensor_errors.run,
 }
 NAMES = (*STUDIES, "all")
 
