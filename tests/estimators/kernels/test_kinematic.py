@@ -45,11 +45,12 @@ def test_the_filter_recovers_a_sine_angular_acceleration_better_than_the_differe
         settled = t > 5.0
         error = np.sqrt(np.mean((estimated - w_dot)[settled] ** 2))
         raw = np.sqrt(np.mean((differentiated - w_dot)[settled] ** 2))
-        # measured 0.036-0.040 rad/s^2 against 0.085-0.34 (the differentiator's noise
-        # gain grows with the rate): at least 2x smaller at every rate, and below 16 % of
-        # the 0.31 rad/s^2 amplitude (noise and the filter's lag at 1 Hz)
-        assert error < 0.5 * raw, (rate, error, raw)
-        assert error < 0.05, (rate, error)
+        # measured 0.056-0.060 rad/s^2 against 0.086-0.33 (the differentiator's noise
+        # gain grows with the rate; the jerk density keeps the bounce sweep's body motion):
+        # at least 1.4x smaller at 100 Hz and 3x at 500 Hz and above, and below 20 % of the
+        # 0.31 rad/s^2 amplitude (noise and the filter's lag at 1 Hz)
+        assert error < (0.7 if rate < 200 else 1.0 / 3.0) * raw, (rate, error, raw)
+        assert error < 0.065, (rate, error)
 
 
 def test_the_estimator_in_chunks_equals_one_call():
