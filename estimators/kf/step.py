@@ -33,8 +33,9 @@ from wheelload.estimators.kf import (
     limits,
     monitor_state,
     plausibility,
+    reported_std,
 )
-from wheelload.estimators.kf.tuning import GUARD_TUNING, TUNING, TUNING_INDEX
+from wheelload.estimators.kf.tuning import GUARD_TUNING, SIGMA_TUNING, TUNING, TUNING_INDEX
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -239,7 +240,11 @@ def step_expressions(
     P_new = ca.if_else(bounded, P_new, P_pred)
     use_s, use_c = use_s * bounded, use_c * bounded
 
-    std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
+    # The reported sigma: P and the model's mismatch terms (the gain does not see them).
+    features, sigma_means = reported_std.sigma_features(
+        P_new, u, z, A, b, mask_s, mask_c, y_s, m, dt_used
+    )
+    std = reported_std.reported_std(features, tuning[SIGMA_TUNING])
     residual = b - ca.mtimes(A, x_new)
     used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
     available = ca.vertcat(mask_s, mask_c)
@@ -251,6 +256,7 @@ def step_expressions(
         innovation_gate.next_spread(spread, record, available, dt_used, settings),
     )
     m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
+    m_next = monitor_state.with_sigma_state(m_next, sigma_means)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,

@@ -12,6 +12,7 @@ from wheelload.studies.experiments import (
     headline,
     mismatch,
     monte_carlo,
+    sigma,
     vehicle_file_ablation,
     vehicles,
 )
@@ -26,6 +27,7 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "cheon-structural": cheon_structural.run,
     "monte-carlo": monte_carlo.run,
     "mismatch": mismatch.run,
+    "sigma": sigma.run,
     "vehicles": vehicles.run,
 }
 NAMES = (*STUDIES, "all")

@@ -1,0 +1,139 @@
+r"""Calibration of the reported-sigma model on logs with reference loads.
+
+The model (:mod:`wheelload.estimators.kf.reported_std`) is
+:math:`\sigma_i^2 = \sum_k w_k g_{ik}^2` with :math:`w_k = c_k^2 \ge 0` and
+:math:`g_{i0} = \sqrt{P_{ii}}`. The gain never sees it, so the features g of a log do not
+depend on the coefficients: the filter's own step gives them, run with each
+:math:`c_k = 1` alone (:math:`\sigma = g_k`); no second copy of the features. The weights
+maximise the Gaussian likelihood of the errors :math:`e = \hat F_z - F_z`, each log
+weighing the same,
+
+.. math:: \min_{w \ge 0} \sum_{n,i} \log \sigma_{ni}^2 + e_{ni}^2 / \sigma_{ni}^2
+
+(L-BFGS-B), then the mismatch part is scaled as a whole so that ±2σ covers
+:data:`COVERAGE_TARGET` of the errors (the errors are correlated in time and heavier-tailed
+than a normal, which the likelihood alone does not see).
+
+Example
+-------
+>>> data = sigma_data(TwoStageKF(vehicle), signals)
+>>> coefficients = fit_sigma([data]).coefficients
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from wheelload.estimators.kf.tuning import SIGMA_TUNING
+from wheelload.estimators.kf.two_stage import TwoStageKF
+from wheelload.estimators.logs.signals import Signals
+from wheelload.models.vehicle.description import SIGMA_KEYS
+
+SETTLE = 1.0  # s, start of each log left out (initial covariance)
+COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma
+#: Least coefficient of the filter's own sigma sqrt(P_ii): P grows where rows are missing
+#: (start-up, a gap, no travel), which no other feature sees.
+COVARIANCE_SHARE = 0.05
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SigmaData:
+    """Per settled sample and wheel: the error [N], P_ii [N^2] and the features g (last axis
+    :data:`SIGMA_KEYS`)."""
+
+    error: np.ndarray  # (n, 4)
+    features: np.ndarray  # (n, 4, K)
+
+    def std(self, coefficients: np.ndarray) -> np.ndarray:
+        """The reported sigma (n, 4) with ``coefficients`` (:data:`SIGMA_KEYS` order)."""
+        weights = np.asarray(coefficients, float) ** 2
+        return np.sqrt(self.features**2 @ weights)
+
+    def thinned(self, stride: int) -> SigmaData:
+        """Every ``stride``-th sample."""
+        return SigmaData(error=self.error[::stride], features=self.features[::stride])
+
+
+def sigma_data(kf: TwoStageKF, signals: Signals) -> SigmaData:
+    """Errors and σ features of the filter ``kf`` on a log with reference loads."""
+    if signals.reference is None:
+        raise ValueError(f"{signals.source}: no reference loads fz_*: cannot calibrate sigma")
+    base = np.array(kf.tuning, float)
+    settled = signals.t - signals.t[0] >= SETTLE
+    features = []
+    try:
+        for unit in np.eye(len(SIGMA_KEYS)):
+            kf.tuning = base.copy()
+            kf.tuning[SIGMA_TUNING] = unit
+            estimate = kf.run(signals)
+            features.append(estimate.std[settled])
+    finally:
+        kf.tuning = base
+    error = estimate.loads[settled] - signals.reference[settled]
+    keep = np.all(np.isfinite(error), axis=1)
+    return SigmaData(error=error[keep], features=np.stack(features, axis=2)[keep])
+
+
+@dataclass(frozen=True, kw_only=True)
+class SigmaFit:
+    coefficients: np.ndarray  # SIGMA_KEYS order, c_k >= 0
+    scale: float  # factor on the likelihood's variance for the coverage target
+    coverage: float  # on the fit's data
+    correlation: float  # Pearson r of sigma and |error| on the fit's data
+
+
+def scores(data: list[SigmaData], coefficients: np.ndarray) -> tuple[float, float]:
+    """``(coverage, r)``: share of errors within ±2σ and the Pearson r of σ and |error|."""
+    std = np.concatenate([d.std(coefficients).ravel() for d in data])
+    error = np.abs(np.concatenate([d.error.ravel() for d in data]))
+    if not error.size:
+        return float("nan"), float("nan")
+    coverage = float(np.mean(error <= 2 * std))
+    if np.std(std) <= 0 or np.std(error) <= 0:
+        return coverage, 0.0
+    return coverage, float(np.corrcoef(std, error)[0, 1])
+
+
+def fit_sigma(data: list[SigmaData], target: float = COVERAGE_TARGET) -> SigmaFit:
+    """Maximum-likelihood weights, scaled to the ±2σ coverage ``target`` (module doc)."""
+    data = [d for d in data if d.error.size]
+    if not data:
+        raise ValueError("no logs with reference loads to calibrate sigma on")
+    e2 = np.concatenate([d.error.ravel() ** 2 for d in data])
+    G = np.concatenate([d.features.reshape(-1, len(SIGMA_KEYS)) ** 2 for d in data])
+    # Every log weighs the same, whatever its length.
+    share = np.concatenate([np.full(d.error.size, 1.0 / d.error.size) for d in data])
+    share /= np.sum(share)
+    # Each weight in units of the mean squared error per mean squared feature; the floor
+    # keeps every variance positive.
+    unit = np.mean(e2) / np.fmax(np.mean(G, axis=0), 1e-300)
+    G = G * unit
+    lower = np.zeros(len(SIGMA_KEYS))
+    lower[SIGMA_KEYS.index("sigma_floor")] = 1e-6
+    lower[SIGMA_KEYS.index("sigma_covariance")] = COVARIANCE_SHARE**2 / unit[0]
+    bounds = [(low, None) for low in lower]
+
+    def objective(w: np.ndarray) -> tuple[float, np.ndarray]:
+        v = G @ w
+        value = float(np.sum(share * (np.log(v) + e2 / v)))
+        gradient = G.T @ (share * (1.0 / v - e2 / v**2))
+        return value, gradient
+
+    start = np.full(len(SIGMA_KEYS), 1.0 / len(SIGMA_KEYS))
+    found = optimize.minimize(objective, start, jac=True, method="L-BFGS-B", bounds=bounds)
+    variance = G @ found.x
+    std_error = np.sqrt(e2)
+    low, high = np.log(1e-3), np.log(1e3)
+    for _ in range(50):
+        middle = 0.5 * (low + high)
+        covered = np.mean(std_error <= 2 * np.sqrt(np.exp(middle) * variance))
+        low, high = (middle, high) if covered < target else (low, middle)
+    scale = float(np.exp(0.5 * (low + high)))
+    coefficients = np.sqrt(found.x * unit * scale)
+    coverage, correlation = scores(data, coefficients)
+    return SigmaFit(
+        coefficients=coefficients, scale=scale, coverage=coverage, correlation=correlation
+    )
