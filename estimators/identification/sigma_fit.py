@@ -22,6 +22,7 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,7 @@ from scipy import optimize
 from wheelload.estimators.kf.tuning import SIGMA_TUNING
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import Signals
-from wheelload.models.vehicle.description import SIGMA_KEYS
+from wheelload.models.vehicle.description import SIGMA_KEYS, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out (initial covariance)
 COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma
@@ -137,3 +138,15 @@ def fit_sigma(data: list[SigmaData], target: float = COVERAGE_TARGET) -> SigmaFi
     return SigmaFit(
         coefficients=coefficients, scale=scale, coverage=coverage, correlation=correlation
     )
+
+
+def calibrate_sigma(vehicle: Vehicle, logs: tuple[Signals, ...]) -> SigmaFit:
+    """The reported-sigma model fitted on logs with reference loads, with the KF of
+    ``vehicle`` (its guards and densities)."""
+    return fit_sigma([sigma_data(TwoStageKF(vehicle), signals) for signals in logs])
+
+
+def with_sigma(vehicle: Vehicle, coefficients: np.ndarray) -> Vehicle:
+    """``vehicle`` with its ``[filter] sigma_*`` coefficients replaced."""
+    named = {key: float(value) for key, value in zip(SIGMA_KEYS, coefficients, strict=True)}
+    return vehicle.replace(filter=dataclasses.replace(vehicle.filter, **named))
