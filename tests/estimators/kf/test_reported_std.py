@@ -111,9 +111,10 @@ def test_sigma_rises_with_a_wrong_spring_or_mass_file(dlc):
 
 def test_calibration_recovers_a_known_sigma_model(vehicle, dlc):
     """Errors drawn from a known model (P, a floor and a travel-rate term on the filter's own
-    features) give back its σ within 5 % on 95 % of the samples and its travel-rate
-    coefficient within 10 % (P and the floor are nearly collinear once P has settled: their
-    sum is what the errors show), and ±2σ covers 95 %."""
+    features) give back its σ within 8 % on 95 % of the samples (the 95 % target takes ~2 %
+    off a normal σ, whose ±2σ covers 95.4 %) and its travel-rate coefficient within 10 % (P
+    and the floor are nearly collinear once P has settled: their sum is what the errors
+    show), and ±2σ covers 95 %."""
     data = sigma_data(TwoStageKF(vehicle), dlc)
     truth = np.zeros(len(SIGMA_KEYS))
     truth[SIGMA_KEYS.index("sigma_covariance")] = 0.1
