@@ -146,7 +146,7 @@ def run(context: Context) -> Section:
                         ("all", lambda c, h: True)):  # fmt: skip
         group = [d for c, d, h in zip(cases, data, held) if c.file == "true" and keep(c, h)]
         pooled[label] = _row(group, {"sqrt P": own, "fit": fit.coefficients})
-    pooled_table = pd.DataFrame(pooled).T
+    pooled_table = pd.DataFrame(pooled).T.rename_axis("logs")
     coefficients = pd.DataFrame({"fit": fit.coefficients}, index=list(SIGMA_KEYS))
     context.outputs.write_text("sigma_table.csv", per_scenario.to_csv(float_format="%.4g"))
     context.outputs.write_text("sigma_mismatch.csv", per_file.to_csv(float_format="%.4g"))

@@ -308,3 +308,34 @@ def test_unsprung_masses_stay_within_their_physical_range(folder, capsys):
     low, high = 0.5 * 0.02 * 1613.2, 0.5 * 0.25 * 1613.2
     for name in ("unsprung_front", "unsprung_rear"):
         assert low - 1e-6 <= table.loc[name, "value"] <= high + 1e-6
+
+
+def test_tune_writes_the_reported_sigma_and_says_when_it_cannot(folder, tuned_file, capsys):
+    """With reference loads the tuned file carries the reported-σ model fitted on its logs
+    (the file's own σ covers the tuning logs 95 % pooled, as fitted); a log without them
+    gives one line saying σ cannot be calibrated, and the input file's σ is kept."""
+    tuned = load_vehicle(tuned_file)
+    assert "sigma_travel_rate = " in tuned_file.read_text()
+    errors, covered = [], []
+    for path in ("iso-dlc.csv", "accel-in-turn.csv"):
+        signals = read_log(folder / path)
+        settled = signals.t - signals.t[0] >= 1.0
+        estimate = TwoStageKF(tuned).run(signals)
+        error = np.abs(estimate.loads - signals.reference)[settled]
+        covered.append(error <= 2 * estimate.std[settled])
+        errors.append(error)
+    assert np.mean(np.concatenate([c.ravel() for c in covered])) == pytest.approx(0.95, abs=0.01)
+    frame = pd.read_csv(folder / "slope-20.csv")
+    bare = folder / "no_reference.csv"
+    frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]).to_csv(bare, index=False)
+    out = folder / "tuned_bare.toml"
+    args = ["tune", str(bare), "--vehicle", str(example_vehicle_path()), "--out", str(out)]
+    assert main([*args, "--iterations", "20"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if "reported sigma" in line]
+    assert lines == [
+        "no reference loads fz_* in every log: cannot calibrate the reported sigma; "
+        "the input file's sigma_* (or the defaults) are kept"
+    ]
+    assert "sigma_" not in out.read_text()
+    default = load_vehicle(example_vehicle_path()).filter.sigma_model()
+    assert load_vehicle(out).filter.sigma_model() == default
