@@ -10,9 +10,11 @@ weighing the same,
 
 .. math:: \min_{w \ge 0} \sum_{n,i} \log \sigma_{ni}^2 + e_{ni}^2 / \sigma_{ni}^2
 
-(L-BFGS-B), then the mismatch part is scaled as a whole so that ±2σ covers
-:data:`COVERAGE_TARGET` of the errors (the errors are correlated in time and heavier-tailed
-than a normal, which the likelihood alone does not see).
+(L-BFGS-B), then scaled as a whole so that ±2σ covers :data:`COVERAGE_TARGET` of the errors
+(the errors are correlated in time and heavier-tailed than a normal, which the likelihood
+alone does not see); last, the weights are moved so that each log's coverage lies in
+:data:`COVERAGE_BAND` where the features allow (the likelihood plus a penalty on each log's
+distance from the band): one scale cannot serve a clean log and a noisy one at once.
 
 Example
 -------
@@ -26,7 +28,7 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize
+from scipy import optimize, special
 
 from wheelload.estimators.kf.tuning import SIGMA_TUNING
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -35,6 +37,8 @@ from wheelload.models.vehicle.description import SIGMA_KEYS, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out (initial covariance)
 COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma
+COVERAGE_BAND = (0.91, 0.98)  # each log's share within +-2 sigma, where the features allow
+BAND_PENALTY = 30.0  # weight of a log's squared distance from the band beside the likelihood
 #: Least coefficient of the filter's own sigma sqrt(P_ii): P grows where rows are missing
 #: (start-up, a gap, no travel), which no other feature sees.
 COVARIANCE_SHARE = 0.05
@@ -81,7 +85,7 @@ def sigma_data(kf: TwoStageKF, signals: Signals) -> SigmaData:
 @dataclass(frozen=True, kw_only=True)
 class SigmaFit:
     coefficients: np.ndarray  # SIGMA_KEYS order, c_k >= 0
-    scale: float  # factor on the likelihood's variance for the coverage target
+    scale: float  # factor on the likelihood's variance for the pooled coverage target
     coverage: float  # on the fit's data
     correlation: float  # Pearson r of sigma and |error| on the fit's data
 
@@ -133,11 +137,44 @@ def fit_sigma(data: list[SigmaData], target: float = COVERAGE_TARGET) -> SigmaFi
         covered = np.mean(std_error <= 2 * np.sqrt(np.exp(middle) * variance))
         low, high = (middle, high) if covered < target else (low, middle)
     scale = float(np.exp(0.5 * (low + high)))
-    coefficients = np.sqrt(found.x * unit * scale)
+    weights = _within_band(data, found.x * scale * unit, lower * unit)
+    coefficients = np.sqrt(weights)
     coverage, correlation = scores(data, coefficients)
     return SigmaFit(
         coefficients=coefficients, scale=scale, coverage=coverage, correlation=correlation
     )
+
+
+def _within_band(data: list[SigmaData], weights: np.ndarray, lower: np.ndarray) -> np.ndarray:
+    """The weights moved so that every log's ±2σ coverage lies in :data:`COVERAGE_BAND`
+    where the features allow: the per-log likelihood plus :data:`BAND_PENALTY` times the
+    squared distance of each log's coverage (a smooth count) from the band, Nelder-Mead in
+    log(w - lower) from ``weights``; every third sample."""
+    logs = [(d.features.reshape(-1, len(SIGMA_KEYS))[::3] ** 2, d.error.ravel()[::3])
+            for d in data]  # fmt: skip
+    logs = [(g, e) for g, e in logs if e.size]
+    scale = np.fmax(weights - lower, 1e-12 * np.fmax(weights.max(), 1e-300))
+    low, high = COVERAGE_BAND
+
+    def objective(theta: np.ndarray) -> float:
+        w = lower + scale * np.exp(theta)
+        total = 0.0
+        for g, e in logs:
+            v = np.fmax(g @ w, 1e-300)
+            s = np.sqrt(v)
+            covered = np.mean(special.expit((2 * s - np.abs(e)) / (0.1 * s)))
+            likelihood = np.mean(np.log(v) + e**2 / v)
+            total += likelihood / len(logs)
+            total += BAND_PENALTY * (max(0.0, low - covered) ** 2 + max(0.0, covered - high) ** 2)
+        return total
+
+    found = optimize.minimize(
+        objective,
+        np.zeros(len(weights)),
+        method="Nelder-Mead",
+        options={"maxiter": 3000, "xatol": 1e-3, "fatol": 1e-8},
+    )
+    return lower + scale * np.exp(found.x)
 
 
 def calibrate_sigma(vehicle: Vehicle, logs: tuple[Signals, ...]) -> SigmaFit:

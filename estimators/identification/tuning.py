@@ -55,15 +55,15 @@ from scipy import optimize, stats
 from wheelload.estimators.kf.step import UPDATE_ROWS, step_function
 from wheelload.estimators.kf.tuning import (
     NOISE_DENSITIES,
-    SIGMA_TUNING,
     TUNED_DENSITIES,
     TUNING,
     TUNING_INDEX,
+    with_filter_sigma,
 )
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
-from wheelload.models.vehicle.description import SIGMA_KEYS, FilterTuning, Vehicle
+from wheelload.models.vehicle.description import FilterTuning, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out of the objective (initial covariance)
 SPAN = 1e3  # each density stays within input / SPAN .. input * SPAN
@@ -148,7 +148,7 @@ class FilterRuns:
         if filter_sigma:
             # The densities are calibrated on the filter's own sigma, sqrt(P_ii); the
             # reported sigma's other terms are fitted after (sigma_fit.py).
-            self._base[SIGMA_TUNING] = np.eye(len(SIGMA_KEYS))[SIGMA_KEYS.index("sigma_covariance")]
+            self._base = with_filter_sigma(self._base)
         self._gate_open = self._base.copy()
         for name, value in GATE_OPEN.items():
             self._gate_open[TUNING.index(name)] = value

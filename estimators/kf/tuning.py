@@ -83,6 +83,14 @@ def tuning_vector(
     return vector
 
 
+def with_filter_sigma(tuning: np.ndarray) -> np.ndarray:
+    """``tuning`` with the reported sigma the filter's own, sqrt(P_ii) (:mod:`.reported_std`:
+    ``sigma_covariance`` 1, every other term 0); the loads do not change."""
+    tuning = np.array(tuning, float)
+    tuning[SIGMA_TUNING] = [1.0 if key == "sigma_covariance" else 0.0 for key in SIGMA_KEYS]
+    return tuning
+
+
 def noise_densities(vehicle: Vehicle) -> np.ndarray:
     """The vehicle file's noise densities in :data:`TUNED_DENSITIES` order (constant, then
     input-dependent)."""

@@ -237,16 +237,16 @@ class FilterTuning:
     # sum_k (c_k g_ik)^2 with g_i0 = sqrt(P_ii); the gain does not see it. Defaults:
     # calibrated by ``wheelload study sigma`` on the bundled vehicles' scenarios;
     # ``wheelload tune`` writes those of its logs.
-    sigma_covariance: float = 0.0486  # per N of sqrt(P_ii), the filter's own sigma
-    sigma_floor: float = 0.0619  # N
-    sigma_ax: float = 1.335  # N per m/s^2 of |ax|
-    sigma_ay: float = 4.255  # N per m/s^2 of |ay|
-    sigma_travel_rate: float = 510.2  # N per m/s of |v_i| (damper)
-    sigma_travel: float = 389.1  # N per m of |d_i| (spring)
-    sigma_residual: float = 0.3335  # per N of the equilibrium residual at z, per wheel
-    sigma_residual_rms: float = 0.2751  # per N of its running RMS
-    sigma_innovation: float = 0.3691  # per N of |suspension innovation|
-    sigma_innovation_rms: float = 0.0  # per N of its running RMS
+    sigma_covariance: float = 0.05  # per N of sqrt(P_ii), the filter's own sigma
+    sigma_floor: float = 0.0637  # N
+    sigma_ax: float = 0.5156  # N per m/s^2 of |ax|
+    sigma_ay: float = 3.983  # N per m/s^2 of |ay|
+    sigma_travel_rate: float = 587.2  # N per m/s of |v_i| (damper)
+    sigma_travel: float = 317.1  # N per m of |d_i| (spring)
+    sigma_residual: float = 0.4217  # per N of the equilibrium residual at z, per wheel
+    sigma_residual_rms: float = 0.3341  # per N of its running RMS
+    sigma_innovation: float = 0.7882  # per N of |suspension innovation|
+    sigma_innovation_rms: float = 0.0003  # per N of its running RMS
 
     def sigma_model(self) -> tuple[float, ...]:
         """The reported-sigma coefficients in :data:`SIGMA_KEYS` order."""
