@@ -161,7 +161,7 @@ def handle(args: argparse.Namespace) -> int:
         ),
     }
     if references:
-        sigma = calibrate_sigma(new_vehicle, logs)
+        sigma = calibrate_sigma(new_vehicle, runs.logs)
         new_vehicle = with_sigma(new_vehicle, sigma.coefficients)
         changes.update(
             {
