@@ -62,6 +62,7 @@ from wheelload.models import (
 )
 from wheelload.models.inputs import input_description
 from wheelload.models.measurement_noise import INPUT_DENSITIES
+from wheelload.models.vehicle.description import SIGMA_KEYS
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -78,8 +79,13 @@ FAST_CFLAGS = (
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
 #: Calibration values that must be positive (the rest must be finite).
-#: The input-dependent noise densities may be 0 (constant measurement noise).
-POSITIVE = ("mass", *[n for n in TUNING if n not in INPUT_DENSITIES], "initial_std")
+#: The input-dependent noise densities may be 0 (constant measurement noise), and so may the
+#: reported sigma's coefficients (a term left out).
+POSITIVE = (
+    "mass",
+    *[n for n in TUNING if n not in INPUT_DENSITIES and n not in SIGMA_KEYS],
+    "initial_std",
+)
 
 
 class ParamMode(enum.Enum):

@@ -34,8 +34,15 @@ from wheelload.estimators.kf import (
     monitor_state,
     payload,
     plausibility,
+    reported_std,
 )
-from wheelload.estimators.kf.tuning import GUARD_TUNING, PAYLOAD_SLICE, TUNING, TUNING_INDEX
+from wheelload.estimators.kf.tuning import (
+    GUARD_TUNING,
+    PAYLOAD_SLICE,
+    SIGMA_TUNING,
+    TUNING,
+    TUNING_INDEX,
+)
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -268,7 +275,11 @@ def step_expressions(
     )  # fmt: skip
     mass_properties, mass_properties_std = payload.reported(loaded.theta, loaded.P, p_file)
 
-    std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
+    # The reported sigma: P and the model's mismatch terms (the gain does not see them).
+    features, sigma_means = reported_std.sigma_features(
+        P_new, u, z, A, b, mask_s, mask_c, y_s, m, dt_used
+    )
+    std = reported_std.reported_std(features, tuning[SIGMA_TUNING])
     residual = b - ca.mtimes(A, x_new)
     used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
     available = ca.vertcat(mask_s, mask_c)
@@ -280,6 +291,7 @@ def step_expressions(
         innovation_gate.next_spread(spread, record, available, dt_used, settings),
     )
     m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
+    m_next = monitor_state.with_sigma_state(m_next, sigma_means)
     m_next = monitor_state.with_payload_state(m_next, loaded.theta, loaded.P, watch.seen)
     status = _status(
         record, available, valid_raw, in_range, watch.fault,

@@ -198,6 +198,22 @@ class FaultTuning:
             require_positive(self, field.name)
 
 
+#: The reported-sigma model's coefficients ([filter], optional), in feature order
+#: (estimators/kf/reported_std.py).
+SIGMA_KEYS = (
+    "sigma_covariance",
+    "sigma_floor",
+    "sigma_ax",
+    "sigma_ay",
+    "sigma_travel_rate",
+    "sigma_travel",
+    "sigma_residual",
+    "sigma_residual_rms",
+    "sigma_innovation",
+    "sigma_innovation_rms",
+)
+
+
 @dataclass(frozen=True, kw_only=True)
 class PayloadTuning:
     """Online payload mass and CG ([filter.payload], optional; estimators/kf/payload.py).
@@ -249,6 +265,24 @@ class FilterTuning:
     suspension_noise_rate_density: float = 0.0
     suspension_noise_hub_density: float = 0.0
     constraint_noise_acceleration_density: Vector3 = (0.0, 0.0, 0.0)
+    # Optional: the reported-sigma model (estimators/kf/reported_std.py), sigma^2 =
+    # sum_k (c_k g_ik)^2 with g_i0 = sqrt(P_ii); the gain does not see it. Defaults:
+    # calibrated by ``wheelload study sigma`` on the bundled vehicles' scenarios;
+    # ``wheelload tune`` writes those of its logs.
+    sigma_covariance: float = 0.05  # per N of sqrt(P_ii), the filter's own sigma
+    sigma_floor: float = 0.0637  # N
+    sigma_ax: float = 0.5156  # N per m/s^2 of |ax|
+    sigma_ay: float = 3.983  # N per m/s^2 of |ay|
+    sigma_travel_rate: float = 587.2  # N per m/s of |v_i| (damper)
+    sigma_travel: float = 317.1  # N per m of |d_i| (spring)
+    sigma_residual: float = 0.4217  # per N of the equilibrium residual at z, per wheel
+    sigma_residual_rms: float = 0.3341  # per N of its running RMS
+    sigma_innovation: float = 0.7882  # per N of |suspension innovation|
+    sigma_innovation_rms: float = 0.0003  # per N of its running RMS
+
+    def sigma_model(self) -> tuple[float, ...]:
+        """The reported-sigma coefficients in :data:`SIGMA_KEYS` order."""
+        return tuple(getattr(self, key) for key in SIGMA_KEYS)
 
     def input_densities(self) -> tuple[float, ...]:
         """The input-dependent densities in ``measurement_noise.INPUT_DENSITIES`` order."""
@@ -270,6 +304,8 @@ class FilterTuning:
                 raise SectionKeyError(
                     key, f"must be finite and >= 0 (0: constant noise), got {values}"
                 )
+        for key in SIGMA_KEYS:
+            require_non_negative(self, key)
         require_positive(self, "process_noise_density")
         require_positive(self, "suspension_noise_density")
         require_positive(self, "initial_std")

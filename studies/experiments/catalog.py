@@ -14,6 +14,7 @@ from wheelload.studies.experiments import (
     monte_carlo,
     payload,
     sensor_errors,
+    sigma,
     vehicle_file_ablation,
     vehicles,
 )
@@ -29,6 +30,7 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "monte-carlo": monte_carlo.run,
     "mismatch": mismatch.run,
     "payload": payload.run,
+    "sigma": sigma.run,
     "vehicles": vehicles.run,
     "sensor-errors": sensor_errors.run,
 }

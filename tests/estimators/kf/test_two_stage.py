@@ -76,9 +76,10 @@ def test_at_rest_converges_to_static_loads(vehicle):
     signals = synthetic_log(vehicle, rest(duration=5.0), noise=NOISE, seed=5)
     estimate = TwoStageKF(vehicle).run(signals)
     last_second = estimate.loads[signals.t > 4.0]
-    # noise-limited: per-sample 1-sigma is ~175 N; the mean of the last second is within 30 N
+    # noise-limited: per-sample error ~55 N rms; the mean of the last second is within 30 N
     np.testing.assert_allclose(last_second.mean(axis=0), static_loads(vehicle), atol=30.0)
-    assert np.all(np.abs(last_second - static_loads(vehicle)) < 4 * estimate.std[-1])
+    sigma = estimate.std[signals.t > 4.0].mean(axis=0)  # reported sigma, measured ~55 N
+    assert np.all(np.abs(last_second - static_loads(vehicle)) < 4 * sigma)
 
 
 @pytest.mark.parametrize(
