@@ -17,7 +17,8 @@ at :math:`y^2 \le g\,S`), with each row's :math:`r_\vartheta` times
 :math:`(1 + (a_x^2 + a_y^2) / a_s^2)^2`: the model's mismatch grows with the square of the
 load transfer (the second-order terms, :math:`a_y \sin\phi`, the links). The vertical
 row, which those terms bias in a turn, has the smaller scale :math:`a_s`; the moment rows
-keep the turns in which they see the CG height. The residual
+keep the turns in which they see the CG height (estimated only when its prior spread is
+set: by default the payload sits at the CG's height). The residual
 density covers that mismatch, which is coloured, so the estimate averages over many
 seconds; a sensor bias the equilibrium can
 see (:math:`a_z`, a lateral or longitudinal offset) is absorbed as a small mass or CG
