@@ -277,16 +277,16 @@ class FilterTuning:
     # sum_k (c_k g_ik)^2 with g_i0 = sqrt(P_ii); the gain does not see it. Defaults:
     # calibrated by ``wheelload study sigma`` on the bundled vehicles' scenarios;
     # ``wheelload tune`` writes those of its logs.
-    sigma_covariance: float = 0.05082  # per N of sqrt(P_ii), the filter's own sigma
-    sigma_floor: float = 15.72  # N
-    sigma_ax: float = 1.341  # N per m/s^2 of |ax|
-    sigma_ay: float = 4.567  # N per m/s^2 of |ay|
-    sigma_travel_rate: float = 1879  # N per m/s of |v_i| (damper)
-    sigma_travel: float = 110.1  # N per m of |d_i| (spring)
-    sigma_residual: float = 0.3909  # per N of the equilibrium residual at z, per wheel
-    sigma_residual_rms: float = 0.000657  # per N of its running RMS
-    sigma_innovation: float = 0.4781  # per N of |suspension innovation|
-    sigma_innovation_rms: float = 0.0004796  # per N of its running RMS
+    sigma_covariance: float = 0.05034  # per N of sqrt(P_ii), the filter's own sigma
+    sigma_floor: float = 16.42  # N
+    sigma_ax: float = 1.64  # N per m/s^2 of |ax|
+    sigma_ay: float = 4.984  # N per m/s^2 of |ay|
+    sigma_travel_rate: float = 1968  # N per m/s of |v_i| (damper)
+    sigma_travel: float = 135  # N per m of |d_i| (spring)
+    sigma_residual: float = 0.3402  # per N of the equilibrium residual at z, per wheel
+    sigma_residual_rms: float = 0.0006823  # per N of its running RMS
+    sigma_innovation: float = 0.3238  # per N of |suspension innovation|
+    sigma_innovation_rms: float = 0.0005492  # per N of its running RMS
 
     def sigma_model(self) -> tuple[float, ...]:
         """The reported-sigma coefficients in :data:`SIGMA_KEYS` order."""
