@@ -78,12 +78,18 @@ FAST_CFLAGS = (
     "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
+#: Tuning entries that may be 0: the payload filter switched off, its height not estimated.
+ZERO_ALLOWED = ("payload_position_std_z", "payload_estimate")
 #: Calibration values that must be positive (the rest must be finite).
 #: The input-dependent noise densities may be 0 (constant measurement noise), and so may the
-#: reported sigma's coefficients (a term left out).
+#: reported sigma's coefficients (a term left out) and :data:`ZERO_ALLOWED`.
 POSITIVE = (
     "mass",
-    *[n for n in TUNING if n not in INPUT_DENSITIES and n not in SIGMA_KEYS],
+    *[
+        n
+        for n in TUNING
+        if n not in INPUT_DENSITIES and n not in SIGMA_KEYS and n not in ZERO_ALLOWED
+    ],
     "initial_std",
 )
 
@@ -178,7 +184,9 @@ def kernel_function(
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        ca.cse([named[name] for name in KERNEL_OUTPUTS]),
+        # Dense: an entry the baked values make exactly zero (a payload moment whose prior
+        # spread is 0) keeps its place in the state arrays.
+        ca.cse([ca.densify(named[name]) for name in KERNEL_OUTPUTS]),
         ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
         list(KERNEL_OUTPUTS),
     )
@@ -417,7 +425,15 @@ def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix
     lines.append("}")
     finite = [
         f"FINITE({name}{k})"
-        for name in ("x_next", "P_next", "std", "residual", "m_next", "fault_statistic")
+        for name in (
+            "x_next",
+            "P_next",
+            "std",
+            "residual",
+            "m_next",
+            "fault_statistic",
+            *_SINGLE_STEP_ONLY,
+        )  # the single step's acceptance: every output finite
         for k in range(sizes[name])
     ]
     positive = [f"P_next{k} > {zero}" for k in (0, 4, 7, 9)]

@@ -154,7 +154,25 @@ def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Func
     theta_new, P_new, _, _, used = sequential_update_innovations(
         theta, P, target, J, r, mask, lambda i, y, S: y * y <= gate * S
     )
-    return Update(theta=theta_new, P=P_new, used=used)
+    # A payload outside the car (or lighter than minus half its mass) is no payload: such an
+    # update (a hostile sample the guards let through) is not taken.
+    ok = plausible(theta_new, p)
+    theta_new = ca.if_else(ok, theta_new, theta)
+    P_new = ca.if_else(ok, P_new, P)
+    return Update(theta=theta_new, P=P_new, used=used * ok)
+
+
+def plausible(theta, p):
+    """1 if the payload ``theta`` is one a car can carry: mass in [-m/2, m], its moments
+    within the wheelbase, the track and 1 m of height about the file's CG."""
+    unpacked = ModelParameters(**{k: p[i] for i, k in enumerate(ModelParameters.names())})
+    m = unpacked.mass
+    total = m + theta[0]
+    reach = (0.5 * (unpacked.lf + unpacked.lr), 0.5 * unpacked.track_front, 1.0)
+    ok = (theta[0] >= -0.5 * m) * (theta[0] <= m)
+    for k in range(3):
+        ok = ok * (ca.fabs(theta[1 + k]) <= reach[k] * total)
+    return ok
 
 
 def residual_function(equilibrium: ca.Function | None = None) -> ca.Function:
