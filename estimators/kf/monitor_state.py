@@ -52,10 +52,10 @@ def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.S
     return ca.vertcat(m_next[0:MONITOR_END], hold_state, settle, total)
 
 
-def with_payload_state(m_next: ca.SX, theta: ca.SX, P: ca.SX, seen: ca.SX) -> ca.SX:
+def with_payload_state(m_next: ca.SX, theta: ca.SX, P: ca.SX, started: ca.SX, seen: ca.SX) -> ca.SX:
     """The guards' next state (up to :data:`PAYLOAD`), the payload filter's, started, and
     the travel channels seen."""
-    return ca.vertcat(m_next[0 : PAYLOAD.start], theta, ca.vec(P), 1, seen)
+    return ca.vertcat(m_next[0 : PAYLOAD.start], theta, ca.vec(P), started, seen)
 
 
 def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:

@@ -231,7 +231,9 @@ def step_expressions(
     P_pred, limited_pred = limits.limit_covariance(P_pred, settings.covariance_floor, ceiling)
     # Start where the car is: the first sample sees no prior information, so its rows set
     # the loads (a log that starts in a turn carries no start-up transient).
-    P_pred = ca.if_else(m[monitor_state.STARTED], P_pred, ceiling * ca.DM.eye(4))
+    # An invalid interval holds the state, so the start waits for the first valid one.
+    started = m[monitor_state.STARTED]
+    P_pred = ca.if_else(ca.logic_or(started, 1 - dt_ok), P_pred, ceiling * ca.DM.eye(4))
     H = ca.vertcat(ca.DM.eye(4), A)
     y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
     S_prior = ca.vertcat(
@@ -292,7 +294,9 @@ def step_expressions(
     )
     m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
     m_next = monitor_state.with_sigma_state(m_next, sigma_means)
-    m_next = monitor_state.with_payload_state(m_next, loaded.theta, loaded.P, watch.seen)
+    m_next = monitor_state.with_payload_state(
+        m_next, loaded.theta, loaded.P, ca.logic_or(started, dt_ok), watch.seen
+    )
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
@@ -364,18 +368,16 @@ def step_function(
 
 
 def without_monitor(step: ca.Function) -> ca.Function:
-    """``step`` for callers that carry only x and P: the monitor starts empty every call.
+    """``step`` for callers that carry only x and P: the monitor starts empty every call,
+    as a started filter's (x and P are the prior, not the diffuse first sample's).
 
     ``(x, P, u, u_valid, dt, p, tuning) -> (x_next, P_next, std, residual,
     used, z, innovation, innovation_variance)``.
     """
     inputs = step.sx_in()
-    named = dict(
-        zip(
-            STEP_OUTPUT_NAMES,
-            step.call([*inputs[:2], ca.DM.zeros(step.sparsity_in(2)), *inputs[3:]]),
-        )
-    )
+    m = ca.DM.zeros(step.sparsity_in(2))
+    m[monitor_state.STARTED] = 1
+    named = dict(zip(STEP_OUTPUT_NAMES, step.call([*inputs[:2], m, *inputs[3:]])))
     kept = [
         name
         for name in STEP_OUTPUT_NAMES

@@ -57,12 +57,19 @@ def payload_reference(vehicle: Vehicle, settings) -> tuple[Vehicle, list[str]]:
     estimation off, and a file that says its travel is zeroed is told."""
     payload = vehicle.filter.payload
     if settings.still_period and payload.travel_from_reference:
-        payload = dataclasses.replace(payload, travel_from_reference=False)
-        vehicle = vehicle.replace(filter=dataclasses.replace(vehicle.filter, payload=payload))
-        return vehicle, [f"travel zeroed over the still period: {PAYLOAD_INVISIBLE}"]
+        return with_travel_zeroed(vehicle), [
+            f"travel zeroed over the still period: {PAYLOAD_INVISIBLE}"
+        ]
     if not payload.travel_from_reference:
         return vehicle, [
             "travel zeroed at the log's start ([filter.payload] travel_from_reference = "
             f"false): {PAYLOAD_INVISIBLE}"
         ]
     return vehicle, []
+
+
+def with_travel_zeroed(vehicle: Vehicle) -> Vehicle:
+    """``vehicle`` whose travel reads 0 at the log's start ([filter.payload]
+    travel_from_reference = false), so no payload is estimated."""
+    payload = dataclasses.replace(vehicle.filter.payload, travel_from_reference=False)
+    return vehicle.replace(filter=dataclasses.replace(vehicle.filter, payload=payload))

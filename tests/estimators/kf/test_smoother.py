@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from wheelload.estimators import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
@@ -18,6 +19,13 @@ def numpy_rts(x, P, dt, q):
         xs[k] = x[k] + C @ (xs[k + 1] - x[k])
         Ps[k] = P[k] + C @ (Ps[k + 1] - P_pred) @ C.T
     return xs, Ps
+
+
+@pytest.fixture(scope="module")
+def vehicle(fixed_vehicle):
+    """The example vehicle with the payload filter off: the MHE's window (and the numpy
+    references) hold the file's mass and CG, so the KF it is compared with does too."""
+    return fixed_vehicle
 
 
 def test_compiled_smoother_equals_numpy_rts_and_beats_the_filter(vehicle):
@@ -38,7 +46,8 @@ def test_compiled_smoother_equals_numpy_rts_and_beats_the_filter(vehicle):
     def rmse(loads):
         return np.sqrt(np.mean((loads - signals.reference) ** 2))
 
-    assert rmse(smoothed.loads) < 0.97 * rmse(filtered.loads)  # measured 6 % lower
+    # measured 2.1 % lower (121.9 vs 124.5 N; 6 % with the former suspension noise 625 N^2 s)
+    assert rmse(smoothed.loads) < 0.99 * rmse(filtered.loads)
 
 
 def test_estimate_smooth_writes_the_smoothed_loads(tmp_path, capsys):
