@@ -66,7 +66,6 @@ from wheelload.estimators.logs.signals import (
     check_time_column,
     check_units,
     input_bits,
-    rate_derivatives_used,
     sensor_mode,
 )
 from wheelload.estimators.loops.compiled import ColumnLoop, FlagRule
@@ -249,11 +248,9 @@ class LogStream:
             Differentiator(dt, 4, VELOCITY_CUTOFF, self.source) if self.velocities_derived else None
         )
         rate_dots = None
-        if (
-            RATE_DERIVATIVES[0] not in self.names
-            and RATES[0] in self.names
-            and rate_derivatives_used(kf.parameters)
-        ):
+        # Derived whatever the [model] switches: the fault monitor's parity test uses every
+        # term the inputs allow (as the whole-log path, estimators/logs/signals.py).
+        if RATE_DERIVATIVES[0] not in self.names and RATES[0] in self.names:
             try:
                 rate_dots = RateEstimator(dt, 3, self.source)
             except LogError:

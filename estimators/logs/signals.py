@@ -49,7 +49,6 @@ from wheelload.models.conventions import GRAVITY, WHEELS
 if TYPE_CHECKING:
     import pandas as pd
 
-    from wheelload.models import ModelParameters
 
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
@@ -607,17 +606,6 @@ def write_log(signals: Signals, path: str | Path) -> None:
         frame.to_parquet(path, index=False)
     else:
         raise LogError(f"{path}: unknown log format '{path.suffix}' (use .csv or .parquet)")
-
-
-def rate_derivatives_used(parameters: ModelParameters) -> bool:
-    """Whether a model term switched on reads the body-rate derivatives ``wx_dot wy_dot wz_dot``.
-
-    Only the body inertia and the IMU lever arm do (their gates in
-    :func:`wheelload.models.terms.term_gates`); with both off a log's rate
-    derivatives change no number, so the lean path does not derive them (no
-    differentiator, no ``scipy.signal`` import) and feeds them as missing.
-    """
-    return bool(parameters.term_body_inertia) or bool(parameters.term_imu_lever_arm)
 
 
 def rate_derivatives(signals: Signals) -> np.ndarray:
