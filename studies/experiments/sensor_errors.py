@@ -34,7 +34,7 @@ from wheelload.studies.experiments.runs.common import (
 )
 from wheelload.studies.experiments.runs.context import Context
 from wheelload.studies.experiments.runs.units import TrialResult, TrialSpec
-from wheelload.studies.experiments.vehicle_variants import Edit, Variant
+from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant
 from wheelload.studies.experiments.vehicles import vehicle_files
 
 SCENARIOS = (

@@ -21,7 +21,7 @@ from wheelload.models import example_vehicle_path
 from wheelload.models.vehicle.description import vehicle_from_dict
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.experiments.vehicle_variants import Edit, Variant
+from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant
 from wheelload.studies.metrics import pooled_metrics
 
 KEYS = ("roll_centre_height", "anti_pitch_brake", "anti_pitch_drive")

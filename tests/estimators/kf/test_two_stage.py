@@ -7,9 +7,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators.identification.offsets import (
+    check_still_period,
+    still_period_static_loads,
+)
 from wheelload.estimators.kernels.kalman import update
 from wheelload.estimators.kf.guard import GUARDS_OFF
-from wheelload.estimators.kf.offsets import check_still_period, still_period_static_loads
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import static_loads
 from wheelload.studies.bench.numpy_kf import joint_filter
@@ -238,7 +241,7 @@ def test_a_noisy_imu_at_rest_is_a_still_period(vehicle):
 
 
 def test_corner_weights_are_the_static_loads(vehicle):
-    from wheelload.estimators.kf.offsets import corner_weight_loads
+    from wheelload.estimators.identification.offsets import corner_weight_loads
 
     loads = corner_weight_loads("400, 410,380,390")
     np.testing.assert_allclose(loads, np.array([400, 410, 380, 390]) * 9.80665, rtol=1e-12)
