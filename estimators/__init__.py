@@ -39,7 +39,7 @@ _LAZY_MODULES = {
         "GuardSettings",
         "guard_settings_for",
     ),
-    "wheelload.estimators.kf.offsets": ("check_still_period", "corner_weight_loads"),
+    "wheelload.estimators.identification.offsets": ("check_still_period", "corner_weight_loads"),
     "wheelload.estimators.protocol": ("DEFAULT_MODEL", "SuspensionModel"),
     "wheelload.estimators.kf.step": ("UPDATE_ROWS",),
     "wheelload.estimators.kf.tuning": ("TUNED_DENSITIES", "TUNING_INDEX", "noise_densities"),

@@ -15,11 +15,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wheelload.models.conventions import WHEELS
+from wheelload.models.loaded_vehicle import MASS_PROPERTIES
 
 if TYPE_CHECKING:
     import pandas as pd
 
 RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
+#: Columns of the online mass properties: the values, then their std.
+MASS_PROPERTY_COLUMNS = (*MASS_PROPERTIES, *(f"{name}_std" for name in MASS_PROPERTIES))
 
 
 class StepFlag(enum.IntFlag):
@@ -58,9 +61,9 @@ class StepFlag(enum.IntFlag):
     # updates themselves went ahead.
     BODY_INERTIA_DROPPED = 1 << 16  # no wx_dot, wy_dot (no body rates in the log)
     UNSPRUNG_INERTIA_DROPPED = 1 << 17  # a hub accelerometer az_* missing
-    ROAD_FRAME_OR_LINKS_DROPPED = (
-        1 << 18
-    )  # road frame or link loads: a travel, IMU axis or vx missing
+    # road frame or link loads dropped (an IMU axis or vx missing), or the road frame's
+    # attitude from the equilibrium instead of the travels (a travel missing)
+    ROAD_FRAME_OR_LINKS_DROPPED = 1 << 18
     IMU_TERMS_DROPPED = 1 << 19  # lever arm (no rates) or mounting (an IMU axis missing)
     # Bits 20-23: inputs the log did not have (estimators/logs/signals.py).
     AZ_ASSUMED_G = 1 << 20
@@ -146,6 +149,10 @@ class Estimate:
     flags: np.ndarray  # (n,) StepFlag bits
     has_std: bool = True
     sensor_faults: tuple[SensorFault, ...] = ()  # isolated sensor faults, in time order
+    # The loaded car's mass [kg], CG ahead of and left of the file's CG and CG height [m]
+    # (MASS_PROPERTIES order), estimated online, and their std; None for a method without.
+    mass_properties: np.ndarray | None = None  # (n, 4)
+    mass_properties_std: np.ndarray | None = None  # (n, 4)
 
     @property
     def faults(self) -> pd.DataFrame:
@@ -166,7 +173,8 @@ class Estimate:
         return len(self.t)
 
     def to_pandas(self) -> pd.DataFrame:
-        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., status`` (uint32 bits)."""
+        """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., mass.., mass_std..
+        (if estimated: :data:`MASS_PROPERTY_COLUMNS`), status`` (uint32 bits)."""
         import pandas as pd
 
         columns = {"t": self.t}
@@ -174,6 +182,9 @@ class Estimate:
         if self.has_std:
             columns.update({f"fz_std_{w}": self.std[:, i] for i, w in enumerate(WHEELS)})
         columns.update({name: self.residual[:, i] for i, name in enumerate(RESIDUALS)})
+        if self.mass_properties is not None:
+            values = np.hstack([self.mass_properties, self.mass_properties_std])
+            columns.update({name: values[:, i] for i, name in enumerate(MASS_PROPERTY_COLUMNS)})
         columns[STATUS] = self.flags.astype(np.uint32)  # bits 0-30 (StepFlag)
         return pd.DataFrame(columns)
 

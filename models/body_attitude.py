@@ -22,6 +22,13 @@ side, pitch :math:`\theta > 0` lowers the nose; travel ``d > 0`` in compression.
   relative to the IMU.
 - :func:`roll_pitch_stiffness`: suspension roll and pitch stiffness and
   damping from the springs, dampers and anti-roll bars of the vehicle file.
+- :func:`attitude_from_equilibrium`: the suspension's quasi-static roll and
+  pitch under the measured specific force (no travel sensor needed),
+
+  .. math:: \phi = \frac{m_s (h_s - h_{rc}) f_y}{K_\phi}, \quad
+            \theta = -\frac{m_s h_s (1 - a) f_x}{K_\theta}
+
+  and :func:`attitude_travel`, the four travels of a body roll and pitch.
 """
 
 from __future__ import annotations
@@ -34,6 +41,11 @@ import numpy as np
 from wheelload.models.conventions import GRAVITY
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.vehicle.description import Vehicle
+
+
+def roll_axis_height(p: ModelParameters):
+    r"""Height of the roll axis under the CG: :math:`h_{rc} = (l_r h_{rc,f} + l_f h_{rc,r}) / l`."""
+    return (p.lr * p.roll_centre_front + p.lf * p.roll_centre_rear) / (p.lf + p.lr)
 
 
 def attitude_from_travel(d, track_front, track_rear, wheelbase):
@@ -122,7 +134,7 @@ def roll_pitch_stiffness(vehicle: Vehicle) -> RollPitchStiffness:
     """
     g, s = vehicle.geometry, vehicle.suspension
     axles = ((s.front, g.track_front, g.lf), (s.rear, g.track_rear, g.lr))
-    roll = [(a.spring_rate / 2 + a.arb_ratio * a.arb_rate) * t**2 for a, t, _ in axles]
+    roll = [axle_roll_stiffness(a.spring_rate, a.arb_rate, a.arb_ratio, t) for a, t, _ in axles]
     damping = [0.5 * (a.damper_push + a.damper_pull) for a, _, _ in axles]
     return RollPitchStiffness(
         roll=sum(roll),
@@ -131,3 +143,52 @@ def roll_pitch_stiffness(vehicle: Vehicle) -> RollPitchStiffness:
         pitch=sum(2 * a.spring_rate * arm**2 for a, _, arm in axles),
         pitch_damping=sum(2 * c * arm**2 for c, (_, _, arm) in zip(damping, axles)),
     )
+
+
+def axle_roll_stiffness(spring, arb_rate, arb_ratio, track):
+    r"""Roll stiffness of one axle [N m/rad], :math:`K_{\phi,a} = (k/2 + \gamma k_{arb}) T^2`
+    (left and right travel :math:`\mp T\phi/2`, bar of eq. 6-8)."""
+    return (spring / 2 + arb_ratio * arb_rate) * track**2
+
+
+def attitude_from_equilibrium(f, p: ModelParameters):
+    r"""Quasi-static suspension roll and pitch [rad] under the CG specific force ``f`` (body axes).
+
+    .. math:: \phi = \frac{m_s (h_s - h_{rc}) f_y}{K_{\phi,f} + K_{\phi,r}}, \quad
+        \theta = -\frac{m_s h_s (1 - a) f_x}{2 (k_f l_f^2 + k_r l_r^2)}, \quad
+        a = \frac{l_f a_f + l_r a_r}{l_f + l_r}
+
+    The sprung mass rolls about the roll axis (:func:`roll_axis_height`) and pitches
+    about its CG, the links carrying the anti-pitch share :math:`a` (anti-dive and
+    rear anti-lift when :math:`f_x < 0`, anti-lift and anti-squat otherwise, as
+    :func:`~wheelload.models.suspension.parts.link_loads`). The body-axis specific
+    force already holds the gravity moment of the displaced CG (:math:`f_y = \tilde
+    f_y + g\phi`, :math:`f_x = \tilde f_x - g\theta` to first order), so no
+    :math:`K - m_s g h` correction appears. ISO 8855 signs: a left turn (:math:`f_y >
+    0`) rolls the body to the right (:math:`\phi > 0`), braking (:math:`f_x < 0`)
+    pitches the nose down (:math:`\theta > 0`). A pure function of the sample: no state.
+    """
+    (k_f, arb_f, ratio_f), (k_r, arb_r, ratio_r) = p.axles("spring", "arb_rate", "arb_ratio")
+    roll_stiffness = axle_roll_stiffness(k_f, arb_f, ratio_f, p.track_front) + (
+        axle_roll_stiffness(k_r, arb_r, ratio_r, p.track_rear)
+    )
+    pitch_stiffness = 2 * (k_f * p.lf**2 + k_r * p.lr**2)
+    braking = f[0] < 0
+    front = ca.if_else(braking, p.anti_brake_front, p.anti_drive_front)
+    rear = ca.if_else(braking, p.anti_brake_rear, p.anti_drive_rear)
+    anti = (p.lf * front + p.lr * rear) / (p.lf + p.lr)
+    h_s = p.sprung_cg_height
+    roll = p.sprung_mass * (h_s - roll_axis_height(p)) * f[1] / roll_stiffness
+    pitch = -p.sprung_mass * h_s * (1 - anti) * f[0] / pitch_stiffness
+    return roll, pitch
+
+
+def attitude_travel(roll, pitch, p: ModelParameters) -> ca.SX:
+    r"""Travels FL, FR, RL, RR [m] of a body roll and pitch about the CG (inverse of eq. 7).
+
+    .. math:: d = \big(l_f\theta - \tfrac{T_f}{2}\phi,\; l_f\theta + \tfrac{T_f}{2}\phi,\;
+        -l_r\theta - \tfrac{T_r}{2}\phi,\; -l_r\theta + \tfrac{T_r}{2}\phi\big)
+    """
+    half_f, half_r = 0.5 * p.track_front * roll, 0.5 * p.track_rear * roll
+    front, rear = p.lf * pitch, -p.lr * pitch
+    return ca.vertcat(front - half_f, front + half_f, rear - half_r, rear + half_r)

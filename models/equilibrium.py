@@ -58,24 +58,24 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.models.aero import aero_forces
+from wheelload.models.body_attitude import roll_axis_height
 from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import INPUTS, ModelInputs
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.terms import GATES, body_motion, gate, road_motion
 
 
-def roll_axis_height(p: ModelParameters):
-    r"""Height of the roll axis under the CG: :math:`h_{rc} = (l_r h_{rc,f} + l_f h_{rc,r}) / l`."""
-    return (p.lr * p.roll_centre_front + p.lf * p.roll_centre_rear) / (p.lf + p.lr)
-
-
 def equilibrium_matrix(p: ModelParameters) -> ca.SX:
-    """Rows: vertical force, pitch moment, roll moment; columns FL, FR, RL, RR (eq. 15)."""
-    half_f, half_r = 0.5 * p.track_front, 0.5 * p.track_rear
+    r"""Rows: vertical force, pitch moment, roll moment; columns FL, FR, RL, RR (eq. 15).
+
+    The roll arms are taken about a CG :math:`y_c` left of the centreline
+    (``cg_y``, 0 in the paper): :math:`\pm T/2 - y_c`.
+    """
+    half_f, half_r, y = 0.5 * p.track_front, 0.5 * p.track_rear, p.cg_y
     return ca.vertcat(
         ca.horzcat(1, 1, 1, 1),
         ca.horzcat(p.lf, p.lf, -p.lr, -p.lr),
-        ca.horzcat(half_f, -half_f, half_r, -half_r),
+        ca.horzcat(half_f - y, -half_f - y, half_r - y, -half_r - y),
     )
 
 

@@ -8,7 +8,7 @@ Example
 -------
 >>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
 >>> p.vector().shape
-(67,)
+(68,)
 """
 
 from __future__ import annotations
@@ -132,6 +132,9 @@ class ModelParameters:
     term_stops: Any
     term_unsprung_inertia: Any
     term_imu_lever_arm: Any
+    # Whole-vehicle CG left of the centreline [m]: 0 for a file's vehicle; a payload
+    # estimated online moves it (wheelload.models.payload).
+    cg_y: Any = 0.0
 
     @staticmethod
     def names() -> tuple[str, ...]:

@@ -10,7 +10,10 @@ Terms (what each adds, and where):
 
 - ``road_frame`` (equilibrium): body roll :math:`\phi` and pitch
   :math:`\theta` relative to the road from the four travel sensors (Wang et
-  al. road-angle paper eq. 7, with the tyre deflection added), the specific
+  al. road-angle paper eq. 7, with the tyre deflection added) or, where a
+  travel is missing (gate ``equilibrium_attitude``), from the quasi-static
+  equilibrium of the suspension under the measured specific force
+  (:func:`~wheelload.models.body_attitude.attitude_from_equilibrium`), the specific
   force rotated into the road frame (Kiani et al. corner-based paper, the
   :math:`\tilde a` terms of eq. 17-18) and the CG moved by roll, pitch and
   heave in the moment rows (:func:`wheelload.models.equilibrium`).
@@ -29,7 +32,12 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.models.body_attitude import attitude_from_travel, road_frame
+from wheelload.models.body_attitude import (
+    attitude_from_equilibrium,
+    attitude_from_travel,
+    attitude_travel,
+    road_frame,
+)
 from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,
     BODY_RATES,
@@ -47,6 +55,7 @@ from wheelload.models.suspension.elements import anti_roll_bar_forces
 #: Order of the gate vector taken by the suspension and equilibrium models.
 GATES = (
     "road_frame",
+    "equilibrium_attitude",
     "body_inertia",
     "geometric_transfer",
     "stops",
@@ -59,9 +68,10 @@ GATES = (
 )
 #: Terms that can be dropped for a missing input, in the order of the ``dropped``
 #: output (StepFlag bits 16-19): body inertia (no rate derivatives); unsprung
-#: inertia (a hub accelerometer); road frame or link loads (a travel sensor,
-#: an accelerometer axis or the speed); IMU lever arm or mounting (no rates,
-#: or an accelerometer axis of a tilted IMU).
+#: inertia (a hub accelerometer); road frame or link loads (an accelerometer
+#: axis or the speed; a missing travel sensor keeps the road frame on, with its
+#: attitude from the equilibrium, and sets the same flag); IMU lever arm or
+#: mounting (no rates, or an accelerometer axis of a tilted IMU).
 DROPPABLE = ("body_inertia", "unsprung_inertia", "road_frame_or_links", "imu_lever_arm_or_mounting")
 
 
@@ -76,7 +86,10 @@ def term_gates(valid, p: ModelParameters) -> tuple[ca.SX, ca.SX]:
     """Gates (switch times input validity, :data:`GATES` order) and dropped terms.
 
     ``dropped[k]`` is 1 where term :data:`DROPPABLE` ``[k]`` is switched on
-    but an input it needs is missing in this sample.
+    but an input it needs is missing in this sample. The ``road_frame`` term
+    needs the accelerometer; without a travel sensor (gate
+    ``equilibrium_attitude``) it takes the attitude from the equilibrium and
+    is flagged in ``dropped`` as if dropped.
     """
     rates_ok = _all_valid(valid, BODY_RATES + BODY_RATE_DERIVATIVES)
     inertia_ok = _all_valid(valid, BODY_RATE_DERIVATIVES[:2])
@@ -90,7 +103,8 @@ def term_gates(valid, p: ModelParameters) -> tuple[ca.SX, ca.SX]:
         for j in range(3):
             mounted = ca.logic_or(mounted, R[i, j] != (1.0 if i == j else 0.0))
     gates = ca.vertcat(
-        p.term_road_frame * travel_ok,
+        p.term_road_frame * acc_ok,
+        1 - travel_ok,
         p.term_body_inertia * inertia_ok,
         p.term_geometric_transfer * links_ok,
         p.term_stops,
@@ -232,10 +246,16 @@ def road_motion(inputs: ModelInputs, gates, p: ModelParameters):
     their Taylor polynomials, :func:`small_sin`, :func:`small_cos`: body
     angles stay below 0.1 rad, and a step evaluates no trigonometric function);
     with the ``road_frame`` gate off, :math:`\phi = \theta = e_{CG} = 0`.
+    The attitude comes from the travels, or with the ``equilibrium_attitude``
+    gate on (a travel missing) from the travels of the quasi-static roll and
+    pitch (:func:`~wheelload.models.body_attitude.attitude_from_equilibrium`),
+    tyre deflection added either way.
     Returns ``(f_road, omega, omega_dot, phi, theta, heave)``.
     """
     f, omega, omega_dot = body_motion(inputs, gates, p)
     on = gate(gates, "road_frame")
-    phi, theta, heave = (on * value for value in attitude_from_deflection(inputs.d, p))
+    quasi_static = attitude_travel(*attitude_from_equilibrium(f, p), p)
+    travel = ca.if_else(gate(gates, "equilibrium_attitude"), quasi_static, inputs.d)
+    phi, theta, heave = (on * value for value in attitude_from_deflection(travel, p))
     f_road = road_frame(f, phi, theta, sine=small_sin, cosine=small_cos)
     return f_road, omega, omega_dot, phi, theta, heave

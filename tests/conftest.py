@@ -1,3 +1,5 @@
+import dataclasses
+
 import pytest
 
 from wheelload.models import example_vehicle_path, load_vehicle
@@ -23,3 +25,23 @@ def plant_log():
         return cache[name]
 
     return log
+
+
+def _fixed_mass(vehicle):
+    payload = dataclasses.replace(vehicle.filter.payload, estimate=False)
+    return vehicle.replace(filter=dataclasses.replace(vehicle.filter, payload=payload))
+
+
+@pytest.fixture(scope="session")
+def fixed_mass():
+    """``fixed_mass(vehicle)``: ``vehicle`` with the payload filter off, its file's mass and CG
+    held ([filter.payload] estimate = false). The independent reference filters, the RTS
+    smoother's and the MHE's windows do not carry the payload filter
+    (estimators/kf/payload.py, tested in tests/estimators/kf/test_payload.py)."""
+    return _fixed_mass
+
+
+@pytest.fixture(scope="session")
+def fixed_vehicle():
+    """The example vehicle with the payload filter off (see :func:`fixed_mass`)."""
+    return _fixed_mass(load_vehicle(example_vehicle_path()))

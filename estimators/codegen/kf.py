@@ -62,6 +62,7 @@ from wheelload.models import (
 )
 from wheelload.models.inputs import input_description
 from wheelload.models.measurement_noise import INPUT_DENSITIES
+from wheelload.models.vehicle.description import SIGMA_KEYS
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -77,9 +78,20 @@ FAST_CFLAGS = (
     "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
+#: Tuning entries that may be 0: the payload filter switched off, its height not estimated.
+ZERO_ALLOWED = ("payload_position_std_z", "payload_estimate")
 #: Calibration values that must be positive (the rest must be finite).
-#: The input-dependent noise densities may be 0 (constant measurement noise).
-POSITIVE = ("mass", *[n for n in TUNING if n not in INPUT_DENSITIES], "initial_std")
+#: The input-dependent noise densities may be 0 (constant measurement noise), and so may the
+#: reported sigma's coefficients (a term left out) and :data:`ZERO_ALLOWED`.
+POSITIVE = (
+    "mass",
+    *[
+        n
+        for n in TUNING
+        if n not in INPUT_DENSITIES and n not in SIGMA_KEYS and n not in ZERO_ALLOWED
+    ],
+    "initial_std",
+)
 
 
 class ParamMode(enum.Enum):
@@ -150,7 +162,8 @@ def kernel_function(
     """The step on symmetric storage, without the outputs the C library does not use.
 
     ``kernel(x, P[10], m, u, u_valid, dt[, p, tuning]) -> (x_next, P_next[10],
-    m_next, std, residual, used, status, fault_statistic, fault)``; with
+    m_next, std, residual, used, status, fault_statistic, fault, mass_properties,
+    mass_properties_std)``; with
     :attr:`ParamMode.BAKED` the numeric ``p`` and ``tuning`` are substituted
     so that CasADi folds the constants.
     """
@@ -171,7 +184,9 @@ def kernel_function(
     return ca.Function(
         f"{step.name()}_kernel",
         inputs,
-        ca.cse([named[name] for name in KERNEL_OUTPUTS]),
+        # Dense: an entry the baked values make exactly zero (a payload moment whose prior
+        # spread is 0) keeps its place in the state arrays.
+        ca.cse([ca.densify(named[name]) for name in KERNEL_OUTPUTS]),
         ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"][: len(inputs)],
         list(KERNEL_OUTPUTS),
     )
@@ -184,7 +199,10 @@ BOOLEAN_INPUTS = (KERNEL_INPUTS.index("u_valid"),)
 #: Outputs of the C kernel, in order.
 KERNEL_OUTPUTS = (
     "x_next", "P_next", "m_next", "std", "residual", "used", "status", "fault_statistic", "fault",
+    "mass_properties", "mass_properties_std",
 )  # fmt: skip
+#: Kernel outputs the batched step does not report (the single step does).
+_SINGLE_STEP_ONLY = ("mass_properties", "mass_properties_std")
 
 
 def representable(values: np.ndarray, precision: Precision) -> np.ndarray:
@@ -403,10 +421,19 @@ def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix
         boolean_inputs=BOOLEAN_INPUTS,
     )
     lines += [f"    {line}" for line in body.splitlines()]
+    lines += [f"    (void){name}{k};" for name in _SINGLE_STEP_ONLY for k in range(sizes[name])]
     lines.append("}")
     finite = [
         f"FINITE({name}{k})"
-        for name in ("x_next", "P_next", "std", "residual", "m_next", "fault_statistic")
+        for name in (
+            "x_next",
+            "P_next",
+            "std",
+            "residual",
+            "m_next",
+            "fault_statistic",
+            *_SINGLE_STEP_ONLY,
+        )  # the single step's acceptance: every output finite
         for k in range(sizes[name])
     ]
     positive = [f"P_next{k} > {zero}" for k in (0, 4, 7, 9)]

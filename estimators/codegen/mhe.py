@@ -311,6 +311,7 @@ def _common_defines(mhe, settings: MheSettings, state, dt: float, p0: float) -> 
         f"#define LOW_LOAD {float(max(low, -1e30))!r}\n",
         f"#define HIGH_LOAD {float(min(high, 1e30))!r}\n",
         f"#define LOAD_LIMIT {float(mhe.load_limit)!r}\n",
+        f"#define DIFFUSE_VARIANCE {float(mhe.diffuse_variance)!r}\n",
         f"#define N_INPUTS {len(INPUTS)}\n#define N_USED {len(StepFlag.update_flags())}\n",
         "static const unsigned UPDATE_FLAGS[N_USED] = {"
         + ", ".join(f"{flag.value}u" for flag in StepFlag.update_flags())

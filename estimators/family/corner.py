@@ -43,8 +43,7 @@ from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium_residual
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models import INPUTS, ModelParameters, Vehicle, vehicle_mass_centre
-from wheelload.models.body_attitude import roll_pitch_stiffness
-from wheelload.models.equilibrium import roll_axis_height
+from wheelload.models.body_attitude import roll_axis_height, roll_pitch_stiffness
 from wheelload.models.family.corner_loads import corner_load_function
 from wheelload.models.input_validity import interval_is_valid, sanitise
 

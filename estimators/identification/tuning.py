@@ -53,7 +53,13 @@ import numpy as np
 from scipy import optimize, stats
 
 from wheelload.estimators.kf.step import UPDATE_ROWS, step_function
-from wheelload.estimators.kf.tuning import NOISE_DENSITIES, TUNED_DENSITIES, TUNING, TUNING_INDEX
+from wheelload.estimators.kf.tuning import (
+    NOISE_DENSITIES,
+    TUNED_DENSITIES,
+    TUNING,
+    TUNING_INDEX,
+    with_filter_sigma,
+)
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
@@ -122,9 +128,15 @@ class Consistency:
 
 
 class FilterRuns:
-    """Runs the filter of one vehicle over logs with any tuning (one compiled step)."""
+    """Runs the filter of one vehicle over logs with any tuning (one compiled step).
 
-    def __init__(self, vehicle: Vehicle, logs: tuple[Signals, ...]) -> None:
+    ``filter_sigma``: σ (coverage, correlation) is the filter's own sqrt(P_ii), on which
+    the densities are calibrated; else the reported σ of the vehicle file.
+    """
+
+    def __init__(
+        self, vehicle: Vehicle, logs: tuple[Signals, ...], *, filter_sigma: bool = True
+    ) -> None:
         if not logs:
             raise ValueError("no logs to tune on")
         self.vehicle = vehicle
@@ -133,6 +145,10 @@ class FilterRuns:
         # The filter the written file runs: its interval and guard settings (TwoStageKF's own).
         self._kf = TwoStageKF(vehicle, step=self._step)
         self._base = self._kf.tuning.copy()
+        if filter_sigma:
+            # The densities are calibrated on the filter's own sigma, sqrt(P_ii); the
+            # reported sigma's other terms are fitted after (sigma_fit.py).
+            self._base = with_filter_sigma(self._base)
         self._gate_open = self._base.copy()
         for name, value in GATE_OPEN.items():
             self._gate_open[TUNING.index(name)] = value
@@ -172,7 +188,7 @@ class FilterRuns:
         return np.array(values)
 
     def subset(self, keep: list[int]) -> FilterRuns:
-        """The same filter over the logs at ``keep``."""
+        """The same filter over the logs at ``keep`` (with the filter's own sigma)."""
         return FilterRuns(self.vehicle, tuple(self.logs[k] for k in keep))
 
     def pooled_rmse(self, tuning: np.ndarray, gate_factor: float = 1.0) -> float:

@@ -27,7 +27,7 @@ import functools
 
 import numpy as np
 
-from wheelload.models.files.build_folder import COMPILER, cached_library
+from wheelload.estimators.kernels.c_function import c_function
 
 SOURCE = """
 /* y_k = z + b0 x_k; z = x_k b1 - y_k a1 (transposed direct form II, first order). */
@@ -77,17 +77,8 @@ def _first_order(b, a) -> tuple[np.ndarray, np.ndarray]:
 
 @functools.cache
 def _kernel():
-    library = cached_library(
-        SOURCE,
-        "wheelload_first_order",
-        COMPILER,
-        lambda path: ctypes.CDLL(str(path)),
-        "derive suspension velocities and body-rate derivatives",
-    )
-    function = library.wheelload_first_order
-    function.restype = None
-    function.argtypes = [ctypes.c_long] + [ctypes.c_void_p] * 5
-    return function
+    argtypes = [ctypes.c_long] + [ctypes.c_void_p] * 5
+    return c_function(SOURCE, "wheelload_first_order", "derive suspension velocities", argtypes)
 
 
 def lfilter(

@@ -43,6 +43,7 @@ from wheelload.estimators.kf.monitor_state import (
     RBAR,
     REJECT,
     SPREAD,
+    TRAVEL_SEEN,
 )
 from wheelload.models import ModelParameters, gates_function
 from wheelload.models.inputs import (
@@ -103,6 +104,7 @@ class MonitorOutput:
     statistic: ca.SX  # (7,) test statistic, >= 1 where the channel's test fires
     fault: ca.SX  # (7,) 1 while a channel is isolated
     jump: ca.SX  # (4,) 1 while a travel that jumped faster than max_travel_rate is frozen
+    seen: ca.SX  # (4,) 1 once a travel channel has had a valid sample
 
 
 def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> MonitorOutput:
@@ -136,8 +138,14 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
     # A reading that jumped faster than max_travel_rate (a dead sensor falling to its rail)
     # and has not changed since is dropped at once, and is stuck after stuck_time even
     # when the body is still.
+    # (A channel's first valid sample has nothing to jump from.)
+    seen = m[TRAVEL_SEEN]
     jump = [
-        ca.if_else(changed[i], ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt, m[JUMP][i])
+        ca.if_else(
+            changed[i],
+            seen[i] * (ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt),
+            m[JUMP][i],
+        )
         for i in range(4)
     ]
     # The body moves for corner i when ``stuck_corners`` other corners moved within
@@ -217,6 +225,7 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
         ca.vertcat(*statistic),
         ca.vertcat(*fault_next),
         ca.vertcat(*jump),
+        ca.vertcat(*[ca.logic_or(seen[i], d_valid[i]) for i in range(4)]),
     )
 
 

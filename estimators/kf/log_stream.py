@@ -60,22 +60,27 @@ from wheelload.estimators.logs.signals import (
     WHEEL_SPEED,
     Differentiator,
     LogError,
+    RateEstimator,
     Signals,
     SpeedSource,
     check_time_column,
     check_units,
     input_bits,
-    rate_derivatives_used,
     sensor_mode,
 )
 from wheelload.estimators.loops.compiled import ColumnLoop, FlagRule
-from wheelload.estimators.result import RESIDUALS, SensorFault, StepFlag
+from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS
 from wheelload.models.conventions import WHEELS
 
 GROUPS = (TRAVEL, TRAVEL_RATE, RATES, HUB, RATE_DERIVATIVES)
 #: Output columns of the loop: loads, their std, residual, then the fault monitor's.
-LOOP_COLUMNS = ("x_next", "std", "residual", "fault", "fault_statistic")
+LOOP_COLUMNS = (
+    "x_next", "std", "residual", "fault", "fault_statistic", "mass_properties",
+    "mass_properties_std",
+)  # fmt: skip
+#: The first block row of the mass properties (after loads, std, residual, 2 x 7 monitor).
+_MASS_ROW = 4 + 4 + 3 + 7 + 7
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -102,12 +107,20 @@ class EstimateChunk:
     def residual(self) -> np.ndarray:
         return self.block[8:11].T
 
+    @property
+    def mass_properties(self) -> np.ndarray:
+        """The online mass properties (n, 4) and, after them, their std (n, 4): (n, 8)."""
+        return self.block[_MASS_ROW : _MASS_ROW + 8].T
+
     def columns(self) -> dict[str, np.ndarray]:
         """The columns of ``Estimate.to_pandas`` (with std), by name."""
         columns = {"t": self.t}
         columns.update({f"fz_{w}": self.block[i] for i, w in enumerate(WHEELS)})
         columns.update({f"fz_std_{w}": self.block[4 + i] for i, w in enumerate(WHEELS)})
         columns.update({name: self.block[8 + i] for i, name in enumerate(RESIDUALS)})
+        columns.update(
+            {name: self.block[_MASS_ROW + i] for i, name in enumerate(MASS_PROPERTY_COLUMNS)}
+        )
         columns["status"] = self.flags
         return columns
 
@@ -235,13 +248,11 @@ class LogStream:
             Differentiator(dt, 4, VELOCITY_CUTOFF, self.source) if self.velocities_derived else None
         )
         rate_dots = None
-        if (
-            RATE_DERIVATIVES[0] not in self.names
-            and RATES[0] in self.names
-            and rate_derivatives_used(kf.parameters)
-        ):
+        # Derived whatever the [model] switches: the fault monitor's parity test uses every
+        # term the inputs allow (as the whole-log path, estimators/logs/signals.py).
+        if RATE_DERIVATIVES[0] not in self.names and RATES[0] in self.names:
             try:
-                rate_dots = Differentiator(dt, 3, VELOCITY_CUTOFF, self.source)
+                rate_dots = RateEstimator(dt, 3, self.source)
             except LogError:
                 rate_dots = None  # too irregular: the terms that need them are dropped
         base = input_bits(self.az_assumed, self.speed_source)

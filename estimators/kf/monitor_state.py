@@ -3,8 +3,9 @@
 One vector carried from sample to sample by the step (input ``m``, output ``m_next``): the
 fault monitor's slots (:mod:`.fault_monitor`), the innovation gate's rejection times and
 spreads (:mod:`.innovation_gate`), then each input's held value and hold time, the rate
-derivatives' settle times (:mod:`.plausibility`) and the range of the vertical row
-(:mod:`.limits`). It starts at zero.
+derivatives' settle times (:mod:`.plausibility`), the range of the vertical row
+(:mod:`.limits`), the reported sigma's running means (:mod:`.reported_std`) and the payload
+filter (:mod:`.payload`). It starts at zero.
 
 Example
 -------
@@ -31,7 +32,19 @@ CREDIT = slice(HELD.stop, HELD.stop + len(INPUTS))
 SETTLE = slice(CREDIT.stop, CREDIT.stop + len(BODY_RATES))
 # Lowest and highest vertical-row b seen so far, less the weight (0 at the start).
 TOTAL = slice(SETTLE.stop, SETTLE.stop + 2)
-MONITOR_SIZE = TOTAL.stop
+# The reported sigma's running means (:mod:`.reported_std`): per wheel the squared
+# equilibrium residual at the pseudo-measurement, then the squared suspension innovation.
+SIGMA_RESIDUAL = slice(TOTAL.stop, TOTAL.stop + 4)
+SIGMA_INNOVATION = slice(SIGMA_RESIDUAL.stop, SIGMA_RESIDUAL.stop + 4)
+SIGMA_SLOTS = slice(SIGMA_RESIDUAL.start, SIGMA_INNOVATION.stop)
+# The payload filter (:mod:`.payload`): its state and covariance (column-major); whether the
+# step has taken a sample (0: the payload prior is taken on the next one); whether each
+# travel channel has had a valid sample (0: it has no previous value to jump from).
+PAYLOAD = slice(SIGMA_SLOTS.stop, SIGMA_SLOTS.stop + 4)
+PAYLOAD_COVARIANCE = slice(PAYLOAD.stop, PAYLOAD.stop + 16)
+STARTED = PAYLOAD_COVARIANCE.stop
+TRAVEL_SEEN = slice(STARTED + 1, STARTED + 5)
+MONITOR_SIZE = TRAVEL_SEEN.stop
 
 
 def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.SX) -> ca.SX:
@@ -39,6 +52,17 @@ def with_hold_state(m_next: ca.SX, hold_state: ca.SX, settle: ca.SX, total: ca.S
     return ca.vertcat(m_next[0:MONITOR_END], hold_state, settle, total)
 
 
+def with_payload_state(m_next: ca.SX, theta: ca.SX, P: ca.SX, started: ca.SX, seen: ca.SX) -> ca.SX:
+    """The guards' next state (up to :data:`PAYLOAD`), the payload filter's, started, and
+    the travel channels seen."""
+    return ca.vertcat(m_next[0 : PAYLOAD.start], theta, ca.vec(P), started, seen)
+
+
 def with_gate_state(m_next: ca.SX, times: ca.SX, spread: ca.SX) -> ca.SX:
     """The monitor state with the rows' rejection times and innovation spreads replaced."""
     return ca.vertcat(m_next[0 : REJECT.start], times, spread, m_next[SPREAD.stop :])
+
+
+def with_sigma_state(m_next: ca.SX, means: ca.SX) -> ca.SX:
+    """The monitor state up to the reported sigma's slots, then its running means."""
+    return ca.vertcat(m_next[0 : SIGMA_SLOTS.start], means)

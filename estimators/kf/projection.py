@@ -30,6 +30,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.kernels.kalman import ldl_solve, symmetrise
+from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import Vehicle
@@ -107,6 +108,8 @@ class ProjectionKF(TwoStageKF):
         :attr:`Weighting.LEAST_SQUARES` (:math:`W = I`).
     static
         Static wheel loads [N]; default: the vehicle file's.
+    guard_settings
+        The guards (:class:`~wheelload.estimators.kf.guard.GuardSettings`); default the file's.
     """
 
     def __init__(
@@ -115,9 +118,11 @@ class ProjectionKF(TwoStageKF):
         *,
         weighting: Weighting = Weighting.MAXIMUM_PROBABILITY,
         static: np.ndarray | None = None,
+        guard_settings: GuardSettings | None = None,
     ) -> None:
         if not isinstance(weighting, Weighting):
             raise TypeError(f"weighting must be a Weighting, got {weighting!r}")
-        super().__init__(vehicle, static=static, step=projection_step_function(weighting))
+        step = projection_step_function(weighting)
+        super().__init__(vehicle, static=static, step=step, guard_settings=guard_settings)
         self.weighting = weighting
         self.name = f"projection KF ({weighting.value})"

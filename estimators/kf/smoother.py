@@ -87,7 +87,9 @@ def rts_smooth(
         record=(0,),
     )
     loads = np.vstack([history[0][::-1], x[-1:]])
-    std = np.vstack([std[::-1], filtered.std[-1:]])
+    # The smoothed sigma is the RTS covariance's (the reported-sigma model is the filter's).
+    last = np.sqrt(np.fmax(np.diagonal(covariances[-1]), 0.0))
+    std = np.vstack([std[::-1], last[None, :]])
     residual = filtered.residual + (filtered.loads - loads) @ np.asarray(A).T
     return Estimate(
         t=filtered.t.copy(), loads=loads, std=std, residual=residual, flags=filtered.flags.copy()

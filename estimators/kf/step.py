@@ -32,9 +32,17 @@ from wheelload.estimators.kf import (
     innovation_gate,
     limits,
     monitor_state,
+    payload,
     plausibility,
+    reported_std,
 )
-from wheelload.estimators.kf.tuning import GUARD_TUNING, TUNING, TUNING_INDEX
+from wheelload.estimators.kf.tuning import (
+    GUARD_TUNING,
+    PAYLOAD_SLICE,
+    SIGMA_TUNING,
+    TUNING,
+    TUNING_INDEX,
+)
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -54,6 +62,7 @@ from wheelload.models.inputs import (
     TRAVEL_RATE,
     input_index,
 )
+from wheelload.models.loaded_vehicle import loaded_parameters_function
 from wheelload.models.measurement_noise import DENSITIES as NOISE_DENSITY_ORDER
 from wheelload.models.measurement_noise import measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
@@ -150,15 +159,29 @@ def step_expressions(
     u_raw = ca.SX.sym("u", len(INPUTS))
     valid_raw = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
-    p = ca.SX.sym("p", len(ModelParameters.names()))
+    p_file = ca.SX.sym("p", len(ModelParameters.names()))
     tuning = ca.SX.sym("tuning", len(TUNING))
     settings = guard.unpack(tuning[GUARD_TUNING])
     dt_nominal = tuning[TUNING_INDEX["sample_interval"]]
+    payload_tuning = tuning[PAYLOAD_SLICE]
 
     # A non-positive or non-finite interval skips the whole step: the state is held.
     dt_ok = interval_is_valid(dt)
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
     dt_used = dt_safe * dt_ok
+
+    # The payload the file does not know (.payload), predicted to this sample: every row
+    # below sees the loaded vehicle; the suspension's offsets stay the reference state's.
+    theta, P_theta = payload.predict(
+        m[monitor_state.PAYLOAD],
+        ca.reshape(m[monitor_state.PAYLOAD_COVARIANCE], 4, 4),
+        m[monitor_state.STARTED],
+        sanitise(u_raw, valid_raw),
+        valid_raw,
+        dt_used,
+        payload_tuning,
+    )
+    p = loaded_parameters_function()(p_file, theta)
 
     # Missing or implausible inputs are replaced by zero and skip the updates they feed;
     # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
@@ -206,6 +229,11 @@ def step_expressions(
     reject, spread = m[monitor_state.REJECT], m[monitor_state.SPREAD]
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = limits.limit_covariance(P_pred, settings.covariance_floor, ceiling)
+    # Start where the car is: the first sample sees no prior information, so its rows set
+    # the loads (a log that starts in a turn carries no start-up transient).
+    # An invalid interval holds the state, so the start waits for the first valid one.
+    started = m[monitor_state.STARTED]
+    P_pred = ca.if_else(ca.logic_or(started, 1 - dt_ok), P_pred, ceiling * ca.DM.eye(4))
     H = ca.vertcat(ca.DM.eye(4), A)
     y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
     S_prior = ca.vertcat(
@@ -239,7 +267,21 @@ def step_expressions(
     P_new = ca.if_else(bounded, P_new, P_pred)
     use_s, use_c = use_s * bounded, use_c * bounded
 
-    std = ca.sqrt(ca.fmax(ca.diag(P_new), 0))
+    # The payload filter on the equilibrium at the pseudo-measured loads (every wheel's
+    # suspension row and the equilibrium row available).
+    all_travel = mask_s[0] * mask_s[1] * mask_s[2] * mask_s[3]
+    gates_term = gates_function()(valid_term, p)[0]
+    loaded = payload.update(
+        theta, P_theta, z, u_term, gates_term, p_file, all_travel * mask_c * bounded,
+        dt_nominal, payload_tuning, payload.residual_function(equilibrium),
+    )  # fmt: skip
+    mass_properties, mass_properties_std = payload.reported(loaded.theta, loaded.P, p_file)
+
+    # The reported sigma: P and the model's mismatch terms (the gain does not see them).
+    features, sigma_means = reported_std.sigma_features(
+        P_new, u, z, A, b, mask_s, mask_c, y_s, m, dt_used
+    )
+    std = reported_std.reported_std(features, tuning[SIGMA_TUNING])
     residual = b - ca.mtimes(A, x_new)
     used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
     available = ca.vertcat(mask_s, mask_c)
@@ -251,14 +293,18 @@ def step_expressions(
         innovation_gate.next_spread(spread, record, available, dt_used, settings),
     )
     m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
+    m_next = monitor_state.with_sigma_state(m_next, sigma_means)
+    m_next = monitor_state.with_payload_state(
+        m_next, loaded.theta, loaded.P, ca.logic_or(started, dt_ok), watch.seen
+    )
     status = _status(
         record, available, valid_raw, in_range, watch.fault,
         ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
     )  # fmt: skip
-    inputs = [x, P, m, u_raw, valid_raw, dt, p, tuning]
+    inputs = [x, P, m, u_raw, valid_raw, dt, p_file, tuning]
     outputs = [
         x_new, P_new, m_next, std, residual, used, z, innovation, innovation_variance,
-        status, watch.statistic, watch.fault,
+        status, watch.statistic, watch.fault, mass_properties, mass_properties_std,
     ]  # fmt: skip
     return inputs, outputs
 
@@ -294,7 +340,8 @@ def _status(record, available, valid_raw, in_range, fault, limited, jump, held, 
 STEP_INPUT_NAMES = ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"]
 STEP_OUTPUT_NAMES = [
     "x_next", "P_next", "m_next", "std", "residual", "used", "z", "innovation",
-    "innovation_variance", "status", "fault_statistic", "fault",
+    "innovation_variance", "status", "fault_statistic", "fault", "mass_properties",
+    "mass_properties_std",
 ]  # fmt: skip
 #: The step's carried state: x, P and the monitor m.
 N_CARRIED = 3
@@ -321,22 +368,28 @@ def step_function(
 
 
 def without_monitor(step: ca.Function) -> ca.Function:
-    """``step`` for callers that carry only x and P: the monitor starts empty every call.
+    """``step`` for callers that carry only x and P: the monitor starts empty every call,
+    as a started filter's (x and P are the prior, not the diffuse first sample's).
 
     ``(x, P, u, u_valid, dt, p, tuning) -> (x_next, P_next, std, residual,
     used, z, innovation, innovation_variance)``.
     """
     inputs = step.sx_in()
-    named = dict(
-        zip(
-            STEP_OUTPUT_NAMES,
-            step.call([*inputs[:2], ca.DM.zeros(step.sparsity_in(2)), *inputs[3:]]),
-        )
-    )
+    m = ca.DM.zeros(step.sparsity_in(2))
+    m[monitor_state.STARTED] = 1
+    named = dict(zip(STEP_OUTPUT_NAMES, step.call([*inputs[:2], m, *inputs[3:]])))
     kept = [
         name
         for name in STEP_OUTPUT_NAMES
-        if name not in ("m_next", "status", "fault_statistic", "fault")
+        if name
+        not in (
+            "m_next",
+            "status",
+            "fault_statistic",
+            "fault",
+            "mass_properties",
+            "mass_properties_std",
+        )  # fmt: skip
     ]
     names_in = [name for name in STEP_INPUT_NAMES if name != "m"]
     return ca.Function(

@@ -1,4 +1,5 @@
-r"""The two-stage KF's tuning vector: noise densities, nominal interval, guard settings.
+r"""The two-stage KF's tuning vector: noise densities, nominal interval, guard settings and
+the reported-sigma coefficients (:mod:`.reported_std`, last).
 
 Tuning is per second (white-noise densities): :math:`Q = q\,dt\,I`,
 :math:`R_s = r_s/\Delta t_{nom}\,I`, :math:`R_c = \mathrm{diag}(r_c)/\Delta t_{nom}` with the
@@ -16,9 +17,11 @@ from __future__ import annotations
 import numpy as np
 
 from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
+from wheelload.estimators.kf.payload import PAYLOAD_TUNING, payload_tuning
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.measurement_noise import INPUT_DENSITIES
+from wheelload.models.vehicle.description import SIGMA_KEYS
 
 #: Order of the tuning vector.
 TUNING = (
@@ -30,6 +33,8 @@ TUNING = (
     "sample_interval",
     *GuardSettings.names(),
     *INPUT_DENSITIES,
+    *PAYLOAD_TUNING,
+    *SIGMA_KEYS,
 )
 #: The filter's constant noise densities: the first entries of the tuning vector (vehicle
 #: file [filter]); the input-dependent ones (default 0) are :data:`INPUT_DENSITIES`, last.
@@ -44,6 +49,10 @@ DEFAULT_SAMPLE_INTERVAL = 0.01
 _GUARD_START = TUNING_INDEX["sample_interval"] + 1
 GUARD_TUNING = slice(_GUARD_START, _GUARD_START + len(GuardSettings.names()))
 _VARIANCE_SCALE = TUNING_INDEX["innovation_variance_scale"]
+#: The payload filter's entries of the tuning vector (:data:`PAYLOAD_TUNING` order).
+PAYLOAD_SLICE = slice(TUNING_INDEX[PAYLOAD_TUNING[0]], TUNING_INDEX[PAYLOAD_TUNING[-1]] + 1)
+#: The reported-sigma coefficients (:mod:`.reported_std`): the last entries.
+SIGMA_TUNING = slice(TUNING_INDEX[SIGMA_KEYS[0]], TUNING_INDEX[SIGMA_KEYS[-1]] + 1)
 
 
 def tuning_vector(
@@ -70,11 +79,21 @@ def tuning_vector(
             sample_interval,
             *settings.vector(),
             *tuning.input_densities(),
+            *payload_tuning(vehicle),
+            *tuning.sigma_model(),
         ]
     )
     # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate's S.
     vector[_VARIANCE_SCALE] *= tuning.gate_scale
     return vector
+
+
+def with_filter_sigma(tuning: np.ndarray) -> np.ndarray:
+    """``tuning`` with the reported sigma the filter's own, sqrt(P_ii) (:mod:`.reported_std`:
+    ``sigma_covariance`` 1, every other term 0); the loads do not change."""
+    tuning = np.array(tuning, float)
+    tuning[SIGMA_TUNING] = [1.0 if key == "sigma_covariance" else 0.0 for key in SIGMA_KEYS]
+    return tuning
 
 
 def noise_densities(vehicle: Vehicle) -> np.ndarray:

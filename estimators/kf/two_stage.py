@@ -319,6 +319,8 @@ class TwoStageKF:
             residual=named["residual"],
             flags=flags_from_outputs(used.T, named["status"].T) | signals.input_flags(),
             sensor_faults=sensor_faults(signals.t, named["fault"], named["fault_statistic"]),
+            mass_properties=named["mass_properties"],
+            mass_properties_std=named["mass_properties_std"],
         )
         covariances = history[1].reshape(-1, 4, 4) if with_covariance else None
         innovations = Innovations(

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators.kernels import first_order
+from wheelload.estimators.kernels import first_order, kinematic
 from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
 from wheelload.models.conventions import GRAVITY, WHEELS
@@ -49,7 +49,6 @@ from wheelload.models.conventions import GRAVITY, WHEELS
 if TYPE_CHECKING:
     import pandas as pd
 
-    from wheelload.models import ModelParameters
 
 TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
@@ -466,14 +465,44 @@ def derive_velocities(
     return differentiator(d)
 
 
-class Differentiator:
-    r"""The travel differentiator of :func:`derive_velocities` with its state carried.
+class ChunkFilter:
+    """A causal per-channel filter run over consecutive chunks of a log with its state carried.
 
-    Called on consecutive chunks of a log (2-D, one column per channel), it
-    returns what one call on the whole log returns, to the bit: each run of
-    finite samples is filtered by ``lfilter`` with the state it left at the
-    end of the previous chunk. ``dt`` are the whole log's sample intervals
-    (the uniformity and sample-rate checks need all of them).
+    Called on consecutive chunks (2-D, one column per channel), it returns what one
+    call on the whole log returns, to the bit: each run of finite samples is filtered
+    with the state it left at the end of the previous chunk; a run after a gap starts
+    afresh (:meth:`start`). Subclasses give :meth:`start` and :meth:`filter`.
+    """
+
+    def __init__(self, channels: int) -> None:
+        self._state: list[np.ndarray | None] = [None] * channels  # None: not inside a run
+
+    def start(self, first: float) -> np.ndarray:
+        """The state before a run whose first sample is ``first``."""
+        raise NotImplementedError
+
+    def filter(self, run: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(outputs, state at the end)`` of one run of finite samples."""
+        raise NotImplementedError
+
+    def __call__(self, samples: np.ndarray) -> np.ndarray:
+        """Outputs of the next chunk (rows: samples, columns: channels); NaN where missing."""
+        out = np.full(samples.shape, np.nan)
+        for channel in range(samples.shape[1]):
+            valid = np.isfinite(samples[:, channel])
+            carried = self._state[channel]
+            for start, stop in _valid_runs(valid):
+                run = samples[start:stop, channel]
+                state = carried if start == 0 and carried is not None else self.start(run[0])
+                out[start:stop, channel], carried = self.filter(run, state)
+            self._state[channel] = carried if valid.size and valid[-1] else None
+        return out
+
+
+class Differentiator(ChunkFilter):
+    r"""The travel differentiator of :func:`derive_velocities` with its state carried
+    (:class:`ChunkFilter`). ``dt`` are the whole log's sample intervals (the uniformity
+    and sample-rate checks need all of them).
     """
 
     def __init__(
@@ -485,6 +514,7 @@ class Differentiator:
         *,
         median: float | None = None,
     ) -> None:
+        super().__init__(channels)
         median = float(np.median(dt)) if median is None else median
         if np.max(np.abs(dt - median)) > 0.05 * median:
             raise LogError(
@@ -501,22 +531,63 @@ class Differentiator:
         # scipy.signal's bilinear, lfilter_zi and lfilter to the bit, without its import.
         self._b, self._a = first_order.bilinear_differentiator(omega, 1.0 / median)
         self._rest = first_order.lfilter_zi(self._b, self._a)
-        self._lfilter = first_order.lfilter
-        self._state: list[np.ndarray | None] = [None] * channels  # None: not inside a run
 
-    def __call__(self, d: np.ndarray) -> np.ndarray:
-        """Velocities of the next chunk ``d`` (rows: samples, columns: channels)."""
-        v = np.full(d.shape, np.nan)
-        for channel in range(d.shape[1]):
-            valid = np.isfinite(d[:, channel])
-            carried = self._state[channel]
-            for start, stop in _valid_runs(valid):
-                run = d[start:stop, channel]
-                zi = carried if start == 0 and carried is not None else self._rest * run[0]
-                v[start:stop, channel], zf = self._lfilter(self._b, self._a, run, zi)
-                carried = zf
-            self._state[channel] = carried if valid.size and valid[-1] else None
-        return v
+    def start(self, first: float) -> np.ndarray:
+        return self._rest * first
+
+    def filter(self, run: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return first_order.lfilter(self._b, self._a, run, state)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RateDerivativeFilter:
+    r"""Settings of the body-rate derivative estimator (:class:`RateEstimator`).
+
+    The kinematic filter of :mod:`~wheelload.estimators.kernels.kinematic` with jerk
+    density :math:`q` and the gyroscope's white noise to the Nyquist frequency,
+    :math:`r = N^2 / (2 T)`: its bandwidth follows the sample rate and the noise.
+    """
+
+    # q [(rad/s^3)^2/Hz], from plant logs at 100-1000 Hz: 0.1 lags the bounce sweep's body
+    # motion (sports car 62 -> 104 N), 10 lets the gyro noise in at rest
+    jerk_density: float = 1.0
+    gyro_noise_density: float = 0.007 * np.pi / 180.0  # N [rad/s/sqrt(Hz)], MTi-1 class
+
+    def gain(self, interval: float) -> np.ndarray:
+        """The steady-state gain at the sample interval ``interval`` [s]."""
+        noise = self.gyro_noise_density**2 / (2.0 * interval)
+        return kinematic.steady_gain(interval, self.jerk_density, noise)
+
+
+class RateEstimator(ChunkFilter):
+    r"""Body-rate derivatives estimated by a kinematic Kalman filter per axis
+    (:class:`RateDerivativeFilter`), its state carried over chunks (:class:`ChunkFilter`);
+    a run after a gap starts at the rate held, :math:`[w_0, 0]`.
+    ``dt`` are the whole log's sample intervals (the uniformity check needs all of them).
+    """
+
+    def __init__(
+        self,
+        dt: np.ndarray,
+        channels: int = 3,
+        source: str = "<log>",
+        settings: RateDerivativeFilter = RateDerivativeFilter(),
+    ) -> None:
+        super().__init__(channels)
+        median = float(np.median(dt))
+        if np.max(np.abs(dt - median)) > 0.05 * median:
+            raise LogError(
+                f"{source}: time stamps are not uniform enough to estimate body-rate "
+                "derivatives; give columns wx_dot wy_dot wz_dot"
+            )
+        self._interval = median
+        self._gain = settings.gain(median)
+
+    def start(self, first: float) -> np.ndarray:
+        return np.array([first, 0.0])
+
+    def filter(self, run: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return kinematic.kinematic_filter(self._interval, self._gain, run, state)
 
 
 def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
@@ -537,30 +608,20 @@ def write_log(signals: Signals, path: str | Path) -> None:
         raise LogError(f"{path}: unknown log format '{path.suffix}' (use .csv or .parquet)")
 
 
-def rate_derivatives_used(parameters: ModelParameters) -> bool:
-    """Whether a model term switched on reads the body-rate derivatives ``wx_dot wy_dot wz_dot``.
+def rate_derivatives(signals: Signals) -> np.ndarray:
+    r"""Estimated derivatives of the body rates ``wx wy wz``, shape (n, 3) [rad/s^2].
 
-    Only the body inertia and the IMU lever arm do (their gates in
-    :func:`wheelload.models.terms.term_gates`); with both off a log's rate
-    derivatives change no number, so the lean path does not derive them (no
-    differentiator, no ``scipy.signal`` import) and feeds them as missing.
-    """
-    return bool(parameters.term_body_inertia) or bool(parameters.term_imu_lever_arm)
-
-
-def rate_derivatives(signals: Signals, cutoff: float = VELOCITY_CUTOFF) -> np.ndarray:
-    r"""Causal filtered derivative of the body rates ``wx wy wz``, shape (n, 3) [rad/s^2].
-
-    The logged ``wx_dot wy_dot wz_dot`` when present, else the same
-    differentiator as :func:`derive_velocities`. All NaN where the log has no
-    rates or its time stamps are too irregular to differentiate: the terms
-    that need them are then dropped and flagged, not guessed.
+    The logged ``wx_dot wy_dot wz_dot`` when present, else the causal kinematic
+    filter of :class:`RateEstimator` (not a differentiator: a filtered derivative
+    of a noisy gyro at 20 Hz carries more noise into the body-inertia term than
+    the term is worth). All NaN where the log has no rates or its time stamps are
+    too irregular: the terms that need them are then dropped and flagged, not guessed.
     """
     if signals.rate_dots is not None:
         return signals.rate_dots
-    if signals.rates is None:
+    if signals.rates is None or len(signals) < 2:
         return np.full((len(signals), 3), np.nan)
     try:
-        return derive_velocities(signals.t, signals.rates, cutoff, signals.source)
+        return RateEstimator(np.diff(signals.t), 3, signals.source)(signals.rates)
     except LogError:
         return np.full((len(signals), 3), np.nan)

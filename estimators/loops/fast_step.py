@@ -40,7 +40,8 @@ from wheelload.models.files.build_folder import shared_library
 INPUTS = ("x", "P", "m", "u", "u_valid", "dt", "p", "tuning")
 OUTPUTS = (
     "x_next", "P_next", "m_next", "std", "residual", "used", "z", "innovation",
-    "innovation_variance", "status", "fault_statistic", "fault",
+    "innovation_variance", "status", "fault_statistic", "fault", "mass_properties",
+    "mass_properties_std",
 )  # fmt: skip
 #: Sizes of the input groups of ``Sample.parts()``: d, v, acc, vx, rates, rate_dots, hub.
 SAMPLE_GROUPS = (4, 4, 3, 1, 3, 3, 4)

@@ -163,6 +163,8 @@ class MovingHorizonEstimator:
         mass = float(self.p[ModelParameters.names().index("mass")])
         #: N, :data:`LOAD_LIMIT` times the vehicle's weight
         self.load_limit = LOAD_LIMIT * mass * GRAVITY
+        #: N^2, the filter's first prediction (m g)^2 I: a log starts with no prior
+        self.diffuse_variance = (mass * GRAVITY) ** 2
         self.check = LoadCheck(
             hard=self.hard,
             null=self.null,
@@ -316,10 +318,12 @@ class MovingHorizonEstimator:
         ``previous`` holds the filter covariance before each sample.
         """
         weights = arrival_weights(previous, self.tuning[0] * dt, state.cost)
+        first = (np.arange(len(dt)) + state.k == 0)[:, None, None]
         if self.settings.arrival is Arrival.STEADY_STATE:
-            first = np.arange(len(dt)) + state.k == 0  # the log's first sample: P0 + Q
-            weights = np.where(first[:, None, None], weights, state.steady)
-        return weights
+            weights = np.where(first, weights, state.steady)
+        # The log's first sample: the filter's diffuse prediction (no prior information).
+        diffuse = state.cost * LOAD_SCALE**2 / self.diffuse_variance * np.eye(4)
+        return np.where(first, diffuse, weights)
 
     def _advance(self, state: MheState, terms: SampleTerms, arrival: np.ndarray):
         """Push one sample's terms into the window, solve, and return the state and report."""

@@ -198,6 +198,61 @@ class FaultTuning:
             require_positive(self, field.name)
 
 
+#: The reported-sigma model's coefficients ([filter], optional), in feature order
+#: (estimators/kf/reported_std.py).
+SIGMA_KEYS = (
+    "sigma_covariance",
+    "sigma_floor",
+    "sigma_ax",
+    "sigma_ay",
+    "sigma_travel_rate",
+    "sigma_travel",
+    "sigma_residual",
+    "sigma_residual_rms",
+    "sigma_innovation",
+    "sigma_innovation_rms",
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PayloadTuning:
+    """Online payload mass and CG ([filter.payload], optional; estimators/kf/payload.py).
+
+    ``travel_from_reference``: the travel sensors read 0 in the file's reference state
+    (its masses, on level ground), so a payload shows as static compression; false when
+    the logger zeroes the travel at the start of a log (a payload is then invisible to
+    the springs and is not estimated: give measured static loads, ``--corner-weights``).
+    """
+
+    estimate: bool = True
+    travel_from_reference: bool = True
+    mass_std: float = 300.0  # kg, prior std of the payload mass
+    # m, prior std of its position about the CG. Height 0: not estimated (the payload sits at
+    # the CG's height): in the moment rows a CG-height error looks like a spring-rate error,
+    # and learning it turns a 20 % spring error into a CG error (Hockenheim 172 -> 213 N);
+    # set it (e.g. 0.3) for a known suspension and a high load (roof box).
+    position_std: Vector3 = (1.0, 0.5, 0.0)
+    residual_density: Vector3 = (3.0e4, 3.0e4, 2.0e4)  # N^2 s, N^2 m^2 s, N^2 m^2 s
+    drift_density: float = 0.01  # kg^2/s, random walk of the mass while driving
+    standstill_density: float = 500.0  # kg^2/s, random walk while standing (loading)
+    standstill_speed: float = 0.5  # m/s, |vx| below which the car is standing
+    gate: float = 16.0  # chi^2_1 threshold of a residual row (4 sigma)
+    # m/s^2 per row: residual density x (1 + (ax^2 + ay^2) / a_s^2)^2
+    acceleration_scale: Vector3 = (1.0, 3.0, 3.0)
+
+    def _check(self) -> None:
+        for key in ("mass_std", "drift_density", "standstill_density", "standstill_speed",
+                    "gate"):  # fmt: skip
+            require_positive(self, key)
+        for key in ("residual_density", "acceleration_scale"):
+            if min(getattr(self, key)) <= 0.0:
+                raise SectionKeyError(key, "must be > 0 in every entry")
+        if min(self.position_std) < 0.0 or min(self.position_std[:2]) == 0.0:
+            raise SectionKeyError(
+                "position_std", "must be > 0 in x and y and >= 0 in z (0: height not estimated)"
+            )
+
+
 @dataclass(frozen=True, kw_only=True)
 class FilterTuning:
     process_noise_density: float  # N^2/s:  Q = q dt I
@@ -206,6 +261,7 @@ class FilterTuning:
     initial_std: float  # N
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
     faults: FaultTuning = FaultTuning()  # [filter.faults], optional: fault-monitor limits
+    payload: PayloadTuning = PayloadTuning()  # [filter.payload], optional: online mass and CG
     # Optional: the innovation variance S the gate compares against (estimators/kf/guard.py,
     # innovation_variance_scale) times this factor. ``wheelload tune`` writes 1/c when it
     # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
@@ -217,6 +273,24 @@ class FilterTuning:
     suspension_noise_rate_density: float = 0.0
     suspension_noise_hub_density: float = 0.0
     constraint_noise_acceleration_density: Vector3 = (0.0, 0.0, 0.0)
+    # Optional: the reported-sigma model (estimators/kf/reported_std.py), sigma^2 =
+    # sum_k (c_k g_ik)^2 with g_i0 = sqrt(P_ii); the gain does not see it. Defaults:
+    # calibrated by ``wheelload study sigma`` on the bundled vehicles' scenarios;
+    # ``wheelload tune`` writes those of its logs.
+    sigma_covariance: float = 0.05034  # per N of sqrt(P_ii), the filter's own sigma
+    sigma_floor: float = 16.42  # N
+    sigma_ax: float = 1.64  # N per m/s^2 of |ax|
+    sigma_ay: float = 4.984  # N per m/s^2 of |ay|
+    sigma_travel_rate: float = 1968  # N per m/s of |v_i| (damper)
+    sigma_travel: float = 135  # N per m of |d_i| (spring)
+    sigma_residual: float = 0.3402  # per N of the equilibrium residual at z, per wheel
+    sigma_residual_rms: float = 0.0006823  # per N of its running RMS
+    sigma_innovation: float = 0.3238  # per N of |suspension innovation|
+    sigma_innovation_rms: float = 0.0005492  # per N of its running RMS
+
+    def sigma_model(self) -> tuple[float, ...]:
+        """The reported-sigma coefficients in :data:`SIGMA_KEYS` order."""
+        return tuple(getattr(self, key) for key in SIGMA_KEYS)
 
     def input_densities(self) -> tuple[float, ...]:
         """The input-dependent densities in ``measurement_noise.INPUT_DENSITIES`` order."""
@@ -238,6 +312,8 @@ class FilterTuning:
                 raise SectionKeyError(
                     key, f"must be finite and >= 0 (0: constant noise), got {values}"
                 )
+        for key in SIGMA_KEYS:
+            require_non_negative(self, key)
         require_positive(self, "process_noise_density")
         require_positive(self, "suspension_noise_density")
         require_positive(self, "initial_std")

@@ -281,6 +281,34 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.bias.acceleration_bias_density": _fixed(
         1e-12, 1.0, "accelerometer bias random walk, (m/s^2)^2/s"
     ),
+    # The reported sigma's coefficients (estimators/kf/reported_std.py): 0 switches a term off.
+    "filter.sigma_covariance": _fixed(0.0, 10.0, "0-10 x the filter's own sigma"),
+    "filter.sigma_floor": lambda v: Range(0.0, _weight(v), "0 N to the weight"),
+    "filter.sigma_ax": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2 of |ax|"),
+    "filter.sigma_ay": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2 of |ay|"),
+    "filter.sigma_travel_rate": lambda v: Range(
+        0.0, 10.0 * max(_wheel_loads(v)), "0-10 x the static wheel load per m/s of damper"
+    ),
+    "filter.sigma_travel": lambda v: Range(
+        0.0, 1000.0 * max(_wheel_loads(v)), "0-1000 x the static wheel load per m of travel"
+    ),
+    **{
+        f"filter.sigma_{name}": _fixed(0.0, 10.0, "0-10 per N of the model's mismatch")
+        for name in ("residual", "residual_rms", "innovation", "innovation_rms")
+    },
+    # The payload filter (estimators/kf/payload.py).
+    "filter.payload.estimate": _fixed(0.0, 1.0, "a switch: false or true"),
+    "filter.payload.travel_from_reference": _fixed(0.0, 1.0, "a switch: false or true"),
+    "filter.payload.mass_std": lambda v: Range(1.0, v.mass.total, "1 kg to the vehicle's mass"),
+    "filter.payload.position_std": _fixed(0.0, 5.0, "0-5 m about the CG"),
+    "filter.payload.residual_density": _sigma_density(
+        lambda v: 1.0, lambda v: 10.0 * _weight(v), "N (N m)"
+    ),
+    "filter.payload.drift_density": _fixed(1e-9, 1e4, "mass random walk while driving, kg^2/s"),
+    "filter.payload.standstill_density": _fixed(1e-6, 1e6, "mass random walk at a stop, kg^2/s"),
+    "filter.payload.standstill_speed": _fixed(0.01, 5.0, "0.01-5 m/s"),
+    "filter.payload.gate": _fixed(1.0, 1e4, "chi^2_1 threshold, 1-100 sigma"),
+    "filter.payload.acceleration_scale": _fixed(0.1, 50.0, "0.1-50 m/s^2"),
     "plant.body.width": _body_width,
     "plant.wheels.spin_inertia_front": _spin(0),
     "plant.wheels.spin_inertia_rear": _spin(1),

@@ -8,7 +8,8 @@ One update with the stacked measurement instead of two sequential ones:
 
 For independent measurement noises this equals the two-stage update exactly
 (Siegloff & Choi §III-D), so it checks the compiled filter and gives the
-benchmark a conventional implementation to compare with. It takes z and b
+benchmark a conventional implementation to compare with. Like the step, the first
+sample's prediction carries no prior information, :math:`P^-_0 = (m g)^2 I`. It takes z and b
 from the model Functions, and :math:`R_s, R_c` from the filter's noise Function
 (:mod:`wheelload.models.measurement_noise`) at each sample's interval; it
 handles no missing samples.
@@ -21,7 +22,13 @@ import numpy as np
 from wheelload.estimators import TUNING_INDEX, input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import sample_intervals
-from wheelload.models import equilibrium_function, gates_function, suspension_function
+from wheelload.models import (
+    GRAVITY,
+    ModelParameters,
+    equilibrium_function,
+    gates_function,
+    suspension_function,
+)
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 
 
@@ -49,19 +56,18 @@ def measurement_noises(signals: Signals, tuning: np.ndarray, dt: np.ndarray) -> 
     return np.vstack([np.asarray(R_s), np.asarray(R_c)]).T
 
 
-def joint_filter(
-    signals: Signals, p: np.ndarray, tuning: np.ndarray, x0: np.ndarray, P0: np.ndarray
-) -> np.ndarray:
+def joint_filter(signals: Signals, p: np.ndarray, tuning: np.ndarray, x0: np.ndarray) -> np.ndarray:
     """Loads (n, 4) from the joint (stacked) Joseph-form update, one sample at a time."""
     z, A, b = pseudo_measurements(signals, p)
     dt = sample_intervals(signals.t)
     R_diagonal = measurement_noises(signals, tuning, dt)
     H = np.vstack([np.eye(4), A])
     I = np.eye(4)
-    x, P = x0.astype(float).copy(), P0.astype(float).copy()
+    x, P = x0.astype(float).copy(), np.zeros((4, 4))
+    weight = p[ModelParameters.names().index("mass")] * GRAVITY
     out = np.empty((len(signals), 4))
     for k in range(len(signals)):
-        P = P + tuning[0] * dt[k] * I
+        P = P + tuning[0] * dt[k] * I if k else weight**2 * I
         R = np.diag(R_diagonal[k])
         S = H @ P @ H.T + R
         K = np.linalg.solve(S, H @ P).T

@@ -19,6 +19,7 @@ from wheelload.studies.drive.scenario_log import metadata_path, write_log
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.scenarios import SCENARIOS
+from wheelload.studies.drive.sensors import GRADES, MTI_1, sensor_grade
 from wheelload.studies.plots.scenario import plot_scenario
 
 RIG_SWEEP = "rig-sweep"
@@ -52,6 +53,12 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
     parser.add_argument(
         "--noise", type=float, default=1.0, help="sensor noise scale s (0 = clean signals)"
+    )
+    parser.add_argument(
+        "--sensors",
+        choices=list(GRADES),
+        default=MTI_1.name,
+        help=f"sensor grade (default {MTI_1.name}; clean: noise-free)",
     )
     parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz]")
     parser.add_argument(
@@ -158,6 +165,7 @@ def handle(args: argparse.Namespace) -> int:
         internal_rate=args.internal_rate,
         allow_unusual=args.allow_unusual,
         payload=payload,
+        sensors=sensor_grade(args.sensors),
     )
     sidecar = write_log(result.log, out, result.metadata, replace=args.force)
     if args.plot:
@@ -173,9 +181,17 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def _rig(args: argparse.Namespace, vehicle) -> int:
-    if args.noise != 1.0 or args.roughness or args.plot or args.payload or args.payload_change:
+    if (
+        args.noise != 1.0
+        or args.roughness
+        or args.plot
+        or args.sensors != MTI_1.name
+        or args.payload
+        or args.payload_change
+    ):
         raise ValueError(
-            f"--noise, --roughness, --plot and the payload options do not apply to {RIG_SWEEP}"
+            f"--noise, --sensors, --roughness, --plot and the payload options do not apply to "
+            f"{RIG_SWEEP}"
         )
     settings = RigSettings(seed=args.seed, rate=args.rate)
     corner, bar = rig_sweep(load_vehicle(vehicle), settings)

@@ -8,7 +8,9 @@ of input and likelihood shape no tuning log objects to, and a ±2σ coverage
 calibration (``wheelload.estimators.identification.tuning``). The new file is a
 copy of ``--vehicle`` with new ``[filter]`` densities and, with references,
 ``gate_scale = 1/c`` for densities scaled by c (the gate keeps its decisions, so
-only σ is calibrated)."""
+only σ is calibrated) and the reported-σ model's ``sigma_*`` fitted on the logs
+(``wheelload.estimators.identification.sigma_fit``; without references the input
+file's are kept)."""
 
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities, read_log
+from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
 from wheelload.estimators.identification.tuning import (
     NIS_BAND,
     RATIO_AGREEMENT,
@@ -26,6 +29,7 @@ from wheelload.estimators.identification.tuning import (
     tuned_vehicle,
 )
 from wheelload.models import load_vehicle
+from wheelload.models.vehicle.description import SIGMA_KEYS
 from wheelload.models.vehicle.file import (
     add_values,
     check_output_path,
@@ -156,6 +160,24 @@ def handle(args: argparse.Namespace) -> int:
             f"tuned: the gate's S x this (the densities were scaled x{result.scale:.3g})",
         ),
     }
+    if references:
+        sigma = calibrate_sigma(new_vehicle, runs.logs)
+        new_vehicle = with_sigma(new_vehicle, sigma.coefficients)
+        changes.update(
+            {
+                ("filter", key): (value, "tuned: reported sigma (estimators/kf/reported_std.py)")
+                for key, value in zip(SIGMA_KEYS, sigma.coefficients, strict=True)
+            }
+        )
+        print(
+            f"reported sigma calibrated on the tuning logs: ±2σ coverage "
+            f"{100 * sigma.coverage:.1f} %, r(σ, |error|) {sigma.correlation:.2f}"
+        )
+    else:
+        print(
+            "no reference loads fz_* in every log: cannot calibrate the reported sigma; "
+            "the input file's sigma_* (or the defaults) are kept"
+        )
     text = vehicle_path.read_text(encoding="utf-8")
     header = f"Filter tuned by `wheelload tune` from {vehicle_path.name}: {note}.\n"
     write_vehicle_text(
@@ -179,8 +201,10 @@ def evaluation_table(vehicle, tuned, logs) -> str:
     ]
     groups = [(Path(s.source).name, (s,)) for s in logs] + [("pooled", logs)]
     for name, group in groups:
-        before = FilterRuns(vehicle, group).consistency(noise_densities(vehicle))
-        after = FilterRuns(tuned, group).consistency(noise_densities(tuned))
+        before = FilterRuns(vehicle, group, filter_sigma=False).consistency(
+            noise_densities(vehicle)
+        )
+        after = FilterRuns(tuned, group, filter_sigma=False).consistency(noise_densities(tuned))
         lines.append(
             f"{name:>28}{100 * before.coverage:9.1f}{100 * after.coverage:11.1f}"
             f"{before.rmse:10.1f}{after.rmse:12.1f}"

@@ -17,7 +17,7 @@ from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.scenario_log import file_hash, write_log
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS, scenario_run
-from wheelload.studies.drive.sensors import measure
+from wheelload.studies.drive.sensors import MTI_1, SensorGrade, measure
 from wheelload.studies.drive.simulation import Truth, simulate
 
 
@@ -56,9 +56,11 @@ def run_scenario(
     internal_rate: float = 1000.0,
     allow_unusual: bool = False,
     payload: PayloadSchedule | None = None,
+    sensors: SensorGrade = MTI_1,
 ) -> ScenarioResult:
-    """Simulate scenario ``name`` with the vehicle file at ``vehicle_path``; with ``payload``
-    the plant carries it (recorded in the metadata's ``payload``), the file does not."""
+    """Simulate scenario ``name`` with the vehicle file at ``vehicle_path``, measured by the
+    sensors of grade ``sensors`` at noise scale ``noise``; with ``payload`` the plant
+    carries it (recorded in the metadata's ``payload``), the file does not."""
     options = Options() if options is None else options
     vehicle = load_vehicle(vehicle_path, allow_unusual=allow_unusual)
     run = scenario_run(name, vehicle, options)
@@ -66,7 +68,7 @@ def run_scenario(
         vehicle, run, internal_rate=internal_rate, output_rate=output_rate, payload=payload
     )
     rng = np.random.default_rng(np.random.SeedSequence([options.seed, 1]))
-    log = measure(truth.frame, noise, rng)
+    log = measure(truth.frame, noise, rng, sensors)
     metadata = {
         "scenario": name,
         "vehicle": vehicle.name,
@@ -77,6 +79,7 @@ def run_scenario(
         "internal_rate_hz": internal_rate,
         "integrator": "RK4, fixed step, CasADi JIT",
         "noise_scale": noise,
+        "sensor_grade": sensors.name,
         "options": dataclasses.asdict(options),
         "driver": dataclasses.asdict(run.tuning),
         "slip_control": dataclasses.asdict(run.slip_control),

@@ -1,4 +1,7 @@
-r"""Sensor models: a body IMU and four suspension displacement sensors.
+r"""Sensor models: a body IMU, four suspension displacement sensors and the speed.
+
+A :class:`SensorGrade` bundles one of each (``GRADES``: ``clean``, ``mti-1``,
+``consumer-mems``), selected by name (:func:`sensor_grade`); ``mti-1`` is the default.
 
 A noise scale ``s`` multiplies every stochastic part (paper §IV-F); ``s = 0``
 returns the clean signals.
@@ -32,6 +35,23 @@ bandwidth 1 kHz, bias instability 1 mg, and a residual turn-on bias of 5 mg
 (1 sigma) after the zeroing at standstill such systems do (the IMU's
 assumption too); the same channel model as the IMU's. Written only when the
 truth has them.
+
+Consumer-MEMS grade (``consumer-mems``): 2.5 times the MTi-1 grade's noise
+densities, turn-on biases and bias instabilities: accelerometer 300 µg/√Hz and
+12.5 mg, gyroscope 0.0175 °/s/√Hz and 0.5 °/s. These bracket two consumer IMUs'
+data sheets: Bosch Sensortec BMI088 (BST-BMI088-DS001, Table 1: accelerometer
+output noise density 175 µg/√Hz x/y, zero-g offset ±20 mg; gyroscope rate noise
+density 0.014 °/s/√Hz, zero-rate offset ±1 °/s) and TDK InvenSense MPU-6050
+(PS-MPU-6000A-00 rev. 3.4, §6.1-6.2: accelerometer power spectral density
+400 µg/√Hz, zero-g tolerance ±50 mg x/y; gyroscope rate noise spectral density
+0.005 °/s/√Hz, zero-rate tolerance ±20 °/s); the biases are the residuals after
+the standstill zeroing the MTi-1 grade assumes, a quarter to a tenth of the raw
+offsets. Bandwidths as the parts' digital low-pass filters at their highest
+settings: 260 Hz accelerometer, 256 Hz gyroscope (MPU-6050 DLPF_CFG = 0). Travel:
+the issue's MEMS case, 0.05 mm white noise (1 sigma) and a 0.1 mm logger step
+beside the same linearity error; speed ``vx``: 0.05 m/s white noise (1 sigma).
+The MTi-1 grade logs ``vx`` clean (a wheel-speed or GNSS speed far better than
+the loads need), the consumer grade with that noise.
 """
 
 from __future__ import annotations
@@ -105,10 +125,77 @@ class HubAccelerometerModel(InertialNoise):
 
 @dataclass(frozen=True, kw_only=True)
 class TravelSensorModel:
+    """A travel sensor: a smooth linearity error, white noise and the logger's step."""
+
     full_scale: float = 0.150  # m, stroke
     linearity: float = 0.0025  # fraction of full scale
-    repeatability: float = 0.02e-3  # m, 1 sigma
-    bits: int = 12
+    repeatability: float = 0.02e-3  # m, 1 sigma white noise
+    resolution: float = 0.150 / 2**12  # m, logger step (12 bits of the stroke); 0: none
+
+
+@dataclass(frozen=True, kw_only=True)
+class SpeedSensorModel:
+    """The logged forward speed ``vx``: white noise."""
+
+    noise: float = 0.0  # m/s, 1 sigma
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorGrade:
+    """A set of sensors: body IMU, travel sensors, speed and hub accelerometers."""
+
+    name: str
+    imu: ImuModel
+    travel: TravelSensorModel
+    speed: SpeedSensorModel
+    hub: HubAccelerometerModel = HubAccelerometerModel()
+
+
+def _scaled_imu(factor: float) -> ImuModel:
+    """The MTi-1 grade's IMU with every noise density, bias and instability times ``factor``
+    and the consumer parts' bandwidths."""
+    mti = ImuModel()
+    return ImuModel(
+        accel_noise_density=factor * mti.accel_noise_density,
+        accel_bandwidth=260.0,
+        accel_bias=factor * mti.accel_bias,
+        accel_bias_instability=factor * mti.accel_bias_instability,
+        gyro_noise_density=factor * mti.gyro_noise_density,
+        gyro_bandwidth=256.0,
+        gyro_bias=factor * mti.gyro_bias,
+        gyro_bias_instability=factor * mti.gyro_bias_instability,
+    )
+
+
+MTI_1 = SensorGrade(
+    name="mti-1", imu=ImuModel(), travel=TravelSensorModel(), speed=SpeedSensorModel()
+)
+CONSUMER_MEMS = SensorGrade(
+    name="consumer-mems",
+    imu=_scaled_imu(2.5),
+    travel=TravelSensorModel(repeatability=0.05e-3, resolution=0.1e-3),
+    speed=SpeedSensorModel(noise=0.05),
+)
+CLEAN = SensorGrade(
+    name="clean",
+    imu=_scaled_imu(0.0),
+    travel=TravelSensorModel(linearity=0.0, repeatability=0.0, resolution=0.0),
+    speed=SpeedSensorModel(),
+    hub=HubAccelerometerModel(noise_density=0.0, bias=0.0, bias_instability=0.0),
+)
+#: Every grade by name.
+GRADES: dict[str, SensorGrade] = {
+    CLEAN.name: CLEAN,
+    MTI_1.name: MTI_1,
+    CONSUMER_MEMS.name: CONSUMER_MEMS,
+}
+
+
+def sensor_grade(name: str) -> SensorGrade:
+    """The grade called ``name``, or an error naming the grades."""
+    if name not in GRADES:
+        raise ValueError(f"unknown sensor grade '{name}'; choose from {', '.join(GRADES)}")
+    return GRADES[name]
 
 
 def _inertial_channel(clean, rng, dt, noise: InertialNoise, scale):
@@ -124,16 +211,16 @@ def measure(
     truth: pd.DataFrame,
     scale: float,
     rng: np.random.Generator,
-    imu: ImuModel = ImuModel(),
-    travel: TravelSensorModel = TravelSensorModel(),
-    hub: HubAccelerometerModel = HubAccelerometerModel(),
+    grade: SensorGrade = MTI_1,
 ) -> pd.DataFrame:
-    """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* az_* fz_*``).
+    """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* az_* fz_*``)
+    with the sensors of ``grade`` at noise scale ``scale`` (``clean``: none).
 
     The hub channels ``az_*`` are measured when ``truth`` has them.
     """
     if scale < 0:
         raise ValueError(f"noise scale must be >= 0, got {scale}")
+    imu, travel = grade.imu, grade.travel
     dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
     log = truth.copy()
     for axes, noise in (
@@ -142,7 +229,7 @@ def measure(
     ):
         for axis in axes:
             log[axis] = _inertial_channel(truth[axis].to_numpy(), rng, dt, noise, scale)
-    step = scale * travel.full_scale / 2**travel.bits
+    step = scale * travel.resolution
     for wheel in WHEELS:
         d = truth[f"d_{wheel}"].to_numpy()
         phase = rng.uniform(0.0, 2.0 * np.pi)
@@ -160,5 +247,9 @@ def measure(
     for wheel in WHEELS:
         if f"az_{wheel}" not in truth.columns:
             continue
+        hub = grade.hub
         log[f"az_{wheel}"] = _inertial_channel(truth[f"az_{wheel}"].to_numpy(), rng, dt, hub, scale)
+    if scale * grade.speed.noise > 0 and "vx" in truth.columns:
+        vx = truth["vx"].to_numpy()
+        log["vx"] = vx + scale * grade.speed.noise * rng.standard_normal(vx.size)
     return log

@@ -13,6 +13,8 @@ from wheelload.studies.experiments import (
     mismatch,
     monte_carlo,
     payload,
+    sensor_errors,
+    sigma,
     vehicle_file_ablation,
     vehicles,
 )
@@ -28,7 +30,9 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "monte-carlo": monte_carlo.run,
     "mismatch": mismatch.run,
     "payload": payload.run,
+    "sigma": sigma.run,
     "vehicles": vehicles.run,
+    "sensor-errors": sensor_errors.run,
 }
 NAMES = (*STUDIES, "all")
 

@@ -10,7 +10,7 @@ from wheelload.studies.experiments.report.tables import markdown
 from wheelload.studies.experiments.runs.common import Section, all_methods, trials, truth_spec
 from wheelload.studies.experiments.runs.context import Context
 from wheelload.studies.experiments.runs.units import TrialSpec
-from wheelload.studies.experiments.vehicle_variants import Edit, Variant, scaled, value
+from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled, value
 
 SCENARIO = "hockenheim"
 ERROR = 0.20

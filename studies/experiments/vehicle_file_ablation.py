@@ -1,7 +1,7 @@
 """Study ``ablation`` (Table V): the KF (method A) on the Nordschleife with its vehicle file
 edited, pooled metrics per case.
 
-Each case is a :class:`~wheelload.studies.experiments.vehicle_variants.Variant`
+Each case is a :class:`~wheelload.studies.experiments.runs.vehicle_variants.Variant`
 of the estimator's vehicle file; the plant keeps the unedited file.
 No aero: lift and drag coefficients 0. No ARB: bar rates 0. Symmetric
 damper: push and pull coefficients both at their mean. No constraints: the
@@ -21,7 +21,7 @@ from wheelload.studies.experiments.report.tables import markdown, pooled_table
 from wheelload.studies.experiments.runs.common import Section, simulate, trials, truth_spec
 from wheelload.studies.experiments.runs.context import Context
 from wheelload.studies.experiments.runs.units import TrialSpec
-from wheelload.studies.experiments.vehicle_variants import Edit, Variant, scaled, value
+from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled, value
 
 AXLES = ("suspension.front", "suspension.rear")
 RC_SCALES = (0.25, 0.5, 2.0, 4.0)

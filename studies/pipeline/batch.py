@@ -45,7 +45,11 @@ from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
-from wheelload.studies.pipeline.measured_static import measured_static_loads
+from wheelload.studies.pipeline.measured_static import (
+    measured_static_loads,
+    payload_reference,
+    with_travel_zeroed,
+)
 from wheelload.studies.pipeline.summary import LoadFigures, LogHeader, summary_row
 from wheelload.studies.workers import ignore_interrupts
 
@@ -117,10 +121,15 @@ def _vehicle(path: Path, allow_unusual: bool = False) -> Vehicle:
 
 
 @functools.lru_cache(maxsize=8)
-def _filter(vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None) -> Estimator:
-    """The two-stage KF (``kf``) whose compiled loop is built, cached per process."""
+def _filter(
+    vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None, zeroed: bool
+) -> Estimator:
+    """The two-stage KF (``kf``) whose compiled loop is built, cached per process; ``zeroed``:
+    the travel is zeroed at the log's start (:func:`payload_reference`)."""
     initial = None if static is None else np.array(static)
-    kf = build("kf", _vehicle(vehicle, allow_unusual), static=initial, step=_step())
+    description = _vehicle(vehicle, allow_unusual)
+    description = with_travel_zeroed(description) if zeroed else description
+    kf = build("kf", description, static=initial, step=_step())
     kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
                    d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
     return kf
@@ -144,6 +153,8 @@ def _prepare_log(path: Path, settings: EstimateSettings):
         notes.append(describe_plausibility(plausibility))
     static, reasons = measured_static_loads(signals, vehicle, settings)
     notes += reasons
+    vehicle, reasons = payload_reference(vehicle, settings)
+    notes += reasons
     return vehicle, signals, notes, static
 
 
@@ -153,7 +164,8 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     if settings.method == "kf":
         key = None if static is None else tuple(float(f) for f in static)
         with _lock:  # build (or load) the compiled loop once per process, not per thread
-            estimator = _filter(settings.vehicle, settings.allow_unusual, key)
+            zeroed = not vehicle.filter.payload.travel_from_reference
+            estimator = _filter(settings.vehicle, settings.allow_unusual, key, zeroed)
     elif static is not None:
         raise ValueError(
             "--still-period and --corner-weights apply to --method kf only, "
@@ -312,10 +324,11 @@ def process_logs(
             rows[path] = _error_row(path, error)
             continue
         key = None if static is None else tuple(float(f) for f in static)
-        prepared.setdefault(key, []).append((path, vehicle, signals, notes))
-    for key, logs in prepared.items():
+        zeroed = not vehicle.filter.payload.travel_from_reference
+        prepared.setdefault((key, zeroed), []).append((path, vehicle, signals, notes))
+    for (key, zeroed), logs in prepared.items():
         with _lock:
-            kf = _filter(settings.vehicle, settings.allow_unusual, key)
+            kf = _filter(settings.vehicle, settings.allow_unusual, key, zeroed)
         for start in range(0, len(logs), BATCH):
             group = logs[start : start + BATCH]
             estimates = run_batched(kf, settings.vehicle, [log[2] for log in group])

@@ -59,6 +59,7 @@ class EstimateDigest:
         self.wheels = None if reference_wheels is None else np.flatnonzero(reference_wheels)
         self.scored = 0
         self.reference_sum = None if self.wheels is None else np.zeros(len(self.wheels))
+        self.mass_properties = None  # (8,) the last sample's values and std, if estimated
         self.errors = None
         if self.wheels is not None and self.wheels.size:
             self.errors = np.empty((samples, len(self.wheels)))
@@ -95,6 +96,11 @@ class EstimateDigest:
             self.errors[self.scored : self.scored + count] = estimate[keep] - truth[keep]
             self.reference_sum += truth[keep].sum(axis=0)
             self.scored += count
+
+    def add_mass_properties(self, values: np.ndarray) -> None:
+        """Take the next chunk's online mass properties and their std, (n, 8): keeps the last."""
+        if len(values):
+            self.mass_properties = np.array(values[-1], float)
 
     def means(self) -> np.ndarray:
         """Mean load per wheel [N]."""

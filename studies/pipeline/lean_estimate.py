@@ -22,7 +22,11 @@ from wheelload.estimators.registry import build
 from wheelload.estimators.result import SensorFault
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
-from wheelload.studies.pipeline.measured_static import corner_weights, still_period
+from wheelload.studies.pipeline.measured_static import (
+    corner_weights,
+    payload_reference,
+    still_period,
+)
 
 if TYPE_CHECKING:
     from wheelload.estimators import LogStream
@@ -88,6 +92,8 @@ def estimate_lean(
         notes.append(describe_plausibility(plausibility))
     static, reason = static_loads_for(stream, vehicle, settings)
     notes += reason
+    vehicle, reason = payload_reference(vehicle, settings)
+    notes += reason
     kf = build("kf", vehicle, static=static)
     digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
     faults: list[SensorFault] = []
@@ -99,6 +105,7 @@ def estimate_lean(
             if write is not None:
                 write(chunk.columns())
             digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
+            digest.add_mass_properties(chunk.mass_properties)
     stats = stream.channel_stats
     warnings = channel_warnings(
         stream.source,

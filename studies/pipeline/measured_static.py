@@ -8,10 +8,17 @@ checks the car was at rest there (:func:`~wheelload.estimators.check_still_perio
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from wheelload.estimators import Signals, check_still_period, corner_weight_loads
 from wheelload.models import Vehicle
+
+PAYLOAD_INVISIBLE = (
+    "a payload is invisible to the springs, so mass and CG are not estimated online: "
+    "give measured corner weights (--corner-weights) or the loaded masses in the file"
+)
 
 
 def measured_static_loads(
@@ -42,3 +49,27 @@ def still_period(
         signals, vehicle, settings.still_period, static=static, noise=settings.still_noise
     )
     return still.static, [still.reason]
+
+
+def payload_reference(vehicle: Vehicle, settings) -> tuple[Vehicle, list[str]]:
+    """``(vehicle, notes)``: online mass and CG need travel measured from the file's
+    reference state; a still period zeroes it at the log's start instead, so it turns the
+    estimation off, and a file that says its travel is zeroed is told."""
+    payload = vehicle.filter.payload
+    if settings.still_period and payload.travel_from_reference:
+        return with_travel_zeroed(vehicle), [
+            f"travel zeroed over the still period: {PAYLOAD_INVISIBLE}"
+        ]
+    if not payload.travel_from_reference:
+        return vehicle, [
+            "travel zeroed at the log's start ([filter.payload] travel_from_reference = "
+            f"false): {PAYLOAD_INVISIBLE}"
+        ]
+    return vehicle, []
+
+
+def with_travel_zeroed(vehicle: Vehicle) -> Vehicle:
+    """``vehicle`` whose travel reads 0 at the log's start ([filter.payload]
+    travel_from_reference = false), so no payload is estimated."""
+    payload = dataclasses.replace(vehicle.filter.payload, travel_from_reference=False)
+    return vehicle.replace(filter=dataclasses.replace(vehicle.filter, payload=payload))

@@ -44,6 +44,10 @@ def digest_of(estimate: Estimate, signals: Signals) -> EstimateDigest:
         samples=len(estimate), reference_wheels=wheels, has_std=estimate.has_std
     )
     digest.add(estimate.loads, estimate.std, estimate.flags, reference)
+    if estimate.mass_properties is not None:
+        digest.add_mass_properties(
+            np.hstack([estimate.mass_properties, estimate.mass_properties_std])
+        )
     return digest
 
 
@@ -143,6 +147,8 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
             f"{digest.load_max[i]:10.0f} {std}"
         )
     lines.append(f"sensor set: {header.mode}")
+    if digest.mass_properties is not None:
+        lines.append(mass_properties_line(digest.mass_properties))
     lines.append(_row_use(digest))
     lines.append(f"samples with a skipped update (missing or guarded input): {digest.skipped}")
     if digest.assumed:
@@ -165,6 +171,16 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
                 f"{name.upper():>8}{rmse:10.1f}{rmse_percent:10.2f}{p95:10.1f}{peak:10.1f}"
             )
     return "\n".join(lines)
+
+
+def mass_properties_line(values: np.ndarray) -> str:
+    """The online mass and CG at the end of the log (values then std, ``MASS_PROPERTIES``)."""
+    (mass, x, y, height), (s_mass, s_x, s_y, s_height) = values[:4], values[4:]
+    return (
+        f"mass and CG estimated online (end of log): {mass:.0f} ± {s_mass:.0f} kg; CG "
+        f"{x:+.3f} ± {s_x:.3f} m ahead and {y:+.3f} ± {s_y:.3f} m left of the file's, "
+        f"{height:.3f} ± {s_height:.3f} m high"
+    )
 
 
 @dataclass(frozen=True, kw_only=True)

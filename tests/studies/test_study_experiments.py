@@ -19,8 +19,8 @@ from wheelload.studies.experiments.runs.common import ISO_DLC_WINDOW, truth_spec
 from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
 from wheelload.studies.experiments.runs.runner import Runner
 from wheelload.studies.experiments.runs.units import TRUTH
+from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, value
 from wheelload.studies.experiments.vehicle_file_ablation import ablation_variants, model_switches
-from wheelload.studies.experiments.vehicle_variants import Edit, Variant, value
 from wheelload.studies.metrics import wheel_metrics
 
 

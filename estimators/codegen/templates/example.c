@@ -13,7 +13,8 @@
  * az_fl az_fr az_rl az_rr, are missing samples when absent). Unlike
  * wheelload's Python reader, this example derives nothing: the v_* columns
  * are required and the rate derivatives are read, not computed.
- * Writes t, fz_*, fz_std_*, residual_*, status as CSV (stdout by default).
+ * Writes t, fz_*, fz_std_*, residual_*, the online mass properties and their std,
+ * status as CSV (stdout by default).
  * The interval before a sample is t[k] - t[k-1]; the first sample uses
  * t[1] - t[0], as wheelload's Python filter does.
  *
@@ -308,6 +309,9 @@ static void write_row(FILE *out, double t, const ${prefix}_output *estimate)
     for (k = 0; k < 3; ++k) {
         fprintf(out, ",${digits}", (double)estimate->residual[k]);
     }
+    for (k = 0; k < 8; ++k) {
+        fprintf(out, ",${digits}", (double)estimate->mass_properties[k]);
+    }
     fprintf(out, ",%lu\n", (unsigned long)estimate->flags);
 }
 
@@ -386,7 +390,8 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
         return 2;
     }
     fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
-                 "residual_vertical,residual_pitch,residual_roll,status\n");
+                 "residual_vertical,residual_pitch,residual_roll,mass,cg_x,cg_y,cg_height,"
+                 "mass_std,cg_x_std,cg_y_std,cg_height_std,status\n");
     ${prefix}_step(&state, params, &first[0], (${prefix}_real)(t - t_previous), &estimate);
     write_row(out, t_previous, &estimate);
     do {

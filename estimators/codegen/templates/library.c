@@ -59,7 +59,8 @@ static const uint32_t guard_flags[${n_status}] = {${guard_flags}};
 
 /* The filter step of CasADi Function ${step_name}: inputs x, P (symmetric
  * storage), m (monitor), u, u_valid, dt${kernel_params_doc}; outputs x_next,
- * P_next, m_next, std, residual, used, status, fault_statistic, fault.
+ * P_next, m_next, std, residual, used, status, fault_statistic, fault, mass_properties,
+ * mass_properties_std.
  * ${kernel_flops} arithmetic operations. */
 static void ${prefix}_kernel(const ${prefix}_real x[4], const ${prefix}_real P[10],
                              const ${prefix}_real m[${PREFIX}_N_MONITOR],
@@ -71,7 +72,9 @@ static void ${prefix}_kernel(const ${prefix}_real x[4], const ${prefix}_real P[1
                              ${prefix}_real std[4], ${prefix}_real residual[3],
                              ${prefix}_real used[N_USED], ${prefix}_real status[${n_status}],
                              ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS],
-                             ${prefix}_real fault[${PREFIX}_N_FAULT_CHANNELS])
+                             ${prefix}_real fault[${PREFIX}_N_FAULT_CHANNELS],
+                             ${prefix}_real mass_properties[4],
+                             ${prefix}_real mass_properties_std[4])
 {
 ${kernel_body}
 }
@@ -104,6 +107,9 @@ ${static_loads}
     for (k = 0; k < ${PREFIX}_N_MONITOR; ++k) {
         state->monitor[k] = ZERO;
     }
+    for (k = 0; k < 8; ++k) {
+        state->mass_properties[k] = ZERO;
+    }
     state->P[0] = variance;
     state->P[4] = variance;
     state->P[7] = variance;
@@ -119,6 +125,7 @@ uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
     ${prefix}_real x_next[4], P_next[10], std[4], residual[3], used[N_USED];
     ${prefix}_real m_next[${PREFIX}_N_MONITOR], status[${n_status}];
     ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS], fault[${PREFIX}_N_FAULT_CHANNELS];
+    ${prefix}_real mass_properties[8];
     uint32_t flags = 0u, faults = 0u;
     int accepted = 0;
     int k;
@@ -132,10 +139,11 @@ ${input_copy}
     if (FINITE(dt) && dt > ZERO) {
         ${prefix}_kernel(state->x, state->P, state->monitor, u, u_valid, dt${kernel_params_call},
                          x_next, P_next, m_next, std, residual, used, status, fault_statistic,
-                         fault);
+                         fault, mass_properties, mass_properties + 4);
         accepted = all_finite(x_next, 4) & all_finite(P_next, 10) & all_finite(std, 4)
                    & all_finite(residual, 3) & all_finite(m_next, ${PREFIX}_N_MONITOR)
-                   & all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS);
+                   & all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS)
+                   & all_finite(mass_properties, 8);
         for (k = 0; k < 4; ++k) {
             accepted &= P_next[diagonal[k]] > ZERO;
         }
@@ -149,6 +157,9 @@ ${input_copy}
         }
         for (k = 0; k < ${PREFIX}_N_MONITOR; ++k) {
             state->monitor[k] = m_next[k];
+        }
+        for (k = 0; k < 8; ++k) {
+            state->mass_properties[k] = mass_properties[k];
         }
         for (k = 0; k < N_USED; ++k) {
             flags |= used[k] < HALF ? update_flags[k] : 0u;
@@ -183,6 +194,9 @@ ${input_copy}
     }
     for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
         output->fault_statistic[k] = fault_statistic[k];
+    }
+    for (k = 0; k < 8; ++k) {
+        output->mass_properties[k] = state->mass_properties[k];
     }
     output->faults = faults;
     output->flags = flags;

@@ -64,6 +64,7 @@ typedef struct {
     ${prefix}_real x[4];
     ${prefix}_real P[10];
     ${prefix}_real monitor[${PREFIX}_N_MONITOR];
+    ${prefix}_real mass_properties[8]; /* the last accepted step's (output), 0 after reset */
 } ${prefix}_state;
 
 #define ${PREFIX}_N_INPUTS ${n_inputs}
@@ -90,6 +91,9 @@ typedef struct {
     ${prefix}_real std[4];      /* standard deviations [N] */
     ${prefix}_real residual[3]; /* b - A x: vertical [N], pitch [N m], roll [N m] */
     ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS]; /* >= 1: test fires */
+    /* Online mass properties, then their standard deviations: total mass [kg], CG
+     * ahead of and left of the vehicle file's CG [m], CG height [m]. */
+    ${prefix}_real mass_properties[8];
     uint32_t faults;            /* bit k: fault channel k isolated and dropped */
     uint32_t flags;             /* ${PREFIX}_FLAG_* bits */
 } ${prefix}_output;

@@ -1,6 +1,11 @@
 /* c s^2 (P + q dt I)^-1, symmetrised; the steady-state weight after the log's first sample. */
 static void arrival_weight(int first, const double *P, double dt, double *weight) {
-    if (!first && !KALMAN_ARRIVAL) {
+    if (first) { /* the log's first sample: the filter's diffuse prediction (m g)^2 I */
+        for (int e = 0; e < 16; ++e)
+            weight[e] = e % 5 == 0 ? COST * LOAD_SCALE * LOAD_SCALE / DIFFUSE_VARIANCE : 0.0;
+        return;
+    }
+    if (!KALMAN_ARRIVAL) {
         memcpy(weight, ARRIVAL_STEADY, sizeof(double) * 16);
         return;
     }

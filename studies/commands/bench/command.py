@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
 
     small = _tile(base, args.loop_samples)
     start = time.perf_counter()
-    joint_filter(small, kf.p, kf.tuning, kf.initial_state().x, kf.initial_state().P)
+    joint_filter(small, kf.p, kf.tuning, kf.initial_state().x)
     numpy_time = time.perf_counter() - start
 
     n_step = min(args.loop_samples, 5000)

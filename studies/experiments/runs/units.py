@@ -29,18 +29,20 @@ from wheelload.models.vehicle.description import Vehicle, vehicle_from_dict
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.sensors import measure
+from wheelload.studies.drive.sensors import MTI_1, measure, sensor_grade
 from wheelload.studies.experiments.runs.cache import ResultCache
 from wheelload.studies.metrics import wheel_metrics
 
 TRUTH = "truth"
 TRIAL = "trial"
 KF_TRIALS = "kf-trials"
+INTERNAL_RATE = 1000.0  # Hz, the plant's integration rate (a multiple of every output rate)
 
 
 @dataclass(frozen=True, kw_only=True)
 class TruthSpec:
-    """A plant run: scenario, the plant's vehicle file (its text), lap share, seed, and the
+    """A plant run: scenario, the plant's vehicle file (its text), lap share, seed, the log's
+    output rate (the plant integrates at :data:`INTERNAL_RATE`, a multiple of it), and the
     payload the plant carries (the vehicle file does not know it)."""
 
     scenario: str
@@ -48,6 +50,7 @@ class TruthSpec:
     shorten: float = 1.0
     seed: int = 0
     payload: PayloadSchedule | None = None
+    output_rate: float = 100.0  # Hz
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -58,6 +61,7 @@ class TrialSpec:
     vehicle_text: str  # the estimators' vehicle file (an edited copy in ablation / mismatch)
     methods: tuple[str, ...]
     noise: float = 1.0  # sensor noise scale s (paper §IV-F)
+    sensors: str = MTI_1.name  # sensor grade (studies.drive.sensors.GRADES)
     seed: int = 0  # measurement seed
     window: tuple[float, float] | None = None  # scored samples, t in [start, end] s
     keep_estimates: bool = False  # keep the loads for figures
@@ -101,7 +105,15 @@ def simulate_truth(spec: TruthSpec, folder: Path) -> pd.DataFrame:
         path = Path(temporary) / "vehicle.toml"
         path.write_text(spec.vehicle_text, encoding="utf-8")
         options = Options(seed=spec.seed, shorten=spec.shorten)
-        result = run_scenario(spec.scenario, path, options=options, noise=0.0, payload=spec.payload)
+        result = run_scenario(
+            spec.scenario,
+            path,
+            options=options,
+            noise=0.0,
+            output_rate=spec.output_rate,
+            internal_rate=INTERNAL_RATE,
+            payload=spec.payload,
+        )
     return result.truth.frame
 
 
@@ -125,7 +137,7 @@ def measured(spec: TrialSpec, folder: Path) -> pd.DataFrame:
         raise ValueError("TrialSpec.truth_key is not set: plan trials with common.trials()")
     truth = _truth(str(folder), spec.truth_key)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 1]))
-    return measure(truth, spec.noise, rng)
+    return measure(truth, spec.noise, rng, sensor_grade(spec.sensors))
 
 
 def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, read_log, write_log
+from wheelload.estimators import StepFlag, TwoStageKF, read_log, signals_from_frame, write_log
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import (
     CodegenOptions,
@@ -25,8 +25,10 @@ from wheelload.estimators.codegen.kf import (
     generate,
 )
 from wheelload.estimators.kf.step import step_function
-from wheelload.estimators.result import RESIDUALS, WHEELS
+from wheelload.estimators.logs.signals import rate_derivatives
+from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, WHEELS
 from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, suspension_function
+from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 LOADS = [f"fz_{w}" for w in WHEELS]
@@ -109,17 +111,23 @@ def generated(tmp_path_factory, precision, mode, step=None, name="lib"):
     )
 
 
-@pytest.mark.parametrize("mode", list(ParamMode))
-def test_double_build_matches_python_run(tmp_path_factory, log_path, python_estimates, mode):
-    c = run_example(generated(tmp_path_factory, Precision.DOUBLE, mode), log_path)
-    assert list(c.columns) == list(python_estimates.columns)
-    for column in [*LOADS, *STD, *RESIDUALS]:
-        expected = python_estimates[column].to_numpy()
+def assert_double_build_matches(c, python):
+    """The double build's columns against the Python run's (module docstring's tolerance);
+    the online mass properties too: the payload filter's state rides in the monitor."""
+    assert list(c.columns) == list(python.columns)
+    for column in [*LOADS, *STD, *RESIDUALS, *MASS_PROPERTY_COLUMNS]:
+        expected = python[column].to_numpy()
         scale = np.max(np.abs(expected))
         np.testing.assert_allclose(
             c[column], expected, rtol=1e-9, atol=1e-9 * scale, err_msg=column
         )
-    np.testing.assert_array_equal(c["status"], python_estimates["status"])
+    np.testing.assert_array_equal(c["status"], python["status"])
+
+
+@pytest.mark.parametrize("mode", list(ParamMode))
+def test_double_build_matches_python_run(tmp_path_factory, log_path, python_estimates, mode):
+    c = run_example(generated(tmp_path_factory, Precision.DOUBLE, mode), log_path)
+    assert_double_build_matches(c, python_estimates)
     assert (python_estimates["status"] != 0).sum() > 10  # the guarding was exercised
 
 
@@ -131,6 +139,33 @@ def test_float_build_matches_python_run(tmp_path_factory, log_path, python_estim
     std = c[STD].to_numpy() - python_estimates[STD].to_numpy()
     assert np.max(np.abs(std)) < 0.05  # std depends on P only, not on the signals
     np.testing.assert_array_equal(c["status"], python_estimates["status"])
+
+
+@pytest.fixture(scope="module")
+def imu_only_log_path(tmp_path_factory):
+    """A plant brake-in-turn log (sensor noise s = 1) with every travel sample missing.
+
+    The rate derivatives are written into the log: the C example reads them,
+    the Python reader would derive them.
+    """
+    log = run_scenario("brake-in-turn", example_vehicle_path()).log
+    travel = [f"{kind}_{w}" for kind in ("d", "v") for w in WHEELS]
+    signals = signals_from_frame(log.assign(**{name: np.nan for name in travel}))
+    signals = dataclasses.replace(signals, rate_dots=rate_derivatives(signals))
+    path = tmp_path_factory.mktemp("imu_only") / "imu_only.csv"
+    write_log(signals, path)
+    return path
+
+
+def test_double_build_matches_python_run_without_travel(vehicle, tmp_path_factory,
+                                                        imu_only_log_path):  # fmt: skip
+    # IMU-only: the road frame takes its attitude from the equilibrium in every sample,
+    # and the roll-split row observes the warp; same tolerance as with travel.
+    c = run_example(generated(tmp_path_factory, Precision.DOUBLE, ParamMode.BAKED, name="imu"),
+                    imu_only_log_path)  # fmt: skip
+    python = TwoStageKF(vehicle).run(read_log(imu_only_log_path)).to_pandas()
+    assert_double_build_matches(c, python)
+    assert (python["status"].to_numpy() & int(StepFlag.ROAD_FRAME_OR_LINKS_DROPPED)).all()
 
 
 def test_header_traces_the_vehicle_file_and_model(tmp_path_factory):

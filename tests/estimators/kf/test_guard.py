@@ -92,16 +92,17 @@ def test_vehicle_file_rejects_a_bad_fault_limit(tmp_path):
 
 
 def test_suv_clean_lap_guarded_equals_plain(suv, vehicle, suv_log):
-    """SUV Hockenheim: 406 N guarded against 223 N plain with the sports car's limits (the
-    SUV's model mismatch was isolated as az and d_rl faults); with the SUV file's own
-    [filter.faults] no alarm and within 2 % of the plain filter."""
+    """SUV Hockenheim: 100 N guarded against 85 N plain with the sports car's limits (the
+    SUV's model mismatch is isolated as d_rr and ay faults; 406 against 223 N before the
+    payload filter took up part of it); with the SUV file's own [filter.faults] no alarm
+    and within 2 % of the plain filter."""
     lap = suv_log("hockenheim")
     guarded, plain, estimate = errors(suv, lap)
     assert estimate.faults.empty
     assert guarded <= 1.02 * plain
     sports_limits = guard_settings_for(vehicle)
     borrowed, _, estimate = errors(suv, lap, sports_limits)
-    assert not estimate.faults.empty and borrowed > 1.2 * plain
+    assert not estimate.faults.empty and borrowed > 1.1 * plain
 
 
 def test_quantised_still_corner_is_not_stuck(vehicle, plant_log):

@@ -9,9 +9,11 @@ plant's. Exactness checks compare with an independent numpy Kalman filter
 import dataclasses
 
 import numpy as np
+import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
+from wheelload.estimators.kf.monitor_state import STARTED
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
@@ -34,6 +36,13 @@ def reference_step(numpy_step, kf, x, P, signals, k, dt, rows):
     y_all = np.concatenate([z, b.ravel()])
     r = np.concatenate([np.full(4, r_s), r_c]) / nominal
     return numpy_step(x, P, q, dt, H, y_all, r, rows)
+
+
+@pytest.fixture(scope="module")
+def vehicle(fixed_vehicle):
+    """The example vehicle with the payload filter off: the numpy reference step holds the
+    file's mass and CG."""
+    return fixed_vehicle
 
 
 def test_gated_row_is_skipped_exactly(vehicle, dlc, numpy_step, with_values):
@@ -67,7 +76,9 @@ def test_gate_never_locks_the_data_out(vehicle, dlc):
         kf = TwoStageKF(slow, guard_settings=settings)
         start = kf.initial_state()
         x0 = start.x + np.array([3000.0, -3000.0, 3000.0, -3000.0])
-        estimate = kf.run(dlc, dataclasses.replace(start, x=x0))
+        m = start.m.copy()
+        m[STARTED] = 1  # a running filter's state (a fresh one takes no prior on sample 0)
+        estimate = kf.run(dlc, dataclasses.replace(start, x=x0, m=m))
         errors[name] = pooled_rmse(estimate.loads[late], dlc.reference[late])
         released = np.flatnonzero(estimate.flags & StepFlag.GATE_RELEASED)
         if settings is None:

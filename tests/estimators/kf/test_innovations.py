@@ -8,6 +8,7 @@ other order).
 """
 
 import numpy as np
+import pytest
 
 from wheelload.estimators import TwoStageKF
 from wheelload.estimators.kf.step import UPDATE_ROWS
@@ -15,6 +16,13 @@ from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import gates_function, suspension_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
+
+
+@pytest.fixture(scope="module")
+def vehicle(fixed_vehicle):
+    """The example vehicle with the payload filter off: the numpy reference step holds the
+    file's mass and CG."""
+    return fixed_vehicle
 
 
 def test_first_suspension_innovation_equals_independent_computation(vehicle):

@@ -11,13 +11,17 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators.kf.tuning import with_filter_sigma
 from wheelload.models import GRAVITY
 from wheelload.studies.experiments.faults.fault_injection import pooled_rmse
 
 
 def test_sigma_grows_across_a_gap(vehicle, dlc):
-    """5 s and 1 h gaps: sigma after >= sigma before, and covers the error (issue: 176 -> 8.5 N)."""
+    """5 s and 1 h gaps: the filter's own sigma (sqrt P) after >= before, and covers the error
+    (issue: 176 -> 8.5 N); the reported sigma stays finite and within the weight."""
     kf = TwoStageKF(vehicle)
+    kf.tuning = with_filter_sigma(kf.tuning)
+    reported = TwoStageKF(vehicle)
     gap_at = 700
     for gap in (5.0, 3600.0):
         t = dlc.t.copy()
@@ -29,6 +33,8 @@ def test_sigma_grows_across_a_gap(vehicle, dlc):
         assert np.all(error <= 3.0 * after)
         weight = vehicle.mass.total * GRAVITY
         assert np.all(after <= weight)
+        sigma = reported.run(dataclasses.replace(dlc, t=t)).std
+        assert np.all(np.isfinite(sigma)) and np.all((sigma >= 0) & (sigma <= weight))
 
 
 @pytest.mark.parametrize(

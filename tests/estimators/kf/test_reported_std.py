@@ -1,0 +1,139 @@
+"""The reported σ (estimators/kf/reported_std.py): kept apart from the gain, calibrated,
+rising with a wrong vehicle file, never NaN or negative.
+
+The defaults were fitted by ``wheelload study sigma`` on seeds 0-2 of every bundled
+scenario but the Nordschleife lap; the held-out test runs a stretch of that lap.
+"""
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from wheelload.estimators import TwoStageKF
+from wheelload.estimators.identification.sigma_fit import fit_sigma, scores, sigma_data
+from wheelload.estimators.kf.tuning import SIGMA_TUNING
+from wheelload.estimators.logs.signals import signals_from_frame
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models.vehicle.description import SIGMA_KEYS, vehicle_from_dict
+from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenario_runner import run_scenario
+from wheelload.studies.experiments.mismatch import mismatch_variants
+
+OWN = np.eye(len(SIGMA_KEYS))[SIGMA_KEYS.index("sigma_covariance")]
+
+
+def with_coefficients(vehicle, coefficients):
+    kf = TwoStageKF(vehicle)
+    kf.tuning[SIGMA_TUNING] = coefficients
+    return kf
+
+
+def settled_scores(estimate, signals):
+    keep = signals.t - signals.t[0] >= 1.0
+    error = np.abs(estimate.loads - signals.reference)[keep]
+    sigma = estimate.std[keep]
+    coverage = float(np.mean(error <= 2 * sigma))
+    return coverage, float(np.corrcoef(sigma.ravel(), error.ravel())[0, 1]), sigma.mean()
+
+
+def test_loads_and_covariance_do_not_depend_on_the_sigma_model(vehicle, dlc):
+    """The gain never sees σ: loads and P bit-identical whatever the coefficients; with the
+    filter's own term alone σ is sqrt(diag P), the filter's former σ, to the bit."""
+    runs = [
+        with_coefficients(vehicle, c).run_with_covariance(dlc)
+        for c in (OWN, np.array(vehicle.filter.sigma_model()), np.arange(len(SIGMA_KEYS)))
+    ]
+    for estimate, covariance in runs[1:]:
+        np.testing.assert_array_equal(estimate.loads, runs[0][0].loads)
+        np.testing.assert_array_equal(covariance, runs[0][1])
+    own, covariance = runs[0]
+    np.testing.assert_array_equal(
+        own.std, np.sqrt(np.fmax(np.diagonal(covariance, axis1=1, axis2=2), 0))
+    )
+    # The default model is input-dependent (sqrt P is constant after the start).
+    default = runs[1][0].std[200:]
+    assert np.std(default) > 0.2 * np.mean(default)
+
+
+def test_sigma_never_nan_or_negative_on_hostile_samples(vehicle, dlc, with_values):
+    hostile = with_values(dlc, 400, d_fl=np.nan, ax=1e6, v_rr=np.inf)
+    hostile = with_values(hostile, 401, ay=np.nan, az=-1e9, d_rr=5.0)
+    estimate = TwoStageKF(vehicle).run(hostile)
+    assert np.all(np.isfinite(estimate.std)) and np.all(estimate.std >= 0)
+    zero = with_coefficients(vehicle, np.zeros(len(SIGMA_KEYS))).run(hostile)
+    assert np.all(zero.std == 0.0)
+
+
+@pytest.fixture(scope="module")
+def held_out():
+    """10 % of the Nordschleife lap (not in the calibration), clean and with the standard
+    sensors (s = 1)."""
+    logs = {}
+    for noise in (0.0, 1.0):
+        run = run_scenario(
+            "nordschleife", example_vehicle_path(), options=Options(shorten=0.1), noise=noise
+        )
+        logs[noise] = signals_from_frame(run.log, source=f"nordschleife s={noise:g}")
+    return logs
+
+
+def test_default_sigma_covers_and_follows_the_error_on_a_held_out_lap(held_out):
+    """The defaults on a lap they were not fitted on: with sensor errors ±2σ covers 88-99 %
+    (target 90-98 %, measured 96.1 %), clean at least 90 % (measured 100 %: conservative
+    on clean signals); σ follows |error| (r ≥ 0.15 on one noisy log, 0.4 clean; measured
+    0.18, 0.44 with the payload filter on; the filter's own σ: 100 % coverage whatever the
+    error)."""
+    vehicle = load_vehicle(example_vehicle_path())
+    for noise, low, high, least_r in ((0.0, 0.90, 1.0, 0.4), (1.0, 0.88, 0.99, 0.15)):
+        signals = held_out[noise]
+        coverage, r, _ = settled_scores(TwoStageKF(vehicle).run(signals), signals)
+        assert low <= coverage <= high, (noise, coverage)
+        assert r >= least_r, (noise, r)
+        own = settled_scores(with_coefficients(vehicle, OWN).run(signals), signals)
+        assert own[0] == 1.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="sigma rises only 1.05-1.17x with the payload filter on (measured on iso-dlc: true "
+    "32.8 N; springs -20/+20 % 36.3/36.2 N at RMSE 59/62 N; mass -20/+20 % 34.6/38.4 N at "
+    "RMSE 719/692 N): a wrong file mass shifts the springs' static loads with it, so no row "
+    "sees it (issue 20)",
+)
+def test_sigma_rises_with_a_wrong_spring_or_mass_file(dlc):
+    """The ISO lane change estimated with the springs or the mass of the file 20 % off (the
+    plant keeps the true file): the mean σ grows by 20 % or more."""
+    text = example_vehicle_path().read_text(encoding="utf-8")
+    variants = {v.label: v.apply(text) for v in mismatch_variants(text)}
+    mean = {
+        label: settled_scores(TwoStageKF(vehicle_from_dict(tomllib.loads(t))).run(dlc), dlc)[2]
+        for label, t in variants.items()
+        if label == "true" or label.startswith(("springs", "mass"))
+    }
+    assert len(mean) == 5
+    for label, value in mean.items():
+        if label != "true":
+            assert value >= 1.2 * mean["true"], (label, value, mean["true"])
+
+
+def test_calibration_recovers_a_known_sigma_model(vehicle, dlc):
+    """Errors drawn from a known model (P, a floor and a travel-rate term on the filter's own
+    features) give back its σ within 8 % on 95 % of the samples (the 95 % target takes ~2 %
+    off a normal σ, whose ±2σ covers 95.4 %) and its travel-rate coefficient within 10 % (P
+    and the floor are nearly collinear once P has settled: their sum is what the errors
+    show), and ±2σ covers within the fit's band 91-98 %."""
+    data = sigma_data(TwoStageKF(vehicle), dlc)
+    truth = np.zeros(len(SIGMA_KEYS))
+    truth[SIGMA_KEYS.index("sigma_covariance")] = 0.1
+    truth[SIGMA_KEYS.index("sigma_floor")] = 20.0
+    truth[SIGMA_KEYS.index("sigma_travel_rate")] = 400.0
+    rng = np.random.default_rng(0)
+    drawn = type(data)(error=rng.standard_normal(data.error.shape) * data.std(truth),
+                       features=data.features)  # fmt: skip
+    fit = fit_sigma([drawn])
+    ratio = drawn.std(fit.coefficients) / drawn.std(truth)
+    assert np.quantile(np.abs(ratio - 1.0), 0.95) < 0.08
+    k = SIGMA_KEYS.index("sigma_travel_rate")
+    assert fit.coefficients[k] == pytest.approx(truth[k], rel=0.1)
+    assert 0.91 <= scores([drawn], fit.coefficients)[0] <= 0.98  # the fit's band (96.0 %)
