@@ -102,13 +102,42 @@ def scores(data: list[SigmaData], coefficients: np.ndarray) -> tuple[float, floa
     return coverage, float(np.corrcoef(std, error)[0, 1])
 
 
-def fit_sigma(data: list[SigmaData], target: float = COVERAGE_TARGET) -> SigmaFit:
-    """Maximum-likelihood weights, scaled to the ±2σ coverage ``target`` (module doc)."""
+def fit_sigma(
+    data: list[SigmaData],
+    target: float = COVERAGE_TARGET,
+    held: np.ndarray | None = None,
+    free: tuple[str, ...] | None = None,
+) -> SigmaFit:
+    """Maximum-likelihood weights, scaled to the ±2σ coverage ``target`` (module doc).
+
+    Only the keys ``free`` (default: every key) are fitted, beside the others held at
+    ``held`` (default 0); a feature that is 0 on every sample (no log without travel, say)
+    cannot be fitted and is held too.
+    """
     data = [d for d in data if d.error.size]
     if not data:
         raise ValueError("no logs with reference loads to calibrate sigma on")
+    seen = np.any([np.any(d.features != 0, axis=(0, 1)) for d in data], axis=0)
+    fitted = seen & np.isin(SIGMA_KEYS, SIGMA_KEYS if free is None else free)
+    coefficients = np.zeros(len(SIGMA_KEYS)) if held is None else np.array(held, float)
+    coefficients[fitted] = 0.0
+    # The held terms' variance, per sample and wheel (N^2).
+    offsets = [d.std(coefficients).ravel() ** 2 for d in data]
+    reduced = [SigmaData(error=d.error, features=d.features[..., fitted]) for d in data]
+    names = [SIGMA_KEYS[k] for k in np.flatnonzero(fitted)]
+    coefficients[fitted], scale = _fit(reduced, offsets, target, names)
+    coverage, correlation = scores(data, coefficients)
+    return SigmaFit(
+        coefficients=coefficients, scale=scale, coverage=coverage, correlation=correlation
+    )
+
+
+def _fit(data: list[SigmaData], offsets: list[np.ndarray], target: float, names):
+    """``(coefficients, scale)`` of :func:`fit_sigma` on the features ``names`` (each seen
+    on some sample) beside the held terms' variances ``offsets`` (per log, raveled)."""
     e2 = np.concatenate([d.error.ravel() ** 2 for d in data])
-    G = np.concatenate([d.features.reshape(-1, len(SIGMA_KEYS)) ** 2 for d in data])
+    G = np.concatenate([d.features.reshape(-1, len(names)) ** 2 for d in data])
+    held = np.concatenate(offsets)
     # Every log weighs the same, whatever its length.
     share = np.concatenate([np.full(d.error.size, 1.0 / d.error.size) for d in data])
     share /= np.sum(share)
@@ -116,51 +145,51 @@ def fit_sigma(data: list[SigmaData], target: float = COVERAGE_TARGET) -> SigmaFi
     # keeps every variance positive.
     unit = np.mean(e2) / np.fmax(np.mean(G, axis=0), 1e-300)
     G = G * unit
-    lower = np.zeros(len(SIGMA_KEYS))
-    lower[SIGMA_KEYS.index("sigma_floor")] = 1e-6
-    lower[SIGMA_KEYS.index("sigma_covariance")] = COVARIANCE_SHARE**2 / unit[0]
+    lower = np.zeros(len(names))
+    if "sigma_floor" in names:
+        lower[names.index("sigma_floor")] = 1e-6
+    if "sigma_covariance" in names:
+        lower[names.index("sigma_covariance")] = COVARIANCE_SHARE**2 / unit[0]
     bounds = [(low, None) for low in lower]
 
     def objective(w: np.ndarray) -> tuple[float, np.ndarray]:
-        v = G @ w
+        v = np.fmax(G @ w + held, 1e-300)
         value = float(np.sum(share * (np.log(v) + e2 / v)))
         gradient = G.T @ (share * (1.0 / v - e2 / v**2))
         return value, gradient
 
-    start = np.full(len(SIGMA_KEYS), 1.0 / len(SIGMA_KEYS))
+    start = np.full(len(names), 1.0 / len(names))
     found = optimize.minimize(objective, start, jac=True, method="L-BFGS-B", bounds=bounds)
     variance = G @ found.x
     std_error = np.sqrt(e2)
     low, high = np.log(1e-3), np.log(1e3)
     for _ in range(50):
         middle = 0.5 * (low + high)
-        covered = np.mean(std_error <= 2 * np.sqrt(np.exp(middle) * variance))
+        covered = np.mean(std_error <= 2 * np.sqrt(np.exp(middle) * variance + held))
         low, high = (middle, high) if covered < target else (low, middle)
     scale = float(np.exp(0.5 * (low + high)))
-    weights = _within_band(data, found.x * scale * unit, lower * unit)
-    coefficients = np.sqrt(weights)
-    coverage, correlation = scores(data, coefficients)
-    return SigmaFit(
-        coefficients=coefficients, scale=scale, coverage=coverage, correlation=correlation
-    )
+    weights = _within_band(data, offsets, found.x * scale * unit, lower * unit)
+    return np.sqrt(weights), scale
 
 
-def _within_band(data: list[SigmaData], weights: np.ndarray, lower: np.ndarray) -> np.ndarray:
+def _within_band(
+    data: list[SigmaData], offsets: list[np.ndarray], weights: np.ndarray, lower: np.ndarray
+) -> np.ndarray:
     """The weights moved so that every log's ±2σ coverage lies in :data:`COVERAGE_BAND`
     where the features allow: the per-log likelihood plus :data:`BAND_PENALTY` times the
     squared distance of each log's coverage (a smooth count) from the band, Nelder-Mead in
     log(w - lower) from ``weights``; every third sample."""
-    logs = [(d.features.reshape(-1, len(SIGMA_KEYS))[::3] ** 2, d.error.ravel()[::3])
-            for d in data]  # fmt: skip
-    logs = [(g, e) for g, e in logs if e.size]
+    logs = [(d.features.reshape(-1, len(weights))[::3] ** 2, d.error.ravel()[::3], o[::3])
+            for d, o in zip(data, offsets)]  # fmt: skip
+    logs = [(g, e, o) for g, e, o in logs if e.size]
     scale = np.fmax(weights - lower, 1e-12 * np.fmax(weights.max(), 1e-300))
     low, high = COVERAGE_BAND
 
     def objective(theta: np.ndarray) -> float:
         w = lower + scale * np.exp(theta)
         total = 0.0
-        for g, e in logs:
-            v = np.fmax(g @ w, 1e-300)
+        for g, e, o in logs:
+            v = np.fmax(g @ w + o, 1e-300)
             s = np.sqrt(v)
             covered = np.mean(special.expit((2 * s - np.abs(e)) / (0.1 * s)))
             likelihood = np.mean(np.log(v) + e**2 / v)
@@ -179,8 +208,10 @@ def _within_band(data: list[SigmaData], weights: np.ndarray, lower: np.ndarray) 
 
 def calibrate_sigma(vehicle: Vehicle, logs: tuple[Signals, ...]) -> SigmaFit:
     """The reported-sigma model fitted on logs with reference loads, with the KF of
-    ``vehicle`` (its guards and densities)."""
-    return fit_sigma([sigma_data(TwoStageKF(vehicle), signals) for signals in logs])
+    ``vehicle`` (its guards and densities); a feature the logs never exercise keeps the
+    file's coefficient."""
+    data = [sigma_data(TwoStageKF(vehicle), signals) for signals in logs]
+    return fit_sigma(data, held=np.array(vehicle.filter.sigma_model()))
 
 
 def with_sigma(vehicle: Vehicle, coefficients: np.ndarray) -> Vehicle:

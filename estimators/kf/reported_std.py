@@ -14,7 +14,12 @@ with a wrong CG or mass); :math:`|v_i|` (damper map); :math:`|d_i|` (spring rate
 load by which the suspension pseudo-measurement misses the rigid-body equilibrium
 (large when the file's springs or mass are wrong or an IMU axis is biased), and its
 running RMS :math:`\sqrt{\overline{\delta_i^2}}`; the suspension row's innovation
-:math:`|y_i|` and its running RMS. A running mean is an exponentially weighted mean
+:math:`|y_i|` and its running RMS; last, for a wheel whose suspension row is missing (no
+travel: its load comes from the equilibrium and the roll split alone), 1, :math:`|a_x|`,
+:math:`|a_y|` (the split's and the quasi-static attitude's errors grow with the load
+transfer) and :math:`|a_z - g|` (heave and pitch the equilibrium cannot split; it reads
+:math:`g (1 - \cos\alpha)` at rest on a grade :math:`\alpha`: the norm of the specific
+force instead grows with the lateral acceleration, 0.6 kN of σ on a lap). A running mean is an exponentially weighted mean
 :math:`\bar q \leftarrow \bar q + \alpha (q - \bar q)`, :math:`\alpha = \Delta t /
 (\tau + \Delta t)`, :math:`\tau` = :data:`SIGMA_TIME`, carried in the monitor state
 (:data:`~wheelload.estimators.kf.monitor_state.SIGMA_RESIDUAL`,
@@ -33,6 +38,7 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.estimators.kf import monitor_state
+from wheelload.models import GRAVITY
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, TRAVEL_RATE, input_index
 from wheelload.models.vehicle.description import SIGMA_KEYS
 
@@ -40,7 +46,7 @@ from wheelload.models.vehicle.description import SIGMA_KEYS
 SIGMA_TIME = 1.0
 _TRAVEL = input_index(TRAVEL)
 _RATE = input_index(TRAVEL_RATE)
-_AX, _AY = input_index(SPECIFIC_FORCE)[:2]
+_AX, _AY, _AZ = input_index(SPECIFIC_FORCE)
 
 
 def _running(mean, value, available, dt):
@@ -65,6 +71,7 @@ def sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt):
     innovation = y_s * mask_s
     innovation_mean = _running(m[monitor_state.SIGMA_INNOVATION], innovation**2, mask_s, dt)
     own = ca.sqrt(ca.fmax(ca.diag(P), 0))
+    heave = ca.fabs(u[_AZ] - GRAVITY) * (u[_AZ] != 0)  # u is 0 where az is missing
     rows = []
     for i in range(4):
         rows.append(
@@ -79,6 +86,10 @@ def sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt):
                 ca.sqrt(ca.fmax(residual_mean[i], 0)),
                 ca.fabs(innovation[i]),
                 ca.sqrt(ca.fmax(innovation_mean[i], 0)),
+                1 - mask_s[i],
+                ca.fabs(u[_AX]) * (1 - mask_s[i]),
+                ca.fabs(u[_AY]) * (1 - mask_s[i]),
+                heave * (1 - mask_s[i]),
             )
         )
     return ca.vertcat(*rows), ca.vertcat(residual_mean, innovation_mean)

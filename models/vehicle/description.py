@@ -211,6 +211,10 @@ SIGMA_KEYS = (
     "sigma_residual_rms",
     "sigma_innovation",
     "sigma_innovation_rms",
+    "sigma_no_travel",
+    "sigma_no_travel_ax",
+    "sigma_no_travel_ay",
+    "sigma_no_travel_az",
 )
 
 
@@ -287,6 +291,11 @@ class FilterTuning:
     sigma_residual_rms: float = 0.0006823  # per N of its running RMS
     sigma_innovation: float = 0.3238  # per N of |suspension innovation|
     sigma_innovation_rms: float = 0.0005492  # per N of its running RMS
+    # A wheel without its suspension row (no travel: from the equilibrium and the split)
+    sigma_no_travel: float = 51.26  # N
+    sigma_no_travel_ax: float = 0.0001004  # N per m/s^2 of |ax|
+    sigma_no_travel_ay: float = 10.54  # N per m/s^2 of |ay|
+    sigma_no_travel_az: float = 288.4  # N per m/s^2 of |az - g| (heave, pitch)
 
     def sigma_model(self) -> tuple[float, ...]:
         """The reported-sigma coefficients in :data:`SIGMA_KEYS` order."""

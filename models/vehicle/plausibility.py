@@ -296,6 +296,10 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
         f"filter.sigma_{name}": _fixed(0.0, 10.0, "0-10 per N of the model's mismatch")
         for name in ("residual", "residual_rms", "innovation", "innovation_rms")
     },
+    "filter.sigma_no_travel": lambda v: Range(0.0, _weight(v), "0 N to the weight"),
+    "filter.sigma_no_travel_ax": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
+    "filter.sigma_no_travel_ay": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
+    "filter.sigma_no_travel_az": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
     # The payload filter (estimators/kf/payload.py).
     "filter.payload.estimate": _fixed(0.0, 1.0, "a switch: false or true"),
     "filter.payload.travel_from_reference": _fixed(0.0, 1.0, "a switch: false or true"),

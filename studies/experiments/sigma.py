@@ -7,8 +7,9 @@ sensor noise s = 1, measurement seeds :data:`FIT_SEEDS`, every scenario but
 :data:`HELD_OUT_SCENARIOS`; it is reported on all of them (seeds 0-4). Per scenario: ±2σ
 coverage and the Pearson r of σ and |error| with the filter's own σ (sqrt P), the
 coefficients the vehicle file gives (the code defaults where it gives none) and this
-run's fit; then every ±20 % file of the ``mismatch`` study (the plant keeps the true
-file), whose σ should rise with the error.
+run's fit; each with every sensor and IMU-only (travel columns dropped, true file); then
+every ±20 % file of the ``mismatch`` study (the plant keeps the true file), whose σ should
+rise with the error.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import pandas as pd
 from wheelload.estimators.identification.sigma_fit import SigmaData, fit_sigma, scores, sigma_data
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
+from wheelload.models.inputs import TRAVEL, TRAVEL_RATE
 from wheelload.models.vehicle.description import SIGMA_KEYS, vehicle_from_dict
 from wheelload.studies.drive.scenarios import SCENARIOS
 from wheelload.studies.experiments.mismatch import mismatch_variants
@@ -35,6 +37,10 @@ from wheelload.studies.experiments.runs.units import TRUTH, TrialSpec, measured
 from wheelload.studies.experiments.vehicles import vehicle_files
 
 SIGMA_DATA = "sigma-data"
+SIGMA_DATA_IMU_ONLY = "sigma-data-imu-only"
+#: Sensor sets: every channel, or IMU-only (travel columns dropped; the true file only).
+SENSORS = ("all", "IMU only")
+NO_TRAVEL_KEYS = tuple(key for key in SIGMA_KEYS if key.startswith("sigma_no_travel"))
 SEEDS = (0, 1, 2, 3, 4)
 FIT_SEEDS = (0, 1, 2)
 HELD_OUT_SCENARIOS = ("nordschleife",)
@@ -46,7 +52,16 @@ CONDITIONS = (("clean", 0.0, (0,)), ("sensor errors", 1.0, SEEDS))
 def sigma_trial(spec: TrialSpec, folder: Path) -> tuple[np.ndarray, np.ndarray]:
     """Errors and σ features of the KF on one measured log (a unit of work; arrays, as the
     cache holds them)."""
+    return _trial(measured(spec, folder), spec)
+
+
+def sigma_trial_imu_only(spec: TrialSpec, folder: Path) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sigma_trial` on the log without its travel and travel-rate columns."""
     log = measured(spec, folder)
+    return _trial(log.drop(columns=[c for c in (*TRAVEL, *TRAVEL_RATE) if c in log]), spec)
+
+
+def _trial(log: pd.DataFrame, spec: TrialSpec) -> tuple[np.ndarray, np.ndarray]:
     signals = signals_from_frame(log, source=spec.truth.scenario, wiring_checks=False)
     kf = build("kf", vehicle_from_dict(tomllib.loads(spec.vehicle_text)))
     data = sigma_data(kf, signals).thinned(STRIDE)
@@ -59,6 +74,7 @@ class Case:
     scenario: str
     condition: str
     file: str  # "true" or a mismatch variant's label
+    sensors: str  # one of SENSORS
     seed: int
     coefficients: tuple[float, ...]  # the estimators' file's own
 
@@ -73,14 +89,16 @@ def _plan(context: Context) -> tuple[list[Case], list[TrialSpec]]:
             for label, file_text in variants:
                 coefficients = vehicle_from_dict(tomllib.loads(file_text)).filter.sigma_model()
                 for condition, noise, seeds in CONDITIONS:
-                    # the wrong files on one noise draw each
+                    # the wrong files on one noise draw each, with every sensor
                     for seed in seeds if label == "true" else seeds[:1]:
-                        cases.append(Case(vehicle=path.stem, scenario=scenario,
-                                          condition=condition, file=label, seed=seed,
-                                          coefficients=coefficients))  # fmt: skip
-                        specs.append(TrialSpec(truth=truth, vehicle_text=file_text,
-                                               methods=("kf",), noise=noise,
-                                               seed=seed))  # fmt: skip
+                        for sensors in SENSORS if label == "true" else SENSORS[:1]:
+                            cases.append(Case(vehicle=path.stem, scenario=scenario,
+                                              condition=condition, file=label,
+                                              sensors=sensors, seed=seed,
+                                              coefficients=coefficients))  # fmt: skip
+                            specs.append(TrialSpec(truth=truth, vehicle_text=file_text,
+                                                   methods=("kf",), noise=noise,
+                                                   seed=seed))  # fmt: skip
     return cases, specs
 
 
@@ -101,14 +119,20 @@ def run(context: Context) -> Section:
     cases, specs = _plan(context)
     simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
     jobs = [
-        Job(kind=SIGMA_DATA, function=sigma_trial,
+        Job(kind=SIGMA_DATA if c.sensors == SENSORS[0] else SIGMA_DATA_IMU_ONLY,
+            function=sigma_trial if c.sensors == SENSORS[0] else sigma_trial_imu_only,
             spec=TrialSpec(truth=s.truth, vehicle_text=s.vehicle_text, methods=s.methods,
                            noise=s.noise, seed=s.seed, truth_key=cache_key(TRUTH, s.truth)))
-        for s in specs
+        for c, s in zip(cases, specs)
     ]  # fmt: skip
     data = [SigmaData(error=e, features=g) for e, g in context.runner.run(jobs, "sigma")]
     held = [c.scenario in HELD_OUT_SCENARIOS or c.seed not in FIT_SEEDS for c in cases]
-    fit = fit_sigma([d for c, d, h in zip(cases, data, held) if c.file == "true" and not h])
+    # Two stages: every coefficient on the logs with all sensors (the no-travel features are
+    # 0 there), then the no-travel ones on the IMU-only logs beside the others held.
+    fit_set = [(c, d) for c, d, h in zip(cases, data, held) if c.file == "true" and not h]
+    fit = fit_sigma([d for c, d in fit_set if c.sensors == SENSORS[0]])
+    fit = fit_sigma([d for c, d in fit_set if c.sensors == SENSORS[1]], held=fit.coefficients,
+                    free=NO_TRAVEL_KEYS)  # fmt: skip
     own = np.eye(len(SIGMA_KEYS))[SIGMA_KEYS.index("sigma_covariance")]
 
     def table(key, keep) -> pd.DataFrame:
@@ -124,8 +148,9 @@ def run(context: Context) -> Section:
             rows[name] = _row([d for _, d in members], coefficients)
         return pd.DataFrame(rows).T
 
-    per_scenario = table(lambda c: (c.vehicle, c.scenario, c.condition), lambda c: c.file == "true")
-    per_scenario.index.names = ["vehicle", "scenario", "condition"]
+    per_scenario = table(lambda c: (c.vehicle, c.scenario, c.sensors, c.condition),
+                         lambda c: c.file == "true")  # fmt: skip
+    per_scenario.index.names = ["vehicle", "scenario", "sensors", "condition"]
     per_scenario.insert(
         0,
         "fit on",
@@ -134,7 +159,8 @@ def run(context: Context) -> Section:
             for s in per_scenario.index.get_level_values("scenario")
         ],  # fmt: skip
     )
-    per_file = table(lambda c: (c.vehicle, c.file, c.condition), lambda c: c.seed == 0)
+    per_file = table(lambda c: (c.vehicle, c.file, c.condition),
+                     lambda c: c.seed == 0 and c.sensors == SENSORS[0])  # fmt: skip
     per_file.index.names = ["vehicle", "file", "condition"]
     mean_sigma = per_file["file mean σ [N]"]
     true_sigma = {(v, cond): mean_sigma[(v, "true", cond)] for v, _, cond in per_file.index}
@@ -144,8 +170,10 @@ def run(context: Context) -> Section:
     pooled = {}
     for label, keep in (("fit set", lambda c, h: not h), ("held out", lambda c, h: h),
                         ("all", lambda c, h: True)):  # fmt: skip
-        group = [d for c, d, h in zip(cases, data, held) if c.file == "true" and keep(c, h)]
-        pooled[label] = _row(group, {"sqrt P": own, "fit": fit.coefficients})
+        for sensors in SENSORS:
+            group = [d for c, d, h in zip(cases, data, held)
+                     if c.file == "true" and c.sensors == sensors and keep(c, h)]  # fmt: skip
+            pooled[f"{label}, {sensors}"] = _row(group, {"sqrt P": own, "fit": fit.coefficients})
     pooled_table = pd.DataFrame(pooled).T.rename_axis("logs")
     coefficients = pd.DataFrame({"fit": fit.coefficients}, index=list(SIGMA_KEYS))
     context.outputs.write_text("sigma_table.csv", per_scenario.to_csv(float_format="%.4g"))

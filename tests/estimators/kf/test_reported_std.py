@@ -137,3 +137,20 @@ def test_calibration_recovers_a_known_sigma_model(vehicle, dlc):
     k = SIGMA_KEYS.index("sigma_travel_rate")
     assert fit.coefficients[k] == pytest.approx(truth[k], rel=0.1)
     assert 0.91 <= scores([drawn], fit.coefficients)[0] <= 0.98  # the fit's band (96.0 %)
+
+
+def test_a_feature_no_log_exercises_keeps_the_given_coefficient(vehicle, dlc):
+    """The lane change has travel on every sample, so the no-travel features are 0 there:
+    the fit leaves their coefficients at the ones given (the file's, in ``tune``; 0 by
+    default) and fits the others as if they were not there."""
+    data = sigma_data(TwoStageKF(vehicle), dlc)
+    unseen = [SIGMA_KEYS.index(k) for k in SIGMA_KEYS if k.startswith("sigma_no_travel")]
+    assert np.all(data.features[..., unseen] == 0)
+    given = np.arange(1.0, len(SIGMA_KEYS) + 1)
+    fit = fit_sigma([data], held=given)
+    np.testing.assert_array_equal(fit.coefficients[unseen], given[unseen])
+    plain = fit_sigma([data])
+    np.testing.assert_array_equal(plain.coefficients[unseen], 0.0)
+    seen = np.setdiff1d(np.arange(len(SIGMA_KEYS)), unseen)
+    np.testing.assert_array_equal(fit.coefficients[seen], plain.coefficients[seen])
+    assert fit.coverage == pytest.approx(plain.coverage)
