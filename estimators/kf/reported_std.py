@@ -19,9 +19,10 @@ travel: its load comes from the equilibrium and the roll split alone), 1, :math:
 :math:`|a_y|` (the split's and the quasi-static attitude's errors grow with the load
 transfer) and :math:`|a_z - g|` (heave and pitch the equilibrium cannot split; it reads
 :math:`g (1 - \cos\alpha)` at rest on a grade :math:`\alpha`: the norm of the specific
-force instead grows with the lateral acceleration, 0.6 kN of σ on a lap). A running mean is an exponentially weighted mean
-:math:`\bar q \leftarrow \bar q + \alpha (q - \bar q)`, :math:`\alpha = \Delta t /
-(\tau + \Delta t)`, :math:`\tau` = :data:`SIGMA_TIME`, carried in the monitor state
+force instead grows with the lateral acceleration, 0.6 kN of σ on a lap). A running mean
+is an exponentially weighted mean :math:`\bar q \leftarrow \bar q + \alpha (q - \bar q)`,
+:math:`\alpha = \Delta t / (\tau + \Delta t)`, :math:`\tau` = :data:`SIGMA_TIME`, carried
+in the monitor state
 (:data:`~wheelload.estimators.kf.monitor_state.SIGMA_RESIDUAL`,
 :data:`~wheelload.estimators.kf.monitor_state.SIGMA_INNOVATION`); a feature whose rows are
 missing in a sample is 0 there (its mean held). The gain never sees σ: x and P are the
