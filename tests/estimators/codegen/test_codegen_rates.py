@@ -1,13 +1,13 @@
-"""The generated example reads the body-rate derivatives, it does not derive them.
+"""The generated example estimates the body-rate derivatives as the Python reader does.
 
-wheelload's Python reader derives ``wx_dot wy_dot wz_dot`` from ``wx wy wz``
-(:func:`~wheelload.estimators.logs.signals.rate_derivatives`) when a log has the
-rates only; the C example (documented in its header) treats the absent
-derivative columns as missing samples, so the inertia terms that need them
-are dropped and flagged. Pinned here: on a log with rates and no derivatives
-the C equals the Python filter run with the derivatives missing (1e-9
-relative, as tests/estimators/codegen/test_codegen.py), and differs from the Python filter that
-derived them.
+wheelload's Python reader estimates ``wx_dot wy_dot wz_dot`` from ``wx wy wz``
+(:func:`~wheelload.estimators.logs.signals.rate_derivatives`: a steady-state kinematic
+Kalman filter per axis) when a log has the rates only; the generated library's
+``wheelload_kf_rate_filter`` is the same filter, and the example program runs it where
+the log has no derivative columns. On a log with rates and no derivatives the C equals
+the Python filter (1e-9 relative, as tests/estimators/codegen/test_codegen.py), flags
+included; the derivatives do feed the body-inertia terms (the filter without them
+differs by more than 1 N).
 """
 
 import dataclasses
@@ -25,7 +25,7 @@ from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 LOADS = [f"fz_{w}" for w in WHEELS]
 
 
-def test_example_drops_the_rate_terms_python_derives(vehicle, tmp_path):
+def test_example_derives_the_rate_terms_as_python_does(vehicle, tmp_path):
     signals = synthetic_log(
         vehicle, slalom(duration=6.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
     )
@@ -50,9 +50,25 @@ def test_example_drops_the_rate_terms_python_derives(vehicle, tmp_path):
     missing = TwoStageKF(vehicle).run(
         dataclasses.replace(read, rate_dots=np.full((len(read), 3), np.nan))
     )
-    scale = np.abs(missing.loads).max()
-    np.testing.assert_allclose(c[LOADS], missing.loads, rtol=1e-9, atol=1e-9 * scale)
-    np.testing.assert_array_equal(c["status"], missing.flags)
+    scale = np.abs(derived.loads).max()
+    np.testing.assert_allclose(c[LOADS], derived.loads, rtol=1e-9, atol=1e-9 * scale)
+    np.testing.assert_array_equal(c["status"], derived.flags)
     # The derived derivatives feed the body-inertia terms: other loads, other flags.
     assert np.abs(derived.loads - missing.loads).max() > 1.0  # N
     assert (derived.flags != missing.flags).any()
+
+
+def test_codegen_bakes_the_rate_gain_of_its_sample_interval(tmp_path, capsys):
+    """``codegen --sample-interval``: the rate filter's gain is the Python reader's at that
+    interval (a log at 500 Hz needs the library generated for 0.002 s)."""
+    from wheelload.estimators.logs.signals import RateDerivativeFilter
+    from wheelload.studies.cli import main
+
+    out = tmp_path / "c"
+    assert main(["codegen", "--out", str(out), "--sample-interval", "0.002"]) == 0
+    source = (out / "wheelload_kf.c").read_text()
+    gain = [float(g) for g in RateDerivativeFilter().gain(0.002)]
+    assert f"rate_gain[2] = {{{gain[0]!r}, {gain[1]!r}}};" in source
+    assert "rate_interval = 0.002;" in source
+    assert main(["codegen", "--out", str(tmp_path / "bad"), "--sample-interval", "0"]) == 2
+    assert "sample interval must be > 0 s" in capsys.readouterr().err
