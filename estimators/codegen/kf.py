@@ -314,9 +314,9 @@ def _substitutions(
             f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
         ),
         "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
-        "rate_gain_0": repr(float(rate_gain[0])),
-        "rate_gain_1": repr(float(rate_gain[1])),
-        "rate_interval": repr(float(options.sample_interval)),
+        "rate_gain_0": literal(float(rate_gain[0]), precision),
+        "rate_gain_1": literal(float(rate_gain[1]), precision),
+        "rate_interval": literal(float(options.sample_interval), precision),
         "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
         "input_cases": "\n".join(
             f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)

@@ -170,9 +170,9 @@ void ${prefix}_step_batch(const ${prefix}_batch *batch, const ${prefix}_params *
  * filter (an alpha-beta filter) with its gain for the sample interval
  * ${rate_interval} s (a log at another rate needs the library generated for it:
  * --sample-interval); a run of rates after a missing one starts afresh at
- * [w, 0]. In double whatever the library's precision, as in Python. */
+ * [w, 0]. In the library's precision (the double build gives Python's numbers). */
 typedef struct {
-    double w[3], w_dot[3];
+    ${prefix}_real w[3], w_dot[3];
     int running[3]; /* 0: the next finite rate starts a run */
 } ${prefix}_rate_filter;
 
