@@ -46,6 +46,13 @@ def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
     assert files <= {p.name for p in out.iterdir()}
     assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
     assert "#define OSQP_USE_FLOAT" in (out / "osqp" / "osqp_configure.h").read_text()
+    # Its own Makefile builds the static library (relative paths: the folder may move).
+    moved = tmp_path / "moved"
+    out.rename(moved)
+    subprocess.run(["make", "-s", "-C", str(moved)], check=True, capture_output=True)
+    symbols = subprocess.run(["nm", str(moved / "libwheelload_mhe.a")], check=True,
+                             capture_output=True, text=True).stdout  # fmt: skip
+    assert " T wheelload_mhe_step" in symbols and " T wheelload_mhe_kf_step" in symbols
 
 
 def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):
