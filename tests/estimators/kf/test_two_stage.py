@@ -67,8 +67,8 @@ def test_run_equals_repeated_step(vehicle, drive):
         np.testing.assert_allclose(estimate.std[0], run.std[k], rtol=1e-12)
 
 
-def test_the_face_hands_out_samples_and_step_gives_state_and_estimate(vehicle, drive):
-    from wheelload.estimators import samples
+def test_samples_and_step_give_state_and_estimate(vehicle, drive):
+    from wheelload.estimators.samples import samples
 
     kf = TwoStageKF(vehicle)
     state, dt = kf.initial_state(), sample_intervals(drive.t)
