@@ -46,6 +46,7 @@ _LAZY_MODULES = {
     "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
     "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
+    "wheelload.estimators.samples": ("step_through",),
 }
 _LAZY = {name: module for module, names in _LAZY_MODULES.items() for name in names}
 

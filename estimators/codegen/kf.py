@@ -51,6 +51,7 @@ from wheelload.estimators.kf.step import (
 )
 from wheelload.estimators.kf.tuning import DEFAULT_SAMPLE_INTERVAL, TUNING, tuning_vector
 from wheelload.estimators.logs.output_files import write_text
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.result import StepFlag
 from wheelload.models import (
     INPUTS,
@@ -234,6 +235,7 @@ def _substitutions(
 ) -> dict[str, str]:
     parameters = ModelParameters.from_vehicle(vehicle)
     p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
+    rate_gain = RateDerivativeFilter().gain(options.sample_interval)
     values = dict(
         zip(
             calibration_names(),
@@ -312,6 +314,9 @@ def _substitutions(
             f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
         ),
         "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
+        "rate_gain_0": literal(float(rate_gain[0]), precision),
+        "rate_gain_1": literal(float(rate_gain[1]), precision),
+        "rate_interval": literal(float(options.sample_interval), precision),
         "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
         "input_cases": "\n".join(
             f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)

@@ -22,12 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision
-from wheelload.estimators.codegen.mhe import FILTER_PREFIX, generate_mhe
+from wheelload.estimators.codegen.mhe import generate_mhe, mhe_includes, mhe_sources
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.output_files import write_text
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.settings import MheSettings
-from wheelload.estimators.mhe.terms import TERMS_NAME
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import Vehicle
 
@@ -169,25 +168,6 @@ int main(int argc, char **argv) {
     return fclose(out) == 0 ? 0 : 1;
 }
 """
-
-
-def mhe_sources(folder: Path) -> list[Path]:
-    """The C files of a generated embedded MHE (without a main)."""
-    osqp_dir = folder / "osqp"
-    linked = [folder / f"{FILTER_PREFIX}.c"] if (folder / f"{FILTER_PREFIX}.c").exists() else []
-    return [
-        folder / "wheelload_mhe.c",
-        folder / f"{TERMS_NAME}.c",
-        *linked,
-        osqp_dir / "wheelload_mhe_workspace.c",
-        *sorted((osqp_dir / "src").glob("*.c")),
-    ]
-
-
-def mhe_includes(folder: Path) -> list[str]:
-    osqp_dir = folder / "osqp"
-    return [f"-I{osqp_dir}", f"-I{osqp_dir / 'inc' / 'public'}",
-            f"-I{osqp_dir / 'inc' / 'private'}", f"-I{folder}"]  # fmt: skip
 
 
 def build_mhe_program(

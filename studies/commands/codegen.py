@@ -32,6 +32,7 @@ class Estimator(enum.Enum):
 KF_OPTIONS = {
     "params": ParamMode.RUNTIME.value,
     "prefix": "wheelload_kf",
+    "sample_interval": CodegenOptions().sample_interval,
 }
 MHE_OPTIONS = {
     "horizon": 10,
@@ -96,6 +97,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="runtime (default): calibration in the parameter struct; baked: folded into the code",
     )
     kf.add_argument("--prefix", help="C symbol prefix (default wheelload_kf)")
+    kf.add_argument(
+        "--sample-interval",
+        type=float,
+        help="the logger's nominal interval [s] (default 0.01): the default measurement noise "
+        "and the gain of the rate-derivative filter",
+    )
     mhe = parser.add_argument_group("mhe only")
     mhe.add_argument("--horizon", type=int, help="window length N (default 10)")
     mhe.add_argument(
@@ -140,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
         precision=Precision(args.precision),
         params=ParamMode(values["params"]),
         prefix=values["prefix"],
+        sample_interval=values["sample_interval"],
     )
     library = generate(vehicle_path, args.out, options, allow_unusual=args.allow_unusual)
     for path in (library.header, library.source, library.example, library.selftest):

@@ -46,6 +46,13 @@ def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
     assert files <= {p.name for p in out.iterdir()}
     assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
     assert "#define OSQP_USE_FLOAT" in (out / "osqp" / "osqp_configure.h").read_text()
+    # Its own Makefile builds the static library (relative paths: the folder may move).
+    moved = tmp_path / "moved"
+    out.rename(moved)
+    subprocess.run(["make", "-s", "-C", str(moved)], check=True, capture_output=True)
+    symbols = subprocess.run(["nm", str(moved / "libwheelload_mhe.a")], check=True,
+                             capture_output=True, text=True).stdout  # fmt: skip
+    assert " T wheelload_mhe_step" in symbols and " T wheelload_mhe_kf_step" in symbols
 
 
 def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):
@@ -86,3 +93,23 @@ def test_codegen_mhe_writes_the_robust_bias_lagged_window_with_the_kf_linked_in(
     assert (out / "wheelload_mhe_kf.c").exists() and (out / "wheelload_mhe.h").exists()
     assert main(["codegen", "--out", str(tmp_path / "kf"), "--lag", "2"]) == 2
     assert "--lag: not an option of --estimator kf" in capsys.readouterr().err
+
+
+def test_the_generated_makefile_takes_gcc_unless_cc_is_given(tmp_path, capsys):
+    """make's built-in ``CC = cc`` does not count: gcc by default, the user's CC otherwise
+    (``make -n`` prints the commands without running them)."""
+    import os
+
+    out = tmp_path / "c"
+    assert main(["codegen", "--out", str(out)]) == 0
+    environment = {k: v for k, v in os.environ.items() if k != "CC"}
+
+    def commands(*args, **extra):
+        return subprocess.run(["make", "-n", "-C", str(out), *args], check=True,
+                              capture_output=True, text=True, env={**environment, **extra}
+                              ).stdout  # fmt: skip
+
+    built = [line for line in commands().splitlines() if " -o " in line]
+    assert len(built) == 2 and all(line.startswith("gcc -std=c99") for line in built)
+    assert "my-cc -std=c99" in commands(CC="my-cc")
+    assert "other-cc -std=c99" in commands("CC=other-cc")

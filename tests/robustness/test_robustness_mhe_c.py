@@ -20,8 +20,8 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators.codegen.c_emitter import Precision
-from wheelload.estimators.codegen.mhe import embedded_settings
-from wheelload.estimators.codegen.mhe_build import MAIN, mhe_includes, mhe_sources, write_inputs
+from wheelload.estimators.codegen.mhe import embedded_settings, mhe_includes, mhe_sources
+from wheelload.estimators.codegen.mhe_build import MAIN, write_inputs
 from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings

@@ -8,7 +8,6 @@ of its 14151 samples (196 N guarded against 150 N plain): its parity residual
 (several hundred N without the link and road-frame terms) looked like travel faults.
 """
 
-import dataclasses
 import re
 import subprocess
 from dataclasses import fields
@@ -127,21 +126,17 @@ def test_paper_model_still_isolates_an_accelerometer_bias(biased_lap, capsys):
 def test_compiled_c_monitor_equals_python_on_the_paper_model(biased_lap, tmp_path):
     """The generated C (double precision, gcc) on the biased paper-model lap: loads to
     1e-9 relative (the same operations in the same order) and every status bit equal,
-    including the ay isolation from the changed monitor. The C example reads the
-    body-rate derivatives instead of deriving them
-    (tests/estimators/codegen/test_codegen_rates.py), so the Python filter it is compared
-    with runs without them too: the monitor's complete model then drops the body-inertia
-    term in both."""
+    including the ay isolation from the changed monitor. The log has no rate
+    derivatives: the C example estimates them as the Python reader does
+    (tests/estimators/codegen/test_codegen_rates.py), for the monitor's complete model."""
     log, paper = biased_lap
     library = generate(paper, tmp_path, CodegenOptions(precision=Precision.DOUBLE))
     binary = build_program(library, library.example, tmp_path / "example")
     out = tmp_path / "estimates.csv"
     subprocess.run([str(binary), str(log), str(out)], check=True, timeout=120)
     c = pd.read_csv(out)
-    read = read_log(log)
-    missing = dataclasses.replace(read, rate_dots=np.full((len(read), 3), np.nan))
-    python = TwoStageKF(load_vehicle(paper)).run(missing)
+    python = TwoStageKF(load_vehicle(paper)).run(read_log(log))
     np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
     np.testing.assert_array_equal(c["status"], python.flags)
-    assert list(python.faults["channel"]) == ["ay"]
+    assert set(python.faults["channel"]) == {"ay"}
     assert np.any(c["status"].to_numpy() & StepFlag.IMU_FAULT)

@@ -10,9 +10,11 @@
  * any order: t and the channels of ${prefix}_input_names (t, vx, ax, ay, az,
  * d_fl, d_fr, d_rl, d_rr and the travel rates v_fl, v_fr, v_rl, v_rr are
  * required; the optional channels, e.g. wx wy wz, wx_dot wy_dot wz_dot and
- * az_fl az_fr az_rl az_rr, are missing samples when absent). Unlike
- * wheelload's Python reader, this example derives nothing: the v_* columns
- * are required and the rate derivatives are read, not computed.
+ * az_fl az_fr az_rl az_rr, are missing samples when absent). Without the
+ * columns wx_dot wy_dot wz_dot the rate derivatives are estimated from wx wy wz
+ * by ${prefix}_rate_filter, as wheelload's Python reader does (the same
+ * numbers for a log at the library's sample interval); the v_* columns are
+ * required (the travel rates are not derived).
  * Writes t, fz_*, fz_std_*, residual_*, the online mass properties and their std,
  * status as CSV (stdout by default).
  * The interval before a sample is t[k] - t[k-1]; the first sample uses
@@ -377,14 +379,18 @@ static FILE *open_temporary(const char *path, char *temporary, size_t size)
 
 /* Filter the rows of log after the first two (already read) and write the
  * estimates; 0, or 2 on an error (reported). */
+/* derive: the log has no rate-derivative columns, so ${prefix}_rate_filter gives them. */
 static int run(log_reader *log, int n_columns, const int *column, const double *t_first,
-               const ${prefix}_input *first, FILE *out, const ${prefix}_params *params)
+               const ${prefix}_input *first, FILE *out, const ${prefix}_params *params,
+               int derive)
 {
     ${prefix}_state state;
     ${prefix}_output estimate;
-    ${prefix}_input input = first[1];
+    ${prefix}_rate_filter rates;
+    ${prefix}_input start = first[0], input = first[1];
     double t = t_first[1], t_previous = t_first[0];
     int status = ${prefix}_init(&state, params);
+    ${prefix}_rate_filter_reset(&rates);
     if (status != 0) {
         fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
         return 2;
@@ -392,9 +398,15 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
     fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
                  "residual_vertical,residual_pitch,residual_roll,mass,cg_x,cg_y,cg_height,"
                  "mass_std,cg_x_std,cg_y_std,cg_height_std,status\n");
-    ${prefix}_step(&state, params, &first[0], (${prefix}_real)(t - t_previous), &estimate);
+    if (derive) {
+        ${prefix}_rate_filter_step(&rates, &start);
+    }
+    ${prefix}_step(&state, params, &start, (${prefix}_real)(t - t_previous), &estimate);
     write_row(out, t_previous, &estimate);
     do {
+        if (derive) {
+            ${prefix}_rate_filter_step(&rates, &input);
+        }
         ${prefix}_step(&state, params, &input, (${prefix}_real)(t - t_previous), &estimate);
         write_row(out, t, &estimate);
         t_previous = t;
@@ -408,7 +420,7 @@ int main(int argc, char **argv)
     FILE *out;
     char *fields[MAX_COLUMNS];
     int column[N_CHANNELS];
-    int n_columns, k, j, status;
+    int n_columns, k, j, status, derive;
     double t_first[2];
     ${prefix}_input first[2];
     ${prefix}_params params;
@@ -497,7 +509,14 @@ int main(int argc, char **argv)
     } else {
         out = stdout;
     }
-    status = run(&log, n_columns, column, t_first, first, out, &params);
+    derive = 1;
+    for (k = 1; k < N_CHANNELS; ++k) {
+        if (strcmp(channels[k], "wx_dot") == 0 || strcmp(channels[k], "wy_dot") == 0 ||
+            strcmp(channels[k], "wz_dot") == 0) {
+            derive = derive && column[k] < 0;
+        }
+    }
+    status = run(&log, n_columns, column, t_first, first, out, &params, derive);
     fclose(log.file);
     if (out == stdout) {
         if (fflush(stdout) != 0 && status == 0) {

@@ -228,3 +228,47 @@ ${unused_params}
 ${batch_body}
     }
 }
+
+/* The rate filter's steady-state gain and interval (estimators/kernels/kinematic.py). */
+static const ${prefix}_real rate_gain[2] = {${rate_gain_0}, ${rate_gain_1}};
+static const ${prefix}_real rate_interval = ${rate_interval};
+
+void ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter)
+{
+    int axis;
+    for (axis = 0; axis < 3; ++axis) {
+        filter->w[axis] = ${PREFIX}_REAL_C(0.0);
+        filter->w_dot[axis] = ${PREFIX}_REAL_C(0.0);
+        filter->running[axis] = 0;
+    }
+}
+
+void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *input)
+{
+    const ${prefix}_real rate[3] = {input->wx, input->wy, input->wz};
+    ${prefix}_real out[3];
+    int axis;
+    for (axis = 0; axis < 3; ++axis) {
+        const ${prefix}_real z = rate[axis];
+        ${prefix}_real predicted, residual;
+        if (!isfinite(z)) {
+            filter->running[axis] = 0;
+            out[axis] = z;
+            continue;
+        }
+        if (!filter->running[axis]) { /* a run starts at [w, 0] */
+            filter->w[axis] = z;
+            filter->w_dot[axis] = ${PREFIX}_REAL_C(0.0);
+            filter->running[axis] = 1;
+        }
+        /* x- = F x; x = x- + K (z - x-_0), in the order of the Python kernel */
+        predicted = filter->w[axis] + rate_interval * filter->w_dot[axis];
+        residual = z - predicted;
+        filter->w[axis] = predicted + rate_gain[0] * residual;
+        filter->w_dot[axis] = filter->w_dot[axis] + rate_gain[1] * residual;
+        out[axis] = filter->w_dot[axis];
+    }
+    input->wx_dot = out[0];
+    input->wy_dot = out[1];
+    input->wz_dot = out[2];
+}

@@ -164,4 +164,23 @@ void ${prefix}_step_batch(const ${prefix}_batch *batch, const ${prefix}_params *
                           const ${prefix}_real *input, const ${prefix}_real *dt,
                           const ${prefix}_batch_output *output);
 
+/* Body-rate derivatives wx_dot wy_dot wz_dot from the rates wx wy wz, as
+ * wheelload's Python reader estimates them for a log without them
+ * (estimators/kernels/kinematic.py): per axis the steady-state kinematic Kalman
+ * filter (an alpha-beta filter) with its gain for the sample interval
+ * ${rate_interval} s (a log at another rate needs the library generated for it:
+ * --sample-interval); a run of rates after a missing one starts afresh at
+ * [w, 0]. In the library's precision (the double build gives Python's numbers). */
+typedef struct {
+    ${prefix}_real w[3], w_dot[3];
+    int running[3]; /* 0: the next finite rate starts a run */
+} ${prefix}_rate_filter;
+
+/* Before a log's first sample. */
+void ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter);
+
+/* One sample: reads input's wx wy wz and writes its wx_dot wy_dot wz_dot
+ * (non-finite where the rate is). */
+void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *input);
+
 #endif /* ${PREFIX}_H */

@@ -4,9 +4,9 @@ A hostile log is a plant log whose every input channel, optional ones
 included, is corrupted at a fraction of its samples by NaN, :math:`\\pm 10^{30}`
 or a spike of 10 to 1000 times the channel's clean spread (added to the
 sample). The body-rate derivatives are written as columns, derived from the
-clean rates by the Python reader's differentiator, so that the Python filter
-and the generated C's example program (which derives nothing) read the same
-inputs, and are corrupted like the other channels.
+clean rates by the Python reader's estimator, so that the Python filter and the
+generated C's example program (which reads them where a log has them) read the
+same inputs, and are corrupted like the other channels.
 
 :func:`summarise` gives what ``wheelload bench hostile`` prints per estimator:
 non-finite outputs, max :math:`|F_z|`, steps locked out (``STEP_REJECTED``

@@ -1,13 +1,13 @@
-"""The generated example reads the body-rate derivatives, it does not derive them.
+"""The generated example estimates the body-rate derivatives as the Python reader does.
 
-wheelload's Python reader derives ``wx_dot wy_dot wz_dot`` from ``wx wy wz``
-(:func:`~wheelload.estimators.logs.signals.rate_derivatives`) when a log has the
-rates only; the C example (documented in its header) treats the absent
-derivative columns as missing samples, so the inertia terms that need them
-are dropped and flagged. Pinned here: on a log with rates and no derivatives
-the C equals the Python filter run with the derivatives missing (1e-9
-relative, as tests/estimators/codegen/test_codegen.py), and differs from the Python filter that
-derived them.
+wheelload's Python reader estimates ``wx_dot wy_dot wz_dot`` from ``wx wy wz``
+(:func:`~wheelload.estimators.logs.signals.rate_derivatives`: a steady-state kinematic
+Kalman filter per axis) when a log has the rates only; the generated library's
+``wheelload_kf_rate_filter`` is the same filter, and the example program runs it where
+the log has no derivative columns. On a log with rates and no derivatives the C equals
+the Python filter (1e-9 relative, as tests/estimators/codegen/test_codegen.py), flags
+included; the derivatives do feed the body-inertia terms (the filter without them
+differs by more than 1 N).
 """
 
 import dataclasses
@@ -15,17 +15,41 @@ import subprocess
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from wheelload.estimators import TwoStageKF, read_log, write_log
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.result import WHEELS
 from wheelload.models import example_vehicle_path
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
+from wheelload.studies.pipeline.example_log import example_log_path
 
 LOADS = [f"fz_{w}" for w in WHEELS]
 
 
-def test_example_drops_the_rate_terms_python_derives(vehicle, tmp_path):
+@pytest.fixture(scope="module")
+def example(tmp_path_factory):
+    """The example program of the bundled vehicle (double, runtime parameters), built once."""
+    folder = tmp_path_factory.mktemp("c")
+    library = generate(example_vehicle_path(), folder, CodegenOptions())
+    return build_program(library, library.example, folder / "example")
+
+
+def test_example_on_the_bundled_log_equals_the_python_filter(vehicle, example, tmp_path):
+    """The bundled log has the rates and no derivative columns: the example program, with
+    no extra column, equals the Python filter (``wheelload estimate``'s) to 1e-9 relative,
+    flags included (before the rate filter: up to 216 N apart)."""
+    out = tmp_path / "estimates.csv"
+    subprocess.run([str(example), str(example_log_path()), str(out)], check=True, timeout=60)
+    c = pd.read_csv(out)
+    python = TwoStageKF(vehicle).run(read_log(example_log_path()))
+    assert python.flags.size == len(c)
+    scale = np.abs(python.loads).max()
+    np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-9 * scale)
+    np.testing.assert_array_equal(c["status"], python.flags)
+
+
+def test_example_derives_the_rate_terms_as_python_does(vehicle, example, tmp_path):
     signals = synthetic_log(
         vehicle, slalom(duration=6.0), noise=SensorNoise(acceleration=0.05, travel=0.0003)
     )
@@ -39,10 +63,8 @@ def test_example_drops_the_rate_terms_python_derives(vehicle, tmp_path):
     write_log(signals, log)
     assert not {"wx_dot", "wy_dot", "wz_dot"} & set(pd.read_csv(log).columns)
 
-    library = generate(example_vehicle_path(), tmp_path / "c", CodegenOptions())
-    binary = build_program(library, library.example, tmp_path / "c" / "example")
     out = tmp_path / "estimates.csv"
-    subprocess.run([str(binary), str(log), str(out)], check=True, timeout=60)
+    subprocess.run([str(example), str(log), str(out)], check=True, timeout=60)
     c = pd.read_csv(out)
 
     read = read_log(log)
@@ -50,9 +72,25 @@ def test_example_drops_the_rate_terms_python_derives(vehicle, tmp_path):
     missing = TwoStageKF(vehicle).run(
         dataclasses.replace(read, rate_dots=np.full((len(read), 3), np.nan))
     )
-    scale = np.abs(missing.loads).max()
-    np.testing.assert_allclose(c[LOADS], missing.loads, rtol=1e-9, atol=1e-9 * scale)
-    np.testing.assert_array_equal(c["status"], missing.flags)
+    scale = np.abs(derived.loads).max()
+    np.testing.assert_allclose(c[LOADS], derived.loads, rtol=1e-9, atol=1e-9 * scale)
+    np.testing.assert_array_equal(c["status"], derived.flags)
     # The derived derivatives feed the body-inertia terms: other loads, other flags.
     assert np.abs(derived.loads - missing.loads).max() > 1.0  # N
     assert (derived.flags != missing.flags).any()
+
+
+def test_codegen_bakes_the_rate_gain_of_its_sample_interval(tmp_path, capsys):
+    """``codegen --sample-interval``: the rate filter's gain is the Python reader's at that
+    interval (a log at 500 Hz needs the library generated for 0.002 s)."""
+    from wheelload.estimators.logs.signals import RateDerivativeFilter
+    from wheelload.studies.cli import main
+
+    out = tmp_path / "c"
+    assert main(["codegen", "--out", str(out), "--sample-interval", "0.002"]) == 0
+    source = (out / "wheelload_kf.c").read_text()
+    gain = [float(g) for g in RateDerivativeFilter().gain(0.002)]  # double: exact digits
+    assert f"rate_gain[2] = {{{gain[0]!r}, {gain[1]!r}}};" in source
+    assert "rate_interval = 0.002;" in source
+    assert main(["codegen", "--out", str(tmp_path / "bad"), "--sample-interval", "0"]) == 2
+    assert "sample interval must be > 0 s" in capsys.readouterr().err

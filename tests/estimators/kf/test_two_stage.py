@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators import FilterState, Sample, StepFlag, TwoStageKF
 from wheelload.estimators.identification.offsets import (
     check_still_period,
     still_period_static_loads,
@@ -65,6 +65,17 @@ def test_run_equals_repeated_step(vehicle, drive):
         state, estimate = kf.step(state, sample, dt[k])
         np.testing.assert_allclose(estimate.loads[0], run.loads[k], rtol=1e-12)
         np.testing.assert_allclose(estimate.std[0], run.std[k], rtol=1e-12)
+
+
+def test_samples_and_step_give_state_and_estimate(vehicle, drive):
+    from wheelload.estimators.samples import samples
+
+    kf = TwoStageKF(vehicle)
+    state, dt = kf.initial_state(), sample_intervals(drive.t)
+    for k, sample in zip(range(50), samples(drive), strict=False):
+        state, estimate = kf.step(state, sample, dt[k])
+    assert isinstance(state, FilterState)
+    np.testing.assert_allclose(estimate.loads[0], kf.run(drive).loads[49], rtol=1e-12)
 
 
 def test_constraint_tightens_as_rc_goes_to_zero(vehicle, drive):
