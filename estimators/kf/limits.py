@@ -20,6 +20,14 @@ import casadi as ca
 
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.monitor_state import TOTAL
+from wheelload.models import GRAVITY
+
+
+def variance_ceiling(mass):
+    r""":math:`(m g)^2` [N^2]: the largest variance of a wheel load, and the first sample's
+    prediction (no prior information); ``mass`` numeric or symbolic."""
+    weight = mass * GRAVITY
+    return weight * weight
 
 
 def total_range(m, b_vertical, available, weight) -> ca.SX:

@@ -218,7 +218,7 @@ def step_expressions(
 
     # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
     weight = p[_P_INDEX["mass"]] * GRAVITY
-    ceiling = weight * weight
+    ceiling = limits.variance_ceiling(p[_P_INDEX["mass"]])
     Q = ca.fmin(tuning[TUNING_INDEX["process_noise_density"]] * dt_used, ceiling) * ca.DM.eye(4)
     # R_s, R_c from the inputs (models/measurement_noise.py; constant with the default zeros).
     densities = ca.vertcat(*[tuning[k] for k in _NOISE_INDEX])

@@ -67,6 +67,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from wheelload.estimators.kf.limits import variance_ceiling
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
     FilterState,
@@ -164,7 +165,7 @@ class MovingHorizonEstimator:
         #: N, :data:`LOAD_LIMIT` times the vehicle's weight
         self.load_limit = LOAD_LIMIT * mass * GRAVITY
         #: N^2, the filter's first prediction (m g)^2 I: a log starts with no prior
-        self.diffuse_variance = (mass * GRAVITY) ** 2
+        self.diffuse_variance = variance_ceiling(mass)
         self.check = LoadCheck(
             hard=self.hard,
             null=self.null,

@@ -104,23 +104,31 @@ def _plan(context: Context) -> tuple[list[Case], list[TrialSpec]]:
 
 def _row(group: list[SigmaData], coefficients: dict[str, np.ndarray]) -> dict[str, float]:
     group = [d for d in group if d.error.size]
+    if not group:  # no settled sample (a --quick segment shorter than the settling time)
+        return {"RMSE [N]": float("nan")} | {
+            f"{label} {score}": float("nan")
+            for label in coefficients
+            for score in ("±2σ [%]", "r", "mean σ [N]")
+        }
     error = np.concatenate([d.error.ravel() for d in group])
-    row = {"RMSE [N]": float(np.sqrt(np.mean(error**2))) if error.size else float("nan")}
+    row = {"RMSE [N]": float(np.sqrt(np.mean(error**2)))}
     for label, c in coefficients.items():
         coverage, r = scores(group, c)
         row[f"{label} ±2σ [%]"] = 100.0 * coverage
         row[f"{label} r"] = r
-        std = [d.std(c).ravel() for d in group]
-        row[f"{label} mean σ [N]"] = float(np.mean(np.concatenate(std))) if std else float("nan")
+        row[f"{label} mean σ [N]"] = float(
+            np.mean(np.concatenate([d.std(c).ravel() for d in group]))
+        )
     return row
 
 
 def run(context: Context) -> Section:
     cases, specs = _plan(context)
     simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
+    units = {SENSORS[0]: (SIGMA_DATA, sigma_trial),
+             SENSORS[1]: (SIGMA_DATA_IMU_ONLY, sigma_trial_imu_only)}  # fmt: skip
     jobs = [
-        Job(kind=SIGMA_DATA if c.sensors == SENSORS[0] else SIGMA_DATA_IMU_ONLY,
-            function=sigma_trial if c.sensors == SENSORS[0] else sigma_trial_imu_only,
+        Job(kind=units[c.sensors][0], function=units[c.sensors][1],
             spec=TrialSpec(truth=s.truth, vehicle_text=s.vehicle_text, methods=s.methods,
                            noise=s.noise, seed=s.seed, truth_key=cache_key(TRUTH, s.truth)))
         for c, s in zip(cases, specs)
