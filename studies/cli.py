@@ -38,6 +38,7 @@ COMMANDS = (
     "wheelload.studies.commands.tune",
     "wheelload.studies.commands.identify_study",
     "wheelload.studies.commands.ablation",
+    "wheelload.studies.commands.docs",
 )
 
 
@@ -59,6 +60,7 @@ COMMAND_MODULES = {
     "tune": "wheelload.studies.commands.tune",
     "identify-study": "wheelload.studies.commands.identify_study",
     "ablation": "wheelload.studies.commands.ablation",
+    "docs": "wheelload.studies.commands.docs",
 }
 
 

@@ -91,7 +91,7 @@ class SigmaFit:
 
 
 def scores(data: list[SigmaData], coefficients: np.ndarray) -> tuple[float, float]:
-    """``(coverage, r)``: share of errors within ±2σ and the Pearson r of σ and |error|."""
+    """``(coverage, r)``: share of errors within ±2σ and the Pearson r of σ and ``|error|``."""
     std = np.concatenate([d.std(coefficients).ravel() for d in data])
     error = np.abs(np.concatenate([d.error.ravel() for d in data]))
     if not error.size:

@@ -202,7 +202,7 @@ class FilterRuns:
         return float(np.sqrt(np.mean(np.concatenate(errors) ** 2)))
 
     def consistency(self, tuning: np.ndarray, gate_factor: float = 1.0) -> Consistency:
-        """NIS, ±2σ coverage, RMSE, σ–|error| correlation and gated share over the logs."""
+        """NIS, ±2σ coverage, RMSE, σ–``|error|`` correlation and gated share over the logs."""
         nis, inside, covered, squared, pairs = [], [], [], [], []
         gated, available = 0, 0
         for signals, (estimate, inn) in zip(self.logs, self.run(tuning, gate_factor=gate_factor)):

@@ -21,7 +21,7 @@ import casadi as ca
 def ldl_solve(S, B):
     r"""Solve :math:`S X = B` for symmetric positive definite ``S`` by :math:`S = L D L^\top`.
 
-    Square-root free, so it emits only +, -, *, / in generated code.
+    Square-root free, so it emits only ``+ - * /`` in generated code.
     """
     n = S.shape[0]
     L = [[None] * n for _ in range(n)]

@@ -53,7 +53,7 @@ class ResidualLoss:
         return self.kind is not Loss.QUADRATIC
 
     def weights(self) -> tuple[float, float]:
-        """(kappa, mu): the cost kappa/2 (rho - e)^2 + mu |e| that realises the loss."""
+        """(kappa, mu): the cost kappa/2 (rho - e)^2 + mu ``|e|`` that realises the loss."""
         if self.kind is Loss.HUBER:
             return 1.0, self.threshold
         return 1.0 / L1_CORE, 1.0

@@ -404,7 +404,7 @@ class WindowQP:
         """The bias information of one sample with its loads eliminated (Schur complement).
 
         Rows take the loss's effective weight at the solution's residuals
-        (Huber: min(1, delta/|rho|)), so an outlier adds little.
+        (Huber: ``min(1, delta/|rho|)``), so an outlier adds little.
         """
         nd = self.travel_basis.shape[1]
         M, weights = [], []

@@ -190,7 +190,7 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def evaluation_table(vehicle, tuned, logs) -> str:
-    """Per-log and pooled ±2σ coverage, RMSE and σ–|error| correlation, input and tuned."""
+    """Per-log and pooled ±2σ coverage, RMSE and σ–``|error|`` correlation, input and tuned."""
     if any(signals.reference is None for signals in logs):
         raise ValueError("--evaluate needs logs with reference loads fz_*")
     lines = [

@@ -8,7 +8,7 @@
    the true, the wrong and the identified file on the other scenarios
    (pooled RMSE, Siegloff & Choi eq. 31).
 4. Tune the filter on two logs; score the input and the tuned filter on the
-   logs not used for tuning (±2σ coverage, pooled RMSE, σ–|error| correlation).
+   logs not used for tuning (±2σ coverage, pooled RMSE, σ–``|error|`` correlation).
 
 Example
 -------

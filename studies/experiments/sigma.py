@@ -5,7 +5,7 @@ The reported-σ model (``estimators/kf/reported_std.py``) is fitted
 scale to 95 % ±2σ coverage) on both bundled vehicles' standard scenarios, clean and with
 sensor noise s = 1, measurement seeds :data:`FIT_SEEDS`, every scenario but
 :data:`HELD_OUT_SCENARIOS`; it is reported on all of them (seeds 0-4). Per scenario: ±2σ
-coverage and the Pearson r of σ and |error| with the filter's own σ (sqrt P), the
+coverage and the Pearson r of σ and ``|error|`` with the filter's own σ (sqrt P), the
 coefficients the vehicle file gives (the code defaults where it gives none) and this
 run's fit; each with every sensor and IMU-only (travel columns dropped, true file); then
 every ±20 % file of the ``mismatch`` study (the plant keeps the true file), whose σ should
