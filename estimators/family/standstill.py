@@ -34,7 +34,10 @@ from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.family.quarter_car import tyre_load_function
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.models.family.standstill import UNKNOWNS, standstill_residual_function
+from wheelload.models.inputs import INPUTS, SPECIFIC_FORCE, input_index
+from wheelload.models.terms import GATES, gates_function
 
 MAX_ITERATIONS = 30
 CONDITION_LIMIT = 1e10  # of the normal matrix: beyond it an unknown is not determined
@@ -63,7 +66,11 @@ class WeighSettings:
 
 @dataclass(frozen=True, kw_only=True)
 class Attitude:
-    """Mean loads [N] and specific force [m/s^2] of one log at rest, with standard errors."""
+    """Mean loads [N] and specific force [m/s^2] of one log at rest, with standard errors.
+
+    ``inputs``: the mean input vector at rest (missing channels 0); ``gates``: the model's
+    term gates for the channels the log has.
+    """
 
     source: str
     loads: np.ndarray
@@ -71,6 +78,8 @@ class Attitude:
     acc: np.ndarray
     acc_se: np.ndarray
     samples: int
+    inputs: np.ndarray
+    gates: np.ndarray
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -119,6 +128,10 @@ def at_rest(signals: Signals, vehicle: Vehicle, settings: WeighSettings) -> Atti
     loads = np.asarray(
         loads_of(signals.d[usable].T, signals.v[usable].T, a_u.T, unsprung_masses(vehicle), p)
     ).T
+    u = input_matrix(signals)[:, usable].T
+    valid = np.all(np.isfinite(u), axis=0)
+    mean_inputs = np.where(valid, np.nanmean(np.where(np.isfinite(u), u, 0.0), axis=0), 0.0)
+    gates = np.asarray(gates_function()(valid.astype(float), p)[0], float).ravel()
     return Attitude(
         source=signals.source,
         loads=loads.mean(axis=0),
@@ -126,6 +139,8 @@ def at_rest(signals: Signals, vehicle: Vehicle, settings: WeighSettings) -> Atti
         acc=acc.mean(axis=0),
         acc_se=acc.std(axis=0) / np.sqrt(count),
         samples=count,
+        inputs=mean_inputs,
+        gates=gates,
     )
 
 
@@ -139,17 +154,20 @@ def weigh(
     p = ModelParameters.from_vehicle(vehicle).vector()
     centre = vehicle_mass_centre(vehicle)
     theta = np.array([vehicle.mass.total, centre.lf, 0.0, centre.height])
-    F, acc, th = ca.SX.sym("F", 4), ca.SX.sym("acc", 3), ca.SX.sym("theta", 4)
-    residual = standstill_residual_function()(F, acc, th, p)
+    F, u, th = ca.SX.sym("F", 4), ca.SX.sym("u", len(INPUTS)), ca.SX.sym("theta", 4)
+    gates = ca.SX.sym("gates", len(GATES))
+    residual = standstill_residual_function()(F, u, gates, th, p)
+    J_acc = ca.jacobian(residual, u)[:, input_index(SPECIFIC_FORCE)]
     model = ca.Function(
         "standstill_fit",
-        [F, acc, th],
-        [residual, ca.jacobian(residual, th), ca.jacobian(residual, F), ca.jacobian(residual, acc)],
+        [F, u, gates, th],
+        [residual, ca.jacobian(residual, th), ca.jacobian(residual, F), J_acc],
     )
     for _ in range(MAX_ITERATIONS):
         rows, jac, weights = [], [], []
         for a in attitudes:
-            r, J, J_F, J_a = (np.asarray(m, float) for m in model(a.loads, a.acc, theta))
+            values = model(a.loads, a.inputs, a.gates, theta)
+            r, J, J_F, J_a = (np.asarray(m, float) for m in values)
             cov_F = np.diag(settings.load_std**2 + a.loads_se**2)
             cov_a = np.diag(settings.accel_std**2 + a.acc_se**2)
             cov = J_F @ cov_F @ J_F.T + J_a @ cov_a @ J_a.T

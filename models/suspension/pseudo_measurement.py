@@ -79,6 +79,7 @@ from wheelload.models.terms import GATES, gate, road_motion, small_sin
 __all__ = [
     "anti_roll_bar_forces",
     "damper_force",
+    "geometric_loads",
     "piecewise_damper_force",
     "stop_force",
     "suspension_function",
@@ -132,6 +133,17 @@ def tyre_force_loads(f_road, vx, d, p: ModelParameters) -> list:
     return result
 
 
+def geometric_loads(f_road, vx, d, p: ModelParameters) -> list:
+    """Load per corner FL, FR, RL, RR of the ``geometric_transfer`` term [N] (ungated).
+
+    :func:`~wheelload.models.suspension.parts.link_loads` (roll-centre and anti-pitch
+    couples) plus :func:`tyre_force_loads` (jacking and body tilt).
+    """
+    couples = link_loads(f_road, vx, p)
+    tyres = tyre_force_loads(f_road, vx, d, p)
+    return [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
+
+
 def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     """Pseudo-measured wheel loads FL, FR, RL, RR from the inputs ``u`` (eq. 9 + terms).
 
@@ -141,9 +153,7 @@ def suspension_loads(u, gates, p: ModelParameters, damper=None) -> ca.SX:
     d = inputs.d
     f_road = road_motion(inputs, gates, p)[0]
     paper = travel_loads(d, inputs.v, p, damper)
-    couples = link_loads(f_road, inputs.vx, p)
-    tyres = tyre_force_loads(f_road, inputs.vx, d, p)
-    links = [couple + tyre for couple, tyre in zip(couples, tyres, strict=True)]
+    links = geometric_loads(f_road, inputs.vx, d, p)
     axles = p.axles("bump_gap", "rebound_gap", "stop_rate", "stop_progressive", "unsprung")
     loads = []
     for axle, (bump, rebound, k1, k2, unsprung) in enumerate(axles):
