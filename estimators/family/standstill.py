@@ -31,10 +31,10 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.family.quarter_car import unsprung_masses
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.family.quarter_car import tyre_load_function
-from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.models.family.standstill import UNKNOWNS, standstill_residual_function
 from wheelload.models.inputs import INPUTS, SPECIFIC_FORCE, input_index
 from wheelload.models.terms import GATES, gates_function
