@@ -163,7 +163,7 @@ def _draw_wheel(ax, t, load, std, has_std, skipped, reference, i, error) -> None
         rms = np.sqrt(np.mean(error**2))
         heading += f": RMS error {rms:.0f} N"
         if has_std:
-            heading += f", |error| < 2σ in {coverage(error, std):.0%}"
+            heading += f", |error| < 2σ in {coverage(error, std):.1%}"
     ax.set_title(heading)
     ax.set_ylabel("Fz [kN]")
     ax.grid(alpha=0.3)
