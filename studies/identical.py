@@ -71,15 +71,23 @@ def label(group: tuple[str, ...]) -> str:
 
 
 def collapse(values: Mapping[str, Value], groups: tuple[tuple[str, ...], ...]) -> dict[str, Value]:
-    """``values`` with each group's first member's entry under the group's :func:`label`
-    (methods absent from ``values`` left out)."""
-    return {label(group): values[group[0]] for group in groups if group[0] in values}
+    """``values`` in order, a group's first member under the group's :func:`label`, its
+    other members left out; a name in no group is kept as it is."""
+    first = {group[0]: group for group in groups}
+    later = {name for group in groups for name in group[1:]}
+    return {
+        label(first[name]) if name in first else name: value
+        for name, value in values.items()
+        if name not in later
+    }
 
 
 def identity_notes(
     loads: Mapping[str, np.ndarray], groups: tuple[tuple[str, ...], ...]
 ) -> tuple[str, ...]:
     """One line per group of two or more: the members are identical, by how much, why."""
+    stored = any(np.asarray(values).dtype == np.float32 for values in loads.values())
+    resolution = ", compared as stored (float32)" if stored else ""
     notes = []
     for group in groups:
         if len(group) < 2:
@@ -87,7 +95,7 @@ def identity_notes(
         largest = max(max_difference(loads[group[0]], loads[name]) for name in group[1:])
         reason = REASONS.get(group, "their loads agree at every sample")
         notes.append(
-            f"{label(group)}: identical on this log (max |difference| {largest:.1e} N "
-            f"< {TOLERANCE:g} N): {reason}"
+            f"{label(group)}: identical on this log, max |difference| {largest:.1e} N "
+            f"< {TOLERANCE:g} N{resolution}; {reason}"
         )
     return tuple(notes)

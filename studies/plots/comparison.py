@@ -25,6 +25,7 @@ from wheelload.studies.plots.method_panels import (
     draw_against_reference,
     draw_error_distribution,
     method_styles,
+    write_notes,
 )
 
 if TYPE_CHECKING:
@@ -66,7 +67,7 @@ def comparison_figure(
     columns = min(MOST_COLUMNS, len(distinct))
     rows = math.ceil(len(distinct) / columns)
     notes = comparison.notes()
-    figure = Figure(figsize=(15, 2.3 * rows + 4.2 + 0.2 * len(notes)))
+    figure = Figure(figsize=(15, 2.3 * rows + 4.2 + 0.3 * len(notes)))
     grid = figure.add_gridspec(rows + 1, columns, height_ratios=[1.0] * rows + [1.6])
     t, reference = signals.t, signals.reference[:, wheel]
     start, end = comparison.window
@@ -91,9 +92,7 @@ def comparison_figure(
     where = f"t = {start:g}..{end:g} s ({int(mask.sum())} samples)"
     draw_error_distribution(figure.add_subplot(grid[rows, :]), errors, styles, where)
     figure.suptitle(f"{WHEEL_NAMES[wheel]}{' — ' + title if title else ''}")
-    for j, note in enumerate(notes):
-        figure.text(0.01, 0.005 + 0.018 * (len(notes) - 1 - j), f"note: {note}", fontsize=8)
-    figure.tight_layout(rect=(0, 0.02 + 0.018 * len(notes), 1, 1))
+    figure.tight_layout(rect=(0, write_notes(figure, notes), 1, 1))
     return figure
 
 

@@ -6,6 +6,7 @@ the error distribution with limits from the data.
   the reference's alone.
 - :func:`draw_against_reference`: one method's load under the reference (black, thicker,
   drawn last: the highest zorder).
+- :func:`write_notes`: notes (e.g. identical methods shown once) at the figure's foot.
 - :func:`draw_error_distribution`: a box per method of |estimate − reference|, the axis
   set from the data (1.1 × the largest 99th percentile, said in the axis label), each
   method's 99th percentile marked and its maximum written where it leaves the axis.
@@ -13,6 +14,7 @@ the error distribution with limits from the data.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -108,3 +110,15 @@ def draw_error_distribution(
         fontsize=9,
     )
     ax.grid(axis="y", alpha=0.3)
+
+
+def write_notes(figure, notes: Sequence[str], fontsize: float = 8.0) -> float:
+    """Write ``notes`` at the foot of ``figure``, wrapped to its width; returns the share of
+    its height they take (the bottom of ``tight_layout``'s ``rect``)."""
+    width = int(figure.get_figwidth() * 125 / fontsize)  # characters a line holds
+    lines = [line for note in notes for line in textwrap.wrap(f"note: {note}", width)]
+    if not lines:
+        return 0.0
+    height = 1.5 * fontsize / 72.0 * len(lines) / figure.get_figheight()
+    figure.text(0.01, 0.004, "\n".join(lines), fontsize=fontsize, va="bottom")
+    return height + 0.01
