@@ -111,7 +111,8 @@ def estimate_figure(
     for i, (row, column) in enumerate(slots):
         ax = figure.add_subplot(grid[row, column], sharex=first)
         first = first or ax
-        error = None if reference is None else loads[:, i] - reference[:, i]
+        held = reference is not None and np.isfinite(reference[:, i]).any()
+        error = loads[:, i] - reference[:, i] if held else None  # NaN where no reference
         _draw_wheel(ax, t, loads[:, i], std[:, i], has_std, skipped, reference, i, error)
         if with_errors:
             below = figure.add_subplot(grid[row + 1, column], sharex=first)
@@ -160,7 +161,7 @@ def _draw_wheel(ax, t, load, std, has_std, skipped, reference, i, error) -> None
         )  # fmt: skip
     heading = WHEEL_NAMES[i]
     if error is not None:
-        rms = np.sqrt(np.mean(error**2))
+        rms = np.sqrt(np.nanmean(error**2))
         heading += f": RMS error {rms:.0f} N"
         if has_std:
             heading += f", |error| < 2σ in {coverage(error, std):.1%}"
@@ -171,6 +172,12 @@ def _draw_wheel(ax, t, load, std, has_std, skipped, reference, i, error) -> None
 
 def _draw_error(ax, t, error, std, has_std) -> None:
     """The error against the reference [N], with the ±2σ band around zero."""
+    ax.set_ylabel("error [N]")
+    ax.grid(alpha=0.3)
+    if error is None:
+        ax.text(0.5, 0.5, "no reference loads for this wheel", transform=ax.transAxes,
+                ha="center", va="center", color="0.4")  # fmt: skip
+        return
     if has_std:
         ax.fill_between(
             t, -2.0 * std, 2.0 * std, color=ESTIMATE_COLOUR, alpha=0.25, lw=0, label="± 2σ",
@@ -178,6 +185,4 @@ def _draw_error(ax, t, error, std, has_std) -> None:
         )  # fmt: skip
     ax.plot(t, error, color="black", lw=0.8, label="estimate − reference", zorder=ESTIMATE_ORDER)
     ax.axhline(0.0, color="0.5", lw=0.6, zorder=0)
-    ax.set_ylabel("error [N]")
-    ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=7, ncol=2)
