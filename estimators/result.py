@@ -186,7 +186,7 @@ class Estimate:
 
         ``reference``: the reference loads (n, 4) [N] of the same samples, e.g.
         ``signals.reference``; each panel then gives the RMS error and the coverage
-        (share of samples with |error| < 2σ). ``errors``: a panel under each wheel with
+        (share of samples with ``|error| < 2σ``). ``errors``: a panel under each wheel with
         the error and the ±2σ band around zero (the constraint residuals without a
         reference). Samples with a skipped update are marked. See
         :mod:`wheelload.estimators.estimate_figure`.

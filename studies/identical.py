@@ -27,7 +27,7 @@ from typing import TypeVar
 
 import numpy as np
 
-#: Largest |difference| [N] of two methods' loads that still counts as identical.
+#: Largest ``|difference|`` [N] of two methods' loads that still counts as identical.
 TOLERANCE = 1e-9
 #: Why a known pair is identical (the members in registry order).
 REASONS = {

@@ -3,7 +3,7 @@ then the distribution of every method's error.
 
 Each method (identical ones once, :mod:`wheelload.studies.identical`) gets its own panel
 and its own colour and line style (:mod:`~wheelload.studies.plots.method_panels`), the
-reference on top of it; the bottom panel gives a box of |estimate − reference| per method
+reference on top of it; the bottom panel gives a box of ``|estimate − reference|`` per method
 over the scored window, its axis set from the data (1.1 × the largest 99th percentile).
 
 Example

@@ -7,7 +7,7 @@ the error distribution with limits from the data.
 - :func:`draw_against_reference`: one method's load under the reference (black, thicker,
   drawn last: the highest zorder).
 - :func:`write_notes`: notes (e.g. identical methods shown once) at the figure's foot.
-- :func:`draw_error_distribution`: a box per method of |estimate − reference|, the axis
+- :func:`draw_error_distribution`: a box per method of ``|estimate − reference|``, the axis
   set from the data (1.1 × the largest 99th percentile, said in the axis label), each
   method's 99th percentile marked and its maximum written where it leaves the axis.
 """
@@ -31,7 +31,7 @@ HATCHES = {"-": "", "--": "///", "-.": "\\\\\\", ":": "..."}
 REFERENCE = {"color": "black", "lw": 1.6, "zorder": 3, "label": "reference"}
 ESTIMATE_WIDTH = 1.0
 ESTIMATE_ORDER = 2
-#: The error axis ends at this multiple of the largest 99th percentile of |error|.
+#: The error axis ends at this multiple of the largest 99th percentile of ``|error|``.
 HEADROOM = 1.1
 PERCENTILE = 99.0
 WHISKERS = (5.0, 95.0)
@@ -67,7 +67,7 @@ def draw_against_reference(ax, x, reference, load, style: Style, label: str) -> 
 
 
 def error_limit(errors: Mapping[str, np.ndarray]) -> float:
-    """The error axis' top [N]: :data:`HEADROOM` × the largest 99th percentile of |error|."""
+    """The error axis' top [N]: :data:`HEADROOM` × the largest 99th percentile of ``|error|``."""
     top = max(float(np.percentile(np.abs(e), PERCENTILE)) for e in errors.values())
     return HEADROOM * top if top > 0 else 1.0
 
@@ -75,7 +75,7 @@ def error_limit(errors: Mapping[str, np.ndarray]) -> float:
 def draw_error_distribution(
     ax, errors: Mapping[str, np.ndarray], styles: Mapping[str, Style], where: str
 ) -> None:
-    """A box of |error| [N] per method (25-75 %, whiskers 5-95 %), its 99th percentile (▼)
+    """A box of ``|error|`` [N] per method (25-75 %, whiskers 5-95 %), its 99th percentile (▼)
     and, where it leaves the axis, its maximum; ``where`` names the samples (title)."""
     names = list(errors)
     magnitudes = [np.abs(np.asarray(errors[name], float)) for name in names]
