@@ -7,6 +7,7 @@ reads both).
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +20,7 @@ from wheelload.models.loaded_vehicle import MASS_PROPERTIES
 
 if TYPE_CHECKING:
     import pandas as pd
+    from matplotlib.figure import Figure
 
 RESIDUALS = ("residual_vertical", "residual_pitch", "residual_roll")
 #: Columns of the online mass properties: the values, then their std.
@@ -140,6 +142,9 @@ class Estimate:
     ``has_std`` is False for a method that has no standard deviation (an
     algebraic or deterministic estimator): its ``std`` is then all zeros (never
     NaN) and :meth:`to_pandas` leaves the ``fz_std_*`` columns out.
+
+    ``method``: the registered name of the method that made it (``""`` when not told:
+    :meth:`named` sets it). :meth:`plot` draws it; its repr is one line, no arrays.
     """
 
     t: np.ndarray  # (n,)
@@ -153,6 +158,51 @@ class Estimate:
     # (MASS_PROPERTIES order), estimated online, and their std; None for a method without.
     mass_properties: np.ndarray | None = None  # (n, 4)
     mass_properties_std: np.ndarray | None = None  # (n, 4)
+    method: str = ""  # the registered method's name, e.g. "kf" ("" when not told)
+
+    def named(self, method: str) -> Estimate:
+        """This estimate labelled with the registered ``method`` name (arrays shared)."""
+        return dataclasses.replace(self, method=method)
+
+    def __repr__(self) -> str:
+        """``Estimate(method='kf', samples=1353, t=0.01..13.53 s, ...)``: no arrays."""
+        parts = [f"method={self.method!r}"] if self.method else []
+        parts.append(f"samples={len(self)}")
+        if len(self):
+            parts.append(f"t={self.t[0]:.2f}..{self.t[-1]:.2f} s")
+        parts.append(f"wheels={' '.join(WHEELS)}")
+        parts.append("std: reported" if self.has_std else "std: none")
+        skipped = int(np.count_nonzero(np.asarray(self.flags).astype(np.int64)
+                                       & StepFlag.skipped_mask()))  # fmt: skip
+        parts.append(f"flags: {skipped} skipped")
+        if self.sensor_faults:
+            parts.append(f"faults: {len(self.sensor_faults)}")
+        return f"{type(self).__name__}({', '.join(parts)})"
+
+    def plot(
+        self, reference: np.ndarray | None = None, *, errors: bool = False, title: str = ""
+    ) -> Figure:
+        """Four panels (FL, FR, RL, RR): the loads, their ±2σ band and ``reference`` on top.
+
+        ``reference``: the reference loads (n, 4) [N] of the same samples, e.g.
+        ``signals.reference``; each panel then gives the RMS error and the coverage
+        (share of samples with ``|error| < 2σ``). ``errors``: a panel under each wheel with
+        the error and the ±2σ band around zero (the constraint residuals without a
+        reference). Samples with a skipped update are marked. See
+        :mod:`wheelload.estimators.estimate_figure`.
+
+        Example
+        -------
+        >>> estimate.plot(signals.reference).savefig("loads.png")
+        """
+        from wheelload.estimators.estimate_figure import estimate_figure
+
+        skipped = (np.asarray(self.flags).astype(np.int64) & StepFlag.skipped_mask()) != 0
+        return estimate_figure(
+            self.t, self.loads, self.std, has_std=self.has_std, skipped=skipped,
+            reference=reference, residual=self.residual, errors=errors,
+            title=title or self.method,
+        )  # fmt: skip
 
     @property
     def faults(self) -> pd.DataFrame:

@@ -31,7 +31,7 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True, kw_only=True, eq=False)
+@dataclass(frozen=True, kw_only=True, eq=False, repr=False)  # the one-line Estimate repr
 class MheEstimate(Estimate):
     """:class:`Estimate` plus the solver's per-sample report."""
 

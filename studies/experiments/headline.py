@@ -28,6 +28,7 @@ from wheelload.studies.experiments.runs.common import (
 )
 from wheelload.studies.experiments.runs.context import Context
 from wheelload.studies.experiments.runs.units import TrialResult, TrialSpec
+from wheelload.studies.identical import collapse, identical_groups, identity_notes
 
 TITLES = {
     "iso-dlc": "ISO double lane change, trimmed 5.0-12.0 s (Table II, Figs. 5-6)",
@@ -83,14 +84,19 @@ def run(context: Context, scenario: str) -> Section:
     """Write the table (CSV, Markdown) and figures of ``scenario``; the report section."""
     result = headline_result(context, scenario)
     out = context.outputs
-    table = wheel_table(result.metrics)
+    # Identical methods once in the table and the figures (studies/identical.py).
+    loads = result.estimates or {}
+    groups = identical_groups(loads)
+    metrics, notes = collapse(result.metrics, groups), identity_notes(loads, groups)
+    table = wheel_table(metrics)
     out.write_text(f"{scenario}_table.csv", table.to_csv(float_format="%.3f"))
-    bars = figures.metric_bars(result.metrics, TITLES[scenario])
+    bars = figures.metric_bars(metrics, TITLES[scenario], notes)
     bars_name = out.save_figure(bars, f"{scenario}_metrics.png").name
     figures.close(bars)
     links = [figure_link(bars_name, f"{scenario} metric bars")]
     if scenario == "iso-dlc":
-        fig = figures.loads_figure(result.t, result.reference, result.estimates, TITLES[scenario])
+        estimates = collapse(loads, groups)
+        fig = figures.loads_figure(result.t, result.reference, estimates, TITLES[scenario], notes)
         links.insert(0, figure_link(out.save_figure(fig, "iso-dlc_loads.png").name, "Fig. 5"))
         figures.close(fig)
     else:
@@ -108,6 +114,7 @@ def run(context: Context, scenario: str) -> Section:
             f"## {TITLES[scenario]}",
             f"{len(result.t)} samples scored. Every registered method, per wheel and pooled:",
             markdown(table),
+            *(f"*Note:* {note}." for note in notes),
             f"Beside the paper's {label}: each cell is ours (paper), methods A-F = "
             "kf, B, C, D, E, F.",
             markdown(beside_paper(result.metrics, paper)),

@@ -182,7 +182,7 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
         notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")
     else:
         estimate = estimator.run(signals)
-    return _log_result(path, vehicle, signals, notes, estimate)
+    return _log_result(path, vehicle, signals, notes, estimate.named(settings.method))
 
 
 def _log_result(path: Path, vehicle: Vehicle, signals: Signals, notes, estimate) -> LogResult:

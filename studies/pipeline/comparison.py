@@ -25,6 +25,7 @@ from wheelload.estimators.protocol import MethodInfo
 from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import Estimate
 from wheelload.models import Vehicle
+from wheelload.studies.identical import identical_groups, identity_notes, label
 from wheelload.studies.metrics import COLUMNS, wheel_metrics
 
 WARM_UP_SAMPLES = 50
@@ -49,6 +50,25 @@ class Comparison:
     samples: int
     window: tuple[float, float]
     results: tuple[MethodResult, ...]
+
+    def loads(self) -> dict[str, np.ndarray]:
+        """Each method's loads (n, 4) [N] over the whole log, by name."""
+        return {r.info.name: r.estimate.loads for r in self.results}
+
+    def identical(self) -> tuple[tuple[str, ...], ...]:
+        """The methods grouped by identical loads (:func:`~wheelload.studies.identical.
+        identical_groups`): tables and figures show one row or line a group."""
+        return identical_groups(self.loads())
+
+    def distinct(self) -> tuple[tuple[str, MethodResult], ...]:
+        """``(label, result)`` of each group of identical methods, its first member's result
+        (``projection-mp = projection-ls``)."""
+        by_name = {r.info.name: r for r in self.results}
+        return tuple((label(group), by_name[group[0]]) for group in self.identical())
+
+    def notes(self) -> tuple[str, ...]:
+        """Why each group of two or more methods is shown once."""
+        return identity_notes(self.loads(), self.identical())
 
 
 def parse_methods(text: str) -> tuple[str, ...]:
@@ -108,7 +128,7 @@ def compare_methods(
         times = []
         for _ in range(repeat):
             start = time.perf_counter()
-            estimate = estimator.run(signals)
+            estimate = estimator.run(signals).named(info.name)
             times.append((time.perf_counter() - start) / len(signals))
         metrics = wheel_metrics(estimate.loads[mask], signals.reference[mask])
         results.append(
@@ -134,8 +154,10 @@ def long_table(comparison: Comparison) -> pd.DataFrame:
 
 
 def format_table(comparison: Comparison) -> str:
-    """The paper-style table (Tables II-IV): metric blocks, one row per method; then timings."""
-    width = max(6, *(len(r.info.name) for r in comparison.results))
+    """The paper-style table (Tables II-IV): metric blocks, one row per method (identical
+    methods in one row, with a note why); then the timings of every method."""
+    distinct = comparison.distinct()
+    width = max(6, *(len(name) for name, _ in distinct))
     header = f"{'Metric':<10}{'Method':<{width + 2}}" + "".join(
         f"{w:>10}" for w in ("FL", "FR", "RL", "RR", "pooled")
     )
@@ -146,14 +168,15 @@ def format_table(comparison: Comparison) -> str:
         header,
     ]
     for column in COLUMNS:
-        for j, result in enumerate(comparison.results):
+        for j, (name, result) in enumerate(distinct):
             values = result.metrics[column]
             digits = 2
-            label = UNITS[column] if j == 0 else ""
+            metric = UNITS[column] if j == 0 else ""
             lines.append(
-                f"{label:<10}{result.info.name:<{width + 2}}"
+                f"{metric:<10}{name:<{width + 2}}"
                 + "".join(f"{values[w]:>10.{digits}f}" for w in ("fl", "fr", "rl", "rr", "pooled"))
             )
+    lines.extend(f"note: {note}" for note in comparison.notes())
     lines.append("")
     lines.append(
         f"{'time per sample [µs]':<22}{'min':>10}{'median':>10}{'max':>10}   method: description"

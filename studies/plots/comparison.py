@@ -1,21 +1,38 @@
-"""Figures of a method comparison: one per wheel, every method's estimate against the reference."""
+"""Figures of a method comparison, one per wheel: a panel per method against the reference,
+then the distribution of every method's error.
+
+Each method (identical ones once, :mod:`wheelload.studies.identical`) gets its own panel
+and its own colour and line style (:mod:`~wheelload.studies.plots.method_panels`), the
+reference on top of it; the bottom panel gives a box of ``|estimate − reference|`` per method
+over the scored window, its axis set from the data (1.1 × the largest 99th percentile).
+
+Example
+-------
+>>> comparison_figure(compare_methods(signals, vehicle, names), signals, 0).savefig("fl.png")
+"""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from wheelload.estimators.logs.signals import Signals  # noqa: E402
+from wheelload.estimators.logs.signals import Signals
 from wheelload.models.conventions import WHEELS
 from wheelload.models.files.temporaries import replacing
-from wheelload.studies.pipeline.comparison import Comparison  # noqa: E402
+from wheelload.studies.pipeline.comparison import Comparison, evaluation_mask
+from wheelload.studies.plots.method_panels import (
+    draw_against_reference,
+    draw_error_distribution,
+    method_styles,
+    write_notes,
+)
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 WHEEL_NAMES = ("front left", "front right", "rear left", "rear right")
+MOST_COLUMNS = 4
 
 
 def figure_paths(folder: str | Path, stem: str) -> list[Path]:
@@ -38,38 +55,53 @@ def _save(figure, path: Path) -> None:
         figure.savefig(temporary, dpi=110)
 
 
+def comparison_figure(
+    comparison: Comparison, signals: Signals, wheel: int, title: str = ""
+) -> Figure:
+    """Wheel ``wheel`` (0-3, FL..RR): a panel per method, its load under the reference; the
+    error distribution of every method over the scored window; a note per identical group."""
+    from matplotlib.figure import Figure
+
+    distinct = comparison.distinct()
+    styles = method_styles([name for name, _ in distinct])
+    columns = min(MOST_COLUMNS, len(distinct))
+    rows = math.ceil(len(distinct) / columns)
+    notes = comparison.notes()
+    figure = Figure(figsize=(15, 2.3 * rows + 4.2 + 0.3 * len(notes)))
+    grid = figure.add_gridspec(rows + 1, columns, height_ratios=[1.0] * rows + [1.6])
+    t, reference = signals.t, signals.reference[:, wheel]
+    start, end = comparison.window
+    first = None
+    for k, (name, result) in enumerate(distinct):
+        ax = figure.add_subplot(grid[k // columns, k % columns], sharex=first, sharey=first)
+        first = first or ax
+        ax.axvspan(start, end, color="0.93", zorder=0)
+        load = result.estimate.loads[:, wheel]
+        draw_against_reference(ax, t, reference, load, styles[name], name)
+        rmse = result.metrics.loc[WHEELS[wheel], "RMSE"]
+        ax.set_title(f"{name}: RMSE {rmse:.0f} N", fontsize=9)
+        if k % columns == 0:
+            ax.set_ylabel("Fz [kN]")
+        if k + columns >= len(distinct):
+            ax.set_xlabel("t [s] (scored window shaded)")
+    first.legend(loc="best", fontsize=7)
+    mask = evaluation_mask(t, comparison.window)
+    errors = {
+        name: result.estimate.loads[mask, wheel] - reference[mask] for name, result in distinct
+    }
+    where = f"t = {start:g}..{end:g} s ({int(mask.sum())} samples)"
+    draw_error_distribution(figure.add_subplot(grid[rows, :]), errors, styles, where)
+    figure.suptitle(f"{WHEEL_NAMES[wheel]}{' — ' + title if title else ''}")
+    figure.tight_layout(rect=(0, write_notes(figure, notes), 1, 1))
+    return figure
+
+
 def plot_comparison(
     comparison: Comparison, signals: Signals, paths: list[Path], title: str = ""
 ) -> list[Path]:
-    """One figure per wheel: reference and each method's estimate (top), their errors (bottom)."""
-    t = signals.t
+    """Save :func:`comparison_figure` of each wheel to ``paths`` (FL, FR, RL, RR)."""
     for i, path in enumerate(paths):
-        figure, (top, bottom) = plt.subplots(
-            2, 1, figsize=(14, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1.2]}
-        )
-        top.plot(t, signals.reference[:, i] / 1000.0, color="black", lw=1.4, label="reference")
-        for result in comparison.results:
-            load = result.estimate.loads[:, i]
-            rmse = result.metrics.loc[WHEELS[i], "RMSE"]
-            label = f"{result.info.name} (RMSE {rmse:.0f} N)"
-            (line,) = top.plot(t, load / 1000.0, lw=0.9, label=label)
-            bottom.plot(t, load - signals.reference[:, i], lw=0.8, color=line.get_color())
-        for ax in (top, bottom):
-            ax.axvspan(*comparison.window, color="0.9", zorder=0)
-            ax.grid(alpha=0.3)
-        top.set_ylabel("Fz [kN]")
-        top.set_title(f"{WHEEL_NAMES[i]}{' — ' + title if title else ''}")
-        top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-        bottom.set_ylabel("error [N]")
-        bottom.set_xlabel("t [s] (scored window shaded)")
-        limit = np.nanpercentile(
-            np.abs(np.concatenate([r.estimate.loads[:, i] - signals.reference[:, i]
-                                   for r in comparison.results])), 99.5
-        )  # fmt: skip
-        bottom.set_ylim(-1.2 * limit - 1, 1.2 * limit + 1)
-        figure.tight_layout()
-        _save(figure, path)
-        plt.close(figure)
+        _save(comparison_figure(comparison, signals, i, title), path)
     return paths
 
 

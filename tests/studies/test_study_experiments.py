@@ -39,7 +39,11 @@ def test_iso_dlc_quick_table_matches_a_direct_run_and_rerun_hits_the_cache(tmp_p
     for name in ("iso-dlc.md", "iso-dlc_loads.png", "iso-dlc_metrics.png"):
         assert (out / name).stat().st_size > 1000
     table = pd.read_csv(out / "iso-dlc_table.csv", index_col=[0, 1])
-    assert len(table) == 4 * count
+    # projection-mp and projection-ls are identical on the ISO DLC (P ∝ I before the
+    # projection, every travel sensor present): one row, named for both, with a note.
+    assert len(table) == 4 * (count - 1)
+    assert ("RMSE [N]", "projection-mp = projection-ls") in table.index
+    assert "*Note:* projection-mp = projection-ls: identical" in (out / "iso-dlc.md").read_text()
     # Independent check: the scenario runner's own log (noise 1, seed 0), the KF from the
     # registry, the paper's metrics over 5-12 s; equal to the CSV's 3 decimals.
     log = run_scenario("iso-dlc", example_vehicle_path()).log
