@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import os
 import signal
 import sys
 import threading
 from collections.abc import Sequence
 from importlib.metadata import version
+
+from wheelload.studies.commands.options import log_level
 
 COMMANDS = (
     "wheelload.studies.commands.vehicle",
@@ -71,7 +74,11 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
     )
-    parser.add_argument("--version", action="version", version=version("wheelload"))
+    parser.add_argument("--version", action="version", version=f"wheelload {version('wheelload')}")
+    parser.add_argument("-q", "--quiet", dest="quiet_top", action="store_true", help="only errors")
+    parser.add_argument(
+        "-v", "--verbose", dest="verbose_top", action="count", help="more on stderr (-vv debug)"
+    )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     first = next(iter(argv), None) if argv else None
     modules = (COMMAND_MODULES[first],) if first in COMMAND_MODULES else COMMANDS
@@ -106,10 +113,31 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, previous)
 
 
+def _configure_logging(level: int) -> None:
+    """One stderr handler for the library's loggers, at the ``-q``/``-v`` level; Python
+    warnings (NumPy's among them) go through it too."""
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
+    root = logging.getLogger("wheelload")
+    root.handlers[:] = [handler]
+    root.setLevel(level)
+    root.propagate = False
+    logging.captureWarnings(True)
+    warnings_logger = logging.getLogger("py.warnings")
+    warnings_logger.handlers[:] = [handler]
+    warnings_logger.setLevel(level)
+    warnings_logger.propagate = False
+
+
 def _main(argv: list[str]) -> int:
     from wheelload.models.files.build_folder import BuildFolderError
 
-    args = build_parser(argv).parse_args(argv)
+    parser = build_parser(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # the command's own usage, not the top level's
+        subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        subparsers.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
+    _configure_logging(log_level(args))
     try:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError, BuildFolderError) as error:

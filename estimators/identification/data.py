@@ -172,7 +172,9 @@ def read_rig(path: str | Path) -> tuple[DataSet, ...]:
         raise LogError(f"{source}: no such rig file")
     try:
         frame = pd.read_csv(path, comment="#")
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError) as error:
+    except LogError:
+        raise
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, ValueError) as error:
         raise LogError(f"{source}: cannot be read: {error}") from None
     frame = frame.rename(columns=lambda name: str(name).strip())
     if set(ARB_COLUMNS) <= set(frame.columns):
@@ -218,13 +220,20 @@ def drive_gates(p, sets: tuple[DataSet, ...]) -> tuple[float, ...]:
 
 
 def read_drive(
-    path: str | Path, channels: tuple[str, ...], optional: frozenset[str] = frozenset()
+    path: str | Path,
+    channels: tuple[str, ...],
+    optional: frozenset[str] = frozenset(),
+    *,
+    channel_map: str | Path | None = None,
+    wiring_checks: bool = True,
 ) -> DataSet:
     """Read a drive log with reference loads for the model's signal ``channels``.
 
     A channel is taken from the validated log (travel rates derived when not
     logged) or, failing that, from a column of that name; an ``optional``
-    channel the log lacks is 0.
+    channel the log lacks is 0. With a ``channel_map`` the log (any format
+    :func:`~wheelload.estimators.logs.signals.read_log` reads) is read through it,
+    with its wiring checks unless ``wiring_checks`` is off.
     """
     path = Path(path)
     source = str(path)
@@ -232,7 +241,16 @@ def read_drive(
         raise LogError(f"{source}: no such log file")
     suffix = path.suffix.lower()
     try:
-        frame = pd.read_csv(path, comment="#") if suffix == ".csv" else pd.read_parquet(path)
+        if channel_map is not None:
+            from wheelload.estimators.logs.signals import read_log
+
+            frame = read_log(path, channels=channel_map, wiring_checks=wiring_checks).to_frame()
+        elif suffix == ".csv":
+            frame = pd.read_csv(path, comment="#")
+        else:
+            frame = pd.read_parquet(path)
+    except LogError:
+        raise
     except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, ValueError) as error:
         raise LogError(f"{source}: cannot be read: {error}") from None
     frame = frame.rename(columns=lambda name: str(name).strip())

@@ -383,7 +383,10 @@ def scan_log(
     present = chunk_columns(path)
     for name in REQUIRED:
         if name not in present:
-            raise ChunkError(f"{source}: missing column '{name}'")
+            raise ChunkError(
+                f"{source}: missing column '{name}' "
+                "(a logger's names: give a channel map, --channels)"
+            )
     for group in GROUPS:
         if 0 < sum(name in present for name in group) < len(group):
             raise ChunkError(f"{source}: a partial group of {group[0]}")

@@ -303,7 +303,10 @@ def signals_from_frame(
     frame = frame.rename(columns=lambda name: str(name).strip())
     for name in REQUIRED:
         if name not in frame.columns:
-            raise LogError(f"{source}: missing column '{name}'")
+            raise LogError(
+                f"{source}: missing column '{name}' "
+                "(a logger's names: give a channel map, --channels)"
+            )
 
     def column(name: str) -> np.ndarray:
         kind = frame[name].dtype

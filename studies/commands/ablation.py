@@ -6,13 +6,20 @@ The study is :mod:`~wheelload.studies.experiments.model_terms_ablation`.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
+from wheelload.studies.commands.options import CommandTraits, add_common_options, show_progress
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS
 from wheelload.studies.experiments import model_terms_ablation
+
+logger = logging.getLogger(__name__)
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(vehicle=True, writes=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -34,7 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--quick", action="store_true", help="laps cut to 10 %% of their length (tests)"
     )
     parser.add_argument("--out", help="also write the long table as CSV")
-    parser.add_argument("--force", action="store_true", help="overwrite --out if it exists")
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 
@@ -49,7 +56,9 @@ def run(args: argparse.Namespace) -> int:
     options = Options(seed=args.seed, shorten=0.1 if args.quick else 1.0)
     table = model_terms_ablation.ablation(
         paths, scenarios, options, noise=args.noise,
-        progress=lambda text: print(text, file=sys.stderr, flush=True),
+        progress=(lambda text: print(text, file=sys.stderr, flush=True))
+        if show_progress(args) else logger.info,
+        allow_unusual=args.allow_unusual,
     )  # fmt: skip
     for vehicle in dict.fromkeys(table["vehicle"]):
         for title, labels in model_terms_ablation.label_groups().items():

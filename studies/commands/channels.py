@@ -13,6 +13,10 @@ import numpy as np
 
 from wheelload.estimators import read_log
 from wheelload.estimators.logs.readers import channel_map_template, channel_names, load_channel_map
+from wheelload.studies.commands.options import CommandTraits, add_common_options
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -23,6 +27,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--template", action="store_true", help="print a commented channel map")
     parser.add_argument("--list", metavar="LOG", help="print the channel names of LOG")
     parser.add_argument("--log", help="read this log through MAP and summarise it")
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 

@@ -18,7 +18,12 @@ from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
 from wheelload.estimators.logs.output_files import check_output_folder
 from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
+from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_common_options,
+    add_vehicle_option,
+    vehicle_file,
+)
 
 
 class Estimator(enum.Enum):
@@ -60,6 +65,10 @@ BIAS_CHOICES = {
 }
 
 
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(vehicle=True, writes=True)
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "codegen",
@@ -78,11 +87,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_vehicle_option(parser)
     parser.add_argument(
         "--out", required=True, help="output folder: new or empty (created if missing)"
-    )
-    parser.add_argument(
-        "--force",
-        action="store_true",
-        help="write into a folder that is not empty, replacing files of the same name",
     )
     parser.add_argument(
         "--precision",
@@ -123,7 +127,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         choices=[a.value for a in Arrival],
         help="kalman (default: the linked filter's covariance) or steady-state",
     )
-    add_allow_unusual(parser)
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 

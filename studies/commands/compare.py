@@ -12,9 +12,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators import SuspensionModel, read_log
-from wheelload.models import load_vehicle
-from wheelload.studies.commands.options import add_suspension_option
+from wheelload.estimators import SuspensionModel
+from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_common_options,
+    add_suspension_option,
+    log_of,
+    vehicle_of,
+)
 from wheelload.studies.pipeline.comparison import (
     compare_methods,
     format_table,
@@ -27,6 +32,9 @@ from wheelload.studies.plots.comparison import (
     plot_comparison,
     write_csv,
 )
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, scores=True, vehicle=True, writes=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -42,13 +50,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="kf,B,C,D,E,E+C,F",
         help="comma-separated method names (see `wheelload methods`; default kf,B,C,D,E,E+C,F)",
     )
-    parser.add_argument("--start", type=float, help="score from this time [s] (default: log start)")
-    parser.add_argument("--end", type=float, help="score up to this time [s] (default: log end)")
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per method (default 3)")
     parser.add_argument("--figures", help="folder for one PNG per wheel: LOGNAME_compare_fl.png ..")
     parser.add_argument("--csv", help="write the table (one row per method and wheel) to this CSV")
-    parser.add_argument("--force", action="store_true", help="overwrite existing output files")
     add_suspension_option(parser)
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 
@@ -62,8 +68,8 @@ def run(args: argparse.Namespace) -> int:
         if log_path.exists() and path.exists() and path.samefile(log_path):
             raise ValueError(f"{path} is the input log: choose another output file")
     check_writable(outputs, args.force)
-    vehicle = load_vehicle(Path(args.vehicle))
-    signals = read_log(log_path)
+    vehicle = vehicle_of(args.vehicle, args)
+    signals = log_of(log_path, args)
     window = None
     if args.start is not None or args.end is not None:
         start = float(signals.t[0]) if args.start is None else args.start

@@ -6,7 +6,13 @@ import argparse
 import os
 from pathlib import Path
 
+from wheelload.studies.commands.options import CommandTraits, add_common_options
+
 DOCS_PACKAGES = ("sphinx", "furo", "myst_parser")
+
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(writes=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -18,7 +24,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "pip install -e '.[docs]'.",
     )
     parser.add_argument("--out", required=True, help="folder of the site (absent or empty)")
-    parser.add_argument("--force", action="store_true", help="replace a non-empty --out")
     parser.add_argument(
         "--jobs",
         type=int,
@@ -30,6 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="a local MathJax tex-svg.js to serve with the site, for reading it offline "
         "(default: the pages load MathJax from its CDN)",
     )
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 

@@ -18,14 +18,19 @@ from wheelload.estimators import SuspensionModel
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
 from wheelload.studies.commands.options import (
-    add_allow_unusual,
+    CommandTraits,
+    add_common_options,
     add_suspension_option,
+    show_progress,
     vehicle_file,
 )
 from wheelload.studies.pipeline import batch
 from wheelload.studies.pipeline.example_log import example_log_path
 from wheelload.studies.pipeline.lean_estimate import estimate_lean, takes_lean_path
 from wheelload.studies.pipeline.summary import LogHeader, summary, summary_text
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -45,20 +50,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--method", default="kf", help="estimator name (see `wheelload methods`; default kf)"
     )
-    parser.add_argument("--channels", help="channel map TOML (wheelload channels --template)")
     parser.add_argument(
         "--out",
         help="one log: write the estimates to this .csv or .parquet; many: into this folder",
     )
     parser.add_argument("--plot", help="one log: save a figure of the estimates (.png .pdf .svg)")
-    parser.add_argument(
-        "--force", action="store_true", help="replace existing output files (never an input)"
-    )
-    parser.add_argument(
-        "--skip-wiring-checks",
-        action="store_true",
-        help="accept a log whose signs, units or wiring look wrong (see log_checks)",
-    )
     parser.add_argument(
         "--smooth",
         action="store_true",
@@ -87,10 +83,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="one log: read it whole into memory (default for a CSV/Parquet log with the KF: "
         "in chunks, memory bounded by the chunk)",
     )
-    parser.add_argument("--workers", type=int, default=1, help="local processes for many logs")
-    parser.add_argument("--dask", metavar="ADDRESS", help="run many logs on this Dask scheduler")
     add_suspension_option(parser)
-    add_allow_unusual(parser)
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 
@@ -195,7 +189,13 @@ def _run_many(paths: list[Path], settings: batch.EstimateSettings, args: argpars
     if folder is not None and folder.resolve() in {p.parent.resolve() for p in paths}:
         raise ValueError(f"{folder}: holds the input logs: write the estimates into another folder")
     table = batch.run_logs(
-        paths, settings, folder, workers=args.workers, dask_address=args.dask, force=args.force
+        paths,
+        settings,
+        folder,
+        workers=args.workers,
+        dask_address=args.dask,
+        force=args.force,
+        progress=show_progress(args),
     )
     columns = ["log", "samples", "mode", "mean_fz_fl", "mean_fz_rr", "min_fz", "rmse_pooled"]
     shown = table[[c for c in columns + ["error"] if c in table.columns]]

@@ -18,12 +18,12 @@ from wheelload.estimators.identification.report import (
     parameter_table,
     rmse_table,
 )
-from wheelload.models import load_vehicle
 from wheelload.models.vehicle.file import (
     check_output_path,
     write_text_atomically,
     write_vehicle_text,
 )
+from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
 from wheelload.studies.pipeline.identification import identify_vehicle
 
 REPORT_FILES = (
@@ -34,6 +34,10 @@ REPORT_FILES = (
     "maps.png",
     "residuals.png",
 )
+
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 
 
 def register(subparsers) -> None:
@@ -69,7 +73,7 @@ def register(subparsers) -> None:
         default=0.25,
         help="hold a parameter whose 1σ relative precision is worse than this (default 0.25)",
     )
-    parser.add_argument("--force", action="store_true", help="replace existing output files")
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=handle)
 
 
@@ -88,7 +92,7 @@ def _knots(args: argparse.Namespace) -> tuple[float, ...]:
 
 def handle(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle)
-    load_vehicle(vehicle_path)  # the vehicle file's errors before the outputs'
+    vehicle_of(vehicle_path, args)  # the vehicle file's errors before the outputs'
     inputs = (vehicle_path, *map(Path, args.rig), *map(Path, args.drive))
     out = check_output_path(args.out, inputs, args.force)
     report = Path(args.report) if args.report else None
@@ -105,6 +109,9 @@ def handle(args: argparse.Namespace) -> int:
         fixed=frozenset(name.strip() for name in args.fix.split(",") if name.strip()),
         precision=args.precision,
         instrumental=args.instrumental,
+        allow_unusual=args.allow_unusual,
+        channel_map=args.channels,
+        wiring_checks=not args.skip_wiring_checks,
     )
     result, keys = identified.result, identified.keys
     write_vehicle_text(identified.text, out, inputs=inputs, force=args.force)

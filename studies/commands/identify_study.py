@@ -13,12 +13,16 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from wheelload.models import load_vehicle
+from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
 from wheelload.studies.drive.scenarios import SCENARIOS as SCENARIO_TABLE
 from wheelload.studies.experiments.identification_study import StudySettings, run_study
 
 SCENARIO_NAMES = tuple(sorted(SCENARIO_TABLE))
 QUICK = ("accel-in-turn", "iso-dlc", "slope-20")  # identified from accel-in-turn
+
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(vehicle=True, writes=True)
 
 
 def register(subparsers) -> None:
@@ -38,6 +42,7 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--vehicle", help="the true vehicle file the plant runs (default: the bundled sports car)"
     )
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=handle)
 
 
@@ -49,9 +54,13 @@ def handle(args: argparse.Namespace) -> int:
         settings = dataclasses.replace(settings, identify_on=args.identify_on)
     if args.vehicle:
         path = Path(args.vehicle)
-        load_vehicle(path)  # a one-line error for a bad file before any simulation
+        vehicle_of(path, args)  # a one-line error for a bad file before any simulation
         settings = dataclasses.replace(settings, vehicle=path)
     folder = Path(args.out)
+    tables = [folder / f"{name}.csv" for name in ("identification", "tuning")]
+    existing = [path for path in tables if path.exists()]
+    if existing and not args.force:
+        raise ValueError(f"{existing[0]} exists: choose another --out or add --force")
     identification, tuning = run_study(settings, folder)
     for name, frame in (("identification", identification), ("tuning", tuning)):
         target = folder / f"{name}.csv"

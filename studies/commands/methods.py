@@ -5,12 +5,17 @@ from __future__ import annotations
 import argparse
 
 from wheelload.estimators.registry import methods
+from wheelload.studies.commands.options import CommandTraits, add_common_options
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "methods", help="list the estimators (names for --method / --methods)"
     )
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 

@@ -5,13 +5,20 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import pandas as pd
-
 from wheelload.estimators.registry import build
-from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_vehicle_option
+from wheelload.models import example_vehicle_path
+from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_common_options,
+    add_vehicle_option,
+    log_of,
+    vehicle_of,
+)
 from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
 from wheelload.studies.pipeline.batch import expand_logs
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, vehicle=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,13 +31,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--splits", type=float, nargs="+", default=[0.3, 0.4, 0.45, 0.55, 0.6, 0.7],
         help="roll_split_front values for the IMU-only sweep (the default split is added)",
     )  # fmt: skip
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path())
+    vehicle = vehicle_of(args.vehicle or example_vehicle_path(), args)
     (path,) = expand_logs([args.log])
-    frame = pd.read_parquet(path) if path.suffix != ".csv" else pd.read_csv(path, comment="#")
+    frame = log_of(path, args).to_frame()
     table = sensor_set_table(frame, vehicle, Path(path).name)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     default = float(build("kf", vehicle).parameters.roll_split_front)

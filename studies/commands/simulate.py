@@ -10,8 +10,12 @@ from pathlib import Path
 
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.payload import Payload
-from wheelload.models.vehicle.file import example_vehicle_path, load_vehicle
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.models.vehicle.file import example_vehicle_path
+from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_common_options,
+    vehicle_of,
+)
 from wheelload.studies.drive.payload_schedule import PayloadChange, PayloadSchedule
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.drive.roads import ISO_CLASSES
@@ -23,6 +27,10 @@ from wheelload.studies.drive.sensors import GRADES, MTI_1, sensor_grade
 from wheelload.studies.plots.scenario import plot_scenario
 
 RIG_SWEEP = "rig-sweep"
+
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(vehicle=True, writes=True)
 
 
 def register(subparsers) -> None:
@@ -46,9 +54,6 @@ def register(subparsers) -> None:
         "file is written beside it as <stem>_arb.csv)",
     )
     parser.add_argument("--plot", help="save a figure (.png, .pdf, .svg) of the run")
-    parser.add_argument(
-        "--force", action="store_true", help="replace existing output files (never an input)"
-    )
     parser.add_argument("--vehicle", default=None, help="vehicle file (default: bundled)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
     parser.add_argument(
@@ -94,7 +99,7 @@ def register(subparsers) -> None:
         help="the payload becomes KG at X,Y,Z from time T [s] on, over 1.5 s, while the car "
         "stands still (standstill, stop-and-go)",
     )
-    add_allow_unusual(parser)
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=handle)
 
 
@@ -194,7 +199,7 @@ def _rig(args: argparse.Namespace, vehicle) -> int:
             f"{RIG_SWEEP}"
         )
     settings = RigSettings(seed=args.seed, rate=args.rate)
-    corner, bar = rig_sweep(load_vehicle(vehicle), settings)
+    corner, bar = rig_sweep(vehicle_of(vehicle, args), settings)
     paths = write_rig(corner, bar, args.out, force=args.force)
     print(
         f"{RIG_SWEEP}: {len(corner)} corner-rig and {len(bar)} bar-rig samples "

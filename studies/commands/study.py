@@ -19,8 +19,11 @@ from wheelload.estimators import SuspensionModel, read_log
 from wheelload.estimators.logs.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_common_options,
     add_suspension_option,
-    add_vehicle_file_options,
+    add_vehicle_option,
+    show_progress,
     vehicle_file,
 )
 from wheelload.studies.experiments import catalog as experiments
@@ -31,6 +34,9 @@ from wheelload.studies.experiments.runs.context import Context, Outputs, Setting
 from wheelload.studies.experiments.runs.folder_lock import folder_lock
 from wheelload.studies.experiments.runs.runner import Runner, check_scheduler
 
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True, workers=2)
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     study = subparsers.add_parser("study", help="run a comparison study and print its table")
@@ -40,7 +46,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
     )
     study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
-    study.add_argument("--channels", help="channel map TOML for --logs (wheelload channels)")
     study.add_argument(
         "--scenarios",
         nargs="*",
@@ -79,19 +84,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument(
         "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
     )
-    study.add_argument(
-        "--force", action="store_true", help="replace existing output files (never an input)"
-    )
-    study.add_argument(
-        "--skip-wiring-checks", action="store_true", help="accept logs whose wiring looks wrong"
-    )
-    add_vehicle_file_options(study)
+    add_vehicle_option(study)
     # the experiments' own options (--quick, --force and --out are shared with mhe-vs-kf)
-    study.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
-    study.add_argument("--dask", metavar="ADDRESS", help="run on this Dask scheduler")
     study.add_argument("--cache", help="cache folder (default DIR/.cache)")
-    study.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_suspension_option(study)
+    add_common_options(study, TRAITS)
     study.set_defaults(handler=run)
 
 
@@ -213,7 +210,7 @@ def _run_experiment(args: argparse.Namespace, out: Path) -> int:
         cache=ResultCache(folder=Path(args.cache) if args.cache else out / ".cache"),
         workers=args.workers,
         dask_address=args.dask,
-        progress=not args.no_progress,
+        progress=show_progress(args),
     )
     outputs = Outputs(folder=out, force=args.force)
     start = time.perf_counter()

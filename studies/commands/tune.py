@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities, read_log
+from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
 from wheelload.estimators.identification.tuning import (
     NIS_BAND,
@@ -28,7 +28,6 @@ from wheelload.estimators.identification.tuning import (
     tune,
     tuned_vehicle,
 )
-from wheelload.models import load_vehicle
 from wheelload.models.vehicle.description import SIGMA_KEYS
 from wheelload.models.vehicle.file import (
     add_values,
@@ -36,6 +35,10 @@ from wheelload.models.vehicle.file import (
     prepend_comment,
     write_vehicle_text,
 )
+from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 
 
 def register(subparsers) -> None:
@@ -47,7 +50,6 @@ def register(subparsers) -> None:
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
     parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
-    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
     parser.add_argument(
         "--evaluate",
         nargs="+",
@@ -61,6 +63,7 @@ def register(subparsers) -> None:
         default=400,
         help="Nelder-Mead iterations per fit (default 400; fewer for a quick look)",
     )
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=handle)
 
 
@@ -68,8 +71,8 @@ def handle(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle)
     inputs = (vehicle_path, *map(Path, args.logs))
     out = check_output_path(args.out, inputs, args.force)
-    vehicle = load_vehicle(vehicle_path)
-    logs = tuple(read_log(path) for path in args.logs)
+    vehicle = vehicle_of(vehicle_path, args)
+    logs = tuple(log_of(path, args) for path in args.logs)
     references = all(signals.reference is not None for signals in logs)
     runs = FilterRuns(vehicle, logs)
     result = tune(runs, noise_densities(vehicle), references=references, iterations=args.iterations)
@@ -185,7 +188,7 @@ def handle(args: argparse.Namespace) -> int:
     )
     print(f"vehicle file written to {out}")
     if args.evaluate:
-        print(evaluation_table(vehicle, new_vehicle, tuple(read_log(p) for p in args.evaluate)))
+        print(evaluation_table(vehicle, new_vehicle, tuple(log_of(p, args) for p in args.evaluate)))
     return 0
 
 

@@ -5,7 +5,10 @@ from __future__ import annotations
 import argparse
 
 from wheelload.models import load_vehicle, static_loads, vehicle_mass_centre, vehicle_template
-from wheelload.studies.commands.options import add_allow_unusual
+from wheelload.studies.commands.options import CommandTraits, add_common_options
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(vehicle=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -15,7 +18,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--template", action="store_true", help="print a commented template")
     group.add_argument("file", nargs="?", help="vehicle TOML file to check and summarise")
-    add_allow_unusual(parser)
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
 

@@ -13,13 +13,16 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators import WeighSettings, sprung_geometry, weigh
-from wheelload.estimators.logs.signals import read_log
-from wheelload.models import load_vehicle, vehicle_mass_centre
+from wheelload.models import vehicle_mass_centre
 from wheelload.models.vehicle.file import (
     check_output_path,
     edited_vehicle_text,
     write_vehicle_text,
 )
+from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
+
+#: The shared option groups this command takes (options.CommandTraits).
+TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 
 
 def register(subparsers) -> None:
@@ -31,24 +34,24 @@ def register(subparsers) -> None:
     parser.add_argument("logs", nargs="+", metavar="LOG", help="logs at rest (.csv or .parquet)")
     parser.add_argument("--vehicle", required=True, help="vehicle TOML file (suspension, geometry)")
     parser.add_argument("--out", help="write an updated copy of the vehicle file here")
-    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
     parser.add_argument(
         "--max-speed", type=float, default=0.3, help="speed below which a sample is at rest [m/s]"
     )
     parser.add_argument(
         "--settle", type=float, default=1.0, help="seconds dropped at the start of a still period"
     )
+    add_common_options(parser, TRAITS)
     parser.set_defaults(handler=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle)
-    vehicle = load_vehicle(vehicle_path)
+    vehicle = vehicle_of(vehicle_path, args)
     inputs = (vehicle_path, *(Path(p) for p in args.logs))
     if args.out:  # before the work: an output that would replace a file is refused at once
         check_output_path(args.out, inputs, args.force)
     settings = WeighSettings(max_speed=args.max_speed, settle=args.settle)
-    result = weigh([read_log(path) for path in args.logs], vehicle, settings)
+    result = weigh([log_of(path, args) for path in args.logs], vehicle, settings)
     centre = vehicle_mass_centre(vehicle)
     file_values = (vehicle.mass.total, centre.lf, 0.0, centre.height)
     print(f"{'':>22}{'estimate':>12}{'1 sigma':>10}{'file':>10}")

@@ -64,13 +64,16 @@ def ablation(
     options: Options,
     noise: float = 1.0,
     progress=None,
+    allow_unusual: bool = False,
 ) -> pd.DataFrame:
     """Long table: vehicle, scenario, configuration, RMSE and Max [N]."""
     rows = []
     for path in vehicle_paths:
-        vehicle = load_vehicle(path)
+        vehicle = load_vehicle(path, allow_unusual=allow_unusual)
         for name in scenarios:
-            result = run_scenario(name, path, options=options, noise=noise)
+            result = run_scenario(
+                name, path, options=options, noise=noise, allow_unusual=allow_unusual
+            )
             signals = signals_from_frame(result.log, source=f"{vehicle.name}/{name}")
             for label, variant in configurations(vehicle).items():
                 estimate = build("kf", variant).run(signals)

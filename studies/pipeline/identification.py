@@ -55,16 +55,24 @@ def identify_vehicle(
     fixed: frozenset[str] = frozenset(),
     precision: float = 0.25,
     instrumental: bool = False,
+    allow_unusual: bool = False,
+    channel_map: str | Path | None = None,
+    wiring_checks: bool = True,
 ) -> Identified:
     """Fit the suspension maps of ``vehicle_path`` (a piecewise damper with ``knots``, else
     linear) to the rig files and drive logs; the new file's text carries the changed
-    values with an 'identified' comment."""
-    vehicle = load_vehicle(vehicle_path)
+    values with an 'identified' comment. ``channel_map`` and ``wiring_checks``: how the
+    drive logs are read (:func:`~wheelload.estimators.identification.data.read_drive`)."""
+    vehicle = load_vehicle(vehicle_path, allow_unusual=allow_unusual)
     text = vehicle_path.read_text(encoding="utf-8")
     table = tomllib.loads(text)
     model = piecewise_model(knots) if knots else default_model()
     sets = tuple(s for path in rig for s in read_rig(path))
-    sets += tuple(read_drive(path, model.channel_names(), model.optional) for path in drive)
+    sets += tuple(
+        read_drive(path, model.channel_names(), model.optional,
+                   channel_map=channel_map, wiring_checks=wiring_checks)
+        for path in drive
+    )  # fmt: skip
     # The terms the vehicle file switches on, where the drive logs carry their inputs.
     gates = drive_gates(ModelParameters.from_vehicle(vehicle), sets)
     model = piecewise_model(knots, gates) if knots else default_model(gates)

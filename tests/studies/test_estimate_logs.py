@@ -124,7 +124,7 @@ def test_a_bad_log_in_a_fleet_is_a_row_with_its_error(tmp_path, example):
     example.iloc[:200].drop(columns=["ax"]).to_csv(tmp_path / "bad.csv", index=False)
     settings = EstimateSettings(vehicle=example_vehicle_path())
     table = run_logs(expand_logs([str(tmp_path)]), settings, None, progress=False)
-    assert table.loc[0, "error"].endswith("bad.csv: missing column 'ax'")
+    assert "bad.csv: missing column 'ax'" in table.loc[0, "error"]
     assert table.loc[1, "error"] == "" and table.loc[1, "samples"] == 200
 
 

@@ -17,7 +17,11 @@ from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import joint_filter
-from wheelload.studies.commands.options import add_vehicle_file_options
+from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_message_options,
+    add_vehicle_file_options,
+)
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 BENCHMARKS = (
@@ -33,8 +37,16 @@ BENCHMARKS = (
 )
 
 
+#: The bench command itself only dispatches: each benchmark has its own options.
+TRAITS = CommandTraits()
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
-    bench = subparsers.add_parser("bench", help="print timings and the hostile-input table")
+    bench = subparsers.add_parser(
+        "bench",
+        help="timings beside their alternatives, hostile inputs, fault injection "
+        "(wheelload bench --help lists them)",
+    )
     benchmarks = bench.add_subparsers(dest="what", required=True, metavar="WHAT")
     parser = benchmarks.add_parser("kf", help="two-stage KF: compiled run, step, numpy loop")
     parser.add_argument(
@@ -50,6 +62,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
     for module in BENCHMARKS:
         importlib.import_module(module).register_bench(benchmarks)
+    add_message_options(bench)
+    for benchmark in benchmarks.choices.values():
+        add_message_options(benchmark)
 
 
 def _tile(signals, n):
