@@ -267,7 +267,16 @@ def read_drive(
     signals = signals_from_frame(
         frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]), source=source
     )
+    travels = [name for name in channels if name.startswith("d_")]
+    if travels and not np.isfinite(signals.d).any():
+        raise LogError(
+            f"{source}: no suspension travel ({', '.join(travels)}): the maps are fitted to "
+            "the travels against the reference loads; log the travel sensors (or map them "
+            "with --channels)"
+        )
     validated = signals.to_frame()
+    if signals.az_assumed:  # g, as the estimators take it
+        validated["az"] = signals.acc[:, 2]
     if signals.rates is not None and signals.rate_dots is None:
         derived = rate_derivatives(signals)
         if np.isfinite(derived).any():

@@ -174,11 +174,13 @@ class Signals:
         return float(1.0 / np.median(np.diff(self.t)))
 
     def to_frame(self) -> pd.DataFrame:
-        """The signals as a DataFrame with the log's column names."""
+        """The signals as a DataFrame with the log's column names (no ``az`` where assumed)."""
         import pandas as pd
 
         columns = {"t": self.t, "vx": self.vx}
-        columns.update(zip(("ax", "ay", "az"), self.acc.T))
+        # an assumed az (g, the log had none) is left out, so that it stays assumed
+        kept = ("ax", "ay") if self.az_assumed else ("ax", "ay", "az")
+        columns.update(zip(kept, self.acc.T))
         if self.rates is not None:
             columns.update(zip(RATES, self.rates.T))
         columns.update(zip(TRAVEL, self.d.T))

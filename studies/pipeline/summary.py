@@ -29,6 +29,7 @@ class ScannedLog(Protocol):
     source: str
     t: np.ndarray
     velocities_derived: bool
+    az_assumed: bool
 
     @property
     def sample_rate(self) -> float: ...
@@ -78,12 +79,21 @@ def guard_lines(estimate: Estimate) -> list[str]:
     return _guard_lines(digest, estimate.sensor_faults)
 
 
-def _guard_lines(digest: EstimateDigest, faults) -> list[str]:
+def _guard_lines(digest: EstimateDigest, faults, assumed: tuple[str, ...] = ()) -> list[str]:
+    """Guard lines; a fault on an ``assumed`` channel (the log lacks it) is the assumption
+    failing, not a sensor's fault, and is said so."""
     lines = []
     named = ", ".join(f"{flag.name.lower()} {n}" for flag, n in digest.guards.items() if n)
     if named:
         lines.append(f"samples flagged by the guards: {named}")
     for fault in faults:
+        if fault.channel in assumed:
+            lines.append(
+                f"the assumed {fault.channel} (not in the log) does not hold from "
+                f"{fault.start:.2f} s to {fault.end:.2f} s (test statistic "
+                f"{fault.statistic:.1f}); it was left out of the updates: log {fault.channel}"
+            )
+            continue
         lines.append(
             f"sensor fault: {fault.channel} from {fault.start:.2f} s to {fault.end:.2f} s "
             f"(test statistic {fault.statistic:.1f}); the channel was left out of the updates"
@@ -112,6 +122,7 @@ class LogHeader:
     velocities_derived: bool
     mode: str
     has_reference: bool
+    assumed: tuple[str, ...] = ()  # channels the log lacks, taken as assumed values
 
     @classmethod
     def of(cls, log: ScannedLog, *, has_reference: bool) -> LogHeader:
@@ -124,6 +135,7 @@ class LogHeader:
             velocities_derived=log.velocities_derived,
             mode=log.mode(),
             has_reference=has_reference,
+            assumed=("az",) if log.az_assumed else (),
         )
 
 
@@ -153,7 +165,7 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
     lines.append(f"samples with a skipped update (missing or guarded input): {digest.skipped}")
     if digest.assumed:
         lines.append(f"samples with an assumed input (status bits 20-22): {digest.assumed}")
-    lines.extend(_guard_lines(digest, faults))
+    lines.extend(_guard_lines(digest, faults, header.assumed))
     for flag, dropped in digest.dropped.items():
         if dropped:
             name = str(flag.name).lower().replace("_", " ")

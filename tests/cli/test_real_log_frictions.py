@@ -1,0 +1,65 @@
+"""Real logs as users bring them: a missing travel, a missing az, a logger's names.
+
+Each test writes a real log (the bundled lane change with channels removed) and runs the
+library's own reader, writer, summary or command on it.
+"""
+
+import pandas as pd
+import pytest
+
+from wheelload.estimators import TwoStageKF, read_log, write_log
+from wheelload.estimators.result import SensorFault
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.cli import main
+from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline.example_log import example_log_path
+from wheelload.studies.pipeline.summary import LogHeader, summary_text
+
+
+@pytest.fixture(scope="module")
+def plant():
+    return pd.read_csv(example_log_path(), comment="#")
+
+
+def test_identify_without_travel_names_the_missing_channels(plant, tmp_path, capsys):
+    """A research car with wheel-force transducers and no travel: the error says so."""
+    log = tmp_path / "no_travel.csv"
+    plant.drop(columns=[c for c in plant.columns if c[:2] in ("d_", "v_")]).to_csv(log)
+    out = tmp_path / "identified.toml"
+    args = ["identify", "--vehicle", str(example_vehicle_path()), "--out", str(out)]
+    assert main([*args, "--drive", str(log)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith(
+        "no suspension travel (d_fl, d_fr, d_rl, d_rr): the maps are fitted to the travels "
+        "against the reference loads; log the travel sensors (or map them with --channels)"
+    )
+    assert len(err.splitlines()) == 1 and not out.exists()
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_an_assumed_az_stays_assumed_through_write_log(plant, tmp_path, suffix):
+    log = tmp_path / "no_az.csv"
+    plant.drop(columns=["az"]).to_csv(log, index=False)
+    signals = read_log(log)
+    assert signals.az_assumed
+    again = tmp_path / f"again{suffix}"
+    write_log(signals, again)
+    read_again = read_log(again)
+    assert read_again.az_assumed
+    assert "no az: g assumed" in read_again.mode()
+    assert (read_again.acc == signals.acc).all()
+
+
+def test_a_fault_on_the_assumed_az_is_not_called_a_sensor_fault(plant, tmp_path):
+    log = tmp_path / "no_az.csv"
+    plant.drop(columns=["az"]).to_csv(log, index=False)
+    signals = read_log(log)
+    estimate = TwoStageKF(load_vehicle(example_vehicle_path())).run(signals)
+    digest = EstimateDigest(samples=len(estimate), reference_wheels=None)
+    digest.add(estimate.loads, estimate.std, estimate.flags)
+    header = LogHeader.of(signals, has_reference=False)
+    assert header.assumed == ("az",)
+    faults = (*estimate.sensor_faults, SensorFault(channel="az", start=5.0, end=6.0, statistic=9.0))
+    text = summary_text(header, digest, faults, "sports_car")
+    assert "sensor fault: az" not in text
+    assert "the assumed az (not in the log) does not hold from 5.00 s to 6.00 s" in text
