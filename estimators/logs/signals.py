@@ -369,7 +369,7 @@ def signals_from_frame(
         speed, speed_source = np.zeros(t.size), SpeedSource.NONE
     check_units(acc, d, v, speed, source)
     if wiring_checks:
-        raise_for_wiring(check_wiring(t, speed, acc, d, group(RATES)), source)
+        raise_for_wiring(check_wiring(t, speed, acc, d, group(RATES, partial=True)), source)
     derived = v is None and bool(np.isfinite(d).any())
     if derived:
         v = derive_velocities(t, d, velocity_cutoff, source)
@@ -381,10 +381,10 @@ def signals_from_frame(
         acc=acc,
         d=d,
         v=v,
-        rates=group(RATES),
+        rates=group(RATES, partial=True),  # any subset of wx wy wz: the others missing
         reference=group(REFERENCE, partial=True),
         hub=group(HUB),
-        rate_dots=group(RATE_DERIVATIVES),
+        rate_dots=group(RATE_DERIVATIVES, partial=True),
         velocities_derived=derived,
         source=source,
         az_assumed=az_assumed,

@@ -63,3 +63,27 @@ def test_a_fault_on_the_assumed_az_is_not_called_a_sensor_fault(plant, tmp_path)
     text = summary_text(header, digest, faults, "sports_car")
     assert "sensor fault: az" not in text
     assert "the assumed az (not in the log) does not hold from 5.00 s to 6.00 s" in text
+
+
+def test_a_partial_rate_set_is_read_and_its_terms_flagged(plant, tmp_path, capsys):
+    """Roll and yaw rate without a pitch rate: the log is read (the two rates kept, the
+    pitch rate missing), the terms that need all three are dropped and flagged, and the
+    loads stay within 1 N of the full log's pooled RMSE (27.8 N on the bundled log)."""
+    log = tmp_path / "no_pitch_rate.csv"
+    plant.drop(columns=["wy"]).to_csv(log, index=False)
+    signals = read_log(log)
+    assert signals.rates.shape[1] == 3
+    assert pd.isna(signals.rates[:, 1]).all()
+    assert (signals.rates[:, [0, 2]] == plant[["wx", "wz"]].to_numpy()).all()
+    vehicle = str(example_vehicle_path())
+    assert main(["estimate", str(log), "--vehicle", vehicle]) == 0
+    partial = capsys.readouterr().out
+    assert main(["estimate", str(example_log_path()), "--vehicle", vehicle]) == 0
+    full = capsys.readouterr().out
+
+    def pooled(text: str) -> float:
+        return float(next(line for line in text.splitlines() if "POOLED" in line).split()[1])
+
+    assert "samples with a model term dropped (body inertia dropped)" in partial
+    assert "wiring checks: 5 passed" in partial  # the rates present are still checked
+    assert abs(pooled(partial) - pooled(full)) < 1.0
