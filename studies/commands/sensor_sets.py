@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators.registry import build
-from wheelload.models import example_vehicle_path
+from wheelload.models import WHEELS, example_vehicle_path
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -42,15 +42,20 @@ def run(args: argparse.Namespace) -> int:
     table = sensor_set_table(frame, vehicle, Path(path).name)
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     default = float(build("kf", vehicle).parameters.roll_split_front)
-    truth = reference_split(frame, vehicle)
+    missing = [f"fz_{w}" for w in WHEELS if not frame[f"fz_{w}"].notna().any()]
+    if missing:  # the log's own split needs the lateral transfer of both axles
+        own = f"n/a (needs reference loads on all four wheels; no {', '.join(missing)})"
+        splits = sorted({*args.splits, round(default, 4)})
+    else:
+        truth = reference_split(frame, vehicle)
+        own = f"{truth:.4f}"
+        splits = sorted({*args.splits, round(default, 4), round(truth, 4)})
     print(
-        f"\nroll split: default {default:.4f} (springs, bars and roll centres), "
-        f"the log's own {truth:.4f}"
+        f"\nroll split: default {default:.4f} (springs, bars and roll centres), the log's own {own}"
     )
-    splits = sorted({*args.splits, round(default, 4), round(truth, 4)})
     print(
         split_sweep(frame, vehicle, splits).to_string(
-            index=False, float_format=lambda v: f"{v:.4g}"
+            index=False, float_format=lambda v: f"{v:.4g}", na_rep="n/a"
         )
     )
     return 0

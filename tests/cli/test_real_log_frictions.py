@@ -87,3 +87,16 @@ def test_a_partial_rate_set_is_read_and_its_terms_flagged(plant, tmp_path, capsy
     assert "samples with a model term dropped (body inertia dropped)" in partial
     assert "wiring checks: 5 passed" in partial  # the rates present are still checked
     assert abs(pooled(partial) - pooled(full)) < 1.0
+
+
+def test_sensor_sets_on_front_only_references_scores_what_it_can(plant, tmp_path, capsys):
+    """Front wheel-force transducers only: the table and the sweep's front column, the
+    rear and the log's own split said to be unavailable, exit 0."""
+    log = tmp_path / "front_reference.csv"
+    plant.drop(columns=["fz_rl", "fz_rr"]).to_csv(log, index=False)
+    assert main(["sensor-sets", str(log)]) == 0
+    out = capsys.readouterr().out
+    assert "the log's own n/a (needs reference loads on all four wheels; no fz_rl, fz_rr)" in out
+    sweep = out[out.index("roll_split_front") :].splitlines()[1:]
+    assert sweep and all(line.split()[2] == "n/a" for line in sweep)
+    assert all(float(line.split()[1]) >= 0 for line in sweep)  # the front error is scored
