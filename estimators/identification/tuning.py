@@ -229,7 +229,7 @@ class FilterRuns:
                 else np.nan
             )
         return Consistency(
-            nis_mean=tuple(float(np.nanmean(ratio[:, r])) for r in range(ratio.shape[1])),
+            nis_mean=tuple(_finite_mean(ratio[:, r]) for r in range(ratio.shape[1])),
             nis_in_band=tuple(inside),
             coverage=float(np.mean(np.concatenate(covered))) if covered else np.nan,
             rmse=float(np.sqrt(np.mean(np.concatenate(squared)))) if squared else np.nan,
@@ -513,3 +513,9 @@ __all__ = [
     "tuned_vehicle",
     "with_tuning",
 ]
+
+
+def _finite_mean(values: np.ndarray) -> float:
+    """Mean of the finite values; NaN (no warning) where a row never ran."""
+    finite = values[np.isfinite(values)]
+    return float(finite.mean()) if finite.size else np.nan

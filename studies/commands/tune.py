@@ -17,6 +17,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
 from wheelload.estimators.identification.tuning import (
@@ -114,7 +116,7 @@ def handle(args: argparse.Namespace) -> int:
     ):
         check = runs.consistency(tuning, gate)
         nis = ", ".join(
-            f"{row} {m:.2f} ({100 * b:.0f} %)"
+            f"{row} {m:.2f} ({100 * b:.0f} %)" if np.isfinite(m) else f"{row} n/a (never ran)"
             for row, m, b in zip(UPDATE_ROWS, check.nis_mean, check.nis_in_band)
         )
         extra = (

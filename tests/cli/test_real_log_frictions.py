@@ -100,3 +100,16 @@ def test_sensor_sets_on_front_only_references_scores_what_it_can(plant, tmp_path
     sweep = out[out.index("roll_split_front") :].splitlines()[1:]
     assert sweep and all(line.split()[2] == "n/a" for line in sweep)
     assert all(float(line.split()[1]) >= 0 for line in sweep)  # the front error is scored
+
+
+def test_tune_on_an_imu_only_log_says_which_rows_never_ran(plant, tmp_path, capfd):
+    """No travel sensors: the suspension rows never run; tune says so, with no NaN and no
+    NumPy warning (capfd: what the process writes, Python warnings included)."""
+    log = tmp_path / "imu_only.csv"
+    plant.drop(columns=[c for c in plant.columns if c[:2] in ("d_", "v_")]).to_csv(log)
+    args = ["tune", str(log), "--vehicle", str(example_vehicle_path()), "--iterations", "5"]
+    assert main([*args, "--out", str(tmp_path / "tuned.toml")]) == 0
+    out, err = capfd.readouterr()
+    assert out.count("suspension_fl n/a (never ran)") == 2  # input and tuned
+    assert "nan" not in out.lower()
+    assert "Warning" not in err
