@@ -26,6 +26,7 @@ from wheelload.studies.pipeline.measured_static import (
     corner_weights,
     payload_reference,
     still_period,
+    without_travel,
 )
 
 if TYPE_CHECKING:
@@ -134,6 +135,8 @@ def static_loads_for(stream: LogStream, vehicle: Vehicle, settings):
     channel of the log with no sample in the period is refused as on the whole log.
     """
     static, notes = corner_weights(settings)
+    if static is not None and not stream.travel_present.any():
+        notes = [without_travel(static, vehicle)]
     head = stream.head
     if settings.still_period:
         window = head.t <= head.t[0] + settings.still_period

@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 
 from wheelload.estimators import Signals, check_still_period, corner_weight_loads
-from wheelload.models import Vehicle
+from wheelload.models import GRAVITY, Vehicle
 
 PAYLOAD_INVISIBLE = (
     "a payload is invisible to the springs, so mass and CG are not estimated online: "
@@ -27,8 +27,22 @@ def measured_static_loads(
     """``(static loads or None, notes)``: :func:`corner_weights`, then :func:`still_period`
     on the log's first samples."""
     static, notes = corner_weights(settings)
+    if static is not None and not np.isfinite(signals.d).any():
+        notes = [without_travel(static, vehicle)]
     static, still = still_period(signals, vehicle, settings, static)
     return static, notes + still
+
+
+def without_travel(static: np.ndarray, vehicle: Vehicle) -> str:
+    """What corner weights do for a log without travel sensors: they set the suspension
+    rows' static loads, which such a log never runs; their total still weighs the car."""
+    measured = float(np.sum(static)) / GRAVITY
+    return (
+        f"corner weights {measured:.1f} kg in all against the file's {vehicle.mass.total:.1f} "
+        "kg; they set the static loads of the suspension rows, which this log without travel "
+        "sensors never runs, so they hardly change its loads: put the measured mass and CG "
+        "in the vehicle file (wheelload weigh gives them from logs at rest)"
+    )
 
 
 def corner_weights(settings) -> tuple[np.ndarray | None, list[str]]:

@@ -113,3 +113,22 @@ def test_tune_on_an_imu_only_log_says_which_rows_never_ran(plant, tmp_path, capf
     assert out.count("suspension_fl n/a (never ran)") == 2  # input and tuned
     assert "nan" not in out.lower()
     assert "Warning" not in err
+
+
+def test_corner_weights_without_travel_say_what_they_can_and_cannot_do(plant, tmp_path, capsys):
+    """IMU only: the corner weights hardly move the loads (the rows they set never run;
+    0.5 mN on the written estimates, through the equilibrium's quasi-static terms) and the
+    summary says so, with their total."""
+    log = tmp_path / "imu_only.csv"
+    plant.drop(columns=[c for c in plant.columns if c[:2] in ("d_", "v_")]).to_csv(log)
+    vehicle = str(example_vehicle_path())
+    outputs = []
+    for extra in ([], ["--corner-weights", "440,440,366,366"]):
+        out = tmp_path / f"loads{len(extra)}.csv"
+        assert main(["estimate", str(log), "--vehicle", vehicle, "--out", str(out), *extra]) == 0
+        outputs.append(pd.read_csv(out))
+    text = capsys.readouterr().out
+    assert "corner weights 1612.0 kg in all against the file's 1613.2 kg" in text
+    assert "which this log without travel sensors never runs" in text
+    loads = [f"fz_{w}" for w in ("fl", "fr", "rl", "rr")]
+    assert (outputs[0][loads] - outputs[1][loads]).abs().max().max() < 0.01  # N
