@@ -27,7 +27,7 @@ from wheelload.studies.commands.options import (
 from wheelload.studies.pipeline import batch
 from wheelload.studies.pipeline.example_log import example_log_path
 from wheelload.studies.pipeline.lean_estimate import estimate_lean, takes_lean_path
-from wheelload.studies.pipeline.summary import LogHeader, summary, summary_text
+from wheelload.studies.pipeline.summary import MESSAGE_SEPARATOR, LogHeader, summary, summary_text
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True)
@@ -200,6 +200,9 @@ def _run_many(paths: list[Path], settings: batch.EstimateSettings, args: argpars
     columns = ["log", "samples", "mode", "mean_fz_fl", "mean_fz_rr", "min_fz", "rmse_pooled"]
     shown = table[[c for c in columns + ["error"] if c in table.columns]]
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
+    for log, messages in zip(table["log"], table.get("messages", [""] * len(table))):
+        for message in messages.split(MESSAGE_SEPARATOR) if isinstance(messages, str) else ():
+            print(f"{log}: {message}")  # each log's checks and notes, named
     if folder is not None:
         batch.write_table(table, folder / batch.SUMMARY_NAME, replace=args.force)
         print(f"{len(paths)} logs: estimates and {batch.SUMMARY_NAME} written to {folder}")

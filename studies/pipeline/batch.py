@@ -213,7 +213,7 @@ def log_row(path: Path, result: LogResult) -> dict:
     signals = result.signals
     header = LogHeader.of(signals, has_reference=signals.reference is not None)
     figures = LoadFigures.of_estimate(result.estimate, signals, str(path))
-    return summary_row(str(path), header, figures, len(result.warnings))
+    return summary_row(str(path), header, figures, result.warnings, result.notes)
 
 
 #: Logs of more bytes than this run one at a time on the lean path (read in chunks,
@@ -247,7 +247,7 @@ def lean_row(
         stream = result.stream
         header = LogHeader.of(stream, has_reference=stream.reference_present is not None)
         figures = LoadFigures.of_digest(result.digest, str(path))
-        return summary_row(str(path), header, figures, len(result.warnings))
+        return summary_row(str(path), header, figures, result.warnings, result.notes)
     except (ValueError, FileNotFoundError) as error:
         return _error_row(path, error)
 

@@ -243,9 +243,20 @@ def _pooled_rmse(metrics) -> float:
         return np.nan  # no sample to score
 
 
-def summary_row(log: str, header: LogHeader, figures: LoadFigures, warnings: int) -> dict:
+#: Separates a log's messages in the summary table's ``messages`` cell.
+MESSAGE_SEPARATOR = " | "
+
+
+def summary_row(
+    log: str,
+    header: LogHeader,
+    figures: LoadFigures,
+    warnings: tuple[str, ...],
+    notes: tuple[str, ...] = (),
+) -> dict:
     """One row of the summary table of many logs: the log, its estimates' figures, the
-    number of warnings and an empty error."""
+    number of warnings, the log's notes and warnings (wiring and plausibility checks among
+    them) joined by :data:`MESSAGE_SEPARATOR`, and an empty error."""
     row = {
         "log": log,
         "samples": header.samples,
@@ -261,6 +272,7 @@ def summary_row(log: str, header: LogHeader, figures: LoadFigures, warnings: int
     row["negative_samples"] = figures.negative
     row["min_fz"] = figures.minimum
     row["rmse_pooled"] = figures.rmse_pooled
-    row["warnings"] = warnings
+    row["warnings"] = len(warnings)
+    row["messages"] = MESSAGE_SEPARATOR.join((*notes, *warnings))
     row["error"] = ""
     return row

@@ -117,7 +117,7 @@ def test_tune_on_an_imu_only_log_says_which_rows_never_ran(plant, tmp_path, capf
 
 def test_corner_weights_without_travel_say_what_they_can_and_cannot_do(plant, tmp_path, capsys):
     """IMU only: the corner weights hardly move the loads (the rows they set never run;
-    0.5 mN on the written estimates, through the equilibrium's quasi-static terms) and the
+    0.5 mN on the written estimates) and the
     summary says so, with their total."""
     log = tmp_path / "imu_only.csv"
     plant.drop(columns=[c for c in plant.columns if c[:2] in ("d_", "v_")]).to_csv(log)
@@ -132,3 +132,21 @@ def test_corner_weights_without_travel_say_what_they_can_and_cannot_do(plant, tm
     assert "which this log without travel sensors never runs" in text
     loads = [f"fz_{w}" for w in ("fl", "fr", "rl", "rr")]
     assert (outputs[0][loads] - outputs[1][loads]).abs().max().max() < 0.01  # N
+
+
+def test_many_logs_keep_each_logs_messages(plant, tmp_path, capsys):
+    """A folder of logs: each log's wiring-check line printed under its name and kept in
+    summary.csv's messages column."""
+    folder = tmp_path / "logs"
+    folder.mkdir()
+    plant.to_csv(folder / "full.csv", index=False)
+    plant.drop(columns=["wy"]).to_csv(folder / "no_pitch_rate.csv", index=False)
+    out = tmp_path / "out"
+    args = ["estimate", str(folder), "--vehicle", str(example_vehicle_path()), "--out", str(out)]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    summary = pd.read_csv(out / "summary.csv")
+    for name in ("full.csv", "no_pitch_rate.csv"):
+        assert f"{folder / name}: wiring checks: 5 passed" in printed
+        row = summary[summary["log"].str.endswith(name)].iloc[0]
+        assert "wiring checks: 5 passed" in row["messages"]
