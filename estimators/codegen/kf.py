@@ -42,6 +42,10 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.codegen.runtime_parameters import (
+    derivation_substitutions,
+    runtime_fields,
+)
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
 from wheelload.estimators.kf.step import (
     STEP_INPUT_NAMES,
@@ -138,7 +142,7 @@ class GeneratedLibrary:
 
 def calibration_names() -> tuple[str, ...]:
     """Fields of the runtime parameter struct: model parameters, tuning, initial std."""
-    return (*ModelParameters.names(), *TUNING, "initial_std")
+    return runtime_fields()
 
 
 def packed(P: ca.SX) -> ca.SX:
@@ -345,6 +349,7 @@ def _substitutions(
         ),
         "batch_rows": _batch_rows(kernel, prefix),
         "batch_body": _indent(_batch_body(kernel, runtime, precision, prefix), 2),
+        **derivation_substitutions(vehicle, runtime, precision, prefix, values),
     }
 
 
