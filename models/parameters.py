@@ -210,7 +210,7 @@ class ModelParameters:
         derived = dict(zip(DERIVED, derived_function()(parameters.vector()).full().ravel()))
         following = [name for name in DERIVED if name.startswith("static_") and static is None]
         following += ["roll_split_front"] if split is None else []
-        return dataclasses.replace(parameters, **{name: derived[name] for name in following})
+        return dataclasses.replace(parameters, **{name: float(derived[name]) for name in following})
 
     def imu_rotation(self) -> ca.SX:
         """The sensor-to-body rotation of the IMU as a 3 x 3 matrix."""
