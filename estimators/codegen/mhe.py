@@ -14,6 +14,8 @@ The emitted folder holds
   their row weights come from the filter's noise Function
   (:mod:`wheelload.models.measurement_noise`, the vehicle file's input-dependent
   densities included, through the ``TUNING`` table), as in Python;
+- ``wheelload_mhe_state.h``: the state of one instance (the driver's
+  ``templates/mhe_plain_state.h`` or ``templates/mhe_window_state.h`` at the generated sizes);
 - ``wheelload_mhe.c/.h``: the window driver (``templates/mhe_shared.c``, then
   ``templates/mhe_plain.c`` for quadratic losses, ``templates/mhe_window.c`` with
   auxiliary variables for
@@ -28,7 +30,12 @@ The emitted folder holds
   Kalman arrival cost (:attr:`Arrival.KALMAN`) and the reported standard
   deviations.
 
-``wheelload_mhe_step(u, dt, &out)`` gives the loads of sample k - lag, the
+The C is re-entrant: everything one estimator keeps between samples, its OSQP solver
+included, is one caller-owned ``wheelload_mhe_state`` (``wheelload_mhe_state.h``; OSQP's
+file-scope workspace is rewritten into a member of it by
+:mod:`~wheelload.estimators.codegen.mhe_workspace`), so several instances run side by side
+in one program. ``wheelload_mhe_reset(&state)`` starts a log;
+``wheelload_mhe_step(&state, u, dt, &out)`` gives the loads of sample k - lag, the
 KF's standard deviations, the equilibrium residual :math:`b - A x` of that
 sample, the bias states (travel offsets [m], ax/ay [m/s²]), OSQP's status,
 iterations, a fallback flag and the ``StepFlag`` bits. Input guarding: a
@@ -81,6 +88,7 @@ import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
+from wheelload.estimators.codegen.mhe_workspace import make_reentrant
 from wheelload.estimators.kf.projection import Weighting, projection_step_function
 from wheelload.estimators.logs.output_files import atomic_write, check_output_folder
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
@@ -197,6 +205,7 @@ def _generate_into(
     with quiet_stdout():  # OSQP reports the files it writes
         solver.codegen(str(folder / "osqp"), prefix="wheelload_mhe_", parameters="matrices",
                        force_rewrite=True, use_float=precision is Precision.FLOAT)  # fmt: skip
+    make_reentrant(folder / "osqp")  # the solver a member of each instance's state
     low, high = mhe.load_bounds  # C has no infinite literal: OSQP takes 1e30 as infinite
     terms = terms_function(settings.constraint, null=mhe.null, pinv=mhe.pinv,
                            lower_load=max(low, -1e33), upper_load=min(high, 1e33))  # fmt: skip
@@ -206,7 +215,10 @@ def _generate_into(
     (folder / "wheelload_mhe.h").write_text(HEADER.replace("@N_BIAS@", str(max(n_bias, 0)))
                                             .replace("@N_INPUTS@", str(len(INPUTS)))
                                             .replace("@LAG@", str(settings.lag)))  # fmt: skip
-    common = _common_defines(mhe, settings, state, dt, float(P0[0, 0]))
+    sizes = _state_sizes(mhe, settings)
+    (folder / "wheelload_mhe_state.h").write_text(_state_header(sizes, settings.extended, linked))
+    aliases = "".join(f"#define {name} WHEELLOAD_MHE_{name}\n" for name in sizes)
+    common = aliases + _common_defines(mhe, settings, state, dt, float(P0[0, 0]))
     kalman = settings.arrival is Arrival.KALMAN
     common = common.replace("#define KALMAN_ARRIVAL 0", f"#define KALMAN_ARRIVAL {int(kalman)}")
     if settings.extended:
@@ -358,7 +370,7 @@ def _common_defines(mhe, settings: MheSettings, state, dt: float, p0: float) -> 
     low, high = mhe.load_bounds
     x0 = np.array(mhe.filter.parameters.static(), dtype=float)
     return "".join([
-        f"#define N {settings.horizon}\n#define W {mhe.width}\n#define HARD {int(mhe.hard)}\n",
+        f"#define HARD {int(mhe.hard)}\n",
         f"#define LAG {settings.lag}\n#define NP {mhe.p.size}\n#define KALMAN_ARRIVAL 0\n",
         f"#define LOAD_SCALE {LOAD_SCALE!r}\n#define DT {float(dt)!r}\n",
         f"#define Q_DENSITY {float(mhe.tuning[0])!r}\n#define P0_VAR {p0!r}\n",
@@ -383,16 +395,37 @@ def _common_defines(mhe, settings: MheSettings, state, dt: float, p0: float) -> 
     ])  # fmt: skip
 
 
+def _state_sizes(mhe, settings: MheSettings) -> dict[str, int]:
+    """The sizes of the state's arrays (``WHEELLOAD_MHE_<name>`` in wheelload_mhe_state.h;
+    the driver's ``<name>``): horizon N, load variables W per sample, and per driver its own."""
+    N, width = settings.horizon, mhe.width
+    if not settings.extended:  # the quadratic window: block-tridiagonal Hessian
+        rows = N * width if settings.bounded else 0
+        nnz = csc_value_order(N, width).size
+        return dict(N=N, W=width, NX=N * width, NY=max(rows, 1), NNZ=nnz,
+                    NV=N * width * width + (N - 1) * width)  # fmt: skip
+    qp = mhe.window_qp
+    nb = qp.n_bias
+    return dict(N=N, W=width, WIDTH=qp.width, NB=nb, NK=max(nb, 1), NL=qp.width + nb,
+                NQ=N * qp.width + nb, NNZ=qp.order.size)  # fmt: skip
+
+
+def _state_header(sizes: dict[str, int], extended: bool, linked: bool) -> str:
+    """wheelload_mhe_state.h: the sizes and the state struct of the driver."""
+    template = "mhe_window_state.h" if extended else "mhe_plain_state.h"
+    member = "    wheelload_mhe_kf_state kf;               /* the fallback filter's state */\n"
+    member = member if linked else ""
+    body = (TEMPLATES / template).read_text().replace("@KF_MEMBER@\n", member)
+    defines = "".join(f"#define WHEELLOAD_MHE_{name} {value}\n" for name, value in sizes.items())
+    include = f'#include "{FILTER_PREFIX}.h"\n' if linked else ""
+    return STATE_HEADER.format(defines=defines, body=body, include=include)
+
+
 def _plain_defines(mhe, settings: MheSettings) -> str:
     """The quadratic window's layout: block-tridiagonal Hessian in OSQP's CSC order."""
-    N, width = settings.horizon, mhe.width
-    rows = N * width if settings.bounded else 0
-    order = csc_value_order(N, width)
-    return "".join([
-        f"#define NX (N * W)\n#define NY {max(rows, 1)}\n#define HAS_Y {int(rows > 0)}\n",
-        f"#define NNZ {order.size}\n",
-        _array("ORDER", order, "int"),
-    ])  # fmt: skip
+    rows = settings.horizon * mhe.width if settings.bounded else 0
+    order = csc_value_order(settings.horizon, mhe.width)
+    return "".join([f"#define HAS_Y {int(rows > 0)}\n", _array("ORDER", order, "int")])
 
 
 def _window_defines(mhe, settings: MheSettings) -> str:
@@ -416,8 +449,7 @@ def _window_defines(mhe, settings: MheSettings) -> str:
                 f"#define SCALE_{name[0]} {scale!r}\n")  # fmt: skip
 
     return "".join([
-        f"#define WIDTH {qp.width}\n#define NS {qp.ns}\n#define NC {qp.nc}\n",
-        f"#define NB {qp.n_bias}\n#define ND {nd}\n#define NNZ {pattern.size}\n",
+        f"#define NS {qp.ns}\n#define NC {qp.nc}\n#define ND {nd}\n",
         f"#define TRAVEL_UNIT {TRAVEL_UNIT!r}\n",
         loss(settings.suspension_loss, "SUSPENSION"),
         loss(settings.constraint_loss, "CONSTRAINT"),
@@ -443,13 +475,34 @@ PRELUDE = """/* wheelload_mhe.c: generated by wheelload (wheelload.estimators.co
 """
 
 
-HEADER = r"""/* wheelload_mhe.h: the embedded moving-horizon wheel-load estimator (generated). */
+HEADER = r"""/* wheelload_mhe.h: the embedded moving-horizon wheel-load estimator (generated).
+ *
+ * Re-entrant: all that one estimator keeps from sample to sample, its OSQP solver included, is
+ * one wheelload_mhe_state the caller owns (static, on the stack or from an allocator); several
+ * instances (vehicles, logs) run side by side in one program, interleaved as the caller likes.
+ * Nothing is global and nothing is allocated; one instance is used by one thread at a time.
+ *
+ *     static wheelload_mhe_state front_axle, rear_axle;  // sizeof: wheelload_mhe_state_size()
+ *     wheelload_mhe_output out;
+ *     wheelload_mhe_reset(&front_axle);
+ *     wheelload_mhe_reset(&rear_axle);
+ *     for (;;) { ... wheelload_mhe_step(&front_axle, u, dt, &out); ... }
+ *
+ * The state holds pointers into itself (its solver's): it is reset where it lives, never copied
+ * or moved between samples (a step on a copy is refused: WHEELLOAD_MHE_NOT_RESET). */
 #ifndef WHEELLOAD_MHE_H
 #define WHEELLOAD_MHE_H
+
+#include <stddef.h>
+
+#include "wheelload_mhe_state.h"
 
 #define WHEELLOAD_MHE_N_INPUTS @N_INPUTS@ /* wheelload.models.INPUTS order */
 #define WHEELLOAD_MHE_N_BIAS @N_BIAS@     /* entries of bias in use */
 #define WHEELLOAD_MHE_LAG @LAG@           /* samples: loads are the estimate of sample k - LAG */
+/* wheelload_mhe_step's status for a state not reset where it is (never reset, or copied or
+   moved since): nothing is estimated, out zeroed with flags 255; reset it. */
+#define WHEELLOAD_MHE_NOT_RESET (-1)
 
 typedef struct {
     double loads[4];    /* wheel loads [N] of sample k - LAG */
@@ -461,17 +514,38 @@ typedef struct {
     unsigned flags;     /* skipped updates and dropped terms (StepFlag); 255: interval rejected */
 } wheelload_mhe_output;
 
-/* Start a new log: inert window, static loads. */
-void wheelload_mhe_reset(void);
+/* Start a new log in state: its solver set up afresh, inert window, static loads. */
+void wheelload_mhe_reset(wheelload_mhe_state *state);
 
 /* One sample u[WHEELLOAD_MHE_N_INPUTS] (non-finite entries: missing; the terms they feed are
    dropped) after the interval dt [s] (0 < dt < the maximum interval, else nothing is solved:
-   the last estimate is held, status 0, flags 255). Returns OSQP's status (1 = solved). */
-int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out);
+   the last estimate is held, status 0, flags 255). Returns OSQP's status (1 = solved), or
+   WHEELLOAD_MHE_NOT_RESET. */
+int wheelload_mhe_step(wheelload_mhe_state *state, const double *u, double dt,
+                       wheelload_mhe_output *out);
 
-void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, double *std,
-                       double *residual, double *bias, int *status, int *iterations,
-                       int *fallback, unsigned *flags, double *seconds);
+/* sizeof(wheelload_mhe_state), for a caller that allocates it by size (e.g. through an FFI). */
+size_t wheelload_mhe_state_size(void);
 
+/* A whole log of n samples in state, reset first (u: n x WHEELLOAD_MHE_N_INPUTS row-major; dt:
+   the interval before each sample); per sample its outputs and wall time [s]. */
+void wheelload_mhe_run(wheelload_mhe_state *state, int n, const double *u, const double *dt,
+                       double *loads, double *std, double *residual, double *bias, int *status,
+                       int *iterations, int *fallback, unsigned *flags, double *seconds);
+
+#endif
+"""
+
+STATE_HEADER = """/* wheelload_mhe_state.h: the state of one embedded MHE instance (generated by
+ * wheelload; see wheelload_mhe.h). Its members are the estimator's: the caller owns the struct
+ * and passes it to wheelload_mhe_reset and wheelload_mhe_step, and reads or writes none of
+ * them. The sizes are fixed at generation. */
+#ifndef WHEELLOAD_MHE_STATE_H
+#define WHEELLOAD_MHE_STATE_H
+
+#include "wheelload_mhe_workspace.h"
+{include}
+{defines}
+{body}
 #endif
 """
