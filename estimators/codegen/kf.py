@@ -14,6 +14,11 @@ selects, so that gcc vectorises the loop over filters when built with
 flag). Built with the same flags, both give the same numbers; with the
 strict flags they are bit-identical.
 
+With runtime parameters, ``wheelload_kf_set_param`` sets a calibration value and recomputes
+the parameters derived from it (the static loads, the default roll split) with C emitted from
+the models' own derivation (:mod:`~wheelload.estimators.codegen.runtime_parameters`): a spring
+set at run time gives the Python filter of the vehicle file with that spring.
+
 Files written to the output folder, for prefix ``wheelload_kf``:
 ``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
 ``wheelload_kf_example.c`` (CSV log in, CSV estimates out),
