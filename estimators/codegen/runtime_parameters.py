@@ -48,7 +48,8 @@ class SetStatus(enum.IntEnum):
     OK = 0
     UNKNOWN = 1  # no field of that index
     NOT_FINITE = 2  # the value, or a parameter derived from it, is not finite
-    FIXED = 3  # moves the mass centre with file values the library does not hold
+    FIXED = 3  # another value of a field that moves the mass centre with file values the
+    # library does not hold
 
 
 def runtime_fields() -> tuple[str, ...]:
@@ -208,8 +209,9 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
     if (!isfinite(value)) {{
         return {PREFIX}_SET_NOT_FINITE;
     }}
-    if (param_feeds[index] & FIXED_BIT) {{
-        return {PREFIX}_SET_FIXED;
+    if (param_feeds[index] & FIXED_BIT) {{ /* its own value only: nothing moves */
+        const int same = value == *{prefix}_param_field(params, index);
+        return same ? {PREFIX}_SET_OK : {PREFIX}_SET_FIXED;
     }}
     changed = *params;
     *{prefix}_param_field(&changed, index) = value;

@@ -111,9 +111,9 @@ ${derivation_fields}
 #define ${PREFIX}_N_DERIVED ${n_derived}
 
 /* Status of ${prefix}_set_param (params unchanged unless OK): no field of that index;
- * the value, or a parameter derived from it, is not finite; a field that moves the mass
- * centre with vehicle-file values the library does not hold (regenerate the library from
- * the changed vehicle file). */
+ * the value, or a parameter derived from it, is not finite; another value of a field that
+ * moves the mass centre with vehicle-file values the library does not hold (regenerate the
+ * library from the changed vehicle file). */
 ${set_statuses}
 
 /* The calibration of the vehicle file the library was generated from. */

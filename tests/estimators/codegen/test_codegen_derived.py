@@ -136,7 +136,8 @@ int main(void)
     other = wheelload_kf_set_param(&params, spring, INFINITY);
     printf("not_finite %d %d\n", status, other);
     status = wheelload_kf_set_param(&params, sprung, 1500.0);
-    printf("fixed %d %.17g\n", status, params.sprung_mass);
+    other = wheelload_kf_set_param(&params, sprung, params.sprung_mass); /* its own value */
+    printf("fixed %d %d %.17g\n", status, other, params.sprung_mass);
     printf("refused_left %.17g %.17g\n", params.spring_front, params.roll_split_front);
     status = wheelload_kf_set_param(&params, spring, 66000.0);
     printf("spring %d %.17g\n", status, params.roll_split_front);
@@ -170,7 +171,7 @@ def test_set_param_statuses_and_derived_values_equal_python_to_the_bit(vehicle, 
     default = ModelParameters.from_vehicle(vehicle)
     assert report["unknown"] == [str(int(SetStatus.UNKNOWN))] * 2
     assert report["not_finite"] == [str(int(SetStatus.NOT_FINITE))] * 2
-    assert report["fixed"] == [str(int(SetStatus.FIXED)), repr(default.sprung_mass)]
+    assert report["fixed"] == [str(int(SetStatus.FIXED)), "0", repr(default.sprung_mass)]
     # a refused value leaves the struct as it was
     assert [float(v) for v in report["refused_left"]] == [default.spring_front,
                                                           default.roll_split_front]  # fmt: skip
