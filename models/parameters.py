@@ -208,9 +208,8 @@ class ModelParameters:
             **{f"term_{key}": float(value) for key, value in terms.items()},
         )
         derived = dict(zip(DERIVED, derived_function()(parameters.vector()).full().ravel()))
-        following = [name for name in DERIVED if name.startswith("static_") and static is None]
-        following += ["roll_split_front"] if split is None else []
-        return dataclasses.replace(parameters, **{name: float(derived[name]) for name in following})
+        follow = following(vehicle, static_given=static is not None)
+        return dataclasses.replace(parameters, **{name: float(derived[name]) for name in follow})
 
     def imu_rotation(self) -> ca.SX:
         """The sensor-to-body rotation of the IMU as a 3 x 3 matrix."""
@@ -244,6 +243,14 @@ DERIVED = ("static_fl", "static_fr", "static_rl", "static_rr", "roll_split_front
 #: axle distances, the tyre radii, the aero application point): a change of one of them
 #: alone cannot be carried into the parameters it moves (the generated C refuses it).
 MASS_CENTRE_INPUTS = ("sprung_mass", "unsprung_front", "unsprung_rear", "sprung_cg_height")
+
+
+def following(vehicle: Vehicle, *, static_given: bool = False) -> tuple[str, ...]:
+    """The :data:`DERIVED` parameters ``vehicle``'s take from their sources: the static loads
+    unless given, the roll split unless the file gives ``suspension.roll_split_front``."""
+    given = {"roll_split_front"} if vehicle.suspension.roll_split_front is not None else set()
+    given |= {name for name in DERIVED if name.startswith("static_")} if static_given else set()
+    return tuple(name for name in DERIVED if name not in given)
 
 
 def derived_values(p: ModelParameters) -> ca.SX:

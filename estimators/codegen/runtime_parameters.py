@@ -27,6 +27,7 @@ True
 from __future__ import annotations
 
 import enum
+import textwrap
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, literal
 from wheelload.estimators.kf.tuning import TUNING
@@ -36,6 +37,7 @@ from wheelload.models.parameters import (
     MASS_CENTRE_INPUTS,
     derived_function,
     derived_sources,
+    following,
 )
 
 #: Bit of a record entry or field that no run-time value may change (a mass-centre input).
@@ -55,13 +57,6 @@ class SetStatus(enum.IntEnum):
 def runtime_fields() -> tuple[str, ...]:
     """Fields of the runtime parameter struct: model parameters, tuning, initial std."""
     return (*ModelParameters.names(), *TUNING, "initial_std")
-
-
-def following(vehicle: Vehicle) -> tuple[str, ...]:
-    """The derived parameters that follow their sources in ``vehicle``'s library: every one
-    but a roll split the vehicle file gives (pinned there, as in Python)."""
-    pinned = {"roll_split_front"} if vehicle.suspension.roll_split_front is not None else set()
-    return tuple(name for name in DERIVED if name not in pinned)
 
 
 def feeds() -> dict[str, int]:
@@ -102,7 +97,10 @@ def derivation_substitutions(
         return {
             "set_statuses": statuses,
             "n_derived": "0",
-            "derived_note": "none at run time: the vehicle and tuning are baked into the step.",
+            "derived_comment": _comment(
+                "Derived parameters: none at run time, the vehicle and tuning are baked into "
+                "the step."
+            ),
             "derivation_fields": "",
             "derivation_defaults": "",
             "derivation_code": _baked_set_param(prefix),
@@ -116,9 +114,12 @@ def derivation_substitutions(
     pinned = [name for name in DERIVED if name not in follow]
     sources = derived_sources()
     note = "; ".join(f"{name} from {', '.join(sources[name])}" for name in DERIVED)
-    note += (
-        f" (pinned by the vehicle file: {', '.join(pinned)})" if pinned else ""
-    ) + f". Not settable (they move the mass centre): {', '.join(MASS_CENTRE_INPUTS)}."
+    note += f" (pinned by the vehicle file: {', '.join(pinned)})" if pinned else ""
+    note = (
+        f"Derived parameters, recomputed by {prefix}_set_param from their sources with the "
+        f"model's own equations (wheelload.models.parameters.derived_function): {note}. Not "
+        f"settable (they move the mass centre): {', '.join(MASS_CENTRE_INPUTS)}."
+    )
     real = f"{prefix}_real"
     body = emit_statements(
         derived_function(),
@@ -140,28 +141,32 @@ def derivation_substitutions(
         fixed=f"{FIXED_BIT}u",
     )
     defaults = [f"    {bits}u, /* derived: {' '.join(follow) or 'none'} follow their sources */"]
-    defaults.append(
-        "    {"
-        + ", ".join(literal(values[name], precision) for name in record)
-        + "}, /* record: "
-        + " ".join(record)
-        + " */"
-    )
+    defaults.append(_comment(f"record: {' '.join(record)}", "    "))
+    numbers = ", ".join(literal(values[name], precision) for name in record)
+    defaults.append(textwrap.fill("{" + numbers + "},", 96, initial_indent="    ",
+                                  subsequent_indent="     "))  # fmt: skip
     return {
         "set_statuses": statuses,
         "n_derived": str(len(DERIVED)),
-        "derived_note": note,
-        "derivation_fields": (
-            f"    /* Kept by {prefix}_set_param, checked by {prefix}_init; do not write.\n"
-            f"     * derived: bit k set while derived parameter k ({', '.join(DERIVED)})\n"
-            "     * follows its sources; record: the values the last derivation saw of\n"
-            f"     * {' '.join(record)}. */\n"
-            f"    uint32_t derived;\n    {real} record[{len(record)}];"
-        ),
+        "derived_comment": _comment(note),
+        "derivation_fields": _comment(
+            f"Kept by {prefix}_set_param, checked by {prefix}_init; do not write. derived: bit "
+            f"k set while derived parameter k ({', '.join(DERIVED)}) follows its sources; "
+            f"record: the values the last derivation saw of {' '.join(record)}.",
+            "    ",
+        )
+        + f"\n    uint32_t derived;\n    {real} record[{len(record)}];",
         "derivation_defaults": "\n".join(defaults),
         "derivation_code": code,
         "derivation_check": _runtime_check(prefix, record),
     }
+
+
+def _comment(text: str, indent: str = "") -> str:
+    """``text`` as a C comment wrapped at 96 columns."""
+    lines = textwrap.wrap(text, 93 - len(indent))
+    body = f"\n{indent} * ".join(lines)
+    return f"{indent}/* {body} */"
 
 
 def _baked_set_param(prefix: str) -> str:

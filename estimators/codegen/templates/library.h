@@ -106,8 +106,7 @@ ${param_fields}
 ${derivation_fields}
 } ${prefix}_params;
 
-/* Derived parameters, recomputed by ${prefix}_set_param from their sources with the
- * model's own equations (wheelload.models.parameters.derived_function): ${derived_note} */
+${derived_comment}
 #define ${PREFIX}_N_DERIVED ${n_derived}
 
 /* Status of ${prefix}_set_param (params unchanged unless OK): no field of that index;
