@@ -40,14 +40,22 @@ def vehicle_mass_centre(vehicle: Vehicle) -> MassCentre:
     return MassCentre(lf=g.lf - offset_x, lr=g.lr + offset_x, height=height, offset_x=offset_x)
 
 
-def static_loads(vehicle: Vehicle) -> np.ndarray:
-    r"""Static wheel loads on level ground, order FL, FR, RL, RR [N].
+def level_static_loads(mass, lf, lr) -> tuple:
+    r"""Static wheel loads on level ground FL, FR, RL, RR [N] of whole-vehicle mass and CG.
 
     .. math:: F_{z,f} = \tfrac12 m g \, l_r / (l_f + l_r), \quad
               F_{z,r} = \tfrac12 m g \, l_f / (l_f + l_r)
+
+    Numbers or CasADi symbols (the model parameters derive their static loads from it:
+    :func:`wheelload.models.parameters.derived_values`).
     """
+    weight = mass * GRAVITY
+    front = 0.5 * weight * lr / (lf + lr)
+    rear = 0.5 * weight * lf / (lf + lr)
+    return (front, front, rear, rear)
+
+
+def static_loads(vehicle: Vehicle) -> np.ndarray:
+    """Static wheel loads on level ground, order FL, FR, RL, RR [N] (:func:`level_static_loads`)."""
     centre = vehicle_mass_centre(vehicle)
-    weight = vehicle.mass.total * GRAVITY
-    front = 0.5 * weight * centre.lr / (centre.lf + centre.lr)
-    rear = 0.5 * weight * centre.lf / (centre.lf + centre.lr)
-    return np.array([front, front, rear, rear])
+    return np.array(level_static_loads(vehicle.mass.total, centre.lf, centre.lr))

@@ -4,6 +4,11 @@ Every symbolic model takes its parameters as an explicit vector ``p`` so that
 the same function serves the Python filter (numeric ``p``), generated C with
 runtime parameters, and identification (Jacobians with respect to ``p``).
 
+Some parameters are derived from others (:data:`DERIVED`: the static loads from the mass
+and CG, the default roll split from the springs, bars and links): one CasADi Function,
+:func:`derived_function`, gives them, for :meth:`ModelParameters.from_vehicle` and for the
+generated C, which evaluates it again when one of their sources is set at run time.
+
 Example
 -------
 >>> p = ModelParameters.from_vehicle(load_vehicle(example_vehicle_path()))
@@ -15,12 +20,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
+from wheelload.models.mass_properties import level_static_loads, vehicle_mass_centre
 from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle.description import Vehicle
 
@@ -148,13 +154,20 @@ class ModelParameters:
 
     @classmethod
     def from_vehicle(cls, vehicle: Vehicle, static: np.ndarray | None = None) -> ModelParameters:
-        """Numeric parameters; ``static`` overrides the static wheel loads [N]."""
+        """Numeric parameters; ``static`` overrides the static wheel loads [N].
+
+        The static loads (unless given) and the roll split (unless the file gives
+        ``suspension.roll_split_front``) are :func:`derived_function`'s.
+        """
         terms = dataclasses.asdict(vehicle.model)
         mounting = mounting_matrix(*vehicle.geometry.imu_orientation)
         centre = vehicle_mass_centre(vehicle)
-        static = static_loads(vehicle) if static is None else np.asarray(static, float)
-        if static.shape != (4,) or not np.all(np.isfinite(static)):
-            raise ValueError(f"static loads must be 4 finite values, got {static}")
+        if static is not None:
+            static = np.asarray(static, float)
+            if static.shape != (4,) or not np.all(np.isfinite(static)):
+                raise ValueError(f"static loads must be 4 finite values, got {static}")
+        placeholder = np.zeros(4) if static is None else static  # no derived value reads them
+        split = vehicle.suspension.roll_split_front
         front, rear = vehicle.suspension.front, vehicle.suspension.rear
         aero = vehicle.aero
         parameters = cls(
@@ -170,11 +183,11 @@ class ModelParameters:
             drag_coefficient=aero.drag_coefficient,
             aero_x=aero.application_point[0] - centre.offset_x,
             aero_z=aero.application_point[2] + vehicle.geometry.cg_height - centre.height,
-            static_fl=float(static[0]),
-            static_fr=float(static[1]),
-            static_rl=float(static[2]),
-            static_rr=float(static[3]),
-            roll_split_front=vehicle.suspension.roll_split_front,
+            static_fl=float(placeholder[0]),
+            static_fr=float(placeholder[1]),
+            static_rl=float(placeholder[2]),
+            static_rr=float(placeholder[3]),
+            roll_split_front=0.0 if split is None else split,
             sprung_mass=vehicle.mass.sprung,
             sprung_cg_height=vehicle.geometry.cg_height,
             inertia_xx=vehicle.mass.inertia[0],
@@ -194,10 +207,9 @@ class ModelParameters:
             **{f"imu_r{i + 1}{j + 1}": float(mounting[i, j]) for i in range(3) for j in range(3)},
             **{f"term_{key}": float(value) for key, value in terms.items()},
         )
-        if vehicle.suspension.roll_split_front is not None:
-            return parameters
-        share = roll_split_default(parameters)
-        return dataclasses.replace(parameters, roll_split_front=share)
+        derived = dict(zip(DERIVED, derived_function()(parameters.vector()).full().ravel()))
+        follow = following(vehicle, static_given=static is not None)
+        return dataclasses.replace(parameters, **{name: float(derived[name]) for name in follow})
 
     def imu_rotation(self) -> ca.SX:
         """The sensor-to-body rotation of the IMU as a 3 x 3 matrix."""
@@ -217,3 +229,60 @@ class ModelParameters:
         return tuple(
             tuple(getattr(self, f"{n}_{axle}") for n in names) for axle in ("front", "rear")
         )
+
+
+#: Parameters derived from other parameters, in :func:`derived_function`'s output order: the
+#: static loads (:func:`~wheelload.models.mass_properties.level_static_loads` of ``mass``,
+#: ``lf``, ``lr``) and the default roll split
+#: (:func:`~wheelload.models.roll_stiffness.roll_split_default`). No derived value reads a
+#: derived parameter.
+DERIVED = ("static_fl", "static_fr", "static_rl", "static_rr", "roll_split_front")
+#: Parameters that enter the whole-vehicle mass centre (``mass``, ``lf``, ``lr``,
+#: ``cg_height``, ``aero_x``, ``aero_z``: :func:`~wheelload.models.mass_properties.
+#: vehicle_mass_centre`) with vehicle-file values that are not parameters (the sprung CG's
+#: axle distances, the tyre radii, the aero application point): a change of one of them
+#: alone cannot be carried into the parameters it moves (the generated C refuses it).
+MASS_CENTRE_INPUTS = ("sprung_mass", "unsprung_front", "unsprung_rear", "sprung_cg_height")
+
+
+def following(vehicle: Vehicle, *, static_given: bool = False) -> tuple[str, ...]:
+    """The :data:`DERIVED` parameters ``vehicle``'s take from their sources: the static loads
+    unless given, the roll split unless the file gives ``suspension.roll_split_front``."""
+    given = {"roll_split_front"} if vehicle.suspension.roll_split_front is not None else set()
+    given |= {name for name in DERIVED if name.startswith("static_")} if static_given else set()
+    return tuple(name for name in DERIVED if name not in given)
+
+
+def derived_values(p: ModelParameters) -> ca.SX:
+    """The :data:`DERIVED` parameters of ``p`` (numbers or symbols) as one SX column."""
+    static = level_static_loads(p.mass, p.lf, p.lr)
+    return ca.vertcat(*static, roll_split_default(p))
+
+
+@cache
+def derived_function() -> ca.Function:
+    """``derived_parameters(p) -> derived[len(DERIVED)]``: :func:`derived_values` (built once)."""
+    p_vector, p = ModelParameters.symbolic()
+    values = derived_values(p)
+    read = {ModelParameters.names()[k] for k in _dependencies(values, p_vector)[1]}
+    if read & set(DERIVED):
+        raise ValueError(f"a derived parameter reads derived parameters {sorted(read)}")
+    return ca.Function("derived_parameters", [p_vector], [values], ["p"], ["derived"])
+
+
+def derived_sources() -> dict[str, tuple[str, ...]]:
+    """Each :data:`DERIVED` parameter's sources: the parameters it depends on (structurally:
+    a switch that selects a branch counts, as ``term_geometric_transfer`` for the split)."""
+    f = derived_function()
+    rows, cols = _dependencies(f.call([f.sx_in(0)])[0], f.sx_in(0))
+    names = ModelParameters.names()
+    return {
+        name: tuple(names[c] for r, c in zip(rows, cols) if r == k)
+        for k, name in enumerate(DERIVED)
+    }
+
+
+def _dependencies(values: ca.SX, p_vector: ca.SX) -> tuple[list[int], list[int]]:
+    """(output rows, parameter columns) of the structural Jacobian of ``values``."""
+    rows, cols = ca.jacobian_sparsity(values, p_vector).get_triplet()
+    return list(rows), list(cols)

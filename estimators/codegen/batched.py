@@ -63,8 +63,10 @@ DRIVER = """
    outputs are rows of [lengths[b]][4] loads and std, [..][3] residual,
    [..][N_FAULT_CHANNELS] statistic, faults, flags. Past its end a filter is
    fed a rejected sample (dt NaN: the state is held) and nothing is written. The
-   state x, P, monitor ([rows][n]) is carried in place. */
-void ${prefix}_run_batch(int n, long steps, const ${prefix}_params *params,
+   state x, P, monitor ([rows][n]) is carried in place. values: the calibration, one
+   per field of ${prefix}_param_names (the Python filter's: its derived parameters
+   already follow their sources). */
+void ${prefix}_run_batch(int n, long steps, const double *values,
                          const double *const *inputs, const long *lengths,
                          const double *const *dts, double *x, double *P, double *monitor,
                          double *const *loads, double *const *stds,
@@ -80,8 +82,12 @@ void ${prefix}_run_batch(int n, long steps, const ${prefix}_params *params,
     double statistic[BLOCK][${PREFIX}_N_FAULT_CHANNELS * MAX_FILTERS];
     uint32_t fault_bits[BLOCK][MAX_FILTERS], flag_bits[BLOCK][MAX_FILTERS];
     ${prefix}_batch batch;
+    ${prefix}_params params = ${prefix}_default_params;
     long t0, t;
     int b, k, j, m;
+    for (k = 0; k < ${PREFIX}_N_PARAMS; ++k) {
+        *${prefix}_param_field(&params, k) = values[k];
+    }
     batch.n = n;
     batch.x = x;
     batch.P = P;
@@ -107,7 +113,7 @@ void ${prefix}_run_batch(int n, long steps, const ${prefix}_params *params,
             output.fault_statistic = statistic[j];
             output.faults = fault_bits[j];
             output.flags = flag_bits[j];
-            ${prefix}_step_batch(&batch, params, u[j], dt[j], &output);
+            ${prefix}_step_batch(&batch, &params, u[j], dt[j], &output);
             memcpy(state_x[j], x, sizeof(double) * 4 * (size_t)n);
         }
         for (b = 0; b < n; ++b) {

@@ -14,6 +14,11 @@ selects, so that gcc vectorises the loop over filters when built with
 flag). Built with the same flags, both give the same numbers; with the
 strict flags they are bit-identical.
 
+With runtime parameters, ``wheelload_kf_set_param`` sets a calibration value and recomputes
+the parameters derived from it (the static loads, the default roll split) with C emitted from
+the models' own derivation (:mod:`~wheelload.estimators.codegen.runtime_parameters`): a spring
+set at run time gives the Python filter of the vehicle file with that spring.
+
 Files written to the output folder, for prefix ``wheelload_kf``:
 ``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
 ``wheelload_kf_example.c`` (CSV log in, CSV estimates out),
@@ -42,6 +47,10 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.codegen.runtime_parameters import (
+    derivation_substitutions,
+    runtime_fields,
+)
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
 from wheelload.estimators.kf.step import (
     STEP_INPUT_NAMES,
@@ -138,7 +147,7 @@ class GeneratedLibrary:
 
 def calibration_names() -> tuple[str, ...]:
     """Fields of the runtime parameter struct: model parameters, tuning, initial std."""
-    return (*ModelParameters.names(), *TUNING, "initial_std")
+    return runtime_fields()
 
 
 def packed(P: ca.SX) -> ca.SX:
@@ -345,6 +354,7 @@ def _substitutions(
         ),
         "batch_rows": _batch_rows(kernel, prefix),
         "batch_body": _indent(_batch_body(kernel, runtime, precision, prefix), 2),
+        **derivation_substitutions(vehicle, runtime, precision, prefix, values),
     }
 
 

@@ -2,8 +2,9 @@ r"""The embedded MHE compiled and run: a shared library over a log, a stand-alon
 
 :func:`build_mhe_library` generates the C (:func:`~wheelload.estimators.codegen.mhe.generate_mhe`),
 compiles it with gcc -O2 and loads it with ctypes (:class:`CompiledMhe`);
-:func:`build_mhe_program` builds a stand-alone program reading input rows from a text file
-(any compiler, e.g. ``arm-linux-gnueabihf-gcc -static``), :func:`write_inputs` writes them.
+:func:`build_mhe_program` builds the stand-alone example program, which reads input rows from
+text files, one estimator instance per file (any compiler, e.g. ``arm-linux-gnueabihf-gcc
+-static``); :func:`write_inputs` writes them.
 
 Example
 -------
@@ -22,9 +23,14 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.codegen.c_emitter import Precision
-from wheelload.estimators.codegen.mhe import generate_mhe, mhe_includes, mhe_sources
+from wheelload.estimators.codegen.mhe import (
+    EXAMPLE,
+    TEMPLATES,
+    generate_mhe,
+    mhe_includes,
+    mhe_sources,
+)
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.output_files import write_text
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.protocol import sample_intervals
@@ -47,12 +53,22 @@ class EmbeddedResult:
 
 
 class CompiledMhe:
-    """The generated embedded MHE compiled to a shared library and loaded with ctypes."""
+    """The generated embedded MHE compiled to a shared library and loaded with ctypes.
+
+    Each :meth:`run` has a state of its own (``wheelload_mhe_state``, allocated here at
+    ``wheelload_mhe_state_size()`` bytes and reset by ``wheelload_mhe_run``).
+    """
 
     def __init__(self, path: Path, n_bias: int) -> None:
         self._lib = ctypes.CDLL(str(path))
         self._lib.wheelload_mhe_run.restype = None
+        self._lib.wheelload_mhe_state_size.restype = ctypes.c_size_t
         self.n_bias = n_bias
+
+    @property
+    def state_size(self) -> int:
+        """Bytes of one instance's state, ``sizeof(wheelload_mhe_state)``."""
+        return int(self._lib.wheelload_mhe_state_size())
 
     def run(self, signals: Signals) -> EmbeddedResult:
         u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
@@ -72,7 +88,10 @@ class CompiledMhe:
             out[name].ctypes.data_as(ctypes.POINTER(kinds.get(name, ctypes.c_double)))
             for name in names
         ]
+        # Doubles: aligned for every member of the state (doubles, pointers, OSQPInt).
+        state = np.zeros(-(-self.state_size // 8), dtype=np.float64)
         self._lib.wheelload_mhe_run(
+            state.ctypes.data_as(ctypes.c_void_p),
             ctypes.c_int(n),
             u.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
             dt.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
@@ -115,59 +134,10 @@ def n_bias(folder: Path) -> int:
     raise ValueError(f"{folder}: not a generated embedded MHE (no wheelload_mhe.h)")
 
 
-MAIN = r"""
-/* wheelload_mhe_main.c: run the embedded MHE over a text file of input rows.
-   Each row: the interval dt [s] before the sample, then the WHEELLOAD_MHE_N_INPUTS inputs in
-   wheelload.models.INPUTS order ('nan' = missing).
-   Output CSV: fz_fl..fz_rr (of sample k - lag), std_fl..std_rr, residual_0..2, status,
-   iterations, fallback, flags, osqp_float_bytes, bias_0..; exit 2 on bad use. */
-#include <stdio.h>
-#include "osqp.h"
-#include "wheelload_mhe.h"
-
-#define ROW_SIZE (1 + WHEELLOAD_MHE_N_INPUTS)
-
-int main(int argc, char **argv) {
-    if (argc != 3) {
-        fprintf(stderr, "usage: %s INPUTS.txt ESTIMATES.csv\n", argv[0]);
-        return 2;
-    }
-    FILE *in = fopen(argv[1], "r");
-    if (!in) {
-        fprintf(stderr, "%s: cannot open\n", argv[1]);
-        return 2;
-    }
-    FILE *out = fopen(argv[2], "w");
-    if (!out) {
-        fprintf(stderr, "%s: cannot write\n", argv[2]);
-        fclose(in);
-        return 2;
-    }
-    fprintf(out, "fz_fl,fz_fr,fz_rl,fz_rr,std_fl,std_fr,std_rl,std_rr,residual_0,residual_1,"
-                 "residual_2,status,iterations,fallback,flags,osqp_float_bytes");
-    for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",bias_%d", i);
-    fprintf(out, "\n");
-    wheelload_mhe_reset();
-    double row[ROW_SIZE];
-    for (;;) {
-        int i;
-        for (i = 0; i < ROW_SIZE; ++i)
-            if (fscanf(in, "%lf", &row[i]) != 1) break;
-        if (i < ROW_SIZE) break;
-        wheelload_mhe_output o;
-        int status = wheelload_mhe_step(row + 1, row[0], &o);
-        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.loads[i]);
-        for (i = 0; i < 4; ++i) fprintf(out, "%.9g,", o.std[i]);
-        for (i = 0; i < 3; ++i) fprintf(out, "%.9g,", o.residual[i]);
-        fprintf(out, "%d,%d,%d,%u,%d", status, o.iterations, o.fallback, o.flags,
-                (int)sizeof(OSQPFloat));
-        for (i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i) fprintf(out, ",%.9g", o.bias[i]);
-        fprintf(out, "\n");
-    }
-    fclose(in);
-    return fclose(out) == 0 ? 0 : 1;
-}
-"""
+#: The example program (``templates/mhe_main.c``, written beside the library by
+#: :func:`~wheelload.estimators.codegen.mhe.generate_mhe` as ``wheelload_mhe_main.c``): one
+#: instance per input file, interleaved.
+MAIN = (TEMPLATES / "mhe_main.c").read_text()
 
 
 def build_mhe_program(
@@ -181,15 +151,15 @@ def build_mhe_program(
     flags: tuple[str, ...] = ("-O2",),
     vehicle_path: Path | None = None,
 ) -> Path:
-    """Generate the embedded MHE and compile it with :data:`MAIN` into ``folder/wheelload_mhe``.
+    """Generate the embedded MHE and compile its example program (:data:`MAIN`, one instance
+    per input file) into ``folder/wheelload_mhe``.
 
     ``compiler`` may be a cross compiler (e.g. ``arm-linux-gnueabihf-gcc`` with
     ``-static`` among ``flags``, run under ``qemu-arm``).
     """
     folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
                           vehicle_path=vehicle_path)  # fmt: skip
-    main = folder / "wheelload_mhe_main.c"
-    write_text(main, MAIN, replace=True)
+    main = folder / EXAMPLE
     binary = folder / "wheelload_mhe"
     command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
                str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip

@@ -76,7 +76,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="kf: write PREFIX.h, PREFIX.c (the library, libm only), PREFIX_example.c "
         "(CSV log in, CSV estimates out; needs the v_* travel-rate columns), "
         "PREFIX_selftest.c and a Makefile. mhe: write the embedded MHE (OSQP embedded "
-        "solver, wheelload_mhe_terms.c, wheelload_mhe.c).",
+        "solver, wheelload_mhe_terms.c, wheelload_mhe.c, wheelload_mhe_state.h: one "
+        "caller-owned state per instance; the example wheelload_mhe_main.c and a Makefile).",
     )
     parser.add_argument(
         "--estimator",

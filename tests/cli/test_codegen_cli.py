@@ -73,7 +73,8 @@ def test_codegen_mhe_refuses_a_folder_with_files_and_replaces_them_with_force(tm
     assert "is not empty" in capsys.readouterr().err
     assert mine.read_text() == "/* the user's own file */\n"
     assert main([*argv, "--force"]) == 0
-    assert "#define N 3" in mine.read_text()
+    assert "#define N WHEELLOAD_MHE_N" in mine.read_text()
+    assert "#define WHEELLOAD_MHE_N 3" in (out / "wheelload_mhe_state.h").read_text()
     # every file renamed into place: no temporary file or staging folder is left behind
     assert not [p for p in out.rglob("*") if p.name.startswith(".")]
 
@@ -88,7 +89,8 @@ def test_codegen_mhe_writes_the_robust_bias_lagged_window_with_the_kf_linked_in(
     assert "susp huber 1.5σ, eq l1, travel+ax/ay bias, lag 2" in printed
     assert "two-stage KF linked in" in printed
     source = (out / "wheelload_mhe.c").read_text()
-    assert "#define LAG 2" in source and "#define NB 5" in source
+    assert "#define LAG 2" in source and "#define NB WHEELLOAD_MHE_NB" in source
+    assert "#define WHEELLOAD_MHE_NB 5" in (out / "wheelload_mhe_state.h").read_text()
     assert "#define KALMAN_ARRIVAL 1" in source and "#define MU_S 1.5" in source
     assert (out / "wheelload_mhe_kf.c").exists() and (out / "wheelload_mhe.h").exists()
     assert main(["codegen", "--out", str(tmp_path / "kf"), "--lag", "2"]) == 2

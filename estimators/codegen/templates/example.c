@@ -5,7 +5,9 @@
  *     ${prefix}_example LOG.csv [ESTIMATES.csv|- [NAME=VALUE ...]]
  *
  * NAME=VALUE pairs override fields of ${prefix}_default_params (see
- * ${prefix}_param_names), e.g. spring_front=65000, without regenerating.
+ * ${prefix}_param_names), e.g. spring_front=65000, without regenerating,
+ * through ${prefix}_set_param: the derived parameters follow (a spring moves
+ * the roll split), in any order of the pairs; a refused one is reported.
  * LOG.csv has a header row and the columns of the wheelload log format, in
  * any order: t and the channels of ${prefix}_input_names (t, vx, ax, ay, az,
  * d_fl, d_fr, d_rl, d_rr and the travel rates v_fl, v_fr, v_rl, v_rr are
@@ -317,27 +319,40 @@ static void write_row(FILE *out, double t, const ${prefix}_output *estimate)
     fprintf(out, ",%lu\n", (unsigned long)estimate->flags);
 }
 
-/* Apply one NAME=VALUE override; 0 if the name is unknown or the value not a
- * decimal number. */
+/* Apply one NAME=VALUE override with ${prefix}_set_param; 0 (reported) if the
+ * name is unknown, the value not a decimal number, or the library refuses it. */
 static int override(${prefix}_params *params, const char *assignment)
 {
     const char *equals = strchr(assignment, '=');
     int k;
-    if (equals == NULL) {
-        return 0;
-    }
-    for (k = 0; k < ${PREFIX}_N_PARAMS; ++k) {
-        const char *name = ${prefix}_param_names[k];
-        if (strlen(name) == (size_t)(equals - assignment)
-            && strncmp(name, assignment, strlen(name)) == 0) {
-            double value;
-            if (!is_decimal(equals + 1) || number(equals + 1, REAL_MAX, &value) != FIELD_OK) {
-                return 0;
+    if (equals != NULL) {
+        for (k = 0; k < ${PREFIX}_N_PARAMS; ++k) {
+            const char *name = ${prefix}_param_names[k];
+            if (strlen(name) == (size_t)(equals - assignment)
+                && strncmp(name, assignment, strlen(name)) == 0) {
+                double value;
+                int status;
+                if (!is_decimal(equals + 1) || number(equals + 1, REAL_MAX, &value) != FIELD_OK) {
+                    fprintf(stderr, "%s: the value is not a decimal number\n", assignment);
+                    return 0;
+                }
+                status = ${prefix}_set_param(params, k, (${prefix}_real)value);
+                if (status == ${PREFIX}_SET_FIXED) {
+                    fprintf(stderr,
+                            "%s: '%s' moves the mass centre with vehicle-file values this "
+                            "library does not hold: regenerate the library from the changed "
+                            "vehicle file\n",
+                            assignment, name);
+                } else if (status != ${PREFIX}_SET_OK) {
+                    fprintf(stderr, "%s: '%s' or a parameter derived from it is not finite\n",
+                            assignment, name);
+                }
+                return status == ${PREFIX}_SET_OK;
             }
-            *${prefix}_param_field(params, k) = (${prefix}_real)value;
-            return 1;
         }
     }
+    fprintf(stderr, "%s: unknown parameter (NAME=VALUE, NAME one of %s_param_names)\n",
+            assignment, "${prefix}");
     return 0;
 }
 
@@ -391,8 +406,13 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
     double t = t_first[1], t_previous = t_first[0];
     int status = ${prefix}_init(&state, params);
     ${prefix}_rate_filter_reset(&rates);
-    if (status != 0) {
+    if (status > 0) {
         fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
+        return 2;
+    }
+    if (status < 0) {
+        fprintf(stderr, "parameter '%s' was written without ${prefix}_set_param\n",
+                ${prefix}_param_names[-status - 1]);
         return 2;
     }
     fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
@@ -439,7 +459,6 @@ int main(int argc, char **argv)
     params = ${prefix}_default_params;
     for (k = 3; k < argc; ++k) {
         if (!override(&params, argv[k])) {
-            fprintf(stderr, "unknown parameter or bad value '%s'\n", argv[k]);
             return 2;
         }
     }

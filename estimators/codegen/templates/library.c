@@ -22,6 +22,7 @@ const char ${prefix}_build_id[] =
 
 const ${prefix}_params ${prefix}_default_params = {
 ${param_defaults}
+${derivation_defaults}
 };
 
 const char *const ${prefix}_param_names[${PREFIX}_N_PARAMS] = {
@@ -89,9 +90,12 @@ static int all_finite(const ${prefix}_real *values, int n)
     return finite;
 }
 
+${derivation_code}
+
 int ${prefix}_init(${prefix}_state *state, const ${prefix}_params *params)
 {
 ${param_checks}
+${derivation_check}
     ${prefix}_reset(state, params);
     return 0;
 }

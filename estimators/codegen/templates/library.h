@@ -24,8 +24,10 @@
  * Usage:
  *     ${prefix}_state state;
  *     ${prefix}_output out;
- *     if (${prefix}_init(&state, &${prefix}_default_params) != 0) { ... }
- *     for (;;) { ... ${prefix}_step(&state, &${prefix}_default_params, &input, dt, &out); }
+ *     ${prefix}_params params = ${prefix}_default_params;
+ *     if (${prefix}_set_param(&params, index, value) != ${PREFIX}_SET_OK) { ... }
+ *     if (${prefix}_init(&state, &params) != 0) { ... }
+ *     for (;;) { ... ${prefix}_step(&state, &params, &input, dt, &out); }
  */
 #ifndef ${PREFIX}_H
 #define ${PREFIX}_H
@@ -101,7 +103,17 @@ typedef struct {
 /* Calibration. ${params_note} */
 typedef struct {
 ${param_fields}
+${derivation_fields}
 } ${prefix}_params;
+
+${derived_comment}
+#define ${PREFIX}_N_DERIVED ${n_derived}
+
+/* Status of ${prefix}_set_param (params unchanged unless OK): no field of that index;
+ * the value, or a parameter derived from it, is not finite; another value of a field that
+ * moves the mass centre with vehicle-file values the library does not hold (regenerate the
+ * library from the changed vehicle file). */
+${set_statuses}
 
 /* The calibration of the vehicle file the library was generated from. */
 extern const ${prefix}_params ${prefix}_default_params;
@@ -111,11 +123,20 @@ extern const char *const ${prefix}_param_names[${PREFIX}_N_PARAMS];
 extern const char ${prefix}_build_id[];
 
 /* Address of field `index` (order of ${prefix}_param_names) of params, or a
- * null pointer for an index out of range: sets a field found by name. */
+ * null pointer for an index out of range: reads a field found by name. Writing
+ * through it bypasses the derived parameters: set fields with ${prefix}_set_param. */
 ${prefix}_real *${prefix}_param_field(${prefix}_params *params, int index);
 
-/* Check the calibration and reset the state. Returns 0, or 1 + the index in
- * ${prefix}_param_names of the first invalid field (state left untouched). */
+/* Set field `index` (order of ${prefix}_param_names) to value and recompute the
+ * derived parameters that follow it (${PREFIX}_N_DERIVED); setting a derived
+ * parameter itself pins it (it no longer follows its sources). Returns
+ * ${PREFIX}_SET_OK or another ${PREFIX}_SET_* status (params unchanged). */
+int ${prefix}_set_param(${prefix}_params *params, int index, ${prefix}_real value);
+
+/* Check the calibration and reset the state. Returns 0; 1 + the index in
+ * ${prefix}_param_names of the first invalid field; or -(1 + the index) of a
+ * field written directly, not by ${prefix}_set_param, that derived parameters
+ * depend on (they would be stale). State left untouched unless 0. */
 int ${prefix}_init(${prefix}_state *state, const ${prefix}_params *params);
 
 /* Static loads with covariance initial_std^2 I. */

@@ -1,16 +1,16 @@
 /* The fallback filter: the library of `wheelload codegen` (wheelload_mhe_kf.c, from the same
  * vehicle file) linked in: the two-stage KF (soft constraint) or the projection KF (hard), as the
  * Python MHE's. Its estimate stands in for a sample whose QP is not solved (flagged fallback), its
- * covariance gives the Kalman arrival weight, its standard deviations are reported. */
-#include "wheelload_mhe_kf.h"
+ * covariance gives the Kalman arrival weight, its standard deviations are reported. Each MHE
+ * instance has its own filter state (mhe->kf); the calibration is the library's default. */
 
-static wheelload_mhe_kf_state KF;
+static void kf_reset(wheelload_mhe_state *mhe) {
+    wheelload_mhe_kf_reset(&mhe->kf, &wheelload_mhe_kf_default_params);
+}
 
-static void kf_reset(void) { wheelload_mhe_kf_reset(&KF, &wheelload_mhe_kf_default_params); }
-
-static void kf_covariance(double *P) {
+static void kf_covariance(const wheelload_mhe_state *mhe, double *P) {
     static const int index[16] = {0, 1, 2, 3, 1, 4, 5, 6, 2, 5, 7, 8, 3, 6, 8, 9};
-    for (int e = 0; e < 16; ++e) P[e] = (double)KF.P[index[e]];
+    for (int e = 0; e < 16; ++e) P[e] = (double)mhe->kf.P[index[e]];
 }
 
 static void kf_run(wheelload_mhe_kf_state *state, const double *u, double dt,
@@ -22,20 +22,20 @@ static void kf_run(wheelload_mhe_kf_state *state, const double *u, double dt,
                           (wheelload_mhe_kf_real)dt, output);
 }
 
-static void kf_step(const double *u, double dt, double *x, double *std) {
+static void kf_step(wheelload_mhe_state *mhe, const double *u, double dt, double *x, double *std) {
     wheelload_mhe_kf_output output;
-    kf_run(&KF, u, dt, &output);
+    kf_run(&mhe->kf, u, dt, &output);
     for (int i = 0; i < 4; ++i) {
-        x[i] = (double)KF.x[i];
+        x[i] = (double)mhe->kf.x[i];
         std[i] = (double)output.std[i];
     }
 }
 
 /* A rejected interval: the filter's report of the held step, its residual moved to the held
    estimate; the filter's state is not advanced. */
-static void kf_held(const double *u, double dt, const double *held, double *std,
-                    double *residual) {
-    wheelload_mhe_kf_state copy = KF;
+static void kf_held(const wheelload_mhe_state *mhe, const double *u, double dt, const double *held,
+                    double *std, double *residual) {
+    wheelload_mhe_kf_state copy = mhe->kf;
     wheelload_mhe_kf_output output;
     kf_run(&copy, u, dt, &output);
     for (int i = 0; i < 4; ++i) std[i] = (double)output.std[i];

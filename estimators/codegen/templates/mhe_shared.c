@@ -1,10 +1,12 @@
 /* Shared by the two window drivers (mhe_plain.c, mhe_window.c) of wheelload_mhe.c. */
 
 /* The fallback filter (appended after the driver: the linked KF, or the held estimate). */
-static void kf_reset(void);
-static void kf_covariance(double *P); /* its covariance [N^2] before the sample, 4 x 4 */
-static void kf_step(const double *u, double dt, double *x, double *std);
-static void kf_held(const double *u, double dt, const double *held, double *std, double *residual);
+static void kf_reset(wheelload_mhe_state *mhe);
+/* its covariance [N^2] before the sample, 4 x 4 */
+static void kf_covariance(const wheelload_mhe_state *mhe, double *P);
+static void kf_step(wheelload_mhe_state *mhe, const double *u, double dt, double *x, double *std);
+static void kf_held(const wheelload_mhe_state *mhe, const double *u, double dt, const double *held,
+                    double *std, double *residual);
 /* Arrival weight c s^2 Pi^-1 of a window starting at the sample (first: the log's first). */
 static void arrival_weight(int first, const double *P, double dt, double *weight);
 

@@ -18,17 +18,19 @@ static void arrival_weight(int first, const double *P, double dt, double *weight
                 COST * LOAD_SCALE * LOAD_SCALE * (0.5 * (inverse[r * 4 + c] + inverse[c * 4 + r]));
 }
 
-/* A whole log (u: n x N_INPUTS, row-major; dt: the interval before each sample); bias: n x
-   WHEELLOAD_MHE_N_BIAS; wall time per sample in seconds. */
-void wheelload_mhe_run(int n, const double *u, const double *dt, double *loads, double *std,
-                       double *residual, double *bias, int *status, int *iterations,
-                       int *fallback, unsigned *flags, double *seconds) {
-    wheelload_mhe_reset();
+size_t wheelload_mhe_state_size(void) { return sizeof(wheelload_mhe_state); }
+
+/* A whole log in mhe, reset first (u: n x N_INPUTS, row-major; dt: the interval before each
+   sample); bias: n x WHEELLOAD_MHE_N_BIAS; wall time per sample in seconds. */
+void wheelload_mhe_run(wheelload_mhe_state *mhe, int n, const double *u, const double *dt,
+                       double *loads, double *std, double *residual, double *bias, int *status,
+                       int *iterations, int *fallback, unsigned *flags, double *seconds) {
+    wheelload_mhe_reset(mhe);
     for (int k = 0; k < n; ++k) {
         struct timespec start, stop;
         wheelload_mhe_output out;
         clock_gettime(CLOCK_MONOTONIC, &start);
-        status[k] = wheelload_mhe_step(u + N_INPUTS * k, dt[k], &out);
+        status[k] = wheelload_mhe_step(mhe, u + N_INPUTS * k, dt[k], &out);
         clock_gettime(CLOCK_MONOTONIC, &stop);
         seconds[k] = (double)(stop.tv_sec - start.tv_sec)
                      + 1e-9 * (double)(stop.tv_nsec - start.tv_nsec);

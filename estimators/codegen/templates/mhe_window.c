@@ -10,41 +10,28 @@
  * rho = sqrt(mask dt / r) r_i (the CasADi rows of wheelload_mhe_residual_rows), costs
  * kappa/2 (rho - e)^2 + mu |e| (quadratic: 1/2 rho^2). The bias arrival weight (information)
  * loses q_b dt of variance per sample and gains the Schur complement of each sample that leaves
- * the window, rows weighted by the loss's effective (IRLS) weight. */
+ * the window, rows weighted by the loss's effective (IRLS) weight. Every value that lives from
+ * one sample to the next is in the caller's wheelload_mhe_state (mhe->, the members of
+ * wheelload_mhe_state.h), its solver included. */
 
-#define NL (WIDTH + NB)     /* a sample's local variables: its block, then the biases */
-#define NM (W + NB)         /* what a data row acts on: the loads, then the biases */
-#define NQ (N * WIDTH + NB) /* QP variables */
-#define NK (NB > 0 ? NB : 1)
+#define NM (W + NB) /* what a data row acts on: the loads, then the biases */
 
-typedef struct {
-    double z[4], Jd[16], b[3], Ba[6], ls[4], lc[3], xp[4], link, lower[W], upper[W];
-    double Hl[NL * NL], gl[NL]; /* the sample's data rows over its block and the biases */
-    double kfx[4];              /* the fallback's estimate of the sample */
-} sample_t;
+/* A sample of the window (wheelload_mhe_state.h). */
+typedef wheelload_mhe_sample sample_t;
 
-static sample_t S[N];                   /* the window, oldest first */
-static double ARR[N][16];               /* arrival weight c s^2 Pi^-1 of a window starting there */
-static double HIST[N][4];               /* estimates of the N samples before; the prior is row 0 */
-static double HD[NQ * NQ], GD[NQ];      /* the window's dense Hessian and linear term */
-static OSQPFloat XW[NQ], YW[NQ], Q[NQ], L[NQ], U[NQ], PX[NNZ]; /* OSQP's type */
-static double BETA[NK], INFO[NK * NK];  /* bias estimate and its information */
-static double FALLBACK[4];              /* the fallback filter's (or held) estimate */
-static long K = 0;
-
-void wheelload_mhe_reset(void) {
-    K = 0;
-    memset(S, 0, sizeof S);
-    memset(ARR, 0, sizeof ARR);
-    memset(XW, 0, sizeof XW);
-    memset(YW, 0, sizeof YW);
-    memset(BETA, 0, sizeof BETA);
-    memset(INFO, 0, sizeof INFO);
-    for (int i = 0; i < NB; ++i) INFO[i * NK + i] = BETA_INFO0[i];
+void wheelload_mhe_reset(wheelload_mhe_state *mhe) {
+    mhe->K = 0;
+    memset(mhe->S, 0, sizeof mhe->S);
+    memset(mhe->ARR, 0, sizeof mhe->ARR);
+    memset(mhe->XW, 0, sizeof mhe->XW);
+    memset(mhe->YW, 0, sizeof mhe->YW);
+    memset(mhe->BETA, 0, sizeof mhe->BETA);
+    memset(mhe->INFO, 0, sizeof mhe->INFO);
+    for (int i = 0; i < NB; ++i) mhe->INFO[i * NK + i] = BETA_INFO0[i];
     for (int j = 0; j < N; ++j) {
-        memcpy(S[j].z, X0, sizeof X0);
-        memcpy(S[j].kfx, X0, sizeof X0);
-        memcpy(HIST[j], X0, sizeof X0);
+        memcpy(mhe->S[j].z, X0, sizeof X0);
+        memcpy(mhe->S[j].kfx, X0, sizeof X0);
+        memcpy(mhe->HIST[j], X0, sizeof X0);
     }
 @@ reset_filter
 }
@@ -159,9 +146,10 @@ static void local_terms(sample_t *s) {
 }
 
 /* The window's dense Hessian and linear term (physical costs; scaled by COST on loading). */
-static void assemble(int j0, const double *prior, const double *arrival) {
-    memset(HD, 0, sizeof HD);
-    memset(GD, 0, sizeof GD);
+static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
+                     const double *arrival) {
+    memset(mhe->HD, 0, sizeof mhe->HD);
+    memset(mhe->GD, 0, sizeof mhe->GD);
     double X[4 * W];
     memset(X, 0, sizeof X);
     for (int i = 0; i < 4; ++i) {
@@ -174,14 +162,15 @@ static void assemble(int j0, const double *prior, const double *arrival) {
     for (int j = 0; j < N; ++j) {
         int base = j * WIDTH;
         if (j < j0) {
-            for (int a = 0; a < W; ++a) HD[(base + a) * NQ + base + a] += 1.0 / COST;
+            for (int a = 0; a < W; ++a) mhe->HD[(base + a) * NQ + base + a] += 1.0 / COST;
             continue;
         }
         int map[NL];
         for (int a = 0; a < NL; ++a) map[a] = a < WIDTH ? base + a : N * WIDTH + a - WIDTH;
         for (int a = 0; a < NL; ++a) {
-            for (int b = 0; b < NL; ++b) HD[map[a] * NQ + map[b]] += S[j].Hl[a * NL + b];
-            GD[map[a]] += S[j].gl[a];
+            for (int b = 0; b < NL; ++b)
+                mhe->HD[map[a] * NQ + map[b]] += mhe->S[j].Hl[a * NL + b];
+            mhe->GD[map[a]] += mhe->S[j].gl[a];
         }
         int cols[2 * W];
         double r[4];
@@ -192,19 +181,19 @@ static void assemble(int j0, const double *prior, const double *arrival) {
         if (j == j0) {
             double weight[16];
             for (int e = 0; e < 16; ++e) weight[e] = arrival[e] / (COST * LOAD_SCALE * LOAD_SCALE);
-            for (int i = 0; i < 4; ++i) r[i] = prior[i] - S[j].xp[i];
-            add_rows(HD, NQ, GD, cols, W, X, 4, r, weight, 1);
-        } else if (S[j].link > 0.0) {
+            for (int i = 0; i < 4; ++i) r[i] = prior[i] - mhe->S[j].xp[i];
+            add_rows(mhe->HD, NQ, mhe->GD, cols, W, X, 4, r, weight, 1);
+        } else if (mhe->S[j].link > 0.0) {
             double M[4 * 2 * W], link[4];
             for (int i = 0; i < 4; ++i) {
                 for (int a = 0; a < W; ++a) {
                     M[i * 2 * W + a] = X[i * W + a];
                     M[i * 2 * W + W + a] = -X[i * W + a];
                 }
-                r[i] = -(S[j].xp[i] - S[j - 1].xp[i]);
-                link[i] = S[j].link;
+                r[i] = -(mhe->S[j].xp[i] - mhe->S[j - 1].xp[i]);
+                link[i] = mhe->S[j].link;
             }
-            add_rows(HD, NQ, GD, cols, 2 * W, M, 4, r, link, 0);
+            add_rows(mhe->HD, NQ, mhe->GD, cols, 2 * W, M, 4, r, link, 0);
         }
     }
 #if NB > 0
@@ -215,7 +204,7 @@ static void assemble(int j0, const double *prior, const double *arrival) {
         cols[a] = N * WIDTH + a;
         eye[a * NB + a] = 1.0;
     }
-    add_rows(HD, NQ, GD, cols, NB, eye, NB, BETA, INFO, 1);
+    add_rows(mhe->HD, NQ, mhe->GD, cols, NB, eye, NB, mhe->BETA, mhe->INFO, 1);
 #endif
 }
 
@@ -228,8 +217,8 @@ static double effective(int robust, double corner, double scale, double rho) {
 
 /* The bias information of the window's oldest sample with its loads eliminated, at the
    solution v (Schur complement; rows at the loss's effective weight), added to INFO. */
-static void leaving_information(const OSQPFloat *v) {
-    const sample_t *s = &S[0];
+static void leaving_information(wheelload_mhe_state *mhe, const OSQPFloat *v) {
+    const sample_t *s = &mhe->S[0];
     double beta[NB], x[4], delta[4] = {0.0, 0.0, 0.0, 0.0}, ba[2] = {0.0, 0.0};
     for (int a = 0; a < NB; ++a) beta[a] = (double)v[N * WIDTH + a];
     for (int i = 0; i < 4; ++i) {
@@ -283,7 +272,7 @@ static void leaving_information(const OSQPFloat *v) {
             for (int c = 0; c < W; ++c)
                 for (int e = 0; e < W; ++e)
                     t -= F[c * NM + W + a] * inverse[c * W + e] * F[e * NM + W + b];
-            INFO[a * NK + b] += t;
+            mhe->INFO[a * NK + b] += t;
         }
 }
 #endif
@@ -294,23 +283,24 @@ static int checked(const OSQPFloat *block, const sample_t *s, double *loads) {
 }
 
 /* The window's minimiser when no sample has a data term: the prior carried unchanged. */
-static void prior_solution(int j0, const double *prior) {
+static void prior_solution(wheelload_mhe_state *mhe, int j0, const double *prior) {
     double solution[N][W];
     for (int j = 0; j < N; ++j)
-        for (int a = 0; a < W; ++a) solution[j][a] = (double)XW[j * WIDTH + a];
+        for (int a = 0; a < W; ++a) solution[j][a] = (double)mhe->XW[j * WIDTH + a];
 #if HARD
     double Wn[4], nWn = 0.0, num = 0.0;
     for (int r = 0; r < 4; ++r) {
         Wn[r] = 0.0;
-        for (int c = 0; c < 4; ++c) Wn[r] += ARR[j0][r * 4 + c] * NULL_VECTOR[c];
+        for (int c = 0; c < 4; ++c) Wn[r] += mhe->ARR[j0][r * 4 + c] * NULL_VECTOR[c];
         nWn += NULL_VECTOR[r] * Wn[r];
     }
-    for (int r = 0; r < 4; ++r) num += Wn[r] * (prior[r] - S[j0].xp[r]);
+    for (int r = 0; r < 4; ++r) num += Wn[r] * (prior[r] - mhe->S[j0].xp[r]);
     double omega = num / nWn / LOAD_SCALE;
     for (int j = j0; j < N; ++j) {
         if (j > j0) {
             double step = 0.0;
-            for (int r = 0; r < 4; ++r) step += NULL_VECTOR[r] * (S[j].xp[r] - S[j - 1].xp[r]);
+            for (int r = 0; r < 4; ++r)
+                step += NULL_VECTOR[r] * (mhe->S[j].xp[r] - mhe->S[j - 1].xp[r]);
             omega -= step / LOAD_SCALE;
         }
         solution[j][0] = omega;
@@ -322,27 +312,28 @@ static void prior_solution(int j0, const double *prior) {
     for (int j = 0; j < N; ++j)
         for (int a = 0; a < WIDTH; ++a) {
             double v = a < W ? solution[j][a] : 0.0;
-            if (a < W && j >= j0) v = fmin(fmax(v, S[j].lower[a]), S[j].upper[a]);
-            XW[j * WIDTH + a] = (OSQPFloat)v;
+            if (a < W && j >= j0) v = fmin(fmax(v, mhe->S[j].lower[a]), mhe->S[j].upper[a]);
+            mhe->XW[j * WIDTH + a] = (OSQPFloat)v;
         }
 }
 
-int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
+int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
+                      wheelload_mhe_output *out) {
     double u0[N_INPUTS], valid[N_INPUTS], cost = COST;
     memset(out, 0, sizeof *out);
     double previous_P[16];
 @@ interval_and_inputs
     double kf_std[4];
-    kf_step(u, dt, FALLBACK, kf_std);
-    sample_t *s = &S[0];
-    memmove(S, S + 1, sizeof(sample_t) * (N - 1));
-    s = &S[N - 1];
+    kf_step(mhe, u, dt, mhe->FALLBACK, kf_std);
+    sample_t *s = &mhe->S[0];
+    memmove(mhe->S, mhe->S + 1, sizeof(sample_t) * (N - 1));
+    s = &mhe->S[N - 1];
     {
         double h[W * W], g[W], link, lo[W], hi[W], used[N_USED];
-        wheelload_mhe_terms(u0, valid, &dt, FALLBACK, P_VECTOR, TUNING, &cost, h, g, &link, s->xp,
-                            lo, hi, s->b, used);
+        wheelload_mhe_terms(u0, valid, &dt, mhe->FALLBACK, P_VECTOR, TUNING, &cost, h, g, &link,
+                            s->xp, lo, hi, s->b, used);
         for (int i = 0; i < N_USED; ++i) out->flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
-        s->link = K == 0 ? 0.0 : link / (COST * LOAD_SCALE * LOAD_SCALE);
+        s->link = mhe->K == 0 ? 0.0 : link / (COST * LOAD_SCALE * LOAD_SCALE);
         memcpy(s->lower, lo, sizeof lo);
         memcpy(s->upper, hi, sizeof hi);
     }
@@ -354,84 +345,86 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 2; ++c) s->Ba[r * 2 + c] = Ba[c * 3 + r];
     }
-    memcpy(s->kfx, FALLBACK, sizeof FALLBACK);
+    memcpy(s->kfx, mhe->FALLBACK, sizeof mhe->FALLBACK);
     local_terms(s);
-    memmove(ARR[0], ARR[1], sizeof(double) * 16 * (N - 1));
-    arrival_weight(K == 0, previous_P, dt, ARR[N - 1]);
-    int j0 = K < N - 1 ? (int)(N - 1 - K) : 0;
-    if (K == 0) osqp_update_rho(&wheelload_mhe_solver, (OSQPFloat)RHO0);
-    memmove(XW, XW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
-    memmove(YW, YW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
+    memmove(mhe->ARR[0], mhe->ARR[1], sizeof(double) * 16 * (N - 1));
+    arrival_weight(mhe->K == 0, previous_P, dt, mhe->ARR[N - 1]);
+    int j0 = mhe->K < N - 1 ? (int)(N - 1 - mhe->K) : 0;
+    if (mhe->K == 0) osqp_update_rho(&mhe->osqp.solver, (OSQPFloat)RHO0);
+    memmove(mhe->XW, mhe->XW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
+    memmove(mhe->YW, mhe->YW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
     int data = 0;
     for (int j = j0; j < N; ++j) {
-        for (int i = 0; i < 4; ++i) data |= S[j].ls[i] != 0.0;
-        for (int i = 0; i < 3; ++i) data |= S[j].lc[i] != 0.0;
+        for (int i = 0; i < 4; ++i) data |= mhe->S[j].ls[i] != 0.0;
+        for (int i = 0; i < 3; ++i) data |= mhe->S[j].lc[i] != 0.0;
     }
     int status = 1;
     out->iterations = 0;
     if (!data) {
-        prior_solution(j0, HIST[N - 1]);
+        prior_solution(mhe, j0, mhe->HIST[N - 1]);
     } else {
-        assemble(j0, HIST[0], ARR[j0]);
-        for (int i = 0; i < NNZ; ++i) PX[i] = (OSQPFloat)(COST * HD[PATTERN[i]]);
+        assemble(mhe, j0, mhe->HIST[0], mhe->ARR[j0]);
+        for (int i = 0; i < NNZ; ++i) mhe->PX[i] = (OSQPFloat)(COST * mhe->HD[PATTERN[i]]);
         for (int i = 0; i < NQ; ++i) {
             double low = 0.0, high = 0.0;
             if (i < N * WIDTH) {
                 int j = i / WIDTH, a = i % WIDTH;
                 if (j >= j0) {
-                    low = a < W ? S[j].lower[a] : 0.0;
-                    high = a < W ? S[j].upper[a] : (double)OSQP_INFTY;
+                    low = a < W ? mhe->S[j].lower[a] : 0.0;
+                    high = a < W ? mhe->S[j].upper[a] : (double)OSQP_INFTY;
                 }
             } else {
                 low = -BETA_BOUND[i - N * WIDTH];
                 high = BETA_BOUND[i - N * WIDTH];
             }
-            Q[i] = (OSQPFloat)(COST * GD[i]);
-            L[i] = (OSQPFloat)fmax(low, -(double)OSQP_INFTY);
-            U[i] = (OSQPFloat)fmin(high, (double)OSQP_INFTY);
+            mhe->Q[i] = (OSQPFloat)(COST * mhe->GD[i]);
+            mhe->L[i] = (OSQPFloat)fmax(low, -(double)OSQP_INFTY);
+            mhe->U[i] = (OSQPFloat)fmin(high, (double)OSQP_INFTY);
         }
-        if (finite_data(PX, NNZ, Q, L, U, NQ, 1)) {
-            osqp_update_data_mat(&wheelload_mhe_solver, PX, OSQP_NULL, NNZ, OSQP_NULL, OSQP_NULL,
-                                 0);
-            osqp_update_data_vec(&wheelload_mhe_solver, Q, L, U);
-            osqp_warm_start(&wheelload_mhe_solver, XW, YW);
+        if (finite_data(mhe->PX, NNZ, mhe->Q, mhe->L, mhe->U, NQ, 1)) {
+            osqp_update_data_mat(&mhe->osqp.solver, mhe->PX, OSQP_NULL, NNZ, OSQP_NULL,
+                                 OSQP_NULL, 0);
+            osqp_update_data_vec(&mhe->osqp.solver, mhe->Q, mhe->L, mhe->U);
+            osqp_warm_start(&mhe->osqp.solver, mhe->XW, mhe->YW);
 @@ solve
         if (status == 1) {
-            memcpy(XW, wheelload_mhe_solver.solution->x, sizeof XW);
-            memcpy(YW, wheelload_mhe_solver.solution->y, sizeof YW);
+            memcpy(mhe->XW, mhe->osqp.solver.solution->x, sizeof mhe->XW);
+            memcpy(mhe->YW, mhe->osqp.solver.solution->y, sizeof mhe->YW);
         }
     }
     double x[4];
-    int failed = status != 1 || !checked(XW + (N - 1) * WIDTH, s, x);
+    int failed = status != 1 || !checked(mhe->XW + (N - 1) * WIDTH, s, x);
     if (failed) {
-        fallback_loads(FALLBACK, HIST[N - 1], x);
+        fallback_loads(mhe->FALLBACK, mhe->HIST[N - 1], x);
     }
 #if NB > 0
     else {
         for (int a = 0; a < NB; ++a)
-            BETA[a] = fmin(fmax((double)XW[N * WIDTH + a], -BETA_BOUND[a]), BETA_BOUND[a]);
-        if (K >= N - 1) leaving_information(XW);
+            mhe->BETA[a] =
+                fmin(fmax((double)mhe->XW[N * WIDTH + a], -BETA_BOUND[a]), BETA_BOUND[a]);
+        if (mhe->K >= N - 1) leaving_information(mhe, mhe->XW);
     }
     {
         double walk = s->link > 0.0 ? 1.0 / (Q_DENSITY * s->link) : 0.0;
         double a[NB * NB], covariance[NB * NB];
-        memcpy(a, INFO, sizeof a);
+        memcpy(a, mhe->INFO, sizeof a);
         invert(a, NB, covariance);
         for (int i = 0; i < NB; ++i) covariance[i * NB + i] += BETA_DENSITY[i] * walk;
         invert(covariance, NB, a);
         for (int r = 0; r < NB; ++r)
-            for (int c = 0; c < NB; ++c) INFO[r * NK + c] = 0.5 * (a[r * NB + c] + a[c * NB + r]);
+            for (int c = 0; c < NB; ++c)
+                mhe->INFO[r * NK + c] = 0.5 * (a[r * NB + c] + a[c * NB + r]);
     }
 #endif
-    memmove(HIST[0], HIST[1], sizeof(double) * 4 * (N - 1));
-    memcpy(HIST[N - 1], x, sizeof x);
-    ++K;
+    memmove(mhe->HIST[0], mhe->HIST[1], sizeof(double) * 4 * (N - 1));
+    memcpy(mhe->HIST[N - 1], x, sizeof x);
+    ++mhe->K;
     /* the output: the window's estimate of sample k - LAG */
-    const sample_t *lagged = &S[N - 1 - LAG];
+    const sample_t *lagged = &mhe->S[N - 1 - LAG];
     if (LAG == 0 || failed) {
         memcpy(out->loads, x, sizeof x);
-    } else if (!checked(XW + (N - 1 - LAG) * WIDTH, lagged, out->loads)) {
-        fallback_loads(lagged->kfx, HIST[N - 1], out->loads);
+    } else if (!checked(mhe->XW + (N - 1 - LAG) * WIDTH, lagged, out->loads)) {
+        fallback_loads(lagged->kfx, mhe->HIST[N - 1], out->loads);
     }
     for (int r = 0; r < 3; ++r) {
         out->residual[r] = lagged->b[r];
@@ -443,11 +436,11 @@ int wheelload_mhe_step(const double *u, double dt, wheelload_mhe_output *out) {
 #if ND > 0
     for (int i = 0; i < 4; ++i) {
         double v = 0.0;
-        for (int c = 0; c < ND; ++c) v += TRAVEL_BASIS[i * ND + c] * BETA[c];
+        for (int c = 0; c < ND; ++c) v += TRAVEL_BASIS[i * ND + c] * mhe->BETA[c];
         out->bias[nr++] = v * TRAVEL_UNIT;
     }
 #endif
-    for (int c = ND; c < NB; ++c) out->bias[nr++] = BETA[c];
+    for (int c = ND; c < NB; ++c) out->bias[nr++] = mhe->BETA[c];
 #endif
     out->fallback = failed;
     return status;

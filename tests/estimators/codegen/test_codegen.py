@@ -27,7 +27,7 @@ from wheelload.estimators.codegen.kf import (
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.logs.signals import rate_derivatives
 from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, WHEELS
-from wheelload.models import INPUTS, ModelParameters, example_vehicle_path, suspension_function
+from wheelload.models import INPUTS, example_vehicle_path, suspension_function
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
@@ -236,11 +236,9 @@ def test_runtime_params_change_the_filter_without_regenerating(vehicle, tmp_path
     )
     front = dataclasses.replace(vehicle.suspension.front, spring_rate=66000.0)
     noise = (*vehicle.filter.constraint_noise_density[:2], 5000.0)
-    # A derived default (the roll split, from the springs and bars) is fixed when the
-    # library is generated; a run-time spring leaves it, so the file pins it too.
-    split = ModelParameters.from_vehicle(vehicle).roll_split_front
+    # The derived roll split follows the spring (wheelload_kf_set_param), as in Python.
     changed = vehicle.replace(
-        suspension=dataclasses.replace(vehicle.suspension, front=front, roll_split_front=split),
+        suspension=dataclasses.replace(vehicle.suspension, front=front),
         filter=dataclasses.replace(vehicle.filter, constraint_noise_density=noise),
     )
     expected = TwoStageKF(changed).run(read_log(log_path)).to_pandas()
