@@ -85,7 +85,9 @@ GROUPS = {
 
 
 def add_common_options(parser: argparse.ArgumentParser, traits: CommandTraits) -> None:
-    """The shared option groups of a command with these ``traits`` (one set for all)."""
+    """The shared option groups of a command with these ``traits`` (one set for all); the
+    parser keeps the declaration as its ``traits`` default."""
+    parser.set_defaults(traits=traits)
     if traits.log:
         group = parser.add_argument_group(GROUPS["log"])
         group.add_argument(

@@ -7,7 +7,6 @@ declarations against what the commands do with real files.
 """
 
 import argparse
-import importlib
 import logging
 import shutil
 
@@ -16,9 +15,17 @@ import pytest
 
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import COMMAND_MODULES, build_parser, main
-from wheelload.studies.commands.options import GROUPS, CommandTraits
 from wheelload.studies.pipeline.example_log import example_log_path
 
+#: The groups' titles, as ``wheelload COMMAND --help`` shows them.
+GROUPS = {
+    "log": "log input",
+    "scores": "scoring window",
+    "vehicle": "vehicle file",
+    "writes": "output",
+    "many_logs": "many logs",
+    "messages": "messages",
+}
 OPTIONS = {
     "log": ("--channels", "--skip-wiring-checks"),
     "scores": ("--start", "--end"),
@@ -42,9 +49,9 @@ def _groups(parser: argparse.ArgumentParser) -> dict[str, set[str]]:
 
 @pytest.mark.parametrize("name", sorted(COMMAND_MODULES))
 def test_every_command_takes_the_groups_its_traits_declare(name):
-    traits = importlib.import_module(COMMAND_MODULES[name]).TRAITS
-    assert isinstance(traits, CommandTraits)
     parser = _subparsers(build_parser())[name]
+    traits = parser.get_default("traits")  # the command module's TRAITS
+    assert traits is not None, name
     groups = _groups(parser)
     assert {"-q", "-v"} <= groups[GROUPS["messages"]], name
     for trait, options in OPTIONS.items():
@@ -69,8 +76,9 @@ def test_bench_subcommands_take_the_message_options_and_are_listed():
 def test_the_reading_commands_read_the_logs_declared():
     """The declarations hold: every command that reads a user's log says so."""
     readers = {"estimate", "compare", "sensor-sets", "study", "weigh", "identify", "tune"}
+    parsers = _subparsers(build_parser())
     for name in readers:
-        assert importlib.import_module(COMMAND_MODULES[name]).TRAITS.log, name
+        assert parsers[name].get_default("traits").log, name
 
 
 @pytest.fixture(scope="module")

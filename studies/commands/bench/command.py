@@ -63,6 +63,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     for module in BENCHMARKS:
         importlib.import_module(module).register_bench(benchmarks)
     add_message_options(bench)
+    bench.set_defaults(traits=TRAITS)
     for benchmark in benchmarks.choices.values():
         add_message_options(benchmark)
 
