@@ -5,7 +5,11 @@ reports (``Estimate.std``: for the two-stage KF the reported-σ model of
 :mod:`wheelload.estimators.kf.reported_std`, for the smoother the RTS covariance), drawn
 as given, never refitted to the log. With reference loads each wheel's coverage
 :math:`\frac{1}{n}\#\{k : |\hat F_{z,k} - F_{z,k}| < 2\sigma_k\}` (0.954 for an honest
-Gaussian σ) is written in its panel.
+Gaussian σ) is written in its panel, and the caption gives the pooled coverage, the ratio
+of the median 2σ to the RMS error (2 for an honest Gaussian σ) and a verdict: σ
+conservative (coverage above :data:`CONSERVATIVE`, the band wider than the errors, e.g. the
+smoother's RTS covariance: coverage 100 %, 2σ ≈ 7 × the mean error on the bundled log),
+honest, or optimistic (coverage below :data:`OPTIMISTIC`).
 
 Matplotlib is imported inside :func:`estimate_figure` only (the estimators need it for
 nothing else); the figure is a :class:`matplotlib.figure.Figure` outside pyplot, so no
@@ -19,6 +23,7 @@ Example
 
 from __future__ import annotations
 
+import textwrap
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,6 +36,8 @@ if TYPE_CHECKING:
 WHEEL_NAMES = ("front left", "front right", "rear left", "rear right")
 #: Share of a Gaussian within ±2σ: what an honest σ's coverage should be.
 GAUSSIAN_COVERAGE = 0.9545
+#: Pooled coverages above / below which σ is called conservative / optimistic.
+CONSERVATIVE, OPTIMISTIC = 0.99, 0.90
 ESTIMATE_COLOUR = "tab:blue"
 #: Drawing order: band, estimate, reference (on top), skipped-update marks.
 BAND_ORDER, ESTIMATE_ORDER, REFERENCE_ORDER, MARK_ORDER = 1, 2, 3, 4
@@ -45,20 +52,38 @@ def coverage(error: np.ndarray, std: np.ndarray) -> float:
     return float(np.mean(np.abs(error[finite]) < 2.0 * std[finite]))
 
 
-def band_caption(has_std: bool, with_reference: bool) -> str:
-    """The figure's caption line: what the band is and what the coverage means."""
+def band_caption(
+    has_std: bool,
+    error: np.ndarray | None = None,
+    std: np.ndarray | None = None,
+    source: str = "",
+) -> str:
+    """The figure's caption: what the band is (``source``: where σ comes from) and, with the
+    errors (n, 4) [N], the pooled coverage, the median 2σ over the RMS error, a verdict."""
     if not has_std:
         return "this method reports no standard deviation: no band is drawn"
-    text = (
-        "band: estimate ± 2σ, σ as the estimator reports it (Estimate.std), not refitted "
-        "to this log"
+    origin = source or "as the estimator reports it"
+    text = f"band: estimate ± 2σ, σ {origin} (Estimate.std), not refitted to this log"
+    if error is None or not np.isfinite(error).any():
+        return text
+    pooled = coverage(error, std)
+    finite = np.isfinite(error) & np.isfinite(std)
+    rms = float(np.sqrt(np.mean(error[finite] ** 2)))
+    ratio = float(np.median(2.0 * std[finite])) / rms if rms > 0 else float("inf")
+    return (
+        f"{text}; coverage (share of samples with |estimate − reference| < 2σ) {pooled:.1%}, "
+        f"median 2σ = {ratio:.1f} × the RMS error (an honest Gaussian σ: "
+        f"{GAUSSIAN_COVERAGE:.1%}, 2.0 ×): {verdict(pooled)}"
     )
-    if with_reference:
-        text += (
-            f"; coverage: share of samples with |estimate − reference| < 2σ "
-            f"({GAUSSIAN_COVERAGE:.1%} for an honest Gaussian σ)"
-        )
-    return text
+
+
+def verdict(pooled: float) -> str:
+    """What a pooled coverage says of σ: conservative, honest or optimistic."""
+    if pooled > CONSERVATIVE:
+        return "σ conservative, the band wider than the errors"
+    if pooled < OPTIMISTIC:
+        return "σ optimistic, errors leave the band"
+    return "σ about right"
 
 
 def check_reference(reference: np.ndarray | None, samples: int) -> np.ndarray | None:
@@ -86,12 +111,14 @@ def estimate_figure(
     residual: np.ndarray | None = None,
     errors: bool = False,
     title: str = "",
+    std_source: str = "",
 ) -> Figure:
     """Four wheel panels (FL, FR, RL, RR): estimate, ±2σ band, reference on top.
 
     ``skipped``: samples whose update was skipped (marked ×). ``errors``: a panel under
     each wheel with the error against the reference and the ±2σ band around zero (with a
     reference), or the pitch and roll constraint residuals ``residual`` (without one).
+    ``std_source``: where σ comes from, for the caption (default: as the estimator reports).
     """
     from matplotlib.figure import Figure
 
@@ -133,8 +160,10 @@ def estimate_figure(
     figure.axes[0].legend(loc="best", fontsize=8)
     if title:
         figure.suptitle(title)
-    figure.text(0.01, 0.005, band_caption(has_std, reference is not None), fontsize=8)
-    figure.tight_layout(rect=(0, 0.02, 1, 1))
+    error = None if reference is None else loads - reference
+    caption = textwrap.fill(band_caption(has_std, error, std, std_source), 200)
+    figure.text(0.01, 0.005, caption, fontsize=8, va="bottom")
+    figure.tight_layout(rect=(0, 0.015 * (caption.count("\n") + 1) + 0.01, 1, 1))
     return figure
 
 

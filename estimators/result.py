@@ -159,6 +159,8 @@ class Estimate:
     mass_properties: np.ndarray | None = None  # (n, 4)
     mass_properties_std: np.ndarray | None = None  # (n, 4)
     method: str = ""  # the registered method's name, e.g. "kf" ("" when not told)
+    # Where std comes from when it is not the method's own reported sigma (figure captions).
+    std_source: str = ""
 
     def named(self, method: str) -> Estimate:
         """This estimate labelled with the registered ``method`` name (arrays shared)."""
@@ -171,7 +173,8 @@ class Estimate:
         if len(self):
             parts.append(f"t={self.t[0]:.2f}..{self.t[-1]:.2f} s")
         parts.append(f"wheels={' '.join(WHEELS)}")
-        parts.append("std: reported" if self.has_std else "std: none")
+        source = self.std_source.split(" (")[0] if self.std_source else "reported"
+        parts.append(f"std: {source}" if self.has_std else "std: none")
         skipped = int(np.count_nonzero(np.asarray(self.flags).astype(np.int64)
                                        & StepFlag.skipped_mask()))  # fmt: skip
         parts.append(f"flags: {skipped} skipped")
@@ -201,7 +204,7 @@ class Estimate:
         return estimate_figure(
             self.t, self.loads, self.std, has_std=self.has_std, skipped=skipped,
             reference=reference, residual=self.residual, errors=errors,
-            title=title or self.method,
+            title=title or self.method, std_source=self.std_source,
         )  # fmt: skip
 
     @property

@@ -30,6 +30,9 @@ from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.result import Estimate
 
 SMOOTHER_NAME = "wheelload_rts_step"
+#: The smoothed σ: the RTS covariance of the filter's random-walk model, without the
+#: reported-σ model's calibration (``estimators/kf/reported_std.py``).
+RTS_STD_SOURCE = "the RTS covariance √diag Pˢ (random-walk model, no reported-σ calibration)"
 
 
 def smoother_function(step: ca.Function) -> ca.Function:
@@ -92,5 +95,10 @@ def rts_smooth(
     std = np.vstack([std[::-1], last[None, :]])
     residual = filtered.residual + (filtered.loads - loads) @ np.asarray(A).T
     return Estimate(
-        t=filtered.t.copy(), loads=loads, std=std, residual=residual, flags=filtered.flags.copy()
+        t=filtered.t.copy(),
+        loads=loads,
+        std=std,
+        residual=residual,
+        flags=filtered.flags.copy(),
+        std_source=RTS_STD_SOURCE,
     )

@@ -14,7 +14,8 @@ import pytest  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from wheelload.estimators import StepFlag, read_log  # noqa: E402
+from wheelload.estimators import StepFlag, TwoStageKF, read_log  # noqa: E402
+from wheelload.estimators.estimate_figure import CONSERVATIVE  # noqa: E402
 from wheelload.estimators.registry import methods  # noqa: E402
 from wheelload.models import example_vehicle_path, load_vehicle  # noqa: E402
 from wheelload.studies.experiments.report.figures import loads_figure  # noqa: E402
@@ -175,7 +176,31 @@ def test_estimate_plot_holds_the_estimate_its_band_and_the_reference(kf_estimate
         error = estimate.loads[:, i] - signals.reference[:, i]
         covered = np.mean(np.abs(error) < 2.0 * estimate.std[:, i])
         assert f"|error| < 2σ in {covered:.1%}" in ax.get_title()
-    assert any("σ as the estimator reports it" in text.get_text() for text in figure.texts)
+    caption = " ".join(text.get_text() for text in figure.texts).replace("\n", " ")
+    assert "σ as the estimator reports it" in caption
+    # The pooled coverage and the band-to-error ratio, computed here from the arrays.
+    error = estimate.loads - signals.reference
+    pooled = np.mean(np.abs(error) < 2.0 * estimate.std)
+    ratio = np.median(2.0 * estimate.std) / np.sqrt(np.mean(error**2))
+    assert f"< 2σ) {pooled:.1%}" in caption and f"median 2σ = {ratio:.1f} ×" in caption
+
+
+def test_the_smoothed_band_is_named_the_rts_covariance_and_called_conservative(signals):
+    """The smoother's σ is its RTS covariance: drawn as given, its source and verdict said."""
+    smoothed = TwoStageKF(load_vehicle(example_vehicle_path())).smooth(signals)
+    figure = smoothed.plot(signals.reference)
+    caption = " ".join(text.get_text() for text in figure.texts).replace("\n", " ")
+    error = np.abs(smoothed.loads - signals.reference)
+    pooled = np.mean(error < 2.0 * smoothed.std)
+    assert pooled > CONSERVATIVE  # the measured 100 %: the band wider than every error
+    assert "RTS covariance" in caption and f"< 2σ) {pooled:.1%}" in caption
+    assert "σ conservative" in caption
+    for i, ax in enumerate(figure.axes):
+        (band,) = ax.collections
+        corners = np.concatenate([path.vertices for path in band.get_paths()])
+        upper = (smoothed.loads[:, i] + 2.0 * smoothed.std[:, i]) / 1000.0
+        assert corners[:, 1].max() == pytest.approx(upper.max(), abs=EXACT)
+    assert "std: the RTS covariance" in repr(smoothed) and len(repr(smoothed)) < 200
 
 
 def test_estimate_plot_with_errors_draws_the_band_around_zero(kf_estimate, tmp_path):
