@@ -206,12 +206,18 @@ def write_text_atomically(text: str, path: Path) -> None:
 
 
 def write_vehicle_text(
-    text: str, path: str | Path, *, inputs: tuple[str | Path, ...], force: bool
+    text: str,
+    path: str | Path,
+    *,
+    inputs: tuple[str | Path, ...],
+    force: bool,
+    allow_unusual: bool = False,
 ) -> Path:
-    """Validate ``text`` as a vehicle file and write it to ``path`` (see module docstring)."""
+    """Validate ``text`` as a vehicle file (``allow_unusual``: as :func:`load_vehicle`'s) and
+    write it to ``path`` (see module docstring)."""
     path = check_output_path(path, inputs, force)
     path.parent.mkdir(parents=True, exist_ok=True)
     with replacing(path) as temporary:
         temporary.write_text(text, encoding="utf-8")
-        load_vehicle(temporary)  # the copy must be a valid vehicle file
+        load_vehicle(temporary, allow_unusual=allow_unusual)  # the copy must be valid
     return path

@@ -114,7 +114,9 @@ def handle(args: argparse.Namespace) -> int:
         wiring_checks=not args.skip_wiring_checks,
     )
     result, keys = identified.result, identified.keys
-    write_vehicle_text(identified.text, out, inputs=inputs, force=args.force)
+    write_vehicle_text(
+        identified.text, out, inputs=inputs, force=args.force, allow_unusual=args.allow_unusual
+    )
     params = parameter_table(result, keys)
     print(f"identified {len(result.free)} parameters from {len(identified.sets)} data sets:")
     print(params.drop(columns=["sources"]).to_string(index=False, float_format="%.5g"))

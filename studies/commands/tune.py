@@ -186,7 +186,11 @@ def handle(args: argparse.Namespace) -> int:
     text = vehicle_path.read_text(encoding="utf-8")
     header = f"Filter tuned by `wheelload tune` from {vehicle_path.name}: {note}.\n"
     write_vehicle_text(
-        prepend_comment(add_values(text, changes), header), out, inputs=inputs, force=args.force
+        prepend_comment(add_values(text, changes), header),
+        out,
+        inputs=inputs,
+        force=args.force,
+        allow_unusual=args.allow_unusual,
     )
     print(f"vehicle file written to {out}")
     if args.evaluate:

@@ -75,7 +75,9 @@ def handle(args: argparse.Namespace) -> int:
             ("geometry", "cg_height"): sprung["cg_height"],
         }
         text = edited_vehicle_text(vehicle_path.read_text(encoding="utf-8"), changes)
-        write_vehicle_text(text, args.out, inputs=inputs, force=args.force)
+        write_vehicle_text(
+            text, args.out, inputs=inputs, force=args.force, allow_unusual=args.allow_unusual
+        )
         print(f"vehicle file written to {args.out} (sprung CG: lf {sprung['lf']:.4f} m, "
               f"height {sprung['cg_height']:.4f} m)")  # fmt: skip
     return 0

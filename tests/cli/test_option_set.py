@@ -159,3 +159,14 @@ def test_allow_unusual_reaches_the_vehicle_loader(tmp_path, capsys):
     assert "--allow-unusual" in capsys.readouterr().err
     assert main([*args, "--repeat", "1", "--allow-unusual"]) == 0
     assert "RMSE [N]" in capsys.readouterr().out
+
+
+def test_tune_writes_an_unusual_file_it_was_allowed_to_read(tmp_path, capsys):
+    """--allow-unusual holds for the written copy's check too, not only for the input."""
+    text = example_vehicle_path().read_text()
+    unusual = tmp_path / "stiff.toml"
+    unusual.write_text(text.replace("spring_rate = 60000.0", "spring_rate = 900000.0", 1))
+    out = tmp_path / "tuned.toml"
+    args = ["tune", str(example_log_path()), "--vehicle", str(unusual), "--out", str(out)]
+    assert main([*args, "--iterations", "2", "--allow-unusual"]) == 0
+    assert "spring_rate = 900000.0" in out.read_text()
