@@ -70,6 +70,7 @@ from wheelload.models import (
     Vehicle,
     load_vehicle,
 )
+from wheelload.models.files.build_folder import cached_object
 from wheelload.models.inputs import input_description
 from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle.description import SIGMA_KEYS
@@ -545,9 +546,11 @@ def build_program(
     compiler: str = "gcc",
     flags: tuple[str, ...] = STRICT_CFLAGS,
 ) -> Path:
-    """Compile ``main_source`` (e.g. ``library.example``) with the library; errors show gcc."""
+    """Compile ``main_source`` (e.g. ``library.example``) and link it with the library, whose
+    object is compiled once per text and flags (``cached_object``); errors show gcc."""
     binary = Path(binary)
-    command = [compiler, *flags, "-o", str(binary), str(main_source), str(library.source), "-lm"]
+    library_object = cached_object(library.source, (library.header,), (compiler, *flags))
+    command = [compiler, *flags, "-o", str(binary), str(main_source), str(library_object), "-lm"]
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:
         raise RuntimeError(f"{main_source}: {' '.join(command)} failed:\n{result.stderr}")

@@ -25,6 +25,7 @@ import numpy as np
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.mhe import (
     EXAMPLE,
+    FILTER_PREFIX,
     TEMPLATES,
     generate_mhe,
     mhe_includes,
@@ -35,6 +36,7 @@ from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import Vehicle
+from wheelload.models.files.build_folder import cached_object
 
 
 @dataclass(frozen=True)
@@ -118,12 +120,22 @@ def build_mhe_library(
     folder = generate_mhe(vehicle, settings, Path(folder), dt, precision,
                           vehicle_path=vehicle_path)  # fmt: skip
     library = folder / "libwheelload_mhe.so"
-    command = ["gcc", "-O2", "-shared", "-fPIC", "-std=gnu99", "-o", str(library),
-               *mhe_includes(folder), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+    flags = ("-O2", "-fPIC", "-std=gnu99")
+    command = ["gcc", *flags, "-shared", "-o", str(library), *mhe_includes(folder),
+               *compiled_sources(folder, ("gcc", *flags)), "-lm"]  # fmt: skip
     completed = subprocess.run(command, capture_output=True, text=True)
     if completed.returncode != 0:
         raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")
     return CompiledMhe(library, n_bias(folder))
+
+
+def compiled_sources(folder: Path, command: tuple[str, ...]) -> list[str]:
+    """The embedded MHE's C files for ``command``, the linked KF (the largest, the same for
+    every window of a vehicle) as its object compiled once (``cached_object``)."""
+    linked = folder / f"{FILTER_PREFIX}.c"
+    header = (folder / f"{FILTER_PREFIX}.h",)
+    return [str(cached_object(path, header, command) if path == linked else path)
+            for path in mhe_sources(folder)]  # fmt: skip
 
 
 def n_bias(folder: Path) -> int:
@@ -161,8 +173,9 @@ def build_mhe_program(
                           vehicle_path=vehicle_path)  # fmt: skip
     main = folder / EXAMPLE
     binary = folder / "wheelload_mhe"
+    sources = compiled_sources(folder, (compiler, *flags, "-std=gnu99"))
     command = [compiler, *flags, "-std=gnu99", "-o", str(binary), *mhe_includes(folder),
-               str(main), *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+               str(main), *sources, "-lm"]  # fmt: skip
     completed = subprocess.run(command, capture_output=True, text=True)
     if completed.returncode != 0:
         raise RuntimeError(f"compiling the embedded MHE failed:\n{completed.stderr[-3000:]}")

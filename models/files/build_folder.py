@@ -110,20 +110,24 @@ def _put(folder: Path, target: Path, data: bytes) -> None:
         temporary.unlink(missing_ok=True)
 
 
-def _compile(source: str, library: Path, command: tuple[str, ...], purpose: str) -> bytes:
-    """The bytes of ``source`` compiled by ``command``, in a temporary folder of the build
-    folder (fixed file names inside it, so that the same source gives the same bytes)."""
-    folder = library.parent
-    work = temporary_file(folder, library.stem, ".d")
+def _compile(
+    sources: dict[str, str], target: Path, command: tuple[str, ...], purpose: str
+) -> bytes:
+    """The bytes ``command`` makes of ``sources`` (file name: text; the first is compiled, the
+    others are the headers it includes), in a temporary folder of the build folder (fixed file
+    names inside it, so that the same sources give the same bytes)."""
+    folder = target.parent
+    work = temporary_file(folder, target.stem, ".d")
     work.unlink()
     work.mkdir(mode=0o700)
     try:
-        c_file = work / library.with_suffix(".c").name
-        c_file.write_text(source)
-        output = work / library.name
+        for file_name, text in sources.items():
+            (work / file_name).write_text(text)
+        output = work / target.name
+        link = () if "-c" in command else ("-lm",)
         try:
             subprocess.run(
-                [*command, "-o", output.name, c_file.name, "-lm"],
+                [*command, "-o", output.name, next(iter(sources)), *link],
                 check=True,
                 capture_output=True,
                 text=True,
@@ -131,13 +135,45 @@ def _compile(source: str, library: Path, command: tuple[str, ...], purpose: str)
             )
         except FileNotFoundError:
             raise BuildFolderError(
-                f"no C compiler 'gcc' found: it is needed to {purpose}; install gcc"
+                f"no C compiler '{command[0]}' found: it is needed to {purpose}; install gcc"
             ) from None
         except subprocess.CalledProcessError as error:
-            raise RuntimeError(f"compiling {library.stem} failed:\n{error.stderr}") from None
+            raise RuntimeError(f"compiling {target.stem} failed:\n{error.stderr}") from None
         return output.read_bytes()
     finally:
         shutil.rmtree(work, ignore_errors=True)
+
+
+def _cached_build(sources: dict[str, str], name: str, suffix: str, command: tuple[str, ...],
+                  load, purpose: str):  # fmt: skip
+    """``load`` of what ``command`` makes of ``sources`` (:func:`_compile`), made once.
+
+    The output is named by the hash of the command and the sources, built under
+    :func:`build_folder`, its record (size and SHA-256) and then the output renamed
+    into place. A cached output is used only when it matches its record
+    (:func:`checked_library`); one that does not, or does not load, is built again
+    with a one-line note.
+    """
+    text = " ".join(command) + "".join(f"\n{file}\n{body}" for file, body in sources.items())
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    folder = build_folder()
+    target = folder / f"{name}_{digest}{suffix}"
+    if target.exists():
+        problem = checked_library(target)
+        if problem is None:
+            try:
+                return load(target)
+            except (OSError, RuntimeError) as error:
+                first = (str(error) or type(error).__name__).splitlines()[0]
+                problem = f"it does not load ({first})"
+        _log.warning("wheelload: note: cached library %s is rebuilt: %s", target, problem)
+    remove_stale(folder)
+    data = _compile(sources, target, command, purpose)
+    # The record first: an output in place always has its record, and a crash between
+    # the two renames leaves a record without its output (built again, never used).
+    _put(folder, _sidecar(target), _record(data).encode("ascii"))
+    _put(folder, target, data)
+    return load(target)
 
 
 #: gcc and its flags for the small shared libraries of the compiled loops and kernels
@@ -146,33 +182,19 @@ COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
 
 
 def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
-    """``source`` compiled once by ``command`` (gcc and its flags) and loaded with ``load``.
+    """``source`` compiled once by ``command`` (gcc and its flags) into a shared library
+    loaded with ``load`` (:func:`_cached_build`). ``purpose`` completes "gcc is needed to ..."."""
+    return _cached_build({f"{name}.c": source}, name, ".so", command, load, purpose)
 
-    The library is named by the hash of the source and the command, built
-    under :func:`build_folder`, its record (size and SHA-256) and then the
-    library renamed into place. A cached library is loaded only when it matches
-    its record (:func:`checked_library`); one that does not, or does not load,
-    is built again with a one-line note. ``purpose`` completes "gcc is needed to ...".
-    """
-    digest = hashlib.sha256((" ".join(command) + "\n" + source).encode()).hexdigest()[:16]
-    folder = build_folder()
-    library = folder / f"{name}_{digest}.so"
-    if library.exists():
-        problem = checked_library(library)
-        if problem is None:
-            try:
-                return load(library)
-            except (OSError, RuntimeError) as error:
-                first = (str(error) or type(error).__name__).splitlines()[0]
-                problem = f"it does not load ({first})"
-        _log.warning("wheelload: note: cached library %s is rebuilt: %s", library, problem)
-    remove_stale(folder)
-    data = _compile(source, library, command, purpose)
-    # The record first: a library in place always has its record, and a crash between
-    # the two renames leaves a record without its library (built again, never loaded).
-    _put(folder, _sidecar(library), _record(data).encode("ascii"))
-    _put(folder, library, data)
-    return load(library)
+
+def cached_object(source: Path, headers: tuple[Path, ...], command: tuple[str, ...]) -> Path:
+    """The object file ``command`` (compiler and flags, ``-c`` added) makes of the C file
+    ``source`` including ``headers``, compiled once per text and command
+    (:func:`_cached_build`): a large generated library is compiled once however many
+    programs link it."""
+    files = {path.name: path.read_text() for path in (source, *headers)}
+    name = source.stem
+    return _cached_build(files, name, ".o", (*command, "-c"), Path, "build the program")
 
 
 def cached_function(function):

@@ -29,3 +29,34 @@ def test_a_folder_others_can_write_is_refused(tmp_path, monkeypatch):
     shared.chmod(0o777)
     with pytest.raises(RuntimeError, match="not a folder private to this user"):
         build_folder()
+
+
+def _private_build_folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", None)
+
+
+def test_an_object_is_compiled_once_per_text_and_flags(tmp_path, monkeypatch):
+    """cached_object: the same C text and flags give the same object file, compiled once
+    (the file is not rewritten); a changed header or flag gives a new one; a damaged object
+    is compiled again, never linked."""
+    from wheelload.models.files.build_folder import cached_object
+
+    _private_build_folder(tmp_path, monkeypatch)
+    source, header = tmp_path / "tiny.c", tmp_path / "tiny.h"
+    header.write_text("#define SCALE 2\n")
+    source.write_text('#include "tiny.h"\nint tiny(int x) { return SCALE * x; }\n')
+    command = ("gcc", "-O1")
+    first = cached_object(source, (header,), command)
+    stamp = first.stat().st_mtime_ns
+    assert cached_object(source, (header,), command) == first
+    assert first.stat().st_mtime_ns == stamp  # not compiled again
+    assert cached_object(source, (header,), ("gcc", "-O0")) != first
+    header.write_text("#define SCALE 3\n")
+    changed = cached_object(source, (header,), command)
+    assert changed != first
+    changed.write_bytes(changed.read_bytes()[:10])  # truncated
+    assert cached_object(source, (header,), command) == changed
+    assert len(changed.read_bytes()) > 10  # compiled again

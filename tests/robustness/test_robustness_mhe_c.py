@@ -20,8 +20,8 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators.codegen.c_emitter import Precision
-from wheelload.estimators.codegen.mhe import embedded_settings, mhe_includes, mhe_sources
-from wheelload.estimators.codegen.mhe_build import MAIN, write_inputs
+from wheelload.estimators.codegen.mhe import embedded_settings, mhe_includes
+from wheelload.estimators.codegen.mhe_build import MAIN, compiled_sources, write_inputs
 from wheelload.estimators.logs.signals import Signals, read_log
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
@@ -74,9 +74,10 @@ def program(request, tmp_path_factory):
     assert main(["codegen", "--estimator", "mhe", "--out", str(folder), *options]) == 0
     (folder / "wheelload_mhe_main.c").write_text(MAIN)
     binary = folder / "wheelload_mhe"
-    command = ["gcc", "-O1", *_sanitizer_flags(), "-std=gnu99", "-o", str(binary),
-               *mhe_includes(folder), str(folder / "wheelload_mhe_main.c"),
-               *map(str, mhe_sources(folder)), "-lm"]  # fmt: skip
+    flags = ("-O1", *_sanitizer_flags(), "-std=gnu99")
+    command = ["gcc", *flags, "-o", str(binary), *mhe_includes(folder),
+               str(folder / "wheelload_mhe_main.c"), *compiled_sources(folder, ("gcc", *flags)),
+               "-lm"]  # fmt: skip
     built = subprocess.run(command, capture_output=True, text=True)
     assert built.returncode == 0, built.stderr[-2000:]
     return binary, embedded_settings(settings, filter_linked=True, precision=precision), tolerance
