@@ -35,6 +35,6 @@ def test_every_relative_link_exists():
 
 
 def test_ci_runs_the_test_command_readme_gives():
-    command = 'python3 -m pip install -e ".[test]" && python3 -m pytest -q'
+    command = 'python3 -m pip install -e ".[test]" && python3 -m pytest -q -n auto --durations=25'
     assert command in README
     assert (ROOT / ".ci" / "run").read_text().rstrip().endswith(command)

@@ -112,6 +112,8 @@ def test_the_generated_makefile_takes_gcc_unless_cc_is_given(tmp_path, capsys):
                               ).stdout  # fmt: skip
 
     built = [line for line in commands().splitlines() if " -o " in line]
-    assert len(built) == 2 and all(line.startswith("gcc -std=c99") for line in built)
+    # the library's object once, then the example and the self-test linked with it
+    assert len(built) == 3 and all(line.startswith("gcc -std=c99") for line in built)
+    assert sum(" -c " in line for line in built) == 1
     assert "my-cc -std=c99" in commands(CC="my-cc")
     assert "other-cc -std=c99" in commands("CC=other-cc")
