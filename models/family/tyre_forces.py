@@ -37,6 +37,8 @@ from the paper's printed equations:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from wheelload.models.plant.dynamics import SPIN_SMOOTHING
@@ -80,9 +82,9 @@ def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, 
     :math:`(F_{yf}, F_{yr}, e)` and the part the longitudinal forces ``fx`` (4,) give.
 
     :math:`e` is the front left/right difference beyond the normal-load split,
-    :math:`\bar F_{yf} = s F_{yf} + e` with ``share_front`` :math:`s = (w_{fr} -
-    w_{fl}) / (w_{fl} + w_{fr})` (:func:`split_weights`; with :math:`w = F_z` the split
-    the paper names as the simple alternative; :math:`e` carries what differs).
+    :math:`\bar F_{yf} = s F_{yf} + e` with ``share_front`` :math:`s = s_{fr} - s_{fl}`
+    (:func:`tyre_split`, or :func:`load_shares`: the split the paper names as the simple
+    alternative; :math:`e` carries what differs).
     Returns ``(H (3, 3), offset (3,))``, the yaw row divided by ``inertia_z`` (yaw
     acceleration).
     """
@@ -105,37 +107,51 @@ def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, 
     return h, offset
 
 
-def cornering_split_exponent(load: float, nominal_load: float, cornering_load: float) -> float:
-    r""":math:`\gamma = d \ln K_y / d \ln F_z = (1 - u^2)/(1 + u^2)`, :math:`u = F_z /
-    (p_{Ky2} F_{z0})`: the load sensitivity of the Magic Formula's cornering stiffness
-    :math:`K_y \propto \sin(2 \arctan u)` at ``load``; an axle's lateral force splits
-    as :math:`F_z^\gamma` in the tyres' linear range (:math:`\gamma = 1`: by load)."""
-    u = load / (cornering_load * nominal_load)
-    return (1.0 - u**2) / (1.0 + u**2)
+def tyre_split(loads, axle_forces, *, nominal_loads, friction, load_sensitivity, cornering_load):
+    r"""Left/right shares (4,) of each axle's lateral force by the tyres' load sensitivity.
+
+    Both tyres of an axle run at about one slip angle. In the linear range their forces
+    go as the Magic Formula's cornering stiffness :math:`K_y \propto \sin(2\arctan(F_z /
+    (p_{Ky2} F_{z0})))`; at the limit as the peak :math:`D = \mu_y (1 + p_{D2}\, df_z) F_z`.
+    The share blends the two by the axle's utilisation :math:`\eta = |F_{y,axle}| /
+    (D_L + D_R)` (clipped to [0, 1]): :math:`s_i = (1 - \eta) K_{y,i} / \sum K_y +
+    \eta D_i / \sum D`, exact at both ends. ``axle_forces`` (front, rear), ``nominal_loads``
+    (front, rear) :math:`F_{z0}`.
+    """
+    shares = []
+    for axle in range(2):
+        left, right = max(float(loads[2 * axle]), 1.0), max(float(loads[2 * axle + 1]), 1.0)
+        nominal = nominal_loads[axle]
+        k_left, k_right = (math.sin(2.0 * math.atan(f / (cornering_load * nominal)))
+                           for f in (left, right))  # fmt: skip
+        d_left, d_right = (max(friction * (1.0 + load_sensitivity * (f - nominal) / nominal) * f,
+                               1.0) for f in (left, right))  # fmt: skip
+        eta = min(abs(float(axle_forces[axle])) / (d_left + d_right), 1.0)
+        for k, d in ((k_left, d_left), (k_right, d_right)):
+            shares.append((1.0 - eta) * k / (k_left + k_right) + eta * d / (d_left + d_right))
+    return np.array(shares)
 
 
-def split_weights(loads, exponents):
-    r"""Weights :math:`F_{z,i}^{\gamma_a}` (4,) of the left/right split, ``exponents``
-    (front, rear)."""
-    clipped = np.maximum(np.asarray(loads, float), 1.0)
-    return clipped ** np.repeat(np.asarray(exponents, float), 2)
+def load_shares(loads):
+    """Left/right shares (4,) of each axle by normal load (the paper's simple split)."""
+    fz = np.maximum(np.asarray(loads, float), 1.0)
+    axles = np.repeat([fz[0] + fz[1], fz[2] + fz[3]], 2)
+    return fz / axles
 
 
-def wheel_lateral_forces(axles, weights):
-    r"""Per-wheel :math:`F_y` (4,) from :math:`(F_{yf}, F_{yr}, e)` and the split weights
-    (4,, :func:`split_weights`): front :math:`F_{y,fl/fr} = F_{yf} w_{fl/fr} / (w_{fl} +
-    w_{fr}) \mp e/2`, rear by the same shares without :math:`e`.
+def wheel_lateral_forces(axles, shares):
+    r"""Per-wheel :math:`F_y` (4,) from :math:`(F_{yf}, F_{yr}, e)` and the left/right shares
+    (4,, :func:`tyre_split` or :func:`load_shares`): front :math:`F_{y,fl/fr} = s_{fl/fr}
+    F_{yf} \mp e/2`, rear :math:`s_{rl/rr} F_{yr}`.
 
     Linear in the state: returns ``(values (4,), G (4, 3))`` with ``values = G @ axles``.
     """
-    front = weights[0] + weights[1]
-    rear = weights[2] + weights[3]
     g = np.array(
         [
-            [weights[0] / front, 0.0, -0.5],
-            [weights[1] / front, 0.0, 0.5],
-            [0.0, weights[2] / rear, 0.0],
-            [0.0, weights[3] / rear, 0.0],
+            [shares[0], 0.0, -0.5],
+            [shares[1], 0.0, 0.5],
+            [0.0, shares[2], 0.0],
+            [0.0, shares[3], 0.0],
         ]
     )
     return g @ axles, g
