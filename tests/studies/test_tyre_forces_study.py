@@ -31,3 +31,6 @@ def test_goal_line_reads_the_worst_goal_row():
     assert "meets it: worst F_x 3.0 %, worst F_y 8.0 %" in goal_line(table)
     table = tyre_table(labels, [row, bad, row])
     assert "misses it" in goal_line(table) and "tyre-forces" in STUDIES
+    # No lateral force at all (1e-14 N): no % rather than 1e16 %.
+    straight = dict(row, **{"fy rms": 1e-14, "tyre-forces fy %": 1e16})
+    assert np.isnan(tyre_table(labels[:1], [straight]).iloc[0]["Fy tyre-forces %"])

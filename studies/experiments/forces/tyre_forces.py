@@ -37,6 +37,7 @@ TYRE_TRIAL = "tyre-trial"
 QUICK_SCENARIOS = ("iso-dlc", "hockenheim", "nordschleife")
 GOAL = 10.0  # %, on the lane change and the laps (issue 25)
 GOAL_SCENARIOS = QUICK_SCENARIOS
+MIN_REFERENCE_RMS = 1.0  # N: below it (no lateral force at all) a % is shown as "–"
 
 
 @lru_cache(maxsize=4)
@@ -93,7 +94,9 @@ def run(context: Context) -> Section:
             "wheel torques as applied), F_y from the adaptive lateral KF on the KF's loads. "
             "`rigid`: m a_x + drag and m a_y (road frame) split by the KF's load share. "
             "The iso-dlc is scored on t = 5-12 s. A scenario whose reference RMS is a few "
-            "newtons (standstill, straight running) gives a large % of a small force.",
+            "newtons (standstill, the bounce sweep's F_x: rolling resistance) gives a large % "
+            f"of a small force; below {MIN_REFERENCE_RMS:g} N (straight running: no lateral "
+            "force) no % is given.",
             goal_line(table),
         ]
     )
@@ -101,7 +104,8 @@ def run(context: Context) -> Section:
 
 
 def tyre_table(labels: list[tuple[str, str]], rows: list[dict[str, float]]) -> pd.DataFrame:
-    """Rows (vehicle, scenario); per axis the reference RMS [N] and each method's %."""
+    """Rows (vehicle, scenario); per axis the reference RMS [N] and each method's % (NaN
+    where the reference RMS is below :data:`MIN_REFERENCE_RMS`)."""
     records = []
     for (vehicle, scenario), row in zip(labels, rows):
         records.append(
@@ -109,14 +113,19 @@ def tyre_table(labels: list[tuple[str, str]], rows: list[dict[str, float]]) -> p
                 "vehicle": vehicle,
                 "scenario": scenario,
                 "Fx RMS [N]": row["fx rms"],
-                "Fx tyre-forces %": row["tyre-forces fx %"],
-                "Fx rigid %": row["tyre-rigid fx %"],
+                "Fx tyre-forces %": _percent(row, "tyre-forces", "fx"),
+                "Fx rigid %": _percent(row, "tyre-rigid", "fx"),
                 "Fy RMS [N]": row["fy rms"],
-                "Fy tyre-forces %": row["tyre-forces fy %"],
-                "Fy rigid %": row["tyre-rigid fy %"],
+                "Fy tyre-forces %": _percent(row, "tyre-forces", "fy"),
+                "Fy rigid %": _percent(row, "tyre-rigid", "fy"),
             }
         )
     return pd.DataFrame(records).set_index(["vehicle", "scenario"])
+
+
+def _percent(row: dict[str, float], method: str, axis: str) -> float:
+    """``method``'s % on ``axis``, NaN below :data:`MIN_REFERENCE_RMS`."""
+    return row[f"{method} {axis} %"] if row[f"{axis} rms"] >= MIN_REFERENCE_RMS else float("nan")
 
 
 def goal_line(table: pd.DataFrame) -> str:
