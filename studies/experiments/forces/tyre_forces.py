@@ -99,7 +99,9 @@ def run(context: Context) -> Section:
             "force) no % is given.",
             goal_line(table),
         ]
-    )
+        + (["--quick: the laps are their first 1 %, the straight start with little lateral "
+            "force; the verdict holds for the full laps only."] if settings.quick else [])
+    )  # fmt: skip
     return Section(title="Tyre forces", markdown=body)
 
 
