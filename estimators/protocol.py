@@ -65,6 +65,10 @@ class Sample:
     rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
     rate_dots: np.ndarray | None = None  # (3,) their derivative [rad/s^2], if logged
     hub: np.ndarray | None = None  # (4,) az_fl..az_rr hub specific force, if logged
+    # Tyre-force inputs (not in :meth:`vector`: the load estimators do not use them).
+    spin: np.ndarray | None = None  # (4,) omega_fl..omega_rr [rad/s], if logged
+    torque: np.ndarray | None = None  # (4,) torque_fl..torque_rr [N m], if logged
+    steer: float | None = None  # front road-wheel angle [rad], if logged
 
     def vector(self) -> np.ndarray:
         def given(values: np.ndarray | None, size: int) -> np.ndarray:

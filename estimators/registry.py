@@ -52,6 +52,10 @@ FAMILY_MODULES = (
     "corner",
 )
 FAMILY_PACKAGE = "wheelload.estimators.family"
+#: Modules of the tyre-force methods (F_x, F_y per wheel beside the KF's F_z), in
+#: ``wheelload.estimators.family``: a table of their own, so that the load studies
+#: (:func:`methods`) do not rank them as load estimators.
+TYRE_MODULES = ("tyre_forces",)
 
 
 class UnknownMethodError(ValueError):
@@ -98,9 +102,17 @@ def methods() -> dict[str, MethodInfo]:
     return table
 
 
+@functools.cache
+def tyre_methods() -> dict[str, MethodInfo]:
+    """The tyre-force methods by name (``tyre-pid``, ``tyre-lateral``, ``tyre-forces``,
+    ``tyre-rigid``); :func:`build` builds them as any other."""
+    infos = _module_infos(tuple(f"{FAMILY_PACKAGE}.{module}" for module in TYRE_MODULES))
+    return {info.name: info for info in infos}
+
+
 def method(name: str) -> MethodInfo:
-    """The registered method ``name`` (exact, else case-insensitive match)."""
-    table = methods()
+    """The registered method ``name`` (exact, else case-insensitive match), load or tyre."""
+    table = {**methods(), **tyre_methods()}
     if name in table:
         return table[name]
     folded = {key.lower(): info for key, info in table.items()}

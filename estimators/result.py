@@ -161,6 +161,12 @@ class Estimate:
     method: str = ""  # the registered method's name, e.g. "kf" ("" when not told)
     # Where std comes from when it is not the method's own reported sigma (figure captions).
     std_source: str = ""
+    # Tyre forces [N] in each tyre's frame (ISO 8855: x along the wheel heading in the road
+    # plane, y to its left) and their std, (n, 4); None for a method without them.
+    fx: np.ndarray | None = None
+    fy: np.ndarray | None = None
+    fx_std: np.ndarray | None = None
+    fy_std: np.ndarray | None = None
 
     def named(self, method: str) -> Estimate:
         """This estimate labelled with the registered ``method`` name (arrays shared)."""
@@ -227,7 +233,8 @@ class Estimate:
 
     def to_pandas(self) -> pd.DataFrame:
         """Columns ``t, fz_fl.., fz_std_fl.. (if has_std), residual_*.., mass.., mass_std..
-        (if estimated: :data:`MASS_PROPERTY_COLUMNS`), status`` (uint32 bits)."""
+        (if estimated: :data:`MASS_PROPERTY_COLUMNS`), fx_*, fx_std_*, fy_*, fy_std_* (if
+        estimated), status`` (uint32 bits)."""
         import pandas as pd
 
         columns = {"t": self.t}
@@ -238,6 +245,14 @@ class Estimate:
         if self.mass_properties is not None:
             values = np.hstack([self.mass_properties, self.mass_properties_std])
             columns.update({name: values[:, i] for i, name in enumerate(MASS_PROPERTY_COLUMNS)})
+        for prefix, values in (
+            ("fx", self.fx),
+            ("fx_std", self.fx_std),
+            ("fy", self.fy),
+            ("fy_std", self.fy_std),
+        ):
+            if values is not None:
+                columns.update({f"{prefix}_{w}": values[:, i] for i, w in enumerate(WHEELS)})
         columns[STATUS] = self.flags.astype(np.uint32)  # bits 0-30 (StepFlag)
         return pd.DataFrame(columns)
 

@@ -35,6 +35,9 @@ def samples(signals: Signals) -> Iterator[Sample]:
             rates=None if signals.rates is None else signals.rates[k],
             rate_dots=None if rate_dots is None else rate_dots[k],
             hub=None if signals.hub is None else signals.hub[k],
+            spin=None if signals.spin is None else signals.spin[k],
+            torque=None if signals.torque is None else signals.torque[k],
+            steer=None if signals.steer is None else float(signals.steer[k]),
         )
 
 
@@ -47,7 +50,16 @@ def concatenate(estimates: Sequence[Estimate], t: np.ndarray) -> Estimate:
         residual=np.concatenate([e.residual for e in estimates]),
         flags=np.concatenate([np.atleast_1d(e.flags) for e in estimates]).astype(np.int64),
         has_std=all(e.has_std for e in estimates),
+        fx=_joined([e.fx for e in estimates]),
+        fy=_joined([e.fy for e in estimates]),
+        fx_std=_joined([e.fx_std for e in estimates]),
+        fy_std=_joined([e.fy_std for e in estimates]),
     )
+
+
+def _joined(parts: list[np.ndarray | None]) -> np.ndarray | None:
+    """The rows of ``parts`` stacked, or None when any is None (a method without them)."""
+    return None if any(p is None for p in parts) else np.concatenate(parts)
 
 
 def step_through(estimator: Estimator, signals: Signals, state: Any = None) -> Estimate:

@@ -95,3 +95,13 @@ def no_sample_message(source: str, names: list[str]) -> str:
 def pooled_metrics(estimate: np.ndarray, reference: np.ndarray) -> dict[str, float]:
     """Pooled RMSE, RMSE %, P95 and Max over all wheels and samples (eq. 31-34)."""
     return wheel_metrics(estimate, reference).loc["pooled", list(COLUMNS)].to_dict()
+
+
+def pooled_force_error(estimate: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
+    """Pooled RMSE of ``estimate`` against ``reference`` (n, 4) [N] and the reference's pooled
+    RMS [N], over the samples where both are finite (the tyre forces' metric: their mean
+    can be zero, so the % is of the RMS, not of the mean as for the loads)."""
+    estimate, reference = np.asarray(estimate, float), np.asarray(reference, float)
+    keep = np.isfinite(estimate) & np.isfinite(reference)
+    errors = (estimate - reference)[keep]
+    return float(np.sqrt(np.mean(errors**2))), float(np.sqrt(np.mean(reference[keep] ** 2)))

@@ -8,7 +8,11 @@ optional ``wx wy wz`` [rad/s] and their derivative ``wx_dot wy_dot wz_dot``
 [m/s], optional hub accelerometers ``az_fl az_fr az_rl az_rr`` [m/s^2,
 specific force along the body z axis, +9.81 at rest], optional reference
 loads ``fz_fl fz_fr fz_rl fz_rr`` [N] (any of them), optional wheel speeds
-``ws_fl ..`` [m/s]. CSV and Parquet logs with these column names are read as
+``ws_fl ..`` [m/s]; for the tyre-force estimators, optional wheel spins ``omega_fl ..``
+[rad/s], drive/brake torque on each wheel ``torque_fl ..`` [N m, > 0 drives forward],
+front road-wheel angle ``steer`` [rad, > 0 to the left] and reference tyre forces
+``fx_fl .. fy_rr`` [N, each tyre's frame, ISO 8855: x along the wheel heading in the road
+plane, y to its left]. CSV and Parquet logs with these column names are read as
 they are; any other log (MDF4, CarMaker ERG, other names or units) through a
 channel map (``estimators/logs/readers``), ``read_log(path, channels=MAP)``.
 
@@ -54,6 +58,11 @@ TRAVEL = tuple(f"d_{w}" for w in WHEELS)
 TRAVEL_RATE = tuple(f"v_{w}" for w in WHEELS)
 REFERENCE = tuple(f"fz_{w}" for w in WHEELS)
 WHEEL_SPEED = tuple(f"ws_{w}" for w in WHEELS)
+SPIN = tuple(f"omega_{w}" for w in WHEELS)
+TORQUE = tuple(f"torque_{w}" for w in WHEELS)
+REFERENCE_FX = tuple(f"fx_{w}" for w in WHEELS)
+REFERENCE_FY = tuple(f"fy_{w}" for w in WHEELS)
+STEER = "steer"
 RATES = ("wx", "wy", "wz")
 HUB = tuple(f"az_{w}" for w in WHEELS)
 RATE_DERIVATIVES = ("wx_dot", "wy_dot", "wz_dot")
@@ -130,12 +139,19 @@ class Signals:
     az_assumed: bool = False
     speed_source: SpeedSource = SpeedSource.LOGGED
     travel_quantum: np.ndarray | None = None  # (4,) logger step of d_* [m] (travel_quantum)
+    # Tyre-force channels (module docstring), each None when the log lacks it.
+    spin: np.ndarray | None = None  # (n, 4) omega_* [rad/s]
+    torque: np.ndarray | None = None  # (n, 4) torque_* [N m]
+    steer: np.ndarray | None = None  # (n,) front road-wheel angle [rad]
+    reference_fx: np.ndarray | None = None  # (n, 4) fx_* [N], tyre frame
+    reference_fy: np.ndarray | None = None  # (n, 4) fy_* [N], tyre frame
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
         shapes = {"t": (n,), "vx": (n,), "acc": (n, 3), "d": (n, 4), "v": (n, 4),
                   "rates": (n, 3), "reference": (n, 4), "hub": (n, 4),
-                  "rate_dots": (n, 3)}  # fmt: skip
+                  "rate_dots": (n, 3), "spin": (n, 4), "torque": (n, 4), "steer": (n,),
+                  "reference_fx": (n, 4), "reference_fy": (n, 4)}  # fmt: skip
         for name, shape in shapes.items():
             value = getattr(self, name)
             if value is not None and np.shape(value) != shape:
@@ -191,6 +207,16 @@ class Signals:
             columns.update(zip(HUB, self.hub.T))
         if self.reference is not None:
             columns.update(zip(REFERENCE, self.reference.T))
+        if self.steer is not None:
+            columns[STEER] = self.steer
+        for names, values in (
+            (SPIN, self.spin),
+            (TORQUE, self.torque),
+            (REFERENCE_FX, self.reference_fx),
+            (REFERENCE_FY, self.reference_fy),
+        ):
+            if values is not None:
+                columns.update(zip(names, values.T))  # fmt: skip
         return pd.DataFrame(columns)
 
     def slice(self, start: int, stop: int) -> Signals:
@@ -214,6 +240,11 @@ class Signals:
             az_assumed=self.az_assumed,
             speed_source=self.speed_source,
             travel_quantum=self.travel_quantum,
+            spin=cut(self.spin),
+            torque=cut(self.torque),
+            steer=cut(self.steer),
+            reference_fx=cut(self.reference_fx),
+            reference_fy=cut(self.reference_fy),
         )
 
 
@@ -390,6 +421,11 @@ def signals_from_frame(
         az_assumed=az_assumed,
         speed_source=speed_source,
         travel_quantum=travel_quantum(d),
+        spin=group(SPIN, partial=True),
+        torque=group(TORQUE, partial=True),
+        steer=column(STEER) if STEER in frame.columns else None,
+        reference_fx=group(REFERENCE_FX, partial=True),
+        reference_fy=group(REFERENCE_FY, partial=True),
     )
 
 

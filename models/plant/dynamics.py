@@ -277,6 +277,49 @@ def loaded_body_accelerations(vehicle: Vehicle, payload, force, moment, unsprung
     return acc, omega_dot
 
 
+def spin_direction(spin):
+    """:math:`\\tanh(\\omega / \\omega_s)`: the sign of a wheel's spin, smoothed below
+    :data:`SPIN_SMOOTHING` (brake and rolling-resistance torques fade to zero at rest)."""
+    return ca.tanh(spin / SPIN_SMOOTHING)
+
+
+def wheel_torque(drive, brake, direction):
+    r"""Torque on a wheel about its spin axis from drive and brake [N m], > 0 forward.
+
+    .. math:: T = T_{drive} - T_{brake} \tanh(\omega / \omega_s)
+
+    ``direction`` is :func:`spin_direction` of the wheel's spin.
+    """
+    return drive - brake * direction
+
+
+def wheel_force_function(vehicle: Vehicle) -> ca.Function:
+    r"""``plant_wheel_forces(kappa, alpha, fz, spin, drive, brake) -> (fx, fy, torque)``.
+
+    Per wheel (4 x 1 each, FL FR RL RR) the plant's own tyre forces in the tyre frame
+    (:func:`~wheelload.models.plant.tyre.tyre_forces`: ``fx`` along the wheel heading in
+    the road plane, ``fy`` to its left, ISO 8855) and the drive/brake torque on the wheel
+    (:func:`wheel_torque`), from the transient slips, the normal loads and the applied
+    inputs: the reference the tyre-force estimators are scored against.
+    """
+    plant = vehicle_plant(vehicle)
+    kappa, alpha, fz = ca.SX.sym("kappa", 4), ca.SX.sym("alpha", 4), ca.SX.sym("fz", 4)
+    spin, drive, brake = ca.SX.sym("spin", 4), ca.SX.sym("drive", 4), ca.SX.sym("brake", 4)
+    fx, fy, torque = [], [], []
+    for i, c in enumerate(corners(vehicle)):
+        f_x, f_y = tyre_forces(kappa[i], alpha[i], fz[i], c.nominal_load, plant.tyre)
+        fx.append(f_x)
+        fy.append(f_y)
+        torque.append(wheel_torque(drive[i], brake[i], spin_direction(spin[i])))
+    return ca.Function(
+        "plant_wheel_forces",
+        [kappa, alpha, fz, spin, drive, brake],
+        [ca.vertcat(*fx), ca.vertcat(*fy), ca.vertcat(*torque)],
+        ["kappa", "alpha", "fz", "spin", "drive", "brake"],
+        ["fx", "fy", "torque"],
+    )
+
+
 def plant_dynamics(vehicle: Vehicle, road: RoadSurface, payload: bool = False):
     """SX expressions ``(x, u, xdot, y)`` of the plant on one road (see module docstring).
 
@@ -335,10 +378,9 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface, payload: bool = False):
         force = fx * e_x + fy * e_y + fz * normal
         loaded = ca.fmin(gap, c.radius)
         rolling_radius = c.radius - ca.fmax(deflection, 0.0) / 3.0
-        spin_sign = ca.tanh(spin[i] / SPIN_SMOOTHING)
+        spin_sign = spin_direction(spin[i])
         spin_acc = (
-            drive[i]
-            - brake[i] * spin_sign
+            wheel_torque(drive[i], brake[i], spin_sign)
             - fx * loaded
             - tyre.rolling_resistance * fz * loaded * spin_sign
         ) / c.spin_inertia

@@ -1,7 +1,12 @@
 """Write a simulated log (CSV or Parquet by suffix) and its JSON metadata sidecar.
 
-Log columns (DESIGN.md): ``t vx ax ay az wx wy wz d_* v_* az_* fz_*``; the
-metadata ``LOG.meta.json`` records everything that produced the log.
+Log columns (DESIGN.md): ``t vx ax ay az wx wy wz d_* v_* az_* fz_*``, then, when the
+frame has them (:data:`WHEEL_COLUMNS`), the tyre-force channels: the front road-wheel
+angle ``steer`` [rad, > 0 to the left], wheel spins ``omega_*`` [rad/s], the drive/brake
+torque on each wheel ``torque_*`` [N m, > 0 forward] and the reference tyre forces
+``fx_* fy_*`` [N] in each tyre's frame (ISO 8855: x along the wheel heading in the road
+plane, y to its left; the plant's ``fz_*`` is along the road normal). The metadata
+``LOG.meta.json`` records everything that produced the log.
 """
 
 from __future__ import annotations
@@ -21,6 +26,14 @@ LOG_COLUMNS = (
     + tuple(f"v_{w}" for w in WHEELS)
     + tuple(f"az_{w}" for w in WHEELS)
     + tuple(f"fz_{w}" for w in WHEELS)
+)
+#: Optional channels of the tyre-force estimators, written when the frame has them.
+WHEEL_COLUMNS = (
+    ("steer",)
+    + tuple(f"omega_{w}" for w in WHEELS)
+    + tuple(f"torque_{w}" for w in WHEELS)
+    + tuple(f"fx_{w}" for w in WHEELS)
+    + tuple(f"fy_{w}" for w in WHEELS)
 )
 SUFFIXES = (".csv", ".parquet")
 
@@ -51,7 +64,7 @@ def write_log(
     if missing:
         raise ValueError(f"log frame lacks column '{missing[0]}'")
     path.parent.mkdir(parents=True, exist_ok=True)
-    log = frame.loc[:, list(LOG_COLUMNS)]
+    log = frame.loc[:, [*LOG_COLUMNS, *(c for c in WHEEL_COLUMNS if c in frame.columns)]]
     with atomic_write(path, replace=replace) as temporary:
         if path.suffix.lower() == ".csv":
             log.to_csv(temporary, index=False, float_format="%.9g")

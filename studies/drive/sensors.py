@@ -51,7 +51,10 @@ settings: 260 Hz accelerometer, 256 Hz gyroscope (MPU-6050 DLPF_CFG = 0). Travel
 the issue's MEMS case, 0.05 mm white noise (1 sigma) and a 0.1 mm logger step
 beside the same linearity error; speed ``vx``: 0.05 m/s white noise (1 sigma).
 The MTi-1 grade logs ``vx`` clean (a wheel-speed or GNSS speed far better than
-the loads need), the consumer grade with that noise.
+the loads need), the consumer grade with that noise. Wheel spins ``omega_*`` (when the
+truth has them): 0.02 rad/s white noise (1 sigma, every grade), drawn after every other
+channel so that a log without them keeps its noise; the drive/brake torques ``torque_*``
+and the steer angle are logged as the plant applies them (their errors are not modelled).
 """
 
 from __future__ import annotations
@@ -141,6 +144,13 @@ class SpeedSensorModel:
 
 
 @dataclass(frozen=True, kw_only=True)
+class WheelSpeedSensorModel:
+    """The logged wheel spins ``omega_*``: white noise."""
+
+    noise: float = 0.02  # rad/s, 1 sigma
+
+
+@dataclass(frozen=True, kw_only=True)
 class SensorGrade:
     """A set of sensors: body IMU, travel sensors, speed and hub accelerometers."""
 
@@ -149,6 +159,7 @@ class SensorGrade:
     travel: TravelSensorModel
     speed: SpeedSensorModel
     hub: HubAccelerometerModel = HubAccelerometerModel()
+    wheel_speed: WheelSpeedSensorModel = WheelSpeedSensorModel()
 
 
 def _scaled_imu(factor: float) -> ImuModel:
@@ -252,4 +263,10 @@ def measure(
     if scale * grade.speed.noise > 0 and "vx" in truth.columns:
         vx = truth["vx"].to_numpy()
         log["vx"] = vx + scale * grade.speed.noise * rng.standard_normal(vx.size)
+    for wheel in WHEELS:
+        if scale * grade.wheel_speed.noise > 0 and f"omega_{wheel}" in truth.columns:
+            spin = truth[f"omega_{wheel}"].to_numpy()
+            log[f"omega_{wheel}"] = spin + scale * grade.wheel_speed.noise * rng.standard_normal(
+                spin.size
+            )
     return log

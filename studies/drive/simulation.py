@@ -16,7 +16,14 @@ import numpy as np
 import pandas as pd
 
 from wheelload.models.conventions import WHEELS
-from wheelload.models.plant.dynamics import INPUT_NAMES, OUTPUT, OUTPUT_NAMES, STATE, STATE_NAMES
+from wheelload.models.plant.dynamics import (
+    INPUT_NAMES,
+    OUTPUT,
+    OUTPUT_NAMES,
+    STATE,
+    STATE_NAMES,
+    wheel_force_function,
+)
 from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
 from wheelload.models.vehicle.description import Vehicle
@@ -144,6 +151,8 @@ def simulate(
             break
     wall = time.perf_counter() - tic
     frame = truth_frame(states[:recorded], outputs[:recorded], inputs[:recorded], dt, run.road)
+    frame = frame.assign(**wheel_columns(vehicle, states[:recorded], outputs[:recorded],
+                                         inputs[:recorded]))  # fmt: skip
     if run.record_from is not None:
         frame = frame[frame["s"] >= run.record_from].reset_index(drop=True)
         frame["t"] -= frame["t"].iloc[0]
@@ -177,3 +186,31 @@ def truth_frame(
     frame["half_width"] = np.interp(frame["s"], road.s, road.half_width)
     frame["steer"] = inputs[:, 0]
     return pd.DataFrame(frame)
+
+
+def wheel_columns(
+    vehicle: Vehicle, states: np.ndarray, outputs: np.ndarray, inputs: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Reference tyre forces ``fx_* fy_*`` [N] (tyre frame, ISO 8855: x along the wheel
+    heading in the road plane, y to its left), wheel spins ``omega_*`` [rad/s] and the
+    drive/brake torque on each wheel ``torque_*`` [N m, > 0 forward], from the plant's
+    own equations (:func:`~wheelload.models.plant.dynamics.wheel_force_function`)."""
+
+    def block(prefix: str) -> np.ndarray:
+        return states[:, [STATE[f"{prefix}_{w}"] for w in WHEELS]].T
+
+    fz = outputs[:, [OUTPUT[f"fz_{w}"] for w in WHEELS]].T
+    drive = inputs[:, [INPUT_NAMES.index(f"drive_{w}") for w in WHEELS]].T
+    brake = inputs[:, [INPUT_NAMES.index(f"brake_{w}") for w in WHEELS]].T
+    spin = block("omega")
+    count = states.shape[0]
+    if count == 0:
+        fx = fy = torque = np.zeros((4, 0))
+    else:
+        forces = wheel_force_function(vehicle).map(count)
+        fx, fy, torque = (np.asarray(o).reshape(4, count) for o in forces(
+            block("kappa"), block("alpha"), fz, spin, drive, brake))  # fmt: skip
+    columns = {}
+    for prefix, values in (("fx", fx), ("fy", fy), ("omega", spin), ("torque", torque)):
+        columns.update({f"{prefix}_{w}": values[i] for i, w in enumerate(WHEELS)})
+    return columns

@@ -18,6 +18,7 @@ from wheelload.studies.experiments import (
     vehicle_file_ablation,
     vehicles,
 )
+from wheelload.studies.experiments.forces import tyre_forces
 from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
 from wheelload.studies.experiments.runs.context import Context
 
@@ -33,6 +34,7 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "sigma": sigma.run,
     "vehicles": vehicles.run,
     "sensor-errors": sensor_errors.run,
+    "tyre-forces": tyre_forces.run,
 }
 NAMES = (*STUDIES, "all")
 

@@ -11,7 +11,7 @@ import pytest
 from wheelload.models import load_vehicle
 from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.cli import main
-from wheelload.studies.drive.scenario_log import LOG_COLUMNS, metadata_path
+from wheelload.studies.drive.scenario_log import LOG_COLUMNS, WHEEL_COLUMNS, metadata_path
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS, dlc_lanes, scenario_run
 from wheelload.studies.drive.simulation import simulate
@@ -52,7 +52,7 @@ def test_simulate_command_writes_log_metadata_and_plot(tmp_path):
     )
     assert status == 0
     frame = pd.read_csv(log)
-    assert tuple(frame.columns) == LOG_COLUMNS
+    assert tuple(frame.columns) == LOG_COLUMNS + WHEEL_COLUMNS  # the plant logs both
     assert np.isfinite(frame.to_numpy()).all()
     meta = json.loads(metadata_path(log).read_text())
     assert meta["scenario"] == "iso-dlc" and meta["seed"] == 4 and meta["noise_scale"] == 0.0
@@ -67,7 +67,7 @@ def test_parquet_log_and_unknown_suffix(tmp_path):
     log = tmp_path / "slope.parquet"
     assert main(["simulate", "slope-20", "--out", str(log), "--rate", "50"]) == 0
     frame = pd.read_parquet(log)
-    assert tuple(frame.columns) == LOG_COLUMNS
+    assert tuple(frame.columns) == LOG_COLUMNS + WHEEL_COLUMNS  # the plant logs both
     assert np.diff(frame["t"]).mean() == pytest.approx(0.02)
     # On the 20 % grade the measured specific force tilts: ax = g sin(atan 0.2) at steady speed.
     steep = frame[frame["t"] > frame["t"].iloc[-1] - 5.0]

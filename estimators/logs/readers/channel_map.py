@@ -58,6 +58,9 @@ TARGETS: dict[str, Kind] = {
     **{f"fz_{w}": Kind.FORCE for w in WHEELS},
     **{f"ws_{w}": Kind.SPEED for w in WHEELS},
     **{f"az_{w}": Kind.ACCELERATION for w in WHEELS},  # hub accelerometers (body z)
+    **{f"omega_{w}": Kind.ANGULAR_RATE for w in WHEELS},  # wheel spins
+    **{f"fx_{w}": Kind.FORCE for w in WHEELS},  # reference tyre forces, tyre frame
+    **{f"fy_{w}": Kind.FORCE for w in WHEELS},
 }
 #: groups filled with missing (NaN) columns when only some of them are mapped
 GROUPS = (

@@ -1,0 +1,455 @@
+r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage KF's loads.
+
+- ``tyre-pid`` (§III-A, eq. 4-9): :math:`F_x` of each wheel from its spin and torque, the
+  PI spin observer of :func:`~wheelload.models.family.tyre_forces.observer_matrices`
+  (the printed eq. 4-5 need the unknown :math:`F_x`; the implementable form has eq. 9's
+  error dynamics), discretised exactly with the torque and spin linear between samples
+  (first-order hold; the paper's Remark 1 holds them, which lags a spin ramp by half a
+  sample), minus the rolling resistance on the KF's :math:`F_z`.
+- ``tyre-lateral`` (§III-B, eq. 10-16): a Kalman filter on
+  :math:`(F_{yf}, F_{yr}, e, r)`: the axles' lateral forces, the front left/right
+  difference beyond the load split (the paper's :math:`\bar F_{yf}`; see
+  :func:`~wheelload.models.family.tyre_forces.body_force_rows`) and the yaw rate; measured
+  the tyres' force sums from the accelerometer (road frame, drag, IMU lever arm) and the
+  gyro's yaw rate. Random-walk forces (:math:`A_y = 0`, eq. 10), the yaw rate integrated
+  from eq. 3. Covariance switching (§IV): where any wheel's spin acceleration reaches
+  ``slip_threshold`` the filter takes the paper's high-slip pair, :math:`Q` times
+  :math:`(0.036/0.11)^2` and :math:`R` times :math:`(0.4/0.018)^2` (the paper's ratios).
+- ``tyre-forces``: the KF's :math:`F_z` with σ, ``tyre-pid``'s :math:`F_x` and
+  ``tyre-lateral``'s :math:`F_y`, each with σ.
+- ``tyre-rigid``: the baseline, the same force sums :math:`S_x, S_y` split to the wheels by
+  the KF's normal-load share (both directions; no drive layout is assumed).
+
+The paper splits nothing left/right beyond its state :math:`\bar F_{yf}` (front) and the
+normal-load share it names as the simple alternative; ours splits each axle by the tyres'
+load sensitivity (:class:`LateralSplit`; ``LOAD`` is the paper's share), and the front
+difference beyond it (:math:`e`) has a tight prior: it is seen only through
+:math:`\sin\delta` in the yaw row, where any yaw-model error would land on it.
+
+All four run the registered two-stage KF for :math:`F_z` and need the log's ``omega_*``,
+``torque_*`` and ``steer`` (rigid: none of them); a missing one is a one-line error. The
+wheel's spin inertia and rolling-resistance coefficient come from the vehicle file's
+``[plant]`` section, the only place the file holds them, as do the tyre coefficients of the
+left/right split (:func:`~wheelload.models.family.tyre_forces.tyre_split`). σ of
+:math:`F_x`: the spin noise through the observer (its impulse response's energy), 30 % of
+the rolling resistance and 4 % of the force (loaded radius, torque); of :math:`F_y`: the
+filter's covariance mapped to the wheels.
+"""
+
+from __future__ import annotations
+
+import enum
+import functools
+from dataclasses import dataclass, replace
+
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.kernels.discretise import expm
+from wheelload.estimators.kf.method import build_kf
+from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.protocol import MethodInfo, Sample
+from wheelload.estimators.result import Estimate
+from wheelload.models import ModelParameters, Vehicle
+from wheelload.models.aero import aero_forces
+from wheelload.models.body_attitude import attitude_function
+from wheelload.models.family.tyre_forces import (
+    body_force_rows,
+    load_share_split,
+    load_shares,
+    observer_gains,
+    observer_matrices,
+    rolling_resistance_force,
+    tyre_split,
+    wheel_lateral_forces,
+)
+from wheelload.models.plant.dynamics import corners, vehicle_plant
+
+#: The paper's nominal and high-slip covariances (§IV): Q 0.11^2 -> 0.036^2, R 0.018^2 -> 0.4^2.
+HIGH_SLIP_Q = (0.036 / 0.11) ** 2
+HIGH_SLIP_R = (0.4 / 0.018) ** 2
+
+
+class LateralSplit(enum.Enum):
+    """How an axle's lateral force splits left/right before the filter's :math:`e`."""
+
+    LOAD = "load"  # F_z share: the paper's simple alternative (§III-B)
+    TYRE = "tyre"  # the tyres' load sensitivity, by utilisation (models: tyre_split)
+
+
+class TyreInputError(ValueError):
+    """A log without a channel the tyre-force estimators need."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class TyreSettings:
+    """Observer and filter settings (SI units)."""
+
+    observer_frequency: float = 3.0  # Hz, natural frequency of eq. 9's poles
+    observer_damping: float = 0.8  # -
+    spin_noise: float = 0.02  # rad/s, 1 sigma white spin noise (sigma of F_x)
+    rolling_resistance_std: float = 0.3  # share of the rolling resistance (sigma of F_x)
+    force_share_std: float = 0.04  # share of F_x: the loaded radius and torque (sigma of F_x)
+    force_rate: float = 4000.0  # N/sqrt(s), random walk of the axle lateral forces
+    # e, the front difference beyond the split, is seen only through sin(steer) in the yaw
+    # row, where any yaw-model error lands on it: a tight prior and a slow walk keep it
+    # near the split (the paper's simple alternative) unless the yaw row insists.
+    split_std: float = 50.0  # N, initial sigma of e
+    split_rate: float = 1.0  # N/sqrt(s), random walk of e
+    yaw_rate_noise: float = 0.01  # rad/s^2/sqrt(Hz)... process noise of r per sqrt(s)
+    force_noise: float = 120.0  # N, 1 sigma of the force sums S_x, S_y (model error)
+    gyro_noise: float = 0.002  # rad/s, 1 sigma of the yaw rate
+    initial_force_std: float = 500.0  # N
+    slip_threshold: float = 40.0  # rad/s^2, |d omega / dt| of any wheel: high slip
+    split: LateralSplit = LateralSplit.TYRE
+    missing_std: float = 1.0e4  # N, sigma of an F_x held through a missing spin or torque
+
+    def __post_init__(self) -> None:
+        for key in ("observer_frequency", "observer_damping", "force_rate", "split_rate",
+                    "split_std", "yaw_rate_noise", "force_noise", "gyro_noise",
+                    "initial_force_std", "slip_threshold"):  # fmt: skip
+            if not getattr(self, key) > 0:
+                raise ValueError(f"tyre settings: {key} must be > 0, got {getattr(self, key)}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class TyreState:
+    """The KF's state and the observers' ``core`` (see :meth:`TyreForces.core_step`)."""
+
+    kf: object
+    # observers (4, 4): omega_hat, xi, last torque, last spin (None until a sample with
+    # both); lateral filter x = (F_yf, F_yr, e, r) and P; last spins; last F_x
+    core: tuple = (None, None, None, None, None)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Constants:
+    """Numbers of the vehicle the observers need (module docstring)."""
+
+    inertia: np.ndarray  # (4,) spin inertia [kg m^2]
+    radius: np.ndarray  # (4,) static loaded radius [m]
+    rolling: float  # rolling-resistance coefficient
+    mass: float  # whole-vehicle mass [kg]
+    yaw_inertia: float  # about the sprung CG, unsprung masses included [kg m^2]
+    lf: float
+    lr: float
+    track_front: float
+    track_rear: float
+    imu_x: float  # IMU ahead of the sprung CG [m]
+    nominal_loads: tuple[float, float]  # F_z0 front, rear [N]
+    friction: float  # mu_y0
+    load_sensitivity: float  # p_D2
+    cornering_load: float  # p_Ky2
+
+
+def vehicle_constants(vehicle: Vehicle) -> Constants:
+    """:class:`Constants` of ``vehicle`` (its ``[plant]`` section for the wheels and tyres)."""
+    items = corners(vehicle)
+    g = vehicle.geometry
+    tyre = vehicle_plant(vehicle).tyre
+    return Constants(
+        inertia=np.array([c.spin_inertia for c in items]),
+        radius=np.array([c.radius - c.static_load / c.tyre_rate for c in items]),
+        rolling=float(tyre.rolling_resistance),
+        mass=float(vehicle.mass.total),
+        yaw_inertia=float(vehicle.mass.inertia[2])
+        + sum(c.unsprung * (c.x**2 + c.y**2) for c in items),
+        lf=float(g.lf),
+        lr=float(g.lr),
+        track_front=float(g.track_front),
+        track_rear=float(g.track_rear),
+        imu_x=float(g.imu_position[0]),
+        nominal_loads=(items[0].nominal_load, items[2].nominal_load),
+        friction=float(tyre.friction_y),
+        load_sensitivity=float(tyre.friction_load_sensitivity),
+        cornering_load=float(tyre.cornering_load_y),
+    )
+
+
+@functools.cache
+def discrete_observer(inertia: float, radius: float, frequency: float, damping: float, dt: float):
+    r"""``(Phi, Gamma1, Gamma2, C, D, noise gain)`` of one wheel's observer over ``dt``.
+
+    First-order hold (torque and spin linear between samples, Franklin, Powell & Workman
+    §6.3.2): :math:`z_{k+1} = \Phi z_k + \Gamma_1 u_k + \Gamma_2 (u_{k+1} - u_k)`, exact for
+    a spin ramp (a constant force), where a zero-order hold would lag the spin by half a
+    sample and bias :math:`\hat F` by about :math:`J \dot\omega / (2 R)`. The noise gain is
+    the root energy of the spin-to-force impulse response (σ of :math:`F_x`).
+    """
+    k1, k2 = observer_gains(inertia=inertia, radius=radius, frequency=frequency, damping=damping)
+    a, b, c, d = observer_matrices(inertia=inertia, radius=radius, k1=k1, k2=k2)
+    block = np.zeros((6, 6))
+    block[:2, :2], block[:2, 2:4], block[2:4, 4:] = a * dt, b * dt, np.eye(2)
+    exact = np.array(expm(ca.DM(block)))
+    phi, gamma1, gamma2 = exact[:2, :2], exact[:2, 2:4], exact[:2, 4:]
+    # Response of F = C z + D u to a unit spin impulse (u_0 = (0, 1), then 0).
+    z, previous, response = np.zeros(2), np.zeros(2), []
+    for k in range(int(20.0 / (frequency * dt)) + 10):
+        u = np.array([0.0, 1.0 if k == 0 else 0.0])
+        z = z if k == 0 else phi @ z + gamma1 @ previous + gamma2 @ (u - previous)
+        response.append(c @ z + d @ u)
+        previous = u
+    return phi, gamma1, gamma2, c, d, float(np.sqrt(np.sum(np.square(response))))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Inputs:
+    """One sample's inputs of the observers (NaN where missing)."""
+
+    spin: np.ndarray  # (4,) rad/s
+    torque: np.ndarray  # (4,) N m
+    steer: float  # rad
+    rate: float  # yaw rate [rad/s]
+    sums: np.ndarray  # (2,) S_x, S_y [N] (:meth:`TyreForces.force_sums`)
+    loads: np.ndarray  # (4,) the KF's F_z [N]
+
+
+def _given(values, size: int) -> np.ndarray:
+    return np.full(size, np.nan) if values is None else np.asarray(values, float)
+
+
+class TyreForces:
+    """Tyre forces per wheel on the KF's loads (module docstring)."""
+
+    name = "tyre-forces"
+    has_std = True
+
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        settings: TyreSettings = TyreSettings(),
+        *,
+        longitudinal: bool = True,
+        lateral: bool = True,
+    ) -> None:
+        self.vehicle = vehicle
+        self.settings = settings
+        self.show_fx = longitudinal
+        self.lateral = lateral  # the lateral filter runs on the observer's F_x either way
+        self.constants = vehicle_constants(vehicle)
+        self.kf = build_kf(vehicle)
+        self._attitude = attitude_function(vehicle)
+        self._parameters = ModelParameters.from_vehicle(vehicle)
+
+    def initial_state(self) -> TyreState:
+        return TyreState(kf=self.kf.initial_state())
+
+    def force_sums(self, d: np.ndarray, acc: np.ndarray, vx, rate) -> np.ndarray:
+        r"""``(n, 2)`` :math:`(S_x, S_y)` of ``n`` samples: the tyres' force sums from the
+        specific force in the road frame (module docstring), the drag added and the
+        centripetal lever-arm term :math:`r^2 x_{imu}` removed from :math:`a_x`."""
+        k = self.constants
+        n = d.shape[0]
+        _, _, road = self._attitude.map(n)(np.nan_to_num(d).T, acc.T)
+        road = np.asarray(road).reshape(3, n)
+        _, drag = aero_forces(np.asarray(vx, float), self._parameters)
+        rate = np.nan_to_num(np.asarray(rate, float))
+        return np.column_stack([k.mass * (road[0] + rate**2 * k.imu_x) + drag, k.mass * road[1]])
+
+    def shares(self, loads: np.ndarray, axles: np.ndarray) -> np.ndarray:
+        """Left/right shares of the axles' lateral forces (:class:`LateralSplit`)."""
+        k = self.constants
+        if self.settings.split is LateralSplit.LOAD:
+            return load_shares(loads)
+        return tyre_split(loads, axles, nominal_loads=k.nominal_loads, friction=k.friction,
+                          load_sensitivity=k.load_sensitivity,
+                          cornering_load=k.cornering_load)  # fmt: skip
+
+    def core_step(self, core: tuple, inputs: Inputs, dt: float):
+        """One sample of the observers: ``(core, fx, fx_std, fy, fy_std)``."""
+        observer, x, P, last_spin, last_fx = core
+        observer, fx, fx_std = self._fx(observer, last_fx, inputs, dt)
+        x, P, fy, fy_std = self._fy(x, P, last_spin, inputs, fx, dt)
+        spin = inputs.spin if np.all(np.isfinite(inputs.spin)) else last_spin
+        return (observer, x, P, spin, fx), fx, fx_std, fy, fy_std
+
+    def _fx(self, observer, last_fx, inputs: Inputs, dt: float):
+        """The spin observers' step: ``(observer, fx, fx_std)``; held without spin or torque."""
+        s, k = self.settings, self.constants
+        spin, torque = inputs.spin, inputs.torque
+        if not (np.all(np.isfinite(spin)) and np.all(np.isfinite(torque))):
+            held = np.zeros(4) if last_fx is None else last_fx
+            return observer, held, np.full(4, s.missing_std)
+        new = np.empty((4, 4))
+        fx, std = np.empty(4), np.empty(4)
+        for i in range(4):
+            phi, gamma1, gamma2, c, d, gain = discrete_observer(
+                k.inertia[i], k.radius[i], s.observer_frequency, s.observer_damping,
+                round(float(dt), 9))  # fmt: skip
+            u = np.array([torque[i], spin[i]])
+            if observer is None:  # start in equilibrium: F = -k2 xi = T / R, no spin error
+                z = np.array([spin[i], (torque[i] / k.radius[i]) / c[1]])
+            else:
+                z, previous = observer[i, :2], observer[i, 2:]
+                z = phi @ z + gamma1 @ previous + gamma2 @ (u - previous)
+            new[i] = [z[0], z[1], u[0], u[1]]
+            rolling = rolling_resistance_force(inputs.loads[i], spin[i], k.rolling)
+            fx[i] = c @ z + d @ u - rolling
+            std[i] = np.sqrt((gain * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2
+                             + (s.force_share_std * fx[i]) ** 2)  # fmt: skip
+        return new, fx, std
+
+    def _fy(self, x, P, last_spin, inputs: Inputs, fx: np.ndarray, dt: float):
+        """The lateral filter's step: ``(x, P, fy, fy_std)``."""
+        s, k = self.settings, self.constants
+        steer = inputs.steer if np.isfinite(inputs.steer) else 0.0
+        rate = inputs.rate
+        if x is None:
+            x = np.array([0.0, 0.0, 0.0, rate if np.isfinite(rate) else 0.0])
+            P = np.diag([s.initial_force_std**2] * 2 + [s.split_std**2, s.gyro_noise**2])
+        high_slip = False
+        if last_spin is not None and dt > 0 and np.all(np.isfinite(inputs.spin)):
+            high_slip = bool(np.any(np.abs(inputs.spin - last_spin) >= s.slip_threshold * dt))
+        q_scale = HIGH_SLIP_Q if high_slip else 1.0
+        r_scale = HIGH_SLIP_R if high_slip else 1.0
+        shares = self.shares(inputs.loads, x[:2])
+        h, offset = body_force_rows(steer, fx, lf=k.lf, lr=k.lr, track_front=k.track_front,
+                                    track_rear=k.track_rear, share_front=shares[1] - shares[0],
+                                    inertia_z=k.yaw_inertia)  # fmt: skip
+        # Predict: forces random walk, r integrated from eq. 3's yaw acceleration.
+        F = np.eye(4)
+        F[3, :3] = dt * h[2]
+        x = F @ x
+        x[3] += dt * offset[2]
+        Q = q_scale * dt * np.diag([s.force_rate**2, s.force_rate**2, s.split_rate**2,
+                                    s.yaw_rate_noise**2])  # fmt: skip
+        P = F @ P @ F.T + Q
+        # Update: S_x, S_y at the IMU (lever arm: m x_imu r_dot), and the gyro's r.
+        H = np.zeros((3, 4))
+        H[0, :3] = h[0]
+        H[1, :3] = h[1] + k.mass * k.imu_x * h[2]
+        H[2, 3] = 1.0
+        z = np.array([inputs.sums[0] - offset[0],
+                      inputs.sums[1] - offset[1] - k.mass * k.imu_x * offset[2], rate])  # fmt: skip
+        R = r_scale * np.array([s.force_noise**2, s.force_noise**2, s.gyro_noise**2])
+        valid = np.isfinite(z)
+        if valid.any():
+            Hv = H[valid]
+            S = Hv @ P @ Hv.T + np.diag(R[valid])
+            K = np.linalg.solve(S, Hv @ P).T
+            x = x + K @ (z[valid] - Hv @ x)
+            I_KH = np.eye(4) - K @ Hv
+            P = I_KH @ P @ I_KH.T + (K * R[valid]) @ K.T
+            P = 0.5 * (P + P.T)
+        fy, G = wheel_lateral_forces(x[:3], shares)  # the shares of the predicted forces
+        std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", G, P[:3, :3], G), 0.0))
+        return x, P, fy, std
+
+    # -- the protocol -----------------------------------------------------------------
+
+    def _estimate(self, loads: Estimate, fx, fx_std, fy, fy_std) -> Estimate:
+        return replace(
+            loads,
+            fx=fx if self.show_fx else None,
+            fx_std=fx_std if self.show_fx else None,
+            fy=fy if self.lateral else None,
+            fy_std=fy_std if self.lateral else None,
+        )
+
+    def step(self, state: TyreState, sample: Sample, dt: float) -> tuple[TyreState, Estimate]:
+        kf_state, loads = self.kf.step(state.kf, sample, dt)
+        rate = np.nan if sample.rates is None else float(sample.rates[2])
+        inputs = Inputs(
+            spin=_given(sample.spin, 4), torque=_given(sample.torque, 4),
+            steer=np.nan if sample.steer is None else float(sample.steer), rate=rate,
+            sums=self.force_sums(np.asarray(sample.d)[None], np.asarray(sample.acc)[None],
+                                 [sample.vx], [rate])[0],
+            loads=loads.loads[0],
+        )  # fmt: skip
+        core, *outputs = self.core_step(state.core, inputs, float(dt))
+        rows = [np.asarray(o, float).reshape(1, 4) for o in outputs]
+        return TyreState(kf=kf_state, core=core), self._estimate(loads, *rows)
+
+    def run(self, signals: Signals) -> Estimate:
+        """The whole log: the KF's ``run`` for the loads, then the observers sample by sample
+        (the same numbers as :meth:`step`)."""
+        require_wheel_channels(signals)
+        loads = self.kf.run(signals)
+        n = len(signals)
+        rates = np.full(n, np.nan) if signals.rates is None else signals.rates[:, 2]
+        sums = self.force_sums(signals.d, signals.acc, signals.vx, rates)
+        dts = np.concatenate([np.diff(signals.t)[:1], np.diff(signals.t)])
+        out = [np.zeros((n, 4)) for _ in range(4)]
+        core = TyreState(kf=None).core
+        for j in range(n):
+            inputs = Inputs(spin=signals.spin[j], torque=signals.torque[j],
+                            steer=float(signals.steer[j]), rate=float(rates[j]), sums=sums[j],
+                            loads=loads.loads[j])  # fmt: skip
+            core, out[0][j], out[1][j], out[2][j], out[3][j] = self.core_step(
+                core, inputs, float(dts[j])
+            )
+        return self._estimate(loads, *out)
+
+
+def require_wheel_channels(signals: Signals) -> None:
+    """A one-line error naming the first tyre-force channel the log lacks."""
+    for name, values in (("omega_fl", signals.spin), ("torque_fl", signals.torque),
+                         ("steer", signals.steer)):  # fmt: skip
+        if values is None:
+            raise TyreInputError(
+                f"{signals.source}: no column '{name}': the tyre-force estimators need "
+                "omega_fl..omega_rr [rad/s], torque_fl..torque_rr [N m] and steer [rad]"
+            )
+
+
+class RigidSplit(TyreForces):
+    """Baseline: the force sums split by the KF's normal-load share (no wheel channels)."""
+
+    name = "tyre-rigid"
+    has_std = False
+
+    def step(self, state: TyreState, sample: Sample, dt: float) -> tuple[TyreState, Estimate]:
+        kf_state, loads = self.kf.step(state.kf, sample, dt)
+        rate = np.nan if sample.rates is None else float(sample.rates[2])
+        sums = self.force_sums(np.asarray(sample.d)[None], np.asarray(sample.acc)[None],
+                               [sample.vx], [rate])  # fmt: skip
+        split = [load_share_split(sums[:, axis], loads.loads) for axis in (0, 1)]
+        return replace(state, kf=kf_state), replace(loads, fx=split[0], fy=split[1])
+
+    def run(self, signals: Signals) -> Estimate:
+        loads = self.kf.run(signals)
+        rates = np.full(len(signals), np.nan) if signals.rates is None else signals.rates[:, 2]
+        sums = self.force_sums(signals.d, signals.acc, signals.vx, rates)
+        split = [load_share_split(sums[:, axis], loads.loads) for axis in (0, 1)]
+        return replace(loads, fx=split[0], fy=split[1])
+
+
+def _pid(vehicle: Vehicle, settings: TyreSettings = TyreSettings()) -> TyreForces:
+    method = TyreForces(vehicle, settings, lateral=False)
+    method.name = "tyre-pid"
+    return method
+
+
+def _lateral(vehicle: Vehicle, settings: TyreSettings = TyreSettings()) -> TyreForces:
+    method = TyreForces(vehicle, settings, longitudinal=False)
+    method.name = "tyre-lateral"
+    return method
+
+
+INFO = (
+    MethodInfo(
+        name="tyre-pid",
+        description="F_x per wheel: PI spin observer on the wheel dynamics, KF loads",
+        reference="corner-based paper §III-A, eq. 1, 4-9",
+        build=_pid,
+    ),
+    MethodInfo(
+        name="tyre-lateral",
+        description="F_y per wheel: adaptive KF on axle forces and yaw rate, KF loads",
+        reference="corner-based paper §III-B, eq. 2-3, 10-16, §IV covariance switching",
+        build=_lateral,
+    ),
+    MethodInfo(
+        name="tyre-forces",
+        description="F_x, F_y, F_z per wheel with sigma: KF loads + tyre-pid + tyre-lateral",
+        reference="corner-based paper §III; road-angle paper §III (vertical block feeds "
+        "the lateral block)",
+        build=TyreForces,
+    ),
+    MethodInfo(
+        name="tyre-rigid",
+        description="baseline: m a_x, m a_y (road frame, drag) split by the KF's load share",
+        reference="rigid-body baseline (corner-based paper eq. 2, load-share split)",
+        build=RigidSplit,
+    ),
+)

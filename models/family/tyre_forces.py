@@ -1,0 +1,164 @@
+r"""Tyre forces from wheel and body dynamics (corner-based paper §III-A/B, eq. 1-16).
+
+Signs derived here (ISO 8855, tyre frame: x along the wheel heading in the road plane,
+y to its left; the front road-wheel angle :math:`\delta > 0` steers left), not copied
+from the paper's printed equations:
+
+- Wheel spin (eq. 1): :math:`J \dot\omega = T - R F_x - f_r R F_z \tanh(\omega/\omega_s)`
+  (:func:`longitudinal_force`), the plant's own wheel equation with the rolling
+  resistance named apart (the paper's :math:`\Omega_x`).
+- The printed observer (eq. 4-5) feeds back :math:`\tilde F_x = F_x - \hat F_x`, which is
+  unknown online. Its implementable form (:func:`observer_matrices`) is the wheel model
+  driven by the measured torque plus a PI correction on the spin error
+  :math:`\tilde\omega = \omega - \hat\omega`:
+
+  .. math:: J \dot{\hat\omega} = T - R \hat F, \qquad
+            \hat F = -k_1 \tilde\omega - k_2 \textstyle\int \tilde\omega\, dt
+
+  whose error obeys eq. 9's :math:`J \ddot{\tilde\omega} + R k_1 \dot{\tilde\omega} + R k_2
+  \tilde\omega = \dot F`: Hurwitz for :math:`k_1, k_2 > 0`, and :math:`\hat F \to F`
+  for a constant force (the integral holds it). A falling :math:`\omega` below the model
+  (:math:`\tilde\omega < 0`) means more retarding force, hence the minus signs.
+- Body forces (eq. 2-3, :func:`body_force_rows`): the tyres' forces in the road plane
+  equal the whole-vehicle mass times the specific force in the road frame (the body's
+  roll and pitch relative to the road from the travels, eq. 7 and 4-5 of the main paper)
+  plus the drag, :math:`S_x = m \check a_x + D`, :math:`S_y = m \check a_y`; with an
+  accelerometer's specific force the road's own grade and bank drop out (the paper's
+  :math:`\theta_r, \phi_r` correct a kinematic acceleration). Yaw about the sprung CG,
+
+  .. math:: I_z \dot r = l_f (F_{yf} \cos\delta + F_{xf} \sin\delta)
+            + \tfrac{t_f}{2} (\bar F_{xf} \cos\delta - \bar F_{yf} \sin\delta)
+            - l_r F_{yr} + \tfrac{t_r}{2} \bar F_{xr},
+
+  :math:`\bar F = F_R - F_L`: eq. 3 as printed; the printed output matrix (11) has the
+  opposite sign on :math:`\bar F_{yf}`, and its measurement is the yaw acceleration, not
+  the rate (here the rate is a filter state and the gyro measures it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wheelload.models.plant.dynamics import SPIN_SMOOTHING
+
+
+def rolling_resistance_force(fz, spin, coefficient: float):
+    r"""Rolling resistance at the contact patch [N]: :math:`f_r F_z \tanh(\omega/\omega_s)`."""
+    return coefficient * fz * np.tanh(spin / SPIN_SMOOTHING)
+
+
+def longitudinal_force(torque, spin_rate, fz, spin, *, inertia, radius, coefficient):
+    r"""Eq. 1: :math:`F_x = (T - J\dot\omega)/R - f_r F_z \tanh(\omega/\omega_s)` [N]."""
+    return (torque - inertia * spin_rate) / radius - rolling_resistance_force(fz, spin, coefficient)
+
+
+def observer_matrices(
+    *, inertia: float, radius: float, k1: float, k2: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""``(A, B, C, D)`` of the PI spin observer (module docstring), continuous time.
+
+    State :math:`z = (\hat\omega, \xi = \int \tilde\omega\, dt)`, input
+    :math:`u = (T, \omega)`, output the total retarding force :math:`\hat F = C z + D u`:
+
+    .. math:: \dot z = \begin{pmatrix} -R k_1/J & R k_2/J \\ -1 & 0 \end{pmatrix} z
+              + \begin{pmatrix} 1/J & R k_1/J \\ 0 & 1 \end{pmatrix} u
+    """
+    a = np.array([[-radius * k1 / inertia, radius * k2 / inertia], [-1.0, 0.0]])
+    b = np.array([[1.0 / inertia, radius * k1 / inertia], [0.0, 1.0]])
+    return a, b, np.array([k1, -k2]), np.array([0.0, -k1])
+
+
+def observer_gains(*, inertia: float, radius: float, frequency: float, damping: float):
+    r"""``(k1, k2)`` placing eq. 9's poles at natural frequency ``frequency`` [Hz] and
+    ``damping``: :math:`R k_2 / J = \omega_n^2`, :math:`R k_1 / J = 2 \zeta \omega_n`."""
+    omega_n = 2.0 * np.pi * frequency
+    return 2.0 * damping * omega_n * inertia / radius, omega_n**2 * inertia / radius
+
+
+def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, inertia_z):
+    r"""Rows of :math:`(S_x, S_y, I_z \dot r)` in the lateral state
+    :math:`(F_{yf}, F_{yr}, e)` and the part the longitudinal forces ``fx`` (4,) give.
+
+    :math:`e` is the front left/right difference beyond the normal-load split,
+    :math:`\bar F_{yf} = s F_{yf} + e` with ``share_front`` :math:`s = s_{fr} - s_{fl}`
+    (:func:`tyre_split`, or :func:`load_shares`: the split the paper names as the simple
+    alternative; :math:`e` carries what differs).
+    Returns ``(H (3, 3), offset (3,))``, the yaw row divided by ``inertia_z`` (yaw
+    acceleration).
+    """
+    c, s = np.cos(steer), np.sin(steer)
+    fxf, fxr = fx[0] + fx[1], fx[2] + fx[3]
+    bar_xf, bar_xr = fx[1] - fx[0], fx[3] - fx[2]
+    half_f, half_r = 0.5 * track_front, 0.5 * track_rear
+    h = np.array(
+        [
+            [-s, 0.0, 0.0],
+            [c, 1.0, 0.0],
+            [lf * c - half_f * s * share_front, -lr, -half_f * s],
+        ]
+    )
+    offset = np.array(
+        [fxf * c + fxr, fxf * s, lf * fxf * s + half_f * bar_xf * c + half_r * bar_xr]
+    )
+    h[2] /= inertia_z
+    offset[2] /= inertia_z
+    return h, offset
+
+
+def tyre_split(loads, axle_forces, *, nominal_loads, friction, load_sensitivity, cornering_load):
+    r"""Left/right shares (4,) of each axle's lateral force by the tyres' load sensitivity.
+
+    Both tyres of an axle run at about one slip angle. In the linear range their forces
+    go as the Magic Formula's cornering stiffness :math:`K_y \propto \sin(2\arctan(F_z /
+    (p_{Ky2} F_{z0})))`; at the limit as the peak :math:`D = \mu_y (1 + p_{D2}\, df_z) F_z`.
+    The share blends the two by the axle's utilisation :math:`\eta = |F_{y,axle}| /
+    (D_L + D_R)` (clipped to [0, 1]): :math:`s_i = (1 - \eta) K_{y,i} / \sum K_y +
+    \eta D_i / \sum D`, exact at both ends. ``axle_forces`` (front, rear), ``nominal_loads``
+    (front, rear) :math:`F_{z0}`.
+    """
+    shares = []
+    for axle in range(2):
+        left, right = max(float(loads[2 * axle]), 1.0), max(float(loads[2 * axle + 1]), 1.0)
+        nominal = nominal_loads[axle]
+        k_left, k_right = (math.sin(2.0 * math.atan(f / (cornering_load * nominal)))
+                           for f in (left, right))  # fmt: skip
+        d_left, d_right = (max(friction * (1.0 + load_sensitivity * (f - nominal) / nominal) * f,
+                               1.0) for f in (left, right))  # fmt: skip
+        eta = min(abs(float(axle_forces[axle])) / (d_left + d_right), 1.0)
+        for k, d in ((k_left, d_left), (k_right, d_right)):
+            shares.append((1.0 - eta) * k / (k_left + k_right) + eta * d / (d_left + d_right))
+    return np.array(shares)
+
+
+def load_shares(loads):
+    """Left/right shares (4,) of each axle by normal load (the paper's simple split)."""
+    fz = np.maximum(np.asarray(loads, float), 1.0)
+    axles = np.repeat([fz[0] + fz[1], fz[2] + fz[3]], 2)
+    return fz / axles
+
+
+def wheel_lateral_forces(axles, shares):
+    r"""Per-wheel :math:`F_y` (4,) from :math:`(F_{yf}, F_{yr}, e)` and the left/right shares
+    (4,, :func:`tyre_split` or :func:`load_shares`): front :math:`F_{y,fl/fr} = s_{fl/fr}
+    F_{yf} \mp e/2`, rear :math:`s_{rl/rr} F_{yr}`.
+
+    Linear in the state: returns ``(values (4,), G (4, 3))`` with ``values = G @ axles``.
+    """
+    g = np.array(
+        [
+            [shares[0], 0.0, -0.5],
+            [shares[1], 0.0, 0.5],
+            [0.0, shares[2], 0.0],
+            [0.0, shares[3], 0.0],
+        ]
+    )
+    return g @ axles, g
+
+
+def load_share_split(total, loads):
+    """``total`` (n,) split over the wheels by normal-load share (n, 4): the rigid-body
+    baseline's :math:`F_i = S F_{z,i} / \\sum F_z`."""
+    weights = np.maximum(loads, 0.0)
+    return total[:, None] * weights / np.maximum(weights.sum(axis=1, keepdims=True), 1.0)

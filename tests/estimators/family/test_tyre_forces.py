@@ -1,0 +1,191 @@
+"""Tyre-force estimators (corner-based paper §III-A/B): defining properties and the plant.
+
+The plant test simulates one iso-dlc run (about 4 s, the compiled chunk cached) and runs
+the two-stage KF under both methods: about 15 s in all.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from wheelload.estimators.family.tyre_forces import (
+    Inputs,
+    TyreForces,
+    TyreInputError,
+    TyreSettings,
+    discrete_observer,
+)
+from wheelload.estimators.logs.signals import signals_from_frame
+from wheelload.estimators.registry import build, methods, tyre_methods
+from wheelload.estimators.samples import step_through
+from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models.family.tyre_forces import body_force_rows, tyre_split
+from wheelload.studies.drive.scenario_runner import run_scenario
+
+
+def test_spin_observer_recovers_a_constant_force():
+    """Eq. 1 on a synthetic wheel (J = 1.6 kg m^2, R = 0.32 m, T = 300 N m, F_x = 600 N):
+    the observer starts at F = T / R = 937.5 N and settles on 600 N; its error obeys
+    eq. 9 (3 Hz, damping 0.8), so after 3 s it is below 1e-6 N (e^{-0.8 * 2 pi 3 * 3})."""
+    inertia, radius, torque, force, dt = 1.6, 0.32, 300.0, 600.0, 0.01
+    phi, gamma1, gamma2, c, d, _ = discrete_observer(inertia, radius, 3.0, 0.8, dt)
+    omega = 50.0
+    z = np.array([omega, (torque / radius) / c[1]])
+    previous = np.array([torque, omega])
+    estimates = [c @ z + d @ previous]
+    for _ in range(300):
+        omega += dt * (torque - radius * force) / inertia  # exact: the spin is a ramp
+        u = np.array([torque, omega])
+        z = phi @ z + gamma1 @ previous + gamma2 @ (u - previous)
+        estimates.append(c @ z + d @ u)
+        previous = u
+    assert estimates[0] == pytest.approx(torque / radius)
+    assert abs(estimates[-1] - force) < 1e-6
+
+
+def test_spin_observer_poles_are_eq_9():
+    """The discrete observer's eigenvalues are exp(s dt) of eq. 9's characteristic
+    polynomial J s^2 + R k1 s + R k2 (natural frequency and damping as set)."""
+    dt, frequency, damping = 0.01, 3.0, 0.8
+    phi, *_ = discrete_observer(1.6, 0.32, frequency, damping, dt)
+    wn = 2 * np.pi * frequency
+    poles = np.roots([1.0, 2 * damping * wn, wn**2])
+    np.testing.assert_allclose(
+        np.sort_complex(np.linalg.eigvals(phi)), np.sort_complex(np.exp(poles * dt)), rtol=1e-9
+    )
+
+
+def test_tyre_split_ends():
+    """Left/right shares: the cornering stiffnesses' ratio with no axle force, the peak
+    forces' ratio at the axle's friction limit, and shares that add to 1 per axle."""
+    loads = np.array([2500.0, 5500.0, 3000.0, 6000.0])
+    nominal, p_ky2, mu, p_d2 = (3800.0, 4700.0), 2.0, 1.15, -0.1
+
+    def split(axles):
+        return tyre_split(loads, axles, nominal_loads=nominal, friction=mu,
+                          load_sensitivity=p_d2, cornering_load=p_ky2)  # fmt: skip
+
+    ky = np.sin(2 * np.arctan(loads / (p_ky2 * np.repeat(nominal, 2))))
+    peak = mu * (1 + p_d2 * (loads - np.repeat(nominal, 2)) / np.repeat(nominal, 2)) * loads
+    linear, limit = split([0.0, 0.0]), split([1e6, -1e6])
+    np.testing.assert_allclose(linear[:2], ky[:2] / ky[:2].sum(), rtol=1e-12)
+    np.testing.assert_allclose(limit[2:], peak[2:] / peak[2:].sum(), rtol=1e-12)
+    np.testing.assert_allclose(split([3000.0, 2000.0]).reshape(2, 2).sum(axis=1), 1.0)
+    # The more loaded tyre takes more, but less than its load share in the linear range.
+    assert 0.5 < linear[1] < loads[1] / loads[:2].sum()
+
+
+def _inputs(vehicle, fyf, fyr, steer, rate, spin):
+    """A steady sample whose force sums and gyro agree with the axle forces (yaw balanced
+    by the rear force), equal loads (the left/right shares are 1/2) and F_x = 0: the
+    torques just overcome the rolling resistance."""
+    k = TyreForces(vehicle).constants
+    torque = k.radius * k.rolling * 4000.0 * np.tanh(spin / 0.5)
+    return Inputs(spin=np.full(4, spin), torque=torque, steer=steer, rate=rate,
+                  sums=np.array([-fyf * np.sin(steer), fyf * np.cos(steer) + fyr]),
+                  loads=np.full(4, 4000.0))  # fmt: skip
+
+
+def test_force_sums_of_a_steady_sample():
+    """S_x, S_y from the accelerometer: m a (level body, no speed: no drag), the
+    centripetal r^2 x_imu of the IMU's lever arm removed from a_x."""
+    vehicle = load_vehicle(example_vehicle_path())
+    method = TyreForces(vehicle)
+    m, x_imu, rate = vehicle.mass.total, vehicle.geometry.imu_position[0], 0.4
+    acc = np.array([[0.5 - rate**2 * x_imu, 3.0, 9.80665]])
+    sums = method.force_sums(np.zeros((1, 4)), acc, [0.0], [rate])
+    np.testing.assert_allclose(sums[0], [0.5 * m, 3.0 * m], rtol=1e-12)
+
+
+def test_lateral_filter_settles_on_the_axle_forces():
+    """Eq. 10-16 with the state's yaw rate: a steady turn whose yaw moment balances
+    (F_yr from eq. 3 with F_x = 0) is found to 1 N from a zero start in 5 s (random walk,
+    exact measurements)."""
+    vehicle = load_vehicle(example_vehicle_path())
+    method = TyreForces(vehicle)
+    k = method.constants
+    steer, fyf = 0.03, 3000.0
+    h, _ = body_force_rows(steer, np.zeros(4), lf=k.lf, lr=k.lr, track_front=k.track_front,
+                           track_rear=k.track_rear, share_front=0.0,
+                           inertia_z=k.yaw_inertia)  # fmt: skip
+    fyr = h[2, 0] * fyf / -h[2, 1]  # yaw row = 0
+    inputs = _inputs(vehicle, fyf, fyr, steer, 0.4, 60.0)
+    core = method.initial_state().core
+    for _ in range(500):
+        core, _, _, fy, _ = method.core_step(core, inputs, 0.01)
+    x = core[1]
+    assert x[0] == pytest.approx(fyf, abs=1.0) and x[1] == pytest.approx(fyr, abs=1.0)
+    # e (the front difference beyond the split) is seen only through sin(steer) in the
+    # yaw row: it is still settling, hence 5 N per wheel.
+    assert fy[0] == pytest.approx(fyf / 2, abs=5.0) and fy[3] == pytest.approx(fyr / 2, abs=1.0)
+
+
+def test_high_slip_switches_the_covariances():
+    """§IV: a wheel spin changing faster than slip_threshold makes the filter trust its
+    model (Q down, R up): the same step in a_y moves the estimate far less."""
+    vehicle = load_vehicle(example_vehicle_path())
+    method = TyreForces(vehicle)
+    core = method.initial_state().core
+    for _ in range(200):
+        core, *_ = method.core_step(core, _inputs(vehicle, 0.0, 0.0, 0.0, 0.0, 60.0), 0.01)
+    moved = {}
+    for spin in (60.0, 61.0):  # 0 or 100 rad/s^2 at dt = 0.01 s
+        after, *_ = method.core_step(core, _inputs(vehicle, 2000.0, 0.0, 0.0, 0.0, spin), 0.01)
+        moved[spin] = after[1][0] + after[1][1]
+    assert moved[61.0] < 0.1 * moved[60.0]
+    assert TyreSettings().slip_threshold < 100.0
+
+
+@pytest.fixture(scope="module")
+def dlc():
+    result = run_scenario("iso-dlc", example_vehicle_path())
+    return signals_from_frame(result.log, wiring_checks=False)
+
+
+def _percent(estimate, reference):
+    return 100 * np.sqrt(np.mean((estimate - reference) ** 2) / np.mean(reference**2))
+
+
+def test_against_the_plant_on_the_lane_change(dlc):
+    """Sports car, ISO lane change, measured sensors: pooled RMSE as % of the reference RMS.
+
+    Tolerances: F_x 8 %, F_y 10 % (the issue's goal; measured 4.3 % and 5.7 %); the
+    rigid-body split is worse on both (measured 72 % and 16 %). F_z is the KF's own.
+    """
+    vehicle = load_vehicle(example_vehicle_path())
+    forces = build("tyre-forces", vehicle).run(dlc)
+    rigid = build("tyre-rigid", vehicle).run(dlc)
+    assert _percent(forces.fx, dlc.reference_fx) < 8.0
+    assert _percent(forces.fy, dlc.reference_fy) < 10.0
+    assert _percent(rigid.fx, dlc.reference_fx) > _percent(forces.fx, dlc.reference_fx)
+    assert _percent(rigid.fy, dlc.reference_fy) > _percent(forces.fy, dlc.reference_fy)
+    np.testing.assert_array_equal(forces.loads, build("kf", vehicle).run(dlc).loads)
+    for values in (forces.fx, forces.fy, forces.fx_std, forces.fy_std):
+        assert np.all(np.isfinite(values))
+    frame = forces.to_pandas()
+    assert {"fx_fl", "fx_std_rr", "fy_rl", "fy_std_fr", "fz_fl", "fz_std_rr"} <= set(frame)
+
+
+def test_step_equals_run(dlc):
+    """The protocol: repeated step gives run's numbers (200 samples of the lane change)."""
+    vehicle = load_vehicle(example_vehicle_path())
+    short = dlc.slice(500, 700)
+    for name in ("tyre-forces", "tyre-rigid"):
+        method = build(name, vehicle)
+        ran, stepped = method.run(short), step_through(method, short)
+        np.testing.assert_allclose(stepped.fy, ran.fy, rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(stepped.fx, ran.fx, rtol=1e-9, atol=1e-6)
+
+
+def test_registered_apart_from_the_load_methods(dlc):
+    """The tyre methods are built by the registry but not ranked as load estimators; a log
+    without wheel spins gets a one-line error naming the channel."""
+    assert set(tyre_methods()) == {"tyre-pid", "tyre-lateral", "tyre-forces", "tyre-rigid"}
+    assert not set(tyre_methods()) & set(methods())
+    vehicle = load_vehicle(example_vehicle_path())
+    bare = dataclasses.replace(dlc, spin=None)
+    with pytest.raises(TyreInputError, match="no column 'omega_fl'"):
+        build("tyre-pid", vehicle).run(bare)
+    pid = build("tyre-pid", vehicle).run(dlc.slice(0, 50))
+    assert pid.fy is None and pid.fx.shape == (50, 4)
