@@ -175,6 +175,9 @@ void ${prefix}_run_batch(step_batch_fn step, param_field_fn field,
 """
 #: Filters side by side at most per call (the driver's buffers).
 MAX_FILTERS = 64
+#: A batch is padded to a multiple of this many filters (8 doubles: an AVX-512 vector, two
+#: AVX2 vectors): no filter falls into a scalar remainder loop.
+LANES = 8
 
 
 @dataclass(frozen=True)
@@ -225,14 +228,16 @@ def _pointer(array: np.ndarray) -> ctypes.c_void_p:
     return ctypes.c_void_p(array.ctypes.data)
 
 
-def _pointers(arrays: list[np.ndarray]) -> ctypes.Array:
-    return (ctypes.c_void_p * len(arrays))(*[array.ctypes.data for array in arrays])
+def _pointers(arrays: list[np.ndarray], n: int) -> ctypes.Array:
+    """The arrays' addresses, null pointers after them up to ``n``."""
+    return (ctypes.c_void_p * n)(*[array.ctypes.data for array in arrays])
 
 
-def _channels(logs: list[Signals], keep: list) -> tuple[ctypes.Array, np.ndarray]:
+def _channels(logs: list[Signals], n: int, keep: list) -> tuple[ctypes.Array, np.ndarray]:
     """Each log's input channels as (address, stride in samples), read in place.
 
-    Address 0 where the log lacks the channel. An array that is not float64 with
+    Address 0 where the log lacks the channel, and for the filters after the logs up
+    to ``n``. An array that is not float64 with
     strides of whole doubles is copied (and kept alive in ``keep``).
     """
     addresses, strides = [], []
@@ -250,6 +255,8 @@ def _channels(logs: list[Signals], keep: list) -> tuple[ctypes.Array, np.ndarray
             strides += [row // 8] * width
     if len(addresses) != len(INPUTS) * len(logs):
         raise RuntimeError(f"{len(addresses)} input channels for {len(logs)} logs")
+    addresses += [0] * (len(INPUTS) * (n - len(logs)))
+    strides += [0] * (len(INPUTS) * (n - len(logs)))
     return (ctypes.c_void_p * len(addresses))(*addresses), np.array(strides, dtype=np.int64)
 
 
@@ -286,23 +293,31 @@ def _run_group(
     library: BatchLibrary, kf: TwoStageKF, interval: float, logs: list[Signals]
 ) -> list[Estimate]:
     """Logs with the same nominal interval, stepped side by side (at most MAX_FILTERS)."""
-    n, lengths = len(logs), np.array([len(log) for log in logs], dtype=np.int64)
+    # Padded with empty filters (length 0: every step rejected, nothing read or written) to
+    # a multiple of LANES, so that every log goes through the vectorised loop body: a log's
+    # bits do not depend on its batch (a scalar remainder loop may contract FMAs otherwise).
+    count = len(logs)
+    n = -(-count // LANES) * LANES
+    lengths = np.zeros(n, dtype=np.int64)
+    lengths[:count] = [len(log) for log in logs]
     initial = kf.initial_state()
     params = np.concatenate([kf.p, kf.tuning_for(interval), [kf.vehicle.filter.initial_std]])
     x = np.repeat(initial.x[:, None], n, axis=1)
     P = np.repeat(np.array([initial.P[i, j] for i, j in PACKED])[:, None], n, axis=1)
     monitor = np.repeat(initial.m[:, None], n, axis=1)
     keep: list[np.ndarray] = []
-    channels, strides = _channels(logs, keep)
+    channels, strides = _channels(logs, n, keep)
     times = [np.ascontiguousarray(log.t, dtype=np.float64) for log in logs]
-    bits = np.array([input_bits(log.az_assumed, log.speed_source) for log in logs], np.int64)
+    bits = np.zeros(n, np.int64)
+    bits[:count] = [input_bits(log.az_assumed, log.speed_source) for log in logs]
     n_faults = len(FAULT_CHANNELS)
-    loads = [np.empty((length, 4)) for length in lengths]
-    std = [np.empty((length, 4)) for length in lengths]
-    residual = [np.empty((length, 3)) for length in lengths]
-    statistic = [np.empty((length, n_faults)) for length in lengths]
-    faults = [np.empty(length, np.uint32) for length in lengths]
-    flags = [np.empty(length, np.int64) for length in lengths]
+    lengths_of = lengths[:count]
+    loads = [np.empty((length, 4)) for length in lengths_of]
+    std = [np.empty((length, 4)) for length in lengths_of]
+    residual = [np.empty((length, 3)) for length in lengths_of]
+    statistic = [np.empty((length, n_faults)) for length in lengths_of]
+    faults = [np.empty(length, np.uint32) for length in lengths_of]
+    flags = [np.empty(length, np.int64) for length in lengths_of]
     any_fault = np.empty(n, np.uint32)
     getattr(library.driver, f"{PREFIX}_run_batch")(
         library.symbol("step_batch"),
@@ -313,18 +328,18 @@ def _run_group(
         _pointer(params),
         channels,
         _pointer(strides),
-        _pointers(times),
+        _pointers(times, n),
         _pointer(lengths),
         _pointer(bits),
         _pointer(x),
         _pointer(P),
         _pointer(monitor),
-        _pointers(loads),
-        _pointers(std),
-        _pointers(residual),
-        _pointers(statistic),
-        _pointers(faults),
-        _pointers(flags),
+        _pointers(loads, n),
+        _pointers(std, n),
+        _pointers(residual, n),
+        _pointers(statistic, n),
+        _pointers(faults, n),
+        _pointers(flags, n),
         _pointer(any_fault),
     )
     estimates = []

@@ -66,13 +66,11 @@ def make_fleet(vehicle: Vehicle, count: int, samples: int) -> Fleet:
 
 
 def peer_arrays(kf: TwoStageKF, fleet: Fleet) -> FleetArrays:
-    """The peers' inputs for the fleet, at the nominal interval the batched step uses."""
-    intervals = {nominal_interval(log.t) for log in fleet.logs}
-    if len(intervals) != 1:
-        raise ValueError(f"the fleet's logs have {len(intervals)} nominal intervals, not one")
-    tuning = kf.tuning_for(intervals.pop())
+    """The peers' inputs for the fleet, each log's noise at the nominal interval the
+    batched step uses for it."""
+    tunings = [kf.tuning_for(nominal_interval(log.t)) for log in fleet.logs]
     weight = kf.parameters.mass * GRAVITY
-    return fleet_arrays(fleet.bases, fleet.windows, kf.p, tuning, kf.initial_state().x, weight)
+    return fleet_arrays(fleet.bases, fleet.windows, kf.p, tunings, kf.initial_state().x, weight)
 
 
 def batched_loads(kf: TwoStageKF, vehicle_path: Path, fleet: Fleet, first: int) -> np.ndarray:

@@ -48,34 +48,35 @@ def fleet_arrays(
     bases: list[Signals],
     windows: list[tuple[int, int, int]],
     p: np.ndarray,
-    tuning: np.ndarray,
+    tunings: list[np.ndarray],
     x0: np.ndarray,
     weight: float,
 ) -> FleetArrays:
     """:class:`FleetArrays` of windows ``(base, start, stop)`` of equal length of ``bases``.
 
-    ``tuning`` carries the nominal interval the noise is computed with (the batched
-    step's :meth:`~wheelload.estimators.TwoStageKF.tuning_for`).
+    ``tunings[j]`` carries the nominal interval window ``j``'s noise is computed with (the
+    batched step's :meth:`~wheelload.estimators.TwoStageKF.tuning_for`).
     """
-    interval = float(tuning[TUNING_INDEX["sample_interval"]])
-    per_base = []
-    for base in bases:
-        z, A, b = pseudo_measurements(base, p)
-        R = measurement_noises(base, tuning, np.full(len(base), interval))
-        per_base.append((z, A, b, R))
-    A = per_base[0][1]
-    if any(not np.array_equal(entry[1], A) for entry in per_base):
+    measured = [pseudo_measurements(base, p) for base in bases]
+    A = measured[0][1]
+    if any(not np.array_equal(entry[1], A) for entry in measured):
         raise ValueError("the peers take one equilibrium matrix A for the whole fleet")
+    noises: dict[tuple[int, float], np.ndarray] = {}
     length = windows[0][2] - windows[0][1]
     T, B = length, len(windows)
     z, b, R, dt = np.empty((T, B, 4)), np.empty((T, B, 3)), np.empty((T, B, 7)), np.empty((T, B))
     for j, (k, start, stop) in enumerate(windows):
         if stop - start != length:
             raise ValueError("the peers take windows of one length")
-        base_z, _, base_b, base_R = per_base[k]
-        z[:, j], b[:, j], R[:, j] = base_z[start:stop], base_b[start:stop], base_R[start:stop]
+        interval = float(tunings[j][TUNING_INDEX["sample_interval"]])
+        if (k, interval) not in noises:
+            full = np.full(len(bases[k]), interval)
+            noises[k, interval] = measurement_noises(bases[k], tunings[j], full)
+        z[:, j], b[:, j] = measured[k][0][start:stop], measured[k][2][start:stop]
+        R[:, j] = noises[k, interval][start:stop]
         dt[:, j] = sample_intervals(bases[k].t[start:stop])
-    return FleetArrays(z=z, A=A, b=b, R=R, dt=dt, x0=x0, q=float(tuning[0]), prior=weight**2)
+    q = float(tunings[0][0])
+    return FleetArrays(z=z, A=A, b=b, R=R, dt=dt, x0=x0, q=q, prior=weight**2)
 
 
 def numpy_fleet(arrays: FleetArrays) -> np.ndarray:

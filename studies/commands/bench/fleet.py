@@ -67,7 +67,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--samples", type=int, default=2000, help="samples per log (default 2000)")
     parser.add_argument("--repeats", type=int, default=3, help="repeats in turn (default 3)")
     parser.add_argument(
-        "--files", type=int, default=200, help="logs written for the throughput runs (default 200)"
+        "--files", type=int, default=100, help="logs written for the throughput runs (default 100)"
     )
     parser.add_argument(
         "--quick", action="store_true", help="128 logs of 1000 samples, 64 files, 2 repeats"
@@ -176,7 +176,7 @@ def _throughput(fleet, folder: Path, vehicle_path: Path, args) -> None:
 
             cluster = stack.enter_context(
                 LocalCluster(
-                    n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+                    n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
                 )
             )
             variants["dask LocalCluster (2)"] = {"dask_address": cluster.scheduler_address}
