@@ -185,8 +185,8 @@ class BatchLibrary:
     """The generated library (its batched step) and the driver that feeds it logs.
 
     Two shared objects: the library alone (the kernel, the slow build, cached by
-    its source's hash) and the small driver, which calls the library's batched step
-    and parameter setter through function pointers (so a driver change rebuilds in
+    its source's hash) and the small driver, which reaches the library's batched step,
+    parameter fields and default calibration through pointers (so a driver change rebuilds in
     a second, and the self-test can be linked against the very same kernel).
     """
 
@@ -237,8 +237,8 @@ def _channels(logs: list[Signals], n: int, keep: list) -> tuple[ctypes.Array, np
     """Each log's input channels as (address, stride in samples), read in place.
 
     Address 0 where the log lacks the channel, and for the filters after the logs up
-    to ``n``. An array that is not float64 with
-    strides of whole doubles is copied (and kept alive in ``keep``).
+    to ``n``. An array that is not float64 with strides of whole doubles is copied
+    (and kept alive in ``keep``).
     """
     addresses, strides = [], []
     for log in logs:
