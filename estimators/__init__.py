@@ -42,7 +42,12 @@ _LAZY_MODULES = {
     "wheelload.estimators.identification.offsets": ("check_still_period", "corner_weight_loads"),
     "wheelload.estimators.protocol": ("DEFAULT_MODEL", "SuspensionModel"),
     "wheelload.estimators.kf.step": ("UPDATE_ROWS",),
-    "wheelload.estimators.kf.tuning": ("TUNED_DENSITIES", "TUNING_INDEX", "noise_densities"),
+    "wheelload.estimators.kf.tuning": (
+        "TUNED_DENSITIES",
+        "TUNING_INDEX",
+        "noise_densities",
+        "nominal_interval",
+    ),
     "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
     "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),

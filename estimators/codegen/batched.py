@@ -6,11 +6,15 @@ Function (:mod:`wheelload.estimators.codegen.kf`, runtime parameters, double),
 built once with the Makefile's ``FAST_CFLAGS`` (cached in the private build
 folder by the hash of its source and flags) and stepped ``n`` filters at a
 time through ``wheelload_batch_step_batch`` (struct of arrays, vectorised
-across the filters). Logs of different lengths are padded with rejected
-samples (the state is held) whose outputs are not written; the C driver
-reads each log's input matrix and writes its outputs in place (no padded or
-transposed copies); logs are grouped by
-their nominal interval, which sets the measurement noise.
+across the filters). One C call runs a whole batch of logs: the driver
+reads each log's own arrays in place (channel by channel, with their
+strides; intervals from the time stamps), writes its outputs in place, ORs in
+the flags of inputs the log lacks and notes which logs had an isolated fault
+(the fault records are made for those only): no per-sample Python, no input
+matrix, no copies. Logs of different lengths are padded with rejected samples
+(the state is held) whose outputs are not written; the logs of a batch are
+taken longest first, so the padding is small. Logs are grouped by their nominal
+interval, which sets the measurement noise.
 
 Each log's :class:`Estimate` equals :meth:`TwoStageKF.run` on it to about
 1e-12 relative (the same operations; FMA contraction rounds once where
@@ -27,6 +31,7 @@ import ctypes
 import functools
 import tempfile
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -37,10 +42,10 @@ from wheelload.estimators.codegen.kf import FAST_CFLAGS, PACKED, CodegenOptions,
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF, sensor_faults
-from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
-from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.logs.inputs import input_blocks
+from wheelload.estimators.logs.signals import Signals, input_bits
 from wheelload.estimators.result import Estimate
+from wheelload.models import INPUTS
 from wheelload.models.files.build_folder import build_folder, shared_library
 
 PREFIX = "wheelload_batch"
@@ -53,25 +58,38 @@ SHARED_FLAGS = (
 )
 
 DRIVER = """
+#include <math.h>
 #include <string.h>
 
 #define MAX_FILTERS ${max_filters}
 #define BLOCK 16
 
-/* n (<= MAX_FILTERS) logs side by side over `steps` samples. Log b: inputs[b] is its
-   [N_INPUTS][lengths[b]] matrix (row k = channel k), dts[b] its intervals; its
-   outputs are rows of [lengths[b]][4] loads and std, [..][3] residual,
-   [..][N_FAULT_CHANNELS] statistic, faults, flags. Past its end a filter is
-   fed a rejected sample (dt NaN: the state is held) and nothing is written. The
-   state x, P, monitor ([rows][n]) is carried in place. values: the calibration, one
-   per field of ${prefix}_param_names (the Python filter's: its derived parameters
-   already follow their sources). */
-void ${prefix}_run_batch(int n, long steps, const double *values,
-                         const double *const *inputs, const long *lengths,
-                         const double *const *dts, double *x, double *P, double *monitor,
-                         double *const *loads, double *const *stds,
+typedef void (*step_batch_fn)(const ${prefix}_batch *, const ${prefix}_params *,
+                              const ${prefix}_real *, const ${prefix}_real *,
+                              const ${prefix}_batch_output *);
+typedef ${prefix}_real *(*param_field_fn)(${prefix}_params *, int);
+
+/* n (<= MAX_FILTERS) logs side by side over `steps` samples, through the library's
+   batched step `step` (its ${prefix}_step_batch) with the calibration `values` (one per
+   field of ${prefix}_param_names, set through `field` on a copy of `defaults`).
+
+   Log b's channel k (order of ${prefix}_input_names) is read in place from the log's
+   own arrays: sample i at channels[b * N_INPUTS + k][i * strides[b * N_INPUTS + k]], a
+   null pointer for a channel the log lacks (NaN); its intervals come from its time
+   stamps times[b] (the first sample reuses the first interval). Its outputs are rows
+   of [lengths[b]][4] loads and std, [..][3] residual, [..][N_FAULT_CHANNELS]
+   statistic, faults and flags (input_bits[b] or'ed in); any_fault[b] is the OR of its
+   fault bits. Past its end a filter is fed a rejected sample (dt NaN: the state is
+   held) and nothing is written. The state x, P, monitor ([rows][n]) is carried in
+   place. */
+void ${prefix}_run_batch(step_batch_fn step, param_field_fn field,
+                         const ${prefix}_params *defaults, int n, long steps,
+                         const double *values, const double *const *channels,
+                         const long *strides, const double *const *times,
+                         const long *lengths, const int64_t *input_bits, double *x, double *P,
+                         double *monitor, double *const *loads, double *const *stds,
                          double *const *residuals, double *const *statistics,
-                         uint32_t *const *faults, uint32_t *const *flags)
+                         uint32_t *const *faults, int64_t *const *flags, uint32_t *any_fault)
 {
     /* on the stack: concurrent calls from threads are independent. Inputs and
        outputs go through blocks of BLOCK steps so that each log's rows are read
@@ -82,28 +100,43 @@ void ${prefix}_run_batch(int n, long steps, const double *values,
     double statistic[BLOCK][${PREFIX}_N_FAULT_CHANNELS * MAX_FILTERS];
     uint32_t fault_bits[BLOCK][MAX_FILTERS], flag_bits[BLOCK][MAX_FILTERS];
     ${prefix}_batch batch;
-    ${prefix}_params params = ${prefix}_default_params;
+    ${prefix}_params params = *defaults;
     long t0, t;
     int b, k, j, m;
     for (k = 0; k < ${PREFIX}_N_PARAMS; ++k) {
-        *${prefix}_param_field(&params, k) = values[k];
+        *field(&params, k) = values[k];
     }
     batch.n = n;
     batch.x = x;
     batch.P = P;
     batch.monitor = monitor;
+    for (b = 0; b < n; ++b) {
+        any_fault[b] = 0u;
+    }
     for (t0 = 0; t0 < steps; t0 += BLOCK) {
         m = steps - t0 < BLOCK ? (int)(steps - t0) : BLOCK;
         for (b = 0; b < n; ++b) {
-            const long live = lengths[b] - t0; /* steps of log b left in this block */
+            const long length = lengths[b], live = length - t0; /* steps left in the block */
+            const double *time = times[b];
             for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
-                const double *row = inputs[b] + k * lengths[b] + t0;
+                const double *column = channels[b * ${PREFIX}_N_INPUTS + k];
+                const long stride = strides[b * ${PREFIX}_N_INPUTS + k];
+                if (column == 0) {
+                    for (j = 0; j < m; ++j) {
+                        u[j][k * n + b] = (double)NAN;
+                    }
+                    continue;
+                }
+                column += t0 * stride;
                 for (j = 0; j < m; ++j) {
-                    u[j][k * n + b] = j < live ? row[j] : 0.0;
+                    u[j][k * n + b] = j < live ? column[j * stride] : 0.0;
                 }
             }
             for (j = 0; j < m; ++j) {
-                dt[j][b] = j < live ? dts[b][t0 + j] : (double)NAN;
+                t = t0 + j;
+                dt[j][b] = (t >= length || length < 2) ? (double)NAN
+                           : t == 0                    ? time[1] - time[0]
+                                                       : time[t] - time[t - 1];
             }
         }
         for (j = 0; j < m; ++j) {
@@ -113,11 +146,12 @@ void ${prefix}_run_batch(int n, long steps, const double *values,
             output.fault_statistic = statistic[j];
             output.faults = fault_bits[j];
             output.flags = flag_bits[j];
-            ${prefix}_step_batch(&batch, &params, u[j], dt[j], &output);
+            step(&batch, &params, u[j], dt[j], &output);
             memcpy(state_x[j], x, sizeof(double) * 4 * (size_t)n);
         }
         for (b = 0; b < n; ++b) {
             const long live = lengths[b] - t0;
+            uint32_t seen = 0u;
             for (j = 0; j < m && j < live; ++j) {
                 t = t0 + j;
                 for (k = 0; k < 4; ++k) {
@@ -131,19 +165,49 @@ void ${prefix}_run_batch(int n, long steps, const double *values,
                     statistics[b][t * ${PREFIX}_N_FAULT_CHANNELS + k] = statistic[j][k * n + b];
                 }
                 faults[b][t] = fault_bits[j][b];
-                flags[b][t] = flag_bits[j][b];
+                flags[b][t] = (int64_t)flag_bits[j][b] | input_bits[b];
+                seen |= fault_bits[j][b];
             }
+            any_fault[b] |= seen;
         }
     }
 }
 """
 #: Filters side by side at most per call (the driver's buffers).
 MAX_FILTERS = 64
+#: A batch is padded to a multiple of this many filters (8 doubles: an AVX-512 vector, two
+#: AVX2 vectors): no filter falls into a scalar remainder loop.
+LANES = 8
+
+
+@dataclass(frozen=True)
+class BatchLibrary:
+    """The generated library (its batched step) and the driver that feeds it logs.
+
+    Two shared objects: the library alone (the kernel, the slow build, cached by
+    its source's hash) and the small driver, which reaches the library's batched step,
+    parameter fields and default calibration through pointers (so a driver change rebuilds in
+    a second, and the self-test can be linked against the very same kernel).
+    """
+
+    kernel: ctypes.CDLL
+    driver: ctypes.CDLL
+
+    @property
+    def path(self) -> Path:
+        """The library's shared object (the kernel)."""
+        return Path(self.kernel._name)
+
+    def symbol(self, name: str) -> ctypes.c_void_p:
+        """Address of ``wheelload_batch_<name>`` in the library (function or constant)."""
+        return ctypes.c_void_p(
+            ctypes.addressof(ctypes.c_char.in_dll(self.kernel, f"{PREFIX}_{name}"))
+        )
 
 
 @functools.lru_cache(maxsize=4)
-def _library(step: ca.Function, vehicle_path: Path) -> ctypes.CDLL:
-    """The generated library for ``step`` with the batch driver, built and loaded."""
+def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
+    """The generated library for ``step`` and the batch driver, built and loaded."""
     options = CodegenOptions(precision=Precision.DOUBLE, prefix=PREFIX)
     with tempfile.TemporaryDirectory(dir=build_folder()) as folder:
         library = generate(vehicle_path, folder, options, step, allow_unusual=True)
@@ -154,18 +218,46 @@ def _library(step: ca.Function, vehicle_path: Path) -> ctypes.CDLL:
         .replace("${PREFIX}", PREFIX.upper())
         .replace("${max_filters}", str(MAX_FILTERS))
     )
-    shared = shared_library(source + driver, PREFIX, SHARED_FLAGS)
-    function = getattr(shared, f"{PREFIX}_run_batch")
-    function.restype = None
-    return shared
+    kernel = shared_library(source, PREFIX, SHARED_FLAGS)
+    loaded = shared_library(header + driver, f"{PREFIX}_driver", SHARED_FLAGS)
+    getattr(loaded, f"{PREFIX}_run_batch").restype = None
+    return BatchLibrary(kernel=kernel, driver=loaded)
 
 
 def _pointer(array: np.ndarray) -> ctypes.c_void_p:
     return ctypes.c_void_p(array.ctypes.data)
 
 
-def _pointers(arrays: list[np.ndarray]) -> ctypes.Array:
-    return (ctypes.c_void_p * len(arrays))(*[array.ctypes.data for array in arrays])
+def _pointers(arrays: list[np.ndarray], n: int) -> ctypes.Array:
+    """The arrays' addresses, null pointers after them up to ``n``."""
+    return (ctypes.c_void_p * n)(*[array.ctypes.data for array in arrays])
+
+
+def _channels(logs: list[Signals], n: int, keep: list) -> tuple[ctypes.Array, np.ndarray]:
+    """Each log's input channels as (address, stride in samples), read in place.
+
+    Address 0 where the log lacks the channel, and for the filters after the logs up
+    to ``n``. An array that is not float64 with strides of whole doubles is copied
+    (and kept alive in ``keep``).
+    """
+    addresses, strides = [], []
+    for log in logs:
+        for values, width in input_blocks(log):
+            if values is None:
+                addresses += [0] * width
+                strides += [0] * width
+                continue
+            if values.dtype != np.float64 or any(s < 0 or s % 8 for s in values.strides):
+                values = np.ascontiguousarray(values, dtype=np.float64)
+            keep.append(values)
+            row, column = values.strides
+            addresses += [values.ctypes.data + k * column for k in range(width)]
+            strides += [row // 8] * width
+    if len(addresses) != len(INPUTS) * len(logs):
+        raise RuntimeError(f"{len(addresses)} input channels for {len(logs)} logs")
+    addresses += [0] * (len(INPUTS) * (n - len(logs)))
+    strides += [0] * (len(INPUTS) * (n - len(logs)))
+    return (ctypes.c_void_p * len(addresses))(*addresses), np.array(strides, dtype=np.int64)
 
 
 def run_batched(
@@ -174,74 +266,96 @@ def run_batched(
     """:meth:`TwoStageKF.run` of each log, the logs stepped side by side in C.
 
     ``vehicle_path`` is the vehicle file ``kf`` was built from (it names the
-    generated library; the parameters themselves are ``kf``'s).
+    generated library; the parameters themselves are ``kf``'s). Logs of one nominal
+    interval go through the driver longest first, at most :data:`MAX_FILTERS` per call,
+    so that a batch holds logs of about one length (little padding).
     """
     if not logs:
         return []
-    library = _library(kf.step_function, Path(vehicle_path))
+    library = batch_library(kf.step_function, Path(vehicle_path))
     estimates: dict[int, Estimate] = {}
     groups: dict[float, list[int]] = {}
     for index, log in enumerate(logs):
         groups.setdefault(kf.sample_interval or nominal_interval(log.t), []).append(index)
     for interval, members in groups.items():
-        batch = [logs[i] for i in members]
-        for i, estimate in zip(members, _run_group(library, kf, interval, batch), strict=True):
-            estimates[i] = estimate
+        members.sort(key=lambda i: -len(logs[i]))
+        calls = -(-len(members) // MAX_FILTERS)
+        size = -(-len(members) // calls)
+        for start in range(0, len(members), size):
+            chunk = members[start : start + size]
+            batch = [logs[i] for i in chunk]
+            for i, estimate in zip(chunk, _run_group(library, kf, interval, batch), strict=True):
+                estimates[i] = estimate
     return [estimates[i] for i in range(len(logs))]
 
 
 def _run_group(
-    library: ctypes.CDLL, kf: TwoStageKF, interval: float, logs: list[Signals]
+    library: BatchLibrary, kf: TwoStageKF, interval: float, logs: list[Signals]
 ) -> list[Estimate]:
     """Logs with the same nominal interval, stepped side by side (at most MAX_FILTERS)."""
-    if len(logs) > MAX_FILTERS:
-        half = len(logs) // 2
-        return _run_group(library, kf, interval, logs[:half]) + _run_group(
-            library, kf, interval, logs[half:]
-        )
-    n, lengths = len(logs), np.array([len(log) for log in logs], dtype=np.int64)
+    # Padded with empty filters (length 0: every step rejected, nothing read or written) to
+    # a multiple of LANES, so that every log goes through the vectorised loop body: a log's
+    # bits do not depend on its batch (a scalar remainder loop may contract FMAs otherwise).
+    count = len(logs)
+    n = -(-count // LANES) * LANES
+    lengths = np.zeros(n, dtype=np.int64)
+    lengths[:count] = [len(log) for log in logs]
     initial = kf.initial_state()
     params = np.concatenate([kf.p, kf.tuning_for(interval), [kf.vehicle.filter.initial_std]])
     x = np.repeat(initial.x[:, None], n, axis=1)
     P = np.repeat(np.array([initial.P[i, j] for i, j in PACKED])[:, None], n, axis=1)
     monitor = np.repeat(initial.m[:, None], n, axis=1)
-    inputs = [np.ascontiguousarray(input_matrix(log), dtype=float) for log in logs]
-    intervals = [np.ascontiguousarray(sample_intervals(log.t), dtype=float) for log in logs]
+    keep: list[np.ndarray] = []
+    channels, strides = _channels(logs, n, keep)
+    times = [np.ascontiguousarray(log.t, dtype=np.float64) for log in logs]
+    bits = np.zeros(n, np.int64)
+    bits[:count] = [input_bits(log.az_assumed, log.speed_source) for log in logs]
     n_faults = len(FAULT_CHANNELS)
-    loads = [np.empty((length, 4)) for length in lengths]
-    std = [np.empty((length, 4)) for length in lengths]
-    residual = [np.empty((length, 3)) for length in lengths]
-    statistic = [np.empty((length, n_faults)) for length in lengths]
-    faults = [np.empty(length, np.uint32) for length in lengths]
-    flags = [np.empty(length, np.uint32) for length in lengths]
-    getattr(library, f"{PREFIX}_run_batch")(
+    lengths_of = lengths[:count]
+    loads = [np.empty((length, 4)) for length in lengths_of]
+    std = [np.empty((length, 4)) for length in lengths_of]
+    residual = [np.empty((length, 3)) for length in lengths_of]
+    statistic = [np.empty((length, n_faults)) for length in lengths_of]
+    faults = [np.empty(length, np.uint32) for length in lengths_of]
+    flags = [np.empty(length, np.int64) for length in lengths_of]
+    any_fault = np.empty(n, np.uint32)
+    getattr(library.driver, f"{PREFIX}_run_batch")(
+        library.symbol("step_batch"),
+        library.symbol("param_field"),
+        library.symbol("default_params"),
         ctypes.c_int(n),
         ctypes.c_long(int(lengths.max())),
         _pointer(params),
-        _pointers(inputs),
+        channels,
+        _pointer(strides),
+        _pointers(times, n),
         _pointer(lengths),
-        _pointers(intervals),
+        _pointer(bits),
         _pointer(x),
         _pointer(P),
         _pointer(monitor),
-        _pointers(loads),
-        _pointers(std),
-        _pointers(residual),
-        _pointers(statistic),
-        _pointers(faults),
-        _pointers(flags),
+        _pointers(loads, n),
+        _pointers(std, n),
+        _pointers(residual, n),
+        _pointers(statistic, n),
+        _pointers(faults, n),
+        _pointers(flags, n),
+        _pointer(any_fault),
     )
     estimates = []
     for b, log in enumerate(logs):
-        fault = ((faults[b][:, None] >> np.arange(n_faults)) & 1).astype(float)
+        isolated: tuple = ()
+        if any_fault[b]:  # the records only for a log with an isolated fault
+            fault = ((faults[b][:, None] >> np.arange(n_faults)) & 1).astype(float)
+            isolated = sensor_faults(log.t, fault, statistic[b])
         estimates.append(
             Estimate(
                 t=log.t.copy(),
                 loads=loads[b],
                 std=std[b],
                 residual=residual[b],
-                flags=flags[b].astype(np.int64) | log.input_flags(),
-                sensor_faults=sensor_faults(log.t, fault, statistic[b]),
+                flags=flags[b],
+                sensor_faults=isolated,
             )
         )
     return estimates

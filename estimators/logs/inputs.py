@@ -16,25 +16,33 @@ from wheelload.estimators.logs.signals import Signals, rate_derivatives
 from wheelload.models import INPUTS
 
 
+def input_blocks(signals: Signals) -> list[tuple[np.ndarray | None, int]]:
+    """The log's arrays in :data:`INPUTS` order: ``(array (n, width) or None, width)``.
+
+    None where the log lacks an optional channel group (its inputs are NaN).
+    The arrays are the log's own (no copies): the batched C driver reads them in place.
+    """
+    return [
+        (signals.d, 4),
+        (signals.v, 4),
+        (signals.acc, 3),
+        (signals.vx[:, None], 1),
+        (signals.rates, 3),
+        (rate_derivatives(signals), 3),
+        (signals.hub, 4),
+    ]
+
+
 def input_matrix(signals: Signals) -> np.ndarray:
     """The per-sample inputs of a log in :data:`INPUTS` order, shape (len(INPUTS), n).
 
     Optional channels the log lacks are NaN (their terms are dropped).
     """
     n = len(signals)
-
-    def optional(values: np.ndarray | None, width: int) -> np.ndarray:
-        return np.full((width, n), np.nan) if values is None else values.T
-
     rows = np.vstack(
         [
-            signals.d.T,
-            signals.v.T,
-            signals.acc.T,
-            signals.vx[None, :],
-            optional(signals.rates, 3),
-            rate_derivatives(signals).T,
-            optional(signals.hub, 4),
+            np.full((width, n), np.nan) if values is None else values.T
+            for values, width in input_blocks(signals)
         ]
     )
     if rows.shape[0] != len(INPUTS):

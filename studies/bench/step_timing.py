@@ -169,6 +169,14 @@ def selftest_ns(binary: Path, *arguments) -> float:
     return float(re.search(r"min_ns (\S+)", out).group(1))
 
 
+def selftest_median_ns(binary: Path, *arguments) -> float:
+    """Median of the self-test's internal repeats [ns per (filter-)step]."""
+    out = subprocess.run(
+        [str(binary), *map(str, arguments)], capture_output=True, text=True, check=True
+    ).stdout
+    return float(re.search(r"median_ns (\S+)", out).group(1))
+
+
 def fast_selftest(
     vehicle_path: Path, folder: Path, options: CodegenOptions, flags, allow_unusual: bool = False
 ):

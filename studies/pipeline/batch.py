@@ -298,7 +298,9 @@ def process_logs(
 
     With the two-stage KF (not smoothed), the chunk's logs are filtered side
     by side in the generated C library's batched step (``estimators/codegen/batched.py``),
-    :data:`BATCH` at a time, a chunk of one log too: a log's estimates do not depend
+    :data:`BATCH` at a time as they are read (a batch is run, written and dropped before
+    the next is read: memory bounded by one batch however many logs), a chunk of one log
+    too: a log's estimates do not depend
     on its batch, so serial, local processes and Dask give the same bits however
     the logs are split. They equal :meth:`TwoStageKF.run` (a single log's path, the
     compiled loop of the CasADi step) within :data:`BATCHED_TOLERANCE`: the
@@ -311,7 +313,7 @@ def process_logs(
     if settings.method != "kf" or settings.smooth:
         return [process_log(path, settings, folder, force, lean_bytes) for path in paths]
     rows: dict[Path, dict] = {}
-    prepared: dict[tuple[float, ...] | None, list] = {}
+    pending: dict[tuple[tuple[float, ...] | None, bool], list] = {}
     for path in paths:
         if _goes_lean(path, settings, lean_bytes):
             row = lean_row(path, settings, folder, force)
@@ -325,19 +327,30 @@ def process_logs(
             continue
         key = None if static is None else tuple(float(f) for f in static)
         zeroed = not vehicle.filter.payload.travel_from_reference
-        prepared.setdefault((key, zeroed), []).append((path, vehicle, signals, notes))
-    for (key, zeroed), logs in prepared.items():
-        with _lock:
-            kf = _filter(settings.vehicle, settings.allow_unusual, key, zeroed)
-        for start in range(0, len(logs), BATCH):
-            group = logs[start : start + BATCH]
-            estimates = run_batched(kf, settings.vehicle, [log[2] for log in group])
-            for (path, vehicle, signals, notes), estimate in zip(group, estimates, strict=True):
-                rows[path] = _finish_log(path, folder, force, vehicle, signals, notes, estimate)
+        group = pending.setdefault((key, zeroed), [])
+        group.append((path, vehicle, signals, notes))
+        if len(group) == BATCH:  # run as soon as a batch is full: memory bounded by it
+            del pending[key, zeroed]
+            rows.update(_run_batch(settings, folder, force, key, zeroed, group))
+    for (key, zeroed), group in pending.items():
+        rows.update(_run_batch(settings, folder, force, key, zeroed, group))
     return [rows[path] for path in paths]
 
 
-#: Logs filtered side by side at most (their inputs are held in memory together).
+def _run_batch(settings, folder, force, key, zeroed, group) -> dict[Path, dict]:
+    """The rows of a batch of read logs filtered side by side (:func:`process_logs`)."""
+    with _lock:
+        kf = _filter(settings.vehicle, settings.allow_unusual, key, zeroed)
+    estimates = run_batched(kf, settings.vehicle, [log[2] for log in group])
+    return {
+        path: _finish_log(path, folder, force, vehicle, signals, notes, estimate)
+        for (path, vehicle, signals, notes), estimate in zip(group, estimates, strict=True)
+    }
+
+
+#: Logs filtered side by side at most: a worker holds one batch of logs (each at most
+#: :data:`LEAN_BYTES` on disk; longer ones go the lean path) and their estimates at a time,
+#: so a folder of any number of logs runs in bounded memory.
 BATCH = 16
 
 #: Largest relative difference of a batched estimate from :meth:`TwoStageKF.run`'s

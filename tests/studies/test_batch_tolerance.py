@@ -74,3 +74,21 @@ def test_bench_compare_states_same_within_or_no():
     far = table.assign(mean_fz_fl=[4000.0 + 1e-6, 4100.0])  # 2.4e-10 relative: beyond
     assert compare(far, table)[0] == "NO"
     assert compare(table.assign(mode=["x", "y"]), table) == ("NO", float("inf"))
+
+
+def test_a_chunk_runs_one_batch_at_a_time_as_read(fleet, monkeypatch):
+    # Bounded memory: with batches of 2, the 5 logs go through the batched step as 2, 2, 1
+    # (each batch run before the next is read), and the summary is the same to the bit.
+    import wheelload.studies.pipeline.batch as batch
+
+    expected = process_logs(fleet, SETTINGS, None)
+    real, sizes = batch.run_batched, []
+
+    def counted(kf, vehicle_path, logs):
+        sizes.append(len(logs))
+        return real(kf, vehicle_path, logs)
+
+    monkeypatch.setattr(batch, "BATCH", 2)
+    monkeypatch.setattr(batch, "run_batched", counted)
+    assert process_logs(fleet, SETTINGS, None) == expected
+    assert sizes == [2, 2, 1]

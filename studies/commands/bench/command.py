@@ -30,6 +30,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench.mhe",
     "wheelload.studies.bench.scenarios",
     "wheelload.studies.commands.bench.logs",
+    "wheelload.studies.commands.bench.fleet",
     "wheelload.studies.experiments.faults.fault_injection",
     "wheelload.studies.commands.bench.estimate",
     "wheelload.studies.commands.bench.family",
