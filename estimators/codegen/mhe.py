@@ -53,10 +53,12 @@ Limits, against the Python MHE:
   the steady-state one, a sample whose QP is not solved keeps the previous
   estimate, a missing equilibrium input takes :math:`A x` of the previous MHE
   estimate (Python: of its filter's), and no standard deviations are reported
-  (zeros);
-- the extended window's Hessian is assembled densely per sample
-  ((N w + n_b)² doubles; N = 10 with Huber and L1 on all rows and five bias
-  states: 185² = 274 kB).
+  (zeros).
+
+Both windows load OSQP's Hessian values at the fixed pattern of the Python
+MHE's workspace (OSQP's update of values and vectors, no dense matrix): the
+quadratic window from its block-tridiagonal values, the extended window by
+adding each sample's local terms at their positions in the pattern.
 
 Precision: ``Precision.FLOAT`` generates OSQP with ``use_float``
 (``OSQPFloat``; the program reports ``sizeof(OSQPFloat)``) and the linked KF
@@ -442,11 +444,15 @@ def _plain_defines(mhe, settings: MheSettings) -> str:
 def _window_defines(mhe, settings: MheSettings) -> str:
     """The extended window's layout, losses and bias states (:mod:`.mhe.window`).
 
-    The pattern is the one the Python MHE's OSQP workspace was set up with:
-    ``PATTERN[i]`` is the dense index (row-major) of its ``i``-th value in CSC order.
+    The pattern is the one the Python MHE's OSQP workspace was set up with, in CSC form:
+    ``COLUMN_START[c]`` is the first of column ``c``'s values, ``ROW_INDEX[i]`` the row of
+    the ``i``-th (ascending within a column).
     """
     qp = mhe.window_qp
-    pattern = qp.rows[qp.order] * qp.n + qp.cols[qp.order]
+    rows, cols = qp.rows[qp.order], qp.cols[qp.order]
+    if np.any(np.diff(cols * qp.n + rows) <= 0):
+        raise RuntimeError("the window's Hessian values are not in CSC order")
+    column_start = np.searchsorted(cols, np.arange(qp.n + 1))
     nd = qp.travel_basis.shape[1] if qp.travel_bias else 0
     # the acceleration biases: ax and ay, or ay alone (one column)
     columns = [0, 1] if qp.n_bias - nd == 2 else [1]
@@ -464,7 +470,8 @@ def _window_defines(mhe, settings: MheSettings) -> str:
         f"#define TRAVEL_UNIT {TRAVEL_UNIT!r}\n",
         loss(settings.suspension_loss, "SUSPENSION"),
         loss(settings.constraint_loss, "CONSTRAINT"),
-        _array("PATTERN", pattern, "int"),
+        _array("COLUMN_START", column_start, "int"),
+        _array("ROW_INDEX", rows, "int"),
         _array("PINV", mhe.pinv) if mhe.hard and qp.n_bias > nd else "",
         _array("TRAVEL_BASIS", qp.travel_basis) if nd else "",
         _array("ACC_COLS", columns, "int") if qp.n_bias > nd else "",

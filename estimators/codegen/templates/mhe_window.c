@@ -1,7 +1,8 @@
 /* The embedded MHE with robust losses, bias states and lagged output (wheelload.estimators.
  * mhe.window): one QP per sample on OSQP's embedded solver, set up once with the fixed
- * upper-triangular pattern of the Python MHE's window (PATTERN: dense index of each value in
- * OSQP's CSC order).
+ * upper-triangular pattern of the Python MHE's window (COLUMN_START, ROW_INDEX: OSQP's CSC
+ * column starts and row indices); the Hessian is assembled into its values at that pattern
+ * (HV, CSC order), never as a dense matrix.
  *
  * Variables (QP units): per sample a block of WIDTH entries, the W load variables (kN, or the
  * warp amplitude in kN for the hard constraint) then the auxiliaries e+, e- of the robust
@@ -36,8 +37,32 @@ void wheelload_mhe_reset(wheelload_mhe_state *mhe) {
 @@ reset_filter
 }
 
-/* H[cols, cols] += M^T Wt M, g[cols] -= M^T Wt r; M is k x nc (row-major); Wt is k x k when
-   full, else its diagonal (k entries). */
+/* Position of entry (r, c), r <= c, among the window Hessian's values (CSC order), or -1 when
+   the pattern has no such entry. */
+static int position(int r, int c) {
+    int low = COLUMN_START[c], high = COLUMN_START[c + 1] - 1;
+    while (low <= high) {
+        int middle = (low + high) / 2;
+        if (ROW_INDEX[middle] == r) return middle;
+        if (ROW_INDEX[middle] < r) low = middle + 1;
+        else high = middle - 1;
+    }
+    return -1;
+}
+
+/* Add v to entry (r, c) of a Hessian: ld > 0, a dense ld x ld row-major one (a sample's local
+   terms); ld == 0, the window's values at the pattern (upper triangle: r > c is its mirror's). */
+static void add_entry(double *H, int ld, int r, int c, double v) {
+    if (ld > 0) {
+        H[r * ld + c] += v;
+        return;
+    }
+    int i = r <= c ? position(r, c) : -1;
+    if (i >= 0) H[i] += v;
+}
+
+/* H[cols, cols] += M^T Wt M, g[cols] -= M^T Wt r (H as add_entry's); M is k x nc
+   (row-major); Wt is k x k when full, else its diagonal (k entries). */
 static void add_rows(double *H, int ld, double *g, const int *cols, int nc, const double *M,
                      int k, const double *r, const double *Wt, int full) {
     double MW[32][8];
@@ -54,7 +79,7 @@ static void add_rows(double *H, int ld, double *g, const int *cols, int nc, cons
         for (int b = 0; b < nc; ++b) {
             double s = 0.0;
             for (int i = 0; i < k; ++i) s += MW[a][i] * M[i * nc + b];
-            H[cols[a] * ld + cols[b]] += s;
+            add_entry(H, ld, cols[a], cols[b], s);
         }
         double s = 0.0;
         for (int i = 0; i < k; ++i) s += MW[a][i] * r[i];
@@ -145,10 +170,11 @@ static void local_terms(sample_t *s) {
 #endif
 }
 
-/* The window's dense Hessian and linear term (physical costs; scaled by COST on loading). */
+/* The window's Hessian values at the pattern and linear term (physical costs; scaled by COST
+   on loading). */
 static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
                      const double *arrival) {
-    memset(mhe->HD, 0, sizeof mhe->HD);
+    memset(mhe->HV, 0, sizeof mhe->HV);
     memset(mhe->GD, 0, sizeof mhe->GD);
     double X[4 * W];
     memset(X, 0, sizeof X);
@@ -162,14 +188,14 @@ static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
     for (int j = 0; j < N; ++j) {
         int base = j * WIDTH;
         if (j < j0) {
-            for (int a = 0; a < W; ++a) mhe->HD[(base + a) * NQ + base + a] += 1.0 / COST;
+            for (int a = 0; a < W; ++a) add_entry(mhe->HV, 0, base + a, base + a, 1.0 / COST);
             continue;
         }
         int map[NL];
         for (int a = 0; a < NL; ++a) map[a] = a < WIDTH ? base + a : N * WIDTH + a - WIDTH;
         for (int a = 0; a < NL; ++a) {
             for (int b = 0; b < NL; ++b)
-                mhe->HD[map[a] * NQ + map[b]] += mhe->S[j].Hl[a * NL + b];
+                add_entry(mhe->HV, 0, map[a], map[b], mhe->S[j].Hl[a * NL + b]);
             mhe->GD[map[a]] += mhe->S[j].gl[a];
         }
         int cols[2 * W];
@@ -182,7 +208,7 @@ static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
             double weight[16];
             for (int e = 0; e < 16; ++e) weight[e] = arrival[e] / (COST * LOAD_SCALE * LOAD_SCALE);
             for (int i = 0; i < 4; ++i) r[i] = prior[i] - mhe->S[j].xp[i];
-            add_rows(mhe->HD, NQ, mhe->GD, cols, W, X, 4, r, weight, 1);
+            add_rows(mhe->HV, 0, mhe->GD, cols, W, X, 4, r, weight, 1);
         } else if (mhe->S[j].link > 0.0) {
             double M[4 * 2 * W], link[4];
             for (int i = 0; i < 4; ++i) {
@@ -193,7 +219,7 @@ static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
                 r[i] = -(mhe->S[j].xp[i] - mhe->S[j - 1].xp[i]);
                 link[i] = mhe->S[j].link;
             }
-            add_rows(mhe->HD, NQ, mhe->GD, cols, 2 * W, M, 4, r, link, 0);
+            add_rows(mhe->HV, 0, mhe->GD, cols, 2 * W, M, 4, r, link, 0);
         }
     }
 #if NB > 0
@@ -204,7 +230,7 @@ static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
         cols[a] = N * WIDTH + a;
         eye[a * NB + a] = 1.0;
     }
-    add_rows(mhe->HD, NQ, mhe->GD, cols, NB, eye, NB, mhe->BETA, mhe->INFO, 1);
+    add_rows(mhe->HV, 0, mhe->GD, cols, NB, eye, NB, mhe->BETA, mhe->INFO, 1);
 #endif
 }
 
@@ -364,7 +390,7 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
         prior_solution(mhe, j0, mhe->HIST[N - 1]);
     } else {
         assemble(mhe, j0, mhe->HIST[0], mhe->ARR[j0]);
-        for (int i = 0; i < NNZ; ++i) mhe->PX[i] = (OSQPFloat)(COST * mhe->HD[PATTERN[i]]);
+        for (int i = 0; i < NNZ; ++i) mhe->PX[i] = (OSQPFloat)(COST * mhe->HV[i]);
         for (int i = 0; i < NQ; ++i) {
             double low = 0.0, high = 0.0;
             if (i < N * WIDTH) {

@@ -13,8 +13,8 @@ typedef struct wheelload_mhe_state {
     wheelload_mhe_sample S[WHEELLOAD_MHE_N]; /* the window, oldest first */
     double ARR[WHEELLOAD_MHE_N][16];  /* arrival weight c s^2 Pi^-1 of a window starting there */
     double HIST[WHEELLOAD_MHE_N][4];  /* estimates of the samples before; the prior is row 0 */
-    /* the window's dense Hessian and linear term (scratch of each sample) */
-    double HD[WHEELLOAD_MHE_NQ * WHEELLOAD_MHE_NQ], GD[WHEELLOAD_MHE_NQ];
+    /* the window's Hessian values at the pattern (CSC order) and linear term (scratch) */
+    double HV[WHEELLOAD_MHE_NNZ], GD[WHEELLOAD_MHE_NQ];
     /* OSQP's vectors: warm start, q, l, u and the Hessian values in CSC order */
     OSQPFloat XW[WHEELLOAD_MHE_NQ], YW[WHEELLOAD_MHE_NQ], Q[WHEELLOAD_MHE_NQ];
     OSQPFloat L[WHEELLOAD_MHE_NQ], U[WHEELLOAD_MHE_NQ], PX[WHEELLOAD_MHE_NNZ];

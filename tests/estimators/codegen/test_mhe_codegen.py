@@ -76,14 +76,22 @@ def test_generated_c_takes_each_samples_interval_like_python(vehicle, wheel_lift
     np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
 
 
-@pytest.mark.parametrize(("bounded", "max_iter"), [(False, 20), (True, 15)])
+#: Starved solvers: the bounded window needs 15-25 ADMM iterations; the unbounded one's first
+#: is its minimiser to sigma = 1e-6 (qp.UNCONSTRAINED_SETTINGS), which a tolerance of 2e-7
+#: refuses on most samples (measured 162 of 200).
+STARVED = {
+    False: SolverSettings(max_iter=1, check_termination=1, eps_abs=2e-7, eps_rel=2e-7),
+    True: SolverSettings(max_iter=15),
+}
+
+
+@pytest.mark.parametrize("bounded", [False, True])
 def test_hard_window_in_c_falls_back_to_the_projection_kf_like_python(
-    vehicle, wheel_lift, tmp_path, bounded, max_iter
+    vehicle, wheel_lift, tmp_path, bounded
 ):
-    """A starved solver (these windows need 15-25 ADMM iterations) fails on many samples: the
-    C takes the linked projection KF's estimate, flagged, as the Python MHE does; its sigma is
-    reported."""
-    starved = SolverSettings(max_iter=max_iter)
+    """A starved solver (:data:`STARVED`) fails on many samples: the C takes the linked
+    projection KF's estimate, flagged, as the Python MHE does; its sigma is reported."""
+    starved = STARVED[bounded]
     settings = MheSettings(horizon=10, constraint=Constraint.HARD, bounded=bounded,
                            max_load=12000.0, solver=starved)  # fmt: skip
     c = build_mhe_library(

@@ -98,8 +98,10 @@ def test_bounds_keep_every_load_at_or_above_zero(vehicle, wheel_lift, constraint
 
 
 def test_iteration_cap_falls_back_to_the_kf_and_flags_it(vehicle, drive):
+    # bounded: an unbounded window's QP is solved at its first iteration (qp.UNCONSTRAINED_SETTINGS)
     solver = SolverSettings(max_iter=1, check_termination=1)
-    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=5, solver=solver)).run(drive)
+    settings = MheSettings(horizon=5, bounded=True, solver=solver)
+    mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
     kf = TwoStageKF(vehicle).run(drive)
     capped = mhe.status != 1
     assert capped.any()
@@ -229,8 +231,12 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
     acc[150:200] = np.nan  # every equilibrium row and no suspension row... for 50 samples
     d[150:200] = np.nan  # ... nor travel: windows without data, held in closed form
     signals = dataclasses.replace(signals, d=d, acc=acc)
-    # a few iterations only: unsolved windows fall back to the KF (and polish when bounded)
+    # a few iterations only: unsolved windows fall back to the KF (and polish when bounded);
+    # an unbounded window's first iteration is its minimiser (qp.UNCONSTRAINED_SETTINGS), to
+    # sigma = 1e-6: a tolerance below that fails it
     starved = SolverSettings(max_iter=10, check_termination=1, polish=True)
+    if not bounded:
+        starved = SolverSettings(max_iter=2, check_termination=1, eps_abs=1e-14, eps_rel=1e-14)
     for lag, solver in ((0, SolverSettings()), (3, SolverSettings()), (0, starved)):
         settings = MheSettings(
             horizon=6, constraint=constraint, bounded=bounded, lag=lag, solver=solver
