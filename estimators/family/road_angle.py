@@ -63,7 +63,6 @@ N = len(STATE_NAMES)
 MEASURED = (0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 12)
 
 
-
 @dataclass(frozen=True, kw_only=True)
 class RoadAngleTuning:
     """Noise of the road-angle KF (1 sigma or densities) and the road-angle filters."""

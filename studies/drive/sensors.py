@@ -3,8 +3,9 @@ r"""Sensor models: a body IMU, four suspension displacement sensors and the spee
 A :class:`SensorGrade` bundles one of each (``GRADES``: ``clean``, ``mti-1``,
 ``consumer-mems``), selected by name (:func:`sensor_grade`); ``mti-1`` is the default.
 
-A noise scale ``s`` multiplies every stochastic part (paper §IV-F); ``s = 0``
-returns the clean signals.
+A noise scale ``s`` multiplies the sensor errors (paper §IV-F) as a
+:class:`NoiseScaling` says: every stochastic part (``ALL``; ``s = 0`` returns the
+clean signals) or only what the paper scales (``PAPER``).
 
 IMU (MTi-1 class, Xsens MTi-1 series datasheet figures as quoted by
 Kucharczyk et al., Transport and Aerospace Research 2023, table
@@ -56,6 +57,7 @@ the loads need), the consumer grade with that noise.
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +67,30 @@ from wheelload.models.conventions import GRAVITY, WHEELS
 
 MICRO_G = 1e-6 * GRAVITY
 DEG = np.pi / 180.0
+
+
+class NoiseScaling(enum.Enum):
+    """Which sensor errors the noise scale ``s`` multiplies (Siegloff & Choi §IV-F).
+
+    The paper: "synthetic noise was injected into the measured accelerometer channels and
+    suspension displacement signals [...] the same displacement-sensor error realization
+    was also applied to the wheel-travel channels used by the anti-roll-bar term";
+    "Accelerometer corruption was modeled as the combination of band-limited white noise,
+    a constant bias, and a slowly varying bias random walk"; "Suspension displacement
+    sensing was corrupted using a bounded error model including linearity, repeatability,
+    and quantization effects"; "A scalar factor s [...] was applied uniformly to the
+    stochastic components of both noise models, with s = 0 denoting the noise-free case."
+
+    ``PAPER``: s multiplies the accelerometers' (ax, ay, az) white noise, turn-on bias and
+    bias walk and the travel sensors' linearity error, repeatability and logger step (the
+    one travel channel feeds both the spring and the bar term, as the paper's shared
+    realization); the gyroscopes, hub accelerometers and speed, which the paper does not
+    perturb, keep their nominal (s = 1) errors. ``ALL``: s multiplies every sensor's
+    errors (the IMU's gyroscopes, the hub accelerometers and the speed as well).
+    """
+
+    PAPER = "paper"
+    ALL = "all"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -212,23 +238,28 @@ def measure(
     scale: float,
     rng: np.random.Generator,
     grade: SensorGrade = MTI_1,
+    scaling: NoiseScaling = NoiseScaling.ALL,
 ) -> pd.DataFrame:
     """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* az_* fz_*``)
-    with the sensors of ``grade`` at noise scale ``scale`` (``clean``: none).
+    with the sensors of ``grade`` at noise scale ``scale`` (``clean``: none) applied as
+    ``scaling`` says (:class:`NoiseScaling`).
 
-    The hub channels ``az_*`` are measured when ``truth`` has them.
+    The hub channels ``az_*`` are measured when ``truth`` has them. The random draws are
+    the same, in the same order, for either scaling (common random numbers).
     """
     if scale < 0:
         raise ValueError(f"noise scale must be >= 0, got {scale}")
     imu, travel = grade.imu, grade.travel
+    # the sensors the paper does not perturb keep their nominal errors under PAPER
+    other = scale if scaling is NoiseScaling.ALL else 1.0
     dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
     log = truth.copy()
-    for axes, noise in (
-        (("ax", "ay", "az"), imu.accelerometer),
-        (("wx", "wy", "wz"), imu.gyroscope),
+    for axes, noise, factor in (
+        (("ax", "ay", "az"), imu.accelerometer, scale),
+        (("wx", "wy", "wz"), imu.gyroscope, other),
     ):
         for axis in axes:
-            log[axis] = _inertial_channel(truth[axis].to_numpy(), rng, dt, noise, scale)
+            log[axis] = _inertial_channel(truth[axis].to_numpy(), rng, dt, noise, factor)
     step = scale * travel.resolution
     for wheel in WHEELS:
         d = truth[f"d_{wheel}"].to_numpy()
@@ -248,8 +279,8 @@ def measure(
         if f"az_{wheel}" not in truth.columns:
             continue
         hub = grade.hub
-        log[f"az_{wheel}"] = _inertial_channel(truth[f"az_{wheel}"].to_numpy(), rng, dt, hub, scale)
-    if scale * grade.speed.noise > 0 and "vx" in truth.columns:
+        log[f"az_{wheel}"] = _inertial_channel(truth[f"az_{wheel}"].to_numpy(), rng, dt, hub, other)
+    if other * grade.speed.noise > 0 and "vx" in truth.columns:
         vx = truth["vx"].to_numpy()
-        log["vx"] = vx + scale * grade.speed.noise * rng.standard_normal(vx.size)
+        log["vx"] = vx + other * grade.speed.noise * rng.standard_normal(vx.size)
     return log
