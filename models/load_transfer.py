@@ -149,6 +149,4 @@ def static_transfer_function(name: str = "static_transfer_load") -> ca.Function:
     """``name(acc[3], p) -> x[4]``: the paper's method C loads."""
     acc = ca.SX.sym("acc", 3)
     p_vector, p = ModelParameters.symbolic()
-    return ca.Function(
-        name, [acc, p_vector], [static_transfer_loads(acc, p)], ["acc", "p"], ["x"]
-    )
+    return ca.Function(name, [acc, p_vector], [static_transfer_loads(acc, p)], ["acc", "p"], ["x"])

@@ -4,8 +4,8 @@ A :class:`SensorGrade` bundles one of each (``GRADES``: ``clean``, ``mti-1``,
 ``consumer-mems``), selected by name (:func:`sensor_grade`); ``mti-1`` is the default.
 
 A noise scale ``s`` multiplies the sensor errors (paper §IV-F) as a
-:class:`NoiseScaling` says: every stochastic part (``ALL``; ``s = 0`` returns the
-clean signals) or only what the paper scales (``PAPER``).
+:class:`NoiseScaling` says: every error (``ALL``; ``s = 0`` returns the clean
+signals) or only what the paper scales (``PAPER_SENSORS``, ``PAPER_STOCHASTIC``).
 
 IMU (MTi-1 class, Xsens MTi-1 series datasheet figures as quoted by
 Kucharczyk et al., Transport and Aerospace Research 2023, table
@@ -58,7 +58,7 @@ the loads need), the consumer grade with that noise.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import pandas as pd
@@ -81,16 +81,52 @@ class NoiseScaling(enum.Enum):
     and quantization effects"; "A scalar factor s [...] was applied uniformly to the
     stochastic components of both noise models, with s = 0 denoting the noise-free case."
 
-    ``PAPER``: s multiplies the accelerometers' (ax, ay, az) white noise, turn-on bias and
-    bias walk and the travel sensors' linearity error, repeatability and logger step (the
-    one travel channel feeds both the spring and the bar term, as the paper's shared
-    realization); the gyroscopes, hub accelerometers and speed, which the paper does not
-    perturb, keep their nominal (s = 1) errors. ``ALL``: s multiplies every sensor's
-    errors (the IMU's gyroscopes, the hub accelerometers and the speed as well).
+    So s reaches the accelerometers and the travel sensors only (the one travel channel
+    feeds both the spring and the bar term, as the paper's shared realization); the
+    gyroscopes, hub accelerometers and speed, which the paper does not perturb, keep their
+    nominal (s = 1) errors in both paper variants. Which of the two models' components are
+    "the stochastic components" the text leaves open, hence two variants:
+
+    ``PAPER_SENSORS``: every listed component of the two models, the accelerometers'
+    white noise, turn-on bias and bias walk and the travel sensors' linearity error,
+    repeatability and logger step. ``PAPER_STOCHASTIC``: the components random in time
+    only, the accelerometers' white noise and bias walk and the travels' repeatability;
+    the turn-on bias, the linearity curve and the logger step (fixed for a given sensor)
+    stay nominal. ``ALL``: s multiplies every error of every sensor.
     """
 
-    PAPER = "paper"
+    PAPER_SENSORS = "paper-sensors"
+    PAPER_STOCHASTIC = "paper-stochastic"
     ALL = "all"
+
+    def factors(self, scale: float) -> ErrorFactors:
+        """The factor on each error component at noise scale ``scale``."""
+        if self is NoiseScaling.ALL:
+            return ErrorFactors(**dict.fromkeys(ErrorFactors.names(), scale))
+        factors = dict.fromkeys(ErrorFactors.names(), 1.0)
+        scaled = ["accel_random", "travel_random"]
+        if self is NoiseScaling.PAPER_SENSORS:
+            scaled += ["accel_bias", "travel_linearity", "travel_step"]
+        factors.update(dict.fromkeys(scaled, scale))
+        return ErrorFactors(**factors)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ErrorFactors:
+    """Multipliers of the sensor error components (:meth:`NoiseScaling.factors`)."""
+
+    accel_random: float  # accelerometers' white noise and bias walk
+    accel_bias: float  # accelerometers' turn-on bias
+    gyro: float  # every gyroscope error
+    travel_random: float  # travel repeatability (white)
+    travel_linearity: float  # travel linearity curve
+    travel_step: float  # travel logger step
+    hub: float  # every hub-accelerometer error
+    speed: float  # speed noise
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(field.name for field in fields(cls))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -224,13 +260,14 @@ def sensor_grade(name: str) -> SensorGrade:
     return GRADES[name]
 
 
-def _inertial_channel(clean, rng, dt, noise: InertialNoise, scale):
+def _inertial_channel(clean, rng, dt, noise: InertialNoise, random: float, bias: float):
+    """``clean`` plus white noise and bias walk times ``random``, turn-on bias times ``bias``."""
     count = clean.size
     white = noise.noise_density * np.sqrt(min(noise.bandwidth, 0.5 / dt))
     white = white * rng.standard_normal(count)
     step = noise.bias_instability / np.sqrt(noise.instability_time) * np.sqrt(dt)
     walk = np.cumsum(step * rng.standard_normal(count))
-    return clean + scale * (noise.bias * rng.standard_normal() + walk + white)
+    return clean + bias * noise.bias * rng.standard_normal() + random * (walk + white)
 
 
 def measure(
@@ -250,17 +287,17 @@ def measure(
     if scale < 0:
         raise ValueError(f"noise scale must be >= 0, got {scale}")
     imu, travel = grade.imu, grade.travel
-    # the sensors the paper does not perturb keep their nominal errors under PAPER
-    other = scale if scaling is NoiseScaling.ALL else 1.0
+    k = scaling.factors(scale)
     dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
     log = truth.copy()
-    for axes, noise, factor in (
-        (("ax", "ay", "az"), imu.accelerometer, scale),
-        (("wx", "wy", "wz"), imu.gyroscope, other),
+    for axes, noise, random, bias in (
+        (("ax", "ay", "az"), imu.accelerometer, k.accel_random, k.accel_bias),
+        (("wx", "wy", "wz"), imu.gyroscope, k.gyro, k.gyro),
     ):
         for axis in axes:
-            log[axis] = _inertial_channel(truth[axis].to_numpy(), rng, dt, noise, factor)
-    step = scale * travel.resolution
+            clean = truth[axis].to_numpy()
+            log[axis] = _inertial_channel(clean, rng, dt, noise, random, bias)
+    step = k.travel_step * travel.resolution
     for wheel in WHEELS:
         d = truth[f"d_{wheel}"].to_numpy()
         phase = rng.uniform(0.0, 2.0 * np.pi)
@@ -269,7 +306,8 @@ def measure(
             * travel.full_scale
             * np.sin(2.0 * np.pi * d / travel.full_scale + phase)
         )
-        noisy = d + scale * (linear + travel.repeatability * rng.standard_normal(d.size))
+        white = travel.repeatability * rng.standard_normal(d.size)
+        noisy = d + k.travel_linearity * linear + k.travel_random * white
         if step > 0:
             noisy = step * np.round(noisy / step)
         error = noisy - d
@@ -278,9 +316,9 @@ def measure(
     for wheel in WHEELS:
         if f"az_{wheel}" not in truth.columns:
             continue
-        hub = grade.hub
-        log[f"az_{wheel}"] = _inertial_channel(truth[f"az_{wheel}"].to_numpy(), rng, dt, hub, other)
-    if other * grade.speed.noise > 0 and "vx" in truth.columns:
+        hub = truth[f"az_{wheel}"].to_numpy()
+        log[f"az_{wheel}"] = _inertial_channel(hub, rng, dt, grade.hub, k.hub, k.hub)
+    if k.speed * grade.speed.noise > 0 and "vx" in truth.columns:
         vx = truth["vx"].to_numpy()
-        log["vx"] = vx + other * grade.speed.noise * rng.standard_normal(vx.size)
+        log["vx"] = vx + k.speed * grade.speed.noise * rng.standard_normal(vx.size)
     return log
