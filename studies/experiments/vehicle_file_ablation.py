@@ -123,8 +123,10 @@ def rc_words(ours: dict[str, float], calibration: dict[str, float]) -> str:
         f"filter assumes) is {calibration['suspension']:.3g} for the pseudo-measurement and "
         f"{cells} for the equilibrium rows: weighing the two updates as their errors are "
         f"would scale Rc by {matched} (white-noise view; the errors are correlated in time, "
-        "which the filter's weights do not know). The paper's optimum at × 1 says its "
-        "tuning matched its model's errors; ours is where our model's errors put it."
+        "which the filter's weights do not know). One scale moves the three rows together, "
+        f"while their ratios span × {min(ratios):.2g} to × {max(ratios):.2g}: the sweep's "
+        "optimum is the compromise between the rows this log weighs most. The paper reports "
+        "its optimum at its nominal × 1."
     )
 
 
