@@ -65,3 +65,26 @@ def test_trend_sentence_is_computed_from_the_numbers():
     sentence = changes_from(ours, paper, 1.0, "the mean")
     assert "+10.0 % (paper +0.5 %) at 2" in sentence
     assert "+200.0 % (paper +2.0 %) at 16" in sentence
+
+
+def test_monte_carlo_tables_set_each_variant_beside_the_papers_cells():
+    """Made-up trials (RMSE = 100 + 10 s + trial, P95 = 2 RMSE, Max = 3 RMSE) through the
+    study's table code: μ, σ per variant and scale, the paper's cells beside, the trend."""
+    import pandas as pd
+
+    from wheelload.studies.experiments import monte_carlo as mc
+
+    rows = [
+        {"variant": v.value, "s": s, "seed": i, "RMSE": 100 + 10 * s + i,
+         "P95": 2 * (100 + 10 * s + i), "Max": 3 * (100 + 10 * s + i)}
+        for v in mc.VARIANTS for s in mc.SCALES for i in (0, 1)
+    ]  # fmt: skip
+    table = mc.scale_table(pd.DataFrame(rows))
+    cell = table.loc[(mc.VARIANTS[0].value, 4.0)]
+    assert cell["RMSE μ"] == pytest.approx(140.5) and cell["RMSE σ"] == pytest.approx(0.5**0.5)
+    shown = mc.side_by_side(table)
+    assert shown.loc[16.0, "paper RMSE"] == "218.6 ± 11.14"
+    assert shown.loc[16.0, f"{mc.LABELS[mc.VARIANTS[0]]} RMSE"] == "260.5 ± 0.71"
+    words = mc.trend_words(table)
+    # from s = 1 (110.5) to s = 16 (260.5): +135.7 %; the paper's 213.5 -> 218.6: +2.4 %
+    assert "+135.7 % (paper +2.4 %) at 16" in words
