@@ -34,6 +34,16 @@ They satisfy the three rows of :math:`A x = b` (eq. 15-16 without aero) for
 (:math:`z` the suspension model of eq. 9): the load transfer of a rigid body
 on its springs and anti-roll bars, which fixes the roll-moment split that the
 three equilibrium rows leave open.
+
+The paper's method C as its text states it ("a rigid-body quasi-static (QS)
+load-transfer baseline anchored to static axle loads", §IV-B): the static loads
+plus the rigid-body transfer of the body-axis longitudinal and lateral specific
+force, the lateral transfer split by the static axle loads (:math:`\lambda = l_r/L`,
+fixed); no vertical acceleration, aerodynamics or suspension stiffness:
+
+.. math::
+    F_{FL,FR} = F_{0} - \frac{m h}{2L} f_x \mp \frac{m h l_r}{L T_f} f_y, \quad
+    F_{RL,RR} = F_{0} + \frac{m h}{2L} f_x \mp \frac{m h l_f}{L T_r} f_y
 """
 
 from __future__ import annotations
@@ -126,3 +136,17 @@ def equilibrium_split(b, p: ModelParameters, front_share=None):
     return ca.vertcat(
         front / 2 + roll_front, front / 2 - roll_front, rear / 2 + roll_rear, rear / 2 - roll_rear
     )
+
+
+def static_transfer_loads(acc, p: ModelParameters):
+    """The paper's method C: static loads plus the rigid-body transfer of :math:`f_x, f_y`
+    with the lateral split fixed at the static axle loads (module docstring)."""
+    transfer = algebraic_loads(ca.vertcat(acc[0], acc[1], 0.0), p)  # f_z = 0: transfer only
+    return ca.vertcat(*p.static()) + transfer
+
+
+def static_transfer_function(name: str = "static_transfer_load") -> ca.Function:
+    """``name(acc[3], p) -> x[4]``: the paper's method C loads."""
+    acc = ca.SX.sym("acc", 3)
+    p_vector, p = ModelParameters.symbolic()
+    return ca.Function(name, [acc, p_vector], [static_transfer_loads(acc, p)], ["acc", "p"], ["x"])

@@ -22,7 +22,15 @@ model is evaluated at the static position (:math:`d = v = 0`).
 Adaptations: the paper anchors the transfer to static axle loads without
 naming its split; ours is the suspension's own. A sample with a missing
 accelerometer or speed channel keeps the previous estimate and is flagged.
-No standard deviation.
+No standard deviation. This is a strengthened C: it meets the equilibrium rows
+exactly (vertical acceleration, lift and drag included) and splits the roll moment
+by the suspension's Jacobian.
+
+``C-paper`` is the paper's C as its text states it: static loads plus the
+rigid-body transfer of :math:`f_x, f_y` with the lateral split fixed at the static
+axle loads (:func:`wheelload.models.load_transfer.static_transfer_loads`); no
+vertical acceleration, aerodynamics or suspension; the same on either vehicle
+model (it has none of the model's terms).
 """
 
 from __future__ import annotations
@@ -36,7 +44,11 @@ from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium, suspension_loads
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models.inputs import TRAVEL, TRAVEL_RATE, input_index
-from wheelload.models.load_transfer import quasi_static_function, quasi_static_transfer
+from wheelload.models.load_transfer import (
+    quasi_static_function,
+    quasi_static_transfer,
+    static_transfer_function,
+)
 
 _TRAVEL = input_index(TRAVEL + TRAVEL_RATE)
 
@@ -70,6 +82,19 @@ def quasi_static_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     )
 
 
+@functools.cache
+def static_transfer_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
+    """Step of ``C-paper``: state = last loads; loads = static loads plus rigid transfer
+    where the accelerometers are valid (``model`` only names the Function)."""
+    sym = step_symbols(4, 0)
+    x = static_transfer_function()(sym.acc, sym.p_vector)
+    ok = ca.mmin(sym.mask(x))
+    loads = hold(ca.repmat(ok, 4, 1), x, sym.s)
+    return step_function(
+        "wheelload_static_transfer_step", model, sym, loads, loads, ca.SX.zeros(4), ca.DM.ones(4)
+    )
+
+
 class QuasiStatic(FamilyMethod):
     """Method C: quasi-static rigid-body load transfer (module docstring)."""
 
@@ -80,10 +105,31 @@ class QuasiStatic(FamilyMethod):
         return quasi_static_step(self.suspension)
 
 
-INFO = MethodInfo(
-    name="C",
-    description="quasi-static: static loads + rigid-body load transfer split by roll stiffness",
-    reference="Siegloff & Choi §IV-B method C; equilibrium eq. 14-16",
-    build=QuasiStatic,
-    model_choice=True,
+class StaticTransfer(FamilyMethod):
+    """Method C as the paper states it (module docstring: ``C-paper``)."""
+
+    name = "C paper-faithful"
+    has_std = False
+
+    def build_step(self) -> ca.Function:
+        return static_transfer_step(self.suspension)
+
+
+INFO = (
+    MethodInfo(
+        name="C",
+        description="quasi-static (strengthened): static loads moved onto the exact equilibrium "
+        "along the suspension stiffness",
+        reference="Siegloff & Choi §IV-B method C; equilibrium eq. 14-16",
+        build=QuasiStatic,
+        model_choice=True,
+    ),
+    MethodInfo(
+        name="C-paper",
+        description="quasi-static as the paper states it: static loads + rigid transfer of "
+        "ax, ay, split by the static axle loads",
+        reference="Siegloff & Choi §IV-B method C",
+        build=StaticTransfer,
+        model_choice=False,
+    ),
 )

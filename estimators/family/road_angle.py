@@ -62,8 +62,6 @@ N = len(STATE_NAMES)
 #: accelerations.
 MEASURED = (0, 1, 2, 3, 4, 5, 6, 7, 8, 10, 12)
 
-DEFAULT_INERTIA = BodyInertia()
-
 
 @dataclass(frozen=True, kw_only=True)
 class RoadAngleTuning:
@@ -185,13 +183,14 @@ class RoadAngleKF(FamilyMethod):
         self,
         vehicle: Vehicle,
         *,
-        inertia: BodyInertia = DEFAULT_INERTIA,
+        inertia: BodyInertia | None = None,
         tuning: RoadAngleTuning = RoadAngleTuning(),
         suspension: SuspensionModel = DEFAULT_MODEL,
     ) -> None:
-        self.inertia = inertia
+        # the vehicle file's body inertia unless given
+        self.inertia = BodyInertia.from_vehicle(vehicle) if inertia is None else inertia
         self.tuning = tuning
-        model = road_angle_model(vehicle, inertia)
+        model = road_angle_model(vehicle, self.inertia)
         x = ca.SX.sym("x", N)
         self.A = np.asarray(ca.DM(ca.jacobian(model(x)[0], x)), float)
         self._noise = np.zeros(N)  # process noise densities per state

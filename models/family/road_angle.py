@@ -53,13 +53,20 @@ STATE_NAMES = (
 class BodyInertia:
     """Sprung-body inertia about its CG [kg m^2] and the roll / pitch axis height [m].
 
-    Defaults: the reference car's Table I inertia; the axis on the ground (the
-    vehicle file has no roll-centre height), so the arm is the CG height.
+    :meth:`from_vehicle` takes the roll and pitch inertia from the vehicle file's
+    ``mass.inertia`` (Ixx, Iyy); the axis on the ground by default, so the arm is the CG
+    height.
     """
 
-    roll: float = 518.04
-    pitch: float = 1677.0
+    roll: float
+    pitch: float
     axis_height: float = 0.0
+
+    @classmethod
+    def from_vehicle(cls, vehicle: Vehicle, *, axis_height: float = 0.0) -> BodyInertia:
+        """The vehicle file's sprung-body Ixx and Iyy about the CG."""
+        roll, pitch, _ = vehicle.mass.inertia
+        return cls(roll=float(roll), pitch=float(pitch), axis_height=axis_height)
 
     def __post_init__(self) -> None:
         if not (self.roll > 0 and self.pitch > 0 and self.axis_height >= 0):

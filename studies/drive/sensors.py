@@ -3,8 +3,9 @@ r"""Sensor models: a body IMU, four suspension displacement sensors and the spee
 A :class:`SensorGrade` bundles one of each (``GRADES``: ``clean``, ``mti-1``,
 ``consumer-mems``), selected by name (:func:`sensor_grade`); ``mti-1`` is the default.
 
-A noise scale ``s`` multiplies every stochastic part (paper §IV-F); ``s = 0``
-returns the clean signals.
+A noise scale ``s`` multiplies the sensor errors (paper §IV-F) as a
+:class:`NoiseScaling` says: every error (``ALL``; ``s = 0`` returns the clean
+signals) or only what the paper scales (``PAPER_SENSORS``, ``PAPER_STOCHASTIC``).
 
 IMU (MTi-1 class, Xsens MTi-1 series datasheet figures as quoted by
 Kucharczyk et al., Transport and Aerospace Research 2023, table
@@ -59,7 +60,8 @@ and the steer angle are logged as the plant applies them (their errors are not m
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import enum
+from dataclasses import dataclass, fields
 
 import numpy as np
 import pandas as pd
@@ -68,6 +70,66 @@ from wheelload.models.conventions import GRAVITY, WHEELS
 
 MICRO_G = 1e-6 * GRAVITY
 DEG = np.pi / 180.0
+
+
+class NoiseScaling(enum.Enum):
+    """Which sensor errors the noise scale ``s`` multiplies (Siegloff & Choi §IV-F).
+
+    The paper: "synthetic noise was injected into the measured accelerometer channels and
+    suspension displacement signals [...] the same displacement-sensor error realization
+    was also applied to the wheel-travel channels used by the anti-roll-bar term";
+    "Accelerometer corruption was modeled as the combination of band-limited white noise,
+    a constant bias, and a slowly varying bias random walk"; "Suspension displacement
+    sensing was corrupted using a bounded error model including linearity, repeatability,
+    and quantization effects"; "A scalar factor s [...] was applied uniformly to the
+    stochastic components of both noise models, with s = 0 denoting the noise-free case."
+
+    So s reaches the accelerometers and the travel sensors only (the one travel channel
+    feeds both the spring and the bar term, as the paper's shared realization); the
+    gyroscopes, hub accelerometers and speed, which the paper does not perturb, keep their
+    nominal (s = 1) errors in both paper variants. Which of the two models' components are
+    "the stochastic components" the text leaves open, hence two variants:
+
+    ``PAPER_SENSORS``: every listed component of the two models, the accelerometers'
+    white noise, turn-on bias and bias walk and the travel sensors' linearity error,
+    repeatability and logger step. ``PAPER_STOCHASTIC``: the components random in time
+    only, the accelerometers' white noise and bias walk and the travels' repeatability;
+    the turn-on bias, the linearity curve and the logger step (fixed for a given sensor)
+    stay nominal. ``ALL``: s multiplies every error of every sensor.
+    """
+
+    PAPER_SENSORS = "paper-sensors"
+    PAPER_STOCHASTIC = "paper-stochastic"
+    ALL = "all"
+
+    def factors(self, scale: float) -> ErrorFactors:
+        """The factor on each error component at noise scale ``scale``."""
+        if self is NoiseScaling.ALL:
+            return ErrorFactors(**dict.fromkeys(ErrorFactors.names(), scale))
+        factors = dict.fromkeys(ErrorFactors.names(), 1.0)
+        scaled = ["accel_random", "travel_random"]
+        if self is NoiseScaling.PAPER_SENSORS:
+            scaled += ["accel_bias", "travel_linearity", "travel_step"]
+        factors.update(dict.fromkeys(scaled, scale))
+        return ErrorFactors(**factors)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ErrorFactors:
+    """Multipliers of the sensor error components (:meth:`NoiseScaling.factors`)."""
+
+    accel_random: float  # accelerometers' white noise and bias walk
+    accel_bias: float  # accelerometers' turn-on bias
+    gyro: float  # every gyroscope error
+    travel_random: float  # travel repeatability (white)
+    travel_linearity: float  # travel linearity curve
+    travel_step: float  # travel logger step
+    hub: float  # every hub-accelerometer error
+    speed: float  # speed noise
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(field.name for field in fields(cls))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -209,13 +271,14 @@ def sensor_grade(name: str) -> SensorGrade:
     return GRADES[name]
 
 
-def _inertial_channel(clean, rng, dt, noise: InertialNoise, scale):
+def _inertial_channel(clean, rng, dt, noise: InertialNoise, random: float, bias: float):
+    """``clean`` plus white noise and bias walk times ``random``, turn-on bias times ``bias``."""
     count = clean.size
     white = noise.noise_density * np.sqrt(min(noise.bandwidth, 0.5 / dt))
     white = white * rng.standard_normal(count)
     step = noise.bias_instability / np.sqrt(noise.instability_time) * np.sqrt(dt)
     walk = np.cumsum(step * rng.standard_normal(count))
-    return clean + scale * (noise.bias * rng.standard_normal() + walk + white)
+    return clean + bias * noise.bias * rng.standard_normal() + random * (walk + white)
 
 
 def measure(
@@ -223,24 +286,29 @@ def measure(
     scale: float,
     rng: np.random.Generator,
     grade: SensorGrade = MTI_1,
+    scaling: NoiseScaling = NoiseScaling.ALL,
 ) -> pd.DataFrame:
     """Measured log columns from the clean ones in ``truth`` (``t vx ax.. wz d_* v_* az_* fz_*``)
-    with the sensors of ``grade`` at noise scale ``scale`` (``clean``: none).
+    with the sensors of ``grade`` at noise scale ``scale`` (``clean``: none) applied as
+    ``scaling`` says (:class:`NoiseScaling`).
 
-    The hub channels ``az_*`` are measured when ``truth`` has them.
+    The hub channels ``az_*`` are measured when ``truth`` has them. The random draws are
+    the same, in the same order, for either scaling (common random numbers).
     """
     if scale < 0:
         raise ValueError(f"noise scale must be >= 0, got {scale}")
     imu, travel = grade.imu, grade.travel
+    k = scaling.factors(scale)
     dt = float(np.median(np.diff(truth["t"]))) if len(truth) > 1 else 0.01
     log = truth.copy()
-    for axes, noise in (
-        (("ax", "ay", "az"), imu.accelerometer),
-        (("wx", "wy", "wz"), imu.gyroscope),
+    for axes, noise, random, bias in (
+        (("ax", "ay", "az"), imu.accelerometer, k.accel_random, k.accel_bias),
+        (("wx", "wy", "wz"), imu.gyroscope, k.gyro, k.gyro),
     ):
         for axis in axes:
-            log[axis] = _inertial_channel(truth[axis].to_numpy(), rng, dt, noise, scale)
-    step = scale * travel.resolution
+            clean = truth[axis].to_numpy()
+            log[axis] = _inertial_channel(clean, rng, dt, noise, random, bias)
+    step = k.travel_step * travel.resolution
     for wheel in WHEELS:
         d = truth[f"d_{wheel}"].to_numpy()
         phase = rng.uniform(0.0, 2.0 * np.pi)
@@ -249,7 +317,8 @@ def measure(
             * travel.full_scale
             * np.sin(2.0 * np.pi * d / travel.full_scale + phase)
         )
-        noisy = d + scale * (linear + travel.repeatability * rng.standard_normal(d.size))
+        white = travel.repeatability * rng.standard_normal(d.size)
+        noisy = d + k.travel_linearity * linear + k.travel_random * white
         if step > 0:
             noisy = step * np.round(noisy / step)
         error = noisy - d
@@ -258,15 +327,15 @@ def measure(
     for wheel in WHEELS:
         if f"az_{wheel}" not in truth.columns:
             continue
-        hub = grade.hub
-        log[f"az_{wheel}"] = _inertial_channel(truth[f"az_{wheel}"].to_numpy(), rng, dt, hub, scale)
-    if scale * grade.speed.noise > 0 and "vx" in truth.columns:
+        hub = truth[f"az_{wheel}"].to_numpy()
+        log[f"az_{wheel}"] = _inertial_channel(hub, rng, dt, grade.hub, k.hub, k.hub)
+    if k.speed * grade.speed.noise > 0 and "vx" in truth.columns:
         vx = truth["vx"].to_numpy()
-        log["vx"] = vx + scale * grade.speed.noise * rng.standard_normal(vx.size)
+        log["vx"] = vx + k.speed * grade.speed.noise * rng.standard_normal(vx.size)
     for wheel in WHEELS:
-        if scale * grade.wheel_speed.noise > 0 and f"omega_{wheel}" in truth.columns:
+        if k.speed * grade.wheel_speed.noise > 0 and f"omega_{wheel}" in truth.columns:
             spin = truth[f"omega_{wheel}"].to_numpy()
-            log[f"omega_{wheel}"] = spin + scale * grade.wheel_speed.noise * rng.standard_normal(
+            log[f"omega_{wheel}"] = spin + k.speed * grade.wheel_speed.noise * rng.standard_normal(
                 spin.size
             )
     return log

@@ -19,6 +19,7 @@ from wheelload.studies.experiments import (
     vehicles,
 )
 from wheelload.studies.experiments.forces import tyre_forces
+from wheelload.studies.experiments.report.variants import variants_markdown
 from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
 from wheelload.studies.experiments.runs.context import Context
 
@@ -96,6 +97,7 @@ def run_study(name: str, context: Context) -> list[Section]:
             PREAMBLE,
             f"Mode: {mode}. Vehicle: `{context.settings.vehicle_path.name}`.\n",
             model_line(context.settings.suspension),
+            variants_markdown(context.settings.suspension),
         ]
         lines += [section.markdown + "\n" for section in sections]
         lines.append("## Wall time per study [s] (this run; cached parts take no time)\n")

@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import input_matrix
+from wheelload.estimators import input_matrix, noise_densities
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import (
     ModelParameters,
@@ -23,6 +23,7 @@ from wheelload.models import (
     gates_function,
     suspension_function,
 )
+from wheelload.models.measurement_noise import measurement_noise_function
 
 ROWS = ("vertical", "pitch", "roll")
 
@@ -77,3 +78,24 @@ def suspension_residuals(vehicle: Vehicle, frame: pd.DataFrame) -> np.ndarray:
 def suspension_residual_rms(vehicle: Vehicle, frame: pd.DataFrame) -> float:
     """Pooled RMS [N] of the pseudo-measurement :math:`z(u)` against the reference loads."""
     return float(np.sqrt(np.mean(suspension_residuals(vehicle, frame) ** 2)))
+
+
+def noise_calibration(vehicle: Vehicle, frame: pd.DataFrame) -> dict[str, float]:
+    r"""Per update row, the mean over the samples of :math:`e^2 / R`: the actual error
+    :math:`e` on the reference loads (pseudo-measurement :math:`z - F_{ref}`, pooled over the
+    wheels; each equilibrium row's :math:`b - A F_{ref}`) over the variance :math:`R` the
+    KF assumes for it (:func:`~wheelload.models.measurement_noise.measurement_noise_function`
+    with the file's densities at the log's interval, eq. 13, 17). 1 is a row the filter
+    weighs as its error is; the ratio of an equilibrium row's value to the suspension's is
+    the :math:`R_c` scale that would weigh the two updates as their errors are (white-noise
+    view: the errors' correlation in time is left out)."""
+    signals, n, u, _, _ = _model_inputs(vehicle, frame)
+    valid = np.isfinite(input_matrix(signals)).astype(float)
+    dt = float(np.median(np.diff(signals.t)))
+    densities = noise_densities(vehicle)[1:]  # without the process noise, DENSITIES order
+    R_s, R_c = measurement_noise_function().map(n)(u, valid, densities, dt)
+    suspension = suspension_residuals(vehicle, frame) ** 2 / np.asarray(R_s).T
+    rows = equilibrium_residuals(vehicle, frame) ** 2 / np.asarray(R_c).T
+    result = {"suspension": float(np.mean(suspension))}
+    result.update(zip(ROWS, np.mean(rows, axis=0).tolist(), strict=True))
+    return result

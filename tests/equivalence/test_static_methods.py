@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.family.algebraic import Algebraic
-from wheelload.estimators.family.quasi_static import QuasiStatic
+from wheelload.estimators.family.quasi_static import QuasiStatic, StaticTransfer
 from wheelload.estimators.family.suspension_only import SuspensionOnly
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import SuspensionModel
@@ -69,6 +69,32 @@ def test_quasi_static_satisfies_the_equilibrium_with_aero(vehicle):
     )
     assert np.max(np.abs(estimate.residual)) < 1e-6  # N, N m: rounding
     assert not estimate.has_std and np.all(estimate.std == 0)
+
+
+@pytest.mark.parametrize("acc", [(3.0, -5.0, GRAVITY), (-7.0, 8.0, 10.5)])
+def test_paper_c_is_static_loads_plus_rigid_transfer(vehicle, acc):
+    """C-paper written out from the file's numbers: F0 -/+ m h ax / 2L (front/rear), lateral
+    m h ay split by the static axle loads (front lr / L), left wheels lighter for ay > 0;
+    no az and no aero (vx = 40 m/s changes nothing)."""
+    p = ModelParameters.from_vehicle(vehicle)
+    m, h, lf, lr = p.mass, p.cg_height, p.lf, p.lr
+    L = lf + lr
+    ax, ay, _ = acc
+    longitudinal = m * h * ax / (2 * L) * np.array([-1.0, -1.0, 1.0, 1.0])
+    lateral = (
+        m
+        * h
+        * ay
+        / L
+        * np.array([-lr / p.track_front, lr / p.track_front, -lf / p.track_rear, lf / p.track_rear])
+    )
+    expected = static_loads(vehicle) + longitudinal + lateral
+    loads = StaticTransfer(vehicle).run(constant_log(acc, vx=40.0)).loads
+    # Same arithmetic, two derivations: agreement to rounding (1e-9 of the load).
+    np.testing.assert_allclose(loads, np.tile(expected, (N, 1)), rtol=1e-9)
+    # The strengthened C meets the equilibrium with az and lift: it differs here.
+    strong = QuasiStatic(vehicle, suspension=SuspensionModel.PAPER).run(constant_log(acc, vx=40.0))
+    assert np.max(np.abs(strong.loads[-1] - expected)) > 50.0  # N
 
 
 def test_suspension_only_equals_the_suspension_model_written_out(vehicle):
@@ -147,7 +173,7 @@ def test_algebraic_removes_body_pitch_and_roll_from_the_specific_force(vehicle):
     assert np.max(np.abs(estimate.loads[0] - static)) > 20.0  # the filter starts level
 
 
-@pytest.mark.parametrize("method", [Algebraic, QuasiStatic, SuspensionOnly])
+@pytest.mark.parametrize("method", [Algebraic, QuasiStatic, StaticTransfer, SuspensionOnly])
 def test_run_equals_repeated_step(vehicle, method):
     rng = np.random.default_rng(2)
     base = constant_log((1.0, -2.0, GRAVITY), vx=20.0, n=60)

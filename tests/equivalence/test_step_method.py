@@ -44,7 +44,11 @@ def gappy():
     return replace(signals, d=d, acc=acc)
 
 
-@pytest.mark.parametrize("name", FAMILY)
+#: Methods that had a former runner (the reference file's); C-paper came after them.
+FORMER = [name for name in FAMILY if name != "C-paper"]
+
+
+@pytest.mark.parametrize("name", FORMER)
 def test_paper_model_reproduces_the_former_runners_to_the_bit(name, gappy):
     reference = np.load(REFERENCE)
     estimate = build(name, load_vehicle(example_vehicle_path()), SuspensionModel.PAPER).run(gappy)

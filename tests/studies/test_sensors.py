@@ -113,3 +113,36 @@ def test_the_clean_grade_is_noise_free_and_a_bad_name_is_named():
     pd.testing.assert_frame_equal(log, truth)
     with pytest.raises(ValueError, match="unknown sensor grade 'mems'; choose from clean"):
         sensor_grade("mems")
+
+
+def test_paper_scalings_scale_only_what_the_paper_perturbs():
+    """Same seed, s = 4 against s = 1: under both paper scalings the gyroscopes (and under
+    PAPER_STOCHASTIC the accelerometers' turn-on bias and the travel linearity curve) keep
+    their nominal errors exactly; the accelerometers' random part grows 4 times."""
+    from wheelload.studies.drive.sensors import NoiseScaling
+
+    truth = _truth(3000)
+
+    def errors(scaling, s):
+        log = measure(truth, s, np.random.default_rng(5), scaling=scaling)
+        return {c: log[c].to_numpy() - truth[c].to_numpy() for c in ("ax", "wx", "d_fl")}
+
+    for scaling in (NoiseScaling.PAPER_SENSORS, NoiseScaling.PAPER_STOCHASTIC):
+        one, four = errors(scaling, 1.0), errors(scaling, 4.0)
+        np.testing.assert_array_equal(four["wx"], one["wx"])  # gyroscope: nominal
+        assert np.std(np.diff(four["ax"])) == pytest.approx(4 * np.std(np.diff(one["ax"])))
+    # ALL at s = 1 is the nominal log of either paper scaling (common random numbers).
+    nominal = errors(NoiseScaling.ALL, 1.0)
+    for scaling in (NoiseScaling.PAPER_SENSORS, NoiseScaling.PAPER_STOCHASTIC):
+        np.testing.assert_array_equal(errors(scaling, 1.0)["d_fl"], nominal["d_fl"])
+    # The turn-on bias is the accelerometer error's mean: x4 under PAPER_SENSORS, x1 under
+    # PAPER_STOCHASTIC (the white noise and walk of 3000 samples move the mean far less).
+    bias_one = np.mean(nominal["ax"])
+    sensors = np.mean(errors(NoiseScaling.PAPER_SENSORS, 4.0)["ax"])
+    stochastic = np.mean(errors(NoiseScaling.PAPER_STOCHASTIC, 4.0)["ax"])
+    assert abs(bias_one) > 0.005  # 1 sigma is 0.049 m/s^2 (5 mg); this seed draws one
+    assert sensors == pytest.approx(4 * bias_one, rel=0.05)
+    assert stochastic == pytest.approx(bias_one, rel=0.05)
+    # The travel error of PAPER_STOCHASTIC at s = 0 is the linearity curve and the step only.
+    zero = errors(NoiseScaling.PAPER_STOCHASTIC, 0.0)["d_fl"]
+    assert np.max(np.abs(zero)) <= TravelSensorModel().linearity * 0.150 + 0.150 / 2**12

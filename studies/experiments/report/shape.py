@@ -51,17 +51,22 @@ def compare_ranking(ours: dict[str, float], paper: dict[str, float], what: str) 
     return " ".join(lines)
 
 
-def compare_trend(ours: dict[float, float], paper: dict[float, float], what: str) -> str:
-    """A sentence on how a quantity changes from the first to the last key in both."""
-    keys = [k for k in paper if k in ours]
-    if len(keys) < 2:
+def changes_from(
+    ours: dict[float, float], paper: dict[float, float], base: float, what: str
+) -> str:
+    """A sentence: ``what`` at each key above ``base`` as a change from its value at ``base``
+    [%], ours and the paper's, over their common keys."""
+    keys = [k for k in paper if k in ours and k > base]
+    if base not in ours or base not in paper or not keys or not ours[base] or not paper[base]:
         return f"Too few common points to compare {what}."
-    first, last = keys[0], keys[-1]
 
-    def change(values):
-        return 100.0 * (values[last] - values[first]) / values[first] if values[first] else 0.0
+    def change(values, k):
+        return 100.0 * (values[k] - values[base]) / values[base]
 
+    cells = ", ".join(
+        f"{change(ours, k):+.1f} % (paper {change(paper, k):+.1f} %) at {k:g}" for k in keys
+    )
     return (
-        f"{what} changes by {change(ours):+.1f} % from {first:g} to {last:g} here, "
-        f"{change(paper):+.1f} % in the paper."
+        f"From {base:g}, {what} ({ours[base]:.1f} N here, {paper[base]:.1f} N in the paper) "
+        f"changes by {cells}."
     )

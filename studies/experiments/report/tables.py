@@ -37,18 +37,20 @@ def wheel_table(metrics: dict[str, pd.DataFrame]) -> pd.DataFrame:
 
 
 def beside_paper(metrics: dict[str, pd.DataFrame], paper: pd.DataFrame) -> pd.DataFrame:
-    """Each paper cell as 'ours (paper)' for the methods the paper has, per wheel."""
+    """Each paper cell as 'ours (paper)' for the methods the paper has, per wheel; a
+    paper-faithful variant ``NAME-paper`` (e.g. C-paper) beside the paper's ``NAME`` too."""
     rows = []
     for column in COLUMNS:
         for name in paper.loc[column].index:
-            if name not in metrics:
-                continue
-            ours = metrics[name]
-            cells = {
-                w.upper(): f"{ours.loc[w, column]:.2f} ({paper.loc[(column, name), w]:.2f})"
-                for w in WHEELS
-            }
-            rows.append({"metric": UNITS[column], "method": name, **cells})
+            for ours_name in (name, f"{name}-paper"):
+                if ours_name not in metrics:
+                    continue
+                ours = metrics[ours_name]
+                cells = {
+                    w.upper(): f"{ours.loc[w, column]:.2f} ({paper.loc[(column, name), w]:.2f})"
+                    for w in WHEELS
+                }
+                rows.append({"metric": UNITS[column], "method": ours_name, **cells})
     return pd.DataFrame(rows).set_index(["metric", "method"])
 
 

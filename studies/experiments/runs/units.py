@@ -29,7 +29,7 @@ from wheelload.models.vehicle.description import Vehicle, vehicle_from_dict
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
-from wheelload.studies.drive.sensors import MTI_1, measure, sensor_grade
+from wheelload.studies.drive.sensors import MTI_1, NoiseScaling, measure, sensor_grade
 from wheelload.studies.experiments.runs.cache import ResultCache
 from wheelload.studies.metrics import wheel_metrics
 
@@ -61,6 +61,7 @@ class TrialSpec:
     vehicle_text: str  # the estimators' vehicle file (an edited copy in ablation / mismatch)
     methods: tuple[str, ...]
     noise: float = 1.0  # sensor noise scale s (paper §IV-F)
+    scaling: NoiseScaling = NoiseScaling.ALL  # which sensor errors s multiplies
     sensors: str = MTI_1.name  # sensor grade (studies.drive.sensors.GRADES)
     seed: int = 0  # measurement seed
     window: tuple[float, float] | None = None  # scored samples, t in [start, end] s
@@ -137,7 +138,7 @@ def measured(spec: TrialSpec, folder: Path) -> pd.DataFrame:
         raise ValueError("TrialSpec.truth_key is not set: plan trials with common.trials()")
     truth = _truth(str(folder), spec.truth_key)
     rng = np.random.default_rng(np.random.SeedSequence([spec.seed, 1]))
-    return measure(truth, spec.noise, rng, sensor_grade(spec.sensors))
+    return measure(truth, spec.noise, rng, sensor_grade(spec.sensors), spec.scaling)
 
 
 def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:

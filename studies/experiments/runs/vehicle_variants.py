@@ -20,7 +20,13 @@ import tomllib
 from dataclasses import dataclass
 
 from wheelload.models.vehicle.description import vehicle_from_dict
-from wheelload.models.vehicle.file import replace_values
+from wheelload.models.vehicle.file import (
+    TABLE,
+    add_values,
+    assigned_keys,
+    replace_values,
+    table_key,
+)
 
 Value = float | bool | tuple[float, ...]
 
@@ -32,6 +38,7 @@ class Edit:
     table: str
     key: str
     value: Value
+    optional: bool = False  # an optional key: added when the file does not set it
 
     def text(self) -> str:
         if isinstance(self.value, bool):
@@ -50,13 +57,34 @@ class Variant:
 
     def apply(self, text: str) -> str:
         """``text`` with the edits made; every edited key must exist exactly once."""
-        values = {(*edit.table.split("."), edit.key): edit.text() for edit in self.edits}
+        present = assigned_keys(text)
+        values, added = {}, []
+        for edit in self.edits:
+            key = (*edit.table.split("."), edit.key)
+            if edit.optional and key not in present:
+                added.append(edit)
+            else:
+                values[key] = edit.text()
         try:
             edited = replace_values(text, values)
+            for edit in added:
+                edited = _added(edited, edit, self.label)
         except ValueError as error:
             raise ValueError(f"variant '{self.label}': {error}") from None
         vehicle_from_dict(tomllib.loads(edited))  # the variant must be a valid vehicle
         return edited
+
+
+def _added(text: str, edit: Edit, label: str) -> str:
+    """``text`` with the optional key of ``edit`` added: at the end of its table, or under a
+    new table header at the end of the file (TOML allows a super-table after its
+    sub-tables, e.g. ``[suspension]`` after ``[suspension.front]``)."""
+    key = tuple(edit.table.split("."))
+    headers = {table_key(match) for line in text.splitlines() if (match := TABLE.match(line))}
+    comment = f"variant '{label}'"
+    if key in headers:
+        return add_values(text, {(*key, edit.key): (edit.value, comment)})
+    return text.rstrip("\n") + f"\n\n[{edit.table}]\n{edit.key} = {edit.text()}  # {comment}\n"
 
 
 def value(text: str, table: str, key: str) -> Value:

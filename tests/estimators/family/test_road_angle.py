@@ -61,3 +61,22 @@ def test_step_through_equals_run():
     run = kf.run(signals)
     assert np.array_equal(run.loads, step_through(kf, signals).loads)
     assert run.has_std and np.all(run.std > 0)
+
+
+def test_body_inertia_comes_from_the_vehicle_file():
+    """The SUV's file gives Ixx 850, Iyy 3600 kg m^2 (the sports car's 518.04, 1677): the
+    filter's roll and pitch rows divide the suspension's roll / pitch stiffness by those
+    plus m_s h^2 (axis on the ground), computed here from the file's numbers to 1e-9."""
+    from wheelload.models.body_attitude import roll_pitch_stiffness
+    from wheelload.models.family.road_angle import BodyInertia
+
+    suv = load_vehicle(example_vehicle_path().with_name("suv.toml"))
+    estimator = RoadAngleKF(suv)
+    ixx, iyy, _ = suv.mass.inertia
+    assert (estimator.inertia.roll, estimator.inertia.pitch) == (ixx, iyy) == (850.0, 3600.0)
+    k = roll_pitch_stiffness(suv)
+    arm_inertia = suv.mass.sprung * suv.geometry.cg_height**2
+    assert estimator.A[1, 0] == pytest.approx(-k.roll / (ixx + arm_inertia), rel=1e-9)
+    assert estimator.A[3, 2] == pytest.approx(-k.pitch / (iyy + arm_inertia), rel=1e-9)
+    sports = BodyInertia(roll=518.04, pitch=1677.0)  # the constants it used to take
+    assert not np.allclose(RoadAngleKF(suv, inertia=sports).A, estimator.A)
