@@ -1,0 +1,91 @@
+"""What the dense and the chunked fit share: the loss, the robust weights, the rows' layout.
+
+The rows of all data sets are stacked set after set, each set's used
+samples in time order and, within a sample, its wheels in order (as
+:func:`~wheelload.estimators.identification.regressors.evaluate` stacks
+them); :class:`Layout` tells where each set's rows are and which wheel and
+time each row has, from the data sets alone, so a fit that keeps only one
+number per row (its residual) can compute the per-set scales.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+
+from wheelload.estimators.identification.data import DataSet
+from wheelload.estimators.identification.regressors import used_samples
+
+ROBUST_SCALE = 1.5  # robust-loss threshold in units of the residual scale
+INLIER = 3.0  # |r| / sigma below which a row counts for a robust fit's covariance
+
+
+class FitLoss(enum.Enum):
+    """Residual loss of the fit."""
+
+    LINEAR = "linear"
+    HUBER = "huber"
+    SOFT_L1 = "soft-l1"
+
+
+def robust_weight(e: np.ndarray, loss: FitLoss) -> np.ndarray:
+    r"""IRLS weight :math:`\psi(e) / e` of the loss at scaled residuals ``e`` (rows of
+    ``scipy.optimize.least_squares``' cost :math:`C^2 \rho((e / C)^2)`, :math:`C` =
+    :data:`ROBUST_SCALE`): Huber :math:`\min(1, C / |e|)`, soft-L1
+    :math:`(1 + (e / C)^2)^{-1/2}`; least squares 1."""
+    z = np.abs(e) / ROBUST_SCALE
+    if loss is FitLoss.HUBER:
+        return 1.0 / np.maximum(z, 1.0)
+    if loss is FitLoss.SOFT_L1:
+        return 1.0 / np.sqrt(1.0 + z * z)
+    return np.ones_like(e)
+
+
+def inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:
+    """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
+    return np.ones(weighted.size, bool) if loss is FitLoss.LINEAR else np.abs(weighted) < INLIER
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Layout:
+    """Where each data set's rows are in the stacked rows (``offsets``), and their largest
+    absolute target (``peak``)."""
+
+    sets: tuple[DataSet, ...]
+    offsets: np.ndarray  # (count + 1,) first row of each set
+    peak: np.ndarray  # (count,) largest |y| of each set's rows
+
+    @staticmethod
+    def of(sets: tuple[DataSet, ...]) -> Layout:
+        counts, peaks = [], []
+        for data in sets:
+            target = data.target[used_samples(data)]
+            finite = np.isfinite(target)
+            counts.append(int(finite.sum()))
+            peaks.append(float(np.abs(target[finite]).max()) if finite.any() else 0.0)
+        return Layout(
+            sets=sets, offsets=np.concatenate([[0], np.cumsum(counts)]), peak=np.array(peaks)
+        )
+
+    @property
+    def size(self) -> int:
+        return int(self.offsets[-1])
+
+    def rows(self, group: int) -> slice:
+        return slice(int(self.offsets[group]), int(self.offsets[group + 1]))
+
+    def counts(self) -> np.ndarray:
+        return np.diff(self.offsets)
+
+    def wheel_and_time(self, group: int) -> tuple[np.ndarray, np.ndarray]:
+        """Wheel index (into the set's ``rows``) and time of each row of one set."""
+        data = self.sets[group]
+        used = used_samples(data)
+        sample, row = np.nonzero(np.isfinite(data.target[used]))
+        return row, data.t[used][sample]
+
+    def per_row(self, values: np.ndarray) -> np.ndarray:
+        """A per-set value repeated over the set's rows."""
+        return np.repeat(values, self.counts())
