@@ -15,8 +15,8 @@ from wheelload.estimators.identification.fit_terms import ROBUST_SCALE, FitLoss,
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import Rows, evaluate
 
-#: Tolerances of the robust solver: converged to rounding, so that the chunked IRLS,
-#: another route to the same minimiser, can be compared with it.
+#: Tolerances of the robust solver: converged to rounding, so that the chunked Newton
+#: steps, another route to the same minimiser, can be compared with it.
 TIGHT = 1e-15
 
 

@@ -30,17 +30,19 @@ class FitLoss(enum.Enum):
     SOFT_L1 = "soft-l1"
 
 
-def robust_weight(e: np.ndarray, loss: FitLoss) -> np.ndarray:
-    r"""IRLS weight :math:`\psi(e) / e` of the loss at scaled residuals ``e`` (rows of
-    ``scipy.optimize.least_squares``' cost :math:`C^2 \rho((e / C)^2)`, :math:`C` =
-    :data:`ROBUST_SCALE`): Huber :math:`\min(1, C / |e|)`, soft-L1
-    :math:`(1 + (e / C)^2)^{-1/2}`; least squares 1."""
-    z = np.abs(e) / ROBUST_SCALE
+def robust_terms(e: np.ndarray, loss: FitLoss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Cost :math:`\rho`, half its slope :math:`\psi` and the slope of that, :math:`h`, of the
+    loss at scaled residuals ``e``, per row of ``scipy.optimize.least_squares``' cost
+    :math:`C^2 \rho((e / C)^2)` (:math:`C` = :data:`ROBUST_SCALE`): Huber
+    :math:`e^2` or :math:`2 C |e| - C^2`; soft-L1 :math:`2 C^2 (\sqrt{1 + (e/C)^2} - 1)`."""
+    C = ROBUST_SCALE
+    z = (e / C) ** 2
     if loss is FitLoss.HUBER:
-        return 1.0 / np.maximum(z, 1.0)
-    if loss is FitLoss.SOFT_L1:
-        return 1.0 / np.sqrt(1.0 + z * z)
-    return np.ones_like(e)
+        inside = np.abs(e) <= C
+        cost = np.where(inside, e * e, 2 * C * np.abs(e) - C * C)
+        return cost, np.where(inside, e, C * np.sign(e)), inside.astype(float)
+    root = np.sqrt(1.0 + z)
+    return 2 * C * C * (root - 1.0), e / root, 1.0 / (root * root * root)
 
 
 def inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:

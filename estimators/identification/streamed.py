@@ -14,9 +14,8 @@ factor of the weighted subset as the QR of :math:`[w_g R_g[:, S]]_g`, and
 - two-stage least squares: :math:`P_Z A = Q_Z R_{ZA}`, so
   :math:`\min \|P_Z A u - b\| = \min \|R_{ZA} u - R_{Zb}\|` and the
   singular values of :math:`P_Z A` are those of :math:`R_{ZA}`;
-- a robust loss: iteratively reweighted least squares, one pass a step, the
-  rows weighted by :math:`\psi(e)/e` (its fixed point is the robust
-  minimiser, bounds included);
+- a robust loss: bounded Newton steps, one pass a step (the factor of the
+  rows weighted by the loss's curvature and the gradient accumulated);
 - the residuals (for the per-set MAD scale and lag-one autocorrelation) in
   one pass per fit of the identifiability loop, one number per row kept.
 
@@ -30,7 +29,7 @@ import numpy as np
 from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
-from wheelload.estimators.identification.fit_terms import FitLoss, Layout, robust_weight
+from wheelload.estimators.identification.fit_terms import FitLoss, Layout, robust_terms
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import (
     CHUNK,
@@ -40,9 +39,11 @@ from wheelload.estimators.identification.regressors import (
     sampled_rows,
 )
 
-#: IRLS stops when no scaled parameter moves by more than this (relative units).
-IRLS_TOLERANCE = 1e-13
-IRLS_STEPS = 500
+#: Newton's method on a robust loss stops when no scaled parameter moves by more than this
+#: (relative units), or after this many passes.
+NEWTON_TOLERANCE = 1e-13
+NEWTON_STEPS = 100
+EPS = np.finfo(float).eps
 
 
 class Triangle:
@@ -146,28 +147,62 @@ class ChunkedDesign:
         rhs = R[:kz, kz + k] if R.shape[1] > kz + k else None
         return R[:kz, :kz], R[:kz, kz : kz + k], rhs
 
+    def _projection(self, R_ZZ, M, c=None):
+        """``M`` and ``c`` in the coordinates of the instruments' span, the span cut where
+        ``numpy.linalg.lstsq`` on all rows would cut it (singular values below
+        eps * max(rows, columns) of the largest), so both fits project alike."""
+        U, singular, _ = np.linalg.svd(R_ZZ)
+        cut = EPS * max(self.layout.size, R_ZZ.shape[1]) * singular[0]
+        basis = U[:, singular > cut]
+        return basis.T @ M, None if c is None else basis.T @ c
+
+    def _coefficients(self, R_ZZ, M):
+        """:math:`R_{ZZ}^{+} R_{ZA}` with the same cut: instruments times it project."""
+        rcond = EPS * max(self.layout.size, R_ZZ.shape[1])
+        return np.linalg.lstsq(R_ZZ, M, rcond=rcond)[0]
+
     def solve(self, cols, sigma, lower, upper, loss: FitLoss) -> np.ndarray:
         k = len(cols)
         weight = 1.0 / sigma
         R_ZZ, M, c = self._split(self._weighted(cols, weight, True), k)
+        coefficients = None
+        if R_ZZ is not None:
+            coefficients = self._coefficients(R_ZZ, M)
+            M, c = self._projection(R_ZZ, M, c)
         u = _bvls(M, c, lower, upper)
         if loss is FitLoss.LINEAR:
             return u
         u = np.clip(u, lower, upper)
-        coefficients = None if R_ZZ is None else np.linalg.lstsq(R_ZZ, M, rcond=None)[0]
-        for _ in range(IRLS_STEPS):
-            triangle = Triangle(k + 1)
+        return self._newton(cols, weight, u, lower, upper, loss, coefficients)
+
+    def _newton(self, cols, weight, u, lower, upper, loss, coefficients) -> np.ndarray:
+        r"""Bounded Newton steps on the robust cost :math:`\sum \rho(A u - b)`, halved while
+        the cost grows: each pass accumulates the factor of :math:`\sqrt{h} A` and the
+        gradient :math:`A^\top \psi` (:func:`robust_terms`)."""
+        k = len(cols)
+        best, previous = np.inf, u
+        for _ in range(NEWTON_STEPS):
+            triangle, gradient, cost = Triangle(k), np.zeros(k), 0.0
             for start, part in self._passes(self.instrumented):
                 w = weight[int(part.group[0])]
                 A = self._regressors(part, cols, w, coefficients)
-                b = self.r0[start : start + part.y.size] * w
-                root = np.sqrt(robust_weight(A @ u - b, loss))[:, None]
-                triangle.add(np.hstack([A, b[:, None]]) * root)
-            step = _bvls(triangle.R[:k, :k], triangle.R[:k, k], lower, upper)
-            done = np.max(np.abs(step - u)) <= IRLS_TOLERANCE
-            u = step
-            if done:
-                break
+                e = A @ u - self.r0[start : start + part.y.size] * w
+                rho, psi, h = robust_terms(e, loss)
+                cost += rho.sum()
+                gradient += A.T @ psi
+                triangle.add(A * np.sqrt(h)[:, None])
+            if cost > best:  # a step too long: back half way
+                u = 0.5 * (u + previous)
+                if np.max(np.abs(u - previous)) <= NEWTON_TOLERANCE:
+                    return previous
+                continue
+            best, previous = cost, u
+            R = triangle.R
+            rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
+            step = _bvls(R, rhs, lower - u, upper - u)
+            u = np.clip(u + step, lower, upper)
+            if np.max(np.abs(step)) <= NEWTON_TOLERANCE:
+                return u
         return u
 
     def _regressors(self, part: Rows, cols, weight: float, coefficients) -> np.ndarray:
@@ -192,8 +227,8 @@ class ChunkedDesign:
         weight = 1.0 / inflation
         R_ZZ, M, _ = self._split(self._weighted(cols, weight, False), k)
         if inliers is None:
-            return M
-        coefficients = None if R_ZZ is None else np.linalg.lstsq(R_ZZ, M, rcond=None)[0]
+            return M if R_ZZ is None else self._projection(R_ZZ, M)[0]
+        coefficients = None if R_ZZ is None else self._coefficients(R_ZZ, M)
         triangle = Triangle(k)
         for start, part in self._passes(self.instrumented):
             A = self._regressors(part, cols, weight[int(part.group[0])], coefficients)
