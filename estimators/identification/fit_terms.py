@@ -11,9 +11,11 @@ number per row (its residual) can compute the per-set scales.
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
 from wheelload.estimators.identification.regressors import used_samples
@@ -43,6 +45,43 @@ def robust_terms(e: np.ndarray, loss: FitLoss) -> tuple[np.ndarray, np.ndarray, 
         return cost, np.where(inside, e, C * np.sign(e)), inside.astype(float)
     root = np.sqrt(1.0 + z)
     return 2 * C * C * (root - 1.0), e / root, 1.0 / (root * root * root)
+
+
+#: Newton's method on a robust loss stops when no scaled parameter moves by more than this
+#: (relative units), or after this many steps.
+NEWTON_TOLERANCE = 1e-13
+NEWTON_STEPS = 100
+
+
+def newton(
+    terms: Callable[[np.ndarray], tuple[float, np.ndarray, np.ndarray]],
+    u: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> np.ndarray:
+    r"""Bounded Newton steps on a robust cost, halved while the cost grows.
+
+    ``terms(u)`` gives the cost :math:`\sum \rho(A u - b)`, a triangular
+    factor :math:`R` of the curvature :math:`A^\top \mathrm{diag}(h) A`
+    and the gradient :math:`g = A^\top \psi` (:func:`robust_terms`); the
+    step minimises :math:`\tfrac12 \|R \Delta\|^2 + g^\top \Delta` within the
+    bounds, as the least squares :math:`\|R \Delta + R^{-\top} g\|` (BVLS).
+    """
+    best, previous = np.inf, u
+    for _ in range(NEWTON_STEPS):
+        cost, R, gradient = terms(u)
+        if cost > best:  # a step too long: back half way
+            u = 0.5 * (u + previous)
+            if np.max(np.abs(u - previous)) <= NEWTON_TOLERANCE:
+                return previous
+            continue
+        best, previous = cost, u
+        rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
+        step = optimize.lsq_linear(R, rhs, bounds=(lower - u, upper - u), method="bvls").x
+        u = np.clip(u + step, lower, upper)
+        if np.max(np.abs(step)) <= NEWTON_TOLERANCE:
+            return u
+    return u
 
 
 def inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:

@@ -29,7 +29,7 @@ import numpy as np
 from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
-from wheelload.estimators.identification.fit_terms import FitLoss, Layout, robust_terms
+from wheelload.estimators.identification.fit_terms import FitLoss, Layout, newton, robust_terms
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import (
     CHUNK,
@@ -39,10 +39,6 @@ from wheelload.estimators.identification.regressors import (
     sampled_rows,
 )
 
-#: Newton's method on a robust loss stops when no scaled parameter moves by more than this
-#: (relative units), or after this many passes.
-NEWTON_TOLERANCE = 1e-13
-NEWTON_STEPS = 100
 EPS = np.finfo(float).eps
 
 
@@ -176,12 +172,11 @@ class ChunkedDesign:
         return self._newton(cols, weight, u, lower, upper, loss, coefficients)
 
     def _newton(self, cols, weight, u, lower, upper, loss, coefficients) -> np.ndarray:
-        r"""Bounded Newton steps on the robust cost :math:`\sum \rho(A u - b)`, halved while
-        the cost grows: each pass accumulates the factor of :math:`\sqrt{h} A` and the
-        gradient :math:`A^\top \psi` (:func:`robust_terms`)."""
+        r""":func:`~wheelload.estimators.identification.fit_terms.newton`, one pass a step:
+        the factor of :math:`\sqrt{h} A` and the gradient accumulated chunk by chunk."""
         k = len(cols)
-        best, previous = np.inf, u
-        for _ in range(NEWTON_STEPS):
+
+        def terms(u):
             triangle, gradient, cost = Triangle(k), np.zeros(k), 0.0
             for start, part in self._passes(self.instrumented):
                 w = weight[int(part.group[0])]
@@ -191,19 +186,9 @@ class ChunkedDesign:
                 cost += rho.sum()
                 gradient += A.T @ psi
                 triangle.add(A * np.sqrt(h)[:, None])
-            if cost > best:  # a step too long: back half way
-                u = 0.5 * (u + previous)
-                if np.max(np.abs(u - previous)) <= NEWTON_TOLERANCE:
-                    return previous
-                continue
-            best, previous = cost, u
-            R = triangle.R
-            rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
-            step = _bvls(R, rhs, lower - u, upper - u)
-            u = np.clip(u + step, lower, upper)
-            if np.max(np.abs(step)) <= NEWTON_TOLERANCE:
-                return u
-        return u
+            return cost, triangle.R, gradient
+
+        return newton(terms, u, lower, upper)
 
     def _regressors(self, part: Rows, cols, weight: float, coefficients) -> np.ndarray:
         """A chunk's weighted regressors of ``cols``, projected on the instruments' span
