@@ -6,8 +6,8 @@ so with regressors :math:`J` and residual :math:`r_0 = y - \hat y(\theta_0)`
 
 .. math:: \min_{lb \le \Delta \le ub} \sum_k \rho\big((J_k \Delta - r_{0,k}) / \sigma_{g(k)}\big)
 
-with :math:`\rho(r) = r^2` (bounded linear least squares, ``lsq_linear``) or
-a robust loss (Huber, soft-L1, ``scipy.optimize.least_squares``). Each data
+with :math:`\rho(r) = r^2` (bounded linear least squares, BVLS) or a robust
+loss (Huber, soft-L1: bounded Newton steps to the minimiser). Each data
 set ``g`` is weighted by its robust residual scale :math:`\sigma_g`
 (1.4826 MAD). Standard errors from :math:`s^2 (A^\top A)^{-1}` with
 :math:`A_k = J_k / (\sigma_g \sqrt{\kappa_g})`, where
@@ -31,6 +31,13 @@ precision :math:`1/s_i` is worse than ``precision`` is not determined by the
 data; the parameter with the largest share of that direction is held at the
 file value and named in a warning. A fitted value whose standard error
 exceeds ``warn_precision`` of its size is named in a milder warning.
+
+The linear algebra runs by default over chunks of samples with triangular
+factors kept (:mod:`~wheelload.estimators.identification.streamed`: memory
+bounded by the parameter count and one chunk, plus one residual per row);
+``FitPath.DENSE`` holds the whole regressor matrix
+(:mod:`~wheelload.estimators.identification.dense`, the reference: the two
+agree to 1e-9 relative).
 """
 
 from __future__ import annotations
