@@ -10,15 +10,15 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-from wheelload.estimators.identification.data import DataSet
 from wheelload.estimators.identification.fit_terms import (
     ROBUST_SCALE,
     FitLoss,
     Layout,
+    Problem,
+    instrument_columns,
     newton,
     robust_terms,
 )
-from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import Rows, evaluate
 
 
@@ -59,34 +59,21 @@ def _projected(A: np.ndarray, Z: np.ndarray | None) -> np.ndarray:
     return Z @ coefficients
 
 
-def _instrument_columns(Z: np.ndarray, cols, scale, weight) -> np.ndarray:
-    """Instrument regressors of the free columns, all lags side by side, scaled and weighted."""
-    block = Z[:, :, cols] * scale[cols] * weight[:, None, None]
-    return block.reshape(block.shape[0], -1)
-
-
 class DenseDesign:
     """The regression rows of all data sets at the start values, held in memory."""
 
-    def __init__(
-        self,
-        model: SuspensionFitModel,
-        sets: tuple[DataSet, ...],
-        theta: np.ndarray,
-        scale: np.ndarray,
-        instrumented: bool,
-    ) -> None:
-        self.model, self.sets, self.scale = model, sets, scale
-        self.rows = evaluate(model, sets, theta, instrumented)
-        self.layout = Layout.of(sets)
+    def __init__(self, problem: Problem) -> None:
+        self.model, self.sets, self.scale = problem.model, problem.sets, problem.scale
+        self.rows = evaluate(self.model, self.sets, problem.theta, problem.instrumented)
+        self.layout = Layout.of(self.sets)
         self.r0 = self.rows.y - self.rows.y_hat
-        self.peak = np.abs(self.rows.J * scale).max(axis=0)
+        self.peak = np.abs(self.rows.J * self.scale).max(axis=0)
 
     def solve(self, cols, sigma, lower, upper, loss: FitLoss) -> np.ndarray:
         rows, scale = self.rows, self.scale
         weight = 1.0 / sigma[rows.group]
         A = rows.J[:, cols] * scale[cols] * weight[:, None]
-        Z = None if rows.Z is None else _instrument_columns(rows.Z, cols, scale, weight)
+        Z = None if rows.Z is None else instrument_columns(rows.Z, cols, scale, weight)
         return solve(_projected(A, Z), self.r0 * weight, lower, upper, loss)
 
     def residual(self, cols, u) -> np.ndarray:
@@ -97,7 +84,7 @@ class DenseDesign:
         rows, scale = self.rows, self.scale
         per_row = inflation[rows.group][:, None]
         instrument = (
-            None if rows.Z is None else _instrument_columns(rows.Z, cols, scale, 1 / per_row[:, 0])
+            None if rows.Z is None else instrument_columns(rows.Z, cols, scale, 1 / per_row[:, 0])
         )
         info = _projected(rows.J[:, cols] * scale[cols] / per_row, instrument)
         return info if inliers is None else info[inliers]

@@ -49,7 +49,7 @@ import numpy as np
 
 from wheelload.estimators.identification.data import DataSet
 from wheelload.estimators.identification.dense import DenseDesign
-from wheelload.estimators.identification.fit_terms import FitLoss, Layout, inliers
+from wheelload.estimators.identification.fit_terms import FitLoss, Layout, Problem, inliers
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import CHUNK, Rows, linear_free_set
 from wheelload.estimators.identification.streamed import ChunkedDesign
@@ -165,11 +165,12 @@ def _variance_factor(weighted: np.ndarray, free: int, loss: FitLoss) -> float:
 
 
 def _design(model, sets, theta0, scale, free, settings: FitSettings):
-    if settings.path is FitPath.DENSE:
-        return DenseDesign(model, sets, theta0, scale, settings.instrumental)
-    return ChunkedDesign(
-        model, sets, theta0, scale, settings.instrumental, free, chunk=settings.chunk
+    problem = Problem(
+        model=model, sets=sets, theta=theta0, scale=scale, instrumented=settings.instrumental
     )
+    if settings.path is FitPath.DENSE:
+        return DenseDesign(problem)
+    return ChunkedDesign(problem, free, chunk=settings.chunk)
 
 
 def identify(

@@ -18,6 +18,7 @@ import numpy as np
 from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
+from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import used_samples
 
 ROBUST_SCALE = 1.5  # robust-loss threshold in units of the residual scale
@@ -130,3 +131,22 @@ class Layout:
     def per_row(self, values: np.ndarray) -> np.ndarray:
         """A per-set value repeated over the set's rows."""
         return np.repeat(values, self.counts())
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Problem:
+    """What a fit's rows are built from: the model, the data, the start values ``theta``,
+    the parameter scale (``|theta|``, 1 where 0) and whether instruments are wanted."""
+
+    model: SuspensionFitModel
+    sets: tuple[DataSet, ...]
+    theta: np.ndarray
+    scale: np.ndarray
+    instrumented: bool
+
+
+def instrument_columns(Z: np.ndarray, cols, scale, weight) -> np.ndarray:
+    """Instrument regressors of the columns ``cols``, all lags side by side (lag-major),
+    scaled and weighted per row."""
+    block = Z[:, :, cols] * scale[cols] * weight[:, None, None]
+    return block.reshape(block.shape[0], -1)

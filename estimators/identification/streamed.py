@@ -28,9 +28,14 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-from wheelload.estimators.identification.data import DataSet
-from wheelload.estimators.identification.fit_terms import FitLoss, Layout, newton, robust_terms
-from wheelload.estimators.identification.model import SuspensionFitModel
+from wheelload.estimators.identification.fit_terms import (
+    FitLoss,
+    Layout,
+    Problem,
+    instrument_columns,
+    newton,
+    robust_terms,
+)
 from wheelload.estimators.identification.regressors import (
     CHUNK,
     INSTRUMENT_LAGS,
@@ -67,17 +72,11 @@ def _bvls(M: np.ndarray, c: np.ndarray, lower, upper) -> np.ndarray:
 class ChunkedDesign:
     """The regression rows of all data sets, passed over a chunk at a time."""
 
-    def __init__(
-        self,
-        model: SuspensionFitModel,
-        sets: tuple[DataSet, ...],
-        theta: np.ndarray,
-        scale: np.ndarray,
-        instrumented: bool,
-        candidates: list[int],
-        chunk: int = CHUNK,
-    ) -> None:
-        self.model, self.sets, self.theta, self.scale = model, sets, theta, scale
+    def __init__(self, problem: Problem, candidates: list[int], chunk: int = CHUNK) -> None:
+        self.model, self.sets, self.theta = problem.model, problem.sets, problem.theta
+        self.scale = scale = problem.scale
+        instrumented = problem.instrumented
+        sets, theta = self.sets, self.theta
         self.instrumented, self.chunk = instrumented, chunk
         self.layout = Layout.of(sets)
         if self.layout.size == 0:
@@ -101,7 +100,7 @@ class ChunkedDesign:
             cols = self.candidates
             block = [part.J[:, cols] * scale[cols], r0[:, None]]
             if instrumented:
-                block.insert(0, self._instruments(part, cols, np.ones(r0.size)))
+                block.insert(0, instrument_columns(part.Z, cols, self.scale, np.ones(r0.size)))
             triangles[g].add(np.hstack(block))
         self.factors = [t.R for t in triangles]
 
@@ -112,10 +111,6 @@ class ChunkedDesign:
             if part.y.size:
                 yield start, part
                 start += part.y.size
-
-    def _instruments(self, part: Rows, cols, weight) -> np.ndarray:
-        block = part.Z[:, :, cols] * self.scale[cols] * weight[:, None, None]
-        return block.reshape(block.shape[0], -1)
 
     def _columns(self, cols, rhs: bool) -> np.ndarray:
         """Columns of the kept factors: instruments of ``cols`` (lag-major), regressors of
@@ -195,7 +190,7 @@ class ChunkedDesign:
         (:math:`Z R_{ZZ}^{+} R_{ZA}`) when there are instruments."""
         if coefficients is None:
             return part.J[:, cols] * self.scale[cols] * weight
-        Z = self._instruments(part, cols, np.full(part.y.size, weight))
+        Z = instrument_columns(part.Z, cols, self.scale, np.full(part.y.size, weight))
         return Z @ coefficients
 
     def residual(self, cols, u) -> np.ndarray:
