@@ -52,6 +52,10 @@ def robust_terms(e: np.ndarray, loss: FitLoss) -> tuple[np.ndarray, np.ndarray, 
 #: (relative units), or after this many steps.
 NEWTON_TOLERANCE = 1e-13
 NEWTON_STEPS = 100
+#: A step that no longer lowers the cost by this (relative) and is below SETTLED_STEP ends
+#: the steps: the cost is flat to rounding there (Huber's kink lets rows flip in and out).
+SETTLED = 1e-15
+SETTLED_STEP = 1e-10
 
 
 def newton(
@@ -71,10 +75,11 @@ def newton(
     best, previous = np.inf, u
     for _ in range(NEWTON_STEPS):
         cost, R, gradient = terms(u)
-        if cost > best:  # a step too long: back half way
-            u = 0.5 * (u + previous)
-            if np.max(np.abs(u - previous)) <= NEWTON_TOLERANCE:
-                return previous
+        if cost >= best - SETTLED * abs(best):  # no decrease
+            moved = np.max(np.abs(u - previous))
+            if moved <= SETTLED_STEP:  # at the minimiser to rounding (Huber's kink)
+                return u if cost <= best else previous
+            u = 0.5 * (u + previous)  # a step too long: back half way
             continue
         best, previous = cost, u
         rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
