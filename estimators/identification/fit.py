@@ -6,8 +6,8 @@ so with regressors :math:`J` and residual :math:`r_0 = y - \hat y(\theta_0)`
 
 .. math:: \min_{lb \le \Delta \le ub} \sum_k \rho\big((J_k \Delta - r_{0,k}) / \sigma_{g(k)}\big)
 
-with :math:`\rho(r) = r^2` (bounded linear least squares, ``lsq_linear``) or
-a robust loss (Huber, soft-L1, ``scipy.optimize.least_squares``). Each data
+with :math:`\rho(r) = r^2` (bounded linear least squares, BVLS) or a robust
+loss (Huber, soft-L1: bounded Newton steps to the minimiser). Each data
 set ``g`` is weighted by its robust residual scale :math:`\sigma_g`
 (1.4826 MAD). Standard errors from :math:`s^2 (A^\top A)^{-1}` with
 :math:`A_k = J_k / (\sigma_g \sqrt{\kappa_g})`, where
@@ -31,6 +31,13 @@ precision :math:`1/s_i` is worse than ``precision`` is not determined by the
 data; the parameter with the largest share of that direction is held at the
 file value and named in a warning. A fitted value whose standard error
 exceeds ``warn_precision`` of its size is named in a milder warning.
+
+The linear algebra runs by default over chunks of samples with triangular
+factors kept (:mod:`~wheelload.estimators.identification.streamed`: memory
+bounded by the parameter count and one chunk, plus one residual per row);
+``FitPath.DENSE`` holds the whole regressor matrix
+(:mod:`~wheelload.estimators.identification.dense`, the reference: the two
+agree to 1e-9 relative).
 """
 
 from __future__ import annotations
@@ -39,25 +46,28 @@ import enum
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
+from wheelload.estimators.identification.dense import DenseDesign
+from wheelload.estimators.identification.fit_terms import FitLoss, Layout, Problem, inliers
 from wheelload.estimators.identification.model import SuspensionFitModel
-from wheelload.estimators.identification.regressors import Rows, evaluate, linear_free_set
+from wheelload.estimators.identification.regressors import CHUNK, Rows, linear_free_set
+from wheelload.estimators.identification.streamed import ChunkedDesign
 from wheelload.models import ModelParameters
 
 MAD_SCALE = 1.4826  # MAD to standard deviation of a normal distribution
-ROBUST_SCALE = 1.5  # robust-loss threshold in units of the residual scale
-INLIER = 3.0  # |r| / sigma below which a row counts for a robust fit's covariance
 ZERO_FORCE = 1e-6  # N, largest regressor effect still taken as no excitation
 
+__all__ = ["FitLoss", "FitPath", "FitSettings", "Identification", "identify"]
 
-class FitLoss(enum.Enum):
-    """Residual loss of the fit."""
 
-    LINEAR = "linear"
-    HUBER = "huber"
-    SOFT_L1 = "soft-l1"
+class FitPath(enum.Enum):
+    """How the regressors are held: a chunk at a time with R factors kept (bounded memory,
+    :mod:`~wheelload.estimators.identification.streamed`) or all in memory (the reference,
+    :mod:`~wheelload.estimators.identification.dense`)."""
+
+    CHUNKED = "chunked"
+    DENSE = "dense"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -71,6 +81,8 @@ class FitSettings:
     # Instrumental variables for the drive logs' regressors (noisy travel rates and
     # accelerations bias least squares towards zero): two-stage least squares.
     instrumental: bool = False
+    path: FitPath = FitPath.CHUNKED
+    chunk: int = CHUNK  # samples per chunk of the chunked path
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -87,24 +99,18 @@ class Identification:
     warnings: tuple[str, ...]
     sources: dict[str, tuple[str, ...]]  # parameter -> data sets that excite it
     sets: tuple[DataSet, ...]
-    rows: Rows  # at the solution
+    rows: Rows  # at the solution (chunked path: a time-spread sample of each set's rows)
     scale: np.ndarray  # robust residual scale per data set [N]
     autocorrelation: np.ndarray  # lag-one residual autocorrelation per data set
     loss: FitLoss
+    fit_rmse: dict[tuple[str, str], float]  # (data set, wheel) -> RMSE [N], all rows
 
     def residual(self) -> np.ndarray:
         return self.rows.y - self.rows.y_hat
 
     def rmse(self) -> dict[tuple[str, str], float]:
         """Fit RMSE [N] per (data set, wheel)."""
-        r = self.residual()
-        table = {}
-        for g, data in enumerate(self.sets):
-            for wheel in data.rows:
-                mask = (self.rows.group == g) & (self.rows.wheel == wheel)
-                if mask.any():
-                    table[(data.label(), wheel)] = float(np.sqrt(np.mean(r[mask] ** 2)))
-        return table
+        return dict(self.fit_rmse)
 
     def value_of(self, name: str) -> float:
         return float(self.value[self.names.index(name)])
@@ -113,73 +119,58 @@ class Identification:
         return float(self.std_error[self.names.index(name)])
 
 
-def _lag_one(r: np.ndarray, rows: Rows, group: int) -> float:
+def _lag_one(r: np.ndarray, wheel: np.ndarray, t: np.ndarray) -> float:
     """Lag-one autocorrelation of one data set's residuals (per wheel, time order)."""
     values = []
-    for wheel in np.unique(rows.wheel[rows.group == group]):
-        mask = (rows.group == group) & (rows.wheel == wheel)
-        series = r[mask][np.argsort(rows.t[mask], kind="stable")]
+    for w in np.unique(wheel):
+        mask = wheel == w
+        series = r[mask][np.argsort(t[mask], kind="stable")]
         series = series - series.mean()
         if series.size > 2 and np.dot(series, series) > 0:
             values.append(np.dot(series[1:], series[:-1]) / np.dot(series, series))
     return float(np.clip(np.mean(values), 0.0, 0.99)) if values else 0.0
 
 
-def _scales(r: np.ndarray, rows: Rows, count: int) -> tuple[np.ndarray, np.ndarray]:
+def _scales(r: np.ndarray, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
+    count = len(layout.sets)
     sigma = np.ones(count)
     rho = np.zeros(count)
     for g in range(count):
-        mask = rows.group == g
-        if mask.any():
-            spread = MAD_SCALE * np.median(np.abs(r[mask] - np.median(r[mask])))
-            sigma[g] = max(spread, 1e-9 * max(1.0, np.abs(rows.y[mask]).max()))
-            rho[g] = _lag_one(r, rows, g)
+        rows = r[layout.rows(g)]
+        if rows.size:
+            spread = MAD_SCALE * np.median(np.abs(rows - np.median(rows)))
+            sigma[g] = max(spread, 1e-9 * max(1.0, layout.peak[g]))
+            rho[g] = _lag_one(rows, *layout.wheel_and_time(g))
     return sigma, rho
 
 
-def _solve(A, b, lower, upper, loss: FitLoss) -> np.ndarray:
-    """Bounded (robust) least squares of ``A u = b``."""
-    first = optimize.lsq_linear(A, b, bounds=(lower, upper), method="bvls").x
-    if loss is FitLoss.LINEAR:
-        return first
-    result = optimize.least_squares(
-        lambda u: A @ u - b,
-        np.clip(first, lower, upper),
-        jac=lambda u: A,
-        bounds=(lower, upper),
-        loss=loss.value.replace("-", "_"),
-        f_scale=ROBUST_SCALE,
-        x_scale="jac",
-        method="trf",
-    )
-    return result.x
+def _rmse(r: np.ndarray, layout: Layout) -> dict[tuple[str, str], float]:
+    table = {}
+    for g, data in enumerate(layout.sets):
+        rows = r[layout.rows(g)]
+        if not rows.size:
+            continue
+        wheel, _ = layout.wheel_and_time(g)
+        for i, name in enumerate(data.rows):
+            mask = wheel == i
+            if mask.any():
+                table[(data.label(), name)] = float(np.sqrt(np.mean(rows[mask] ** 2)))
+    return table
 
 
-def _projected(A: np.ndarray, Z: np.ndarray | None) -> np.ndarray:
-    r"""Regressors projected on the instruments' span, :math:`Z (Z^\top Z)^{-1} Z^\top A`
-    (two-stage least squares; ``A`` itself without instruments)."""
-    if Z is None:
-        return A
-    coefficients = np.linalg.lstsq(Z, A, rcond=None)[0]
-    return Z @ coefficients
-
-
-def _instrument_columns(Z: np.ndarray, cols, scale, weight) -> np.ndarray:
-    """Instrument regressors of the free columns, all lags side by side, scaled and weighted."""
-    block = Z[:, :, cols] * scale[cols] * weight[:, None, None]
-    return block.reshape(block.shape[0], -1)
-
-
-def _inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:
-    """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
-    return np.ones(weighted.size, bool) if loss is FitLoss.LINEAR else np.abs(weighted) < INLIER
-
-
-def _variance_factor(r, sigma, group, free: int, loss: FitLoss) -> float:
+def _variance_factor(weighted: np.ndarray, free: int, loss: FitLoss) -> float:
     """s^2: mean squared scaled residual of the rows that count, per degree of freedom."""
-    weighted = r / sigma[group]
-    inliers = _inliers(weighted, loss)
-    return float(np.sum(weighted[inliers] ** 2) / max(int(inliers.sum()) - free, 1))
+    counted = inliers(weighted, loss)
+    return float(np.sum(weighted[counted] ** 2) / max(int(counted.sum()) - free, 1))
+
+
+def _design(model, sets, theta0, scale, free, settings: FitSettings):
+    problem = Problem(
+        model=model, sets=sets, theta=theta0, scale=scale, instrumented=settings.instrumental
+    )
+    if settings.path is FitPath.DENSE:
+        return DenseDesign(problem)
+    return ChunkedDesign(problem, free, chunk=settings.chunk)
 
 
 def identify(
@@ -191,6 +182,8 @@ def identify(
     """Fit the model's parameters to ``sets`` starting from (and holding at) ``p``'s values."""
     if not sets:
         raise ValueError("no identification data: give --rig or --drive files")
+    if settings.chunk < 1:
+        raise ValueError(f"chunk: give a positive number of samples, not {settings.chunk}")
     names = model.parameter_names()
     unknown = sorted(set(settings.fixed) - set(names))
     if unknown:
@@ -202,10 +195,11 @@ def identify(
     held = {n: "held (--fix)" for n in settings.fixed}
     for j in nonlinear:
         held[names[j]] = "held: the model is not linear in it together with the fitted ones"
-    rows = evaluate(model, sets, theta0, settings.instrumental)
     scale = np.where(np.abs(theta0) > 0, np.abs(theta0), 1.0)
+    design = _design(model, sets, theta0, scale, free, settings)
+    layout = design.layout
     warnings = []
-    excited = np.abs(rows.J * scale).max(axis=0) > ZERO_FORCE
+    excited = design.peak > ZERO_FORCE
     for j in list(free):
         if not excited[j]:
             free.remove(j)
@@ -216,31 +210,22 @@ def identify(
             )
     lower_all = np.array([settings.lower[n] if n in settings.lower else -np.inf for n in names])
     upper_all = np.array([settings.upper[n] if n in settings.upper else np.inf for n in names])
-    r0 = rows.y - rows.y_hat
-    count = len(sets)
-    sigma, rho = _scales(r0, rows, count)
+    r = design.r0
+    sigma, rho = _scales(r, layout)
     while free:
         cols = np.array(free)
-        weight = 1.0 / sigma[rows.group]
-        A = rows.J[:, cols] * scale[cols] * weight[:, None]
-        Z = None if rows.Z is None else _instrument_columns(rows.Z, cols, scale, weight)
-        b = r0 * weight
         lower = (lower_all[cols] - theta0[cols]) / scale[cols]
         upper = (upper_all[cols] - theta0[cols]) / scale[cols]
-        u = _solve(_projected(A, Z), b, lower, upper, settings.loss)
-        r = r0 - rows.J[:, cols] @ (u * scale[cols])
-        sigma, rho = _scales(r, rows, count)
-        inflation = (sigma * np.sqrt((1 + rho) / (1 - rho)))[rows.group][:, None]
-        instrument = (
-            None
-            if rows.Z is None
-            else _instrument_columns(rows.Z, cols, scale, 1 / inflation[:, 0])
-        )
-        info = _projected(rows.J[:, cols] * scale[cols] / inflation, instrument)
+        u = design.solve(cols, sigma, lower, upper, settings.loss)
+        r = design.residual(cols, u)
+        sigma, rho = _scales(r, layout)
+        inflation = sigma * np.sqrt((1 + rho) / (1 - rho))
+        info = design.information(cols, inflation, None)
         _, singular, vt = np.linalg.svd(info, full_matrices=False)
         weakest = int(np.argmin(singular))
         # Judged on the same footing as the reported standard errors (s^2 (A^T A)^-1).
-        precision = np.sqrt(_variance_factor(r, sigma, rows.group, cols.size, settings.loss)) / (
+        weighted = r / layout.per_row(sigma)
+        precision = np.sqrt(_variance_factor(weighted, cols.size, settings.loss)) / (
             max(singular[weakest], 1e-300)
         )
         if precision <= settings.precision:
@@ -265,10 +250,10 @@ def identify(
     if free:
         cols = np.array(free)
         value[cols] = theta0[cols] + u * scale[cols]
-        weighted = r / sigma[rows.group]
-        inliers = _inliers(weighted, settings.loss)
-        s2 = _variance_factor(r, sigma, rows.group, cols.size, settings.loss)
-        A = info[inliers]
+        weighted = r / layout.per_row(sigma)
+        s2 = _variance_factor(weighted, cols.size, settings.loss)
+        counted = None if settings.loss is FitLoss.LINEAR else inliers(weighted, settings.loss)
+        A = info if counted is None else design.information(cols, inflation, counted)
         cov = s2 * np.linalg.pinv(A.T @ A)
         std[cols] = np.sqrt(np.maximum(np.diag(cov), 0)) * scale[cols]
         d = np.sqrt(np.maximum(np.diag(cov), 1e-300))
@@ -280,14 +265,11 @@ def identify(
                 f"'{names[j]}' is only weakly determined by these data (standard error "
                 f"{100 * relative:.0f} % of its size)"
             )
-    final = evaluate(model, sets, value)
-    sources = {}
-    for j in free:
-        sources[names[j]] = tuple(
-            sets[g].label()
-            for g in range(count)
-            if np.abs(final.J[final.group == g, j] * scale[j]).max(initial=0) > ZERO_FORCE
-        )
+    rows, peak = design.final(value)
+    sources = {
+        names[j]: tuple(sets[g].label() for g in range(len(sets)) if peak[g, j] > ZERO_FORCE)
+        for j in free
+    }
     return Identification(
         names=names,
         initial=theta0,
@@ -299,8 +281,9 @@ def identify(
         warnings=tuple(warnings),
         sources=sources,
         sets=sets,
-        rows=final,
+        rows=rows,
         scale=sigma,
         autocorrelation=rho,
         loss=settings.loss,
+        fit_rmse=_rmse(r, layout),
     )

@@ -18,6 +18,7 @@ the CasADi Jacobian of these expressions; no equation is written here.
 from __future__ import annotations
 
 import functools
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import casadi as ca
@@ -25,6 +26,11 @@ import numpy as np
 
 from wheelload.estimators.identification.data import DataKind, DataSet
 from wheelload.estimators.identification.model import WHEELS, SuspensionFitModel
+from wheelload.estimators.loops.compiled import CompiledLoop
+
+#: Samples per evaluation of the regressors: one chunk's rows (4 wheels x the parameters,
+#: and 3 instrument lags) take a few tens of MB whatever the length of the log.
+CHUNK = 4096
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -42,6 +48,35 @@ def _finish(name: str, s: ca.SX, theta: ca.SX, y: ca.SX, columns) -> Prediction:
         f"{name}_jacobian", [s, theta], [ca.jacobian(y, theta)], ["s", "theta"], ["J"]
     )
     return Prediction(function=function, jacobian=jacobian, columns=tuple(columns))
+
+
+class RowFunction:
+    """Prediction and regressors of one sample, ``(s, theta) -> (y, J)``, over many samples in
+    compiled C (:class:`~wheelload.estimators.loops.compiled.CompiledLoop`).
+
+    The per-sample Function is the :class:`Prediction`'s own (its output and
+    CasADi Jacobian); the samples are fed from numpy arrays, so no CasADi
+    ``map`` over the whole log is built (its sparse output, made dense, took
+    about 30 times the regressor matrix itself).
+    """
+
+    def __init__(self, pred: Prediction) -> None:
+        s, theta = pred.function.sx_in()
+        y = ca.densify(pred.function.call([s, theta])[0])
+        J = pred.jacobian.call([s, theta])[0]
+        step = ca.Function(
+            f"{pred.function.name()}_rows", [s, theta], [y, J], ["s", "theta"], ["y", "J"]
+        )
+        self.rows, self.n_theta = J.shape
+        self.row, self.column = step.sparsity_out(1).get_triplet()
+        self._loop = CompiledLoop(step, 0, ("s",))
+
+    def __call__(self, s: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Predictions (n, rows) and regressors (n, rows, n_theta) at the samples ``s``."""
+        _, _, (y, values) = self._loop([], [theta], [s])
+        J = np.zeros((s.shape[0], self.rows, self.n_theta))
+        J[:, self.row, self.column] = values
+        return y, J
 
 
 def _theta(model: SuspensionFitModel) -> ca.SX:
@@ -102,6 +137,16 @@ def prediction(model: SuspensionFitModel, data: DataSet) -> Prediction:
     return _prediction(model, data.kind, data.location)
 
 
+@functools.lru_cache(maxsize=64)
+def _row_function(model: SuspensionFitModel, kind: DataKind, location: int) -> RowFunction:
+    return RowFunction(_prediction(model, kind, location))
+
+
+def row_function(model: SuspensionFitModel, data: DataSet) -> RowFunction:
+    """The compiled :class:`RowFunction` for a data set."""
+    return _row_function(model, data.kind, data.location)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Rows:
     """The stacked regression rows of all data sets at one parameter point."""
@@ -126,7 +171,7 @@ class Rows:
 INSTRUMENT_LAGS = (2, 3, 4)
 
 
-def instruments(s: np.ndarray, lag: int) -> np.ndarray:
+def instruments(s: np.ndarray, lag: int, index: np.ndarray | None = None) -> np.ndarray:
     r"""Instrument signals: the mean of the samples ``lag`` before and after.
 
     .. math:: \tilde s_k = (s_{k-L} + s_{k+L}) / 2
@@ -137,10 +182,10 @@ def instruments(s: np.ndarray, lag: int) -> np.ndarray:
     correlated with it: regressors evaluated at :math:`\tilde s` for the
     lags :data:`INSTRUMENT_LAGS` are instruments for those at :math:`s`
     (Söderström & Stoica, System Identification, 1989, ch. 8). Edge samples
-    repeat the first and last sample.
+    repeat the first and last sample. ``index``: the samples k wanted (default all).
     """
     n = s.shape[0]
-    index = np.arange(n)
+    index = np.arange(n) if index is None else index
     before = s[np.clip(index - lag, 0, n - 1)]
     after = s[np.clip(index + lag, 0, n - 1)]
     return 0.5 * (before + after)
@@ -153,11 +198,91 @@ def _signal(model: SuspensionFitModel, data: DataSet, name: str) -> np.ndarray:
     return np.zeros((len(data), 1))
 
 
-def _jacobian(pred: Prediction, s: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Regressors (n, rows, n_theta) at the samples ``s`` (n, signals)."""
-    n = s.shape[0]
-    jac = np.asarray(pred.jacobian.map(n)(s.T, theta))  # (rows, n * n_theta)
-    return jac.reshape(jac.shape[0], n, len(theta)).transpose(1, 0, 2)
+def _rows(
+    model: SuspensionFitModel,
+    data: DataSet,
+    group: int,
+    samples: np.ndarray,
+    theta: np.ndarray,
+    instrumented: bool,
+) -> Rows:
+    """The rows of the used ``samples`` (indices with a finite target) of one data set."""
+    pred = prediction(model, data)
+    rows_of = row_function(model, data)
+    full = np.hstack([_signal(model, data, name)[samples] for name in pred.columns])
+    y_hat, jac = rows_of(full, theta)
+    mask = np.isfinite(data.target[samples])
+    sample, row = np.nonzero(mask)
+    Z = None
+    if instrumented:
+        if data.kind is DataKind.DRIVE:
+            columns = [_signal(model, data, name) for name in pred.columns]
+            lagged = []
+            for lag in INSTRUMENT_LAGS:
+                tilde = np.hstack([instruments(c, lag, samples) for c in columns])
+                lagged.append(rows_of(tilde, theta)[1])
+            instrument = np.stack(lagged, axis=2)  # (n, rows, lags, n_theta)
+        else:  # rig rows: their own instruments
+            instrument = np.repeat(jac[:, :, None, :], len(INSTRUMENT_LAGS), axis=2)
+        Z = instrument[sample, row]
+    travel, rate, difference = _row_signals(data, samples, sample, row)
+    return Rows(
+        y=data.target[samples][sample, row],
+        y_hat=y_hat[sample, row],
+        J=jac[sample, row, :],
+        Z=Z,
+        group=np.full(sample.size, group),
+        wheel=np.asarray(data.rows)[row],
+        t=data.t[samples][sample],
+        travel=travel,
+        rate=rate,
+        difference=difference,
+    )
+
+
+def used_samples(data: DataSet) -> np.ndarray:
+    """Indices of the samples with a finite target in some row."""
+    return np.flatnonzero(np.isfinite(data.target).any(axis=1))
+
+
+def chunks(
+    model: SuspensionFitModel,
+    sets: tuple[DataSet, ...],
+    theta: np.ndarray,
+    instrumented: bool = False,
+    size: int = CHUNK,
+) -> Iterator[Rows]:
+    """The rows of :func:`evaluate`, in the same order, ``size`` samples at a time."""
+    for index, data in enumerate(sets):
+        used = used_samples(data)
+        for start in range(0, used.size, size):
+            yield _rows(model, data, index, used[start : start + size], theta, instrumented)
+
+
+#: Samples per data set in the rows a chunked fit keeps for its figures.
+SAMPLED = 5000
+
+
+def sampled_rows(
+    model: SuspensionFitModel, sets: tuple[DataSet, ...], theta: np.ndarray, limit: int = SAMPLED
+) -> Rows:
+    """The rows of at most ``limit`` used samples per data set, spread evenly in time."""
+    parts = []
+    for index, data in enumerate(sets):
+        used = used_samples(data)
+        if used.size > limit:
+            used = used[np.linspace(0, used.size - 1, limit).round().astype(int)]
+        if used.size:
+            parts.append(_rows(model, data, index, used, theta, False))
+    return stack(parts)
+
+
+def stack(parts: list[Rows]) -> Rows:
+    """Rows of several chunks in one."""
+    fields = ("y", "y_hat", "J", "group", "wheel", "t", "travel", "rate", "difference")
+    values = {name: np.concatenate([getattr(p, name) for p in parts]) for name in fields}
+    instrumented = parts[0].Z is not None
+    return Rows(**values, Z=np.concatenate([p.Z for p in parts]) if instrumented else None)
 
 
 def evaluate(
@@ -166,69 +291,20 @@ def evaluate(
     theta: np.ndarray,
     instrumented: bool = False,
 ) -> Rows:
-    """Predictions and regressors of every used sample (finite target) at ``theta``.
+    """Predictions and regressors of every used sample (finite target) at ``theta``, in memory.
 
     ``instrumented``: also the regressors at the drive logs' instrument
     signals (:func:`instruments`; rig rows are their own instruments).
     """
-    parts = []
-    for index, data in enumerate(sets):
-        pred = prediction(model, data)
-        full = np.hstack([_signal(model, data, name) for name in pred.columns])
-        rows = np.isfinite(data.target)
-        keep = rows.any(axis=1)
-        s = full[keep]
-        n = s.shape[0]
-        if n == 0:
-            continue
-        y_hat = np.asarray(pred.function.map(n)(s.T, theta)).T  # (n, rows)
-        jac = _jacobian(pred, s, theta)
-        if data.kind is DataKind.DRIVE and instrumented:
-            instrument = np.stack(
-                [_jacobian(pred, instruments(full, lag)[keep], theta) for lag in INSTRUMENT_LAGS],
-                axis=2,
-            )  # (n, rows, lags, n_theta)
-        else:  # rig rows (and a fit without instruments): their own instruments
-            instrument = np.repeat(jac[:, :, None, :], len(INSTRUMENT_LAGS), axis=2)
-        mask = rows[keep]
-        sample, row = np.nonzero(mask)
-        travel, rate, difference = _row_signals(data, keep, sample, row)
-        parts.append(
-            (
-                data.target[keep][sample, row],
-                y_hat[sample, row],
-                jac[sample, row, :],
-                instrument[sample, row],
-                np.full(sample.size, index),
-                np.asarray(data.rows)[row],
-                data.t[keep][sample],
-                travel,
-                rate,
-                difference,
-            )
-        )
+    parts = [part for part in chunks(model, sets, theta, instrumented) if part.y.size]
     if not parts:
         raise ValueError("no data sample with a measured force or reference load")
-    y, y_hat, J, Z, group, wheel, t, travel, rate, difference = (
-        np.concatenate(items) for items in zip(*parts)
-    )
-    return Rows(
-        y=y,
-        y_hat=y_hat,
-        J=J,
-        Z=Z if instrumented else None,
-        group=group,
-        wheel=wheel,
-        t=t,
-        travel=travel,
-        rate=rate,
-        difference=difference,
-    )
+    return stack(parts)
 
 
-def _row_signals(data: DataSet, keep, sample, row):
+def _row_signals(data: DataSet, samples, sample, row):
     """Travel, rate and axle travel difference of each row, for the report's figures."""
-    signals = {name: value[keep] for name, value in data.signals.items()}
+    signals = {name: value[samples] for name, value in data.signals.items()}
     if data.kind is DataKind.CORNER_RIG:
         return signals["d"][sample, 0], signals["v"][sample, 0], np.zeros(sample.size)
     if data.kind is DataKind.ARB_RIG:

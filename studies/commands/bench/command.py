@@ -35,6 +35,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench.estimate",
     "wheelload.studies.commands.bench.family",
     "wheelload.studies.commands.bench.hostile",
+    "wheelload.studies.commands.bench.identify",
 )
 
 
