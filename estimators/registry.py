@@ -99,7 +99,13 @@ def methods() -> dict[str, MethodInfo]:
 
 
 def method(name: str) -> MethodInfo:
-    """The registered method ``name`` (exact, else case-insensitive match)."""
+    """The registered method ``name`` (exact, else case-insensitive match).
+
+    A core method's exact name is found without importing the family's modules.
+    """
+    for info in core():
+        if info.name == name:
+            return info
     table = methods()
     if name in table:
         return table[name]

@@ -21,7 +21,6 @@ import signal
 import sys
 import threading
 from collections.abc import Sequence
-from importlib.metadata import version
 
 from wheelload.studies.commands.options import log_level
 
@@ -74,7 +73,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
     )
-    parser.add_argument("--version", action="version", version=f"wheelload {version('wheelload')}")
+    parser.add_argument("--version", action=_Version, help="show the version and exit")
     parser.add_argument("-q", "--quiet", dest="quiet_top", action="store_true", help="only errors")
     parser.add_argument(
         "-v", "--verbose", dest="verbose_top", action="count", help="more on stderr (-vv debug)"
@@ -85,6 +84,20 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     for module in modules:
         importlib.import_module(module).register(subparsers)
     return parser
+
+
+class _Version(argparse.Action):
+    """``--version``: the installed distribution's version, looked up only when asked
+    (``importlib.metadata`` is slow to import)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, help=None) -> None:
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        from importlib.metadata import version
+
+        print(f"wheelload {version('wheelload')}")
+        parser.exit()
 
 
 class Terminated(BaseException):
