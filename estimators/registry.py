@@ -101,11 +101,13 @@ def methods() -> dict[str, MethodInfo]:
 def method(name: str) -> MethodInfo:
     """The registered method ``name`` (exact, else case-insensitive match).
 
-    A core method's exact name is found without importing the family's modules.
+    A core method's exact name is found importing its own module only (not the MHE's
+    OSQP set-up for the KF, nor the family's modules).
     """
-    for info in core():
-        if info.name == name:
-            return info
+    for module in CORE_MODULES:
+        for info in _module_infos((module,)):
+            if info.name == name:
+                return info
     table = methods()
     if name in table:
         return table[name]

@@ -68,7 +68,7 @@ COMMAND_MODULES = {
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The command line; with ``argv`` naming a command, only that command's module is
-    imported (every one for help, a version or an unknown command)."""
+    imported (none for ``--version``, every one for help or an unknown command)."""
     parser = argparse.ArgumentParser(
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
@@ -80,7 +80,12 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     first = next(iter(argv), None) if argv else None
-    modules = (COMMAND_MODULES[first],) if first in COMMAND_MODULES else COMMANDS
+    if first in COMMAND_MODULES:
+        modules = (COMMAND_MODULES[first],)
+    elif first == "--version":
+        modules = ()  # nothing to import: the version is all it prints
+    else:
+        modules = COMMANDS
     for module in modules:
         importlib.import_module(module).register(subparsers)
     return parser
@@ -143,10 +148,10 @@ def _configure_logging(level: int) -> None:
 
 
 def _main(argv: list[str]) -> int:
-    from wheelload.models.files.build_folder import BuildFolderError
-
     parser = build_parser(argv)
     args, unknown = parser.parse_known_args(argv)
+    from wheelload.models.files.build_folder import BuildFolderError  # casadi: after --version
+
     if unknown:  # the command's own usage, not the top level's
         subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
         subparsers.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
