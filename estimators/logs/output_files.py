@@ -293,10 +293,20 @@ def table_writer(path: Path, *, replace: bool = False) -> Iterator:
     fmt = table_format(Path(path))
     with atomic_write(Path(path), replace=replace) as temporary:
         writer = _WriterThread(temporary, fmt)
+        schema = None
 
         def write(columns: dict) -> None:
+            nonlocal schema
             arrays = [_arrow_array(values) for values in columns.values()]
-            writer.put(pa.RecordBatch.from_arrays(arrays, names=list(columns)))
+            batch = pa.RecordBatch.from_arrays(arrays, names=list(columns))
+            schema = schema or batch.schema
+            if not batch.schema.equals(schema):  # pyarrow's writers do not check it
+                raise OutputError(
+                    f"{path}: a chunk's columns ({', '.join(batch.schema.names)}) differ from "
+                    f"the first chunk's schema ({', '.join(schema.names)}): write one table "
+                    "per set of columns"
+                )
+            writer.put(batch)
 
         try:
             yield write
