@@ -143,7 +143,8 @@ def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> li
 
     ``errors`` (one row a wheel) is overwritten (made absolute in place; the
     percentiles partition it in place: a percentile does not depend on the order),
-    so the peak memory is the store plus one wheel's squares. Per wheel the figures
+    and each wheel's squares are taken in place (:func:`_squares_invert`), so the
+    peak memory is the store alone. Per wheel the figures
     are computed as there, to the bit; the pooled RMSE sums the squares one wheel
     at a time (equal to 1e-15 relative).
     """
@@ -151,11 +152,17 @@ def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> li
     rows, squares = [], 0.0
     for i in range(len(names)):
         column = errors[i]  # a view: the percentile below reorders the store's row
-        square = column * column
-        rmse = float(np.sqrt(np.mean(square)))
-        squares += float(np.sum(square))
-        del square
         peak = float(column.max())
+        if _squares_invert(column, peak):  # squared in place, then back: no temporary
+            np.square(column, out=column)
+            rmse = float(np.sqrt(np.mean(column)))
+            squares += float(np.sum(column))
+            np.sqrt(column, out=column)  # |e| again, exactly (_squares_invert)
+        else:
+            square = column * column
+            rmse = float(np.sqrt(np.mean(square)))
+            squares += float(np.sum(square))
+            del square
         p95 = float(np.percentile(column, 95, overwrite_input=True))
         rows.append([rmse, 100.0 * rmse / means[i], p95, peak])
         del column
@@ -165,3 +172,16 @@ def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> li
     p95 = float(np.percentile(pooled, 95, overwrite_input=True))
     rows.append([rmse, 100.0 * rmse / float(means.mean()), p95, peak])
     return rows
+
+
+def _squares_invert(column: np.ndarray, peak: float) -> bool:
+    """Whether ``sqrt(e * e) == e`` for every ``e`` of ``column`` (all >= 0, max ``peak``).
+
+    In binary floating point with round-to-nearest, the square root of a rounded
+    square gives the number back exactly unless the square overflows or leaves the
+    normal range (Boldo, "Stupid is as stupid does: taking the square root of the
+    square of a floating-point number", 2015); errors in newtons are far inside it.
+    """
+    if not peak < 1e150:
+        return False
+    return bool(np.min(column, where=column > 0.0, initial=np.inf) > 1e-150)
