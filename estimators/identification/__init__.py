@@ -9,7 +9,7 @@ The names below are imported on first use: the KF's still-period offsets
 pay for the fits' scipy and pandas.
 """
 
-import importlib
+from wheelload.estimators.lazy_names import lazy_names
 
 #: Names imported on first use, by module.
 _LAZY_MODULES = {
@@ -32,14 +32,4 @@ _LAZY_MODULES = {
         "piecewise_model",
     ),
 }
-_LAZY = {name: module for module, names in _LAZY_MODULES.items() for name in names}
-
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'wheelload.estimators.identification' has no attribute '{name}'")
+__getattr__, __all__ = lazy_names(__name__, _LAZY_MODULES)
