@@ -243,7 +243,8 @@ class _WriterThread:
             while (batch := self.batches.get()) is not self._DONE:
                 if self.error is None and not self.abort:
                     try:
-                        writer = writer or self._open(batch.schema)
+                        if writer is None:
+                            writer = self._open(batch.schema)
                         writer.write_batch(batch)
                     except BaseException as error:  # handed to the caller, raised there
                         self.error = error
