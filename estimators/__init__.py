@@ -5,11 +5,10 @@ OSQP and scipy.sparse are slow to import, and a command that does not run the MH
 should not pay for them).
 """
 
-import importlib
-
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.two_stage import FilterState, TwoStageKF
+from wheelload.estimators.lazy_names import lazy_names
 from wheelload.estimators.logs.signals import (
     LogError,
     Signals,
@@ -53,7 +52,7 @@ _LAZY_MODULES = {
     "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
     "wheelload.estimators.samples": ("step_through",),
 }
-_LAZY = {name: module for module, names in _LAZY_MODULES.items() for name in names}
+__getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
 
 
 __all__ = [
@@ -70,13 +69,5 @@ __all__ = [
     "signals_from_frame",
     "step_function",
     "write_log",
-    *sorted(_LAZY),
+    *_LAZY_NAMES,
 ]
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'wheelload.estimators' has no attribute '{name}'")

@@ -111,7 +111,15 @@ def tyre_methods() -> dict[str, MethodInfo]:
 
 
 def method(name: str) -> MethodInfo:
-    """The registered method ``name`` (exact, else case-insensitive match), load or tyre."""
+    """The registered method ``name`` (exact, else case-insensitive match), load or tyre.
+
+    A core method's exact name is found importing its own module only (not the MHE's
+    OSQP set-up for the KF, nor the family's modules).
+    """
+    for module in CORE_MODULES:
+        for info in _module_infos((module,)):
+            if info.name == name:
+                return info
     table = {**methods(), **tyre_methods()}
     if name in table:
         return table[name]

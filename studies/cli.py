@@ -21,7 +21,6 @@ import signal
 import sys
 import threading
 from collections.abc import Sequence
-from importlib.metadata import version
 
 from wheelload.studies.commands.options import log_level
 
@@ -69,22 +68,41 @@ COMMAND_MODULES = {
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The command line; with ``argv`` naming a command, only that command's module is
-    imported (every one for help, a version or an unknown command)."""
+    imported (none for ``--version``, every one for help or an unknown command)."""
     parser = argparse.ArgumentParser(
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
     )
-    parser.add_argument("--version", action="version", version=f"wheelload {version('wheelload')}")
+    parser.add_argument("--version", action=_Version, help="show the version and exit")
     parser.add_argument("-q", "--quiet", dest="quiet_top", action="store_true", help="only errors")
     parser.add_argument(
         "-v", "--verbose", dest="verbose_top", action="count", help="more on stderr (-vv debug)"
     )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     first = next(iter(argv), None) if argv else None
-    modules = (COMMAND_MODULES[first],) if first in COMMAND_MODULES else COMMANDS
+    if first in COMMAND_MODULES:
+        modules = (COMMAND_MODULES[first],)
+    elif first == "--version":
+        modules = ()  # nothing to import: the version is all it prints
+    else:
+        modules = COMMANDS
     for module in modules:
         importlib.import_module(module).register(subparsers)
     return parser
+
+
+class _Version(argparse.Action):
+    """``--version``: the installed distribution's version, looked up only when asked
+    (``importlib.metadata`` is slow to import)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, help=None) -> None:
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        from importlib.metadata import version
+
+        print(f"wheelload {version('wheelload')}")
+        parser.exit()
 
 
 class Terminated(BaseException):
@@ -130,10 +148,10 @@ def _configure_logging(level: int) -> None:
 
 
 def _main(argv: list[str]) -> int:
-    from wheelload.models.files.build_folder import BuildFolderError
-
     parser = build_parser(argv)
     args, unknown = parser.parse_known_args(argv)
+    from wheelload.models.files.build_folder import BuildFolderError  # casadi: after --version
+
     if unknown:  # the command's own usage, not the top level's
         subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
         subparsers.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")

@@ -3,33 +3,33 @@
 Regressors are Jacobians of the model Functions in ``wheelload.models``
 (never a second copy of the equations); the tuning maximises the likelihood
 of the filter's own innovations.
+
+The names below are imported on first use: the KF's still-period offsets
+(``offsets``) live in this package, and a command that estimates a log must not
+pay for the fits' scipy and pandas.
 """
 
-from wheelload.estimators.identification.data import (
-    DataKind,
-    DataSet,
-    drive_gates,
-    read_drive,
-    read_rig,
-)
-from wheelload.estimators.identification.fit import FitLoss, FitSettings, Identification, identify
-from wheelload.estimators.identification.model import (
-    SuspensionFitModel,
-    default_model,
-    piecewise_model,
-)
+from wheelload.estimators.lazy_names import lazy_names
 
-__all__ = [
-    "DataKind",
-    "DataSet",
-    "FitLoss",
-    "FitSettings",
-    "Identification",
-    "SuspensionFitModel",
-    "default_model",
-    "drive_gates",
-    "identify",
-    "piecewise_model",
-    "read_drive",
-    "read_rig",
-]
+#: Names imported on first use, by module.
+_LAZY_MODULES = {
+    "wheelload.estimators.identification.data": (
+        "DataKind",
+        "DataSet",
+        "drive_gates",
+        "read_drive",
+        "read_rig",
+    ),
+    "wheelload.estimators.identification.fit": (
+        "FitLoss",
+        "FitSettings",
+        "Identification",
+        "identify",
+    ),
+    "wheelload.estimators.identification.model": (
+        "SuspensionFitModel",
+        "default_model",
+        "piecewise_model",
+    ),
+}
+__getattr__, __all__ = lazy_names(__name__, _LAZY_MODULES)

@@ -196,14 +196,92 @@ def _write_options(schema):
     )
 
 
+def _arrow_array(values):
+    """A pyarrow array viewing a 1-D numpy array (no copy; ``pa.array`` would import pandas)."""
+    import numpy as np
+    import pyarrow as pa
+
+    values = np.ascontiguousarray(values)
+    kind = pa.from_numpy_dtype(values.dtype)
+    return pa.Array.from_buffers(kind, len(values), [None, pa.py_buffer(values)])
+
+
+class _WriterThread:
+    """Writes record batches on a thread of its own, while the caller computes the next chunk.
+
+    pyarrow formats and writes with the GIL released, so the CSV's number
+    formatting overlaps the compiled loop. At most one batch waits (memory: one
+    chunk more). An error of the writer is raised in the caller at its next
+    ``put`` or at ``close``.
+    """
+
+    _DONE = object()
+
+    def __init__(self, temporary: Path, fmt: TableFormat) -> None:
+        import queue
+        import threading
+
+        self.temporary, self.fmt = temporary, fmt
+        self.batches: queue.Queue = queue.Queue(maxsize=1)
+        self.error: BaseException | None = None
+        self.abort = False
+        self.thread = threading.Thread(target=self._run, name="table-writer", daemon=True)
+        self.thread.start()
+
+    def _open(self, schema):
+        if self.fmt is TableFormat.PARQUET:
+            import pyarrow.parquet as pq
+
+            return pq.ParquetWriter(str(self.temporary), schema)
+        import pyarrow.csv as pc
+
+        return pc.CSVWriter(str(self.temporary), schema, write_options=_write_options(schema))
+
+    def _run(self) -> None:
+        writer = None
+        try:
+            while (batch := self.batches.get()) is not self._DONE:
+                if self.error is None and not self.abort:
+                    try:
+                        if writer is None:
+                            writer = self._open(batch.schema)
+                        writer.write_batch(batch)
+                    except BaseException as error:  # handed to the caller, raised there
+                        self.error = error
+        finally:
+            if writer is not None:
+                try:
+                    writer.close()
+                except BaseException as error:
+                    self.error = self.error or error
+
+    def put(self, batch) -> None:
+        self._raise()
+        self.batches.put(batch)
+
+    def close(self, *, abort: bool) -> None:
+        """Wait for the last batch to be written (``abort``: drop the ones waiting)."""
+        self.abort = abort
+        self.batches.put(self._DONE)
+        self.thread.join()
+        if not abort:
+            self._raise()
+
+    def _raise(self) -> None:
+        if self.error is not None:
+            raise self.error
+
+
 @contextlib.contextmanager
 def table_writer(path: Path, *, replace: bool = False) -> Iterator:
     """Yield ``write(columns)``, which appends a chunk of named columns to a table file.
 
     CSV or Parquet by ``path``'s suffix, written by pyarrow (CSV floats in
-    shortest round-trip form: a read gives back the same doubles) into a
-    temporary file renamed into place by :func:`atomic_write` once the last
-    chunk is in; every chunk must have the same columns and types.
+    shortest round-trip form: a read gives back the same doubles) on a thread
+    of its own, overlapping the caller's work, into a temporary file renamed into
+    place by :func:`atomic_write` once the last chunk is in. Every chunk must
+    have the same columns and types; its arrays are written without a copy and
+    must not be changed after ``write`` returns.
 
     Example
     -------
@@ -215,28 +293,28 @@ def table_writer(path: Path, *, replace: bool = False) -> Iterator:
 
     fmt = table_format(Path(path))
     with atomic_write(Path(path), replace=replace) as temporary:
-        writer = None
+        writer = _WriterThread(temporary, fmt)
+        schema = None
 
         def write(columns: dict) -> None:
-            nonlocal writer
-            batch = pa.record_batch(columns)
-            if writer is None:
-                if fmt is TableFormat.PARQUET:
-                    import pyarrow.parquet as pq
-
-                    writer = pq.ParquetWriter(str(temporary), batch.schema)
-                else:
-                    import pyarrow.csv as pc
-
-                    options = _write_options(batch.schema)
-                    writer = pc.CSVWriter(str(temporary), batch.schema, write_options=options)
-            writer.write_batch(batch)
+            nonlocal schema
+            arrays = [_arrow_array(values) for values in columns.values()]
+            batch = pa.RecordBatch.from_arrays(arrays, names=list(columns))
+            schema = schema or batch.schema
+            if not batch.schema.equals(schema):  # pyarrow's writers do not check it
+                raise OutputError(
+                    f"{path}: a chunk's columns ({', '.join(batch.schema.names)}) differ from "
+                    f"the first chunk's schema ({', '.join(schema.names)}): write one table "
+                    "per set of columns"
+                )
+            writer.put(batch)
 
         try:
             yield write
-        finally:
-            if writer is not None:
-                writer.close()
+        except BaseException:
+            writer.close(abort=True)
+            raise
+        writer.close(abort=False)
 
 
 def write_frame(frame, path: Path, *, replace: bool = False) -> None:

@@ -8,8 +8,6 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from wheelload.models import example_vehicle_path
-
 logger = logging.getLogger(__name__)
 
 
@@ -45,6 +43,8 @@ def add_vehicle_option(parser: argparse.ArgumentParser) -> None:
 
 def vehicle_file(args: argparse.Namespace) -> Path:
     """The ``--vehicle`` file, or the bundled sports car's."""
+    from wheelload.models import example_vehicle_path  # casadi: not for --version
+
     return Path(args.vehicle) if args.vehicle else example_vehicle_path()
 
 

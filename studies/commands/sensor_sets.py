@@ -15,7 +15,7 @@ from wheelload.studies.commands.options import (
     vehicle_of,
 )
 from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
-from wheelload.studies.pipeline.batch import expand_logs
+from wheelload.studies.pipeline.log_settings import expand_logs
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, vehicle=True)

@@ -13,7 +13,6 @@ Example
 from __future__ import annotations
 
 import functools
-import glob
 import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -23,10 +22,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wheelload.estimators import (
-    DEFAULT_MODEL,
     Estimate,
     Signals,
-    SuspensionModel,
     guard_settings_for,
     read_log,
     step_function,
@@ -39,11 +36,14 @@ from wheelload.estimators.logs.plausibility import (
     describe_plausibility,
     raise_for_plausibility,
 )
-from wheelload.estimators.logs.readers import SUFFIXES
 from wheelload.estimators.logs.signals import coarse_travel_note
 from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method
 from wheelload.models import Vehicle, load_vehicle
+from wheelload.studies.pipeline.log_settings import (  # noqa: F401  (named from here too)
+    EstimateSettings,
+    expand_logs,
+)
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.pipeline.measured_static import (
     measured_static_loads,
@@ -60,22 +60,6 @@ SUMMARY_NAME = "summary.csv"
 
 
 @dataclass(frozen=True, kw_only=True)
-class EstimateSettings:
-    """How each log is estimated (the command line's options)."""
-
-    vehicle: Path
-    method: str = "kf"
-    channels: Path | None = None
-    still_period: float | None = None
-    still_noise: float | None = None
-    corner_weights: str | None = None
-    allow_unusual: bool = False
-    wiring_checks: bool = True
-    smooth: bool = False  # offline RTS smoother over the KF (kf only)
-    suspension: SuspensionModel = DEFAULT_MODEL  # vehicle model of a family method
-
-
-@dataclass(frozen=True, kw_only=True)
 class LogResult:
     """One log's signals, estimate and the lines to tell the user."""
 
@@ -84,27 +68,6 @@ class LogResult:
     vehicle: Vehicle
     notes: tuple[str, ...]
     warnings: tuple[str, ...]
-
-
-def expand_logs(patterns: list[str]) -> list[Path]:
-    """Log files named by files, folders or glob patterns, sorted, without repeats."""
-    found: list[Path] = []
-    for pattern in patterns:
-        path = Path(pattern)
-        if path.is_dir():
-            matches = [p for p in sorted(path.iterdir()) if p.suffix.lower() in SUFFIXES]
-            if not matches:
-                raise ValueError(f"{path}: folder has no log file ({', '.join(SUFFIXES)})")
-        elif path.exists():
-            matches = [path]
-        elif glob.has_magic(pattern):
-            matches = [Path(p) for p in sorted(glob.glob(pattern)) if Path(p).is_file()]
-            if not matches:
-                raise ValueError(f"{pattern}: no file matches")
-        else:
-            raise ValueError(f"{path}: no such log file")
-        found += matches
-    return sorted(dict.fromkeys(found))
 
 
 _lock = threading.Lock()

@@ -1,13 +1,16 @@
 """``wheelload bench estimate``: ``wheelload estimate --out`` end to end, and its cold start.
 
-Each run is a fresh ``wheelload`` process (its wall time and peak resident
-memory from ``wait4``), on a log made by repeating the bundled example log
-(time kept increasing; written as Parquet in row groups). Two ways, in turn
-so that both meet the same machine load, ``--repeat`` times each:
+Each run is a fresh ``wheelload`` process (its wall and CPU time from ``wait4``,
+its peak resident memory its own ``VmHWM``), on a log made by repeating the bundled example log
+(time kept increasing; written as Parquet in row groups). Three ways, in turn
+so that all meet the same machine load, ``--repeat`` times each:
 
-- ``lean``: the default, the chunked whole-log path (``estimators/kf/log_stream.py``);
+- ``lean .csv`` and ``lean .parquet``: the default, the chunked whole-log path
+  (``estimators/kf/log_stream.py``), the estimates written as CSV or as Parquet
+  (on a writer thread overlapping the compiled loop); their ratio, pair by pair,
+  is what CSV costs over Parquet;
 - ``in-memory``: ``--in-memory``, the whole log read into memory (pandas),
-  ``TwoStageKF.run``, ``Estimate.to_pandas`` written by pyarrow.
+  ``TwoStageKF.run``, ``Estimate.to_pandas`` written by pyarrow (as CSV).
 
 ``--example`` cold (a fresh, empty build folder: the compiled loop is built)
 and warm (the same folder again). Figures: min / median / max of wall time,
@@ -31,7 +34,8 @@ import numpy as np
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "estimate", help="wheelload estimate --out end to end (lean vs in-memory), cold start"
+        "estimate",
+        help="wheelload estimate --out end to end (CSV vs Parquet, lean vs in-memory), cold start",
     )
     parser.add_argument(
         "--samples",
@@ -47,7 +51,6 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         default=1e7,
         help="measure the in-memory path only up to this size (default 1e7)",
     )
-    parser.add_argument("--suffix", default=".csv", help="output format (.csv or .parquet)")
     parser.set_defaults(handler=run)
 
 
@@ -72,8 +75,26 @@ def write_tiled_log(path: Path, samples: int) -> None:
             w.write_table(pa.table({k: v[:n] for k, v in columns.items()}))
 
 
+#: ``python -c`` running the ``wheelload`` command and printing, at its exit, its own peak
+#: resident memory (``VmHWM``: the ``wait4`` figure of a child includes the memory of the
+#: process it was started from, this benchmark with its tiled log).
+_PEAK_REPORTING = """
+import atexit, runpy, sys
+def _peak():
+    with open("/proc/self/status") as status:
+        kb = next(line.split()[1] for line in status if line.startswith("VmHWM:"))
+    print(f"peak-kB {kb}", file=sys.stderr)
+atexit.register(_peak)
+sys.argv[0] = "wheelload"
+runpy.run_module("wheelload.studies.cli", run_name="__main__")
+"""
+
+
 def _timed(command: list[str], env: dict | None = None) -> tuple[float, float, float]:
-    """Wall time [s], peak resident memory [MB] and CPU time [s] of a child process."""
+    """Wall time [s], peak resident memory [MB] and CPU time [s] of a child process.
+
+    The peak is the child's own (``VmHWM``) where ``/proc`` tells it, else ``wait4``'s.
+    """
     start = time.perf_counter()
     child = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
     _, status, usage = os.wait4(child.pid, 0)
@@ -83,7 +104,9 @@ def _timed(command: list[str], env: dict | None = None) -> tuple[float, float, f
         child.stderr.close()
     if os.waitstatus_to_exitcode(status) != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {stderr.strip()}")
-    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
+    reported = [line.split()[1] for line in stderr.splitlines() if line.startswith("peak-kB ")]
+    peak = int(reported[-1]) if reported else usage.ru_maxrss
+    return wall, peak / 1024.0, usage.ru_utime + usage.ru_stime
 
 
 def _spread(values: list[float], fmt: str) -> str:
@@ -93,7 +116,9 @@ def _spread(values: list[float], fmt: str) -> str:
 def run(args: argparse.Namespace) -> int:
     from wheelload.models import example_vehicle_path
 
-    wheelload = [sys.executable, "-m", "wheelload.studies.cli"]
+    wheelload = [sys.executable, "-c", _PEAK_REPORTING]
+    if not Path("/proc/self/status").exists():
+        wheelload = [sys.executable, "-m", "wheelload.studies.cli"]
     vehicle = str(example_vehicle_path())
     print(f"wheelload estimate --out, {os.cpu_count()} cores; min / median / max of "
           f"{args.repeat} runs; each a fresh process")  # fmt: skip
@@ -106,30 +131,37 @@ def run(args: argparse.Namespace) -> int:
             n = int(size)
             log = Path(folder) / f"log_{n}.parquet"
             write_tiled_log(log, n)
-            out = str(Path(folder) / f"out{args.suffix}")
-            ways = {"lean": []}
+            ways = {"lean .csv": (".csv", []), "lean .parquet": (".parquet", [])}
             if n <= args.in_memory_up_to:
-                ways["in-memory"] = ["--in-memory"]
+                ways["in-memory"] = (".csv", ["--in-memory"])
             figures: dict[str, list[tuple[float, float, float]]] = {way: [] for way in ways}
+            sizes = {}
             for _ in range(args.repeat):
-                for way, extra in ways.items():
+                for way, (suffix, extra) in ways.items():
+                    out = Path(folder) / f"out{suffix}"
                     command = [*wheelload, "estimate", str(log), "--vehicle", vehicle,
-                               "--out", out, "--force", *extra]  # fmt: skip
+                               "--out", str(out), "--force", *extra]  # fmt: skip
                     figures[way].append(_timed(command))
-            print(f"  {n:>10} samples ({log.stat().st_size / 1e6:.0f} MB Parquet in), "
-                  f"out {args.suffix}:")  # fmt: skip
+                    sizes[suffix] = out.stat().st_size / 1e6
+                    out.unlink()
+            print(f"  {n:>10} samples ({log.stat().st_size / 1e6:.0f} MB Parquet in; out "
+                  f"{sizes['.csv']:.0f} MB CSV, {sizes['.parquet']:.0f} MB Parquet):")  # fmt: skip
             for way, runs in figures.items():
                 walls, peaks, cpu = ([r[k] for r in runs] for k in range(3))
-                print(f"    {way:10s} wall {_spread(walls, '7.2f')} s   "
+                print(f"    {way:13s} wall {_spread(walls, '7.2f')} s   "
                       f"cpu {_spread(cpu, '7.2f')} s"
                       f"   peak RSS {_spread(peaks, '6.0f')} MB")  # fmt: skip
-            if len(figures) == 2:
-                lean = statistics.median(r[0] for r in figures["lean"])
+            pairs = list(zip(figures["lean .csv"], figures["lean .parquet"], strict=True))
+            print(f"    CSV / Parquet, pair by pair: wall "
+                  f"{_spread([c[0] / p[0] for c, p in pairs], '.2f')}   cpu "
+                  f"{_spread([c[2] / p[2] for c, p in pairs], '.2f')}")  # fmt: skip
+            if "in-memory" in figures:
+                lean = statistics.median(r[0] for r in figures["lean .csv"])
                 whole = statistics.median(r[0] for r in figures["in-memory"])
-                lean_mb = statistics.median(r[1] for r in figures["lean"])
+                lean_mb = statistics.median(r[1] for r in figures["lean .csv"])
                 whole_mb = statistics.median(r[1] for r in figures["in-memory"])
-                print(f"    lean is {whole / lean:.1f}x faster, {whole_mb / lean_mb:.1f}x less "
-                      "memory (medians)")  # fmt: skip
+                print(f"    lean (CSV) is {whole / lean:.1f}x faster, {whole_mb / lean_mb:.1f}x "
+                      "less memory than in-memory (medians)")  # fmt: skip
         cold, warm = [], []
         for _ in range(args.repeat):
             with tempfile.TemporaryDirectory() as build:

@@ -1,0 +1,33 @@
+"""Names of a package imported on first use (PEP 562 module ``__getattr__``).
+
+A package face that re-exports slow-to-import modules (the MHE's OSQP, the
+identification's scipy) names them here, so that a command that does not use
+them does not pay for them.
+
+Example
+-------
+>>> __getattr__, LAZY_NAMES = lazy_names(__name__, {"pkg.slow": ("Fit",)})
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable
+
+
+def lazy_names(
+    package: str, modules: dict[str, tuple[str, ...]]
+) -> tuple[Callable[[str], object], list[str]]:
+    """The package's ``__getattr__`` importing each name of ``modules`` (by module) when
+    first asked for, and the sorted names (for ``__all__``)."""
+    table = {name: module for module, names in modules.items() for name in names}
+
+    def __getattr__(name: str):
+        if name not in table:
+            raise AttributeError(f"module '{package}' has no attribute '{name}'")
+        value = getattr(importlib.import_module(table[name]), name)
+        setattr(sys.modules[package], name, value)  # found directly from now on
+        return value
+
+    return __getattr__, sorted(table)

@@ -1,0 +1,71 @@
+"""What a cold start imports: one log's estimate pays only for what it runs.
+
+Structural, not timed: a fresh interpreter runs ``wheelload estimate --example
+--out FILE`` (the lean single-log path) and reports ``sys.modules``; none of the
+modules below may be among them (each was imported once and cost start-up time).
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+#: Modules the single-log path does not use: worker processes and the many-log driver,
+#: the batched C, the identification fits (scipy), pandas, the MHE's OSQP, the family,
+#: plotting, progress bars, MDF4, Dask, the docs, the installed version's metadata.
+NOT_FOR_ONE_LOG = (
+    "asammdf",
+    "concurrent.futures.process",
+    "dask",
+    "importlib.metadata",
+    "matplotlib",
+    "multiprocessing",
+    "osqp",
+    "pandas",
+    "scipy",
+    "tqdm",
+    "wheelload.estimators.codegen",
+    "wheelload.estimators.family",
+    "wheelload.estimators.identification.fit",
+    "wheelload.estimators.mhe.qp",
+    "wheelload.studies.docs",
+    "wheelload.studies.pipeline.batch",
+    "wheelload.studies.plots",
+)
+
+
+def _modules_after(argv: list[str]) -> set[str]:
+    """``sys.modules`` of a fresh interpreter after ``wheelload ARGV`` (its output dropped)."""
+    code = (
+        "import contextlib, io, json, sys\n"
+        "from wheelload.studies.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    try:\n"
+        f"        status = main({argv!r})\n"
+        "    except SystemExit as end:\n"
+        "        status = end.code\n"
+        "print(json.dumps([status, sorted(sys.modules)]))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=dict(os.environ)
+    )
+    assert done.returncode == 0, done.stderr
+    status, modules = json.loads(done.stdout.strip().splitlines()[-1])
+    assert status == 0, done.stderr
+    return set(modules)
+
+
+def test_one_log_imports_nothing_it_does_not_run(tmp_path):
+    out = tmp_path / "loads.csv"
+    modules = _modules_after(["estimate", "--example", "--out", str(out)])
+    assert out.stat().st_size > 0  # the path ran, through to the written estimates
+    assert "wheelload.estimators.kf.log_stream" in modules  # the lean path, not another
+    imported = sorted(m for m in NOT_FOR_ONE_LOG if m in modules)
+    assert imported == []
+
+
+def test_the_version_imports_no_numerics():
+    modules = _modules_after(["--version"])
+    assert (
+        sorted(m for m in ("casadi", "numpy", "pyarrow", "wheelload.models") if m in modules) == []
+    )

@@ -1,0 +1,45 @@
+"""The digest's error figures, computed in place in its store, equal the plain computation.
+
+Tolerance zero for RMSE (per wheel), P95 and Max: the same operations on the same
+numbers in the same order; the pooled RMSE sums per wheel (1e-15 relative).
+"""
+
+import numpy as np
+
+from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+
+
+def _plain(errors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """RMSE, P95 and Max of |errors| per wheel (columns), on copies."""
+    absolute = np.abs(errors)
+    rmse = np.array([np.sqrt(np.mean(absolute[:, i] * absolute[:, i])) for i in range(4)])
+    p95 = np.array([np.percentile(absolute[:, i], 95) for i in range(4)])
+    return rmse, p95, absolute.max(axis=0)
+
+
+def test_the_figures_equal_the_plain_ones_in_chunks_with_gaps():
+    rng = np.random.default_rng(7)
+    n = 20_000
+    reference = 4000.0 + 500.0 * rng.standard_normal((n, 4))
+    errors = 40.0 * rng.standard_normal((n, 4))
+    errors[:, 3] *= 1e-160  # errors whose squares leave the normal range: the other route
+    errors[::97, 2] = 0.0
+    reference[5::301, 1] = np.nan  # unscored samples: the store has a tail
+    loads = reference + errors
+    digest = EstimateDigest(samples=n, reference_wheels=np.ones(4, bool))
+    for start in range(0, n, 6000):
+        part = slice(start, start + 6000)
+        m = len(loads[part])
+        digest.add(loads[part], np.ones((m, 4)), np.zeros(m, np.uint32), reference[part])
+    names, rows = digest.metric_rows("log.csv")
+    scored = np.all(np.isfinite(reference), axis=1)
+    expected = (loads - reference)[scored]
+    rmse, p95, peak = _plain(expected)
+    table = np.array(rows)
+    assert names == ["fl", "fr", "rl", "rr", "pooled"]
+    assert np.array_equal(table[:4, 0], rmse)
+    assert np.array_equal(table[:4, 2], p95)
+    assert np.array_equal(table[:4, 3], peak)
+    pooled = np.abs(expected).reshape(-1)
+    assert table[4, 2] == np.percentile(pooled, 95)
+    assert np.isclose(table[4, 0], np.sqrt(np.mean(pooled * pooled)), rtol=1e-15, atol=0)
