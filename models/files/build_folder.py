@@ -15,7 +15,9 @@ mapped (a truncated library mapped into memory kills the process with SIGBUS).
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
+import fcntl
 import hashlib
 import logging
 import os
@@ -158,22 +160,33 @@ def _cached_build(sources: dict[str, str], name: str, suffix: str, command: tupl
     digest = hashlib.sha256(text.encode()).hexdigest()[:16]
     folder = build_folder()
     target = folder / f"{name}_{digest}{suffix}"
-    if target.exists():
-        problem = checked_library(target)
-        if problem is None:
-            try:
-                return load(target)
-            except (OSError, RuntimeError) as error:
-                first = (str(error) or type(error).__name__).splitlines()[0]
-                problem = f"it does not load ({first})"
-        _log.warning("wheelload: note: cached library %s is rebuilt: %s", target, problem)
-    remove_stale(folder)
-    data = _compile(sources, target, command, purpose)
-    # The record first: an output in place always has its record, and a crash between
-    # the two renames leaves a record without its output (built again, never used).
-    _put(folder, _sidecar(target), _record(data).encode("ascii"))
-    _put(folder, target, data)
+    with _held(target):
+        if target.exists():
+            problem = checked_library(target)
+            if problem is None:
+                try:
+                    return load(target)
+                except (OSError, RuntimeError) as error:
+                    first = (str(error) or type(error).__name__).splitlines()[0]
+                    problem = f"it does not load ({first})"
+            _log.warning("wheelload: note: cached library %s is rebuilt: %s", target, problem)
+        remove_stale(folder)
+        data = _compile(sources, target, command, purpose)
+        # The record first: an output in place always has its record, and a crash between
+        # the two renames leaves a record without its output (built again, never used).
+        _put(folder, _sidecar(target), _record(data).encode("ascii"))
+        _put(folder, target, data)
     return load(target)
+
+
+@contextlib.contextmanager
+def _held(target: Path):
+    """An exclusive lock on ``<target>.lock`` while ``target`` is checked or built: processes
+    that need the same output at once (test workers, a fleet's) build it once, the others
+    wait for it and then find it in place. The lock ends with the process that holds it."""
+    with open(target.with_name(target.name + ".lock"), "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
 
 
 #: gcc and its flags for the small shared libraries of the compiled loops and kernels

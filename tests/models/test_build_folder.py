@@ -2,6 +2,7 @@
 
 import os
 import stat
+from pathlib import Path
 
 import pytest
 
@@ -60,3 +61,34 @@ def test_an_object_is_compiled_once_per_text_and_flags(tmp_path, monkeypatch):
     changed.write_bytes(changed.read_bytes()[:10])  # truncated
     assert cached_object(source, (header,), command) == changed
     assert len(changed.read_bytes()) > 10  # compiled again
+
+
+def test_processes_that_need_one_object_at_once_compile_it_once(tmp_path):
+    """Two processes asking for the same object together (two test workers, two fleet
+    workers): one compiles it, the other waits on its lock and takes it. The compiler is
+    gcc behind a script that counts its runs and takes 3 s, so that the two overlap."""
+    import subprocess
+    import sys
+
+    counter = tmp_path / "compilations"
+    compiler = tmp_path / "counting-gcc"
+    compiler.write_text(f'#!/bin/sh\necho run >> "{counter}"\nsleep 3\nexec gcc "$@"\n')
+    compiler.chmod(0o755)
+    source, header = tmp_path / "tiny.c", tmp_path / "tiny.h"
+    header.write_text("#define SCALE 2\n")
+    source.write_text('#include "tiny.h"\nint tiny(int x) { return SCALE * x; }\n')
+    program = (
+        "from pathlib import Path; from wheelload.models.files.build_folder import cached_object;"
+        f"print(cached_object(Path('{source}'), (Path('{header}'),), ('{compiler}', '-O1')))"
+    )
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    workers = [
+        subprocess.Popen(
+            [sys.executable, "-c", program], stdout=subprocess.PIPE, text=True, env=env
+        )  # fmt: skip
+        for _ in range(2)
+    ]
+    paths = {worker.communicate(timeout=120)[0].strip() for worker in workers}
+    assert all(worker.returncode == 0 for worker in workers)
+    assert len(paths) == 1 and Path(paths.pop()).is_file()
+    assert counter.read_text().count("run") == 1
