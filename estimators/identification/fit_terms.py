@@ -91,7 +91,8 @@ def newton(
 
 
 def inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:
-    """Rows that count for the covariance: all (least squares) or |r|/σ below INLIER."""
+    """Rows that count for the covariance: all (least squares) or those with ``|r|/σ``
+    below :data:`INLIER`."""
     return np.ones(weighted.size, bool) if loss is FitLoss.LINEAR else np.abs(weighted) < INLIER
 
 
