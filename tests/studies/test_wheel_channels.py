@@ -61,3 +61,28 @@ def test_wheel_channels_written_and_read(dlc, tmp_path):
     # A log without them still reads, the channels None.
     old = signals_from_frame(frame[list(LOG_COLUMNS)], wiring_checks=False)
     assert old.spin is None and old.reference_fx is None and old.steer is None
+
+
+def test_estimate_reports_the_tyre_force_errors(dlc, tmp_path, capsys):
+    """``estimate --method tyre-forces`` writes fx_*, fy_* and prints their pooled error
+    against the log's reference, the figures of an independent computation on the same run
+    (to the printed 0.1 %)."""
+    from wheelload.estimators.registry import build
+    from wheelload.studies.cli import main
+
+    path, out = tmp_path / "dlc.csv", tmp_path / "forces.csv"
+    write_log(dlc.log, path, dlc.metadata)
+    vehicle = str(example_vehicle_path())
+    code = main(["estimate", str(path), "--vehicle", vehicle, "--method", "tyre-forces",
+                 "--out", str(out)])  # fmt: skip
+    assert code == 0
+    printed = capsys.readouterr().out
+    written = pd.read_csv(out)
+    signals = read_log(path, wiring_checks=False)
+    estimate = build("tyre-forces", load_vehicle(vehicle)).run(signals)
+    for axis, reference in (("x", signals.reference_fx), ("y", signals.reference_fy)):
+        values = written[[f"f{axis}_{w}" for w in ("fl", "fr", "rl", "rr")]].to_numpy()
+        np.testing.assert_allclose(values, getattr(estimate, f"f{axis}"), atol=1e-6)
+        share = 100 * np.sqrt(np.mean((values - reference) ** 2) / np.mean(reference**2))
+        assert f"tyre force F_{axis} against the log's reference" in printed
+        assert f"({share:.1f} % of its RMS" in printed
