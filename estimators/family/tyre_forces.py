@@ -22,7 +22,8 @@ r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage K
 
 The paper splits nothing left/right beyond its state :math:`\bar F_{yf}` (front) and the
 normal-load share it names as the simple alternative; ours splits each axle by the tyres'
-load sensitivity (:class:`LateralSplit`; ``LOAD`` is the paper's share), and the front
+load sensitivity (:class:`~wheelload.estimators.family.tyre_step.LateralSplit`;
+``LOAD`` is the paper's share), and the front
 difference beyond it (:math:`e`) has a tight prior: it is seen only through
 :math:`\sin\delta` in the yaw row, where any yaw-model error would land on it.
 
@@ -34,6 +35,11 @@ left/right split (:func:`~wheelload.models.family.tyre_forces.tyre_split`). σ o
 :math:`F_x`: the spin noise through the observer (its impulse response's energy), 30 % of
 the rolling resistance and 4 % of the force (loaded radius, torque); of :math:`F_y`: the
 filter's covariance mapped to the wheels.
+
+The observers are one CasADi step (:mod:`~wheelload.estimators.family.tyre_step`), called
+by :meth:`TyreForces.step` and looped in compiled C by :meth:`TyreForces.run`;
+``wheelload codegen --tyre-forces`` emits the same step as C
+(:mod:`~wheelload.estimators.codegen.tyre`).
 """
 
 from __future__ import annotations
