@@ -86,3 +86,27 @@ def test_estimate_reports_the_tyre_force_errors(dlc, tmp_path, capsys):
         share = 100 * np.sqrt(np.mean((values - reference) ** 2) / np.mean(reference**2))
         assert f"tyre force F_{axis} against the log's reference" in printed
         assert f"({share:.1f} % of its RMS" in printed
+
+
+def test_compare_scores_the_tyre_forces(dlc):
+    """``compare`` with tyre methods: their F_x, F_y RMSE per wheel and pooled and the % of
+    the reference RMS, each equal to a plain computation on the same estimate (1e-12
+    relative); methods without tyre forces get no rows, and the block is F_x then F_y."""
+    from wheelload.estimators.registry import build
+    from wheelload.studies.pipeline.comparison import compare_methods, format_table
+
+    signals = signals_from_frame(dlc.log, wiring_checks=False)
+    vehicle = load_vehicle(example_vehicle_path())
+    comparison = compare_methods(signals, vehicle, ("kf", "tyre-forces", "tyre-rigid"), repeat=1)
+    rows = {r.info.name: dict(r.forces) for r in comparison.results}
+    assert rows["kf"] == {}
+    estimate = build("tyre-rigid", vehicle).run(signals)
+    for axis, values, reference in (("F_x", estimate.fx, signals.reference_fx),
+                                    ("F_y", estimate.fy, signals.reference_fy)):  # fmt: skip
+        errors = values - reference
+        expected = [*np.sqrt(np.mean(errors**2, axis=0)), np.sqrt(np.mean(errors**2))]
+        expected.append(100 * expected[-1] / np.sqrt(np.mean(reference**2)))
+        np.testing.assert_allclose(rows["tyre-rigid"][axis], expected, rtol=1e-12)
+        assert rows["tyre-forces"][axis][5] < rows["tyre-rigid"][axis][5]
+    text = format_table(comparison)
+    assert text.index("F_x       tyre-forces") < text.index("F_y       tyre-forces")
