@@ -6,7 +6,10 @@
  * with wheelload codegen --tyre-forces.
  *
  * The spin observers are discretised at ${rate_interval} s, the library's sample
- * interval: a log at another rate needs the library generated for it.
+ * interval: a log at another rate needs the library generated for it. The vehicle's
+ * numbers this step uses (mass, yaw inertia, geometry, wheel inertias and radii, tyre
+ * coefficients) are folded in: ${prefix}_set_param does not reach them; regenerate for a
+ * changed vehicle file.
  * Tyre frame (ISO 8855): x along the wheel heading in the road plane, y to its left.
  *
  * Usage, one sample (the combined step of tyre-forces):
