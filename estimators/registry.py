@@ -55,7 +55,7 @@ FAMILY_PACKAGE = "wheelload.estimators.family"
 #: Modules of the tyre-force methods (F_x, F_y per wheel beside the KF's F_z), in
 #: ``wheelload.estimators.family``: a table of their own, so that the load studies
 #: (:func:`methods`) do not rank them as load estimators.
-TYRE_MODULES = ("tyre_forces",)
+TYRE_MODULES = ("tyres.forces",)
 
 
 class UnknownMethodError(ValueError):

@@ -549,7 +549,7 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
     """Template fields of the tyre-force step's files and of its part of the example and
     Makefile (empty parts without ``tyre_forces``)."""
     from wheelload.estimators.codegen.tyre import tyre_substitutions
-    from wheelload.estimators.family.tyre_step import WHEEL_INPUTS
+    from wheelload.estimators.family.tyres.step import WHEEL_INPUTS
 
     prefix = options.prefix
     if not options.tyre_forces:

@@ -5,9 +5,9 @@ library gets ``PREFIX_tyre.h`` / ``PREFIX_tyre.c``: ``PREFIX_tyre_step`` takes t
 input and output of a sample and the wheel channels (spins, torques, steer) and gives
 :math:`F_x, F_y` per wheel with σ, so that the KF step and it make the combined step of
 the ``tyre-forces`` method (:math:`F_z` from the KF). The C is emitted from the Function
-the Python method runs (:func:`~wheelload.estimators.family.tyre_step.tyre_core_function`,
+the Python method runs (:func:`~wheelload.estimators.family.tyres.step.tyre_core_function`,
 composed with the force sums of :meth:`TyreForces.force_sum_function
-<wheelload.estimators.family.tyre_forces.TyreForces.force_sum_function>`), with the
+<wheelload.estimators.family.tyres.forces.TyreForces.force_sum_function>`), with the
 vehicle's numbers and the settings folded in; the spin observers are discretised at the
 library's sample interval (a log at another rate needs the library generated for it, as
 the rate filter does). The example program then reads ``omega_*``, ``torque_*`` and
@@ -19,8 +19,8 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count
-from wheelload.estimators.family.tyre_forces import TyreForces
-from wheelload.estimators.family.tyre_step import CORE, WHEEL_INPUTS
+from wheelload.estimators.family.tyres.forces import TyreForces
+from wheelload.estimators.family.tyres.step import CORE, WHEEL_INPUTS
 from wheelload.models import INPUTS, WHEELS, Vehicle
 
 #: Inputs and outputs of the C tyre kernel, in order.

@@ -32,7 +32,9 @@ def run(args: argparse.Namespace) -> int:
         "terms)\n  by default, so that a comparison ranks estimators, not models; "
         "--suspension paper on\n  `estimate` and `compare` gives the source paper's bare model."
     )
-    print("\ntyre forces F_x, F_y on the KF's F_z (from omega_*, torque_*, steer; tyre-rigid: none):")
+    print(
+        "\ntyre forces F_x, F_y on the KF's F_z (from omega_*, torque_*, steer; tyre-rigid: none):"
+    )
     for name, info in tyres.items():
         print(f"{name:<{width}}  {info.description}")
         print(f"{'':<{width}}  [{info.reference}]")

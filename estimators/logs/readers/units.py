@@ -86,9 +86,7 @@ def unit_factor(unit: str, kind: Kind, where: str) -> float:
     if unit.strip() not in UNITS:
         raise UnitError(f"{where}: unknown unit '{unit}'; known: {', '.join(sorted(UNITS))}")
     found, factor = UNITS[unit.strip()]
-    if found is kind or (
-        kind in (Kind.SPEED, Kind.ANGULAR_RATE) and found is Kind.ROTATION_SPEED
-    ):
+    if found is kind or (kind in (Kind.SPEED, Kind.ANGULAR_RATE) and found is Kind.ROTATION_SPEED):
         return factor
     raise UnitError(
         f"{where}: unit '{unit}' is a {found.name.lower().replace('_', ' ')}, "

@@ -9,14 +9,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from wheelload.estimators.family.tyre_forces import (
+from wheelload.estimators.family.tyres.forces import (
     Inputs,
     TyreForces,
     TyreInputError,
     TyreSettings,
     discrete_observer,
 )
-from wheelload.estimators.family.tyre_step import CORE
+from wheelload.estimators.family.tyres.step import CORE
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
 from wheelload.estimators.samples import step_through
@@ -64,8 +64,9 @@ def test_tyre_split_ends():
     nominal, p_ky2, mu, p_d2 = (3800.0, 4700.0), 2.0, 1.15, -0.1
 
     def split(axles):
-        return np.array(tyre_split(loads, axles, nominal_loads=nominal, friction=mu,
-                                   load_sensitivity=p_d2, cornering_load=p_ky2)).ravel()  # fmt: skip
+        shares = tyre_split(loads, axles, nominal_loads=nominal, friction=mu,
+                            load_sensitivity=p_d2, cornering_load=p_ky2)  # fmt: skip
+        return np.array(shares).ravel()
 
     ky = np.sin(2 * np.arctan(loads / (p_ky2 * np.repeat(nominal, 2))))
     peak = mu * (1 + p_d2 * (loads - np.repeat(nominal, 2)) / np.repeat(nominal, 2)) * loads

@@ -22,7 +22,7 @@ r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage K
 
 The paper splits nothing left/right beyond its state :math:`\bar F_{yf}` (front) and the
 normal-load share it names as the simple alternative; ours splits each axle by the tyres'
-load sensitivity (:class:`~wheelload.estimators.family.tyre_step.LateralSplit`;
+load sensitivity (:class:`~wheelload.estimators.family.tyres.step.LateralSplit`;
 ``LOAD`` is the paper's share), and the front
 difference beyond it (:math:`e`) has a tight prior: it is seen only through
 :math:`\sin\delta` in the yaw row, where any yaw-model error would land on it.
@@ -36,7 +36,7 @@ left/right split (:func:`~wheelload.models.family.tyre_forces.tyre_split`). σ o
 the rolling resistance and 4 % of the force (loaded radius, torque); of :math:`F_y`: the
 filter's covariance mapped to the wheels.
 
-The observers are one CasADi step (:mod:`~wheelload.estimators.family.tyre_step`), called
+The observers are one CasADi step (:mod:`~wheelload.estimators.family.tyres.step`), called
 by :meth:`TyreForces.step` and looped in compiled C by :meth:`TyreForces.run`;
 ``wheelload codegen --tyre-forces`` emits the same step as C
 (:mod:`~wheelload.estimators.codegen.tyre`).
@@ -50,7 +50,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.family.tyre_step import (
+from wheelload.estimators.family.tyres.step import (
     CORE,
     CORE_INPUTS,
     LateralSplit,
@@ -259,7 +259,7 @@ class TyreForces:
 
     @functools.cached_property
     def core_function(self) -> ca.Function:
-        """The observers' step (:func:`.tyre_step.tyre_core_function`)."""
+        """The observers' step (:func:`.step.tyre_core_function`)."""
         return tyre_core_function(self.constants, self.settings, (HIGH_SLIP_Q, HIGH_SLIP_R))
 
     @functools.cached_property

@@ -1,10 +1,10 @@
 r"""The tyre-force observers' step as one CasADi Function: the Python methods and the C.
 
 :func:`tyre_core_function` is one sample of the observers of
-:mod:`~wheelload.estimators.family.tyre_forces` (the PI spin observers of
+:mod:`~wheelload.estimators.family.tyres.forces` (the PI spin observers of
 :math:`F_x`, eq. 4-9 in their implementable form, and the adaptive lateral filter of
 :math:`F_y`, eq. 10-16 with §IV's covariance switching), the vehicle's numbers and the
-settings folded in. :class:`~wheelload.estimators.family.tyre_forces.TyreForces` steps it
+settings folded in. :class:`~wheelload.estimators.family.tyres.forces.TyreForces` steps it
 and loops it over a log in compiled C; ``wheelload codegen --tyre-forces`` emits the same
 Function as C (:mod:`~wheelload.estimators.codegen.tyre`), so both give one set of numbers.
 
@@ -72,7 +72,7 @@ CORE_OUTPUTS = ("core_next", "fx", "fx_std", "fy", "fy_std", "high_slip")
 
 def observer_inputs(discrete: list[tuple]) -> np.ndarray:
     """The ``observer`` input (52,) from each wheel's
-    :func:`~wheelload.estimators.family.tyre_forces.discrete_observer` result."""
+    :func:`~wheelload.estimators.family.tyres.forces.discrete_observer` result."""
     rows = [np.concatenate([np.ravel(phi), np.ravel(g1), np.ravel(g2), [gain]])
             for phi, g1, g2, _, _, gain in discrete]  # fmt: skip
     return np.concatenate(rows)
@@ -94,8 +94,8 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     """``tyre_core(core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, loads,
     dt, observer) -> (core_next, fx, fx_std, fy, fy_std, high_slip)`` (module docstring).
 
-    ``constants``: :class:`~wheelload.estimators.family.tyre_forces.Constants`;
-    ``settings``: :class:`~wheelload.estimators.family.tyre_forces.TyreSettings`;
+    ``constants``: :class:`~wheelload.estimators.family.tyres.forces.Constants`;
+    ``settings``: :class:`~wheelload.estimators.family.tyres.forces.TyreSettings`;
     ``high_slip_scales``: the factors on Q and R in high slip.
     """
     k, s = constants, settings
