@@ -20,12 +20,12 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from functools import cache
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from wheelload.models.files.function_cache import stored_function
 from wheelload.models.mass_properties import level_static_loads, vehicle_mass_centre
 from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle.description import Vehicle
@@ -259,9 +259,13 @@ def derived_values(p: ModelParameters) -> ca.SX:
     return ca.vertcat(*static, roll_split_default(p))
 
 
-@cache
 def derived_function() -> ca.Function:
-    """``derived_parameters(p) -> derived[len(DERIVED)]``: :func:`derived_values` (built once)."""
+    """``derived_parameters(p) -> derived[len(DERIVED)]``: :func:`derived_values` (built once
+    and stored, :func:`~wheelload.models.files.function_cache.stored_function`)."""
+    return stored_function(_build_derived_function)
+
+
+def _build_derived_function() -> ca.Function:
     p_vector, p = ModelParameters.symbolic()
     values = derived_values(p)
     read = {ModelParameters.names()[k] for k in _dependencies(values, p_vector)[1]}

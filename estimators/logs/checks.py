@@ -44,6 +44,7 @@ import numpy as np
 
 from wheelload.estimators.kernels import zero_phase
 from wheelload.models import (
+    GATES,
     GRAVITY,
     INPUTS,
     ModelParameters,
@@ -53,6 +54,7 @@ from wheelload.models import (
     suspension_function,
 )
 from wheelload.models.conventions import WHEELS
+from wheelload.models.files.function_cache import stored_function
 from wheelload.models.inputs import TRAVEL, input_index
 
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
@@ -155,19 +157,29 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
     d_{RR} = 0`) that fixes :math:`\Delta d`.
     """
     p = ModelParameters.from_vehicle(vehicle).vector()
-    u = ca.SX.sym("u", len(INPUTS))
-    gates = np.asarray(gates_function()(np.ones(len(INPUTS)), p)[0]).ravel()
-    z = suspension_function()(u, gates, p)
-    A, b = equilibrium_function()(u, gates, p)
+    gates = np.asarray(stored_function(gates_function)(np.ones(len(INPUTS)), p)[0]).ravel()
     travel, acc = input_index(TRAVEL), input_index(("ax", "ay", "az"))
     rest = np.zeros(len(INPUTS))
     rest[INPUTS.index("az")] = GRAVITY
     rest[list(input_index(("az_fl", "az_fr", "az_rl", "az_rr")))] = GRAVITY
-    jacobians = ca.Function("J", [u], [A, ca.jacobian(z, u), ca.jacobian(b, u)])(rest)
+    jacobians = stored_function(response_jacobians_function)(rest, gates, p)
     A, Z, Bu = (np.asarray(m) for m in jacobians)
     K, L = Z[:, travel], Z[:, acc]
     system = np.vstack([A @ K - Bu[:, travel], [1.0, -1.0, -1.0, 1.0]])
     return np.linalg.solve(system, np.vstack([Bu[:, acc] - A @ L, np.zeros((1, 3))]))
+
+
+def response_jacobians_function() -> ca.Function:
+    """``travel_response_jacobians(u, gates, p) -> (A, dz/du, db/du)``: the equilibrium
+    matrix and the Jacobians of the pseudo-measured loads ``z`` and of ``b`` (eq. 15-16)."""
+    u = ca.SX.sym("u", len(INPUTS))
+    gates = ca.SX.sym("gates", len(GATES))
+    p = ca.SX.sym("p", len(ModelParameters.names()))
+    z = suspension_function()(u, gates, p)
+    A, b = equilibrium_function()(u, gates, p)
+    return ca.Function("travel_response_jacobians", [u, gates, p],
+                       [A, ca.jacobian(z, u), ca.jacobian(b, u)], ["u", "gates", "p"],
+                       ["A", "dz_du", "db_du"])  # fmt: skip
 
 
 def _fill(values: np.ndarray) -> np.ndarray | None:

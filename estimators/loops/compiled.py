@@ -5,7 +5,9 @@ sample after another and carries the accumulated outputs (the filter state)
 to the next sample, like ``Function.mapaccum`` but without its per-call
 copying. The shared library is built with the system C compiler once per
 step Function, cached in a private per-user build folder by the hash of its
-source (so it is never stale), and called through ctypes on numpy arrays.
+source (so it is never stale; a stored step's column loop by the hash of the code
+that generates the source, :func:`~wheelload.models.files.build_folder.keyed_library`,
+which spares generating it), and called through ctypes on numpy arrays.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.models.files.build_folder import shared_library
+from wheelload.models.files.build_folder import keyed_library, shared_library
+from wheelload.models.files.function_cache import stored_stem
 
 LOOP = """
 #include <string.h>
@@ -308,12 +311,20 @@ class ColumnLoop:
         self.fixed = tuple(i for i in range(n_accum, step.n_in()) if i not in inputs)
         self.columns = tuple(names_out.index(name) for name in columns)
         self.n_columns = sum(step.nnz_out(i) for i in self.columns)
-        generator = ca.CodeGenerator(f"{step.name()}.c", {"with_header": False})
-        generator.add(step)
-        source = generator.dump() + _column_source(
-            step, n_accum, inputs, self.fixed, self.columns, rules
-        )
-        library = shared_library(source, f"{step.name()}_columns")
+        def source() -> str:
+            generator = ca.CodeGenerator(f"{step.name()}.c", {"with_header": False})
+            generator.add(step)
+            return generator.dump() + _column_source(
+                step, n_accum, inputs, self.fixed, self.columns, rules
+            )
+
+        name = f"{step.name()}_columns"
+        stem = stored_stem(step)
+        if stem is None:
+            library = shared_library(source(), name)
+        else:  # a stored step: the code determines it, and with the layout the source
+            layout = (n_accum, inputs, self.fixed, self.columns, rules)
+            library = keyed_library(f"{stem} {name} {layout!r}", source, name)
         self._loop = getattr(library, f"{step.name()}_columns")
         self._loop.restype = ctypes.c_int
 

@@ -1,0 +1,90 @@
+"""Named CasADi Functions kept on disk between runs (serialised CasADi).
+
+Building a Function from the models' expressions (the filter step with its
+Jacobians and guards, the suspension pseudo-measurement, the equilibrium rows)
+takes from a few milliseconds to a fifth of a second; loading its serialised
+form takes well under a millisecond for a model Function. A stored Function is
+named by its builder (module and name) and :func:`code_digest` (a hash of every ``.py`` file of
+``wheelload.models`` and ``wheelload.estimators`` and of the CasADi version), so
+an edit of any of them builds it again. It lives in the private build folder
+(:func:`~wheelload.models.files.build_folder.build_folder`), written to a
+temporary file and renamed into place; a file that does not load is built
+again (with a one-line note).
+
+Example
+-------
+>>> z = stored_function(suspension_function)  # the Function suspension_function() builds
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import logging
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import casadi as ca
+
+from wheelload.models.files.build_folder import build_folder
+from wheelload.models.files.temporaries import temporary_file
+
+_log = logging.getLogger(__name__)
+
+#: ``id`` of each Function :func:`stored_function` returned: its file stem (name and digest).
+_STEMS: dict[int, str] = {}
+
+#: The folders of the package whose sources the stored Functions and libraries are built from.
+SOURCE_FOLDERS = ("models", "estimators")
+#: The package's folder (``models/files/`` is two below it).
+PACKAGE_ROOT = Path(__file__).resolve().parents[2]
+
+
+@functools.cache
+def code_digest(root: Path = PACKAGE_ROOT) -> str:
+    """Hash of the ``.py`` files of :data:`SOURCE_FOLDERS` under ``root`` and of the CasADi
+    version."""
+    digest = hashlib.sha256(f"casadi {ca.__version__}\n".encode())
+    for folder in SOURCE_FOLDERS:
+        for path in sorted((root / folder).rglob("*.py")):
+            digest.update(f"{path.relative_to(root)}\n".encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+@functools.cache
+def stored_function(builder: Callable[[], ca.Function]) -> ca.Function:
+    """``builder()``, loaded from the build folder when this code built it before (module
+    docstring); the same object for the same builder in one process."""
+    stem = f"{builder.__module__.rsplit('.', 1)[-1]}.{builder.__qualname__}_{code_digest()}"
+    function = _load_or_build(builder, build_folder() / f"{stem}.casadi")
+    _STEMS[id(function)] = stem
+    return function
+
+
+def stored_stem(function: ca.Function) -> str | None:
+    """``BUILDER_DIGEST`` of a Function :func:`stored_function` returned (what the code alone
+    determines it by: a key for what is built from it), None for any other Function."""
+    return _STEMS.get(id(function))
+
+
+def _load_or_build(builder: Callable[[], ca.Function], path: Path) -> ca.Function:
+    if path.exists():
+        try:
+            return ca.Function.deserialize(path.read_text())
+        except (RuntimeError, OSError, UnicodeDecodeError):  # truncated or corrupt
+            _log.warning("wheelload: note: cached function %s does not load: built again", path)
+    function = builder()
+    try:
+        temporary = temporary_file(path.parent, path.stem, path.suffix)
+    except OSError:
+        return function  # not stored: the Function is still returned
+    try:
+        temporary.write_text(function.serialize())
+        os.replace(temporary, path)
+    except OSError:
+        pass  # not stored: the Function is still returned
+    finally:
+        temporary.unlink(missing_ok=True)
+    return function
