@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.models.files.function_cache import stored_function
+from wheelload.models.files.function_library import compiled_function
 from wheelload.models.mass_properties import level_static_loads, vehicle_mass_centre
 from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle.description import Vehicle
@@ -157,7 +158,8 @@ class ModelParameters:
         """Numeric parameters; ``static`` overrides the static wheel loads [N].
 
         The static loads (unless given) and the roll split (unless the file gives
-        ``suspension.roll_split_front``) are :func:`derived_function`'s.
+        ``suspension.roll_split_front``) are :func:`derived_function`'s (its compiled C,
+        :func:`~wheelload.models.files.function_library.compiled_function`).
         """
         terms = dataclasses.asdict(vehicle.model)
         mounting = mounting_matrix(*vehicle.geometry.imu_orientation)
@@ -207,7 +209,8 @@ class ModelParameters:
             **{f"imu_r{i + 1}{j + 1}": float(mounting[i, j]) for i in range(3) for j in range(3)},
             **{f"term_{key}": float(value) for key, value in terms.items()},
         )
-        derived = dict(zip(DERIVED, derived_function()(parameters.vector()).full().ravel()))
+        values = compiled_function(_build_derived_function)(parameters.vector())[0]
+        derived = dict(zip(DERIVED, values.ravel()))
         follow = following(vehicle, static_given=static is not None)
         return dataclasses.replace(parameters, **{name: float(derived[name]) for name in follow})
 

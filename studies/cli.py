@@ -23,6 +23,7 @@ import threading
 from collections.abc import Sequence
 
 from wheelload.studies.commands.options import log_level
+from wheelload.studies.deferred import defer
 
 COMMANDS = (
     "wheelload.studies.commands.vehicle",
@@ -115,6 +116,7 @@ def _terminate(signum, frame) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    defer("casadi")  # imported where a model is built, not by a warm estimate (deferred.py)
     command = argv[0] if argv and argv[0] in COMMAND_MODULES else "command"
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None

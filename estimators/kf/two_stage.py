@@ -141,9 +141,18 @@ class TwoStageKF:
         self.tuning = tuning_vector(
             vehicle, sample_interval or DEFAULT_SAMPLE_INTERVAL, guard_settings
         )
-        if step is None:
-            step = default_step_function()  # step_function(), loaded from disk when built before
-        self.step_function = step
+        self._given_step = step
+
+    @functools.cached_property
+    def step_function(self) -> ca.Function:
+        """The step Function: the constructor's, or :func:`step_function` (loaded from disk
+        when built before, :func:`default_step_function`), on first use."""
+        return default_step_function() if self._given_step is None else self._given_step
+
+    @property
+    def default_step(self) -> bool:
+        """Whether the step is :func:`step_function` with its defaults (none was given)."""
+        return self._given_step is None
 
     def tuning_for(self, sample_interval: float) -> np.ndarray:
         """:attr:`tuning` with the nominal interval ``sample_interval`` [s]."""

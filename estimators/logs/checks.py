@@ -54,7 +54,7 @@ from wheelload.models import (
     suspension_function,
 )
 from wheelload.models.conventions import WHEELS
-from wheelload.models.files.function_cache import stored_function
+from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import TRAVEL, input_index
 
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
@@ -157,13 +157,12 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
     d_{RR} = 0`) that fixes :math:`\Delta d`.
     """
     p = ModelParameters.from_vehicle(vehicle).vector()
-    gates = np.asarray(stored_function(gates_function)(np.ones(len(INPUTS)), p)[0]).ravel()
+    gates = compiled_function(gates_function)(np.ones(len(INPUTS)), p)[0].ravel()
     travel, acc = input_index(TRAVEL), input_index(("ax", "ay", "az"))
     rest = np.zeros(len(INPUTS))
     rest[INPUTS.index("az")] = GRAVITY
     rest[list(input_index(("az_fl", "az_fr", "az_rl", "az_rr")))] = GRAVITY
-    jacobians = stored_function(response_jacobians_function)(rest, gates, p)
-    A, Z, Bu = (np.asarray(m) for m in jacobians)
+    A, Z, Bu = compiled_function(response_jacobians_function)(rest, gates, p)
     K, L = Z[:, travel], Z[:, acc]
     system = np.vstack([A @ K - Bu[:, travel], [1.0, -1.0, -1.0, 1.0]])
     return np.linalg.solve(system, np.vstack([Bu[:, acc] - A @ L, np.zeros((1, 3))]))

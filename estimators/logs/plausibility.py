@@ -71,7 +71,7 @@ from wheelload.models import (
     gates_function,
     suspension_function,
 )
-from wheelload.models.files.function_cache import stored_function
+from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import WHEELS
 
 MAX_RATE = 5000.0  # Hz, above it no vehicle logger of body and suspension signals
@@ -135,14 +135,14 @@ def _rows(u: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     """``A`` (3 x 4), the pseudo-measured loads with and without the travel (4 x n), ``b``."""
     n = u.shape[1]
     valid = np.isfinite(u).astype(float)
-    gates = np.asarray(stored_function(gates_function).map(n)(valid, p)[0])
+    gates = compiled_function(gates_function).map(valid, p)[0]
     u = np.nan_to_num(u)
     without = u.copy()
     without[[INPUTS.index(f"d_{w}") for w in WHEELS]] = 0.0
-    suspension = stored_function(suspension_function).map(n)
-    z = np.asarray(suspension(u, gates, p))
-    z0 = np.asarray(suspension(without, gates, p))
-    A, b = stored_function(equilibrium_function).map(n)(u, gates, p)
+    suspension = compiled_function(suspension_function).map
+    (z,) = suspension(u, gates, p)
+    (z0,) = suspension(without, gates, p)
+    A, b = compiled_function(equilibrium_function).map(u, gates, p)
     return np.asarray(A)[:, :4], np.column_stack([z, z0]), np.asarray(b)
 
 

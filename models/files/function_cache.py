@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib.util
 import logging
 import os
 from collections.abc import Callable
@@ -45,7 +46,7 @@ PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 def code_digest(root: Path = PACKAGE_ROOT) -> str:
     """Hash of the ``.py`` files of :data:`SOURCE_FOLDERS` under ``root`` and of the CasADi
     version."""
-    digest = hashlib.sha256(f"casadi {ca.__version__}\n".encode())
+    digest = hashlib.sha256(f"casadi {casadi_version()}\n".encode())
     for folder in SOURCE_FOLDERS:
         for path in sorted((root / folder).rglob("*.py")):
             digest.update(f"{path.relative_to(root)}\n".encode())
@@ -53,14 +54,31 @@ def code_digest(root: Path = PACKAGE_ROOT) -> str:
     return digest.hexdigest()[:16]
 
 
+def casadi_version() -> str:
+    """The installed CasADi's version, from its distribution record beside the package (read
+    without importing CasADi, about 30 ms); from CasADi itself where there is no record."""
+    spec = importlib.util.find_spec("casadi")
+    if spec is not None and spec.origin is not None:
+        records = sorted(Path(spec.origin).parents[1].glob("casadi-*.dist-info"))
+        if len(records) == 1:
+            return records[0].name.removeprefix("casadi-").removesuffix(".dist-info")
+    return ca.__version__
+
+
 @functools.cache
 def stored_function(builder: Callable[[], ca.Function]) -> ca.Function:
     """``builder()``, loaded from the build folder when this code built it before (module
     docstring); the same object for the same builder in one process."""
-    stem = f"{builder.__module__.rsplit('.', 1)[-1]}.{builder.__qualname__}_{code_digest()}"
+    stem = builder_stem(builder)
     function = _load_or_build(builder, build_folder() / f"{stem}.casadi")
     _STEMS[id(function)] = stem
     return function
+
+
+def builder_stem(builder: Callable[[], ca.Function]) -> str:
+    """``MODULE.BUILDER_DIGEST``: the name of what is stored of ``builder()``'s Function
+    (the builder's module and name, :func:`code_digest`)."""
+    return f"{builder.__module__.rsplit('.', 1)[-1]}.{builder.__qualname__}_{code_digest()}"
 
 
 def stored_stem(function: ca.Function) -> str | None:

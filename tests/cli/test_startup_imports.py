@@ -12,7 +12,8 @@ import sys
 
 #: Modules the single-log path does not use: worker processes and the many-log driver,
 #: the batched C, the identification fits (scipy), pandas, the MHE's OSQP, the family,
-#: plotting, progress bars, MDF4, Dask, the docs, the installed version's metadata.
+#: plotting, progress bars, MDF4, Dask, the docs, the installed version's metadata, the
+#: projection KF, the channel maps.
 NOT_FOR_ONE_LOG = (
     "asammdf",
     "concurrent.futures.process",
@@ -31,6 +32,8 @@ NOT_FOR_ONE_LOG = (
     "wheelload.studies.docs",
     "wheelload.studies.pipeline.batch",
     "wheelload.studies.plots",
+    "wheelload.estimators.kf.projection",
+    "wheelload.estimators.logs.readers.channel_map",
 )
 
 
@@ -64,8 +67,17 @@ def test_one_log_imports_nothing_it_does_not_run(tmp_path):
     assert imported == []
 
 
+def test_a_warm_estimate_never_loads_casadi(tmp_path):
+    """Once the stored Functions and libraries are built (the first run), one log's estimate
+    reads them as compiled C: CasADi stays a stand-in (studies/deferred.py), never loaded."""
+    argv = ["estimate", "--example", "--out", str(tmp_path / "loads.csv"), "--force"]
+    _modules_after(argv)  # builds what the build folder lacks
+    modules = _modules_after(argv)
+    assert "wheelload.estimators.kf.log_stream" in modules
+    assert "casadi.casadi" not in modules  # the extension module, loaded with casadi itself
+
+
 def test_the_version_imports_no_numerics():
     modules = _modules_after(["--version"])
-    assert (
-        sorted(m for m in ("casadi", "numpy", "pyarrow", "wheelload.models") if m in modules) == []
-    )
+    loaded = ("casadi.casadi", "numpy", "pyarrow", "wheelload.models")
+    assert sorted(m for m in loaded if m in modules) == []
