@@ -120,6 +120,8 @@ def predict(theta, P, started, u, valid, dt, tuning):
 
 @dataclasses.dataclass(frozen=True)
 class Update:
+    """The payload update: parameters, covariance, rows used."""
+
     theta: ca.SX
     P: ca.SX
     used: ca.SX  # (3,) rows used

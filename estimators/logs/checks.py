@@ -34,6 +34,7 @@ Example
 from __future__ import annotations
 
 import enum
+import functools
 import math
 import re
 from collections.abc import Sequence
@@ -197,13 +198,24 @@ def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np
     step = max(int(fs / RATE), 1)
     result = {}
     for name, values in channels.items():
-        filled = _fill(values)
-        if filled is None or filled.size <= 3 * max(len(a), len(b)):
-            continue
-        despiked = zero_phase.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
-        result[name] = zero_phase.filtfilt(b, a, despiked)[::step]
+        low = _low_passed(np.asarray(values, float).tobytes(), tuple(b), tuple(a), step)
+        if low is not None:
+            result[name] = low
     result["t"] = t[::step]
     return result
+
+
+@functools.lru_cache(maxsize=32)
+def _low_passed(values: bytes, b: tuple, a: tuple, step: int) -> np.ndarray | None:
+    """One channel of :func:`quasi_static` (``values``: its float64 bytes), read-only, or
+    None; kept, as the wiring and plausibility checks examine the same window."""
+    filled = _fill(np.frombuffer(values))
+    if filled is None or filled.size <= 3 * max(len(a), len(b)):
+        return None
+    despiked = zero_phase.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
+    low = zero_phase.filtfilt(np.array(b), np.array(a), despiked)[::step]
+    low.flags.writeable = False
+    return low
 
 
 def _decisive_correlation(t: np.ndarray) -> float:
@@ -243,6 +255,8 @@ def _unit_of(ratio: float) -> str | None:
 
 @dataclass(frozen=True)
 class _Hypothesis:
+    """A wiring mistake and the signs it predicts."""
+
     explanation: str
     wheel_signs: dict[str, tuple[int, int, int, int]]  # per axis, predicted agreement
     lateral: int = +1  # sign of vx wz against ay

@@ -51,6 +51,8 @@ Vector3 = tuple[float, float, float]
 
 @dataclass(frozen=True, kw_only=True)
 class Mass:
+    """``[mass]``: total, sprung and unsprung masses, sprung-body inertia."""
+
     total: float  # kg, sprung + unsprung
     sprung: float  # kg
     unsprung_front: float  # kg, both front corners together
@@ -74,6 +76,8 @@ class Mass:
 
 @dataclass(frozen=True, kw_only=True)
 class Geometry:
+    """``[geometry]``: wheelbase, CG position, tracks, IMU position and orientation."""
+
     wheelbase: float  # m
     lf: float  # m, sprung CG to front axle
     lr: float  # m, sprung CG to rear axle
@@ -96,6 +100,8 @@ class Geometry:
 
 @dataclass(frozen=True, kw_only=True)
 class Tyres:
+    """``[tyres]``: radii and vertical stiffness per axle."""
+
     radius_front: float  # m, unloaded
     radius_rear: float  # m
     vertical_stiffness_front: float  # N/m
@@ -108,6 +114,8 @@ class Tyres:
 
 @dataclass(frozen=True, kw_only=True)
 class Aero:
+    """``[aero]``: air density, reference area, lift and drag, application point."""
+
     air_density: float  # kg/m^3
     reference_area: float  # m^2
     lift_coefficient: float  # -, > 0 is lift
@@ -122,6 +130,8 @@ class Aero:
 
 @dataclass(frozen=True, kw_only=True)
 class AxleSuspension:
+    """``[suspension.front]`` or ``[suspension.rear]``: springs, dampers, bar, links, stops."""
+
     spring_rate: float  # N/m at the wheel
     damper_push: float  # N s/m, compression (v > 0)
     damper_pull: float  # N s/m, rebound (v < 0)
@@ -150,6 +160,8 @@ class AxleSuspension:
 
 @dataclass(frozen=True, kw_only=True)
 class Suspension:
+    """``[suspension]``: both axles and the roll split."""
+
     front: AxleSuspension
     rear: AxleSuspension
     # Front share of the lateral load transfer (models/roll_split.py); default:
@@ -259,6 +271,8 @@ class PayloadTuning:
 
 @dataclass(frozen=True, kw_only=True)
 class FilterTuning:
+    """``[filter]``: the KF's noise densities, initial std and the online payload."""
+
     process_noise_density: float  # N^2/s:  Q = q dt I
     suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
     constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt

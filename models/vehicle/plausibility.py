@@ -54,6 +54,8 @@ class Range:
 
 @dataclass(frozen=True)
 class Violation:
+    """A key whose value is outside its plausible range."""
+
     key: str
     value: float
     range: Range
