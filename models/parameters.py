@@ -28,7 +28,6 @@ import numpy as np
 from wheelload.models.files.function_cache import stored_function
 from wheelload.models.files.function_library import compiled_function
 from wheelload.models.mass_properties import level_static_loads, vehicle_mass_centre
-from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle.description import Vehicle
 
 #: Per-axle parameters ``<name>_front``, ``<name>_rear`` and their
@@ -258,6 +257,8 @@ def following(vehicle: Vehicle, *, static_given: bool = False) -> tuple[str, ...
 
 def derived_values(p: ModelParameters) -> ca.SX:
     """The :data:`DERIVED` parameters of ``p`` (numbers or symbols) as one SX column."""
+    from wheelload.models.roll_stiffness import roll_split_default  # the springs' model
+
     static = level_static_loads(p.mass, p.lf, p.lr)
     return ca.vertcat(*static, roll_split_default(p))
 

@@ -38,7 +38,8 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.kf import guard
-from wheelload.estimators.kf.step import N_CARRIED, STEP_OUTPUT_NAMES, step_function
+from wheelload.estimators.kf.step_cache import STEP_FUNCTION
+from wheelload.estimators.kf.step_layout import N_CARRIED, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring
@@ -376,7 +377,7 @@ def _layout(used: int) -> ColumnLayout:
 def _stored_loop() -> ColumnLoop:
     """The default step's loop; its ``used`` output has :data:`UPDATE_ROWS` and the model
     terms' dropped entries (every flag :meth:`StepFlag.update_flags` names)."""
-    return ColumnLoop.stored(step_function, _layout(len(StepFlag.update_flags())))
+    return ColumnLoop.stored(STEP_FUNCTION, _layout(len(StepFlag.update_flags())))
 
 
 @functools.lru_cache(maxsize=4)

@@ -6,7 +6,9 @@ every ``wheelload estimate``; loading its serialised form takes about 10 ms.
 It is stored as any model Function
 (:func:`~wheelload.models.files.function_cache.stored_function`: named by a hash
 of every ``.py`` file of ``wheelload.models`` and ``wheelload.estimators`` and of
-the CasADi version, so an edit of any of them builds it again).
+the CasADi version, so an edit of any of them builds it again); a warm estimate
+runs its stored column loop and imports neither the step's module nor the models
+(:data:`STEP_FUNCTION` names the builder).
 
 Example
 -------
@@ -17,11 +19,13 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.kf.step import step_function
-from wheelload.models.files.function_cache import stored_function
+from wheelload.models.files.function_cache import Builder, stored_function
+
+#: :func:`~wheelload.estimators.kf.step.step_function` with its defaults, by name.
+STEP_FUNCTION = Builder("wheelload.estimators.kf.step", "step_function")
 
 
 def default_step_function() -> ca.Function:
     """:func:`~wheelload.estimators.kf.step.step_function` with its defaults, loaded from
     the build folder when this code built it before (module docstring)."""
-    return stored_function(step_function)
+    return stored_function(STEP_FUNCTION)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
-from wheelload.estimators.kf.payload import PAYLOAD_TUNING, payload_tuning
+from wheelload.estimators.kf.payload_tuning import PAYLOAD_TUNING, payload_tuning
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.measurement_noise import INPUT_DENSITIES

@@ -44,20 +44,19 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.kernels import zero_phase
-from wheelload.models import (
-    GATES,
-    GRAVITY,
-    INPUTS,
-    ModelParameters,
-    Vehicle,
-    equilibrium_function,
-    gates_function,
-    suspension_function,
-)
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
+from wheelload.models.files.function_cache import Builder
 from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import TRAVEL, input_index
 
+#: The model Functions the checks evaluate, by name (imported where they are built; a warm
+#: run reads them as compiled C: ``models/files/function_library.py``).
+GATES_FUNCTION = Builder("wheelload.models.terms", "gates_function")
+SUSPENSION_FUNCTION = Builder("wheelload.models.suspension.pseudo_measurement",
+                              "suspension_function")  # fmt: skip
+EQUILIBRIUM_FUNCTION = Builder("wheelload.models.equilibrium", "equilibrium_function")
+RESPONSE_FUNCTION = Builder("wheelload.estimators.logs.checks", "response_jacobians_function")
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
 MOVING = 2.0  # m/s
 CUTOFF = 1.0  # Hz, quasi-static body response
@@ -158,12 +157,12 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
     d_{RR} = 0`) that fixes :math:`\Delta d`.
     """
     p = ModelParameters.from_vehicle(vehicle).vector()
-    gates = compiled_function(gates_function)(np.ones(len(INPUTS)), p)[0].ravel()
+    gates = compiled_function(GATES_FUNCTION)(np.ones(len(INPUTS)), p)[0].ravel()
     travel, acc = input_index(TRAVEL), input_index(("ax", "ay", "az"))
     rest = np.zeros(len(INPUTS))
     rest[INPUTS.index("az")] = GRAVITY
     rest[list(input_index(("az_fl", "az_fr", "az_rl", "az_rr")))] = GRAVITY
-    A, Z, Bu = compiled_function(response_jacobians_function)(rest, gates, p)
+    A, Z, Bu = compiled_function(RESPONSE_FUNCTION)(rest, gates, p)
     K, L = Z[:, travel], Z[:, acc]
     system = np.vstack([A @ K - Bu[:, travel], [1.0, -1.0, -1.0, 1.0]])
     return np.linalg.solve(system, np.vstack([Bu[:, acc] - A @ L, np.zeros((1, 3))]))
@@ -172,6 +171,8 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
 def response_jacobians_function() -> ca.Function:
     """``travel_response_jacobians(u, gates, p) -> (A, dz/du, db/du)``: the equilibrium
     matrix and the Jacobians of the pseudo-measured loads ``z`` and of ``b`` (eq. 15-16)."""
+    from wheelload.models import GATES, equilibrium_function, suspension_function
+
     u = ca.SX.sym("u", len(INPUTS))
     gates = ca.SX.sym("gates", len(GATES))
     p = ca.SX.sym("p", len(ModelParameters.names()))

@@ -49,9 +49,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.estimators.logs.checks import (
+    EQUILIBRIUM_FUNCTION,
+    GATES_FUNCTION,
     KINEMATIC_CORRELATION,
     MIN_STD,
     RATE,
+    SUSPENSION_FUNCTION,
     Check,
     CheckReport,
     Outcome,
@@ -62,15 +65,7 @@ from wheelload.estimators.logs.checks import (
     travel_response,
     undecided_check,
 )
-from wheelload.models import (
-    GRAVITY,
-    INPUTS,
-    ModelParameters,
-    Vehicle,
-    equilibrium_function,
-    gates_function,
-    suspension_function,
-)
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import WHEELS
 
@@ -133,16 +128,15 @@ def _inputs(q: dict[str, np.ndarray]) -> np.ndarray:
 
 def _rows(u: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``A`` (3 x 4), the pseudo-measured loads with and without the travel (4 x n), ``b``."""
-    n = u.shape[1]
     valid = np.isfinite(u).astype(float)
-    gates = compiled_function(gates_function).map(valid, p)[0]
+    gates = compiled_function(GATES_FUNCTION).map(valid, p)[0]
     u = np.nan_to_num(u)
     without = u.copy()
     without[[INPUTS.index(f"d_{w}") for w in WHEELS]] = 0.0
-    suspension = compiled_function(suspension_function).map
+    suspension = compiled_function(SUSPENSION_FUNCTION).map
     (z,) = suspension(u, gates, p)
     (z0,) = suspension(without, gates, p)
-    A, b = compiled_function(equilibrium_function).map(u, gates, p)
+    A, b = compiled_function(EQUILIBRIUM_FUNCTION).map(u, gates, p)
     return np.asarray(A)[:, :4], np.column_stack([z, z0]), np.asarray(b)
 
 

@@ -20,7 +20,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.models.files.build_folder import keyed_library, shared_library
-from wheelload.models.files.function_cache import stored_stem
+from wheelload.models.files.function_cache import builder_name, stored_stem
 from wheelload.models.files.function_library import Signature, stored_library
 
 LOOP = """
@@ -337,7 +337,7 @@ class ColumnLoop:
         (:func:`~wheelload.models.files.function_library.stored_library`)."""
         loop = cls.__new__(cls)
         source = functools.partial(_column_source, layout=layout)
-        name = f"{builder.__name__}_columns"
+        name = f"{builder_name(builder)[1]}_columns"
         signature, library = stored_library(builder, name, f"columns {layout!r}", source)
         loop._set_up(signature, layout)
         loop._bind(library)

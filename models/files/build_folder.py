@@ -21,9 +21,7 @@ import fcntl
 import hashlib
 import logging
 import os
-import shutil
 import stat
-import subprocess
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -119,6 +117,9 @@ def _compile(
     """The bytes ``command`` makes of ``sources`` (file name: text; the first is compiled, the
     others are the headers it includes), in a temporary folder of the build folder (fixed file
     names inside it, so that the same sources give the same bytes)."""
+    import shutil  # only to build: a warm run loads what is built
+    import subprocess
+
     folder = target.parent
     work = temporary_file(folder, target.stem, ".d")
     work.unlink()

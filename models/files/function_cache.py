@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib
 import importlib.util
 import logging
 import os
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -75,10 +77,32 @@ def stored_function(builder: Callable[[], ca.Function]) -> ca.Function:
     return function
 
 
+@dataclass(frozen=True)
+class Builder:
+    """A Function builder named by its module and name, imported only when it is called: a
+    warm run that finds what is stored of its Function never imports the module (nor the
+    symbolic models it builds from)."""
+
+    module: str
+    name: str
+
+    def __call__(self) -> ca.Function:
+        return getattr(importlib.import_module(self.module), self.name)()
+
+
+def builder_name(builder: Callable[[], ca.Function]) -> tuple[str, str]:
+    """The module and the name of a builder function or :class:`Builder`."""
+    if isinstance(builder, Builder):
+        return builder.module, builder.name
+    return builder.__module__, builder.__qualname__
+
+
 def builder_stem(builder: Callable[[], ca.Function]) -> str:
     """``MODULE.BUILDER_DIGEST``: the name of what is stored of ``builder()``'s Function
-    (the builder's module and name, :func:`code_digest`)."""
-    return f"{builder.__module__.rsplit('.', 1)[-1]}.{builder.__qualname__}_{code_digest()}"
+    (the builder's module and name, :func:`code_digest`; a :class:`Builder` the same as
+    the function it names)."""
+    module, name = builder_name(builder)
+    return f"{module.rsplit('.', 1)[-1]}.{name}_{code_digest()}"
 
 
 def stored_stem(function: ca.Function) -> str | None:

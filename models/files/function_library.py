@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.models.files.build_folder import build_folder, keyed_library
-from wheelload.models.files.function_cache import builder_stem, stored_function
+from wheelload.models.files.function_cache import builder_name, builder_stem, stored_function
 from wheelload.models.files.temporaries import temporary_file
 
 MAP = """
@@ -235,7 +235,7 @@ class _Stale(Exception):
 def compiled_function(builder: Callable[[], object]) -> CompiledFunction:
     """``builder()``'s Function as compiled C (module docstring): loaded with its signature
     when this code built it before, else built (with CasADi) and stored."""
-    name = builder.__name__.strip("_")
+    name = builder_name(builder)[1].strip("_")
     signature, library = stored_library(builder, f"{name}_map", "map", map_source, dense=True)
     return CompiledFunction(signature, library)
 
