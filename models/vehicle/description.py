@@ -19,7 +19,9 @@ Example
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+import sys
 import types
 import typing
 from dataclasses import dataclass
@@ -432,8 +434,22 @@ def _convert(value: object, kind: object, key: str) -> object:
     raise TypeError(f"unsupported field type {kind} for key '{key}'")
 
 
+@functools.cache
+def field_types(cls: type) -> dict[str, object]:
+    """``typing.get_type_hints`` of a dataclass of the vehicle file: each field's annotation
+    evaluated in the class's module, each annotation's text once (a vehicle file has about
+    130 fields, most of them ``float``)."""
+    fields = dataclasses.fields(cls)
+    return {field.name: _annotation(field.type, cls.__module__) for field in fields}
+
+
+@functools.cache
+def _annotation(text: str, module: str) -> object:
+    return eval(text, vars(sys.modules[module]))  # our own annotations, as get_type_hints
+
+
 def _build(cls: type, table: dict, prefix: str) -> object:
-    hints = typing.get_type_hints(cls)
+    hints = field_types(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = sorted(set(table) - set(fields))
     if unknown:
