@@ -5,14 +5,14 @@ MHE's OSQP and scipy.sparse are slow to import, and a command pays only for the
 modules it runs (one log's estimate needs neither the projection KF nor the MHE).
 """
 
-from wheelload.models.lazy_names import lazy_names
+from wheelload.models.files.lazy_names import lazy_names
 
 #: Names imported on first use, by module: the filters, settings and tools the command line
 #: and the studies take from this face (they reach estimators through the registry).
 _LAZY_MODULES = {
     "wheelload.estimators.kf.projection": ("ProjectionKF", "Weighting"),
     "wheelload.estimators.kf.step": ("step_function",),
-    "wheelload.estimators.kf.step_layout": ("UPDATE_ROWS",),
+    "wheelload.estimators.kf.step_cache": ("UPDATE_ROWS",),
     "wheelload.estimators.kf.two_stage": ("FilterState", "TwoStageKF"),
     "wheelload.estimators.logs.signals": (
         "LogError",

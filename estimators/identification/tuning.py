@@ -53,7 +53,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from wheelload.estimators.kf.step import step_function
-from wheelload.estimators.kf.step_layout import UPDATE_ROWS
+from wheelload.estimators.kf.step_cache import UPDATE_ROWS
 from wheelload.estimators.kf.tuning import (
     NOISE_DENSITIES,
     TUNED_DENSITIES,

@@ -38,8 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.kf import guard
-from wheelload.estimators.kf.step_cache import STEP_FUNCTION
-from wheelload.estimators.kf.step_layout import N_CARRIED, STEP_OUTPUT_NAMES
+from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring

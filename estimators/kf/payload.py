@@ -35,7 +35,7 @@ import dataclasses
 import casadi as ca
 
 from wheelload.estimators.kernels.kalman import sequential_update_innovations, symmetrise
-from wheelload.estimators.kf.payload_tuning import PAYLOAD_TUNING
+from wheelload.estimators.kf.tuning import PAYLOAD_TUNING
 from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function
 from wheelload.models.loaded_vehicle import (
     PAYLOAD_STATES,

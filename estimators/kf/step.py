@@ -36,7 +36,7 @@ from wheelload.estimators.kf import (
     plausibility,
     reported_std,
 )
-from wheelload.estimators.kf.step_layout import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
+from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import (
     GUARD_TUNING,
     PAYLOAD_SLICE,

@@ -26,8 +26,12 @@ import numpy as np
 from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.monitor_state import MONITOR_SIZE
-from wheelload.estimators.kf.step_cache import default_step_function
-from wheelload.estimators.kf.step_layout import N_CARRIED, STEP_OUTPUT_NAMES, UPDATE_ROWS
+from wheelload.estimators.kf.step_cache import (
+    N_CARRIED,
+    STEP_OUTPUT_NAMES,
+    UPDATE_ROWS,
+    default_step_function,
+)
 from wheelload.estimators.kf.tuning import (
     DEFAULT_SAMPLE_INTERVAL,
     TUNING_INDEX,

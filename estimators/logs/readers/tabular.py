@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from wheelload.estimators.logs.readers.channel_map import Channel, ChannelMap, ChannelMapError
-from wheelload.estimators.logs.readers.formats import CSV_SUFFIXES, PARQUET_SUFFIXES
+from wheelload.estimators.logs.readers.formats import CSV_SUFFIXES
 from wheelload.estimators.logs.readers.units import Kind, unit_factor
 
 if TYPE_CHECKING:
