@@ -28,6 +28,8 @@ import math
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
+
 #: Relative size at which an impulse response is cut (below double precision of its peak).
 _DECAYED = 1e-18
 
@@ -141,4 +143,4 @@ def medfilt(x: np.ndarray, window: int) -> np.ndarray:
     half = window // 2
     padded = np.concatenate([np.zeros(half), x, np.zeros(half)])
     windows = np.lib.stride_tricks.sliding_window_view(padded, window)
-    return np.median(windows, axis=1)
+    return order_statistics.median(windows, axis=-1)

@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
@@ -221,7 +222,7 @@ class LogStream:
     @property
     def sample_rate(self) -> float:
         """Median sample rate [Hz]."""
-        return float(1.0 / np.median(np.diff(self.t)))
+        return float(1.0 / order_statistics.median(np.diff(self.t)))
 
     def mode(self) -> str:
         """The sensor set in words (as :meth:`Signals.mode`)."""
@@ -487,7 +488,7 @@ def scan_log(
     az_assumed = "az" not in names
     az = az_store.array()
     del az_store
-    az_median = np.nanmedian(az) if np.any(np.isfinite(az)) else np.nan
+    az_median = order_statistics.nanmedian(az) if np.any(np.isfinite(az)) else np.nan
     del az
     check_units(
         np.array([[0.0, 0.0, az_median]]),

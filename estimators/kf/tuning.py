@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
@@ -147,4 +148,4 @@ def nominal_interval(t: np.ndarray) -> float:
     """Median of the positive finite sample intervals of a log (default if none)."""
     dt = np.diff(np.asarray(t, float))
     dt = dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)]
-    return float(np.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL
+    return float(order_statistics.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kernels import zero_phase
+from wheelload.estimators.kernels import order_statistics, zero_phase
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.models.files.function_cache import Builder
@@ -194,7 +194,7 @@ def _fill(values: np.ndarray) -> np.ndarray | None:
 
 def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Low-passed, decimated channels over the examined window (missing channels dropped)."""
-    fs = 1.0 / float(np.median(np.diff(t)))
+    fs = 1.0 / float(order_statistics.median(np.diff(t)))
     b, a = zero_phase.butter2(min(CUTOFF / (0.5 * fs), 0.9))
     step = max(int(fs / RATE), 1)
     result = {}

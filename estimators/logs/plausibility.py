@@ -48,6 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.logs.checks import (
     EQUILIBRIUM_FUNCTION,
     GATES_FUNCTION,
@@ -97,7 +98,7 @@ def _check(name: str, statistic: float, failed: bool, note: str) -> Check:
 
 def sample_rate_check(t: np.ndarray) -> tuple[Check, str | None]:
     """The median sample rate against :data:`MIN_RATE`, :data:`MAX_RATE`."""
-    rate = float(1.0 / np.median(np.diff(t)))
+    rate = float(1.0 / order_statistics.median(np.diff(t)))
     name = "sample rate"
     if rate > MAX_RATE:
         return _check(name, rate, True, "Hz"), (
@@ -236,7 +237,9 @@ def lift_checks(
     if not steady.any():
         checks.append(undecided_check(name, "no steady driving"))
         return checks, mistakes
-    error = float(np.median((np.sum(z, axis=0) - parameters.mass * q["az"] + lift)[steady]))
+    error = float(
+        order_statistics.median((np.sum(z, axis=0) - parameters.mass * q["az"] + lift)[steady])
+    )
     failed = abs(error) > MAX_WEIGHT_ERROR * weight
     checks.append(_check(name, error / weight, failed, "(sum of loads - (m az - lift)) / m g"))
     if failed:

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import StepFlag
+from wheelload.estimators import StepFlag, percentile
 from wheelload.studies.metrics import COLUMNS, WHEELS, no_reference_message, no_sample_message
 
 if TYPE_CHECKING:
@@ -163,13 +163,13 @@ def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> li
             rmse = float(np.sqrt(np.mean(square)))
             squares += float(np.sum(square))
             del square
-        p95 = float(np.percentile(column, 95, overwrite_input=True))
+        p95 = float(percentile(column, 95, overwrite_input=True))
         rows.append([rmse, 100.0 * rmse / means[i], p95, peak])
         del column
     pooled = errors.reshape(-1)
     rmse = float(np.sqrt(squares / pooled.size))
     peak = float(max(row[3] for row in rows))
-    p95 = float(np.percentile(pooled, 95, overwrite_input=True))
+    p95 = float(percentile(pooled, 95, overwrite_input=True))
     rows.append([rmse, 100.0 * rmse / float(means.mean()), p95, peak])
     return rows
 
