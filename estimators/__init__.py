@@ -49,7 +49,7 @@ _LAZY_MODULES = {
     "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
     "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
-    "wheelload.estimators.kernels.order_statistics": ("median", "percentile"),
+    "wheelload.estimators.kernels.order_statistics": ("linear_percentile", "median", "percentile"),
     "wheelload.estimators.samples": ("step_through",),
 }
 __getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)

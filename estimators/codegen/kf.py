@@ -117,6 +117,7 @@ class CodegenOptions:
     prefix: str = "wheelload_kf"
     sample_interval: float = DEFAULT_SAMPLE_INTERVAL  # s, the logger's nominal interval
     branch_free: bool = True  # selects in branch-free forms (False: plain C99 selects)
+    tyre_forces: bool = False  # also the tyre-force step (PREFIX_tyre.h/.c, codegen.tyre)
 
     def __post_init__(self) -> None:
         if not 0.0 < self.sample_interval < 1e6:
@@ -135,6 +136,7 @@ class GeneratedLibrary:
     selftest: Path
     makefile: Path
     kernel: ca.Function
+    tyre: tuple[Path, Path] | None = None  # PREFIX_tyre.h, PREFIX_tyre.c (tyre_forces)
 
     @property
     def flops(self) -> int:
@@ -520,8 +522,9 @@ def generate(
         representable(tuning_vector(vehicle, options.sample_interval), options.precision),
     )
     values = _substitutions(vehicle_path, vehicle, options, step, kernel)
-    out_dir.mkdir(parents=True, exist_ok=True)
     prefix = options.prefix
+    values.update(_tyre_fields(vehicle, options))
+    out_dir.mkdir(parents=True, exist_ok=True)
     targets = {
         "library.h": out_dir / f"{prefix}.h",
         "library.c": out_dir / f"{prefix}.c",
@@ -529,9 +532,43 @@ def generate(
         "selftest.c": out_dir / f"{prefix}_selftest.c",
         "Makefile": out_dir / "Makefile",
     }
-    for template, target in targets.items():
+    tyre = {"tyre.h": out_dir / f"{prefix}_tyre.h", "tyre.c": out_dir / f"{prefix}_tyre.c"}
+    for template, target in {**targets, **(tyre if options.tyre_forces else {})}.items():
         write_text(target, _template(template).substitute(values), replace=True)
-    return GeneratedLibrary(*targets.values(), kernel=kernel)
+    return GeneratedLibrary(
+        *targets.values(), kernel=kernel,
+        tyre=tuple(tyre.values()) if options.tyre_forces else None,
+    )  # fmt: skip
+
+
+def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
+    """Template fields of the tyre-force step's files and of its part of the example and
+    Makefile (empty parts without ``tyre_forces``)."""
+    from wheelload.estimators.codegen.tyre import tyre_substitutions
+    from wheelload.estimators.family.tyre_step import WHEEL_INPUTS
+
+    prefix = options.prefix
+    if not options.tyre_forces:
+        return {"tyre_forces": "0", "wheel_channel_names": "", "tyre_columns": "",
+                "tyre_example_note": "", "tyre_objects": "", "tyre_rule": ""}  # fmt: skip
+    columns = [f"{name}_{wheel}" for name in ("fx", "fx_std", "fy", "fy_std") for wheel in WHEELS]
+    return {
+        **tyre_substitutions(vehicle, options.sample_interval, options.precision, prefix),
+        "tyre_forces": "1",
+        "wheel_channel_names": "\n".join(f'    "{name}",' for name in WHEEL_INPUTS),
+        "tyre_columns": "," + ",".join(columns),
+        "tyre_example_note": (
+            f"\n * Built with the tyre-force step ({prefix}_tyre.h): the log needs the columns "
+            f"\n * {' '.join(WHEEL_INPUTS)} too, and the estimates get\n * "
+            + " ".join(f"{c}_*" for c in ("fx", "fx_std", "fy", "fy_std"))
+            + " after status."
+        ),
+        "tyre_objects": f" {prefix}_tyre.o",
+        "tyre_rule": (
+            f"\n{prefix}_tyre.o: {prefix}_tyre.c {prefix}_tyre.h {prefix}.h\n"
+            f"\t$(CC) $(CFLAGS) -c -o $@ {prefix}_tyre.c\n"
+        ),
+    }
 
 
 def build_program(
@@ -545,8 +582,11 @@ def build_program(
     """Compile ``main_source`` (e.g. ``library.example``) and link it with the library, whose
     object is compiled once per text and flags (``cached_object``); errors show gcc."""
     binary = Path(binary)
-    library_object = cached_object(library.source, (library.header,), (compiler, *flags))
-    command = [compiler, *flags, "-o", str(binary), str(main_source), str(library_object), "-lm"]
+    objects = [cached_object(library.source, (library.header,), (compiler, *flags))]
+    if library.tyre is not None:
+        objects.append(cached_object(library.tyre[1], (library.header, library.tyre[0]),
+                                     (compiler, *flags)))  # fmt: skip
+    command = [compiler, *flags, "-o", str(binary), str(main_source), *map(str, objects), "-lm"]
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:
         raise RuntimeError(f"{main_source}: {' '.join(command)} failed:\n{result.stderr}")

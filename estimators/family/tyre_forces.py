@@ -22,7 +22,8 @@ r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage K
 
 The paper splits nothing left/right beyond its state :math:`\bar F_{yf}` (front) and the
 normal-load share it names as the simple alternative; ours splits each axle by the tyres'
-load sensitivity (:class:`LateralSplit`; ``LOAD`` is the paper's share), and the front
+load sensitivity (:class:`~wheelload.estimators.family.tyre_step.LateralSplit`;
+``LOAD`` is the paper's share), and the front
 difference beyond it (:math:`e`) has a tight prior: it is seen only through
 :math:`\sin\delta` in the yaw row, where any yaw-model error would land on it.
 
@@ -34,47 +35,47 @@ left/right split (:func:`~wheelload.models.family.tyre_forces.tyre_split`). σ o
 :math:`F_x`: the spin noise through the observer (its impulse response's energy), 30 % of
 the rolling resistance and 4 % of the force (loaded radius, torque); of :math:`F_y`: the
 filter's covariance mapped to the wheels.
+
+The observers are one CasADi step (:mod:`~wheelload.estimators.family.tyre_step`), called
+by :meth:`TyreForces.step` and looped in compiled C by :meth:`TyreForces.run`;
+``wheelload codegen --tyre-forces`` emits the same step as C
+(:mod:`~wheelload.estimators.codegen.tyre`).
 """
 
 from __future__ import annotations
 
-import enum
 import functools
 from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.family.tyre_step import (
+    CORE,
+    CORE_INPUTS,
+    LateralSplit,
+    observer_inputs,
+    tyre_core_function,
+)
 from wheelload.estimators.kernels.discretise import expm
 from wheelload.estimators.kf.method import build_kf
 from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.protocol import MethodInfo, Sample
 from wheelload.estimators.result import Estimate
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.aero import aero_forces
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.family.tyre_forces import (
-    body_force_rows,
     load_share_split,
-    load_shares,
     observer_gains,
     observer_matrices,
-    rolling_resistance_force,
-    tyre_split,
-    wheel_lateral_forces,
 )
 from wheelload.models.plant.dynamics import corners, vehicle_plant
 
 #: The paper's nominal and high-slip covariances (§IV): Q 0.11^2 -> 0.036^2, R 0.018^2 -> 0.4^2.
 HIGH_SLIP_Q = (0.036 / 0.11) ** 2
 HIGH_SLIP_R = (0.4 / 0.018) ** 2
-
-
-class LateralSplit(enum.Enum):
-    """How an axle's lateral force splits left/right before the filter's :math:`e`."""
-
-    LOAD = "load"  # F_z share: the paper's simple alternative (§III-B)
-    TYRE = "tyre"  # the tyres' load sensitivity, by utilisation (models: tyre_split)
 
 
 class TyreInputError(ValueError):
@@ -117,9 +118,7 @@ class TyreState:
     """The KF's state and the observers' ``core`` (see :meth:`TyreForces.core_step`)."""
 
     kf: object
-    # observers (4, 4): omega_hat, xi, last torque, last spin (None until a sample with
-    # both); lateral filter x = (F_yf, F_yr, e, r) and P; last spins; last F_x
-    core: tuple = (None, None, None, None, None)
+    core: np.ndarray  # the observers' state (tyre_step.CORE)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -232,108 +231,58 @@ class TyreForces:
         self._parameters = ModelParameters.from_vehicle(vehicle)
 
     def initial_state(self) -> TyreState:
-        return TyreState(kf=self.kf.initial_state())
+        return TyreState(kf=self.kf.initial_state(), core=np.zeros(CORE.size))
+
+    @functools.cached_property
+    def force_sum_function(self) -> ca.Function:
+        r"""``force_sums(d[4], acc[3], vx, rate) -> sums[2]``: :math:`(S_x, S_y)`, the tyres'
+        force sums from the specific force in the road frame (module docstring), the drag
+        added and the centripetal lever-arm term :math:`r^2 x_{imu}` removed from :math:`a_x`."""
+        k = self.constants
+        d, acc = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
+        vx, rate = ca.SX.sym("vx"), ca.SX.sym("rate")
+        _, _, road = self._attitude(d, acc)
+        _, drag = aero_forces(vx, self._parameters)
+        sums = ca.vertcat(k.mass * (road[0] + rate**2 * k.imu_x) + drag, k.mass * road[1])
+        return ca.Function("force_sums", [d, acc, vx, rate], [sums],
+                           ["d", "acc", "vx", "rate"], ["sums"])  # fmt: skip
 
     def force_sums(self, d: np.ndarray, acc: np.ndarray, vx, rate) -> np.ndarray:
-        r"""``(n, 2)`` :math:`(S_x, S_y)` of ``n`` samples: the tyres' force sums from the
-        specific force in the road frame (module docstring), the drag added and the
-        centripetal lever-arm term :math:`r^2 x_{imu}` removed from :math:`a_x`."""
-        k = self.constants
+        """``(n, 2)`` :meth:`force_sum_function` of ``n`` samples (a missing travel or yaw
+        rate taken as 0; a missing acceleration or speed gives NaN where it enters)."""
         n = d.shape[0]
-        _, _, road = self._attitude.map(n)(np.nan_to_num(d).T, acc.T)
-        road = np.asarray(road).reshape(3, n)
-        _, drag = aero_forces(np.asarray(vx, float), self._parameters)
-        rate = np.nan_to_num(np.asarray(rate, float))
-        return np.column_stack([k.mass * (road[0] + rate**2 * k.imu_x) + drag, k.mass * road[1]])
+        sums = self.force_sum_function.map(n)(
+            np.nan_to_num(d).T, np.asarray(acc, float).T, np.asarray(vx, float)[None],
+            np.nan_to_num(np.asarray(rate, float))[None],
+        )  # fmt: skip
+        return np.asarray(sums).reshape(2, n).T
 
-    def shares(self, loads: np.ndarray, axles: np.ndarray) -> np.ndarray:
-        """Left/right shares of the axles' lateral forces (:class:`LateralSplit`)."""
-        k = self.constants
-        if self.settings.split is LateralSplit.LOAD:
-            return load_shares(loads)
-        return tyre_split(loads, axles, nominal_loads=k.nominal_loads, friction=k.friction,
-                          load_sensitivity=k.load_sensitivity,
-                          cornering_load=k.cornering_load)  # fmt: skip
+    @functools.cached_property
+    def core_function(self) -> ca.Function:
+        """The observers' step (:func:`.tyre_step.tyre_core_function`)."""
+        return tyre_core_function(self.constants, self.settings, (HIGH_SLIP_Q, HIGH_SLIP_R))
 
-    def core_step(self, core: tuple, inputs: Inputs, dt: float):
+    @functools.cached_property
+    def _loop(self) -> CompiledLoop:
+        return CompiledLoop(self.core_function, 1, CORE_INPUTS[1:])
+
+    def observer_input(self, dt: float) -> np.ndarray:
+        """The core step's ``observer`` input for an interval ``dt`` (rounded to 1 ns)."""
+        k, s = self.constants, self.settings
+        return observer_inputs([discrete_observer(k.inertia[i], k.radius[i], s.observer_frequency,
+                                                  s.observer_damping, round(float(dt), 9))
+                                for i in range(4)])  # fmt: skip
+
+    def core_step(self, core: np.ndarray, inputs: Inputs, dt: float):
         """One sample of the observers: ``(core, fx, fx_std, fy, fy_std)``."""
-        observer, x, P, last_spin, last_fx = core
-        observer, fx, fx_std = self._fx(observer, last_fx, inputs, dt)
-        x, P, fy, fy_std = self._fy(x, P, last_spin, inputs, fx, dt)
-        spin = inputs.spin if np.all(np.isfinite(inputs.spin)) else last_spin
-        return (observer, x, P, spin, fx), fx, fx_std, fy, fy_std
-
-    def _fx(self, observer, last_fx, inputs: Inputs, dt: float):
-        """The spin observers' step: ``(observer, fx, fx_std)``; held without spin or torque."""
-        s, k = self.settings, self.constants
-        spin, torque = inputs.spin, inputs.torque
-        if not (np.all(np.isfinite(spin)) and np.all(np.isfinite(torque))):
-            held = np.zeros(4) if last_fx is None else last_fx
-            return observer, held, np.full(4, s.missing_std)
-        new = np.empty((4, 4))
-        fx, std = np.empty(4), np.empty(4)
-        for i in range(4):
-            phi, gamma1, gamma2, c, d, gain = discrete_observer(
-                k.inertia[i], k.radius[i], s.observer_frequency, s.observer_damping,
-                round(float(dt), 9))  # fmt: skip
-            u = np.array([torque[i], spin[i]])
-            if observer is None:  # start in equilibrium: F = -k2 xi = T / R, no spin error
-                z = np.array([spin[i], (torque[i] / k.radius[i]) / c[1]])
-            else:
-                z, previous = observer[i, :2], observer[i, 2:]
-                z = phi @ z + gamma1 @ previous + gamma2 @ (u - previous)
-            new[i] = [z[0], z[1], u[0], u[1]]
-            rolling = rolling_resistance_force(inputs.loads[i], spin[i], k.rolling)
-            fx[i] = c @ z + d @ u - rolling
-            std[i] = np.sqrt((gain * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2
-                             + (s.force_share_std * fx[i]) ** 2)  # fmt: skip
-        return new, fx, std
-
-    def _fy(self, x, P, last_spin, inputs: Inputs, fx: np.ndarray, dt: float):
-        """The lateral filter's step: ``(x, P, fy, fy_std)``."""
-        s, k = self.settings, self.constants
-        steer = inputs.steer if np.isfinite(inputs.steer) else 0.0
-        rate = inputs.rate
-        if x is None:
-            x = np.array([0.0, 0.0, 0.0, rate if np.isfinite(rate) else 0.0])
-            P = np.diag([s.initial_force_std**2] * 2 + [s.split_std**2, s.gyro_noise**2])
-        high_slip = False
-        if last_spin is not None and dt > 0 and np.all(np.isfinite(inputs.spin)):
-            high_slip = bool(np.any(np.abs(inputs.spin - last_spin) >= s.slip_threshold * dt))
-        q_scale = HIGH_SLIP_Q if high_slip else 1.0
-        r_scale = HIGH_SLIP_R if high_slip else 1.0
-        shares = self.shares(inputs.loads, x[:2])
-        h, offset = body_force_rows(steer, fx, lf=k.lf, lr=k.lr, track_front=k.track_front,
-                                    track_rear=k.track_rear, share_front=shares[1] - shares[0],
-                                    inertia_z=k.yaw_inertia)  # fmt: skip
-        # Predict: forces random walk, r integrated from eq. 3's yaw acceleration.
-        F = np.eye(4)
-        F[3, :3] = dt * h[2]
-        x = F @ x
-        x[3] += dt * offset[2]
-        Q = q_scale * dt * np.diag([s.force_rate**2, s.force_rate**2, s.split_rate**2,
-                                    s.yaw_rate_noise**2])  # fmt: skip
-        P = F @ P @ F.T + Q
-        # Update: S_x, S_y at the IMU (lever arm: m x_imu r_dot), and the gyro's r.
-        H = np.zeros((3, 4))
-        H[0, :3] = h[0]
-        H[1, :3] = h[1] + k.mass * k.imu_x * h[2]
-        H[2, 3] = 1.0
-        z = np.array([inputs.sums[0] - offset[0],
-                      inputs.sums[1] - offset[1] - k.mass * k.imu_x * offset[2], rate])  # fmt: skip
-        R = r_scale * np.array([s.force_noise**2, s.force_noise**2, s.gyro_noise**2])
-        valid = np.isfinite(z)
-        if valid.any():
-            Hv = H[valid]
-            S = Hv @ P @ Hv.T + np.diag(R[valid])
-            K = np.linalg.solve(S, Hv @ P).T
-            x = x + K @ (z[valid] - Hv @ x)
-            I_KH = np.eye(4) - K @ Hv
-            P = I_KH @ P @ I_KH.T + (K * R[valid]) @ K.T
-            P = 0.5 * (P + P.T)
-        fy, G = wheel_lateral_forces(x[:3], shares)  # the shares of the predicted forces
-        std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", G, P[:3, :3], G), 0.0))
-        return x, P, fy, std
+        arguments = _core_arguments(
+            np.concatenate([inputs.spin, inputs.torque, [inputs.steer]])[None],
+            np.asarray(inputs.sums, float)[None], np.array([inputs.rate]),
+            np.asarray(inputs.loads, float)[None],
+        )  # fmt: skip
+        out = self.core_function(core, *[a[0] for a in arguments], dt, self.observer_input(dt))
+        core, fx, fx_std, fy, fy_std, _ = (np.asarray(o, float).ravel() for o in out)
+        return core, fx, fx_std, fy, fy_std
 
     # -- the protocol -----------------------------------------------------------------
 
@@ -361,24 +310,34 @@ class TyreForces:
         return TyreState(kf=kf_state, core=core), self._estimate(loads, *rows)
 
     def run(self, signals: Signals) -> Estimate:
-        """The whole log: the KF's ``run`` for the loads, then the observers sample by sample
-        (the same numbers as :meth:`step`)."""
+        """The whole log: the KF's ``run`` for the loads, then the observers' step looped in
+        compiled C (the same numbers as :meth:`step`)."""
         require_wheel_channels(signals)
         loads = self.kf.run(signals)
         n = len(signals)
         rates = np.full(n, np.nan) if signals.rates is None else signals.rates[:, 2]
         sums = self.force_sums(signals.d, signals.acc, signals.vx, rates)
         dts = np.concatenate([np.diff(signals.t)[:1], np.diff(signals.t)])
-        out = [np.zeros((n, 4)) for _ in range(4)]
-        core = TyreState(kf=None).core
-        for j in range(n):
-            inputs = Inputs(spin=signals.spin[j], torque=signals.torque[j],
-                            steer=float(signals.steer[j]), rate=float(rates[j]), sums=sums[j],
-                            loads=loads.loads[j])  # fmt: skip
-            core, out[0][j], out[1][j], out[2][j], out[3][j] = self.core_step(
-                core, inputs, float(dts[j])
-            )
-        return self._estimate(loads, *out)
+        unique, which = np.unique(np.round(dts, 9), return_inverse=True)
+        observer = np.array([self.observer_input(dt) for dt in unique])[which]
+        wheels = np.column_stack([signals.spin, signals.torque, signals.steer])
+        arguments = _core_arguments(wheels, sums, rates, loads.loads)
+        _, _, (fx, fx_std, fy, fy_std, _) = self._loop(
+            [np.zeros(CORE.size)], [], [*arguments, dts[:, None], observer]
+        )
+        return self._estimate(loads, fx, fx_std, fy, fy_std)
+
+
+def _core_arguments(wheels, sums, rates, loads) -> list[np.ndarray]:
+    """Per-sample inputs of the core step before ``dt``: values with 0 where missing and
+    their validity flags (n rows each)."""
+
+    def split(values):
+        values = np.asarray(values, float).reshape(len(values), -1)
+        valid = np.isfinite(values)
+        return np.where(valid, values, 0.0), valid.astype(float)
+
+    return [*split(wheels), *split(sums), *split(rates), np.asarray(loads, float)]
 
 
 def require_wheel_channels(signals: Signals) -> None:

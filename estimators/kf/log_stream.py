@@ -488,7 +488,10 @@ def scan_log(
     az_assumed = "az" not in names
     az = az_store.array()
     del az_store
-    az_median = order_statistics.nanmedian(az) if np.any(np.isfinite(az)) else np.nan
+    # the column is ours: its median without a copy
+    az_median = (
+        order_statistics.nanmedian(az, overwrite_input=True) if np.any(np.isfinite(az)) else np.nan
+    )
     del az
     check_units(
         np.array([[0.0, 0.0, az_median]]),

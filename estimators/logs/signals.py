@@ -431,8 +431,8 @@ def signals_from_frame(
 
 def check_time_column(t: np.ndarray, source: str) -> None:
     """A log's time column: finite, increasing, in seconds (one-line :class:`LogError`)."""
-    _check_time(t, source)
-    step = float(order_statistics.median(np.diff(t)))
+    steps = _check_time(t, source)
+    step = float(order_statistics.median(steps, overwrite_input=True))  # the steps are ours
     if step > MAX_SAMPLE_INTERVAL:
         raise LogError(
             f"{source}: column 't' advances by {step:.4g} per sample: more than "
@@ -440,7 +440,8 @@ def check_time_column(t: np.ndarray, source: str) -> None:
         )
 
 
-def _check_time(t: np.ndarray, source: str) -> None:
+def _check_time(t: np.ndarray, source: str) -> np.ndarray:
+    """Finite and increasing ``t``, else a one-line :class:`LogError`; returns its steps."""
     if t.size < 2:
         raise LogError(f"{source}: needs at least 2 samples, has {t.size}")
     missing = np.flatnonzero(~np.isfinite(t))
@@ -454,6 +455,7 @@ def _check_time(t: np.ndarray, source: str) -> None:
             f"{source}: column 't' is not increasing at row {row} "
             f"(t = {t[row - 1]!r} then {t[row]!r})"
         )
+    return steps
 
 
 def check_units(acc, d, v, vx, source: str) -> None:

@@ -37,8 +37,7 @@ from the paper's printed equations:
 
 from __future__ import annotations
 
-import math
-
+import casadi as ca
 import numpy as np
 
 from wheelload.models.plant.dynamics import SPIN_SMOOTHING
@@ -46,7 +45,7 @@ from wheelload.models.plant.dynamics import SPIN_SMOOTHING
 
 def rolling_resistance_force(fz, spin, coefficient: float):
     r"""Rolling resistance at the contact patch [N]: :math:`f_r F_z \tanh(\omega/\omega_s)`."""
-    return coefficient * fz * np.tanh(spin / SPIN_SMOOTHING)
+    return coefficient * fz * ca.tanh(spin / SPIN_SMOOTHING)
 
 
 def longitudinal_force(torque, spin_rate, fz, spin, *, inertia, radius, coefficient):
@@ -88,22 +87,18 @@ def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, 
     Returns ``(H (3, 3), offset (3,))``, the yaw row divided by ``inertia_z`` (yaw
     acceleration).
     """
-    c, s = np.cos(steer), np.sin(steer)
+    c, s = ca.cos(steer), ca.sin(steer)
     fxf, fxr = fx[0] + fx[1], fx[2] + fx[3]
     bar_xf, bar_xr = fx[1] - fx[0], fx[3] - fx[2]
     half_f, half_r = 0.5 * track_front, 0.5 * track_rear
-    h = np.array(
-        [
-            [-s, 0.0, 0.0],
-            [c, 1.0, 0.0],
-            [lf * c - half_f * s * share_front, -lr, -half_f * s],
-        ]
+    h = ca.vertcat(
+        ca.horzcat(-s, 0.0, 0.0),
+        ca.horzcat(c, 1.0, 0.0),
+        ca.horzcat(lf * c - half_f * s * share_front, -lr, -half_f * s) / inertia_z,
     )
-    offset = np.array(
-        [fxf * c + fxr, fxf * s, lf * fxf * s + half_f * bar_xf * c + half_r * bar_xr]
+    offset = ca.vertcat(
+        fxf * c + fxr, fxf * s, (lf * fxf * s + half_f * bar_xf * c + half_r * bar_xr) / inertia_z
     )
-    h[2] /= inertia_z
-    offset[2] /= inertia_z
     return h, offset
 
 
@@ -120,23 +115,23 @@ def tyre_split(loads, axle_forces, *, nominal_loads, friction, load_sensitivity,
     """
     shares = []
     for axle in range(2):
-        left, right = max(float(loads[2 * axle]), 1.0), max(float(loads[2 * axle + 1]), 1.0)
+        left, right = ca.fmax(loads[2 * axle], 1.0), ca.fmax(loads[2 * axle + 1], 1.0)
         nominal = nominal_loads[axle]
-        k_left, k_right = (math.sin(2.0 * math.atan(f / (cornering_load * nominal)))
+        k_left, k_right = (ca.sin(2.0 * ca.atan(f / (cornering_load * nominal)))
                            for f in (left, right))  # fmt: skip
-        d_left, d_right = (max(friction * (1.0 + load_sensitivity * (f - nominal) / nominal) * f,
-                               1.0) for f in (left, right))  # fmt: skip
-        eta = min(abs(float(axle_forces[axle])) / (d_left + d_right), 1.0)
+        d_left, d_right = (ca.fmax(friction * (1.0 + load_sensitivity * (f - nominal) / nominal)
+                                   * f, 1.0) for f in (left, right))  # fmt: skip
+        eta = ca.fmin(ca.fabs(axle_forces[axle]) / (d_left + d_right), 1.0)
         for k, d in ((k_left, d_left), (k_right, d_right)):
             shares.append((1.0 - eta) * k / (k_left + k_right) + eta * d / (d_left + d_right))
-    return np.array(shares)
+    return ca.vertcat(*shares)
 
 
 def load_shares(loads):
     """Left/right shares (4,) of each axle by normal load (the paper's simple split)."""
-    fz = np.maximum(np.asarray(loads, float), 1.0)
-    axles = np.repeat([fz[0] + fz[1], fz[2] + fz[3]], 2)
-    return fz / axles
+    fz = [ca.fmax(loads[i], 1.0) for i in range(4)]
+    front, rear = fz[0] + fz[1], fz[2] + fz[3]
+    return ca.vertcat(fz[0] / front, fz[1] / front, fz[2] / rear, fz[3] / rear)
 
 
 def wheel_lateral_forces(axles, shares):
@@ -146,15 +141,13 @@ def wheel_lateral_forces(axles, shares):
 
     Linear in the state: returns ``(values (4,), G (4, 3))`` with ``values = G @ axles``.
     """
-    g = np.array(
-        [
-            [shares[0], 0.0, -0.5],
-            [shares[1], 0.0, 0.5],
-            [0.0, shares[2], 0.0],
-            [0.0, shares[3], 0.0],
-        ]
+    g = ca.vertcat(
+        ca.horzcat(shares[0], 0.0, -0.5),
+        ca.horzcat(shares[1], 0.0, 0.5),
+        ca.horzcat(0.0, shares[2], 0.0),
+        ca.horzcat(0.0, shares[3], 0.0),
     )
-    return g @ axles, g
+    return ca.mtimes(g, axles), g
 
 
 def load_share_split(total, loads):

@@ -38,6 +38,7 @@ KF_OPTIONS = {
     "params": ParamMode.RUNTIME.value,
     "prefix": "wheelload_kf",
     "sample_interval": CodegenOptions().sample_interval,
+    "tyre_forces": False,
 }
 MHE_OPTIONS = {
     "horizon": 10,
@@ -108,6 +109,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="the logger's nominal interval [s] (default 0.01): the default measurement noise "
         "and the gain of the rate-derivative filter",
     )
+    kf.add_argument(
+        "--tyre-forces",
+        action="store_const",
+        const=True,
+        help="also the tyre-force step (method tyre-forces: F_x, F_y per wheel with sigma on "
+        "the KF's loads): PREFIX_tyre.h/.c; the example then reads omega_*, torque_*, steer "
+        "and writes fx_*, fy_* and their sigma",
+    )
     mhe = parser.add_argument_group("mhe only")
     mhe.add_argument("--horizon", type=int, help="window length N (default 10)")
     mhe.add_argument(
@@ -153,9 +162,11 @@ def run(args: argparse.Namespace) -> int:
         params=ParamMode(values["params"]),
         prefix=values["prefix"],
         sample_interval=values["sample_interval"],
+        tyre_forces=values["tyre_forces"],
     )
     library = generate(vehicle_path, args.out, options, allow_unusual=args.allow_unusual)
-    for path in (library.header, library.source, library.example, library.selftest):
+    for path in (library.header, library.source, *(library.tyre or ()), library.example,
+                 library.selftest):  # fmt: skip
         print(path)
     print(
         f"{library.flops} arithmetic operations per step ({options.precision.value}, "

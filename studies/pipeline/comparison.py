@@ -26,7 +26,7 @@ from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import Estimate
 from wheelload.models import Vehicle
 from wheelload.studies.identical import identical_groups, identity_notes, label
-from wheelload.studies.metrics import COLUMNS, wheel_metrics
+from wheelload.studies.metrics import COLUMNS, pooled_force_error, wheel_metrics
 
 WARM_UP_SAMPLES = 50
 UNITS = {"RMSE": "RMSE [N]", "RMSE %": "RMSE [%]", "P95": "P95 [N]", "Max": "MAX [N]"}
@@ -40,6 +40,8 @@ class MethodResult:
     estimate: Estimate
     metrics: pd.DataFrame  # rows fl, fr, rl, rr, pooled; columns RMSE, RMSE %, P95, Max
     seconds_per_sample: tuple[float, ...]  # one per timed run
+    # Tyre forces against the log's fx_*, fy_*: axis -> (RMSE fl..rr, pooled [N], % of RMS)
+    forces: tuple[tuple[str, np.ndarray], ...] = ()
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -133,12 +135,33 @@ def compare_methods(
         metrics = wheel_metrics(estimate.loads[mask], signals.reference[mask])
         results.append(
             MethodResult(
-                info=info, estimate=estimate, metrics=metrics, seconds_per_sample=tuple(times)
-            )
+                info=info,
+                estimate=estimate,
+                metrics=metrics,
+                seconds_per_sample=tuple(times),
+                forces=force_errors(estimate, signals, mask),
+            )  # fmt: skip
         )
     return Comparison(
         source=signals.source, samples=int(mask.sum()), window=window, results=tuple(results)
     )
+
+
+def force_errors(estimate: Estimate, signals: Signals, mask: np.ndarray):
+    """``(axis, row)`` for each tyre force the estimate has and the log references: the
+    RMSE of each wheel and pooled [N], then the pooled RMSE as % of the reference RMS
+    (:func:`~wheelload.studies.metrics.pooled_force_error`)."""
+    rows = []
+    for axis, values, reference in (("F_x", estimate.fx, signals.reference_fx),
+                                    ("F_y", estimate.fy, signals.reference_fy)):  # fmt: skip
+        if values is None or reference is None or not np.isfinite(reference[mask]).any():
+            continue
+        values, reference = values[mask], reference[mask]
+        wheels = [pooled_force_error(values[:, i], reference[:, i])[0] for i in range(4)]
+        rmse, rms = pooled_force_error(values, reference)
+        share = 100.0 * rmse / rms if rms > 0 else float("nan")
+        rows.append((axis, np.array([*wheels, rmse, share])))
+    return tuple(rows)
 
 
 def long_table(comparison: Comparison) -> pd.DataFrame:
@@ -177,6 +200,7 @@ def format_table(comparison: Comparison) -> str:
                 + "".join(f"{values[w]:>10.{digits}f}" for w in ("fl", "fr", "rl", "rr", "pooled"))
             )
     lines.extend(f"note: {note}" for note in comparison.notes())
+    lines.extend(_force_lines(comparison, width))
     lines.append("")
     lines.append(
         f"{'time per sample [µs]':<22}{'min':>10}{'median':>10}{'max':>10}   method: description"
@@ -188,3 +212,20 @@ def format_table(comparison: Comparison) -> str:
             f"   {result.info.description}"
         )
     return "\n".join(lines)
+
+
+def _force_lines(comparison: Comparison, width: int) -> list[str]:
+    """The tyre forces' block of :func:`format_table` (methods that estimate them), F_x
+    rows, then F_y rows."""
+    rows = sorted(((axis, result.info.name, row) for result in comparison.results
+                   for axis, row in result.forces), key=lambda r: r[0])  # fmt: skip
+    if not rows:
+        return []
+    width = max(width, *(len(name) for _, name, _ in rows))
+    columns = ("FL", "FR", "RL", "RR", "pooled", "% of RMS")
+    header = f"{'Force':<10}{'Method':<{width + 2}}" + "".join(f"{c:>10}" for c in columns)
+    lines = ["", "tyre forces against the log's fx_*, fy_* (tyre frame): RMSE [N]", header]
+    for k, (axis, name, row) in enumerate(rows):
+        shown = axis if k == 0 or rows[k - 1][0] != axis else ""
+        lines.append(f"{shown:<10}{name:<{width + 2}}" + "".join(f"{v:>10.1f}" for v in row))
+    return lines

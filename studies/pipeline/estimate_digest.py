@@ -4,10 +4,10 @@
 log as one chunk, or the chunks of the lean whole-log path) and keeps the
 summary's figures: per-wheel mean, min, max and mean standard deviation, the
 status-bit counts, the negative loads and, against the log's reference loads,
-the errors of the samples scored (the 95th percentile needs all of them:
-8 bytes a scored wheel-sample, allocated once). No second pass over the
-estimates. With the whole log as one chunk the figures equal those computed
-on the whole arrays to the bit.
+the errors of the samples scored (the 95th percentile needs all of them: an
+:class:`~wheelload.studies.pipeline.error_store.ErrorStore`, in memory for a short log,
+on disk for a long one). No second pass over the estimates. With the whole log as one
+chunk the figures equal those computed on the whole arrays to the bit.
 
 Example
 -------
@@ -22,8 +22,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import StepFlag, percentile
+from wheelload.estimators import StepFlag
 from wheelload.studies.metrics import COLUMNS, WHEELS, no_reference_message, no_sample_message
+from wheelload.studies.pipeline.error_store import ErrorStore
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -62,7 +63,7 @@ class EstimateDigest:
         self.mass_properties = None  # (8,) the last sample's values and std, if estimated
         self.errors = None
         if self.wheels is not None and self.wheels.size:
-            self.errors = np.empty((len(self.wheels), samples))  # one contiguous row a wheel
+            self.errors = ErrorStore(len(self.wheels), samples)
 
     def add(
         self,
@@ -92,10 +93,9 @@ class EstimateDigest:
         if self.errors is not None and reference is not None:
             estimate, truth = loads[:, self.wheels], reference[:, self.wheels]
             keep = np.all(np.isfinite(estimate) & np.isfinite(truth), axis=1)
-            count = int(keep.sum())
-            self.errors[:, self.scored : self.scored + count] = (estimate[keep] - truth[keep]).T
+            self.errors.append(estimate[keep] - truth[keep])
             self.reference_sum += truth[keep].sum(axis=0)
-            self.scored += count
+            self.scored += int(keep.sum())
 
     def add_mass_properties(self, values: np.ndarray) -> None:
         """Take the next chunk's online mass properties and their std, (n, 8): keeps the last."""
@@ -113,7 +113,7 @@ class EstimateDigest:
     def metrics(self, source: str) -> pd.DataFrame:
         """The table of :func:`~wheelload.studies.metrics.wheel_metrics`; ValueError as it.
 
-        Once only: the error store is overwritten (see :func:`_lean_metrics`).
+        Once only: the error store is overwritten (see :meth:`.ErrorStore.rows`).
         """
         import pandas as pd
 
@@ -130,58 +130,4 @@ class EstimateDigest:
         names = [WHEELS[i] for i in self.wheels]
         if self.scored == 0:
             raise ValueError(no_sample_message(source, names))
-        k, n = len(names), self.scored
-        flat = self.errors.reshape(-1)
-        for i in range(1, k):  # the rows' scored samples moved together: one contiguous block
-            flat[i * n : (i + 1) * n] = self.errors[i, :n]
-        rows = _lean_metrics(flat[: k * n].reshape(k, n), self.reference_sum / n, names)
-        return [*names, "pooled"], rows
-
-
-def _lean_metrics(errors: np.ndarray, means: np.ndarray, names: list[str]) -> list[list[float]]:
-    """:func:`~wheelload.studies.metrics.metrics_table` without whole-size temporaries.
-
-    ``errors`` (one row a wheel) is overwritten (made absolute in place; the
-    percentiles partition it in place: a percentile does not depend on the order),
-    and each wheel's squares are taken in place (:func:`_squares_invert`), so the
-    peak memory is the store alone. Per wheel the figures
-    are computed as there, to the bit; the pooled RMSE sums the squares one wheel
-    at a time (equal to 1e-15 relative).
-    """
-    np.abs(errors, out=errors)
-    rows, squares = [], 0.0
-    for i in range(len(names)):
-        column = errors[i]  # a view: the percentile below reorders the store's row
-        peak = float(column.max())
-        if _squares_invert(column, peak):  # squared in place, then back: no temporary
-            np.square(column, out=column)
-            rmse = float(np.sqrt(np.mean(column)))
-            squares += float(np.sum(column))
-            np.sqrt(column, out=column)  # |e| again, exactly (_squares_invert)
-        else:
-            square = column * column
-            rmse = float(np.sqrt(np.mean(square)))
-            squares += float(np.sum(square))
-            del square
-        p95 = float(percentile(column, 95, overwrite_input=True))
-        rows.append([rmse, 100.0 * rmse / means[i], p95, peak])
-        del column
-    pooled = errors.reshape(-1)
-    rmse = float(np.sqrt(squares / pooled.size))
-    peak = float(max(row[3] for row in rows))
-    p95 = float(percentile(pooled, 95, overwrite_input=True))
-    rows.append([rmse, 100.0 * rmse / float(means.mean()), p95, peak])
-    return rows
-
-
-def _squares_invert(column: np.ndarray, peak: float) -> bool:
-    """Whether ``sqrt(e * e) == e`` for every ``e`` of ``column`` (all >= 0, max ``peak``).
-
-    In binary floating point with round-to-nearest, the square root of a rounded
-    square gives the number back exactly unless the square overflows or leaves the
-    normal range (Boldo, "Stupid is as stupid does: taking the square root of the
-    square of a floating-point number", 2015); errors in newtons are far inside it.
-    """
-    if not peak < 1e150:
-        return False
-    return bool(np.min(column, where=column > 0.0, initial=np.inf) > 1e-150)
+        return [*names, "pooled"], self.errors.rows(self.reference_sum / self.scored)

@@ -18,7 +18,7 @@ import numpy as np
 
 from wheelload.estimators import Estimate, Signals, StepFlag
 from wheelload.models import WHEELS
-from wheelload.studies.metrics import wheel_metrics
+from wheelload.studies.metrics import pooled_force_error, wheel_metrics
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
 
 
@@ -108,7 +108,24 @@ def summary(estimate: Estimate, signals: Signals, vehicle_name: str) -> str:
     stand on their own.
     """
     header = LogHeader.of(signals, has_reference=signals.reference is not None)
-    return summary_text(header, digest_of(estimate, signals), estimate.sensor_faults, vehicle_name)
+    text = summary_text(header, digest_of(estimate, signals), estimate.sensor_faults, vehicle_name)
+    return "\n".join([text, *tyre_force_lines(estimate, signals)])
+
+
+def tyre_force_lines(estimate: Estimate, signals: Signals) -> list[str]:
+    """The pooled error of the tyre forces an estimate has, where the log has their
+    reference (``fx_*``, ``fy_*``): RMSE and % of the reference RMS
+    (:func:`~wheelload.studies.metrics.pooled_force_error`)."""
+    lines = []
+    for axis, values, reference in (("F_x", estimate.fx, signals.reference_fx),
+                                    ("F_y", estimate.fy, signals.reference_fy)):  # fmt: skip
+        if values is None or reference is None or not np.isfinite(reference).any():
+            continue
+        rmse, rms = pooled_force_error(values, reference)
+        share = f"{100.0 * rmse / rms:.1f} % of" if rms > 0 else "against"
+        lines.append(f"tyre force {axis} against the log's reference: pooled RMSE {rmse:.0f} N "
+                     f"({share} its RMS {rms:.0f} N)")  # fmt: skip
+    return lines
 
 
 @dataclass(frozen=True, kw_only=True)

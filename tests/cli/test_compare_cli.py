@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators.registry import methods
+from wheelload.estimators.registry import methods, tyre_methods
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.metrics import wheel_metrics
@@ -16,7 +16,7 @@ VEHICLE = str(example_vehicle_path())
 def test_methods_lists_every_registered_name(capsys):
     assert main(["methods"]) == 0
     out = capsys.readouterr().out
-    for name, info in methods().items():
+    for name, info in (*methods().items(), *tyre_methods().items()):
         assert f"{name} " in out and info.reference in out
 
 

@@ -4,8 +4,13 @@ Tolerance zero for RMSE (per wheel), P95 and Max: the same operations on the sam
 numbers in the same order; the pooled RMSE sums per wheel (1e-15 relative).
 """
 
-import numpy as np
+import os
 
+import numpy as np
+import pytest
+
+from wheelload.studies.pipeline import error_store
+from wheelload.studies.pipeline.error_store import linear_percentile, order_statistic
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
 
 
@@ -17,7 +22,13 @@ def _plain(errors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rmse, p95, absolute.max(axis=0)
 
 
-def test_the_figures_equal_the_plain_ones_in_chunks_with_gaps():
+@pytest.mark.parametrize("store", ["memory", "disk"])
+def test_the_figures_equal_the_plain_ones_in_chunks_with_gaps(store, monkeypatch, tmp_path):
+    """In memory and on disk (the store's files in a private folder under TMPDIR, removed
+    once the figures are made)."""
+    if store == "disk":
+        monkeypatch.setattr(error_store, "MEMORY_LIMIT", 0)
+        monkeypatch.setattr(error_store.tempfile, "tempdir", str(tmp_path))
     rng = np.random.default_rng(7)
     n = 20_000
     reference = 4000.0 + 500.0 * rng.standard_normal((n, 4))
@@ -43,3 +54,20 @@ def test_the_figures_equal_the_plain_ones_in_chunks_with_gaps():
     pooled = np.abs(expected).reshape(-1)
     assert table[4, 2] == np.percentile(pooled, 95)
     assert np.isclose(table[4, 0], np.sqrt(np.mean(pooled * pooled)), rtol=1e-15, atol=0)
+    assert os.listdir(tmp_path) == []  # the disk store's folder is gone
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 20, 21, 101, 1000, 4097, 99_999])
+def test_the_pooled_percentile_by_selection_is_numpys(n):
+    """Order statistics by bisection on bit patterns over sorted columns, then NumPy's
+    interpolation: equal to ``np.percentile`` to the bit (ties, zeros and sizes whose
+    virtual index falls on, below and above .5)."""
+    rng = np.random.default_rng(n)
+    values = np.abs(rng.standard_normal(n) * 50.0)
+    values[::7] = np.round(values[::7])  # ties
+    values[::11] = 0.0
+    columns = [np.sort(part) for part in np.array_split(values, 4)]
+    for q in (0.0, 50.0, 95.0, 99.9, 100.0):
+        expected = np.percentile(values, q)
+        got = linear_percentile(n, q, lambda k: order_statistic(columns, k))
+        assert got == expected, (q, got, expected)

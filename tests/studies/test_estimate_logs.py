@@ -108,7 +108,7 @@ def test_many_logs_in_parallel_and_on_dask_equal_the_serial_run(tmp_path, fleet,
     local = run_logs(paths, settings, None, workers=2, progress=False)
     pd.testing.assert_frame_equal(local, serial)
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                      dashboard_address=None) as cluster:  # fmt: skip
+                      dashboard_address=":0") as cluster:  # fmt: skip
         out = tmp_path / "out"
         assert main(["estimate", str(fleet), "--vehicle", VEHICLE, "--out", str(out),
                      "--dask", cluster.scheduler_address]) == 0  # fmt: skip

@@ -76,7 +76,7 @@ def test_ablation_quick_on_a_local_dask_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     cache = tmp_path / "cache"
     with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=2,
-                                  dashboard_address=None) as cluster:  # fmt: skip
+                                  dashboard_address=":0") as cluster:  # fmt: skip
         runner = Runner(cache=ResultCache(folder=cache), dask_address=cluster.scheduler_address,
                         progress=False)  # fmt: skip
         outputs = Outputs(folder=tmp_path)

@@ -61,3 +61,52 @@ def test_wheel_channels_written_and_read(dlc, tmp_path):
     # A log without them still reads, the channels None.
     old = signals_from_frame(frame[list(LOG_COLUMNS)], wiring_checks=False)
     assert old.spin is None and old.reference_fx is None and old.steer is None
+
+
+def test_estimate_reports_the_tyre_force_errors(dlc, tmp_path, capsys):
+    """``estimate --method tyre-forces`` writes fx_*, fy_* and prints their pooled error
+    against the log's reference, the figures of an independent computation on the same run
+    (to the printed 0.1 %)."""
+    from wheelload.estimators.registry import build
+    from wheelload.studies.cli import main
+
+    path, out = tmp_path / "dlc.csv", tmp_path / "forces.csv"
+    write_log(dlc.log, path, dlc.metadata)
+    vehicle = str(example_vehicle_path())
+    code = main(["estimate", str(path), "--vehicle", vehicle, "--method", "tyre-forces",
+                 "--out", str(out)])  # fmt: skip
+    assert code == 0
+    printed = capsys.readouterr().out
+    written = pd.read_csv(out)
+    signals = read_log(path, wiring_checks=False)
+    estimate = build("tyre-forces", load_vehicle(vehicle)).run(signals)
+    for axis, reference in (("x", signals.reference_fx), ("y", signals.reference_fy)):
+        values = written[[f"f{axis}_{w}" for w in ("fl", "fr", "rl", "rr")]].to_numpy()
+        np.testing.assert_allclose(values, getattr(estimate, f"f{axis}"), atol=1e-6)
+        share = 100 * np.sqrt(np.mean((values - reference) ** 2) / np.mean(reference**2))
+        assert f"tyre force F_{axis} against the log's reference" in printed
+        assert f"({share:.1f} % of its RMS" in printed
+
+
+def test_compare_scores_the_tyre_forces(dlc):
+    """``compare`` with tyre methods: their F_x, F_y RMSE per wheel and pooled and the % of
+    the reference RMS, each equal to a plain computation on the same estimate (1e-12
+    relative); methods without tyre forces get no rows, and the block is F_x then F_y."""
+    from wheelload.estimators.registry import build
+    from wheelload.studies.pipeline.comparison import compare_methods, format_table
+
+    signals = signals_from_frame(dlc.log, wiring_checks=False)
+    vehicle = load_vehicle(example_vehicle_path())
+    comparison = compare_methods(signals, vehicle, ("kf", "tyre-forces", "tyre-rigid"), repeat=1)
+    rows = {r.info.name: dict(r.forces) for r in comparison.results}
+    assert rows["kf"] == {}
+    estimate = build("tyre-rigid", vehicle).run(signals)
+    for axis, values, reference in (("F_x", estimate.fx, signals.reference_fx),
+                                    ("F_y", estimate.fy, signals.reference_fy)):  # fmt: skip
+        errors = values - reference
+        expected = [*np.sqrt(np.mean(errors**2, axis=0)), np.sqrt(np.mean(errors**2))]
+        expected.append(100 * expected[-1] / np.sqrt(np.mean(reference**2)))
+        np.testing.assert_allclose(rows["tyre-rigid"][axis], expected, rtol=1e-12)
+        assert rows["tyre-forces"][axis][5] < rows["tyre-rigid"][axis][5]
+    text = format_table(comparison)
+    assert text.index("F_x       tyre-forces") < text.index("F_y       tyre-forces")

@@ -18,7 +18,7 @@
  * numbers for a log at the library's sample interval); the v_* columns are
  * required (the travel rates are not derived).
  * Writes t, fz_*, fz_std_*, residual_*, the online mass properties and their std,
- * status as CSV (stdout by default).
+ * status as CSV (stdout by default).${tyre_example_note}
  * The interval before a sample is t[k] - t[k-1]; the first sample uses
  * t[1] - t[0], as wheelload's Python filter does.
  *
@@ -49,6 +49,15 @@
 
 #include "${prefix}.h"
 
+/* 1: built with the tyre-force step (wheelload codegen --tyre-forces). */
+#define TYRE_FORCES ${tyre_forces}
+#if TYRE_FORCES
+#include "${prefix}_tyre.h"
+#define N_WHEEL ${PREFIX}_TYRE_N_WHEEL
+#else
+#define N_WHEEL 0
+#endif
+
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -60,7 +69,7 @@
 
 #define MAX_LINE 16384
 #define MAX_COLUMNS 256
-#define N_CHANNELS (1 + ${PREFIX}_N_INPUTS)
+#define N_CHANNELS (1 + ${PREFIX}_N_INPUTS + N_WHEEL)
 
 /* Largest magnitude an input channel may have (t is kept in double). */
 #if ${PREFIX}_SINGLE_PRECISION
@@ -69,11 +78,19 @@
 #define REAL_MAX DBL_MAX
 #endif
 
-/* t, then the filter's inputs in the order of ${prefix}_input_names. */
+/* t, then the filter's inputs in the order of ${prefix}_input_names (then the wheel
+ * channels of the tyre step). */
 static const char *const channels[N_CHANNELS] = {
     "t",
 ${input_names}
+${wheel_channel_names}
 };
+
+/* One data row: the filter's input and the wheel channels. */
+typedef struct {
+    ${prefix}_input input;
+    ${prefix}_real wheels[N_WHEEL + 1];
+} log_row;
 
 /* The log being read and the position in it, for error messages. */
 typedef struct {
@@ -239,10 +256,10 @@ static int number(const char *text, double limit, double *value)
     return fabs(*value) <= limit ? FIELD_OK : FIELD_OUT_OF_RANGE;
 }
 
-/* Parse the current data row of log (in line) into t and a filter input;
+/* Parse the current data row of log (in line) into t and a row;
  * 0 on an error (reported). t is present and finite on success. */
 static int parse(const log_reader *log, char *line, int n_columns, const int *column,
-                 double *t, ${prefix}_input *input)
+                 double *t, log_row *row)
 {
     char *fields[MAX_COLUMNS];
     double values[N_CHANNELS];
@@ -272,8 +289,11 @@ static int parse(const log_reader *log, char *line, int n_columns, const int *co
         return 0;
     }
     *t = values[0];
-    for (k = 1; k < N_CHANNELS; ++k) {
-        *${prefix}_input_field(input, k - 1) = (${prefix}_real)values[k];
+    for (k = 1; k <= ${PREFIX}_N_INPUTS; ++k) {
+        *${prefix}_input_field(&row->input, k - 1) = (${prefix}_real)values[k];
+    }
+    for (k = ${PREFIX}_N_INPUTS + 1; k < N_CHANNELS; ++k) {
+        row->wheels[k - 1 - ${PREFIX}_N_INPUTS] = (${prefix}_real)values[k];
     }
     return 1;
 }
@@ -281,14 +301,14 @@ static int parse(const log_reader *log, char *line, int n_columns, const int *co
 /* Read and parse the next data row; 1, 0 at the end of the log, -1 on an
  * error (reported), including a t not after t_previous. */
 static int next_row(log_reader *log, char *line, int n_columns, const int *column,
-                    double t_previous, double *t, ${prefix}_input *input)
+                    double t_previous, double *t, log_row *row)
 {
     int status = next_line(log, line);
     if (status <= 0) {
         return status;
     }
     ++log->row;
-    if (!parse(log, line, n_columns, column, t, input)) {
+    if (!parse(log, line, n_columns, column, t, row)) {
         return -1;
     }
     if (!(*t > t_previous)) {
@@ -299,6 +319,19 @@ static int next_row(log_reader *log, char *line, int n_columns, const int *colum
     }
     return 1;
 }
+
+#if TYRE_FORCES
+static void write_forces(FILE *out, const ${prefix}_tyre_output *forces)
+{
+    const ${prefix}_real *columns[4] = {forces->fx, forces->fx_std, forces->fy, forces->fy_std};
+    int j, k;
+    for (j = 0; j < 4; ++j) {
+        for (k = 0; k < 4; ++k) {
+            fprintf(out, ",${digits}", (double)columns[j][k]);
+        }
+    }
+}
+#endif
 
 static void write_row(FILE *out, double t, const ${prefix}_output *estimate)
 {
@@ -316,7 +349,7 @@ static void write_row(FILE *out, double t, const ${prefix}_output *estimate)
     for (k = 0; k < 8; ++k) {
         fprintf(out, ",${digits}", (double)estimate->mass_properties[k]);
     }
-    fprintf(out, ",%lu\n", (unsigned long)estimate->flags);
+    fprintf(out, ",%lu", (unsigned long)estimate->flags);
 }
 
 /* Apply one NAME=VALUE override with ${prefix}_set_param; 0 (reported) if the
@@ -396,15 +429,18 @@ static FILE *open_temporary(const char *path, char *temporary, size_t size)
  * estimates; 0, or 2 on an error (reported). */
 /* derive: the log has no rate-derivative columns, so ${prefix}_rate_filter gives them. */
 static int run(log_reader *log, int n_columns, const int *column, const double *t_first,
-               const ${prefix}_input *first, FILE *out, const ${prefix}_params *params,
-               int derive)
+               const log_row *first, FILE *out, const ${prefix}_params *params, int derive)
 {
     ${prefix}_state state;
     ${prefix}_output estimate;
     ${prefix}_rate_filter rates;
-    ${prefix}_input start = first[0], input = first[1];
+    log_row row[2];
+#if TYRE_FORCES
+    ${prefix}_tyre_state tyre;
+    ${prefix}_tyre_output forces;
+#endif
     double t = t_first[1], t_previous = t_first[0];
-    int status = ${prefix}_init(&state, params);
+    int k, status = ${prefix}_init(&state, params);
     ${prefix}_rate_filter_reset(&rates);
     if (status > 0) {
         fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
@@ -417,21 +453,33 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
     }
     fprintf(out, "t,fz_fl,fz_fr,fz_rl,fz_rr,fz_std_fl,fz_std_fr,fz_std_rl,fz_std_rr,"
                  "residual_vertical,residual_pitch,residual_roll,mass,cg_x,cg_y,cg_height,"
-                 "mass_std,cg_x_std,cg_y_std,cg_height_std,status\n");
-    if (derive) {
-        ${prefix}_rate_filter_step(&rates, &start);
-    }
-    ${prefix}_step(&state, params, &start, (${prefix}_real)(t - t_previous), &estimate);
-    write_row(out, t_previous, &estimate);
-    do {
+                 "mass_std,cg_x_std,cg_y_std,cg_height_std,status${tyre_columns}\n");
+#if TYRE_FORCES
+    ${prefix}_tyre_reset(&tyre);
+#endif
+    row[0] = first[0];
+    row[1] = first[1];
+    /* The first sample uses the interval t[1] - t[0]; then each its own. */
+    for (k = 0; status >= 0; k = 1) {
+        const ${prefix}_real dt = (${prefix}_real)(t - t_previous);
         if (derive) {
-            ${prefix}_rate_filter_step(&rates, &input);
+            ${prefix}_rate_filter_step(&rates, &row[k].input);
         }
-        ${prefix}_step(&state, params, &input, (${prefix}_real)(t - t_previous), &estimate);
-        write_row(out, t, &estimate);
-        t_previous = t;
-        status = next_row(log, line, n_columns, column, t_previous, &t, &input);
-    } while (status > 0);
+        ${prefix}_step(&state, params, &row[k].input, dt, &estimate);
+        write_row(out, k ? t : t_previous, &estimate);
+#if TYRE_FORCES
+        ${prefix}_tyre_step(&tyre, &row[k].input, row[k].wheels, &estimate, dt, &forces);
+        write_forces(out, &forces);
+#endif
+        fputc('\n', out);
+        if (k) {
+            t_previous = t;
+            status = next_row(log, line, n_columns, column, t_previous, &t, &row[1]);
+            if (status == 0) {
+                break;
+            }
+        }
+    }
     return status < 0 ? 2 : 0;
 }
 
@@ -442,7 +490,7 @@ int main(int argc, char **argv)
     int column[N_CHANNELS];
     int n_columns, k, j, status, derive;
     double t_first[2];
-    ${prefix}_input first[2];
+    log_row first[2];
     ${prefix}_params params;
     log_reader log;
     static char temporary[4096];
@@ -495,7 +543,8 @@ int main(int argc, char **argv)
             }
             column[k] = j;
         }
-        if (column[k] < 0 && (k == 0 || !${prefix}_input_optional[k - 1])) {
+        if (column[k] < 0
+            && (k == 0 || k > ${PREFIX}_N_INPUTS || !${prefix}_input_optional[k - 1])) {
             fprintf(stderr, "%s: missing column '%s'%s\n", log.name, channels[k],
                     strncmp(channels[k], "v_", 2) == 0
                         ? " (this example needs the travel rates v_fl v_fr v_rl v_rr)"

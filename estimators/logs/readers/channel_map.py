@@ -59,6 +59,8 @@ TARGETS: dict[str, Kind] = {
     **{f"ws_{w}": Kind.SPEED for w in WHEELS},
     **{f"az_{w}": Kind.ACCELERATION for w in WHEELS},  # hub accelerometers (body z)
     **{f"omega_{w}": Kind.ANGULAR_RATE for w in WHEELS},  # wheel spins
+    **{f"torque_{w}": Kind.TORQUE for w in WHEELS},  # drive minus brake torque at the wheel
+    "steer": Kind.ANGLE,  # front road-wheel angle, > 0 to the left
     **{f"fx_{w}": Kind.FORCE for w in WHEELS},  # reference tyre forces, tyre frame
     **{f"fy_{w}": Kind.FORCE for w in WHEELS},
 }
@@ -212,12 +214,15 @@ def _channel(name: str, table: dict, where: str) -> ChannelSpec:
             )
         motion_ratio = _number(table, "motion_ratio", prefix, where)
     rotation = unit.strip() in ("rpm", "1/min", "rad/s_wheel")
-    if ("radius" in table or "ratio" in table or rotation) and not name.startswith("ws_"):
+    wheel_speed = name.startswith("ws_")
+    if ("radius" in table or "ratio" in table or rotation) and not (
+        wheel_speed or (rotation and name.startswith("omega_") and "radius" not in table)
+    ):
         raise ChannelMapError(
-            f"{where}: channel '{name}': a rotation speed and keys radius, ratio "
-            "are for wheel speeds ws_* only"
+            f"{where}: channel '{name}': a rotation speed is for wheel speeds ws_* and wheel "
+            "spins omega_* only, keys radius, ratio for ws_* only"
         )
-    if rotation and "radius" not in table:
+    if rotation and wheel_speed and "radius" not in table:
         raise ChannelMapError(
             f"{where}: missing key '{prefix}radius' (rolling radius [m]) for unit '{unit}'"
         )
@@ -354,7 +359,8 @@ TEMPLATE = """\
 # Use with: wheelload estimate LOG --vehicle car.toml --channels this.toml
 # Every key is checked; unknown keys, channels and units are errors.
 # Units: s ms us | m cm mm in | m/s mm/s km/h mph | m/s^2 g | rad/s deg/s | N kN
-#        | rpm (wheel speeds, with radius and ratio). "g" is standard gravity.
+#        | N m kNm | rad deg | rpm (wheel speeds with radius and ratio; wheel spins
+#        omega_*). "g" is standard gravity.
 
 [clock]
 channel = "ax"       # output clock: this channel's time stamps (the IMU's)
@@ -416,4 +422,15 @@ motion_ratio = 0.75
 # unit = "rpm"
 # radius = 0.26      # m, rolling radius
 # ratio = 1.0        # sensor shaft turns per wheel turn
+
+# Wheel channels of the tyre-force methods (estimate --method tyre-forces), per wheel.
+# [channels.omega_fl]
+# source = "WheelSpd_FL"
+# unit = "rpm"       # the wheel's spin: rpm or rad/s (no radius)
+# [channels.torque_fl]
+# source = "WheelTrq_FL"   # drive minus brake torque at the wheel
+# unit = "N m"
+# [channels.steer]
+# source = "SteerAngle"    # front road-wheel angle, > 0 to the left
+# unit = "deg"
 """

@@ -28,6 +28,8 @@ class Kind(enum.Enum):
     ACCELERATION = "m/s^2"
     ANGULAR_RATE = "rad/s"
     FORCE = "N"
+    TORQUE = "N m"
+    ANGLE = "rad"
     ROTATION_SPEED = "rpm"  # wheel speed as shaft rotation; needs radius and ratio
 
 
@@ -56,6 +58,14 @@ UNITS: dict[str, tuple[Kind, float]] = {
     "°/s": (Kind.ANGULAR_RATE, math.pi / 180.0),
     "N": (Kind.FORCE, 1.0),
     "kN": (Kind.FORCE, 1e3),
+    "N m": (Kind.TORQUE, 1.0),
+    "Nm": (Kind.TORQUE, 1.0),
+    "N*m": (Kind.TORQUE, 1.0),
+    "kN m": (Kind.TORQUE, 1e3),
+    "kNm": (Kind.TORQUE, 1e3),
+    "rad": (Kind.ANGLE, 1.0),
+    "deg": (Kind.ANGLE, math.pi / 180.0),
+    "°": (Kind.ANGLE, math.pi / 180.0),
     "rpm": (Kind.ROTATION_SPEED, 2.0 * math.pi / 60.0),  # to rad/s
     "1/min": (Kind.ROTATION_SPEED, 2.0 * math.pi / 60.0),
     "rad/s_wheel": (Kind.ROTATION_SPEED, 1.0),
@@ -70,12 +80,15 @@ def unit_factor(unit: str, kind: Kind, where: str) -> float:
     """Factor that converts values in ``unit`` to the SI unit of ``kind``.
 
     A wheel speed (``Kind.SPEED``) may be given as a rotation speed; the
-    factor is then to rad/s and the caller applies radius and ratio.
+    factor is then to rad/s and the caller applies radius and ratio. An angular rate may
+    be given as a rotation speed (a wheel spin in rpm), the factor to rad/s.
     """
     if unit.strip() not in UNITS:
         raise UnitError(f"{where}: unknown unit '{unit}'; known: {', '.join(sorted(UNITS))}")
     found, factor = UNITS[unit.strip()]
-    if found is kind or (kind is Kind.SPEED and found is Kind.ROTATION_SPEED):
+    if found is kind or (
+        kind in (Kind.SPEED, Kind.ANGULAR_RATE) and found is Kind.ROTATION_SPEED
+    ):
         return factor
     raise UnitError(
         f"{where}: unit '{unit}' is a {found.name.lower().replace('_', ' ')}, "

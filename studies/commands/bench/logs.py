@@ -78,9 +78,11 @@ def run(args: argparse.Namespace) -> int:
             if not args.no_dask:
                 from distributed import LocalCluster
 
+                # ":0": the dashboard on a free port (None would still try 8787,
+                # dask/distributed#8136), so two benches or a user's cluster do not collide.
                 cluster = stack.enter_context(LocalCluster(
                     n_workers=workers, threads_per_worker=1, processes=True,
-                    dashboard_address=None))  # fmt: skip
+                    dashboard_address=":0"))  # fmt: skip
                 variants[f"dask LocalCluster ({workers})"] = {
                     "dask_address": cluster.scheduler_address
                 }

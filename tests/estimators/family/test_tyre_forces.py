@@ -16,6 +16,7 @@ from wheelload.estimators.family.tyre_forces import (
     TyreSettings,
     discrete_observer,
 )
+from wheelload.estimators.family.tyre_step import CORE
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
 from wheelload.estimators.samples import step_through
@@ -63,8 +64,8 @@ def test_tyre_split_ends():
     nominal, p_ky2, mu, p_d2 = (3800.0, 4700.0), 2.0, 1.15, -0.1
 
     def split(axles):
-        return tyre_split(loads, axles, nominal_loads=nominal, friction=mu,
-                          load_sensitivity=p_d2, cornering_load=p_ky2)  # fmt: skip
+        return np.array(tyre_split(loads, axles, nominal_loads=nominal, friction=mu,
+                                   load_sensitivity=p_d2, cornering_load=p_ky2)).ravel()  # fmt: skip
 
     ky = np.sin(2 * np.arctan(loads / (p_ky2 * np.repeat(nominal, 2))))
     peak = mu * (1 + p_d2 * (loads - np.repeat(nominal, 2)) / np.repeat(nominal, 2)) * loads
@@ -109,12 +110,13 @@ def test_lateral_filter_settles_on_the_axle_forces():
     h, _ = body_force_rows(steer, np.zeros(4), lf=k.lf, lr=k.lr, track_front=k.track_front,
                            track_rear=k.track_rear, share_front=0.0,
                            inertia_z=k.yaw_inertia)  # fmt: skip
+    h = np.array(h)
     fyr = h[2, 0] * fyf / -h[2, 1]  # yaw row = 0
     inputs = _inputs(vehicle, fyf, fyr, steer, 0.4, 60.0)
     core = method.initial_state().core
     for _ in range(500):
         core, _, _, fy, _ = method.core_step(core, inputs, 0.01)
-    x = core[1]
+    x = core[CORE.x]
     assert x[0] == pytest.approx(fyf, abs=1.0) and x[1] == pytest.approx(fyr, abs=1.0)
     # e (the front difference beyond the split) is seen only through sin(steer) in the
     # yaw row: it is still settling, hence 5 N per wheel.
@@ -132,7 +134,7 @@ def test_high_slip_switches_the_covariances():
     moved = {}
     for spin in (60.0, 61.0):  # 0 or 100 rad/s^2 at dt = 0.01 s
         after, *_ = method.core_step(core, _inputs(vehicle, 2000.0, 0.0, 0.0, 0.0, spin), 0.01)
-        moved[spin] = after[1][0] + after[1][1]
+        moved[spin] = after[CORE.x][0] + after[CORE.x][1]
     assert moved[61.0] < 0.1 * moved[60.0]
     assert TyreSettings().slip_threshold < 100.0
 

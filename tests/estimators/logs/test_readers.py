@@ -276,3 +276,59 @@ def test_csv_with_its_own_names_and_units_through_a_map(tmp_path):
     assert signals.az_assumed and signals.mode() == (
         "four travel sensors; no az: g assumed; vx: none (aerodynamic terms off)"
     )
+
+
+def test_wheel_channels_in_their_own_units_through_a_map(tmp_path):
+    """The tyre-force channels through a map: spins in rpm (no radius: a spin, not a
+    speed), torques in kN m, the steer angle in degrees, each to SI exactly; rpm on a
+    gyro or a radius on a spin is an error naming the key."""
+    from wheelload.studies.pipeline.example_log import example_log_path
+
+    si = pd.read_csv(example_log_path())
+    n = len(si)
+    spin, torque = 60.0 + np.linspace(0.0, 5.0, n), 300.0 * np.sin(np.linspace(0.0, 6.0, n))
+    steer = 0.05 * np.sin(np.linspace(0.0, 3.0, n))
+    raw = si.copy()
+    for w in WHEELS:
+        raw[f"Spin_{w}"] = spin * 60.0 / (2.0 * np.pi)
+        raw[f"Trq_{w}"] = torque / 1000.0
+    raw["Steer_deg"] = np.degrees(steer)
+    log = tmp_path / "wheels.csv"
+    raw.to_csv(log, index=False, float_format="%.17g")
+    same = [c for c in si.columns if c != "t" and not c.startswith("fz_")]
+    text = '[time]\nsource = "t"\nunit = "s"\n' + "".join(
+        f'[channels.{c}]\nsource = "{c}"\nunit = "{_si_unit(c)}"\n' for c in same
+    )
+    wheels = (
+        "".join(
+            f'[channels.omega_{w}]\nsource = "Spin_{w}"\nunit = "rpm"\n'
+            f'[channels.torque_{w}]\nsource = "Trq_{w}"\nunit = "kNm"\n'
+            for w in WHEELS
+        )
+        + '[channels.steer]\nsource = "Steer_deg"\nunit = "deg"\n'
+    )
+    channel_map = tmp_path / "map.toml"
+    channel_map.write_text(text + wheels)
+    signals = read_log(log, channels=channel_map, wiring_checks=False)
+    np.testing.assert_allclose(signals.spin, np.repeat(spin[:, None], 4, axis=1), rtol=1e-12)
+    np.testing.assert_allclose(signals.torque, np.repeat(torque[:, None], 4, axis=1),
+                               rtol=1e-12, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(signals.steer, steer, rtol=1e-12, atol=1e-15)
+    for edit, message in (
+        (('source = "wz"\nunit = "rad/s"', 'source = "wz"\nunit = "rpm"'),
+         r"channel 'wz': a rotation speed is for wheel speeds ws_\* and wheel spins omega_\*"),
+        (('[channels.omega_fl]\nsource = "Spin_fl"\nunit = "rpm"',
+          '[channels.omega_fl]\nsource = "Spin_fl"\nunit = "rpm"\nradius = 0.3'),
+         r"channel 'omega_fl': .*keys radius, ratio for ws_\* only"),
+        (('unit = "kNm"', 'unit = "kN"'), r"unit 'kN' is a force, the channel needs a torque"),
+    ):  # fmt: skip
+        channel_map.write_text((text + wheels).replace(*edit, 1))
+        with pytest.raises(LogError, match=message):
+            read_log(log, channels=channel_map, wiring_checks=False)
+
+
+def _si_unit(name: str) -> str:
+    """The SI unit of one of the log format's channels."""
+    from wheelload.estimators.logs.readers.channel_map import TARGETS
+
+    return TARGETS[name].value
