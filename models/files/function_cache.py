@@ -4,9 +4,9 @@ Building a Function from the models' expressions (the filter step with its
 Jacobians and guards, the suspension pseudo-measurement, the equilibrium rows)
 takes from a few milliseconds to a fifth of a second; loading its serialised
 form takes well under a millisecond for a model Function. A stored Function is
-named by its builder (module and name) and :func:`code_digest` (a hash of every ``.py`` file of
-``wheelload.models`` and ``wheelload.estimators`` and of the CasADi version), so
-an edit of any of them builds it again. It lives in the private build folder
+named by its builder (module and name) and :func:`code_digest` (a hash of every
+``.py`` file of ``wheelload.models`` and ``wheelload.estimators`` and of the CasADi
+version), so an edit of any of them builds it again. It lives in the private build folder
 (:func:`~wheelload.models.files.build_folder.build_folder`), written to a
 temporary file and renamed into place; a file that does not load is built
 again (with a one-line note).
@@ -23,7 +23,6 @@ import hashlib
 import importlib
 import importlib.util
 import logging
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,12 +30,13 @@ from pathlib import Path
 import casadi as ca
 
 from wheelload.models.files.build_folder import build_folder
-from wheelload.models.files.temporaries import temporary_file
+from wheelload.models.files.temporaries import replacing
 
 _log = logging.getLogger(__name__)
 
-#: ``id`` of each Function :func:`stored_function` returned: its file stem (name and digest).
-_STEMS: dict[int, str] = {}
+#: ``id`` of each Function :func:`stored_function` returned: its file stem (name and digest)
+#: and the Function itself (kept, so that its id names no other Function).
+_STEMS: dict[int, tuple[str, ca.Function]] = {}
 
 #: The folders of the package whose sources the stored Functions and libraries are built from.
 SOURCE_FOLDERS = ("models", "estimators")
@@ -58,7 +58,7 @@ def code_digest(root: Path = PACKAGE_ROOT) -> str:
 
 def casadi_version() -> str:
     """The installed CasADi's version, from its distribution record beside the package (read
-    without importing CasADi, about 30 ms); from CasADi itself where there is no record."""
+    without importing CasADi, which takes about 30 ms); from CasADi where there is none."""
     spec = importlib.util.find_spec("casadi")
     if spec is not None and spec.origin is not None:
         records = sorted(Path(spec.origin).parents[1].glob("casadi-*.dist-info"))
@@ -73,7 +73,7 @@ def stored_function(builder: Callable[[], ca.Function]) -> ca.Function:
     docstring); the same object for the same builder in one process."""
     stem = builder_stem(builder)
     function = _load_or_build(builder, build_folder() / f"{stem}.casadi")
-    _STEMS[id(function)] = stem
+    _STEMS[id(function)] = (stem, function)
     return function
 
 
@@ -108,7 +108,8 @@ def builder_stem(builder: Callable[[], ca.Function]) -> str:
 def stored_stem(function: ca.Function) -> str | None:
     """``BUILDER_DIGEST`` of a Function :func:`stored_function` returned (what the code alone
     determines it by: a key for what is built from it), None for any other Function."""
-    return _STEMS.get(id(function))
+    stem, stored = _STEMS.get(id(function), (None, None))
+    return stem if stored is function else None
 
 
 def _load_or_build(builder: Callable[[], ca.Function], path: Path) -> ca.Function:
@@ -118,15 +119,15 @@ def _load_or_build(builder: Callable[[], ca.Function], path: Path) -> ca.Functio
         except (RuntimeError, OSError, UnicodeDecodeError):  # truncated or corrupt
             _log.warning("wheelload: note: cached function %s does not load: built again", path)
     function = builder()
-    try:
-        temporary = temporary_file(path.parent, path.stem, path.suffix)
-    except OSError:
-        return function  # not stored: the Function is still returned
-    try:
-        temporary.write_text(function.serialize())
-        os.replace(temporary, path)
-    except OSError:
-        pass  # not stored: the Function is still returned
-    finally:
-        temporary.unlink(missing_ok=True)
+    store_text(path, function.serialize())
     return function
+
+
+def store_text(path: Path, text: str) -> None:
+    """``text`` into ``path`` through a temporary renamed into place; nothing if that fails
+    (what is not stored is made again next time)."""
+    try:
+        with replacing(path) as temporary:
+            temporary.write_text(text)
+    except OSError:
+        pass

@@ -21,16 +21,18 @@ from __future__ import annotations
 import ctypes
 import functools
 import json
-import os
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 
 from wheelload.models.files.build_folder import build_folder, keyed_library
-from wheelload.models.files.function_cache import builder_name, builder_stem, stored_function
-from wheelload.models.files.temporaries import temporary_file
+from wheelload.models.files.function_cache import (
+    builder_name,
+    builder_stem,
+    store_text,
+    stored_function,
+)
 
 MAP = """
 static const long {name}_nnz_out[{n_out}] = {{{nnz_out}}};
@@ -212,7 +214,7 @@ def stored_library(
             signature = Signature.from_json(record.read_text())
         except (OSError, ValueError, KeyError, TypeError):  # not made yet, or damaged
             signature = Signature.of(function())
-            _write(record, signature.to_json())
+            store_text(record, signature.to_json())
 
         def checked_source(signature=signature) -> str:  # only for the signature recorded
             if Signature.of(function()) != signature:
@@ -238,19 +240,3 @@ def compiled_function(builder: Callable[[], object]) -> CompiledFunction:
     name = builder_name(builder)[1].strip("_")
     signature, library = stored_library(builder, f"{name}_map", "map", map_source, dense=True)
     return CompiledFunction(signature, library)
-
-
-def _write(path: Path, text: str) -> None:
-    """``text`` into ``path`` through a temporary renamed into place (nothing if it fails:
-    the record is made again next time)."""
-    try:
-        temporary = temporary_file(path.parent, path.stem, path.suffix)
-    except OSError:
-        return
-    try:
-        temporary.write_text(text)
-        os.replace(temporary, path)
-    except OSError:
-        pass
-    finally:
-        temporary.unlink(missing_ok=True)
