@@ -383,16 +383,7 @@ def _stored_loop() -> ColumnLoop:
 @functools.lru_cache(maxsize=4)
 def column_loop(step) -> ColumnLoop:
     """The filter step over column arrays, with the status bits of ``TwoStageKF.run``."""
-    layout = _layout(step.nnz_out(STEP_OUTPUT_NAMES.index("used")))
-    return ColumnLoop(
-        step,
-        layout.n_accum,
-        values=layout.values,
-        validity=layout.validity,
-        interval=layout.interval,
-        columns=layout.columns,
-        rules=layout.rules,
-    )
+    return ColumnLoop(step, _layout(step.nnz_out(STEP_OUTPUT_NAMES.index("used"))))
 
 
 def scan_log(

@@ -303,22 +303,11 @@ class ColumnLoop:
     its own column array; each :class:`FlagRule` sets a bit of the ``uint32``
     status. The arithmetic is the step's own generated C, as in
     :class:`CompiledLoop`, so both give the same numbers to the bit.
-    :meth:`stored` gives the loop of a stored step without CasADi once built.
+    :class:`ColumnLayout` names the inputs and outputs; :meth:`stored` gives the loop of a
+    stored step without CasADi once built.
     """
 
-    def __init__(
-        self,
-        step: ca.Function,
-        n_accum: int,
-        *,
-        values: str,
-        validity: str,
-        interval: str,
-        columns: tuple[str, ...],
-        rules: tuple[FlagRule, ...],
-    ) -> None:
-        layout = ColumnLayout(n_accum=n_accum, values=values, validity=validity,
-                              interval=interval, columns=columns, rules=rules)  # fmt: skip
+    def __init__(self, step: ca.Function, layout: ColumnLayout) -> None:
         self._set_up(Signature.of(step), layout)
         name = f"{step.name()}_columns"
         stem = stored_stem(step)
