@@ -5,6 +5,7 @@ Structural, not timed: a fresh interpreter runs ``wheelload estimate --example
 modules below may be among them (each was imported once and cost start-up time).
 """
 
+import gc
 import json
 import os
 import subprocess
@@ -79,3 +80,27 @@ def test_the_version_imports_no_numerics():
     modules = _modules_after(["--version"])
     loaded = ("casadi.casadi", "numpy", "pyarrow", "wheelload.models")
     assert sorted(m for m in loaded if m in modules) == []
+
+
+def test_the_collector_skips_the_startup_objects_and_a_caller_gets_them_back(capsys):
+    """The console command freezes what building its parser made (gc.freeze: the collections
+    and the exit skip it); called from Python, main() leaves the collector as it was."""
+    code = (
+        "import contextlib, gc, io, sys\n"
+        "sys.argv = ['wheelload', 'methods']\n"
+        "from wheelload.studies.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main()\n"
+        "print(gc.get_freeze_count(), gc.isenabled())\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    frozen, enabled = done.stdout.split()
+    assert int(frozen) > 10_000 and enabled == "True"  # the modules' objects, frozen
+
+    from wheelload.studies.cli import main
+
+    before = gc.get_freeze_count()
+    assert main(["methods"]) == 0
+    assert gc.get_freeze_count() == before and gc.isenabled()
+    assert "kf" in capsys.readouterr().out
