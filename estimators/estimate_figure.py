@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.models.conventions import WHEELS
 
 if TYPE_CHECKING:
@@ -69,7 +70,7 @@ def band_caption(
     pooled = coverage(error, std)
     finite = np.isfinite(error) & np.isfinite(std)
     rms = float(np.sqrt(np.mean(error[finite] ** 2)))
-    ratio = float(np.median(2.0 * std[finite])) / rms if rms > 0 else float("inf")
+    ratio = float(order_statistics.median(2.0 * std[finite])) / rms if rms > 0 else float("inf")
     return (
         f"{text}; coverage (share of samples with |estimate − reference| < 2σ) {pooled:.1%}, "
         f"median 2σ = {ratio:.1f} × the RMS error (an honest Gaussian σ: "

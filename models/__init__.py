@@ -1,41 +1,29 @@
-"""Vehicle physics, written once, symbolically in CasADi."""
+"""Vehicle physics, written once, symbolically in CasADi.
 
-from wheelload.models.conventions import GRAVITY, WHEELS
-from wheelload.models.equilibrium import equilibrium_function, paper_equilibrium_function
-from wheelload.models.inputs import INPUTS, OPTIONAL_INPUTS
-from wheelload.models.mass_properties import MassCentre, static_loads, vehicle_mass_centre
-from wheelload.models.parameters import ModelParameters
-from wheelload.models.suspension.pseudo_measurement import suspension_function, travel_function
-from wheelload.models.terms import DROPPABLE, GATES, gates_function
-from wheelload.models.vehicle.description import (
-    ModelTerms,
-    Vehicle,
-    VehicleFileError,
-    vehicle_from_dict,
-)
-from wheelload.models.vehicle.file import example_vehicle_path, load_vehicle, vehicle_template
+Every name of this face is imported on first use, by module (``_LAZY_MODULES``,
+:mod:`~wheelload.models.files.lazy_names`): reading a vehicle file imports none of the
+symbolic models, and a warm estimate takes their numbers from compiled C
+(:mod:`~wheelload.models.files.function_library`).
+"""
 
-__all__ = [
-    "DROPPABLE",
-    "GATES",
-    "GRAVITY",
-    "INPUTS",
-    "OPTIONAL_INPUTS",
-    "WHEELS",
-    "MassCentre",
-    "ModelParameters",
-    "ModelTerms",
-    "Vehicle",
-    "VehicleFileError",
-    "equilibrium_function",
-    "example_vehicle_path",
-    "gates_function",
-    "load_vehicle",
-    "paper_equilibrium_function",
-    "static_loads",
-    "suspension_function",
-    "travel_function",
-    "vehicle_from_dict",
-    "vehicle_mass_centre",
-    "vehicle_template",
-]
+from wheelload.models.files.lazy_names import lazy_names
+
+_LAZY_MODULES = {
+    "wheelload.models.conventions": ("GRAVITY", "WHEELS"),
+    "wheelload.models.equilibrium": ("equilibrium_function", "paper_equilibrium_function"),
+    "wheelload.models.inputs": ("INPUTS", "OPTIONAL_INPUTS"),
+    "wheelload.models.mass_properties": ("MassCentre", "static_loads", "vehicle_mass_centre"),
+    "wheelload.models.parameters": ("ModelParameters",),
+    "wheelload.models.suspension.pseudo_measurement": ("suspension_function", "travel_function"),
+    "wheelload.models.terms": ("DROPPABLE", "GATES", "gates_function"),
+    "wheelload.models.vehicle.description": (
+        "ModelTerms",
+        "Vehicle",
+        "VehicleFileError",
+        "vehicle_from_dict",
+    ),
+    "wheelload.models.vehicle.file": ("example_vehicle_path", "load_vehicle", "vehicle_template"),
+}
+__getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
+
+__all__ = list(_LAZY_NAMES)

@@ -64,12 +64,14 @@ def body_attitude_function(name: str = "body_attitude") -> ca.Function:
     return ca.Function(name, [d, p_vector], [pitch, roll], ["d", "p"], ["pitch", "roll"])
 
 
-def road_frame(acc, roll, pitch, sine=ca.sin, cosine=ca.cos):
+def road_frame(acc, roll, pitch, sine=None, cosine=None):
     r"""Specific force in the road frame, :math:`R_y(\theta) R_x(\phi) a` (eq. 4-5).
 
-    ``sine`` and ``cosine`` may be replaced by polynomials (the model terms use
-    their Taylor polynomials so that a generated step has no trigonometry).
+    ``sine`` and ``cosine`` (default ``ca.sin``, ``ca.cos``) may be replaced by
+    polynomials (the model terms use their Taylor polynomials so that a generated
+    step has no trigonometry).
     """
+    sine, cosine = sine or ca.sin, cosine or ca.cos
     c_r, s_r, c_p, s_p = cosine(roll), sine(roll), cosine(pitch), sine(pitch)
     rx = ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c_r, -s_r), ca.horzcat(0, s_r, c_r))
     ry = ca.vertcat(ca.horzcat(c_p, 0, s_p), ca.horzcat(0, 1, 0), ca.horzcat(-s_p, 0, c_p))

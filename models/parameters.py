@@ -20,14 +20,14 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from functools import cache
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from wheelload.models.files.function_cache import stored_function
+from wheelload.models.files.function_library import compiled_function
 from wheelload.models.mass_properties import level_static_loads, vehicle_mass_centre
-from wheelload.models.roll_stiffness import roll_split_default
 from wheelload.models.vehicle.description import Vehicle
 
 #: Per-axle parameters ``<name>_front``, ``<name>_rear`` and their
@@ -157,7 +157,8 @@ class ModelParameters:
         """Numeric parameters; ``static`` overrides the static wheel loads [N].
 
         The static loads (unless given) and the roll split (unless the file gives
-        ``suspension.roll_split_front``) are :func:`derived_function`'s.
+        ``suspension.roll_split_front``) are :func:`derived_function`'s (its compiled C,
+        :func:`~wheelload.models.files.function_library.compiled_function`).
         """
         terms = dataclasses.asdict(vehicle.model)
         mounting = mounting_matrix(*vehicle.geometry.imu_orientation)
@@ -207,7 +208,8 @@ class ModelParameters:
             **{f"imu_r{i + 1}{j + 1}": float(mounting[i, j]) for i in range(3) for j in range(3)},
             **{f"term_{key}": float(value) for key, value in terms.items()},
         )
-        derived = dict(zip(DERIVED, derived_function()(parameters.vector()).full().ravel()))
+        values = compiled_function(_build_derived_function)(parameters.vector())[0]
+        derived = dict(zip(DERIVED, values.ravel()))
         follow = following(vehicle, static_given=static is not None)
         return dataclasses.replace(parameters, **{name: float(derived[name]) for name in follow})
 
@@ -255,13 +257,19 @@ def following(vehicle: Vehicle, *, static_given: bool = False) -> tuple[str, ...
 
 def derived_values(p: ModelParameters) -> ca.SX:
     """The :data:`DERIVED` parameters of ``p`` (numbers or symbols) as one SX column."""
+    from wheelload.models.roll_stiffness import roll_split_default  # the springs' model
+
     static = level_static_loads(p.mass, p.lf, p.lr)
     return ca.vertcat(*static, roll_split_default(p))
 
 
-@cache
 def derived_function() -> ca.Function:
-    """``derived_parameters(p) -> derived[len(DERIVED)]``: :func:`derived_values` (built once)."""
+    """``derived_parameters(p) -> derived[len(DERIVED)]``: :func:`derived_values` (built once
+    and stored, :func:`~wheelload.models.files.function_cache.stored_function`)."""
+    return stored_function(_build_derived_function)
+
+
+def _build_derived_function() -> ca.Function:
     p_vector, p = ModelParameters.symbolic()
     values = derived_values(p)
     read = {ModelParameters.names()[k] for k in _dependencies(values, p_vector)[1]}

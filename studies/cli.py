@@ -14,6 +14,8 @@ line ``terminated`` and status 143.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import gc
 import importlib
 import logging
 import os
@@ -23,6 +25,7 @@ import threading
 from collections.abc import Sequence
 
 from wheelload.studies.commands.options import log_level
+from wheelload.studies.deferred import defer
 
 COMMANDS = (
     "wheelload.studies.commands.vehicle",
@@ -114,12 +117,15 @@ def _terminate(signum, frame) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``wheelload ARGV`` (default: the process's arguments, as the console command)."""
+    process = argv is None  # the console command: the process ends with the command
     argv = list(sys.argv[1:] if argv is None else argv)
+    defer("casadi")  # imported where a model is built, not by a warm estimate (deferred.py)
     command = argv[0] if argv and argv[0] in COMMAND_MODULES else "command"
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
     try:
-        return _main(argv)
+        return _main(argv, process=process)
     except KeyboardInterrupt:
         print(f"wheelload {command}: interrupted", file=sys.stderr)
         return 130
@@ -147,8 +153,33 @@ def _configure_logging(level: int) -> None:
     warnings_logger.propagate = False
 
 
-def _main(argv: list[str]) -> int:
-    parser = build_parser(argv)
+def _main(argv: list[str], *, process: bool) -> int:
+    with _startup_objects():
+        parser = build_parser(argv)
+    try:
+        return _run(parser, argv)
+    finally:
+        if not process:  # a caller in Python gets its objects back for collection
+            gc.unfreeze()
+
+
+@contextlib.contextmanager
+def _startup_objects():
+    """Building the parser imports the command's modules: objects that live to the end and no
+    garbage. The cyclic collector pauses meanwhile, and what exists then is frozen
+    (``gc.freeze``): the command's collections skip it, and so does the collection at the
+    console command's exit (:func:`main` unfreezes it for a caller in Python)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+    gc.freeze()
+
+
+def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
     args, unknown = parser.parse_known_args(argv)
     from wheelload.models.files.build_folder import BuildFolderError  # casadi: after --version
 

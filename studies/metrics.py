@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from wheelload.estimators import percentile
 from wheelload.models.conventions import WHEELS
 
 if TYPE_CHECKING:
@@ -35,7 +36,7 @@ def _row(errors: np.ndarray, mean_reference: float) -> list[float]:
     return [
         rmse,
         100.0 * rmse / mean_reference,
-        float(np.percentile(absolute, 95)),
+        float(percentile(absolute, 95)),
         float(absolute.max()),
     ]
 

@@ -52,12 +52,8 @@ from wheelload.estimators.codegen.runtime_parameters import (
     runtime_fields,
 )
 from wheelload.estimators.kf.guard import FAULT_CHANNELS
-from wheelload.estimators.kf.step import (
-    STEP_INPUT_NAMES,
-    STEP_NAME,
-    STEP_OUTPUT_NAMES,
-    step_function,
-)
+from wheelload.estimators.kf.step import step_function
+from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import DEFAULT_SAMPLE_INTERVAL, TUNING, tuning_vector
 from wheelload.estimators.logs.output_files import write_text
 from wheelload.estimators.logs.signals import RateDerivativeFilter

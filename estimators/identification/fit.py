@@ -53,6 +53,7 @@ from wheelload.estimators.identification.fit_terms import FitLoss, Layout, Probl
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import CHUNK, Rows, linear_free_set
 from wheelload.estimators.identification.streamed import ChunkedDesign
+from wheelload.estimators.kernels import order_statistics
 from wheelload.models import ModelParameters
 
 MAD_SCALE = 1.4826  # MAD to standard deviation of a normal distribution
@@ -138,7 +139,9 @@ def _scales(r: np.ndarray, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     for g in range(count):
         rows = r[layout.rows(g)]
         if rows.size:
-            spread = MAD_SCALE * np.median(np.abs(rows - np.median(rows)))
+            spread = MAD_SCALE * order_statistics.median(
+                np.abs(rows - order_statistics.median(rows))
+            )
             sigma[g] = max(spread, 1e-9 * max(1.0, layout.peak[g]))
             rho[g] = _lag_one(rows, *layout.wheel_and_time(g))
     return sigma, rho

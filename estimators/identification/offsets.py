@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.logs.signals import Signals
 from wheelload.models import (
     GATES,
@@ -68,7 +69,10 @@ def white_noise_std(values: np.ndarray) -> float:
     steps = np.diff(values[np.isfinite(values)])
     if steps.size < 2:
         return 0.0
-    return float(np.median(np.abs(steps - np.median(steps))) / (0.6745 * np.sqrt(2.0)))
+    return float(
+        order_statistics.median(np.abs(steps - order_statistics.median(steps)))
+        / (0.6745 * np.sqrt(2.0))
+    )
 
 
 def check_still_period(

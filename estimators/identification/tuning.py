@@ -52,7 +52,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-from wheelload.estimators.kf.step import UPDATE_ROWS, step_function
+from wheelload.estimators.kf.step import step_function
+from wheelload.estimators.kf.step_cache import UPDATE_ROWS
 from wheelload.estimators.kf.tuning import (
     NOISE_DENSITIES,
     TUNED_DENSITIES,

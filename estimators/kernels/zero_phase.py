@@ -23,9 +23,12 @@ scale; the median exactly).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
+
+from wheelload.estimators.kernels import order_statistics
 
 #: Relative size at which an impulse response is cut (below double precision of its peak).
 _DECAYED = 1e-18
@@ -88,6 +91,22 @@ def _response_length(a: np.ndarray, n: int) -> int:
     return int(min(n, math.ceil(decay) + 8))
 
 
+@functools.lru_cache(maxsize=16)
+def _responses(b: tuple[float, ...], a: tuple[float, ...], n: int):
+    """For :func:`lfilter` of ``n`` samples: the response length, the impulse response of
+    1/A, the FFT size and the spectrum of the impulse response of B/A (read-only; kept, as
+    the checks filter every channel of a window with one filter)."""
+    a_array = np.array(a)
+    length = _response_length(a_array, n)
+    recursion = _recursion_response(a_array, length)
+    impulse = np.convolve(np.array(b), recursion)[:length]
+    size = 1 << (n + length - 1).bit_length()
+    spectrum = np.fft.rfft(impulse, size)
+    recursion.flags.writeable = False
+    spectrum.flags.writeable = False
+    return length, recursion, size, spectrum
+
+
 def lfilter(b: np.ndarray, a: np.ndarray, x: np.ndarray, zi: np.ndarray) -> np.ndarray:
     """``scipy.signal.lfilter(b, a, x, zi=zi)[0]`` of a second-order filter, 1-D ``x``."""
     b, a = _second_order(b, a)
@@ -95,11 +114,8 @@ def lfilter(b: np.ndarray, a: np.ndarray, x: np.ndarray, zi: np.ndarray) -> np.n
     n = x.size
     if n == 0:
         return x.copy()
-    length = _response_length(a, n)
-    recursion = _recursion_response(a, length)
-    impulse = np.convolve(b, recursion)[:length]
-    size = 1 << (n + length - 1).bit_length()
-    forced = np.fft.irfft(np.fft.rfft(x, size) * np.fft.rfft(impulse, size), size)[:n]
+    length, recursion, size, spectrum = _responses(tuple(b), tuple(a), n)
+    forced = np.fft.irfft(np.fft.rfft(x, size) * spectrum, size)[:n]
     free = np.zeros(n)
     free[:length] += zi[0] * recursion
     free[1 : length + 1] += zi[1] * recursion[: min(length, n - 1)]
@@ -127,4 +143,4 @@ def medfilt(x: np.ndarray, window: int) -> np.ndarray:
     half = window // 2
     padded = np.concatenate([np.zeros(half), x, np.zeros(half)])
     windows = np.lib.stride_tricks.sliding_window_view(padded, window)
-    return np.median(windows, axis=1)
+    return order_statistics.median(windows, axis=-1)

@@ -37,8 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf import guard
-from wheelload.estimators.kf.step import N_CARRIED, STEP_OUTPUT_NAMES
+from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring
@@ -68,7 +69,7 @@ from wheelload.estimators.logs.signals import (
     input_bits,
     sensor_mode,
 )
-from wheelload.estimators.loops.compiled import ColumnLoop, FlagRule
+from wheelload.estimators.loops.compiled import ColumnLayout, ColumnLoop, FlagRule
 from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS
 from wheelload.models.conventions import WHEELS
@@ -221,7 +222,7 @@ class LogStream:
     @property
     def sample_rate(self) -> float:
         """Median sample rate [Hz]."""
-        return float(1.0 / np.median(np.diff(self.t)))
+        return float(1.0 / order_statistics.median(np.diff(self.t)))
 
     def mode(self) -> str:
         """The sensor set in words (as :meth:`Signals.mode`)."""
@@ -238,7 +239,7 @@ class LogStream:
         self, kf: TwoStageKF, *, faults: list[SensorFault] | None = None
     ) -> Iterator[EstimateChunk]:
         """The estimates, chunk by chunk; ``faults`` receives the isolated sensor faults."""
-        loop = column_loop(kf.step_function)
+        loop = filter_loop(kf)
         state0 = kf.initial_state()
         state = [np.ascontiguousarray(np.ravel(a, order="F"), dtype=float)
                  for a in (state0.x, state0.P, state0.m)]  # fmt: skip
@@ -346,24 +347,43 @@ def _fault(channel: str, start: float, end: float, statistic: float) -> SensorFa
     return SensorFault(channel=channel, start=start, end=end, statistic=statistic)
 
 
-@functools.lru_cache(maxsize=4)
-def column_loop(step) -> ColumnLoop:
-    """The filter step over column arrays, with the status bits of ``TwoStageKF.run``."""
+def filter_loop(kf: TwoStageKF) -> ColumnLoop:
+    """The column loop of ``kf``'s step: for the default step the stored loop (read
+    without CasADi once built, :meth:`ColumnLoop.stored`), else :func:`column_loop`."""
+    if kf.default_step:
+        return _stored_loop()
+    return column_loop(kf.step_function)
+
+
+def _layout(used: int) -> ColumnLayout:
+    """Loads, their std, residuals and the monitor's columns; the status bits of
+    ``TwoStageKF.run`` (``used``: the entries of the step's ``used`` output)."""
     update = StepFlag.update_flags()
-    used = STEP_OUTPUT_NAMES.index("used")
     rules = [FlagRule(output="used", element=i, below=True, bit=int(flag))
-             for i, flag in enumerate(update[: step.nnz_out(used)])]  # fmt: skip
+             for i, flag in enumerate(update[:used])]  # fmt: skip
     rules += [FlagRule(output="status", element=i, below=False, bit=int(flag))
               for i, flag in enumerate(StepFlag.guard_flags())]  # fmt: skip
-    return ColumnLoop(
-        step,
-        N_CARRIED,
+    return ColumnLayout(
+        n_accum=N_CARRIED,
         values="u",
         validity="u_valid",
         interval="dt",
         columns=LOOP_COLUMNS,
         rules=tuple(rules),
     )
+
+
+@functools.cache
+def _stored_loop() -> ColumnLoop:
+    """The default step's loop; its ``used`` output has :data:`UPDATE_ROWS` and the model
+    terms' dropped entries (every flag :meth:`StepFlag.update_flags` names)."""
+    return ColumnLoop.stored(STEP_FUNCTION, _layout(len(StepFlag.update_flags())))
+
+
+@functools.lru_cache(maxsize=4)
+def column_loop(step) -> ColumnLoop:
+    """The filter step over column arrays, with the status bits of ``TwoStageKF.run``."""
+    return ColumnLoop(step, _layout(step.nnz_out(STEP_OUTPUT_NAMES.index("used"))))
 
 
 def scan_log(
@@ -460,7 +480,9 @@ def scan_log(
     az = az_store.array()
     del az_store
     # the column is ours: its median without a copy
-    az_median = np.nanmedian(az, overwrite_input=True) if np.any(np.isfinite(az)) else np.nan
+    az_median = (
+        order_statistics.nanmedian(az, overwrite_input=True) if np.any(np.isfinite(az)) else np.nan
+    )
     del az
     check_units(
         np.array([[0.0, 0.0, az_median]]),

@@ -33,58 +33,18 @@ from __future__ import annotations
 import dataclasses
 
 import casadi as ca
-import numpy as np
 
 from wheelload.estimators.kernels.kalman import sequential_update_innovations, symmetrise
-from wheelload.models import GATES, INPUTS, ModelParameters, Vehicle, equilibrium_function
+from wheelload.estimators.kf.tuning import PAYLOAD_TUNING
+from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function
 from wheelload.models.loaded_vehicle import (
     PAYLOAD_STATES,
     loaded_parameters_function,
     mass_properties,
 )
 
-#: The payload filter's entries of the tuning vector, in order.
-PAYLOAD_TUNING = (
-    "payload_estimate",
-    "payload_mass_std",
-    "payload_position_std_x",
-    "payload_position_std_y",
-    "payload_position_std_z",
-    "payload_residual_density_vertical",
-    "payload_residual_density_pitch",
-    "payload_residual_density_roll",
-    "payload_drift_density",
-    "payload_standstill_density",
-    "payload_standstill_speed",
-    "payload_gate",
-    "payload_acceleration_scale_vertical",
-    "payload_acceleration_scale_pitch",
-    "payload_acceleration_scale_roll",
-)
 N_PAYLOAD = len(PAYLOAD_STATES)
 _VX, _AX, _AY = (INPUTS.index(name) for name in ("vx", "ax", "ay"))
-
-
-def payload_tuning(vehicle: Vehicle) -> np.ndarray:
-    """The vehicle file's ``[filter.payload]`` in :data:`PAYLOAD_TUNING` order.
-
-    Estimation is off where the file says travel is zeroed at the start of a log.
-    """
-    t = vehicle.filter.payload
-    on = t.estimate and t.travel_from_reference
-    return np.array(
-        [
-            float(on),
-            t.mass_std,
-            *t.position_std,
-            *t.residual_density,
-            t.drift_density,
-            t.standstill_density,
-            t.standstill_speed,
-            t.gate,
-            *t.acceleration_scale,
-        ]  # fmt: skip
-    )
 
 
 def _settings(tuning: ca.SX):
@@ -120,6 +80,8 @@ def predict(theta, P, started, u, valid, dt, tuning):
 
 @dataclasses.dataclass(frozen=True)
 class Update:
+    """The payload update: parameters, covariance, rows used."""
+
     theta: ca.SX
     P: ca.SX
     used: ca.SX  # (3,) rows used

@@ -36,6 +36,7 @@ from wheelload.estimators.kf import (
     plausibility,
     reported_std,
 )
+from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import (
     GUARD_TUNING,
     PAYLOAD_SLICE,
@@ -67,7 +68,6 @@ from wheelload.models.measurement_noise import DENSITIES as NOISE_DENSITY_ORDER
 from wheelload.models.measurement_noise import measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 
-STEP_NAME = "wheelload_kf_step"
 _NOISE_INDEX = [TUNING_INDEX[name] for name in NOISE_DENSITY_ORDER]
 _RC_INDEX = [TUNING_INDEX[f"constraint_noise_{row}"] for row in ("vertical", "pitch", "roll")]
 _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
@@ -337,16 +337,6 @@ def _status(record, available, valid_raw, in_range, fault, limited, jump, held, 
     )
 
 
-STEP_INPUT_NAMES = ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"]
-STEP_OUTPUT_NAMES = [
-    "x_next", "P_next", "m_next", "std", "residual", "used", "z", "innovation",
-    "innovation_variance", "status", "fault_statistic", "fault", "mass_properties",
-    "mass_properties_std",
-]  # fmt: skip
-#: The step's carried state: x, P and the monitor m.
-N_CARRIED = 3
-
-
 def step_function(
     suspension: ca.Function | None = None,
     equilibrium: ca.Function | None = None,
@@ -399,10 +389,3 @@ def without_monitor(step: ca.Function) -> ca.Function:
         names_in,
         kept,
     )
-
-
-#: The seven update rows in update order (innovation outputs).
-UPDATE_ROWS = (
-    "suspension_fl", "suspension_fr", "suspension_rl", "suspension_rr",
-    "vertical", "pitch", "roll",
-)  # fmt: skip

@@ -1,15 +1,15 @@
-"""The default filter step Function kept on disk between runs (serialised CasADi).
+"""The default filter step Function kept on disk between runs, and its inputs and outputs.
 
 Building :func:`~wheelload.estimators.kf.step.step_function` (the models'
 expressions, Jacobians, guards, common subexpressions) takes about 0.2 s of
-every ``wheelload estimate``; loading its serialised form takes about 15 ms.
-The file is named by a hash of the code it is built from (every ``.py`` file
-of ``wheelload.models`` and ``wheelload.estimators``) and of the CasADi
-version, so an edit of any of them builds it again; it lives in the private
-build folder of the compiled loops
-(:func:`~wheelload.models.files.build_folder.build_folder`), written to a temporary
-file and renamed into place. A file that does not load is built again (with a
-one-line note).
+every ``wheelload estimate``; loading its serialised form takes about 10 ms.
+It is stored as any model Function
+(:func:`~wheelload.models.files.function_cache.stored_function`: named by a hash
+of every ``.py`` file of ``wheelload.models`` and ``wheelload.estimators`` and of
+the CasADi version, so an edit of any of them builds it again); a warm estimate
+runs its stored column loop and imports neither the step's module nor the models
+(:data:`STEP_FUNCTION` names the builder; the names of the step's inputs and outputs,
+which its callers read, are here).
 
 Example
 -------
@@ -18,55 +18,30 @@ Example
 
 from __future__ import annotations
 
-import functools
-import hashlib
-import logging
-import os
-from pathlib import Path
-
 import casadi as ca
 
-from wheelload.estimators.kf.step import STEP_NAME, step_function
-from wheelload.models.files.build_folder import build_folder
-from wheelload.models.files.temporaries import temporary_file
+from wheelload.models.files.function_cache import Builder, stored_function
 
-_log = logging.getLogger(__name__)
+#: The step Function's name (and its C symbol).
+STEP_NAME = "wheelload_kf_step"
+STEP_INPUT_NAMES = ["x", "P", "m", "u", "u_valid", "dt", "p", "tuning"]
+STEP_OUTPUT_NAMES = [
+    "x_next", "P_next", "m_next", "std", "residual", "used", "z", "innovation",
+    "innovation_variance", "status", "fault_statistic", "fault", "mass_properties",
+    "mass_properties_std",
+]  # fmt: skip
+#: The step's carried state: x, P and the monitor m.
+N_CARRIED = 3
+#: The seven update rows in update order (innovation outputs).
+UPDATE_ROWS = (
+    "suspension_fl", "suspension_fr", "suspension_rl", "suspension_rr",
+    "vertical", "pitch", "roll",
+)  # fmt: skip
+#: :func:`~wheelload.estimators.kf.step.step_function` with its defaults, by name.
+STEP_FUNCTION = Builder("wheelload.estimators.kf.step", "step_function")
 
 
-def _code_digest() -> str:
-    """Hash of the models' and estimators' source files and of the CasADi version."""
-    import wheelload.estimators
-    import wheelload.models
-
-    digest = hashlib.sha256(f"casadi {ca.__version__}\n".encode())
-    for package in (wheelload.models, wheelload.estimators):
-        root = Path(package.__file__).parent
-        for path in sorted(root.rglob("*.py")):
-            digest.update(f"{path.relative_to(root.parent)}\n".encode())
-            digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
-
-
-@functools.cache
 def default_step_function() -> ca.Function:
     """:func:`~wheelload.estimators.kf.step.step_function` with its defaults, loaded from
     the build folder when this code built it before (module docstring)."""
-    path = build_folder() / f"{STEP_NAME}_{_code_digest()}.casadi"
-    if path.exists():
-        try:
-            return ca.Function.deserialize(path.read_text())
-        except (RuntimeError, OSError, UnicodeDecodeError):  # truncated or corrupt
-            _log.warning("wheelload: note: cached filter step %s does not load: built again", path)
-    step = step_function()
-    try:
-        temporary = temporary_file(path.parent, path.stem, path.suffix)
-    except OSError:
-        return step  # not cached: the step is still returned
-    try:
-        temporary.write_text(step.serialize())
-        os.replace(temporary, path)
-    except OSError:
-        pass  # not cached: the step is still returned
-    finally:
-        temporary.unlink(missing_ok=True)
-    return step
+    return stored_function(STEP_FUNCTION)

@@ -16,12 +16,54 @@ from __future__ import annotations
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
-from wheelload.estimators.kf.payload import PAYLOAD_TUNING, payload_tuning
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle.description import SIGMA_KEYS
+
+#: The payload filter's entries of the tuning vector, in order.
+PAYLOAD_TUNING = (
+    "payload_estimate",
+    "payload_mass_std",
+    "payload_position_std_x",
+    "payload_position_std_y",
+    "payload_position_std_z",
+    "payload_residual_density_vertical",
+    "payload_residual_density_pitch",
+    "payload_residual_density_roll",
+    "payload_drift_density",
+    "payload_standstill_density",
+    "payload_standstill_speed",
+    "payload_gate",
+    "payload_acceleration_scale_vertical",
+    "payload_acceleration_scale_pitch",
+    "payload_acceleration_scale_roll",
+)
+
+
+def payload_tuning(vehicle: Vehicle) -> np.ndarray:
+    """The vehicle file's ``[filter.payload]`` in :data:`PAYLOAD_TUNING` order.
+
+    Estimation is off where the file says travel is zeroed at the start of a log.
+    """
+    t = vehicle.filter.payload
+    on = t.estimate and t.travel_from_reference
+    return np.array(
+        [
+            float(on),
+            t.mass_std,
+            *t.position_std,
+            *t.residual_density,
+            t.drift_density,
+            t.standstill_density,
+            t.standstill_speed,
+            t.gate,
+            *t.acceleration_scale,
+        ]  # fmt: skip
+    )
+
 
 #: Order of the tuning vector.
 TUNING = (
@@ -106,4 +148,4 @@ def nominal_interval(t: np.ndarray) -> float:
     """Median of the positive finite sample intervals of a log (default if none)."""
     dt = np.diff(np.asarray(t, float))
     dt = dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)]
-    return float(np.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL
+    return float(order_statistics.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL

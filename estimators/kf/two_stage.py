@@ -26,8 +26,12 @@ import numpy as np
 from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.monitor_state import MONITOR_SIZE
-from wheelload.estimators.kf.step import N_CARRIED, STEP_OUTPUT_NAMES, UPDATE_ROWS, without_monitor
-from wheelload.estimators.kf.step_cache import default_step_function
+from wheelload.estimators.kf.step_cache import (
+    N_CARRIED,
+    STEP_OUTPUT_NAMES,
+    UPDATE_ROWS,
+    default_step_function,
+)
 from wheelload.estimators.kf.tuning import (
     DEFAULT_SAMPLE_INTERVAL,
     TUNING_INDEX,
@@ -39,7 +43,7 @@ from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
-from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 
 if TYPE_CHECKING:
@@ -141,9 +145,18 @@ class TwoStageKF:
         self.tuning = tuning_vector(
             vehicle, sample_interval or DEFAULT_SAMPLE_INTERVAL, guard_settings
         )
-        if step is None:
-            step = default_step_function()  # step_function(), loaded from disk when built before
-        self.step_function = step
+        self._given_step = step
+
+    @functools.cached_property
+    def step_function(self) -> ca.Function:
+        """The step Function: the constructor's, or :func:`step_function` (loaded from disk
+        when built before, :func:`default_step_function`), on first use."""
+        return default_step_function() if self._given_step is None else self._given_step
+
+    @property
+    def default_step(self) -> bool:
+        """Whether the step is :func:`step_function` with its defaults (none was given)."""
+        return self._given_step is None
 
     def tuning_for(self, sample_interval: float) -> np.ndarray:
         """:attr:`tuning` with the nominal interval ``sample_interval`` [s]."""
@@ -207,6 +220,8 @@ class TwoStageKF:
     @functools.cached_property
     def _step(self) -> ca.Function:
         """:attr:`step_function` without the fault monitor (built on first use)."""
+        from wheelload.estimators.kf.step import without_monitor  # the symbolic models
+
         return without_monitor(self.step_function)
 
     @functools.cached_property
@@ -286,6 +301,7 @@ class TwoStageKF:
     def smooth(self, signals: Signals, state: FilterState | None = None) -> Estimate:
         """Rauch–Tung–Striebel smoothed loads of a whole log (``estimators/kf/smoother.py``)."""
         from wheelload.estimators.kf.smoother import rts_smooth
+        from wheelload.models import GATES, equilibrium_function
 
         filtered, covariances = self.run_with_covariance(signals, state)
         A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)

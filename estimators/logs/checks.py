@@ -34,6 +34,7 @@ Example
 from __future__ import annotations
 
 import enum
+import functools
 import math
 import re
 from collections.abc import Sequence
@@ -42,19 +43,20 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kernels import zero_phase
-from wheelload.models import (
-    GRAVITY,
-    INPUTS,
-    ModelParameters,
-    Vehicle,
-    equilibrium_function,
-    gates_function,
-    suspension_function,
-)
+from wheelload.estimators.kernels import order_statistics, zero_phase
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
+from wheelload.models.files.function_cache import Builder
+from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import TRAVEL, input_index
 
+#: The model Functions the checks evaluate, by name (imported where they are built; a warm
+#: run reads them as compiled C: ``models/files/function_library.py``).
+GATES_FUNCTION = Builder("wheelload.models.terms", "gates_function")
+SUSPENSION_FUNCTION = Builder("wheelload.models.suspension.pseudo_measurement",
+                              "suspension_function")  # fmt: skip
+EQUILIBRIUM_FUNCTION = Builder("wheelload.models.equilibrium", "equilibrium_function")
+RESPONSE_FUNCTION = Builder("wheelload.estimators.logs.checks", "response_jacobians_function")
 WINDOW = 120.0  # s of motion examined, from the first sample with |vx| > MOVING
 MOVING = 2.0  # m/s
 CUTOFF = 1.0  # Hz, quasi-static body response
@@ -155,19 +157,30 @@ def travel_response(vehicle: Vehicle) -> np.ndarray:
     d_{RR} = 0`) that fixes :math:`\Delta d`.
     """
     p = ModelParameters.from_vehicle(vehicle).vector()
-    u = ca.SX.sym("u", len(INPUTS))
-    gates = np.asarray(gates_function()(np.ones(len(INPUTS)), p)[0]).ravel()
-    z = suspension_function()(u, gates, p)
-    A, b = equilibrium_function()(u, gates, p)
+    gates = compiled_function(GATES_FUNCTION)(np.ones(len(INPUTS)), p)[0].ravel()
     travel, acc = input_index(TRAVEL), input_index(("ax", "ay", "az"))
     rest = np.zeros(len(INPUTS))
     rest[INPUTS.index("az")] = GRAVITY
     rest[list(input_index(("az_fl", "az_fr", "az_rl", "az_rr")))] = GRAVITY
-    jacobians = ca.Function("J", [u], [A, ca.jacobian(z, u), ca.jacobian(b, u)])(rest)
-    A, Z, Bu = (np.asarray(m) for m in jacobians)
+    A, Z, Bu = compiled_function(RESPONSE_FUNCTION)(rest, gates, p)
     K, L = Z[:, travel], Z[:, acc]
     system = np.vstack([A @ K - Bu[:, travel], [1.0, -1.0, -1.0, 1.0]])
     return np.linalg.solve(system, np.vstack([Bu[:, acc] - A @ L, np.zeros((1, 3))]))
+
+
+def response_jacobians_function() -> ca.Function:
+    """``travel_response_jacobians(u, gates, p) -> (A, dz/du, db/du)``: the equilibrium
+    matrix and the Jacobians of the pseudo-measured loads ``z`` and of ``b`` (eq. 15-16)."""
+    from wheelload.models import GATES, equilibrium_function, suspension_function
+
+    u = ca.SX.sym("u", len(INPUTS))
+    gates = ca.SX.sym("gates", len(GATES))
+    p = ca.SX.sym("p", len(ModelParameters.names()))
+    z = suspension_function()(u, gates, p)
+    A, b = equilibrium_function()(u, gates, p)
+    return ca.Function("travel_response_jacobians", [u, gates, p],
+                       [A, ca.jacobian(z, u), ca.jacobian(b, u)], ["u", "gates", "p"],
+                       ["A", "dz_du", "db_du"])  # fmt: skip
 
 
 def _fill(values: np.ndarray) -> np.ndarray | None:
@@ -181,18 +194,29 @@ def _fill(values: np.ndarray) -> np.ndarray | None:
 
 def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Low-passed, decimated channels over the examined window (missing channels dropped)."""
-    fs = 1.0 / float(np.median(np.diff(t)))
+    fs = 1.0 / float(order_statistics.median(np.diff(t)))
     b, a = zero_phase.butter2(min(CUTOFF / (0.5 * fs), 0.9))
     step = max(int(fs / RATE), 1)
     result = {}
     for name, values in channels.items():
-        filled = _fill(values)
-        if filled is None or filled.size <= 3 * max(len(a), len(b)):
-            continue
-        despiked = zero_phase.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
-        result[name] = zero_phase.filtfilt(b, a, despiked)[::step]
+        low = _low_passed(np.asarray(values, float).tobytes(), tuple(b), tuple(a), step)
+        if low is not None:
+            result[name] = low
     result["t"] = t[::step]
     return result
+
+
+@functools.lru_cache(maxsize=32)
+def _low_passed(values: bytes, b: tuple, a: tuple, step: int) -> np.ndarray | None:
+    """One channel of :func:`quasi_static` (``values``: its float64 bytes), read-only, or
+    None; kept, as the wiring and plausibility checks examine the same window."""
+    filled = _fill(np.frombuffer(values))
+    if filled is None or filled.size <= 3 * max(len(a), len(b)):
+        return None
+    despiked = zero_phase.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
+    low = zero_phase.filtfilt(np.array(b), np.array(a), despiked)[::step]
+    low.flags.writeable = False
+    return low
 
 
 def _decisive_correlation(t: np.ndarray) -> float:
@@ -232,6 +256,8 @@ def _unit_of(ratio: float) -> str | None:
 
 @dataclass(frozen=True)
 class _Hypothesis:
+    """A wiring mistake and the signs it predicts."""
+
     explanation: str
     wheel_signs: dict[str, tuple[int, int, int, int]]  # per axis, predicted agreement
     lateral: int = +1  # sign of vx wz against ay

@@ -48,10 +48,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.logs.checks import (
+    EQUILIBRIUM_FUNCTION,
+    GATES_FUNCTION,
     KINEMATIC_CORRELATION,
     MIN_STD,
     RATE,
+    SUSPENSION_FUNCTION,
     Check,
     CheckReport,
     Outcome,
@@ -62,15 +66,8 @@ from wheelload.estimators.logs.checks import (
     travel_response,
     undecided_check,
 )
-from wheelload.models import (
-    GRAVITY,
-    INPUTS,
-    ModelParameters,
-    Vehicle,
-    equilibrium_function,
-    gates_function,
-    suspension_function,
-)
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
+from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import WHEELS
 
 MAX_RATE = 5000.0  # Hz, above it no vehicle logger of body and suspension signals
@@ -101,7 +98,7 @@ def _check(name: str, statistic: float, failed: bool, note: str) -> Check:
 
 def sample_rate_check(t: np.ndarray) -> tuple[Check, str | None]:
     """The median sample rate against :data:`MIN_RATE`, :data:`MAX_RATE`."""
-    rate = float(1.0 / np.median(np.diff(t)))
+    rate = float(1.0 / order_statistics.median(np.diff(t)))
     name = "sample rate"
     if rate > MAX_RATE:
         return _check(name, rate, True, "Hz"), (
@@ -132,16 +129,15 @@ def _inputs(q: dict[str, np.ndarray]) -> np.ndarray:
 
 def _rows(u: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``A`` (3 x 4), the pseudo-measured loads with and without the travel (4 x n), ``b``."""
-    n = u.shape[1]
     valid = np.isfinite(u).astype(float)
-    gates = np.asarray(gates_function().map(n)(valid, p)[0])
+    gates = compiled_function(GATES_FUNCTION).map(valid, p)[0]
     u = np.nan_to_num(u)
     without = u.copy()
     without[[INPUTS.index(f"d_{w}") for w in WHEELS]] = 0.0
-    suspension = suspension_function().map(n)
-    z = np.asarray(suspension(u, gates, p))
-    z0 = np.asarray(suspension(without, gates, p))
-    A, b = equilibrium_function().map(n)(u, gates, p)
+    suspension = compiled_function(SUSPENSION_FUNCTION).map
+    (z,) = suspension(u, gates, p)
+    (z0,) = suspension(without, gates, p)
+    A, b = compiled_function(EQUILIBRIUM_FUNCTION).map(u, gates, p)
     return np.asarray(A)[:, :4], np.column_stack([z, z0]), np.asarray(b)
 
 
@@ -241,7 +237,9 @@ def lift_checks(
     if not steady.any():
         checks.append(undecided_check(name, "no steady driving"))
         return checks, mistakes
-    error = float(np.median((np.sum(z, axis=0) - parameters.mass * q["az"] + lift)[steady]))
+    error = float(
+        order_statistics.median((np.sum(z, axis=0) - parameters.mass * q["az"] + lift)[steady])
+    )
     failed = abs(error) > MAX_WEIGHT_ERROR * weight
     checks.append(_check(name, error / weight, failed, "(sum of loads - (m az - lift)) / m g"))
     if failed:

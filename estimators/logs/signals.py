@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators.kernels import first_order, kinematic
+from wheelload.estimators.kernels import first_order, kinematic, order_statistics
 from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
 from wheelload.estimators.result import StepFlag
 from wheelload.models.conventions import GRAVITY, WHEELS
@@ -187,7 +187,7 @@ class Signals:
     @property
     def sample_rate(self) -> float:
         """Median sample rate [Hz]."""
-        return float(1.0 / np.median(np.diff(self.t)))
+        return float(1.0 / order_statistics.median(np.diff(self.t)))
 
     def to_frame(self) -> pd.DataFrame:
         """The signals as a DataFrame with the log's column names (no ``az`` where assumed)."""
@@ -432,7 +432,7 @@ def signals_from_frame(
 def check_time_column(t: np.ndarray, source: str) -> None:
     """A log's time column: finite, increasing, in seconds (one-line :class:`LogError`)."""
     steps = _check_time(t, source)
-    step = float(np.median(steps, overwrite_input=True))  # the steps are ours: no copy
+    step = float(order_statistics.median(steps, overwrite_input=True))  # the steps are ours
     if step > MAX_SAMPLE_INTERVAL:
         raise LogError(
             f"{source}: column 't' advances by {step:.4g} per sample: more than "
@@ -460,7 +460,7 @@ def _check_time(t: np.ndarray, source: str) -> np.ndarray:
 
 def check_units(acc, d, v, vx, source: str) -> None:
     """Report values that look like the wrong unit rather than guess."""
-    az = np.nanmedian(acc[:, 2]) if np.any(np.isfinite(acc[:, 2])) else np.nan
+    az = order_statistics.nanmedian(acc[:, 2]) if np.any(np.isfinite(acc[:, 2])) else np.nan
     if np.isfinite(az) and 0.5 < abs(az) < 2.0:
         raise LogError(
             f"{source}: column 'az' has median {az:.3g}: it looks like g units; "
@@ -501,7 +501,7 @@ def derive_velocities(
     rest on the first sample after a gap, so a gap makes no false velocity.
     """
     dt = np.diff(t)
-    median = float(np.median(dt))
+    median = float(order_statistics.median(dt))
     if not np.isfinite(d).any():
         return np.full(d.shape, np.nan)
     differentiator = Differentiator(dt, d.shape[1], cutoff, source, median=median)
@@ -558,7 +558,7 @@ class Differentiator(ChunkFilter):
         median: float | None = None,
     ) -> None:
         super().__init__(channels)
-        median = float(np.median(dt)) if median is None else median
+        median = float(order_statistics.median(dt)) if median is None else median
         if np.max(np.abs(dt - median)) > 0.05 * median:
             raise LogError(
                 f"{source}: time stamps are not uniform enough to derive suspension velocities; "
@@ -617,7 +617,7 @@ class RateEstimator(ChunkFilter):
         settings: RateDerivativeFilter = RateDerivativeFilter(),
     ) -> None:
         super().__init__(channels)
-        median = float(np.median(dt))
+        median = float(order_statistics.median(dt))
         if np.max(np.abs(dt - median)) > 0.05 * median:
             raise LogError(
                 f"{source}: time stamps are not uniform enough to estimate body-rate "

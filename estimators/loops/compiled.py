@@ -5,18 +5,23 @@ sample after another and carries the accumulated outputs (the filter state)
 to the next sample, like ``Function.mapaccum`` but without its per-call
 copying. The shared library is built with the system C compiler once per
 step Function, cached in a private per-user build folder by the hash of its
-source (so it is never stale), and called through ctypes on numpy arrays.
+source (so it is never stale; a stored step's column loop by the hash of the code
+that generates the source, :func:`~wheelload.models.files.build_folder.keyed_library`,
+which spares generating it), and called through ctypes on numpy arrays.
 """
 
 from __future__ import annotations
 
 import ctypes
+import functools
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from wheelload.models.files.build_folder import shared_library
+from wheelload.models.files.build_folder import keyed_library, shared_library
+from wheelload.models.files.function_cache import builder_name, stored_stem
+from wheelload.models.files.function_library import Signature, stored_library
 
 LOOP = """
 #include <string.h>
@@ -221,19 +226,18 @@ class FlagRule:
     bit: int
 
 
-def _column_source(
-    step: ca.Function,
-    n_accum: int,
-    inputs: tuple[int, int, int],
-    fixed: tuple[int, ...],
-    columns: tuple[int, ...],
-    rules: tuple[FlagRule, ...],
-) -> str:
-    values, validity, interval = inputs
-    names_out = step.name_out()
+def _column_source(step: ca.Function, layout: ColumnLayout) -> str:
+    """CasADi's C of ``step`` and the column loop around it (:data:`COLUMN_LOOP`)."""
+    n_accum = layout.n_accum
+    generator = ca.CodeGenerator(f"{step.name()}.c", {"with_header": False})
+    generator.add(step)
+    names_in, names_out = step.name_in(), step.name_out()
+    values, validity, interval = (names_in.index(name) for name in layout.inputs())
+    fixed = layout.fixed(names_in)
+    columns = tuple(names_out.index(name) for name in layout.columns)
     buffers, assign, finish = _carried(step, n_accum, "state", "state")
     record = []
-    wanted = set(columns) | {names_out.index(rule.output) for rule in rules}
+    wanted = set(columns) | {names_out.index(rule.output) for rule in layout.rules}
     for i in sorted(wanted - set(range(n_accum))):
         buffers.append(f"    casadi_real out{i}[{step.nnz_out(i)}];")
         assign.append(f"        res[{i}] = out{i};")
@@ -247,14 +251,14 @@ def _column_source(
             record.append(f"        if (columns[{column}]) columns[{column}][k] = {source}[{e}];")
             column += 1
     lines = []
-    for rule in rules:
+    for rule in layout.rules:
         i = names_out.index(rule.output)
         source = f"acc{i}[nxt]" if i < n_accum else f"out{i}"
         test = "<" if rule.below else ">"
         lines.append(
             f"            if ({source}[{rule.element}] {test} 0.5) f |= (uint32_t){rule.bit}u;"
         )
-    return COLUMN_LOOP.format(
+    return generator.dump() + COLUMN_LOOP.format(
         **_step_fields(step),
         n_values=step.nnz_in(values),
         buffers="\n".join(buffers),
@@ -263,6 +267,28 @@ def _column_source(
         rules="\n".join(lines),
         finish="\n".join(finish),
     )
+
+
+@dataclass(frozen=True, kw_only=True)
+class ColumnLayout:
+    """What a :class:`ColumnLoop` feeds the step and takes from it: the first ``n_accum``
+    inputs and outputs carried, the per-sample inputs ``values``, ``validity``,
+    ``interval``, the output ``columns`` and the status bits' ``rules``."""
+
+    n_accum: int
+    values: str
+    validity: str
+    interval: str
+    columns: tuple[str, ...]
+    rules: tuple[FlagRule, ...]
+
+    def inputs(self) -> tuple[str, str, str]:
+        return (self.values, self.validity, self.interval)
+
+    def fixed(self, names_in) -> tuple[int, ...]:
+        """The fixed inputs: neither carried nor per sample."""
+        return tuple(i for i in range(self.n_accum, len(names_in))
+                     if names_in[i] not in self.inputs())  # fmt: skip
 
 
 class ColumnLoop:
@@ -277,44 +303,64 @@ class ColumnLoop:
     its own column array; each :class:`FlagRule` sets a bit of the ``uint32``
     status. The arithmetic is the step's own generated C, as in
     :class:`CompiledLoop`, so both give the same numbers to the bit.
+    :class:`ColumnLayout` names the inputs and outputs; :meth:`stored` gives the loop of a
+    stored step without CasADi once built.
     """
 
-    def __init__(
-        self,
-        step: ca.Function,
-        n_accum: int,
-        *,
-        values: str,
-        validity: str,
-        interval: str,
-        columns: tuple[str, ...],
-        rules: tuple[FlagRule, ...],
-    ) -> None:
-        names_in, names_out = step.name_in(), step.name_out()
-        for name in (values, validity, interval):
-            if name not in names_in[n_accum:]:
-                raise ValueError(f"{step.name()} has no per-sample input named '{name}'")
-        for name in (*columns, *(rule.output for rule in rules)):
-            if name not in names_out:
-                raise ValueError(f"{step.name()} has no output named '{name}'")
-        inputs = tuple(names_in.index(name) for name in (values, validity, interval))
-        if step.nnz_in(inputs[1]) != step.nnz_in(inputs[0]) or step.nnz_in(inputs[2]) != 1:
+    def __init__(self, step: ca.Function, layout: ColumnLayout) -> None:
+        self._set_up(Signature.of(step), layout)
+        name = f"{step.name()}_columns"
+        stem = stored_stem(step)
+        if stem is None:
+            library = shared_library(_column_source(step, layout), name)
+        else:  # a stored step: the code determines it, and with the layout the source
+            source = functools.partial(_column_source, step, layout)
+            library = keyed_library(f"{stem} {name} {layout!r}", source, name)
+        self._bind(library)
+
+    @classmethod
+    def stored(cls, builder, layout: ColumnLayout) -> ColumnLoop:
+        """The loop of ``builder()``'s stored step
+        (:func:`~wheelload.models.files.function_cache.stored_function`): its signature and
+        library read without CasADi when this code built them before
+        (:func:`~wheelload.models.files.function_library.stored_library`)."""
+        loop = cls.__new__(cls)
+        source = functools.partial(_column_source, layout=layout)
+        name = f"{builder_name(builder)[1]}_columns"
+        signature, library = stored_library(builder, name, f"columns {layout!r}", source)
+        loop._set_up(signature, layout)
+        loop._bind(library)
+        return loop
+
+    def _set_up(self, signature: Signature, layout: ColumnLayout) -> None:
+        """Check ``layout`` against the step's ``signature`` and keep the sizes it gives."""
+        names_in, names_out, name = signature.names_in, signature.names_out, signature.name
+        n_accum = layout.n_accum
+        for input_name in layout.inputs():
+            if input_name not in names_in[n_accum:]:
+                raise ValueError(f"{name} has no per-sample input named '{input_name}'")
+        for output in (*layout.columns, *(rule.output for rule in layout.rules)):
+            if output not in names_out:
+                raise ValueError(f"{name} has no output named '{output}'")
+        for rule in layout.rules:
+            if not 0 <= rule.element < signature.nnz_out[names_out.index(rule.output)]:
+                raise ValueError(f"{name}: output '{rule.output}' has no element {rule.element}")
+        inputs = tuple(names_in.index(i) for i in layout.inputs())
+        nnz_in = signature.nnz_in
+        if nnz_in[inputs[1]] != nnz_in[inputs[0]] or nnz_in[inputs[2]] != 1:
             raise ValueError(
-                f"{step.name()}: '{validity}' must match '{values}', '{interval}' be 1"
+                f"{name}: '{layout.validity}' must match '{layout.values}', "
+                f"'{layout.interval}' be 1"
             )
-        self.step = step
+        self.signature = signature
         self.n_accum = n_accum
-        self.n_values = step.nnz_in(inputs[0])
-        self.fixed = tuple(i for i in range(n_accum, step.n_in()) if i not in inputs)
-        self.columns = tuple(names_out.index(name) for name in columns)
-        self.n_columns = sum(step.nnz_out(i) for i in self.columns)
-        generator = ca.CodeGenerator(f"{step.name()}.c", {"with_header": False})
-        generator.add(step)
-        source = generator.dump() + _column_source(
-            step, n_accum, inputs, self.fixed, self.columns, rules
-        )
-        library = shared_library(source, f"{step.name()}_columns")
-        self._loop = getattr(library, f"{step.name()}_columns")
+        self.n_values = nnz_in[inputs[0]]
+        self.fixed = layout.fixed(names_in)
+        self.columns = tuple(names_out.index(c) for c in layout.columns)
+        self.n_columns = sum(signature.nnz_out[i] for i in self.columns)
+
+    def _bind(self, library: ctypes.CDLL) -> None:
+        self._loop = getattr(library, f"{self.signature.name}_columns")
         self._loop.restype = ctypes.c_int
 
     def __call__(
@@ -335,21 +381,25 @@ class ColumnLoop:
         ``len(t)`` per output element, or ``None`` to leave it out; ``flags``:
         contiguous ``uint32`` of ``len(t)``.
         """
-        step = self.step
+        signature = self.signature
         n = len(t)
         t = np.ascontiguousarray(t, dtype=np.float64)
         if len(state) != self.n_accum or any(
-            a.dtype != np.float64 or not a.flags.c_contiguous or a.size != step.nnz_out(i)
+            a.dtype != np.float64 or not a.flags.c_contiguous or a.size != signature.nnz_out[i]
             for i, a in enumerate(state)
         ):
-            raise ValueError(f"{step.name()}: state must be {self.n_accum} contiguous float arrays")
+            raise ValueError(
+                f"{signature.name}: state must be {self.n_accum} contiguous float arrays"
+            )
         fixed = [np.ascontiguousarray(a, float).ravel(order="F") for a in fixed]
         for array, i in zip(fixed, self.fixed, strict=True):
-            if array.size != step.nnz_in(i):
-                raise ValueError(f"input '{step.name_in(i)}' must have {step.nnz_in(i)} values")
+            if array.size != signature.nnz_in[i]:
+                raise ValueError(
+                    f"input '{signature.names_in[i]}' must have {signature.nnz_in[i]} values"
+                )
         if len(values) != self.n_values or len(columns) != self.n_columns:
             raise ValueError(
-                f"{step.name()}: give {self.n_values} value and {self.n_columns} output columns"
+                f"{signature.name}: give {self.n_values} value and {self.n_columns} output columns"
             )
         strides = np.zeros(self.n_values, dtype=np.int64)
         for j, array in enumerate(values):
@@ -380,4 +430,4 @@ class ColumnLoop:
             ctypes.c_uint32(base_flags),
         )
         if status:
-            raise RuntimeError(f"{step.name()} failed in the compiled loop")
+            raise RuntimeError(f"{signature.name} failed in the compiled loop")

@@ -67,6 +67,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf.limits import variance_ceiling
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
@@ -435,7 +436,7 @@ class MovingHorizonEstimator:
         """
         n = len(signals)
         dt = sample_intervals(signals.t)
-        state = state or self.initial_state(float(np.median(dt)))
+        state = state or self.initial_state(float(order_statistics.median(dt)))
         fallback, covariances = self.filter.run_with_covariance(signals, state.kf)
         u = input_matrix(signals)
         valid = np.isfinite(u).astype(float)

@@ -1,1 +1,2 @@
-"""Files the library writes: the private build folder, owner-named temporaries."""
+"""Files the library writes and reads back (the private build folder, stored Functions and
+their compiled C, owner-named temporaries), and package faces that import on first use."""

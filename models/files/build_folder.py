@@ -21,10 +21,9 @@ import fcntl
 import hashlib
 import logging
 import os
-import shutil
 import stat
-import subprocess
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 from wheelload.models.files.temporaries import remove_stale, temporary_file
@@ -118,6 +117,9 @@ def _compile(
     """The bytes ``command`` makes of ``sources`` (file name: text; the first is compiled, the
     others are the headers it includes), in a temporary folder of the build folder (fixed file
     names inside it, so that the same sources give the same bytes)."""
+    import shutil  # only to build: a warm run loads what is built
+    import subprocess
+
     folder = target.parent
     work = temporary_file(folder, target.stem, ".d")
     work.unlink()
@@ -146,18 +148,17 @@ def _compile(
         shutil.rmtree(work, ignore_errors=True)
 
 
-def _cached_build(sources: dict[str, str], name: str, suffix: str, command: tuple[str, ...],
-                  load, purpose: str):  # fmt: skip
-    """``load`` of what ``command`` makes of ``sources`` (:func:`_compile`), made once.
+def _cached_build(key: str, sources: Callable[[], dict[str, str]], name: str, suffix: str,
+                  command: tuple[str, ...], load, purpose: str):  # fmt: skip
+    """``load`` of what ``command`` makes of ``sources()`` (:func:`_compile`), made once.
 
-    The output is named by the hash of the command and the sources, built under
-    :func:`build_folder`, its record (size and SHA-256) and then the output renamed
-    into place. A cached output is used only when it matches its record
-    (:func:`checked_library`); one that does not, or does not load, is built again
-    with a one-line note.
+    The output is named by the hash of the command and ``key`` (the sources' text, or what
+    determines them: :func:`keyed_library`), built under :func:`build_folder`, its record
+    (size and SHA-256) and then the output renamed into place. A cached output is used only
+    when it matches its record (:func:`checked_library`); one that does not, or does not
+    load, is built again with a one-line note.
     """
-    text = " ".join(command) + "".join(f"\n{file}\n{body}" for file, body in sources.items())
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    digest = hashlib.sha256((" ".join(command) + key).encode()).hexdigest()[:16]
     folder = build_folder()
     target = folder / f"{name}_{digest}{suffix}"
     with _held(target):
@@ -171,7 +172,7 @@ def _cached_build(sources: dict[str, str], name: str, suffix: str, command: tupl
                     problem = f"it does not load ({first})"
             _log.warning("wheelload: note: cached library %s is rebuilt: %s", target, problem)
         remove_stale(folder)
-        data = _compile(sources, target, command, purpose)
+        data = _compile(sources(), target, command, purpose)
         # The record first: an output in place always has its record, and a crash between
         # the two renames leaves a record without its output (built again, never used).
         _put(folder, _sidecar(target), _record(data).encode("ascii"))
@@ -197,7 +198,13 @@ COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
 def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
     """``source`` compiled once by ``command`` (gcc and its flags) into a shared library
     loaded with ``load`` (:func:`_cached_build`). ``purpose`` completes "gcc is needed to ..."."""
-    return _cached_build({f"{name}.c": source}, name, ".so", command, load, purpose)
+    sources = {f"{name}.c": source}
+    return _cached_build(_sources_key(sources), lambda: sources, name, ".so", command, load,
+                         purpose)  # fmt: skip
+
+
+def _sources_key(sources: dict[str, str]) -> str:
+    return "".join(f"\n{file}\n{body}" for file, body in sources.items())
 
 
 def cached_object(source: Path, headers: tuple[Path, ...], command: tuple[str, ...]) -> Path:
@@ -207,7 +214,8 @@ def cached_object(source: Path, headers: tuple[Path, ...], command: tuple[str, .
     programs link it."""
     files = {path.name: path.read_text() for path in (source, *headers)}
     name = source.stem
-    return _cached_build(files, name, ".o", (*command, "-c"), Path, "build the program")
+    return _cached_build(_sources_key(files), lambda: files, name, ".o", (*command, "-c"), Path,
+                         "build the program")  # fmt: skip
 
 
 def cached_function(function):
@@ -241,4 +249,26 @@ def shared_library(
     """``source`` compiled once (:func:`cached_library`) and loaded with ctypes."""
     return cached_library(
         source, name, compiler, lambda library: ctypes.CDLL(str(library)), purpose
+    )
+
+
+def keyed_library(
+    key: str,
+    source: Callable[[], str],
+    name: str,
+    purpose: str = "run the filter over a log in compiled code",
+) -> ctypes.CDLL:
+    """As :func:`shared_library`, named by ``key`` instead of the source's text: ``source()``
+    is generated only when the library is built. ``key`` must determine the source (a hash
+    of the code that generates it, :func:`~wheelload.models.files.function_cache.code_digest`,
+    and the arguments it is generated from), so that a changed source never meets a
+    library built from another."""
+    return _cached_build(
+        f"\nkey {key}",
+        lambda: {f"{name}.c": source()},
+        name,
+        ".so",
+        COMPILER,
+        lambda library: ctypes.CDLL(str(library)),
+        purpose,
     )

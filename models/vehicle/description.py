@@ -19,7 +19,9 @@ Example
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+import sys
 import types
 import typing
 from dataclasses import dataclass
@@ -51,6 +53,8 @@ Vector3 = tuple[float, float, float]
 
 @dataclass(frozen=True, kw_only=True)
 class Mass:
+    """``[mass]``: total, sprung and unsprung masses, sprung-body inertia."""
+
     total: float  # kg, sprung + unsprung
     sprung: float  # kg
     unsprung_front: float  # kg, both front corners together
@@ -74,6 +78,8 @@ class Mass:
 
 @dataclass(frozen=True, kw_only=True)
 class Geometry:
+    """``[geometry]``: wheelbase, CG position, tracks, IMU position and orientation."""
+
     wheelbase: float  # m
     lf: float  # m, sprung CG to front axle
     lr: float  # m, sprung CG to rear axle
@@ -96,6 +102,8 @@ class Geometry:
 
 @dataclass(frozen=True, kw_only=True)
 class Tyres:
+    """``[tyres]``: radii and vertical stiffness per axle."""
+
     radius_front: float  # m, unloaded
     radius_rear: float  # m
     vertical_stiffness_front: float  # N/m
@@ -108,6 +116,8 @@ class Tyres:
 
 @dataclass(frozen=True, kw_only=True)
 class Aero:
+    """``[aero]``: air density, reference area, lift and drag, application point."""
+
     air_density: float  # kg/m^3
     reference_area: float  # m^2
     lift_coefficient: float  # -, > 0 is lift
@@ -122,6 +132,8 @@ class Aero:
 
 @dataclass(frozen=True, kw_only=True)
 class AxleSuspension:
+    """``[suspension.front]`` or ``[suspension.rear]``: springs, dampers, bar, links, stops."""
+
     spring_rate: float  # N/m at the wheel
     damper_push: float  # N s/m, compression (v > 0)
     damper_pull: float  # N s/m, rebound (v < 0)
@@ -150,6 +162,8 @@ class AxleSuspension:
 
 @dataclass(frozen=True, kw_only=True)
 class Suspension:
+    """``[suspension]``: both axles and the roll split."""
+
     front: AxleSuspension
     rear: AxleSuspension
     # Front share of the lateral load transfer (models/roll_split.py); default:
@@ -259,6 +273,8 @@ class PayloadTuning:
 
 @dataclass(frozen=True, kw_only=True)
 class FilterTuning:
+    """``[filter]``: the KF's noise densities, initial std and the online payload."""
+
     process_noise_density: float  # N^2/s:  Q = q dt I
     suspension_noise_density: float  # N^2 s: Rs = r_s / dt I
     constraint_noise_density: Vector3  # [N^2 s, N^2 m^2 s, N^2 m^2 s]: Rc = diag(r_c) / dt
@@ -418,8 +434,22 @@ def _convert(value: object, kind: object, key: str) -> object:
     raise TypeError(f"unsupported field type {kind} for key '{key}'")
 
 
+@functools.cache
+def field_types(cls: type) -> dict[str, object]:
+    """``typing.get_type_hints`` of a dataclass of the vehicle file: each field's annotation
+    evaluated in the class's module, each annotation's text once (a vehicle file has about
+    130 fields, most of them ``float``)."""
+    fields = dataclasses.fields(cls)
+    return {field.name: _annotation(field.type, cls.__module__) for field in fields}
+
+
+@functools.cache
+def _annotation(text: str, module: str) -> object:
+    return eval(text, vars(sys.modules[module]))  # our own annotations, as get_type_hints
+
+
 def _build(cls: type, table: dict, prefix: str) -> object:
-    hints = typing.get_type_hints(cls)
+    hints = field_types(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = sorted(set(table) - set(fields))
     if unknown:

@@ -24,6 +24,8 @@ Quad = tuple[float, float, float, float]
 
 @dataclass(frozen=True, kw_only=True)
 class Body:
+    """The plant's body: its width."""
+
     width: float  # m, body width (cone lanes of ISO 3888-1)
 
     def _check(self) -> None:
@@ -32,6 +34,8 @@ class Body:
 
 @dataclass(frozen=True, kw_only=True)
 class Wheels:
+    """The plant's wheels: spin inertia per axle."""
+
     spin_inertia_front: float  # kg m^2, wheel + tyre + disc + hub about the spin axis
     spin_inertia_rear: float  # kg m^2
 
@@ -108,6 +112,8 @@ class DamperMap:
 
 @dataclass(frozen=True, kw_only=True)
 class Dampers:
+    """The plant's damper maps, front and rear."""
+
     front: DamperMap
     rear: DamperMap
 
@@ -117,6 +123,8 @@ class Dampers:
 
 @dataclass(frozen=True, kw_only=True)
 class Driveline:
+    """The plant's driveline: power at the wheels, drive and brake shares."""
+
     max_power: float  # W, at the wheels
     drive_share_front: float  # -, share of drive torque on the front axle
     brake_share_front: float  # -, share of brake torque on the front axle

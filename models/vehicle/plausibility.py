@@ -33,7 +33,7 @@ import numpy as np
 
 from wheelload.models.conventions import GRAVITY
 from wheelload.models.mass_properties import static_loads
-from wheelload.models.vehicle.description import Vehicle
+from wheelload.models.vehicle.description import Vehicle, field_types
 
 TUNING_RATE = 100.0  # Hz, the sample rate at which tuning sigmas are judged
 
@@ -54,6 +54,8 @@ class Range:
 
 @dataclass(frozen=True)
 class Violation:
+    """A key whose value is outside its plausible range."""
+
     key: str
     value: float
     range: Range
@@ -353,7 +355,7 @@ def vehicle_keys(cls: type = Vehicle, prefix: str = "") -> list[str]:
     import typing
 
     keys = []
-    hints = typing.get_type_hints(cls)
+    hints = field_types(cls)
     for field in dataclasses.fields(cls):
         kind = hints[field.name]
         if isinstance(kind, typing.types.UnionType):  # type: ignore[attr-defined]

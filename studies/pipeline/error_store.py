@@ -8,7 +8,7 @@ are those of :func:`~wheelload.studies.metrics.metrics_table` to the bit (the po
 summed one wheel at a time: 1e-15 relative): per wheel the same operations on the same
 numbers; the pooled 95th percentile from the wheels' sorted columns by selection of its
 two order statistics (:func:`order_statistic`) and NumPy's own interpolation
-(:func:`linear_percentile`).
+(:func:`~wheelload.estimators.kernels.order_statistics.linear_percentile`).
 """
 
 from __future__ import annotations
@@ -18,23 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
+from wheelload.estimators import linear_percentile, percentile
+
 #: Bytes of errors kept in memory; a longer log's go to disk (64 MiB: 2 M samples, 4 wheels).
 MEMORY_LIMIT = 64 * 2**20
 PERCENTILE = 95.0
-
-
-def linear_percentile(n: int, q: float, value_at) -> float:
-    """``np.percentile(x, q)`` (method ``linear``) of ``n`` values given their order
-    statistics ``value_at(k)`` (the k-th smallest, from 0): NumPy's virtual index
-    :math:`(n - 1) q / 100` and its two-sided interpolation, operation for operation."""
-    virtual = (n - 1) * float(np.true_divide(q, 100))
-    previous = int(np.floor(virtual))
-    if virtual >= n - 1:
-        return float(value_at(n - 1))
-    gamma = virtual - previous
-    low, high = float(value_at(previous)), float(value_at(previous + 1))
-    difference = high - low
-    return high - difference * (1.0 - gamma) if gamma >= 0.5 else low + difference * gamma
 
 
 def order_statistic(columns: list[np.ndarray], k: int) -> float:
@@ -136,7 +124,7 @@ def _wheel_row(column: np.ndarray, mean: float) -> tuple[list[float], float]:
         rmse = float(np.sqrt(np.mean(square)))
         squares = float(np.sum(square))
         del square
-    p95 = float(np.percentile(column, PERCENTILE, overwrite_input=True))
+    p95 = percentile(column, PERCENTILE, overwrite_input=True)
     return [rmse, 100.0 * rmse / mean, p95, peak], squares
 
 

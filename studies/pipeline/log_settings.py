@@ -10,7 +10,7 @@ import glob
 from dataclasses import dataclass
 from pathlib import Path
 
-from wheelload.estimators.logs.readers import SUFFIXES
+from wheelload.estimators.logs.readers.formats import SUFFIXES
 from wheelload.estimators.protocol import DEFAULT_MODEL, SuspensionModel
 
 

@@ -9,11 +9,14 @@ checks the car was at rest there (:func:`~wheelload.estimators.check_still_perio
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators import Signals, check_still_period, corner_weight_loads
 from wheelload.models import GRAVITY, Vehicle
+
+if TYPE_CHECKING:
+    from wheelload.estimators import Signals
 
 PAYLOAD_INVISIBLE = (
     "a payload is invisible to the springs, so mass and CG are not estimated online: "
@@ -49,6 +52,8 @@ def corner_weights(settings) -> tuple[np.ndarray | None, list[str]]:
     """``(static loads or None, notes)`` from the measured corner weights, if given."""
     if settings.corner_weights is None:
         return None, []
+    from wheelload.estimators import corner_weight_loads  # only when weights are given
+
     static = corner_weight_loads(settings.corner_weights)
     return static, [f"static loads from corner weights {settings.corner_weights} kg"]
 
@@ -59,6 +64,8 @@ def still_period(
     """``(static loads, notes)`` after the still-period check, if a period is given."""
     if not settings.still_period:
         return static, []
+    from wheelload.estimators import check_still_period  # only when a period is given
+
     still = check_still_period(
         signals, vehicle, settings.still_period, static=static, noise=settings.still_noise
     )

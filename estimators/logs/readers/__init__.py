@@ -1,72 +1,24 @@
 """Log readers: CSV, Parquet, MDF4 and CarMaker ERG, through an optional channel map.
 
 :func:`read_frame` returns our columns (SI units, one clock) as a DataFrame,
-which ``signals_from_frame`` validates into ``Signals``.
+which ``signals_from_frame`` validates into ``Signals``. The names below are
+imported on first use (:mod:`~wheelload.models.files.lazy_names`): the lean
+whole-log path reads its chunks (``readers/chunks.py``) without the channel maps.
 """
 
-from __future__ import annotations
+from wheelload.estimators.logs.readers.formats import SUFFIXES
+from wheelload.models.files.lazy_names import lazy_names
 
-from pathlib import Path
-from typing import TYPE_CHECKING
+_LAZY_MODULES = {
+    "wheelload.estimators.logs.readers.channel_map": (
+        "ChannelMap",
+        "ChannelMapError",
+        "channel_map_template",
+        "load_channel_map",
+    ),
+    "wheelload.estimators.logs.readers.frames": ("channel_names", "read_frame"),
+    "wheelload.estimators.logs.readers.resample": ("Method",),
+}
+__getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
 
-from wheelload.estimators.logs.readers import erg, mdf, tabular
-from wheelload.estimators.logs.readers.channel_map import (
-    ChannelMap,
-    ChannelMapError,
-    apply_channel_map,
-    channel_map_template,
-    identity_map,
-    load_channel_map,
-)
-from wheelload.estimators.logs.readers.resample import Method
-
-if TYPE_CHECKING:
-    import pandas as pd
-
-SUFFIXES = (*tabular.CSV_SUFFIXES, *tabular.PARQUET_SUFFIXES, *mdf.SUFFIXES, *erg.SUFFIXES)
-
-__all__ = [
-    "SUFFIXES",
-    "ChannelMap",
-    "ChannelMapError",
-    "Method",
-    "channel_map_template",
-    "channel_names",
-    "load_channel_map",
-    "read_frame",
-]
-
-
-def _kind(path: Path) -> str:
-    suffix = path.suffix.lower()
-    if suffix not in SUFFIXES:
-        raise ChannelMapError(f"{path}: unknown log format '{suffix}' (use {', '.join(SUFFIXES)})")
-    return suffix
-
-
-def channel_names(path: str | Path) -> list[str]:
-    """The source channel names of a log of any supported format."""
-    path = Path(path)
-    suffix = _kind(path)
-    if suffix in mdf.SUFFIXES:
-        return mdf.mdf_channel_names(path)
-    if suffix in erg.SUFFIXES:
-        return erg.erg_channel_names(path)
-    return tabular.table_columns(path)
-
-
-def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame:
-    """Our columns of a log on one clock; ``None`` maps channels named as ours, in SI."""
-    path = Path(path)
-    suffix = _kind(path)
-    if suffix in mdf.SUFFIXES or suffix in erg.SUFFIXES:
-        if channel_map is None:
-            channel_map = identity_map(channel_names(path), str(path))
-        names = [spec.source for spec in channel_map.channels.values()]
-        read = mdf.read_mdf_channels if suffix in mdf.SUFFIXES else erg.read_erg_channels
-        raw = read(path, names)
-    elif channel_map is None:
-        return tabular.read_table(path)
-    else:
-        raw = tabular.read_tabular_channels(path, channel_map)
-    return apply_channel_map(raw, channel_map, str(path))
+__all__ = ["SUFFIXES", *_LAZY_NAMES]

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators.logs.readers.tabular import CSV_SUFFIXES, PARQUET_SUFFIXES
+from wheelload.estimators.logs.readers.formats import CSV_SUFFIXES, PARQUET_SUFFIXES
 
 #: Bytes per CSV block read at a time.
 CSV_BLOCK = 1 << 24

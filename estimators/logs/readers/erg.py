@@ -31,8 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.logs.readers.channel_map import Channel, ChannelMapError
+from wheelload.estimators.logs.readers.formats import ERG_SUFFIXES
 
-SUFFIXES = (".erg",)
+SUFFIXES = ERG_SUFFIXES
 HEADER_SIZE = 16
 MAGIC = b"CM-ERG"
 HEADER = MAGIC + bytes(HEADER_SIZE - len(MAGIC))

@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.logs.readers.channel_map import Channel, ChannelMapError
+from wheelload.estimators.logs.readers.formats import MDF_SUFFIXES
 
-SUFFIXES = (".mf4", ".mdf", ".dat")
+SUFFIXES = MDF_SUFFIXES
 
 
 def _from_asammdf(unraisable) -> bool:

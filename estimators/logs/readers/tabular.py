@@ -10,14 +10,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from wheelload.estimators.logs.readers.channel_map import Channel, ChannelMap, ChannelMapError
+from wheelload.estimators.logs.readers.formats import CSV_SUFFIXES
 from wheelload.estimators.logs.readers.units import Kind, unit_factor
 
 if TYPE_CHECKING:
     import pandas as pd
 
 CHUNK_ROWS = 200_000
-CSV_SUFFIXES = (".csv",)
-PARQUET_SUFFIXES = (".parquet", ".pq")
 
 
 def read_table(path: Path, columns: list[str] | None = None) -> pd.DataFrame:

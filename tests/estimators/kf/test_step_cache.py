@@ -7,8 +7,8 @@ step) and the same outputs from CasADi's virtual machine on random inputs.
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf import step_cache
 from wheelload.estimators.kf.step import step_function
+from wheelload.models.files import function_cache
 
 
 def _c_source(function: ca.Function) -> str:
@@ -28,15 +28,16 @@ def _same(loaded: ca.Function, built: ca.Function) -> None:
 
 
 def test_cached_step_equals_the_built_one_and_a_corrupt_file_is_rebuilt(tmp_path, monkeypatch):
-    monkeypatch.setattr(step_cache, "build_folder", lambda: tmp_path)
+    monkeypatch.setattr(function_cache, "build_folder", lambda: tmp_path)
+    load = function_cache.stored_function.__wrapped__  # without the one-process memo
     built = step_function()
-    first = step_cache.default_step_function.__wrapped__()  # builds and writes the file
+    first = load(step_function)  # builds and writes the file
     (written,) = tmp_path.glob("*.casadi")
-    loaded = step_cache.default_step_function.__wrapped__()  # loads it
+    loaded = load(step_function)  # loads it
     _same(first, built)
     _same(loaded, built)
     written.write_text("not a serialised function")
-    rebuilt = step_cache.default_step_function.__wrapped__()
+    rebuilt = load(step_function)
     _same(rebuilt, built)
     assert written.read_text() == built.serialize()
     assert list(tmp_path.glob("*.tmp")) == []

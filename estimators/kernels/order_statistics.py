@@ -1,0 +1,96 @@
+"""Median and percentile as numpy computes them, without the ``numpy.ma`` import.
+
+NumPy 2 imports ``numpy.ma`` (about 10 ms, a fortieth of a warm ``wheelload
+estimate``) on the first ``np.median``, ``np.nanmedian`` or ``np.percentile``
+(their NaN checks and ``np.unique`` ask ``np.ma``). These give the same numbers
+to the bit: the order statistics from ``np.partition`` (in place where the caller
+allows: no copy of a long column), the middle pair's mean :math:`(a + b)/2`, and
+the percentile's linear interpolation (method 7 of Hyndman and Fan) in numpy's own
+floating-point steps (:func:`linear_percentile`); NaN where any value is NaN. The
+test suite compares them with numpy on random data.
+
+Example
+-------
+>>> median(np.diff(t))  # np.median(np.diff(t))
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+
+def median(values, axis: int | None = None, *, overwrite_input: bool = False):
+    """``np.median(values, axis)`` for ``axis`` None (flattened) or the last axis;
+    ``overwrite_input`` lets it partition ``values`` (a float64 array) in place."""
+    x = np.asarray(values, dtype=float)
+    if axis is None:
+        x = x.reshape(-1)
+    elif axis not in (-1, x.ndim - 1):
+        raise ValueError(f"median along axis {axis} of a {x.ndim}-d array: use the last axis")
+    n = x.shape[-1]
+    if n == 0:
+        return np.float64(np.nan) if x.ndim == 1 else np.full(x.shape[:-1], np.nan)
+    half = n // 2
+    kth = [half - 1, half, n - 1] if n % 2 == 0 else [half, n - 1]  # n - 1: NaN sorts last
+    if overwrite_input:
+        x.partition(kth, axis=-1)
+        part = x
+    else:
+        part = np.partition(x, kth, axis=-1)
+    middle = part[..., half]
+    if n % 2 == 0:
+        middle = (part[..., half - 1] + middle) / 2.0  # np.mean of the middle pair
+    nan = np.isnan(part[..., n - 1])
+    if x.ndim == 1:
+        return np.float64(np.nan) if nan else np.float64(middle)
+    return np.where(nan, np.nan, middle)
+
+
+def nanmedian(values, *, overwrite_input: bool = False):
+    """``np.nanmedian(values)`` of 1-D ``values``: the median of the values that are not NaN
+    (with ``overwrite_input``, moved together in place, as numpy's)."""
+    x = np.asarray(values, dtype=float).reshape(-1)
+    nan = np.isnan(x)
+    missing = np.flatnonzero(nan)
+    if missing.size == x.size:
+        return np.float64(np.nan)
+    if missing.size == 0:
+        return median(x, overwrite_input=overwrite_input)
+    if not overwrite_input:
+        x = x.copy()
+    tail = x[-missing.size :][~nan[-missing.size :]]  # the values after the last gap
+    x[missing[: tail.size]] = tail
+    return median(x[: -missing.size], overwrite_input=True)
+
+
+def linear_percentile(n: int, q: float, value_at: Callable[[int], float]) -> float:
+    """``np.percentile(x, q)`` (method ``linear``) of ``n`` values given their order
+    statistics ``value_at(k)`` (the k-th smallest, from 0): NumPy's virtual index
+    :math:`(n - 1) q / 100` and its two-sided interpolation, operation for operation."""
+    virtual = (n - 1) * float(np.true_divide(q, 100))
+    previous = int(np.floor(virtual))
+    if virtual >= n - 1:
+        return float(value_at(n - 1))
+    gamma = virtual - previous
+    low, high = float(value_at(previous)), float(value_at(previous + 1))
+    difference = high - low
+    return high - difference * (1.0 - gamma) if gamma >= 0.5 else low + difference * gamma
+
+
+def percentile(values, q: float, *, overwrite_input: bool = False) -> float:
+    """``np.percentile(values, q)`` of 1-D ``values`` (``q`` in percent, method ``linear``);
+    ``overwrite_input`` lets it partition ``values`` (a float64 array) in place."""
+    if not 0.0 <= q <= 100.0:
+        raise ValueError("Percentiles must be in the range [0, 100]")
+    x = np.asarray(values, dtype=float).reshape(-1)
+    n = x.size
+    if n == 0:
+        return float("nan")
+    previous = min(int(np.floor((n - 1) * float(np.true_divide(q, 100)))), n - 1)
+    part = x if overwrite_input else x.copy()
+    part.partition(sorted({previous, min(previous + 1, n - 1), n - 1}))
+    if np.isnan(part[n - 1]):  # NaN sorts last
+        return float("nan")
+    return linear_percentile(n, q, part.__getitem__)

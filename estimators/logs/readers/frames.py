@@ -1,0 +1,53 @@
+"""A log of any format read as our columns on one clock (:func:`read_frame`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from wheelload.estimators.logs.readers import erg, mdf, tabular
+from wheelload.estimators.logs.readers.channel_map import (
+    ChannelMap,
+    ChannelMapError,
+    apply_channel_map,
+    identity_map,
+)
+from wheelload.estimators.logs.readers.formats import SUFFIXES
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+def _kind(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise ChannelMapError(f"{path}: unknown log format '{suffix}' (use {', '.join(SUFFIXES)})")
+    return suffix
+
+
+def channel_names(path: str | Path) -> list[str]:
+    """The source channel names of a log of any supported format."""
+    path = Path(path)
+    suffix = _kind(path)
+    if suffix in mdf.SUFFIXES:
+        return mdf.mdf_channel_names(path)
+    if suffix in erg.SUFFIXES:
+        return erg.erg_channel_names(path)
+    return tabular.table_columns(path)
+
+
+def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame:
+    """Our columns of a log on one clock; ``None`` maps channels named as ours, in SI."""
+    path = Path(path)
+    suffix = _kind(path)
+    if suffix in mdf.SUFFIXES or suffix in erg.SUFFIXES:
+        if channel_map is None:
+            channel_map = identity_map(channel_names(path), str(path))
+        names = [spec.source for spec in channel_map.channels.values()]
+        read = mdf.read_mdf_channels if suffix in mdf.SUFFIXES else erg.read_erg_channels
+        raw = read(path, names)
+    elif channel_map is None:
+        return tabular.read_table(path)
+    else:
+        raw = tabular.read_tabular_channels(path, channel_map)
+    return apply_channel_map(raw, channel_map, str(path))
