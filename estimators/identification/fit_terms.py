@@ -52,9 +52,11 @@ def robust_terms(e: np.ndarray, loss: FitLoss) -> tuple[np.ndarray, np.ndarray, 
 #: (relative units), or after this many steps.
 NEWTON_TOLERANCE = 1e-13
 NEWTON_STEPS = 100
-#: A step that no longer lowers the cost by this (relative) and is below SETTLED_STEP ends
-#: the steps: the cost is flat to rounding there (Huber's kink lets rows flip in and out).
+#: Relative change of the cost within rounding: a point whose cost is within this of the best
+#: is as low, and counts as progress when it is nearer stationary (a smaller Newton decrement).
 SETTLED = 1e-15
+#: A step halved back to below this (scaled units) ends the steps: the cost is flat to
+#: rounding there and no nearer stationary point is found (Huber's kink lets rows flip).
 SETTLED_STEP = 1e-10
 
 
@@ -71,18 +73,26 @@ def newton(
     and the gradient :math:`g = A^\top \psi` (:func:`robust_terms`); the
     step minimises :math:`\tfrac12 \|R \Delta\|^2 + g^\top \Delta` within the
     bounds, as the least squares :math:`\|R \Delta + R^{-\top} g\|` (BVLS).
+
+    A step is kept when it lowers the cost, or leaves it equal to rounding with
+    a smaller Newton decrement :math:`\|R^{-\top} g\|` (next to the minimiser
+    the decrease, about :math:`g^\top \Delta`, is below the cost's rounding:
+    judged on the cost alone the last step would be undone and the fit would
+    end where the path to it happened to be, not at the minimiser).
     """
-    best, previous = np.inf, u
+    best, previous, decrement = np.inf, u, np.inf
     for _ in range(NEWTON_STEPS):
         cost, R, gradient = terms(u)
-        if cost >= best - SETTLED * abs(best):  # no decrease
+        rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
+        lower_cost = cost < best - SETTLED * abs(best)
+        nearer = cost <= best + SETTLED * abs(best) and np.linalg.norm(rhs) < decrement
+        if not (lower_cost or nearer):
             moved = np.max(np.abs(u - previous))
             if moved <= SETTLED_STEP:  # at the minimiser to rounding (Huber's kink)
-                return u if cost <= best else previous
+                return previous
             u = 0.5 * (u + previous)  # a step too long: back half way
             continue
-        best, previous = cost, u
-        rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
+        best, previous, decrement = min(cost, best), u, float(np.linalg.norm(rhs))
         step = optimize.lsq_linear(R, rhs, bounds=(lower - u, upper - u), method="bvls").x
         u = np.clip(u + step, lower, upper)
         if np.max(np.abs(step)) <= NEWTON_TOLERANCE:
