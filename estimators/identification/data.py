@@ -33,6 +33,8 @@ import pandas as pd
 from wheelload.estimators.logs.signals import (
     RATE_DERIVATIVES,
     RATES,
+    TRAVEL,
+    TRAVEL_RATE,
     LogError,
     rate_derivatives,
     signals_from_frame,
@@ -297,12 +299,17 @@ def read_drive(
         else:
             raise _no_channel(source, name)
         table[name] = values[:, None]
-    usable = np.all(np.hstack([np.isfinite(v) for v in table.values()]), axis=1)
-    reference[~usable] = np.nan
+    return _drive_set(source, signals.t, table, reference, absent)
+
+
+def _drive_set(source: str, t, table: dict, reference: np.ndarray, absent: set) -> DataSet:
+    """The drive log's data set; no reference where a channel has no finite sample."""
+    for values in table.values():
+        reference[~np.isfinite(values[:, 0])] = np.nan
     return DataSet(
         kind=DataKind.DRIVE,
         source=source,
-        t=signals.t,
+        t=t,
         signals=table,
         target=reference,
         rows=WHEELS,
@@ -362,7 +369,7 @@ def _read_drive_chunks(
     table: dict[str, np.ndarray] = {}
     absent: set[str] = set()
     for name in channels:
-        if name in present or name in ("vx", "az") or name.startswith(("d_", "v_")):
+        if name in present or name in ("vx", "az", *TRAVEL, *TRAVEL_RATE):
             table[name] = np.empty((n, 1))  # read, derived, or missing (NaN) as in Signals
         elif name in RATE_DERIVATIVES and derived_rate_dots:
             table[name] = np.empty((n, 1))
@@ -393,14 +400,4 @@ def _read_drive_chunks(
     for name in absent:
         table[name] = np.zeros((n, 1))
     table = {name: table[name] for name in channels}
-    for values in table.values():
-        reference[~np.isfinite(values[:, 0])] = np.nan
-    return DataSet(
-        kind=DataKind.DRIVE,
-        source=source,
-        t=stream.t,
-        signals=table,
-        target=reference,
-        rows=WHEELS,
-        absent=frozenset(absent),
-    )
+    return _drive_set(source, stream.t, table, reference, absent)
