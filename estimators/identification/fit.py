@@ -119,12 +119,11 @@ class Identification:
         return float(self.std_error[self.names.index(name)])
 
 
-def _lag_one(r: np.ndarray, wheel: np.ndarray, t: np.ndarray) -> float:
-    """Lag-one autocorrelation of one data set's residuals (per wheel, time order)."""
+def _lag_one(r: np.ndarray, layout: Layout, group: int) -> float:
+    """Lag-one autocorrelation of one data set's residuals ``r`` (per wheel, time order)."""
     values = []
-    for w in np.unique(wheel):
-        mask = wheel == w
-        series = r[mask][np.argsort(t[mask], kind="stable")]
+    for _, rows, t in layout.wheel_rows(group):
+        series = r[rows][np.argsort(t, kind="stable")]
         series = series - series.mean()
         if series.size > 2 and np.dot(series, series) > 0:
             values.append(np.dot(series[1:], series[:-1]) / np.dot(series, series))
@@ -138,9 +137,12 @@ def _scales(r: np.ndarray, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     for g in range(count):
         rows = r[layout.rows(g)]
         if rows.size:
-            spread = MAD_SCALE * np.median(np.abs(rows - np.median(rows)))
+            deviation = rows - np.median(rows)
+            np.abs(deviation, out=deviation)
+            spread = MAD_SCALE * np.median(deviation, overwrite_input=True)
+            del deviation
             sigma[g] = max(spread, 1e-9 * max(1.0, layout.peak[g]))
-            rho[g] = _lag_one(rows, *layout.wheel_and_time(g))
+            rho[g] = _lag_one(rows, layout, g)
     return sigma, rho
 
 
@@ -148,13 +150,8 @@ def _rmse(r: np.ndarray, layout: Layout) -> dict[tuple[str, str], float]:
     table = {}
     for g, data in enumerate(layout.sets):
         rows = r[layout.rows(g)]
-        if not rows.size:
-            continue
-        wheel, _ = layout.wheel_and_time(g)
-        for i, name in enumerate(data.rows):
-            mask = wheel == i
-            if mask.any():
-                table[(data.label(), name)] = float(np.sqrt(np.mean(rows[mask] ** 2)))
+        for i, wheel, _ in layout.wheel_rows(g):
+            table[(data.label(), data.rows[i])] = float(np.sqrt(np.mean(rows[wheel] ** 2)))
     return table
 
 

@@ -11,7 +11,7 @@ number per row (its residual) can compute the per-set scales.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,12 +137,20 @@ class Layout:
     def counts(self) -> np.ndarray:
         return np.diff(self.offsets)
 
-    def wheel_and_time(self, group: int) -> tuple[np.ndarray, np.ndarray]:
-        """Wheel index (into the set's ``rows``) and time of each row of one set."""
+    def wheel_rows(self, group: int) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """One set's wheels with rows, one at a time: the wheel (index into the set's
+        ``rows``), where its rows are among the set's rows (in row order) and their times."""
         data = self.sets[group]
         used = used_samples(data)
-        sample, row = np.nonzero(np.isfinite(data.target[used]))
-        return row, data.t[used][sample]
+        finite = np.isfinite(data.target)[used]
+        per_sample = finite.sum(axis=1)
+        first = np.cumsum(per_sample) - per_sample  # the set's first row of each sample
+        del per_sample
+        for wheel in range(finite.shape[1]):
+            on = finite[:, wheel]
+            if on.any():
+                rows = first[on] + finite[on, :wheel].sum(axis=1)
+                yield wheel, rows, data.t[used[on]]
 
     def per_row(self, values: np.ndarray) -> np.ndarray:
         """A per-set value repeated over the set's rows."""
