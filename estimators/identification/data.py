@@ -32,6 +32,9 @@ import pandas as pd
 
 from wheelload.estimators.logs.signals import (
     RATE_DERIVATIVES,
+    RATES,
+    TRAVEL,
+    TRAVEL_RATE,
     LogError,
     rate_derivatives,
     signals_from_frame,
@@ -226,6 +229,7 @@ def read_drive(
     *,
     channel_map: str | Path | None = None,
     wiring_checks: bool = True,
+    in_memory: bool = False,
 ) -> DataSet:
     """Read a drive log with reference loads for the model's signal ``channels``.
 
@@ -234,12 +238,20 @@ def read_drive(
     channel the log lacks is 0. With a ``channel_map`` the log (any format
     :func:`~wheelload.estimators.logs.signals.read_log` reads) is read through it,
     with its wiring checks unless ``wiring_checks`` is off.
+
+    A CSV or Parquet log named as ours is read chunk by chunk (memory: the data
+    set's columns and one chunk); any other, or with ``in_memory``, as a whole
+    table (the same data set, to the bit).
     """
     path = Path(path)
     source = str(path)
     if not path.exists():
         raise LogError(f"{source}: no such log file")
     suffix = path.suffix.lower()
+    if channel_map is None and not in_memory:
+        data = _read_drive_chunks(path, channels, optional, wiring_checks)
+        if data is not None:
+            return data
     try:
         if channel_map is not None:
             from wheelload.estimators.logs.signals import read_log
@@ -254,26 +266,19 @@ def read_drive(
     except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, ValueError) as error:
         raise LogError(f"{source}: cannot be read: {error}") from None
     frame = frame.rename(columns=lambda name: str(name).strip())
+    _check_reference(frame.columns, source)
     reference = np.full((len(frame), 4), np.nan)
     for i, wheel in enumerate(WHEELS):
         name = f"fz_{wheel}"
         if name in frame.columns:
             reference[:, i] = pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
-    if not np.isfinite(reference).any():
-        raise LogError(
-            f"{source}: no reference loads: give at least one of "
-            + ", ".join(f"fz_{w}" for w in WHEELS)
-        )
+    _check_reference(frame.columns, source, np.isfinite(reference).any())
     signals = signals_from_frame(
-        frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]), source=source
+        frame.drop(columns=[c for c in frame.columns if c.startswith("fz_")]),
+        source=source,
+        wiring_checks=wiring_checks,
     )
-    travels = [name for name in channels if name.startswith("d_")]
-    if travels and not np.isfinite(signals.d).any():
-        raise LogError(
-            f"{source}: no suspension travel ({', '.join(travels)}): the maps are fitted to "
-            "the travels against the reference loads; log the travel sensors (or map them "
-            "with --channels)"
-        )
+    _check_travel(channels, source, np.isfinite(signals.d).any())
     validated = signals.to_frame()
     if signals.az_assumed:  # g, as the estimators take it
         validated["az"] = signals.acc[:, 2]
@@ -292,16 +297,107 @@ def read_drive(
             values = np.zeros(len(frame))
             absent.add(name)
         else:
-            raise LogError(f"{source}: the suspension model needs channel '{name}', not in the log")
+            raise _no_channel(source, name)
         table[name] = values[:, None]
-    usable = np.all(np.hstack([np.isfinite(v) for v in table.values()]), axis=1)
-    reference[~usable] = np.nan
+    return _drive_set(source, signals.t, table, reference, absent)
+
+
+def _drive_set(source: str, t, table: dict, reference: np.ndarray, absent: set) -> DataSet:
+    """The drive log's data set; no reference where a channel has no finite sample."""
+    for values in table.values():
+        reference[~np.isfinite(values[:, 0])] = np.nan
     return DataSet(
         kind=DataKind.DRIVE,
         source=source,
-        t=signals.t,
+        t=t,
         signals=table,
         target=reference,
         rows=WHEELS,
         absent=frozenset(absent),
     )
+
+
+def _check_reference(columns, source: str, finite: bool = True) -> None:
+    """A drive log needs a reference load: some ``fz_*`` column with a finite sample."""
+    if not finite or not any(f"fz_{w}" in columns for w in WHEELS):
+        raise LogError(
+            f"{source}: no reference loads: give at least one of "
+            + ", ".join(f"fz_{w}" for w in WHEELS)
+        )
+
+
+def _no_channel(source: str, name: str) -> LogError:
+    return LogError(f"{source}: the suspension model needs channel '{name}', not in the log")
+
+
+def _check_travel(channels: tuple[str, ...], source: str, present: bool) -> None:
+    travels = [name for name in channels if name.startswith("d_")]
+    if travels and not present:
+        raise LogError(
+            f"{source}: no suspension travel ({', '.join(travels)}): the maps are fitted to "
+            "the travels against the reference loads; log the travel sensors (or map them "
+            "with --channels)"
+        )
+
+
+def _read_drive_chunks(
+    path: Path, channels: tuple[str, ...], optional: frozenset[str], wiring_checks: bool
+) -> DataSet | None:
+    """:func:`read_drive` of a CSV or Parquet log named as ours, read chunk by chunk
+    (:meth:`~wheelload.estimators.kf.log_stream.LogStream.signal_chunks`: the same
+    checks and derived signals as the whole-log reader, to the bit), so that memory is the
+    data set's columns and one chunk, not the log's table several times over. None for a
+    log the chunked reader cannot take as plain numbers (read it the ordinary way)."""
+    from wheelload.estimators.kf.log_stream import scan_log
+    from wheelload.estimators.logs.checks import raise_for_wiring
+    from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns
+
+    source = str(path)
+    try:
+        present = chunk_columns(path)
+        _check_reference(present, source)
+        stream = scan_log(path, wiring_checks=wiring_checks)
+    except ChunkError:
+        return None
+    if stream.reference_present is None or not stream.reference_present.any():
+        _check_reference((), source)
+    _check_travel(channels, source, bool(stream.travel_present.any()))
+    if wiring_checks:
+        raise_for_wiring(stream.wiring_report(), source)
+    n = len(stream)
+    derived_rate_dots = RATES[0] in stream.names and RATE_DERIVATIVES[0] not in stream.names
+    table: dict[str, np.ndarray] = {}
+    absent: set[str] = set()
+    for name in channels:
+        if name in present or name in ("vx", "az", *TRAVEL, *TRAVEL_RATE):
+            table[name] = np.empty((n, 1))  # read, derived, or missing (NaN) as in Signals
+        elif name in RATE_DERIVATIVES and derived_rate_dots:
+            table[name] = np.empty((n, 1))
+        elif name in optional:
+            absent.add(name)
+        else:
+            raise _no_channel(source, name)
+    reference = np.full((n, len(WHEELS)), np.nan)
+    extra = tuple(name for name in table if name in present)
+    start = 0
+    try:
+        for t, columns in stream.signal_chunks(extra):
+            stop = start + t.size
+            for i, wheel in enumerate(WHEELS):
+                if f"fz_{wheel}" in columns:
+                    reference[start:stop, i] = columns[f"fz_{wheel}"]
+            for name, values in table.items():
+                values[start:stop, 0] = columns.get(name, np.nan)
+            start = stop
+    except ChunkError:
+        return None
+    for name in RATE_DERIVATIVES:  # none derived (too irregular, no rate): as if not logged
+        if name in table and name not in present and not np.isfinite(table[name]).any():
+            if name not in optional:
+                raise _no_channel(source, name)
+            del table[name]
+            absent.add(name)
+    for name in absent:
+        table[name] = np.zeros((n, 1))
+    table = {name: table[name] for name in channels}
+    return _drive_set(source, stream.t, table, reference, absent)

@@ -11,7 +11,7 @@ number per row (its residual) can compute the per-set scales.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,9 +52,11 @@ def robust_terms(e: np.ndarray, loss: FitLoss) -> tuple[np.ndarray, np.ndarray, 
 #: (relative units), or after this many steps.
 NEWTON_TOLERANCE = 1e-13
 NEWTON_STEPS = 100
-#: A step that no longer lowers the cost by this (relative) and is below SETTLED_STEP ends
-#: the steps: the cost is flat to rounding there (Huber's kink lets rows flip in and out).
+#: Relative change of the cost within rounding: a point whose cost is within this of the best
+#: is as low, and counts as progress when it is nearer stationary (a smaller Newton decrement).
 SETTLED = 1e-15
+#: A step halved back to below this (scaled units) ends the steps: the cost is flat to
+#: rounding there and no nearer stationary point is found (Huber's kink lets rows flip).
 SETTLED_STEP = 1e-10
 
 
@@ -71,18 +73,26 @@ def newton(
     and the gradient :math:`g = A^\top \psi` (:func:`robust_terms`); the
     step minimises :math:`\tfrac12 \|R \Delta\|^2 + g^\top \Delta` within the
     bounds, as the least squares :math:`\|R \Delta + R^{-\top} g\|` (BVLS).
+
+    A step is kept when it lowers the cost, or leaves it equal to rounding with
+    a smaller Newton decrement :math:`\|R^{-\top} g\|` (next to the minimiser
+    the decrease, about :math:`g^\top \Delta`, is below the cost's rounding:
+    judged on the cost alone the last step would be undone and the fit would
+    end where the path to it happened to be, not at the minimiser).
     """
-    best, previous = np.inf, u
+    best, previous, decrement = np.inf, u, np.inf
     for _ in range(NEWTON_STEPS):
         cost, R, gradient = terms(u)
-        if cost >= best - SETTLED * abs(best):  # no decrease
+        rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
+        lower_cost = cost < best - SETTLED * abs(best)
+        nearer = cost <= best + SETTLED * abs(best) and np.linalg.norm(rhs) < decrement
+        if not (lower_cost or nearer):
             moved = np.max(np.abs(u - previous))
             if moved <= SETTLED_STEP:  # at the minimiser to rounding (Huber's kink)
-                return u if cost <= best else previous
+                return previous
             u = 0.5 * (u + previous)  # a step too long: back half way
             continue
-        best, previous = cost, u
-        rhs = -np.linalg.lstsq(R.T, gradient, rcond=None)[0]
+        best, previous, decrement = min(cost, best), u, float(np.linalg.norm(rhs))
         step = optimize.lsq_linear(R, rhs, bounds=(lower - u, upper - u), method="bvls").x
         u = np.clip(u + step, lower, upper)
         if np.max(np.abs(step)) <= NEWTON_TOLERANCE:
@@ -127,12 +137,20 @@ class Layout:
     def counts(self) -> np.ndarray:
         return np.diff(self.offsets)
 
-    def wheel_and_time(self, group: int) -> tuple[np.ndarray, np.ndarray]:
-        """Wheel index (into the set's ``rows``) and time of each row of one set."""
+    def wheel_rows(self, group: int) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """One set's wheels with rows, one at a time: the wheel (index into the set's
+        ``rows``), where its rows are among the set's rows (in row order) and their times."""
         data = self.sets[group]
         used = used_samples(data)
-        sample, row = np.nonzero(np.isfinite(data.target[used]))
-        return row, data.t[used][sample]
+        finite = np.isfinite(data.target)[used]
+        per_sample = finite.sum(axis=1)
+        first = np.cumsum(per_sample) - per_sample  # the set's first row of each sample
+        del per_sample
+        for wheel in range(finite.shape[1]):
+            on = finite[:, wheel]
+            if on.any():
+                rows = first[on] + finite[on, :wheel].sum(axis=1)
+                yield wheel, rows, data.t[used[on]]
 
     def per_row(self, values: np.ndarray) -> np.ndarray:
         """A per-set value repeated over the set's rows."""

@@ -244,6 +244,36 @@ class LogStream:
         state = [np.ascontiguousarray(np.ravel(a, order="F"), dtype=float)
                  for a in (state0.x, state0.P, state0.m)]  # fmt: skip
         tuning = kf.tuning_for(kf.sample_interval or nominal_interval(self.t))
+        base = input_bits(self.az_assumed, self.speed_source)
+        tracker = _FaultTracker()
+        start = 0
+        for t, columns in self.signal_chunks():
+            n = len(t)
+            values = [columns.get(name) for name in INPUTS]
+            block = np.empty((loop.n_columns, n))
+            flags = np.empty(n, dtype=np.uint32)
+            dt_first = float(t[1] - t[0]) if start == 0 else float(t[0] - self.t[start - 1])
+            loop(state, [kf.p, tuning], values, t, dt_first, list(block), flags, base)
+            tracker.add(t, block[11:18], block[18:25])
+            reference = None
+            if self.reference_present is not None:
+                reference = np.column_stack(
+                    [columns[name] if name in columns else np.full(n, np.nan) for name in REFERENCE]
+                )
+            start += n
+            yield EstimateChunk(t=t, block=block, flags=flags, reference=reference)
+        if faults is not None:
+            faults.extend(tracker.finish())
+
+    def signal_chunks(
+        self, extra: tuple[str, ...] = ()
+    ) -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
+        """The log's signals chunk by chunk, ``(t, {name: values})``, as the whole-log reader
+        makes them: the columns read (ours and ``extra``, other columns of the file), the
+        travel rates and body-rate derivatives derived where not logged (their filters'
+        state carried, so each equals the whole log's to the bit; the derivatives left out
+        where the time stamps are too irregular for them), ``az`` where assumed (g) and
+        ``vx`` (logged, the wheel speeds' mean, or 0)."""
         dt = np.diff(self.t)
         travel_rates = (
             Differentiator(dt, 4, VELOCITY_CUTOFF, self.source) if self.velocities_derived else None
@@ -256,47 +286,29 @@ class LogStream:
                 rate_dots = RateEstimator(dt, 3, self.source)
             except LogError:
                 rate_dots = None  # too irregular: the terms that need them are dropped
-        base = input_bits(self.az_assumed, self.speed_source)
-        tracker = _FaultTracker()
+        names = list(self.names) + [name for name in extra if name not in self.names]
         start = 0
-        for chunk in read_chunks(self.path, list(self.names), rows=self.rows):
+        for chunk in read_chunks(self.path, names, rows=self.rows):
             n = len(chunk["t"])
             if n == 0:
                 continue
             t = self.t[start : start + n]
             if not np.array_equal(t, chunk["t"]):
                 raise LogError(f"{self.source}: changed while it was read: read it again")
-            values = self._values(chunk, n, travel_rates, rate_dots)
-            block = np.empty((loop.n_columns, n))
-            flags = np.empty(n, dtype=np.uint32)
-            dt_first = float(t[1] - t[0]) if start == 0 else float(t[0] - self.t[start - 1])
-            loop(state, [kf.p, tuning], values, t, dt_first, list(block), flags, base)
-            tracker.add(t, block[11:18], block[18:25])
-            reference = None
-            if self.reference_present is not None:
-                reference = np.column_stack(
-                    [chunk[name] if name in chunk else np.full(n, np.nan) for name in REFERENCE]
-                )
+            columns = dict(chunk)
+            if travel_rates is not None:
+                derived = travel_rates(_travel(chunk, n))
+                columns.update({name: derived[:, i] for i, name in enumerate(TRAVEL_RATE)})
+            if self.az_assumed:
+                columns["az"] = np.broadcast_to(np.float64(GRAVITY), (n,))
+            columns["vx"] = _speed(chunk, n)[0]
+            if rate_dots is not None:
+                derived = rate_dots(np.column_stack([chunk[name] for name in RATES]))
+                columns.update({name: derived[:, i] for i, name in enumerate(RATE_DERIVATIVES)})
             start += n
-            yield EstimateChunk(t=t, block=block, flags=flags, reference=reference)
+            yield t, columns
         if start != len(self.t):
             raise LogError(f"{self.source}: changed while it was read: read it again")
-        if faults is not None:
-            faults.extend(tracker.finish())
-
-    def _values(self, chunk, n, travel_rates, rate_dots) -> list[np.ndarray | None]:
-        """The per-sample inputs in INPUTS order, one column each (None: missing)."""
-        columns: dict[str, np.ndarray | None] = {name: chunk.get(name) for name in INPUTS}
-        if travel_rates is not None:
-            derived = travel_rates(_travel(chunk, n))
-            columns.update({name: derived[:, i] for i, name in enumerate(TRAVEL_RATE)})
-        if self.az_assumed:
-            columns["az"] = np.broadcast_to(np.float64(GRAVITY), (n,))
-        columns["vx"] = _speed(chunk, n)[0]
-        if rate_dots is not None:
-            derived = rate_dots(np.column_stack([chunk[name] for name in RATES]))
-            columns.update({name: derived[:, i] for i, name in enumerate(RATE_DERIVATIVES)})
-        return [columns[name] for name in INPUTS]
 
 
 class _FaultTracker:

@@ -2,11 +2,14 @@
 
 A lap (a plant log with reference loads: by default a simulated Nordschleife
 lap, ``--quick`` the bundled example log) is tiled 1, 4, 16 times (time
-kept increasing); each fit runs in its own child process so that its peak
-memory is the operating system's figure for that process alone
-(``os.wait4``: numpy and CasADi allocate outside ``tracemalloc``'s sight).
-The chunked fits are compared with the dense fit of the same length: the
-largest relative difference of the fitted values and standard errors.
+kept increasing) into a Parquet log; each case reads that log
+(:func:`~wheelload.estimators.identification.data.read_drive`, chunk by chunk)
+and fits it in a child process of its own, whose peak resident memory
+(``VmHWM``, where ``/proc`` tells it; else ``os.wait4``'s figure) is that of
+the read and the fit alone (numpy and CasADi allocate outside
+``tracemalloc``'s sight). The chunked fits are compared with the dense fit of
+the same length: the largest relative difference of the fitted values and
+standard errors.
 """
 
 from __future__ import annotations
@@ -24,7 +27,6 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
-from wheelload.estimators.identification.data import DataSet
 from wheelload.estimators.identification.fit import FitLoss, FitPath, FitSettings
 from wheelload.models import ModelParameters, example_vehicle_path, load_vehicle
 
@@ -34,63 +36,76 @@ DENSE_LIMIT = 8000.0
 
 @dataclass(frozen=True, kw_only=True)
 class Case:
-    laps: int
     path: FitPath
     loss: FitLoss
     instrumental: bool
 
 
-def tiled(data: DataSet, laps: int) -> DataSet:
-    """``data`` repeated ``laps`` times, time kept increasing."""
-    dt = float(np.median(np.diff(data.t)))
-    span = data.t[-1] - data.t[0] + dt
-    return DataSet(
-        kind=data.kind,
-        source=data.source,
-        t=np.concatenate([data.t + k * span for k in range(laps)]),
-        signals={name: np.tile(v, (laps, 1)) for name, v in data.signals.items()},
-        target=np.tile(data.target, (laps, 1)),
-        rows=data.rows,
-        absent=data.absent,
-    )
+def write_laps(lap: Path, laps: int, path: Path) -> None:
+    """``lap`` (CSV or Parquet) repeated ``laps`` times into the Parquet log ``path``, time
+    kept increasing; one lap in memory at a time."""
+    import pandas as pd
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    parquet = lap.suffix.lower() in (".parquet", ".pq")
+    frame = (pd.read_parquet(lap) if parquet else pd.read_csv(lap, comment="#")).astype(float)
+    t = frame["t"].to_numpy()
+    span = t[-1] - t[0] + float(np.median(np.diff(t)))
+    schema = pa.schema([(str(name), pa.float64()) for name in frame.columns])
+    with pq.ParquetWriter(str(path), schema) as writer:
+        for k in range(laps):
+            frame["t"] = t + k * span
+            writer.write_table(pa.Table.from_pandas(frame, schema=schema, preserve_index=False))
+
+
+def _own_peak() -> float | None:
+    """This process's peak resident memory [MB] (``VmHWM``), None without ``/proc``."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            kb = next(line.split()[1] for line in status if line.startswith("VmHWM:"))
+    except OSError:
+        return None
+    return int(kb) / 1024.0
 
 
 def fit_case(log: Path, case: Case) -> dict:
-    """One fit (run in the child): time and the fitted values and errors."""
+    """One case (run in the child): the read and fit times, the fitted values and errors."""
     vehicle = load_vehicle(example_vehicle_path())
     p = ModelParameters.from_vehicle(vehicle)
     model = default_model()
-    data = (tiled(read_drive(log, model.channel_names(), model.optional), case.laps),)
+    start = time.perf_counter()
+    data = (read_drive(log, model.channel_names(), model.optional),)
+    read = time.perf_counter() - start
     model = default_model(drive_gates(p, data))
     settings = FitSettings(path=case.path, loss=case.loss, instrumental=case.instrumental)
     start = time.perf_counter()
     result = identify(model, data, p, settings)
     return {
+        "read_seconds": read,
         "seconds": time.perf_counter() - start,
         "samples": len(data[0]),
         "free": list(result.free),
         "value": result.value.tolist(),
         "std": result.std_error.tolist(),
+        "peak_mb": _own_peak(),
     }
 
 
 def child() -> None:
-    """``python -c`` entry: argv = log, laps, path, loss, instrumental; prints JSON."""
-    log, laps, path, loss, instrumental = sys.argv[1:6]
-    case = Case(
-        laps=int(laps), path=FitPath(path), loss=FitLoss(loss), instrumental=instrumental == "1"
-    )
+    """``python -c`` entry: argv = log, path, loss, instrumental; prints JSON."""
+    log, path, loss, instrumental = sys.argv[1:5]
+    case = Case(path=FitPath(path), loss=FitLoss(loss), instrumental=instrumental == "1")
     print(json.dumps(fit_case(Path(log), case)))
 
 
 def run_child(log: Path, case: Case) -> tuple[dict, float]:
-    """The fit of ``case`` in a child process: its result and its peak resident memory [MB]."""
+    """The case on ``log`` in a child process: its result and its peak resident memory [MB]."""
     command = [
         sys.executable,
         "-c",
         "from wheelload.studies.bench.identification import child; child()",
         str(log),
-        str(case.laps),
         case.path.value,
         case.loss.value,
         "1" if case.instrumental else "0",
@@ -104,7 +119,9 @@ def run_child(log: Path, case: Case) -> tuple[dict, float]:
         if process.returncode:
             raise RuntimeError(f"identification child failed: {error.strip().splitlines()[-1]}")
         output.seek(0)
-        return json.loads(output.read().decode()), usage.ru_maxrss / 1024.0
+        result = json.loads(output.read().decode())
+    peak = result.pop("peak_mb")
+    return result, usage.ru_maxrss / 1024.0 if peak is None else peak
 
 
 def difference(a: dict, b: dict) -> float:
@@ -120,12 +137,15 @@ def difference(a: dict, b: dict) -> float:
 
 
 def bench(
-    log: Path, laps: tuple[int, ...], loss: FitLoss, instrumental: bool, repeat: int
+    log: Path, laps: tuple[int, ...], loss: FitLoss, instrumental: bool, repeat: int, folder: Path
 ) -> list[dict]:
-    """Rows of the table: laps, samples, path, min/median/max seconds, peak MB, difference."""
+    """Rows of the table: laps, samples, path, min/median/max seconds (fit, and read),
+    peak MB, difference; the tiled logs are written into ``folder``."""
     table = []
     dense_per_lap = None
     for count in laps:
+        tiled = folder / f"{log.stem}_{count}_laps.parquet"
+        write_laps(log, count, tiled)
         dense = None
         for path in (FitPath.DENSE, FitPath.CHUNKED):
             row = {"laps": count, "path": path.value}
@@ -133,14 +153,16 @@ def bench(
                 row["skipped"] = f"dense would need about {dense_per_lap * count:.0f} MB"
                 table.append(row)
                 continue
-            case = Case(laps=count, path=path, loss=loss, instrumental=instrumental)
-            runs = [run_child(log, case) for _ in range(repeat)]
+            case = Case(path=path, loss=loss, instrumental=instrumental)
+            runs = [run_child(tiled, case) for _ in range(repeat)]
             seconds = [result["seconds"] for result, _ in runs]
+            reads = [result["read_seconds"] for result, _ in runs]
             peak = max(mb for _, mb in runs)
             result = runs[0][0]
             row |= {
                 "samples": result["samples"],
                 "seconds": (min(seconds), statistics.median(seconds), max(seconds)),
+                "read_seconds": (min(reads), statistics.median(reads), max(reads)),
                 "peak_mb": peak,
             }
             if path is FitPath.DENSE:
@@ -149,4 +171,5 @@ def bench(
             elif dense is not None:
                 row["difference"] = difference(dense, result)
             table.append(row)
+        tiled.unlink()
     return table

@@ -83,6 +83,7 @@ def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> 
                 batches = source.iter_batches(batch_size=rows, columns=columns, use_threads=False)
                 for batch in batches:
                     yield _floats(batch, columns)
+            pa.default_memory_pool().release_unused()  # the decoding buffers, kept otherwise
             return
         import pyarrow.csv as pc
 
@@ -95,6 +96,7 @@ def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> 
             for batch in reader:  # blocks of CSV_BLOCK bytes, cut into ``rows``
                 for start in range(0, batch.num_rows, rows):
                     yield _floats(batch.slice(start, rows), columns)
+        pa.default_memory_pool().release_unused()
     except (pa.ArrowException, OSError, UnicodeDecodeError) as error:
         raise ChunkError(f"{path}: {error}") from None
 

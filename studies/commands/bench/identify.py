@@ -65,24 +65,29 @@ def run(args: argparse.Namespace) -> int:
             log = Path(folder) / "nordschleife.parquet"
             result = run_scenario("nordschleife", example_vehicle_path())
             write_log(result.log, log, result.metadata)
-        table = bench(log, laps, loss, args.instrumental, args.repeat)
+        table = bench(log, laps, loss, args.instrumental, args.repeat, Path(folder))
     print(
         f"identification of {log.name} tiled {', '.join(map(str, laps))} times "
         f"({loss.value} loss{', instruments' if args.instrumental else ''}); "
-        f"seconds min/median/max of {args.repeat}, peak resident memory of the child process"
+        f"fit and read seconds min/median/max of {args.repeat}, peak resident memory of the "
+        "child process (read and fit)"
     )
-    print(f"{'laps':>5} {'samples':>9} {'path':>8} {'seconds':>26} {'peak MB':>9}  equal")
+    print(
+        f"{'laps':>5} {'samples':>9} {'path':>8} {'fit seconds':>26} {'read seconds':>20} "
+        f"{'peak MB':>9}  equal"
+    )
     for row in table:
         if "skipped" in row:
             print(f"{row['laps']:>5} {'':>9} {row['path']:>8}  skipped: {row['skipped']}")
             continue
         seconds = "/".join(f"{s:.2f}" for s in row["seconds"])
+        reads = "/".join(f"{s:.2f}" for s in row["read_seconds"])
         equal = ""
         if "difference" in row:
             verdict = "yes" if row["difference"] <= EQUAL else "NO"
             equal = f"{verdict} (max rel. difference {row['difference']:.1e})"
         print(
-            f"{row['laps']:>5} {row['samples']:>9} {row['path']:>8} {seconds:>26} "
+            f"{row['laps']:>5} {row['samples']:>9} {row['path']:>8} {seconds:>26} {reads:>20} "
             f"{row['peak_mb']:>9.0f}  {equal}"
         )
     print(f"dense fits skipped where one lap's peak times the laps passes {DENSE_LIMIT:.0f} MB")
