@@ -2,8 +2,7 @@
 
 The pages (``pages/``, Markdown with MyST) and :mod:`.conf` are copied into a temporary
 source folder beside the output, the reference pages are written there
-(:func:`.reference.write_reference`), the pages' ``{run}`` blocks run side by side
-(:func:`.run_blocks.run_pages`), and Sphinx builds with warnings as errors. The site
+(:func:`.reference.write_reference`), and Sphinx builds with warnings as errors. The site
 is built beside ``out`` and renamed into place, so a failed build leaves ``out`` as it was.
 """
 
@@ -17,7 +16,6 @@ from importlib import resources
 from pathlib import Path
 
 from wheelload.studies.docs.reference import write_reference
-from wheelload.studies.docs.run_blocks import run_pages
 
 MATHJAX_NAME = "mathjax-tex-svg.js"
 
@@ -46,8 +44,7 @@ def build_docs(
     """Build the HTML site into ``out``; its ``index.html``.
 
     ``out`` must be absent or empty unless ``force``. ``strict``: warnings are errors.
-    ``jobs``: pages whose blocks run side by side (:func:`.run_blocks.run_pages`), and
-    Sphinx's parallel readers. ``mathjax``: a local MathJax ``tex-svg.js`` served
+    ``jobs``: Sphinx's parallel readers. ``mathjax``: a local MathJax ``tex-svg.js`` served
     with the site (for reading offline); by default the pages load MathJax from its CDN.
     """
     out = Path(out)
@@ -64,7 +61,6 @@ def build_docs(
         source.mkdir()
         _copy_pages(source)
         write_reference(source / "reference")
-        run_pages(source, jobs)
         command = [sys.executable, "-m", "sphinx", "-b", "html", "-q", "-j", str(jobs)]
         if strict:
             command += ["-W", "--keep-going"]

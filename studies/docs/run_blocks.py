@@ -12,23 +12,13 @@ working folder (``_run/<page>/`` in the build's source folder, shared by the pag
 in order) and shows the code, then what it printed (``:tail: N`` keeps the last N lines).
 ``:image: FILE`` shows a figure the block wrote. A block that fails stops the build with
 its output, so a page never shows a command that does not work.
-
-:func:`run_pages` runs every page's blocks before Sphinx reads (the pages side by side, each
-page's blocks in order, as Sphinx would run them) and keeps what they printed in the page's
-folder (``.blocks.json``); the directive then shows the kept output, so the journeys run in
-parallel however Sphinx groups the pages. A page without kept output runs its blocks as it
-is read.
 """
 
 from __future__ import annotations
 
-import json
 import os
-import re
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 
 from docutils import nodes
@@ -70,86 +60,6 @@ def run_block(kind: str, code: str, cwd: Path) -> str:
     return done.stdout
 
 
-#: The file of a page's kept outputs, in its working folder (:func:`run_pages`).
-KEPT = ".blocks.json"
-_FENCE = re.compile(r"^(`{3,}|~{3,})\{run\}\s+(\S+)\s*$")
-_OPTION = re.compile(r"^:[\w-]+:")
-
-
-@dataclass(frozen=True)
-class Block:
-    """A ``{run}`` block of a page: its language and code (options left out)."""
-
-    kind: str
-    code: str
-
-
-def page_blocks(text: str) -> list[Block]:
-    """The ``{run}`` blocks of a Markdown page, in order (back-tick or tilde fences)."""
-    blocks, lines, k = [], text.splitlines(), 0
-    while k < len(lines):
-        opening = _FENCE.match(lines[k])
-        k += 1
-        if opening is None:
-            continue
-        fence, body = opening.group(1), []
-        while k < len(lines) and not (
-            lines[k].strip().startswith(fence[0] * len(fence))
-            and set(lines[k].strip()) == {fence[0]}
-        ):
-            body.append(lines[k])
-            k += 1
-        k += 1
-        while body and _OPTION.match(body[0]):
-            body.pop(0)
-        blocks.append(Block(opening.group(2), "\n".join(body).strip("\n")))
-    return blocks
-
-
-def _run_page(srcdir: Path, docname: str, blocks: list[Block]) -> None:
-    """Run a page's blocks in order in its folder; keep each output, or the first failure."""
-    cwd = page_folder(srcdir, docname)
-    kept = []
-    for block in blocks:
-        entry = {"kind": block.kind, "code": block.code}
-        try:
-            entry["output"] = run_block(block.kind, block.code, cwd)
-        except (ExtensionError, subprocess.TimeoutExpired) as error:
-            entry["error"] = str(error)
-        kept.append(entry)
-        if "error" in entry:
-            break
-    (cwd / KEPT).write_text(json.dumps(kept))
-
-
-def run_pages(srcdir: Path, jobs: int) -> None:
-    """Run the ``{run}`` blocks of every page under ``srcdir`` before Sphinx reads it, ``jobs``
-    pages at a time (module docstring)."""
-    srcdir = Path(srcdir)
-    pages = {}
-    for path in sorted(srcdir.rglob("*.md")):
-        docname = path.relative_to(srcdir).with_suffix("").as_posix()
-        if not docname.startswith("_") and (blocks := page_blocks(path.read_text())):
-            pages[docname] = blocks
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        for done in [pool.submit(_run_page, srcdir, d, b) for d, b in pages.items()]:
-            done.result()
-
-
-def kept_output(cwd: Path, index: int, kind: str, code: str) -> str | None:
-    """Block ``index``'s kept output (:func:`run_pages`), None when the page kept none;
-    ExtensionError when it failed, or when the page's blocks are not those that ran."""
-    try:
-        kept = json.loads((cwd / KEPT).read_text())
-    except FileNotFoundError:
-        return None
-    if index >= len(kept) or (kept[index]["kind"], kept[index]["code"]) != (kind, code):
-        raise ExtensionError(f"{cwd}: run block {index + 1} is not the block that ran before")
-    if "error" in kept[index]:
-        raise ExtensionError(kept[index]["error"])
-    return kept[index]["output"]
-
-
 class RunBlock(Directive):
     """``{run} shell|python`` with options ``:tail: N`` and ``:image: FILE``."""
 
@@ -163,13 +73,8 @@ class RunBlock(Directive):
             raise self.error(f"run: give shell or python, got {kind!r}")
         env = self.state.document.settings.env
         cwd = page_folder(env.srcdir, env.docname)
-        code = "\n".join(self.content).strip("\n")
-        index = env.temp_data.setdefault("run_blocks", 0)
-        env.temp_data["run_blocks"] = index + 1
-        output = kept_output(cwd, index, kind, code)
-        if output is None:
-            output = run_block(kind, code, cwd)
-        output = output.rstrip("\n")
+        code = "\n".join(self.content)
+        output = run_block(kind, code, cwd).rstrip("\n")
         if "tail" in self.options:
             output = "\n".join(output.splitlines()[-self.options["tail"] :])
         shown: list[nodes.Node] = [nodes.literal_block(code, code, language=LANGUAGES[kind])]

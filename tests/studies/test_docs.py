@@ -15,14 +15,7 @@ from sphinx.errors import ExtensionError
 
 from wheelload.studies.docs.build import DocsBuildError, build_docs
 from wheelload.studies.docs.reference import packages
-from wheelload.studies.docs.run_blocks import (
-    Block,
-    kept_output,
-    page_blocks,
-    page_folder,
-    run_block,
-    run_pages,
-)
+from wheelload.studies.docs.run_blocks import run_block
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -89,38 +82,6 @@ def test_a_non_empty_folder_is_refused_without_force(tmp_path):
     with pytest.raises(DocsBuildError, match="not empty: give --force"):
         build_docs(tmp_path)
     assert (tmp_path / "keep.txt").read_text() == "the user's"
-
-
-def test_blocks_run_before_sphinx_keep_their_outputs_in_order(tmp_path):
-    """run_pages runs each page's blocks in order in its folder (options and fences as MyST
-    reads them), keeps their outputs and the first failure; the directive takes them by
-    index and refuses a block that is not the one that ran."""
-    page = (
-        "# A page\n\n```{run} shell\n:tail: 1\necho one > file\ncat file\n```\n\n"
-        "~~~~{run} python\nprint(open('file').read().strip() + ' two')\n~~~~\n\n"
-        "```{run} shell\necho broken; exit 3\n```\n\n```{run} shell\necho never\n```\n"
-    )
-    (tmp_path / "guide").mkdir()
-    (tmp_path / "guide" / "page.md").write_text(page)
-    assert page_blocks(page) == [
-        Block("shell", "echo one > file\ncat file"),
-        Block("python", "print(open('file').read().strip() + ' two')"),
-        Block("shell", "echo broken; exit 3"),
-        Block("shell", "echo never"),
-    ]
-    run_pages(tmp_path, jobs=2)
-    cwd = page_folder(tmp_path, "guide/page")
-    assert kept_output(cwd, 0, "shell", "echo one > file\ncat file") == "one\n"
-    assert kept_output(cwd, 1, "python", "print(open('file').read().strip() + ' two')") == (
-        "one two\n"
-    )
-    with pytest.raises(ExtensionError, match="exit 3"):
-        kept_output(cwd, 2, "shell", "echo broken; exit 3")
-    with pytest.raises(ExtensionError, match="not the block that ran"):
-        kept_output(cwd, 3, "shell", "echo never")  # after the failure nothing ran
-    with pytest.raises(ExtensionError, match="not the block that ran"):
-        kept_output(cwd, 0, "shell", "echo edited")
-    assert kept_output(page_folder(tmp_path, "other"), 0, "shell", "echo x") is None
 
 
 def test_a_failing_block_stops_the_build(tmp_path):
