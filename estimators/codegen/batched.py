@@ -221,9 +221,9 @@ class BatchLibrary:
 def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
     """The generated library for ``step`` and the batch driver, built and loaded.
 
-    The vehicle file is generated from under one name (``vehicle.toml``): the library's text,
-    and so its cached build, depends on the file's contents, not on what the file is called
-    (the calibration itself is set at run time).
+    The library is generated from a copy of the vehicle file under one name
+    (``vehicle.toml``): its text, and so its cached build, depends on the file's contents,
+    not on what the file is called (the calibration itself is set at run time).
     """
     options = CodegenOptions(precision=Precision.DOUBLE, prefix=PREFIX)
     with tempfile.TemporaryDirectory(dir=build_folder()) as folder:
