@@ -49,7 +49,17 @@ from wheelload.models import INPUTS
 from wheelload.models.files.build_folder import build_folder, shared_library
 
 PREFIX = "wheelload_batch"
-#: The fast build of the library as a shared object (warnings are not errors here).
+#: The fast build of the library as a shared object: ``FAST_CFLAGS``, its warnings reported
+#: but not errors here, with gcc's report of the loops it vectorised; both are kept beside
+#: the library (``build_report``), so one compile serves the run and the check of the build.
+KERNEL_FLAGS = (
+    "gcc",
+    *(flag for flag in FAST_CFLAGS if flag != "-Werror"),
+    "-fopt-info-vec-optimized",
+    "-fPIC",
+    "-shared",
+)
+#: The driver's build: ``FAST_CFLAGS`` without the warnings.
 SHARED_FLAGS = (
     "gcc",
     *(flag for flag in FAST_CFLAGS if not flag.startswith("-W")),
@@ -187,11 +197,13 @@ class BatchLibrary:
     Two shared objects: the library alone (the kernel, the slow build, cached by
     its source's hash) and the small driver, which reaches the library's batched step,
     parameter fields and default calibration through pointers (so a driver change rebuilds in
-    a second, and the self-test can be linked against the very same kernel).
+    a second, and the self-test can be linked against the very same kernel). ``source`` is
+    the kernel's C text as compiled (the header in place of its ``#include``).
     """
 
     kernel: ctypes.CDLL
     driver: ctypes.CDLL
+    source: str
 
     @property
     def path(self) -> Path:
@@ -207,10 +219,17 @@ class BatchLibrary:
 
 @functools.lru_cache(maxsize=4)
 def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
-    """The generated library for ``step`` and the batch driver, built and loaded."""
+    """The generated library for ``step`` and the batch driver, built and loaded.
+
+    The library is generated from a copy of the vehicle file under one name
+    (``vehicle.toml``): its text, and so its cached build, depends on the file's contents,
+    not on what the file is called (the calibration itself is set at run time).
+    """
     options = CodegenOptions(precision=Precision.DOUBLE, prefix=PREFIX)
     with tempfile.TemporaryDirectory(dir=build_folder()) as folder:
-        library = generate(vehicle_path, folder, options, step, allow_unusual=True)
+        vehicle = Path(folder) / "vehicle.toml"
+        vehicle.write_bytes(Path(vehicle_path).read_bytes())
+        library = generate(vehicle, Path(folder) / "c", options, step, allow_unusual=True)
         header = library.header.read_text()
         source = library.source.read_text().replace(f'#include "{PREFIX}.h"', header, 1)
     driver = (
@@ -218,10 +237,10 @@ def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
         .replace("${PREFIX}", PREFIX.upper())
         .replace("${max_filters}", str(MAX_FILTERS))
     )
-    kernel = shared_library(source, PREFIX, SHARED_FLAGS)
+    kernel = shared_library(source, PREFIX, KERNEL_FLAGS)
     loaded = shared_library(header + driver, f"{PREFIX}_driver", SHARED_FLAGS)
     getattr(loaded, f"{PREFIX}_run_batch").restype = None
-    return BatchLibrary(kernel=kernel, driver=loaded)
+    return BatchLibrary(kernel=kernel, driver=loaded, source=source)
 
 
 def _pointer(array: np.ndarray) -> ctypes.c_void_p:

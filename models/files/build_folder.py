@@ -11,6 +11,10 @@ recorded at build time in a sidecar file (``<library>.sha256``, renamed into
 place before the library itself), and a library that does not match (truncated,
 damaged, or without its record) is built again with a one-line note, never
 mapped (a truncated library mapped into memory kills the process with SIGBUS).
+
+What the compiler printed while building an output (its warnings, and the reports asked
+for by flags such as ``-fopt-info``) is kept beside it (``<output>.report``,
+:func:`build_report`), so a cached build says what gcc said of it without compiling again.
 """
 
 from __future__ import annotations
@@ -85,6 +89,21 @@ def _sidecar(library: Path) -> Path:
     return library.with_name(library.name + ".sha256")
 
 
+def _report(output: Path) -> Path:
+    return output.with_name(output.name + ".report")
+
+
+def build_report(output: Path) -> str:
+    """What the compiler printed on standard error while building the cached ``output``
+    (warnings, ``-fopt-info`` reports; empty when it said nothing)."""
+    try:
+        return _report(output).read_text()
+    except OSError as error:
+        raise BuildFolderError(
+            f"{output}: no compiler report ({error.strerror}): remove it so that it is built again"
+        ) from None
+
+
 def checked_library(library: Path) -> str | None:
     """Why ``library`` may not be loaded (its record is missing or it does not match), or
     None when its size and hash are those recorded at build time (module docstring)."""
@@ -113,10 +132,11 @@ def _put(folder: Path, target: Path, data: bytes) -> None:
 
 def _compile(
     sources: dict[str, str], target: Path, command: tuple[str, ...], purpose: str
-) -> bytes:
+) -> tuple[bytes, str]:
     """The bytes ``command`` makes of ``sources`` (file name: text; the first is compiled, the
     others are the headers it includes), in a temporary folder of the build folder (fixed file
-    names inside it, so that the same sources give the same bytes)."""
+    names inside it, so that the same sources give the same bytes), and what it printed on
+    standard error (in the C locale)."""
     import shutil  # only to build: a warm run loads what is built
     import subprocess
 
@@ -130,12 +150,13 @@ def _compile(
         output = work / target.name
         link = () if "-c" in command else ("-lm",)
         try:
-            subprocess.run(
+            done = subprocess.run(
                 [*command, "-o", output.name, next(iter(sources)), *link],
                 check=True,
                 capture_output=True,
                 text=True,
                 cwd=work,
+                env={**os.environ, "LC_ALL": "C"},  # the report in one language
             )
         except FileNotFoundError:
             raise BuildFolderError(
@@ -143,7 +164,7 @@ def _compile(
             ) from None
         except subprocess.CalledProcessError as error:
             raise RuntimeError(f"compiling {target.stem} failed:\n{error.stderr}") from None
-        return output.read_bytes()
+        return output.read_bytes(), done.stderr
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
@@ -153,10 +174,11 @@ def _cached_build(key: str, sources: Callable[[], dict[str, str]], name: str, su
     """``load`` of what ``command`` makes of ``sources()`` (:func:`_compile`), made once.
 
     The output is named by the hash of the command and ``key`` (the sources' text, or what
-    determines them: :func:`keyed_library`), built under :func:`build_folder`, its record
-    (size and SHA-256) and then the output renamed into place. A cached output is used only
-    when it matches its record (:func:`checked_library`); one that does not, or does not
-    load, is built again with a one-line note.
+    determines them: :func:`keyed_library`), built under :func:`build_folder`, the
+    compiler's report (:func:`build_report`), the record (size and SHA-256) and then the
+    output renamed into place. A cached output is used only when it matches its record
+    (:func:`checked_library`); one that does not, or does not load, is built again with a
+    one-line note.
     """
     digest = hashlib.sha256((" ".join(command) + key).encode()).hexdigest()[:16]
     folder = build_folder()
@@ -172,7 +194,8 @@ def _cached_build(key: str, sources: Callable[[], dict[str, str]], name: str, su
                     problem = f"it does not load ({first})"
             _log.warning("wheelload: note: cached library %s is rebuilt: %s", target, problem)
         remove_stale(folder)
-        data = _compile(sources(), target, command, purpose)
+        data, report = _compile(sources(), target, command, purpose)
+        _put(folder, _report(target), report.encode())
         # The record first: an output in place always has its record, and a crash between
         # the two renames leaves a record without its output (built again, never used).
         _put(folder, _sidecar(target), _record(data).encode("ascii"))

@@ -63,6 +63,24 @@ def test_an_object_is_compiled_once_per_text_and_flags(tmp_path, monkeypatch):
     assert len(changed.read_bytes()) > 10  # compiled again
 
 
+def test_the_compilers_report_is_kept_beside_the_cached_object(tmp_path, monkeypatch):
+    """build_report: what gcc printed when it built the object (here a -Wall warning), read
+    back later without compiling again; a build without a message leaves an empty report."""
+    from wheelload.models.files.build_folder import BuildFolderError, build_report, cached_object
+
+    _private_build_folder(tmp_path, monkeypatch)
+    source = tmp_path / "noisy.c"
+    source.write_text("int noisy(int x) { int unused; return x; }\n")
+    built = cached_object(source, (), ("gcc", "-Wall"))
+    assert "unused variable 'unused'" in build_report(built)
+    stamp = built.stat().st_mtime_ns
+    assert cached_object(source, (), ("gcc", "-Wall")) == built
+    assert built.stat().st_mtime_ns == stamp  # the report came from the cache
+    assert build_report(cached_object(source, (), ("gcc", "-w"))) == ""
+    with pytest.raises(BuildFolderError, match="no compiler report"):
+        build_report(tmp_path / "absent.o")
+
+
 def test_processes_that_need_one_object_at_once_compile_it_once(tmp_path):
     """Two processes asking for the same object together (two test workers, two fleet
     workers): one compiles it, the other waits on its lock and takes it. The compiler is
