@@ -5,7 +5,8 @@ adds its sub-parser and sets ``handler`` (a function of the parsed arguments
 returning an exit status).
 
 A mistake a user can make is one line on stderr and exit status 2. Ctrl-C
-(SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130; SIGTERM
+(SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130, also where an
+extension swallowed the KeyboardInterrupt and what it handed back then failed; SIGTERM
 raises :class:`Terminated` in the main thread, so that every ``finally`` runs
 (temporary files are removed, :mod:`wheelload.models.files.temporaries`), then the
 line ``terminated`` and status 143.
@@ -24,6 +25,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from wheelload.studies import interrupts
 from wheelload.studies.commands.options import log_level
 from wheelload.studies.deferred import defer
 
@@ -124,6 +126,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = argv[0] if argv and argv[0] in COMMAND_MODULES else "command"
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
+    # Ctrl-C counted where it raises KeyboardInterrupt (not where a shell ignores it).
+    counted = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if counted:
+        signal.signal(signal.SIGINT, interrupts.handler)
+    interrupts.reset()
     try:
         return _main(argv, process=process)
     except KeyboardInterrupt:
@@ -132,9 +139,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:
         print(f"wheelload {command}: terminated", file=sys.stderr)
         return 143
+    except Exception:
+        if not interrupts.pressed():  # else what a swallowed Ctrl-C left behind
+            raise
+        print(f"wheelload {command}: interrupted", file=sys.stderr)
+        return 130
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
+        if counted:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _configure_logging(level: int) -> None:
@@ -190,6 +204,8 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
     try:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError, BuildFolderError) as error:
+        if interrupts.pressed():  # what a swallowed Ctrl-C left behind (studies/interrupts.py)
+            raise KeyboardInterrupt from error
         print(f"wheelload {args.command}: error: {error}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into a command that stopped reading (head)

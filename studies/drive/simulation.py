@@ -27,6 +27,7 @@ from wheelload.models.plant.dynamics import (
 from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
 from wheelload.models.vehicle.description import Vehicle
+from wheelload.studies import interrupts
 from wheelload.studies.drive.driver import Driver, DriverTuning
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.roads import Road
@@ -138,6 +139,7 @@ def simulate(
     recorded = 0
     tic = time.perf_counter()
     for k in range(count):
+        interrupts.check()  # a Ctrl-C the plant's CasADi call swallowed
         request = driver.inputs(z[:n_x], dt)
         if payload is not None:
             request = np.concatenate([request, payload.at(k * dt)])
