@@ -24,12 +24,15 @@ from __future__ import annotations
 
 import enum
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from wheelload.estimators.identification import spill
+from wheelload.estimators.identification.spill import SPILL_BYTES, release
 from wheelload.estimators.logs.signals import (
     RATE_DERIVATIVES,
     RATES,
@@ -44,6 +47,7 @@ from wheelload.models.conventions import WHEELS
 AXLES = ("front", "rear")
 CORNER_COLUMNS = ("d", "v", "force")
 ARB_COLUMNS = ("d_left", "d_right", "force")
+BLOCK = 1 << 16  # samples per block of a pass over a data set that may be on disk
 HEADER_KEY = re.compile(r"^#\s*(\w+)\s*=\s*(\S+)\s*$")
 
 
@@ -75,6 +79,17 @@ class DataSet:
 
     def __len__(self) -> int:
         return len(self.t)
+
+    def release(self) -> None:
+        """Drop the pages of a data set kept on disk from memory (:func:`.spill.release`)."""
+        release(self.t, self.target, *self.signals.values())
+
+    def blocks(self, size: int) -> Iterator[tuple[int, int]]:
+        """Sample ranges ``(start, stop)`` of at most ``size``, the data set's pages dropped
+        after each (a pass over a long log holds one block)."""
+        for start in range(0, len(self), size):
+            yield start, min(start + size, len(self))
+            self.release()
 
     def label(self) -> str:
         if self.kind is DataKind.CORNER_RIG:
@@ -230,6 +245,7 @@ def read_drive(
     channel_map: str | Path | None = None,
     wiring_checks: bool = True,
     in_memory: bool = False,
+    spill_bytes: int = SPILL_BYTES,
 ) -> DataSet:
     """Read a drive log with reference loads for the model's signal ``channels``.
 
@@ -239,9 +255,10 @@ def read_drive(
     :func:`~wheelload.estimators.logs.signals.read_log` reads) is read through it,
     with its wiring checks unless ``wiring_checks`` is off.
 
-    A CSV or Parquet log named as ours is read chunk by chunk (memory: the data
-    set's columns and one chunk); any other, or with ``in_memory``, as a whole
-    table (the same data set, to the bit).
+    A CSV or Parquet log named as ours is read chunk by chunk, its data set kept
+    on disk when larger than ``spill_bytes`` (:mod:`.spill`; memory: one chunk
+    and the time stamps while reading); any other, or with ``in_memory``, as a
+    whole table in memory (the same data set, to the bit).
     """
     path = Path(path)
     source = str(path)
@@ -249,7 +266,7 @@ def read_drive(
         raise LogError(f"{source}: no such log file")
     suffix = path.suffix.lower()
     if channel_map is None and not in_memory:
-        data = _read_drive_chunks(path, channels, optional, wiring_checks)
+        data = _read_drive_chunks(path, channels, optional, wiring_checks, spill_bytes)
         if data is not None:
             return data
     try:
@@ -304,8 +321,11 @@ def read_drive(
 
 def _drive_set(source: str, t, table: dict, reference: np.ndarray, absent: set) -> DataSet:
     """The drive log's data set; no reference where a channel has no finite sample."""
-    for values in table.values():
-        reference[~np.isfinite(values[:, 0])] = np.nan
+    for start in range(0, len(t), BLOCK):
+        block = slice(start, start + BLOCK)
+        for values in table.values():
+            reference[block][~np.isfinite(values[block, 0])] = np.nan
+        release(reference, *table.values())
     return DataSet(
         kind=DataKind.DRIVE,
         source=source,
@@ -341,13 +361,18 @@ def _check_travel(channels: tuple[str, ...], source: str, present: bool) -> None
 
 
 def _read_drive_chunks(
-    path: Path, channels: tuple[str, ...], optional: frozenset[str], wiring_checks: bool
+    path: Path,
+    channels: tuple[str, ...],
+    optional: frozenset[str],
+    wiring_checks: bool,
+    spill_bytes: int,
 ) -> DataSet | None:
     """:func:`read_drive` of a CSV or Parquet log named as ours, read chunk by chunk
     (:meth:`~wheelload.estimators.kf.log_stream.LogStream.signal_chunks`: the same
     checks and derived signals as the whole-log reader, to the bit), so that memory is the
-    data set's columns and one chunk, not the log's table several times over. None for a
-    log the chunked reader cannot take as plain numbers (read it the ordinary way)."""
+    data set's columns (on disk when larger than ``spill_bytes``) and one chunk, not the
+    log's table several times over. None for a log the chunked reader cannot take as plain
+    numbers (read it the ordinary way)."""
     from wheelload.estimators.kf.log_stream import scan_log
     from wheelload.estimators.logs.checks import raise_for_wiring
     from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns
@@ -366,38 +391,53 @@ def _read_drive_chunks(
         raise_for_wiring(stream.wiring_report(), source)
     n = len(stream)
     derived_rate_dots = RATES[0] in stream.names and RATE_DERIVATIVES[0] not in stream.names
-    table: dict[str, np.ndarray] = {}
+    filled: list[str] = []
     absent: set[str] = set()
     for name in channels:
         if name in present or name in ("vx", "az", *TRAVEL, *TRAVEL_RATE):
-            table[name] = np.empty((n, 1))  # read, derived, or missing (NaN) as in Signals
+            filled.append(name)  # read, derived, or missing (NaN) as in Signals
         elif name in RATE_DERIVATIVES and derived_rate_dots:
-            table[name] = np.empty((n, 1))
+            filled.append(name)
         elif name in optional:
             absent.add(name)
         else:
             raise _no_channel(source, name)
-    reference = np.full((n, len(WHEELS)), np.nan)
+    arrays = spill.columns(
+        {"t": 1, "target": len(WHEELS)} | dict.fromkeys(filled, 1), n, spill_bytes
+    )
+    t, reference = arrays.pop("t")[:, 0], arrays.pop("target")
+    table = arrays
     extra = tuple(name for name in table if name in present)
     start = 0
     try:
-        for t, columns in stream.signal_chunks(extra):
-            stop = start + t.size
+        for chunk_t, chunk in stream.signal_chunks(extra):
+            stop = start + chunk_t.size
+            t[start:stop] = chunk_t
             for i, wheel in enumerate(WHEELS):
-                if f"fz_{wheel}" in columns:
-                    reference[start:stop, i] = columns[f"fz_{wheel}"]
+                reference[start:stop, i] = chunk.get(f"fz_{wheel}", np.nan)
             for name, values in table.items():
-                values[start:stop, 0] = columns.get(name, np.nan)
+                values[start:stop, 0] = chunk.get(name, np.nan)
+            release(t, reference, *table.values())
             start = stop
     except ChunkError:
         return None
+    del stream  # its time stamps: the data set has them
     for name in RATE_DERIVATIVES:  # none derived (too irregular, no rate): as if not logged
-        if name in table and name not in present and not np.isfinite(table[name]).any():
+        if name in table and name not in present and not _any_finite(table[name]):
             if name not in optional:
                 raise _no_channel(source, name)
             del table[name]
             absent.add(name)
     for name in absent:
-        table[name] = np.zeros((n, 1))
+        table[name] = np.broadcast_to(np.zeros((1, 1)), (n, 1))  # read-only, no memory
     table = {name: table[name] for name in channels}
-    return _drive_set(source, stream.t, table, reference, absent)
+    return _drive_set(source, t, table, reference, absent)
+
+
+def _any_finite(values: np.ndarray) -> bool:
+    """Whether a column (perhaps on disk) has a finite sample, a block at a time."""
+    for start in range(0, len(values), BLOCK):
+        if np.isfinite(values[start : start + BLOCK]).any():
+            return True
+        release(values)
+    return False

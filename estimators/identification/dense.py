@@ -13,6 +13,7 @@ from scipy import optimize
 from wheelload.estimators.identification.fit_terms import (
     ROBUST_SCALE,
     FitLoss,
+    Inliers,
     Layout,
     Problem,
     instrument_columns,
@@ -79,7 +80,7 @@ class DenseDesign:
     def residual(self, cols, u) -> np.ndarray:
         return self.r0 - self.rows.J[:, cols] @ (u * self.scale[cols])
 
-    def information(self, cols, inflation, inliers: np.ndarray | None) -> np.ndarray:
+    def information(self, cols, inflation, inliers: Inliers | None) -> np.ndarray:
         """The projected weighted regressors (rows ``inliers``, default all)."""
         rows, scale = self.rows, self.scale
         per_row = inflation[rows.group][:, None]
@@ -87,7 +88,7 @@ class DenseDesign:
             None if rows.Z is None else instrument_columns(rows.Z, cols, scale, 1 / per_row[:, 0])
         )
         info = _projected(rows.J[:, cols] * scale[cols] / per_row, instrument)
-        return info if inliers is None else info[inliers]
+        return info if inliers is None else info[inliers.of(slice(None), rows.group)]
 
     def final(self, value: np.ndarray) -> tuple[Rows, np.ndarray]:
         """The rows at ``value`` and the largest scaled regressor per set and parameter."""

@@ -34,7 +34,8 @@ exceeds ``warn_precision`` of its size is named in a milder warning.
 
 The linear algebra runs by default over chunks of samples with triangular
 factors kept (:mod:`~wheelload.estimators.identification.streamed`: memory
-bounded by the parameter count and one chunk, plus one residual per row);
+bounded by the parameter count and one chunk; a long log's data and residuals
+stay on disk, :mod:`~wheelload.estimators.identification.spill`);
 ``FitPath.DENSE`` holds the whole regressor matrix
 (:mod:`~wheelload.estimators.identification.dense`, the reference: the two
 agree to 1e-9 relative).
@@ -48,16 +49,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from wheelload.estimators.identification import residual_stats
 from wheelload.estimators.identification.data import DataSet
 from wheelload.estimators.identification.dense import DenseDesign
-from wheelload.estimators.identification.fit_terms import FitLoss, Layout, Problem, inliers
+from wheelload.estimators.identification.fit_terms import FitLoss, Inliers, Problem
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import CHUNK, Rows, linear_free_set
+from wheelload.estimators.identification.spill import SPILL_BYTES
 from wheelload.estimators.identification.streamed import ChunkedDesign
-from wheelload.estimators.kernels import order_statistics
 from wheelload.models import ModelParameters
 
-MAD_SCALE = 1.4826  # MAD to standard deviation of a normal distribution
 ZERO_FORCE = 1e-6  # N, largest regressor effect still taken as no excitation
 
 __all__ = ["FitLoss", "FitPath", "FitSettings", "Identification", "identify"]
@@ -85,6 +86,7 @@ class FitSettings:
     instrumental: bool = False
     path: FitPath = FitPath.CHUNKED
     chunk: int = CHUNK  # samples per chunk of the chunked path
+    spill_bytes: int = SPILL_BYTES  # per-row values of the chunked path beyond this: on disk
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -121,55 +123,13 @@ class Identification:
         return float(self.std_error[self.names.index(name)])
 
 
-def _lag_one(r: np.ndarray, layout: Layout, group: int) -> float:
-    """Lag-one autocorrelation of one data set's residuals ``r`` (per wheel, time order)."""
-    values = []
-    for _, rows, t in layout.wheel_rows(group):
-        series = r[rows][np.argsort(t, kind="stable")]
-        series = series - series.mean()
-        if series.size > 2 and np.dot(series, series) > 0:
-            values.append(np.dot(series[1:], series[:-1]) / np.dot(series, series))
-    return float(np.clip(np.mean(values), 0.0, 0.99)) if values else 0.0
-
-
-def _scales(r: np.ndarray, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
-    count = len(layout.sets)
-    sigma = np.ones(count)
-    rho = np.zeros(count)
-    for g in range(count):
-        rows = r[layout.rows(g)]
-        if rows.size:
-            deviation = rows - order_statistics.median(rows)
-            np.abs(deviation, out=deviation)
-            spread = MAD_SCALE * order_statistics.median(deviation, overwrite_input=True)
-            del deviation
-            sigma[g] = max(spread, 1e-9 * max(1.0, layout.peak[g]))
-            rho[g] = _lag_one(rows, layout, g)
-    return sigma, rho
-
-
-def _rmse(r: np.ndarray, layout: Layout) -> dict[tuple[str, str], float]:
-    table = {}
-    for g, data in enumerate(layout.sets):
-        rows = r[layout.rows(g)]
-        for i, wheel, _ in layout.wheel_rows(g):
-            table[(data.label(), data.rows[i])] = float(np.sqrt(np.mean(rows[wheel] ** 2)))
-    return table
-
-
-def _variance_factor(weighted: np.ndarray, free: int, loss: FitLoss) -> float:
-    """s^2: mean squared scaled residual of the rows that count, per degree of freedom."""
-    counted = inliers(weighted, loss)
-    return float(np.sum(weighted[counted] ** 2) / max(int(counted.sum()) - free, 1))
-
-
 def _design(model, sets, theta0, scale, free, settings: FitSettings):
     problem = Problem(
         model=model, sets=sets, theta=theta0, scale=scale, instrumented=settings.instrumental
     )
     if settings.path is FitPath.DENSE:
         return DenseDesign(problem)
-    return ChunkedDesign(problem, free, chunk=settings.chunk)
+    return ChunkedDesign(problem, free, chunk=settings.chunk, spill_bytes=settings.spill_bytes)
 
 
 def identify(
@@ -226,23 +186,21 @@ def _identify(
     lower_all = np.array([settings.lower[n] if n in settings.lower else -np.inf for n in names])
     upper_all = np.array([settings.upper[n] if n in settings.upper else np.inf for n in names])
     r = design.r0
-    sigma, rho = _scales(r, layout)
+    sigma, rho = residual_stats.scales(r, layout)
     while free:
         cols = np.array(free)
         lower = (lower_all[cols] - theta0[cols]) / scale[cols]
         upper = (upper_all[cols] - theta0[cols]) / scale[cols]
         u = design.solve(cols, sigma, lower, upper, settings.loss)
         r = design.residual(cols, u)
-        sigma, rho = _scales(r, layout)
+        sigma, rho = residual_stats.scales(r, layout)
         inflation = sigma * np.sqrt((1 + rho) / (1 - rho))
         info = design.information(cols, inflation, None)
         _, singular, vt = np.linalg.svd(info, full_matrices=False)
         weakest = int(np.argmin(singular))
         # Judged on the same footing as the reported standard errors (s^2 (A^T A)^-1).
-        weighted = r / layout.per_row(sigma)
-        precision = np.sqrt(_variance_factor(weighted, cols.size, settings.loss)) / (
-            max(singular[weakest], 1e-300)
-        )
+        s2 = residual_stats.variance_factor(r, sigma, layout, cols.size, settings.loss)
+        precision = np.sqrt(s2) / (max(singular[weakest], 1e-300))
         if precision <= settings.precision:
             break
         culprit = int(cols[np.argmax(np.abs(vt[weakest]))])
@@ -265,10 +223,10 @@ def _identify(
     if free:
         cols = np.array(free)
         value[cols] = theta0[cols] + u * scale[cols]
-        weighted = r / layout.per_row(sigma)
-        s2 = _variance_factor(weighted, cols.size, settings.loss)
-        counted = None if settings.loss is FitLoss.LINEAR else inliers(weighted, settings.loss)
-        A = info if counted is None else design.information(cols, inflation, counted)
+        s2 = residual_stats.variance_factor(r, sigma, layout, cols.size, settings.loss)
+        if settings.loss is not FitLoss.LINEAR:
+            info = design.information(cols, inflation, Inliers(r, sigma, settings.loss))
+        A = info
         cov = s2 * np.linalg.pinv(A.T @ A)
         std[cols] = np.sqrt(np.maximum(np.diag(cov), 0)) * scale[cols]
         d = np.sqrt(np.maximum(np.diag(cov), 1e-300))
@@ -300,5 +258,5 @@ def _identify(
         scale=sigma,
         autocorrelation=rho,
         loss=settings.loss,
-        fit_rmse=_rmse(r, layout),
+        fit_rmse=residual_stats.rmse(r, layout),
     )

@@ -19,7 +19,7 @@ from scipy import optimize
 
 from wheelload.estimators.identification.data import DataSet
 from wheelload.estimators.identification.model import SuspensionFitModel
-from wheelload.estimators.identification.regressors import used_samples
+from wheelload.estimators.identification.regressors import CHUNK
 
 ROBUST_SCALE = 1.5  # robust-loss threshold in units of the residual scale
 INLIER = 3.0  # |r| / sigma below which a row counts for a robust fit's covariance
@@ -106,6 +106,20 @@ def inliers(weighted: np.ndarray, loss: FitLoss) -> np.ndarray:
     return np.ones(weighted.size, bool) if loss is FitLoss.LINEAR else np.abs(weighted) < INLIER
 
 
+@dataclass(frozen=True, eq=False)
+class Inliers:
+    r"""The rows that count for a robust fit's covariance (:func:`inliers` of
+    :math:`r / \sigma_g`), from the residuals ``r`` and the per-set scales ``sigma``."""
+
+    r: np.ndarray
+    sigma: np.ndarray
+    loss: FitLoss
+
+    def of(self, rows: slice, group) -> np.ndarray:
+        """The mask of ``rows``, all of set ``group`` (or one set index per row)."""
+        return inliers(self.r[rows] / self.sigma[group], self.loss)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Layout:
     """Where each data set's rows are in the stacked rows (``offsets``), and their largest
@@ -119,10 +133,15 @@ class Layout:
     def of(sets: tuple[DataSet, ...]) -> Layout:
         counts, peaks = [], []
         for data in sets:
-            target = data.target[used_samples(data)]
-            finite = np.isfinite(target)
-            counts.append(int(finite.sum()))
-            peaks.append(float(np.abs(target[finite]).max()) if finite.any() else 0.0)
+            count, peak = 0, 0.0
+            for start, stop in data.blocks(CHUNK):
+                target = data.target[start:stop]
+                finite = np.isfinite(target)
+                count += int(finite.sum())
+                if finite.any():
+                    peak = max(peak, float(np.abs(target[finite]).max()))
+            counts.append(count)
+            peaks.append(peak)
         return Layout(
             sets=sets, offsets=np.concatenate([[0], np.cumsum(counts)]), peak=np.array(peaks)
         )
@@ -134,27 +153,15 @@ class Layout:
     def rows(self, group: int) -> slice:
         return slice(int(self.offsets[group]), int(self.offsets[group + 1]))
 
-    def counts(self) -> np.ndarray:
-        return np.diff(self.offsets)
-
-    def wheel_rows(self, group: int) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
-        """One set's wheels with rows, one at a time: the wheel (index into the set's
-        ``rows``), where its rows are among the set's rows (in row order) and their times."""
+    def row_blocks(self, group: int) -> Iterator[tuple[slice, np.ndarray, np.ndarray]]:
+        """One set's rows a block of samples at a time: where they are among all rows, the
+        wheel of each (index into the set's ``rows``) and its time."""
         data = self.sets[group]
-        used = used_samples(data)
-        finite = np.isfinite(data.target)[used]
-        per_sample = finite.sum(axis=1)
-        first = np.cumsum(per_sample) - per_sample  # the set's first row of each sample
-        del per_sample
-        for wheel in range(finite.shape[1]):
-            on = finite[:, wheel]
-            if on.any():
-                rows = first[on] + finite[on, :wheel].sum(axis=1)
-                yield wheel, rows, data.t[used[on]]
-
-    def per_row(self, values: np.ndarray) -> np.ndarray:
-        """A per-set value repeated over the set's rows."""
-        return np.repeat(values, self.counts())
+        first = int(self.offsets[group])
+        for start, stop in data.blocks(CHUNK):
+            sample, wheel = np.nonzero(np.isfinite(data.target[start:stop]))
+            yield slice(first, first + sample.size), wheel, data.t[start:stop][sample]
+            first += sample.size
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -240,9 +240,11 @@ def _rows(
     )
 
 
-def used_samples(data: DataSet) -> np.ndarray:
-    """Indices of the samples with a finite target in some row."""
-    return np.flatnonzero(np.isfinite(data.target).any(axis=1))
+def used_samples(data: DataSet, start: int = 0, stop: int | None = None) -> np.ndarray:
+    """Indices of the samples in ``[start, stop)`` (default all) with a finite target in
+    some row."""
+    block = data.target[start:stop]
+    return start + np.flatnonzero(np.isfinite(block).any(axis=1))
 
 
 def chunks(
@@ -252,11 +254,13 @@ def chunks(
     instrumented: bool = False,
     size: int = CHUNK,
 ) -> Iterator[Rows]:
-    """The rows of :func:`evaluate`, in the same order, ``size`` samples at a time."""
+    """The rows of :func:`evaluate`, in the same order, the used samples of ``size``
+    samples at a time (a data set on disk: its pages dropped after each)."""
     for index, data in enumerate(sets):
-        used = used_samples(data)
-        for start in range(0, used.size, size):
-            yield _rows(model, data, index, used[start : start + size], theta, instrumented)
+        for start, stop in data.blocks(size):
+            used = used_samples(data, start, stop)
+            if used.size:
+                yield _rows(model, data, index, used, theta, instrumented)
 
 
 #: Samples per data set in the rows a chunked fit keeps for its figures.
@@ -269,12 +273,27 @@ def sampled_rows(
     """The rows of at most ``limit`` used samples per data set, spread evenly in time."""
     parts = []
     for index, data in enumerate(sets):
-        used = used_samples(data)
-        if used.size > limit:
-            used = used[np.linspace(0, used.size - 1, limit).round().astype(int)]
+        used = _spread(data, limit)
         if used.size:
             parts.append(_rows(model, data, index, used, theta, False))
+            data.release()
     return stack(parts)
+
+
+def _spread(data: DataSet, limit: int) -> np.ndarray:
+    """At most ``limit`` used samples evenly spread over the used samples (their ranks
+    ``linspace(0, count - 1, limit)`` rounded), found a block at a time."""
+    count = sum(used_samples(data, a, b).size for a, b in data.blocks(CHUNK))
+    ranks = np.arange(count)
+    if count > limit:
+        ranks = np.linspace(0, count - 1, limit).round().astype(int)
+    picked, seen = [], 0
+    for a, b in data.blocks(CHUNK):
+        used = used_samples(data, a, b)
+        wanted = ranks[(ranks >= seen) & (ranks < seen + used.size)] - seen
+        picked.append(used[wanted])
+        seen += used.size
+    return np.concatenate(picked) if picked else np.zeros(0, int)
 
 
 def stack(parts: list[Rows]) -> Rows:

@@ -16,11 +16,14 @@ factor of the weighted subset as the QR of :math:`[w_g R_g[:, S]]_g`, and
   singular values of :math:`P_Z A` are those of :math:`R_{ZA}`;
 - a robust loss: bounded Newton steps, one pass a step (the factor of the
   rows weighted by the loss's curvature and the gradient accumulated);
-- the residuals (for the per-set MAD scale and lag-one autocorrelation) in
-  one pass per fit of the identifiability loop, one number per row kept.
+- the residuals (for the per-set MAD scale and lag-one autocorrelation,
+  :mod:`~wheelload.estimators.identification.residual_stats`) in one pass per
+  fit of the identifiability loop, one number per row kept (on disk for a long
+  log, :mod:`~wheelload.estimators.identification.spill`).
 
 Memory: a chunk of regressors and the factors, (4 F + 1)^2 numbers per data
-set, plus one residual per row; time is linear in the log's length.
+set; the data and the residuals of a long log stay on disk, read a chunk at a
+time. Time is linear in the log's length.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from scipy import optimize
 
 from wheelload.estimators.identification.fit_terms import (
     FitLoss,
+    Inliers,
     Layout,
     Problem,
     instrument_columns,
@@ -43,6 +47,7 @@ from wheelload.estimators.identification.regressors import (
     chunks,
     sampled_rows,
 )
+from wheelload.estimators.identification.spill import SPILL_BYTES, release, row_values
 
 EPS = np.finfo(float).eps
 
@@ -72,12 +77,18 @@ def _bvls(M: np.ndarray, c: np.ndarray, lower, upper) -> np.ndarray:
 class ChunkedDesign:
     """The regression rows of all data sets, passed over a chunk at a time."""
 
-    def __init__(self, problem: Problem, candidates: list[int], chunk: int = CHUNK) -> None:
+    def __init__(
+        self,
+        problem: Problem,
+        candidates: list[int],
+        chunk: int = CHUNK,
+        spill_bytes: int = SPILL_BYTES,
+    ) -> None:
         self.model, self.sets, self.theta = problem.model, problem.sets, problem.theta
         self.scale = scale = problem.scale
         instrumented = problem.instrumented
         sets, theta = self.sets, self.theta
-        self.instrumented, self.chunk = instrumented, chunk
+        self.instrumented, self.chunk, self.spill_bytes = instrumented, chunk, spill_bytes
         self.layout = Layout.of(sets)
         if self.layout.size == 0:
             raise ValueError("no data sample with a measured force or reference load")
@@ -87,7 +98,7 @@ class ChunkedDesign:
         k = len(candidates)
         width = self.lags * k + k + 1
         triangles = [Triangle(width) for _ in sets]
-        self.r0 = np.empty(self.layout.size)
+        self.r0 = row_values(self.layout.size, self.spill_bytes)
         self.peak = np.zeros(theta.size)
         self.group_peak = np.zeros((len(sets), theta.size))
         for start, part in self._passes(instrumented):
@@ -104,13 +115,15 @@ class ChunkedDesign:
             triangles[g].add(np.hstack(block))
         self.factors = [t.R for t in triangles]
 
-    def _passes(self, instrumented: bool):
-        """(first row, chunk of rows) over all data sets."""
+    def _passes(self, instrumented: bool, *arrays: np.ndarray):
+        """(first row, chunk of rows) over all data sets; the pages of the per-row values
+        (``r0`` and ``arrays``) on disk dropped after each chunk."""
         start = 0
         for part in chunks(self.model, self.sets, self.theta, instrumented, self.chunk):
             if part.y.size:
                 yield start, part
                 start += part.y.size
+                release(self.r0, *arrays)
 
     def _columns(self, cols, rhs: bool) -> np.ndarray:
         """Columns of the kept factors: instruments of ``cols`` (lag-major), regressors of
@@ -194,13 +207,14 @@ class ChunkedDesign:
         return Z @ coefficients
 
     def residual(self, cols, u) -> np.ndarray:
-        r = self.r0.copy()
+        r = row_values(self.layout.size, self.spill_bytes)
         step = u * self.scale[cols]
-        for start, part in self._passes(False):
-            r[start : start + part.y.size] -= part.J[:, cols] @ step
+        for start, part in self._passes(False, r):
+            rows = slice(start, start + part.y.size)
+            r[rows] = self.r0[rows] - part.J[:, cols] @ step
         return r
 
-    def information(self, cols, inflation, inliers: np.ndarray | None) -> np.ndarray:
+    def information(self, cols, inflation, inliers: Inliers | None) -> np.ndarray:
         """A triangular factor with the singular values and Gram matrix of the projected
         weighted regressors (rows ``inliers``, default all)."""
         k = len(cols)
@@ -210,9 +224,10 @@ class ChunkedDesign:
             return M if R_ZZ is None else self._projection(R_ZZ, M)[0]
         coefficients = None if R_ZZ is None else self._coefficients(R_ZZ, M)
         triangle = Triangle(k)
-        for start, part in self._passes(self.instrumented):
-            A = self._regressors(part, cols, weight[int(part.group[0])], coefficients)
-            triangle.add(A[inliers[start : start + part.y.size]])
+        for start, part in self._passes(self.instrumented, inliers.r):
+            g = int(part.group[0])
+            A = self._regressors(part, cols, weight[g], coefficients)
+            triangle.add(A[inliers.of(slice(start, start + part.y.size), g)])
         return triangle.R
 
     def final(self, value: np.ndarray) -> tuple[Rows, np.ndarray]:

@@ -16,7 +16,7 @@ Example
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -94,3 +94,62 @@ def percentile(values, q: float, *, overwrite_input: bool = False) -> float:
     if np.isnan(part[n - 1]):  # NaN sorts last
         return float("nan")
     return linear_percentile(n, q, part.__getitem__)
+
+
+#: Values gathered into memory at once by :func:`blocked_kth` (8 MB).
+GATHER = 1 << 20
+#: Bins of one histogram pass of :func:`blocked_kth`.
+BINS = 4096
+
+
+def blocked_kth(
+    blocks: Callable[[], Iterator[np.ndarray]], n: int, k: int, gather: int = GATHER
+) -> float:
+    """The ``k``-th smallest (from 0) of ``n`` finite values that ``blocks()`` gives block
+    by block, each call a new pass, in memory ``gather`` values at most.
+
+    Exact selection by histogram: a pass counts the values in the interval known to
+    hold the answer; when few enough, they are gathered and partitioned, else a
+    second pass bins them (:data:`BINS` equal bins between their extremes) and the
+    bin holding rank ``k`` becomes the interval. A pass reads every block once.
+    """
+    if n <= gather:
+        values = np.concatenate([np.asarray(b, float).ravel() for b in blocks()])
+        return float(np.partition(values, k)[k])
+    low, high, below = -np.inf, np.inf, 0  # the answer is in [low, high]; `below` lie under
+    while True:
+        inside, smallest, largest = 0, np.inf, -np.inf
+        for block in blocks():
+            chosen = block[(block >= low) & (block <= high)]
+            if chosen.size:
+                inside += chosen.size
+                smallest, largest = min(smallest, chosen.min()), max(largest, chosen.max())
+        if smallest == largest:
+            return float(smallest)
+        if inside <= gather:
+            values = np.concatenate([b[(b >= low) & (b <= high)] for b in blocks()])
+            return float(np.partition(values, k - below)[k - below])
+        edges = np.linspace(smallest, largest, BINS + 1)
+        counts = np.zeros(BINS, np.int64)
+        for block in blocks():
+            chosen = block[(block >= low) & (block <= high)]
+            bins = np.minimum(np.searchsorted(edges, chosen, side="right") - 1, BINS - 1)
+            counts += np.bincount(bins, minlength=BINS)
+        cumulative = np.cumsum(counts)
+        b = int(np.searchsorted(cumulative, k - below, side="right"))
+        below += int(cumulative[b - 1]) if b else 0
+        last = b == BINS - 1  # the last bin holds its upper edge
+        low, high = edges[b], edges[b + 1] if last else np.nextafter(edges[b + 1], -np.inf)
+
+
+def blocked_median(
+    blocks: Callable[[], Iterator[np.ndarray]], n: int, gather: int = GATHER
+) -> float:
+    """``np.median`` of ``n`` finite values given block by block (:func:`blocked_kth`)."""
+    half = n // 2
+    if n % 2:
+        return blocked_kth(blocks, n, half, gather)
+    if n <= gather:  # one gather, numpy's numbers to the bit
+        return float(median(np.concatenate([np.asarray(b, float).ravel() for b in blocks()])))
+    pair = blocked_kth(blocks, n, half - 1, gather), blocked_kth(blocks, n, half, gather)
+    return (pair[0] + pair[1]) / 2.0

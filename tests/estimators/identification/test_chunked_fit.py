@@ -19,6 +19,7 @@ import pytest
 
 from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
 from wheelload.estimators.identification.fit import FitLoss, FitPath, FitSettings
+from wheelload.estimators.identification.spill import on_disk
 from wheelload.models import ModelParameters
 from wheelload.studies.pipeline.example_log import example_log_path
 
@@ -69,3 +70,23 @@ def test_chunk_size_must_be_positive(drive):
     model, data, p = drive
     with pytest.raises(ValueError, match="chunk: give a positive number"):
         identify(model, data, p, FitSettings(chunk=0))
+
+
+def test_a_fit_kept_on_disk_equals_the_dense_fit(drive):
+    """The path of a long log: the data set and the per-row residuals on temporary files
+    (``spill_bytes=0``), read a chunk at a time with their pages dropped after each, the
+    robust loss's inlier rows taken from the residual file; the dense fit in memory."""
+    model, data, p = drive
+    spilled = (
+        read_drive(example_log_path(), model.channel_names(), model.optional, spill_bytes=0),
+    )
+    assert on_disk(spilled[0].target)
+    settings = {"loss": FitLoss.HUBER, "chunk": 300}
+    dense = identify(model, data, p, FitSettings(path=FitPath.DENSE, **settings))
+    chunked = identify(model, spilled, p, FitSettings(spill_bytes=0, **settings))
+    free = list(dense.free)
+    assert chunked.free == dense.free and len(free) >= 10
+    np.testing.assert_allclose(chunked.value[free], dense.value[free], rtol=1e-9, atol=0)
+    np.testing.assert_allclose(chunked.std_error[free], dense.std_error[free], rtol=1e-9, atol=0)
+    np.testing.assert_allclose(chunked.scale, dense.scale, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(chunked.autocorrelation, dense.autocorrelation, rtol=1e-9)

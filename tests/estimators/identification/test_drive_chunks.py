@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators.identification import default_model, read_drive
+from wheelload.estimators.identification.spill import on_disk
 from wheelload.studies.pipeline.example_log import example_log_path
 
 TILES = 49
@@ -75,3 +76,21 @@ def test_chunked_read_equals_the_whole_table(tmp_path, variant, absent):
     for name, values in whole.signals.items():
         np.testing.assert_array_equal(chunked.signals[name], values, err_msg=name)
     assert len(whole) > 1 << 16 and np.isfinite(chunked.target).sum() > 1 << 18
+
+
+@pytest.mark.parametrize(("variant", "absent"), [("gaps", set()), ("no-rates", {"wx", "wy"})])
+def test_a_data_set_kept_on_disk_equals_the_one_in_memory(tmp_path, variant, absent):
+    """``spill_bytes=0``: every column on a temporary file, mapped (the path a long log
+    takes); the same numbers, the absent channels zeros that take no memory."""
+    model = default_model()
+    path = tmp_path / f"{variant}.parquet"
+    _variant(variant, _tiled()).to_parquet(path, index=False)
+    spilled = read_drive(path, model.channel_names(), model.optional, spill_bytes=0)
+    whole = read_drive(path, model.channel_names(), model.optional, in_memory=True)
+    assert on_disk(spilled.t) and on_disk(spilled.target)
+    np.testing.assert_array_equal(spilled.t, whole.t)
+    np.testing.assert_array_equal(spilled.target, whole.target)
+    for name, values in whole.signals.items():
+        assert on_disk(spilled.signals[name]) != (name in spilled.absent), name
+        np.testing.assert_array_equal(spilled.signals[name], values, err_msg=name)
+    assert absent <= spilled.absent

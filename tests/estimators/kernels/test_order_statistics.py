@@ -4,6 +4,7 @@ numbers to the bit, on random data with repeats, NaNs, odd and even counts."""
 import numpy as np
 import pytest
 
+from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kernels.order_statistics import median, nanmedian, percentile
 
 
@@ -64,3 +65,46 @@ def test_a_median_along_another_axis_or_a_percentile_out_of_range_is_refused():
         median(np.zeros((3, 4)), axis=0)
     with pytest.raises(ValueError, match="range"):
         percentile(np.zeros(3), 101.0)
+
+
+def _passes(values: np.ndarray, block: int):
+    """A pass over ``values`` in blocks of ``block``, counting the passes made."""
+    made = []
+
+    def blocks():
+        made.append(1)
+        for start in range(0, values.size, block):
+            yield values[start : start + block]
+
+    return blocks, made
+
+
+@pytest.mark.parametrize(
+    "kind", ["normal", "heavy-tailed", "ties", "one-value", "clustered", "tiny-spread"]
+)
+@pytest.mark.parametrize("n", [40_001, 40_000])
+def test_blocked_median_is_numpys_with_a_small_gather(kind, n):
+    """Selection over passes, with at most 500 values gathered (80 times fewer than the
+    data), gives numpy's median exactly, also with ties, one repeated value, a cluster
+    far from the rest and a spread of a few ulps."""
+    rng = np.random.default_rng(7)
+    values = {
+        "normal": rng.normal(3.0, 2.0, n),
+        "heavy-tailed": rng.standard_cauchy(n),
+        "ties": rng.integers(-5, 6, n).astype(float),
+        "one-value": np.full(n, -2.5),
+        "clustered": np.concatenate([rng.normal(0, 1e-9, n - 7), rng.normal(1e6, 1, 7)]),
+        "tiny-spread": 1.0 + rng.integers(0, 4, n) * np.finfo(float).eps,
+    }[kind]
+    blocks, made = _passes(values, 3_333)
+    assert order_statistics.blocked_median(blocks, n, gather=500) == np.median(values)
+    assert len(made) <= 24  # each selection: a few count, bin and gather passes
+
+
+def test_blocked_kth_is_the_sorted_value_at_every_rank():
+    rng = np.random.default_rng(3)
+    values = rng.normal(0, 1, 5_000) ** 3
+    ordered = np.sort(values)
+    blocks, _ = _passes(values, 701)
+    for k in (0, 1, 2_499, 2_500, 4_998, 4_999):
+        assert order_statistics.blocked_kth(blocks, values.size, k, gather=64) == ordered[k]
