@@ -270,30 +270,22 @@ SAMPLED = 5000
 def sampled_rows(
     model: SuspensionFitModel, sets: tuple[DataSet, ...], theta: np.ndarray, limit: int = SAMPLED
 ) -> Rows:
-    """The rows of at most ``limit`` used samples per data set, spread evenly in time."""
+    """The rows of at most ``limit`` used samples per data set, spread evenly in time (the
+    used samples of ranks ``linspace(0, count - 1, limit)`` rounded), a block at a time."""
     parts = []
     for index, data in enumerate(sets):
-        used = _spread(data, limit)
-        if used.size:
-            parts.append(_rows(model, data, index, used, theta, False))
-            data.release()
+        count = sum(used_samples(data, a, b).size for a, b in data.blocks(CHUNK))
+        ranks = np.arange(count)
+        if count > limit:
+            ranks = np.linspace(0, count - 1, limit).round().astype(int)
+        seen = 0
+        for a, b in data.blocks(CHUNK):
+            used = used_samples(data, a, b)
+            wanted = ranks[(ranks >= seen) & (ranks < seen + used.size)] - seen
+            if wanted.size:
+                parts.append(_rows(model, data, index, used[wanted], theta, False))
+            seen += used.size
     return stack(parts)
-
-
-def _spread(data: DataSet, limit: int) -> np.ndarray:
-    """At most ``limit`` used samples evenly spread over the used samples (their ranks
-    ``linspace(0, count - 1, limit)`` rounded), found a block at a time."""
-    count = sum(used_samples(data, a, b).size for a, b in data.blocks(CHUNK))
-    ranks = np.arange(count)
-    if count > limit:
-        ranks = np.linspace(0, count - 1, limit).round().astype(int)
-    picked, seen = [], 0
-    for a, b in data.blocks(CHUNK):
-        used = used_samples(data, a, b)
-        wanted = ranks[(ranks >= seen) & (ranks < seen + used.size)] - seen
-        picked.append(used[wanted])
-        seen += used.size
-    return np.concatenate(picked) if picked else np.zeros(0, int)
 
 
 def stack(parts: list[Rows]) -> Rows:
