@@ -31,8 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.identification import spill
-from wheelload.estimators.identification.spill import SPILL_BYTES, release
+from wheelload.estimators.logs import spill
 from wheelload.estimators.logs.signals import (
     RATE_DERIVATIVES,
     RATES,
@@ -42,6 +41,7 @@ from wheelload.estimators.logs.signals import (
     rate_derivatives,
     signals_from_frame,
 )
+from wheelload.estimators.logs.spill import SPILL_BYTES, release
 from wheelload.models.conventions import WHEELS
 
 AXLES = ("front", "rear")

@@ -105,8 +105,8 @@ BINS = 4096
 def blocked_kth(
     blocks: Callable[[], Iterator[np.ndarray]], n: int, k: int, gather: int = GATHER
 ) -> float:
-    """The ``k``-th smallest (from 0) of ``n`` finite values that ``blocks()`` gives block
-    by block, each call a new pass, in memory ``gather`` values at most.
+    """The ``k``-th smallest (from 0) of ``n`` values (no NaN) that ``blocks()`` gives
+    block by block, each call a new pass, in memory ``gather`` values at most.
 
     Exact selection by histogram: a pass counts the values in the interval known to
     hold the answer; when few enough, they are gathered and partitioned, else a
@@ -116,7 +116,13 @@ def blocked_kth(
     if n <= gather:
         values = np.concatenate([np.asarray(b, float).ravel() for b in blocks()])
         return float(np.partition(values, k)[k])
-    low, high, below = -np.inf, np.inf, 0  # the answer is in [low, high]; `below` lie under
+    infinite = [(int(np.sum(b == -np.inf)), int(np.sum(b == np.inf))) for b in blocks()]
+    negative, positive = (sum(c) for c in zip(*infinite))
+    if k < negative or k >= n - positive:
+        return -np.inf if k < negative else np.inf
+    largest_float = np.finfo(float).max
+    # the answer is in [low, high]; `below` values lie under it
+    low, high, below = -largest_float, largest_float, negative
     while True:
         inside, smallest, largest = 0, np.inf, -np.inf
         for block in blocks():
@@ -145,7 +151,7 @@ def blocked_kth(
 def blocked_median(
     blocks: Callable[[], Iterator[np.ndarray]], n: int, gather: int = GATHER
 ) -> float:
-    """``np.median`` of ``n`` finite values given block by block (:func:`blocked_kth`)."""
+    """``np.median`` of ``n`` values (no NaN) given block by block (:func:`blocked_kth`)."""
     half = n // 2
     if n % 2:
         return blocked_kth(blocks, n, half, gather)

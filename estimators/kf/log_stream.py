@@ -43,12 +43,7 @@ from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OU
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring
-from wheelload.estimators.logs.readers.chunks import (
-    ChunkError,
-    chunk_columns,
-    read_chunks,
-    row_count,
-)
+from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns, read_chunks
 from wheelload.estimators.logs.signals import (
     HUB,
     RATE_DERIVATIVES,
@@ -64,11 +59,13 @@ from wheelload.estimators.logs.signals import (
     RateEstimator,
     Signals,
     SpeedSource,
+    Steps,
     check_time_column,
     check_units,
     input_bits,
     sensor_mode,
 )
+from wheelload.estimators.logs.spill import Appended, release
 from wheelload.estimators.loops.compiled import ColumnLayout, ColumnLoop, FlagRule
 from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS
@@ -137,28 +134,6 @@ class ChannelStats:
     rate_max: np.ndarray
 
 
-class _Store:
-    """A column gathered chunk by chunk: into one array if the row count is known."""
-
-    def __init__(self, rows: int | None) -> None:
-        self.filled = 0
-        self.whole = None if rows is None else np.empty(rows)
-        self.parts: list[np.ndarray] = []
-
-    def append(self, values: np.ndarray) -> None:
-        if self.whole is not None and self.filled + len(values) <= len(self.whole):
-            self.whole[self.filled : self.filled + len(values)] = values
-        else:
-            self.parts.append(values)
-        self.filled += len(values)
-
-    def array(self) -> np.ndarray:
-        if self.whole is not None and not self.parts:
-            return self.whole[: self.filled]
-        head = [] if self.whole is None else [self.whole[: self.filled - sum(map(len, self.parts))]]
-        return np.concatenate([*head, *self.parts]) if head or self.parts else np.array([])
-
-
 def _column_peak(values: np.ndarray) -> np.ndarray:
     return np.nanmax(np.abs(values), axis=0, initial=0.0)
 
@@ -205,7 +180,8 @@ class LogStream:
     path: Path
     source: str
     names: tuple[str, ...]  # our columns present in the file
-    t: np.ndarray
+    t: np.ndarray  # on disk for a long log (:mod:`~wheelload.estimators.logs.spill`)
+    steps: Steps  # the sample intervals' median and largest deviation
     travel_present: np.ndarray  # (4,) bool
     reference_present: np.ndarray | None  # (4,) bool, None: no fz_* column
     velocities_derived: bool
@@ -222,7 +198,7 @@ class LogStream:
     @property
     def sample_rate(self) -> float:
         """Median sample rate [Hz]."""
-        return float(1.0 / order_statistics.median(np.diff(self.t)))
+        return float(1.0 / self.steps.median)
 
     def mode(self) -> str:
         """The sensor set in words (as :meth:`Signals.mode`)."""
@@ -274,16 +250,17 @@ class LogStream:
         state carried, so each equals the whole log's to the bit; the derivatives left out
         where the time stamps are too irregular for them), ``az`` where assumed (g) and
         ``vx`` (logged, the wheel speeds' mean, or 0)."""
-        dt = np.diff(self.t)
         travel_rates = (
-            Differentiator(dt, 4, VELOCITY_CUTOFF, self.source) if self.velocities_derived else None
+            Differentiator(self.steps, 4, VELOCITY_CUTOFF, self.source)
+            if self.velocities_derived
+            else None
         )
         rate_dots = None
         # Derived whatever the [model] switches: the fault monitor's parity test uses every
         # term the inputs allow (as the whole-log path, estimators/logs/signals.py).
         if RATE_DERIVATIVES[0] not in self.names and RATES[0] in self.names:
             try:
-                rate_dots = RateEstimator(dt, 3, self.source)
+                rate_dots = RateEstimator(self.steps, 3, self.source)
             except LogError:
                 rate_dots = None  # too irregular: the terms that need them are dropped
         names = list(self.names) + [name for name in extra if name not in self.names]
@@ -292,8 +269,10 @@ class LogStream:
             n = len(chunk["t"])
             if n == 0:
                 continue
-            t = self.t[start : start + n]
-            if not np.array_equal(t, chunk["t"]):
+            t = chunk["t"]
+            same = np.array_equal(self.t[start : start + n], t)
+            release(self.t)
+            if not same:
                 raise LogError(f"{self.source}: changed while it was read: read it again")
             columns = dict(chunk)
             if travel_rates is not None:
@@ -424,7 +403,7 @@ def scan_log(
             raise ChunkError(f"{source}: a partial group of {group[0]}")
     ours = {"t", "ax", "ay", "az", "vx", *WHEEL_SPEED, *REFERENCE, *(n for g in GROUPS for n in g)}
     names = tuple(name for name in present if name in ours)
-    t_store, az_store = _Store(row_count(path)), _Store(row_count(path))
+    t_store, az_store = Appended(), Appended()
     peaks = {"d": np.zeros(4), "v": np.zeros(4), "vx": 0.0}
     travel_present = np.zeros(4, bool)
     reference_present = np.zeros(4, bool)
@@ -487,15 +466,9 @@ def scan_log(
     t = t_store.array()
     if not t.size:
         raise ChunkError(f"{source}: no rows")
-    check_time_column(t, source)
+    steps = check_time_column(t, source)
     az_assumed = "az" not in names
-    az = az_store.array()
-    del az_store
-    # the column is ours: its median without a copy
-    az_median = (
-        order_statistics.nanmedian(az, overwrite_input=True) if np.any(np.isfinite(az)) else np.nan
-    )
-    del az
+    az_median = _nanmedian(az_store.array())
     check_units(
         np.array([[0.0, 0.0, az_median]]),
         peaks["d"][None, :],
@@ -508,6 +481,7 @@ def scan_log(
         source=source,
         names=names,
         t=t,
+        steps=steps,
         travel_present=travel_present,
         reference_present=reference_present if any(n in names for n in REFERENCE) else None,
         velocities_derived=TRAVEL_RATE[0] not in names and bool(travel_present.any()),
@@ -519,8 +493,23 @@ def scan_log(
         rows=rows,
     )
     if stream.velocities_derived:
-        Differentiator(np.diff(t), 4, VELOCITY_CUTOFF, source)  # its checks, before any output
+        Differentiator(steps, 4, VELOCITY_CUTOFF, source)  # its checks, before any output
     return stream
+
+
+def _nanmedian(values: np.ndarray) -> float:
+    """``np.nanmedian`` of a column that may be on disk, a block at a time (NaN if all are;
+    the median of the rest by :func:`~order_statistics.blocked_median`)."""
+    block = 1 << 16
+
+    def blocks():
+        for start in range(0, values.size, block):
+            part = values[start : start + block]
+            yield part[~np.isnan(part)]
+            release(values)
+
+    count = sum(part.size for part in blocks())
+    return float(order_statistics.blocked_median(blocks, count)) if count else np.nan
 
 
 def _signals(head: _Head, source: str, az_assumed: bool) -> Signals:

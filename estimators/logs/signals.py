@@ -47,6 +47,7 @@ import numpy as np
 
 from wheelload.estimators.kernels import first_order, kinematic, order_statistics
 from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
+from wheelload.estimators.logs.spill import release
 from wheelload.estimators.result import StepFlag
 from wheelload.models.conventions import GRAVITY, WHEELS
 
@@ -429,33 +430,76 @@ def signals_from_frame(
     )
 
 
-def check_time_column(t: np.ndarray, source: str) -> None:
-    """A log's time column: finite, increasing, in seconds (one-line :class:`LogError`)."""
-    steps = _check_time(t, source)
-    step = float(order_statistics.median(steps, overwrite_input=True))  # the steps are ours
-    if step > MAX_SAMPLE_INTERVAL:
+def check_time_column(t: np.ndarray, source: str) -> Steps:
+    """A log's time column: finite, increasing, in seconds (one-line :class:`LogError`);
+    its :class:`Steps`."""
+    _check_time(t, source)
+    steps = Steps.of(t)
+    if steps.median > MAX_SAMPLE_INTERVAL:
         raise LogError(
-            f"{source}: column 't' advances by {step:.4g} per sample: more than "
+            f"{source}: column 't' advances by {steps.median:.4g} per sample: more than "
             f"{MAX_SAMPLE_INTERVAL} s, it looks like milliseconds (give seconds)"
         )
+    return steps
 
 
-def _check_time(t: np.ndarray, source: str) -> np.ndarray:
-    """Finite and increasing ``t``, else a one-line :class:`LogError`; returns its steps."""
+#: Time stamps per block of a pass over a time column (which may be on disk).
+TIME_BLOCK = 1 << 16
+
+
+def _step_blocks(t: np.ndarray):
+    """A pass over the steps ``t[k + 1] - t[k]``, ``(first k, steps)`` a block at a time,
+    the pages of a column on disk dropped after each (:mod:`.spill`)."""
+
+    def blocks():
+        for start in range(0, t.size - 1, TIME_BLOCK):
+            yield start, np.diff(t[start : start + TIME_BLOCK + 1])
+            release(t)
+
+    return blocks
+
+
+def _check_time(t: np.ndarray, source: str) -> None:
+    """Finite and increasing ``t``, else a one-line :class:`LogError` (the first missing
+    stamp, then the first step back), a block at a time."""
     if t.size < 2:
         raise LogError(f"{source}: needs at least 2 samples, has {t.size}")
-    missing = np.flatnonzero(~np.isfinite(t))
-    if missing.size:
-        raise LogError(f"{source}: column 't' has no valid time stamp at row {missing[0]}")
-    steps = np.diff(t)
-    bad = np.flatnonzero(steps <= 0.0)
-    if bad.size:
-        row = bad[0] + 1
-        raise LogError(
-            f"{source}: column 't' is not increasing at row {row} "
-            f"(t = {t[row - 1]!r} then {t[row]!r})"
-        )
-    return steps
+    for start in range(0, t.size, TIME_BLOCK):
+        missing = np.flatnonzero(~np.isfinite(t[start : start + TIME_BLOCK]))
+        if missing.size:
+            row = start + missing[0]
+            raise LogError(f"{source}: column 't' has no valid time stamp at row {row}")
+    for start, steps in _step_blocks(t)():
+        bad = np.flatnonzero(steps <= 0.0)
+        if bad.size:
+            row = start + bad[0] + 1
+            raise LogError(
+                f"{source}: column 't' is not increasing at row {row} "
+                f"(t = {t[row - 1]!r} then {t[row]!r})"
+            )
+
+
+@dataclass(frozen=True)
+class Steps:
+    r"""A log's sample intervals as the uniformity and sample-rate checks read them: their
+    median and their largest deviation from it, :math:`\max_k |\Delta t_k - m|`."""
+
+    median: float
+    deviation: float
+
+    @staticmethod
+    def of(t: np.ndarray) -> Steps:
+        """The steps of increasing time stamps ``t`` (at least 2), a block at a time: the
+        median by exact selection (``np.median``'s number)."""
+        blocks = _step_blocks(t)
+        steps = lambda: (values for _, values in blocks())  # noqa: E731
+        median = float(order_statistics.blocked_median(steps, t.size - 1))
+        deviation = max(float(np.max(np.abs(values - median))) for values in steps())
+        return Steps(median, deviation)
+
+    def uniform(self, tolerance: float = 0.05) -> bool:
+        """Whether every step is within ``tolerance`` of the median."""
+        return self.deviation <= tolerance * self.median
 
 
 def check_units(acc, d, v, vx, source: str) -> None:
@@ -500,12 +544,9 @@ def derive_velocities(
     missing travel sample gives a missing velocity, and the filter restarts at
     rest on the first sample after a gap, so a gap makes no false velocity.
     """
-    dt = np.diff(t)
-    median = float(order_statistics.median(dt))
     if not np.isfinite(d).any():
         return np.full(d.shape, np.nan)
-    differentiator = Differentiator(dt, d.shape[1], cutoff, source, median=median)
-    return differentiator(d)
+    return Differentiator(Steps.of(t), d.shape[1], cutoff, source)(d)
 
 
 class ChunkFilter:
@@ -544,22 +585,20 @@ class ChunkFilter:
 
 class Differentiator(ChunkFilter):
     r"""The travel differentiator of :func:`derive_velocities` with its state carried
-    (:class:`ChunkFilter`). ``dt`` are the whole log's sample intervals (the uniformity
-    and sample-rate checks need all of them).
+    (:class:`ChunkFilter`). ``steps``: the whole log's sample intervals (:class:`Steps`,
+    for the uniformity and sample-rate checks).
     """
 
     def __init__(
         self,
-        dt: np.ndarray,
+        steps: Steps,
         channels: int,
         cutoff: float = VELOCITY_CUTOFF,
         source: str = "<log>",
-        *,
-        median: float | None = None,
     ) -> None:
         super().__init__(channels)
-        median = float(order_statistics.median(dt)) if median is None else median
-        if np.max(np.abs(dt - median)) > 0.05 * median:
+        median = steps.median
+        if not steps.uniform():
             raise LogError(
                 f"{source}: time stamps are not uniform enough to derive suspension velocities; "
                 "give columns v_fl v_fr v_rl v_rr"
@@ -606,19 +645,19 @@ class RateEstimator(ChunkFilter):
     r"""Body-rate derivatives estimated by a kinematic Kalman filter per axis
     (:class:`RateDerivativeFilter`), its state carried over chunks (:class:`ChunkFilter`);
     a run after a gap starts at the rate held, :math:`[w_0, 0]`.
-    ``dt`` are the whole log's sample intervals (the uniformity check needs all of them).
+    ``steps``: the whole log's sample intervals (:class:`Steps`, for the uniformity check).
     """
 
     def __init__(
         self,
-        dt: np.ndarray,
+        steps: Steps,
         channels: int = 3,
         source: str = "<log>",
         settings: RateDerivativeFilter = RateDerivativeFilter(),
     ) -> None:
         super().__init__(channels)
-        median = float(order_statistics.median(dt))
-        if np.max(np.abs(dt - median)) > 0.05 * median:
+        median = steps.median
+        if not steps.uniform():
             raise LogError(
                 f"{source}: time stamps are not uniform enough to estimate body-rate "
                 "derivatives; give columns wx_dot wy_dot wz_dot"
@@ -665,6 +704,6 @@ def rate_derivatives(signals: Signals) -> np.ndarray:
     if signals.rates is None or len(signals) < 2:
         return np.full((len(signals), 3), np.nan)
     try:
-        return RateEstimator(np.diff(signals.t), 3, signals.source)(signals.rates)
+        return RateEstimator(Steps.of(signals.t), 3, signals.source)(signals.rates)
     except LogError:
         return np.full((len(signals), 3), np.nan)

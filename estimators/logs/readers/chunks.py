@@ -61,15 +61,6 @@ def chunk_columns(path: Path) -> list[str]:
     return names
 
 
-def row_count(path: Path) -> int | None:
-    """The number of rows of a Parquet log (from its footer); None for CSV."""
-    if path.suffix.lower() not in PARQUET_SUFFIXES:
-        return None
-    import pyarrow.parquet as pq
-
-    return int(pq.read_metadata(path).num_rows)
-
-
 def read_chunks(path: Path, columns: list[str], *, rows: int = PARQUET_ROWS) -> Iterator[dict]:
     """Chunks of at most ``rows`` rows of ``columns`` (present in the file), ``{name: float64}``."""
     import pyarrow as pa

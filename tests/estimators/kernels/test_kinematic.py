@@ -12,6 +12,7 @@ from wheelload.estimators.logs.signals import (
     Differentiator,
     RateDerivativeFilter,
     RateEstimator,
+    Steps,
 )
 from wheelload.studies.pipeline.example_log import example_log_path
 
@@ -40,8 +41,8 @@ def test_the_filter_recovers_a_sine_angular_acceleration_better_than_the_differe
         w = 0.05 * np.sin(omega * t)
         w_dot = 0.05 * omega * np.cos(omega * t)
         noisy = w + GYRO * np.sqrt(rate / 2) * rng.standard_normal(t.size)
-        estimated = RateEstimator(np.diff(t), 1)(noisy[:, None])[:, 0]
-        differentiated = Differentiator(np.diff(t), 1, VELOCITY_CUTOFF)(noisy[:, None])[:, 0]
+        estimated = RateEstimator(Steps.of(t), 1)(noisy[:, None])[:, 0]
+        differentiated = Differentiator(Steps.of(t), 1, VELOCITY_CUTOFF)(noisy[:, None])[:, 0]
         settled = t > 5.0
         error = np.sqrt(np.mean((estimated - w_dot)[settled] ** 2))
         raw = np.sqrt(np.mean((differentiated - w_dot)[settled] ** 2))
@@ -60,8 +61,8 @@ def test_the_estimator_in_chunks_equals_one_call():
     w[37:90, 0] = np.nan
     w[73, 1] = np.nan
     w[-5:, 2] = np.nan
-    whole = RateEstimator(np.diff(t), 3)(w)
-    estimator = RateEstimator(np.diff(t), 3)
+    whole = RateEstimator(Steps.of(t), 3)(w)
+    estimator = RateEstimator(Steps.of(t), 3)
     parts = [estimator(w[k : k + 37]) for k in range(0, len(w), 37)]
     assert np.array_equal(np.concatenate(parts), whole, equal_nan=True)
     assert np.isnan(whole[37:90, 0]).all() and np.isfinite(whole[90:, 0]).all()

@@ -13,7 +13,7 @@ import pytest
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.kf.log_stream import scan_log
 from wheelload.estimators.logs.output_files import OutputError, table_writer
-from wheelload.estimators.logs.signals import Differentiator, derive_velocities
+from wheelload.estimators.logs.signals import Differentiator, Steps, derive_velocities
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
@@ -83,7 +83,7 @@ def test_the_differentiator_in_chunks_equals_one_call(example):
     d[73, 1] = np.nan
     d[-5:, 2] = np.nan
     whole = derive_velocities(t, d)
-    differentiator = Differentiator(np.diff(t), 4)
+    differentiator = Differentiator(Steps.of(t), 4)
     parts = [differentiator(d[k : k + 37]) for k in range(0, len(d), 37)]
     assert np.array_equal(np.concatenate(parts), whole, equal_nan=True)
 

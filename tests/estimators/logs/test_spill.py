@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wheelload.estimators.identification.spill import columns, on_disk, release, row_values
+from wheelload.estimators.logs.signals import Steps
+from wheelload.estimators.logs.spill import Appended, columns, on_disk, release, row_values
 
 STATUS = Path("/proc/self/status")
 
@@ -45,3 +46,29 @@ def test_released_pages_leave_the_process_and_the_values_stay():
     assert released - before < 8.0
     assert values[12345] == 12345.0 and values[-1] == n - 1
     assert np.array_equal(values[::4096], np.arange(0, n, 4096, dtype=float))
+
+
+def test_an_appended_column_goes_to_disk_past_its_limit_with_the_same_values():
+    rng = np.random.default_rng(5)
+    parts = [rng.normal(size=int(k)) for k in rng.integers(1, 900, 40)]
+    for limit, disk in ((10**9, False), (8 * 2000, True)):
+        column = Appended(spill_bytes=limit)
+        for part in parts:
+            column.append(part)
+        values = column.array()
+        assert on_disk(values) == disk
+        assert np.array_equal(values, np.concatenate(parts))
+
+
+def test_the_steps_of_time_stamps_on_disk_are_numpys():
+    """:class:`Steps` of a time column on disk, read a block at a time: the median and
+    largest deviation of ``np.diff`` (300 001 stamps: past a block of 65 536)."""
+    rng = np.random.default_rng(9)
+    t = np.cumsum(0.01 + rng.uniform(-4e-4, 4e-4, 300_001))
+    stored = row_values(t.size, spill_bytes=0)
+    stored[:] = t
+    steps = Steps.of(stored)
+    dt = np.diff(t)
+    assert steps.median == np.median(dt)
+    assert steps.deviation == np.max(np.abs(dt - np.median(dt)))
+    assert steps.uniform() and not Steps.of(np.array([0.0, 1.0, 3.0])).uniform()

@@ -1,12 +1,13 @@
-"""Long identification data on disk: columns in an unnamed temporary file, mapped.
+"""Long logs' columns on disk: an unnamed temporary file, mapped.
 
-A data set or a per-row value of a fit longer than :data:`SPILL_BYTES` lives in
-a temporary file mapped into memory (``mmap``, shared), so that the arrays are
-ordinary NumPy arrays to the code that reads them. The pages a pass has read
-stay mapped until :func:`release` drops them (``madvise(MADV_DONTNEED)``:
-the values stay in the file and the page cache, the process no longer holds
-them), which the chunked fit calls after each chunk: resident memory is then
-the chunk a pass is at, whatever the log's length. The file has no name (it is
+A column longer than :data:`SPILL_BYTES` (a long log's time stamps, an
+identification data set, a fit's per-row residuals) lives in a temporary file
+mapped into memory (``mmap``, shared), so that the arrays are ordinary NumPy
+arrays to the code that reads them. The pages a pass has read stay mapped
+until :func:`release` drops them (``madvise(MADV_DONTNEED)``: the values stay
+in the file and the page cache, the process no longer holds them), which a
+pass over a long log calls after each block: resident memory is then the
+block a pass is at, whatever the log's length. The file has no name (it is
 removed when the last array on it is freed, also after a crash).
 
 Example
@@ -49,6 +50,39 @@ def columns(
         arrays[name] = flat.reshape(width, n).T
         offset += 8 * n * width
     return arrays
+
+
+class Appended:
+    """A float64 column appended chunk by chunk, its length not known in advance: in
+    memory up to ``spill_bytes``, beyond that written to a temporary file as it comes."""
+
+    def __init__(self, spill_bytes: int = SPILL_BYTES) -> None:
+        self.spill_bytes = spill_bytes
+        self.parts: list[np.ndarray] = []
+        self.size = 0
+        self.file = None
+
+    def append(self, values: np.ndarray) -> None:
+        values = np.ascontiguousarray(values, dtype=np.float64)
+        self.size += values.size
+        if self.file is None:
+            self.parts.append(values)
+            if 8 * self.size > self.spill_bytes:
+                self.file = tempfile.TemporaryFile(prefix="wheelload-")
+                for part in self.parts:
+                    self.file.write(part.tobytes())
+                self.parts = []
+        else:
+            self.file.write(values.tobytes())
+
+    def array(self) -> np.ndarray:
+        """The column (n,): on its file, mapped, when it went there."""
+        if self.file is None:
+            return np.concatenate(self.parts) if self.parts else np.zeros(0)
+        self.file.flush()
+        shared = mmap.mmap(self.file.fileno(), 8 * self.size)
+        self.file.close()
+        return np.frombuffer(shared, dtype=np.float64)
 
 
 def row_values(n: int, spill_bytes: int = SPILL_BYTES) -> np.ndarray:
