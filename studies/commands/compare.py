@@ -13,6 +13,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators import SuspensionModel
+from wheelload.studies.commands import catalog
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -40,7 +41,7 @@ TRAITS = CommandTraits(log=True, scores=True, vehicle=True, writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "compare",
-        help="compare estimators on a log with reference loads (paper-style table, figures)",
+        help=catalog.summary("compare"),
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("log", help="log file (.csv or .parquet) with fz_fl..fz_rr reference")

@@ -23,6 +23,7 @@ from wheelload.models.vehicle.file import (
     write_text_atomically,
     write_vehicle_text,
 )
+from wheelload.studies.commands import catalog
 from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
 from wheelload.studies.pipeline.identification import identify_vehicle
 
@@ -43,7 +44,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "identify",
-        help="identify spring, damper and anti-roll-bar maps from rig data and drive logs",
+        help=catalog.summary("identify"),
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")

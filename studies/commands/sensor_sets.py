@@ -7,6 +7,7 @@ from pathlib import Path
 
 from wheelload.estimators.registry import build
 from wheelload.models import WHEELS, example_vehicle_path
+from wheelload.studies.commands import catalog
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -22,9 +23,7 @@ TRAITS = CommandTraits(log=True, vehicle=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "sensor-sets", help="partial sensor sets and the roll-split sweep on a log"
-    )
+    parser = subparsers.add_parser("sensor-sets", help=catalog.summary("sensor-sets"))
     parser.add_argument("log", help="log (CSV or Parquet) with all channels and reference loads")
     add_vehicle_option(parser)
     parser.add_argument(

@@ -37,6 +37,7 @@ from wheelload.models.vehicle.file import (
     prepend_comment,
     write_vehicle_text,
 )
+from wheelload.studies.commands import catalog
 from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -46,7 +47,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "tune",
-        help="fit the filter's noise densities to logs (innovation likelihood)",
+        help=catalog.summary("tune"),
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
