@@ -21,18 +21,6 @@ from wheelload.studies.commands.options import (
     log_of,
     vehicle_of,
 )
-from wheelload.studies.pipeline.comparison import (
-    compare_methods,
-    format_table,
-    long_table,
-    parse_methods,
-)
-from wheelload.studies.plots.comparison import (
-    check_writable,
-    figure_paths,
-    plot_comparison,
-    write_csv,
-)
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, scores=True, vehicle=True, writes=True)
@@ -60,6 +48,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # imported to run, not for --help (studies/commands/catalog.py)
+    from wheelload.studies.pipeline.comparison import (
+        compare_methods,
+        format_table,
+        long_table,
+        parse_methods,
+    )
+    from wheelload.studies.plots.comparison import (
+        check_writable,
+        figure_paths,
+        plot_comparison,
+        write_csv,
+    )
+
     names = parse_methods(args.methods)
     log_path = Path(args.log)
     csv = Path(args.csv) if args.csv else None

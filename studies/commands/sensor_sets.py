@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators.registry import build
 from wheelload.models import WHEELS, example_vehicle_path
 from wheelload.studies.commands import catalog
 from wheelload.studies.commands.options import (
@@ -15,8 +14,6 @@ from wheelload.studies.commands.options import (
     log_of,
     vehicle_of,
 )
-from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
-from wheelload.studies.pipeline.log_settings import expand_logs
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, vehicle=True)
@@ -35,6 +32,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # imported to run, not for --help (studies/commands/catalog.py)
+    from wheelload.estimators.registry import build
+    from wheelload.studies.experiments.sensor_sets import (
+        reference_split,
+        sensor_set_table,
+        split_sweep,
+    )
+    from wheelload.studies.pipeline.log_settings import expand_logs
+
     vehicle = vehicle_of(args.vehicle or example_vehicle_path(), args)
     (path,) = expand_logs([args.log])
     frame = log_of(path, args).to_frame()
