@@ -26,7 +26,7 @@ import threading
 from collections.abc import Sequence
 
 from wheelload.studies import interrupts
-from wheelload.studies.commands.catalog import CATALOG
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import log_level
 from wheelload.studies.deferred import defer
 
@@ -41,7 +41,7 @@ COMMAND_MODULES = {name: command.module for name, command in CATALOG.items()}
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The command line. Without ``argv`` every command's module builds its parser; with
     ``argv``, only the command it names does (none for ``--help`` or ``--version``), and the
-    others are listed by their summaries alone (:mod:`~wheelload.studies.commands.catalog`)."""
+    others are listed by their summaries alone (:mod:`wheelload.studies.commands`)."""
     parser = argparse.ArgumentParser(
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",

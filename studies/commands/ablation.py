@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
-from wheelload.studies.commands import catalog
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, show_progress
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS
@@ -26,7 +26,7 @@ TRAITS = CommandTraits(vehicle=True, writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "ablation",
-        help=catalog.summary("ablation"),
+        help=CATALOG["ablation"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument(

@@ -13,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators import SuspensionModel
-from wheelload.studies.commands import catalog
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -29,7 +29,7 @@ TRAITS = CommandTraits(log=True, scores=True, vehicle=True, writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "compare",
-        help=catalog.summary("compare"),
+        help=CATALOG["compare"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("log", help="log file (.csv or .parquet) with fz_fl..fz_rr reference")
@@ -48,7 +48,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    # imported to run, not for --help (studies/commands/catalog.py)
+    # imported to run, not for --help (studies/commands/__init__.py)
     from wheelload.studies.pipeline.comparison import (
         compare_methods,
         format_table,

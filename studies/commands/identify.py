@@ -16,7 +16,7 @@ from wheelload.models.vehicle.file import (
     write_text_atomically,
     write_vehicle_text,
 )
-from wheelload.studies.commands import catalog
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
 
 REPORT_FILES = (
@@ -36,7 +36,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "identify",
-        help=catalog.summary("identify"),
+        help=CATALOG["identify"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
@@ -84,7 +84,7 @@ def _knots(args: argparse.Namespace) -> tuple[float, ...]:
 
 
 def handle(args: argparse.Namespace) -> int:
-    # imported to run, not for --help (studies/commands/catalog.py)
+    # imported to run, not for --help (studies/commands/__init__.py)
     from wheelload.estimators.identification import FitLoss
     from wheelload.estimators.identification.report import parameter_table
     from wheelload.studies.pipeline.identification import identify_vehicle
@@ -127,7 +127,7 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def _write_report(result, keys, report: Path, vehicle_path: Path, out: Path) -> None:
-    # imported to run, not for --help (studies/commands/catalog.py)
+    # imported to run, not for --help (studies/commands/__init__.py)
     from wheelload.estimators.identification.report import (
         correlation_table,
         markdown_report,

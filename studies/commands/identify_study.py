@@ -13,7 +13,7 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from wheelload.studies.commands import catalog
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
 from wheelload.studies.drive.scenarios import SCENARIOS as SCENARIO_TABLE
 from wheelload.studies.experiments.identification_study import StudySettings, run_study
@@ -29,7 +29,7 @@ TRAITS = CommandTraits(vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "identify-study",
-        help=catalog.summary("identify-study"),
+        help=CATALOG["identify-study"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--out", default="identify-study", help="folder for logs and tables")

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from wheelload.models import WHEELS, example_vehicle_path
-from wheelload.studies.commands import catalog
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -20,7 +20,7 @@ TRAITS = CommandTraits(log=True, vehicle=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("sensor-sets", help=catalog.summary("sensor-sets"))
+    parser = subparsers.add_parser("sensor-sets", help=CATALOG["sensor-sets"].summary)
     parser.add_argument("log", help="log (CSV or Parquet) with all channels and reference loads")
     add_vehicle_option(parser)
     parser.add_argument(
@@ -32,7 +32,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    # imported to run, not for --help (studies/commands/catalog.py)
+    # imported to run, not for --help (studies/commands/__init__.py)
     from wheelload.estimators.registry import build
     from wheelload.studies.experiments.sensor_sets import (
         reference_split,

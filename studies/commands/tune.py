@@ -27,7 +27,7 @@ from wheelload.models.vehicle.file import (
     prepend_comment,
     write_vehicle_text,
 )
-from wheelload.studies.commands import catalog
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -37,7 +37,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "tune",
-        help=catalog.summary("tune"),
+        help=CATALOG["tune"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
@@ -61,7 +61,7 @@ def register(subparsers) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
-    # imported to run, not for --help (studies/commands/catalog.py)
+    # imported to run, not for --help (studies/commands/__init__.py)
     from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
     from wheelload.estimators.identification.tuning import (
         NIS_BAND,

@@ -3,8 +3,7 @@
 import argparse
 import importlib
 
-from wheelload.studies.cli import COMMAND_MODULES, COMMANDS, build_parser
-from wheelload.studies.commands.catalog import CATALOG
+from wheelload.studies.cli import CATALOG, COMMAND_MODULES, COMMANDS, build_parser
 
 
 def test_each_command_is_registered_by_the_module_named_for_it():
