@@ -6,7 +6,8 @@ returning an exit status).
 
 A mistake a user can make is one line on stderr and exit status 2. Ctrl-C
 (SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130, also where an
-extension swallowed the KeyboardInterrupt and what it handed back then failed; SIGTERM
+extension swallowed the KeyboardInterrupt and what it handed back then failed, or caught
+the signal itself (:mod:`wheelload.estimators.interrupts`); SIGTERM
 raises :class:`Terminated` in the main thread, so that every ``finally`` runs
 (temporary files are removed, :mod:`wheelload.models.files.temporaries`), then the
 line ``terminated`` and status 143.
@@ -25,7 +26,6 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from wheelload.studies import interrupts
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import log_level
 from wheelload.studies.deferred import defer
@@ -100,22 +100,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
     # Ctrl-C counted where it raises KeyboardInterrupt (not where a shell ignores it).
     counted = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    if counted:
-        signal.signal(signal.SIGINT, interrupts.handler)
-    interrupts.reset()
     try:
-        return _main(argv, process=process)
+        return _main(argv, process=process, counted=counted)
     except KeyboardInterrupt:
         print(f"wheelload {command}: interrupted", file=sys.stderr)
         return 130
     except Terminated:
         print(f"wheelload {command}: terminated", file=sys.stderr)
         return 143
-    except Exception:
-        if not interrupts.pressed():  # else what a swallowed Ctrl-C left behind
-            raise
-        print(f"wheelload {command}: interrupted", file=sys.stderr)
-        return 130
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
@@ -139,11 +131,11 @@ def _configure_logging(level: int) -> None:
     warnings_logger.propagate = False
 
 
-def _main(argv: list[str], *, process: bool) -> int:
+def _main(argv: list[str], *, process: bool, counted: bool) -> int:
     with _startup_objects():
         parser = build_parser(argv)
     try:
-        return _run(parser, argv)
+        return _run(parser, argv, counted=counted)
     finally:
         if not process:  # a caller in Python gets its objects back for collection
             gc.unfreeze()
@@ -165,18 +157,25 @@ def _startup_objects():
     gc.freeze()
 
 
-def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
+def _run(parser: argparse.ArgumentParser, argv: list[str], *, counted: bool) -> int:
+    """Parse ``argv`` and run the command; Ctrl-C presses counted meanwhile when ``counted``
+    (:mod:`wheelload.estimators.interrupts`), and an error after a press is the press."""
     args, unknown = parser.parse_known_args(argv)
-    from wheelload.models.files.build_folder import BuildFolderError  # casadi: after --version
+    # After --help and --version: casadi (the build folder), the estimators' and models' faces.
+    from wheelload.estimators import interrupts
+    from wheelload.models.files.build_folder import BuildFolderError
 
     if unknown:  # the command's own usage, not the top level's
         subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
         subparsers.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
     _configure_logging(log_level(args))
+    interrupts.reset()
+    if counted:  # main() puts Python's default handler back
+        signal.signal(signal.SIGINT, interrupts.handler)
     try:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError, BuildFolderError) as error:
-        if interrupts.pressed():  # what a swallowed Ctrl-C left behind (studies/interrupts.py)
+        if interrupts.pressed():  # what a swallowed Ctrl-C left behind
             raise KeyboardInterrupt from error
         print(f"wheelload {args.command}: error: {error}", file=sys.stderr)
         return 2
@@ -191,6 +190,10 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
             file=sys.stderr,
         )
         return 2
+    except Exception as error:
+        if not interrupts.pressed():
+            raise
+        raise KeyboardInterrupt from error  # e.g. the None a swallowed Ctrl-C left behind
 
 
 if __name__ == "__main__":
