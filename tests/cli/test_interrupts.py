@@ -36,18 +36,22 @@ INTERRUPTIBLE = [sys.executable, "-c", "import runpy, signal, sys; "
                  "runpy.run_module('wheelload.studies.cli', run_name='__main__')"]  # fmt: skip
 
 
-@pytest.mark.parametrize("after", [2.0, 3.5])
-def test_one_press_stops_a_simulation(tmp_path, after):
-    out = tmp_path / "lap.csv"
-    run = subprocess.Popen([*INTERRUPTIBLE, "simulate", "nordschleife", "--out", str(out)],
+def _press(argv: list[str], after: float, out) -> None:
+    """``wheelload ARGV`` pressed Ctrl-C once, ``after`` seconds in: the line, 130, no ``out``."""
+    run = subprocess.Popen([*INTERRUPTIBLE, *argv, "--out", str(out)],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
     time.sleep(after)
     assert run.poll() is None, run.communicate()
     run.send_signal(signal.SIGINT)
     _, err = run.communicate(timeout=60)
     assert run.returncode == 130, err
-    assert err == "wheelload simulate: interrupted\n"
+    assert err == f"wheelload {argv[0]}: interrupted\n"
     assert not out.exists()
+
+
+@pytest.mark.parametrize("after", [2.0, 3.5])
+def test_one_press_stops_a_simulation(tmp_path, after):
+    _press(["simulate", "nordschleife"], after, tmp_path / "lap.csv")
 
 
 @pytest.fixture(scope="module")
@@ -63,17 +67,8 @@ def long_log(tmp_path_factory):
 
 @pytest.mark.parametrize("after", [2.5, 6.0])  # the MHE's CasADi terms; its window loop
 def test_one_press_stops_a_long_mhe_run(tmp_path, long_log, after):
-    out = tmp_path / "loads.csv"
-    run = subprocess.Popen([*INTERRUPTIBLE, "estimate", str(long_log), "--method", "mhe",
-                            "--vehicle", str(example_vehicle_path()), "--out", str(out)],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
-    time.sleep(after)
-    assert run.poll() is None, run.communicate()
-    run.send_signal(signal.SIGINT)
-    _, err = run.communicate(timeout=60)
-    assert run.returncode == 130, err
-    assert err == "wheelload estimate: interrupted\n"
-    assert not out.exists()
+    argv = ["estimate", str(long_log), "--method", "mhe", "--vehicle", str(example_vehicle_path())]
+    _press(argv, after, tmp_path / "loads.csv")
 
 
 def test_a_press_osqp_caught_is_raised():
