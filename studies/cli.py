@@ -6,7 +6,8 @@ returning an exit status).
 
 A mistake a user can make is one line on stderr and exit status 2. Ctrl-C
 (SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130, also where an
-extension swallowed the KeyboardInterrupt and what it handed back then failed; SIGTERM
+extension swallowed the KeyboardInterrupt and what it handed back then failed, or caught
+the signal itself (:mod:`wheelload.estimators.interrupts`); SIGTERM
 raises :class:`Terminated` in the main thread, so that every ``finally`` runs
 (temporary files are removed, :mod:`wheelload.models.files.temporaries`), then the
 line ``terminated`` and status 143.
@@ -25,55 +26,22 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from wheelload.studies import interrupts
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import log_level
 from wheelload.studies.deferred import defer
 
-COMMANDS = (
-    "wheelload.studies.commands.vehicle",
-    "wheelload.studies.commands.estimate",
-    "wheelload.studies.commands.methods",
-    "wheelload.studies.commands.compare",
-    "wheelload.studies.commands.channels",
-    "wheelload.studies.commands.sensor_sets",
-    "wheelload.studies.commands.bench.command",
-    "wheelload.studies.commands.simulate",
-    "wheelload.studies.commands.study",
-    "wheelload.studies.commands.codegen",
-    "wheelload.studies.commands.weigh",
-    "wheelload.studies.commands.identify",
-    "wheelload.studies.commands.tune",
-    "wheelload.studies.commands.identify_study",
-    "wheelload.studies.commands.ablation",
-    "wheelload.studies.commands.docs",
-)
-
+#: The modules that register the commands, in the order the help lists them.
+COMMANDS = tuple(command.module for command in CATALOG.values())
 
 #: The module that registers each command: ``wheelload COMMAND ...`` imports that one
 #: only (a cold start pays for what it runs; tests/cli/test_cli_commands.py keeps it exact).
-COMMAND_MODULES = {
-    "vehicle": "wheelload.studies.commands.vehicle",
-    "estimate": "wheelload.studies.commands.estimate",
-    "methods": "wheelload.studies.commands.methods",
-    "compare": "wheelload.studies.commands.compare",
-    "channels": "wheelload.studies.commands.channels",
-    "sensor-sets": "wheelload.studies.commands.sensor_sets",
-    "bench": "wheelload.studies.commands.bench.command",
-    "simulate": "wheelload.studies.commands.simulate",
-    "study": "wheelload.studies.commands.study",
-    "codegen": "wheelload.studies.commands.codegen",
-    "weigh": "wheelload.studies.commands.weigh",
-    "identify": "wheelload.studies.commands.identify",
-    "tune": "wheelload.studies.commands.tune",
-    "identify-study": "wheelload.studies.commands.identify_study",
-    "ablation": "wheelload.studies.commands.ablation",
-    "docs": "wheelload.studies.commands.docs",
-}
+COMMAND_MODULES = {name: command.module for name, command in CATALOG.items()}
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
-    """The command line; with ``argv`` naming a command, only that command's module is
-    imported (none for ``--version``, every one for help or an unknown command)."""
+    """The command line. Without ``argv`` every command's module builds its parser; with
+    ``argv``, only the command it names does (none for ``--help`` or ``--version``), and the
+    others are listed by their summaries alone (:mod:`wheelload.studies.commands`)."""
     parser = argparse.ArgumentParser(
         prog="wheelload",
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
@@ -84,16 +52,20 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         "-v", "--verbose", dest="verbose_top", action="count", help="more on stderr (-vv debug)"
     )
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    first = next(iter(argv), None) if argv else None
-    if first in COMMAND_MODULES:
-        modules = (COMMAND_MODULES[first],)
-    elif first == "--version":
-        modules = ()  # nothing to import: the version is all it prints
-    else:
-        modules = COMMANDS
-    for module in modules:
-        importlib.import_module(module).register(subparsers)
+    built = set(CATALOG) if argv is None else {_command_of(argv)}
+    for name, command in CATALOG.items():
+        if name in built:
+            importlib.import_module(command.module).register(subparsers)
+        else:  # listed in the help; never parses (argv does not name it)
+            subparsers.add_parser(name, help=command.summary, add_help=False)
     return parser
+
+
+def _command_of(argv: Sequence[str]) -> str | None:
+    """The command ``argv`` names: its first word that is not an option (no top-level option
+    takes a value)."""
+    word = next((word for word in argv if not word.startswith("-")), None)
+    return word if word in CATALOG else None
 
 
 class _Version(argparse.Action):
@@ -123,27 +95,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     process = argv is None  # the console command: the process ends with the command
     argv = list(sys.argv[1:] if argv is None else argv)
     defer("casadi")  # imported where a model is built, not by a warm estimate (deferred.py)
-    command = argv[0] if argv and argv[0] in COMMAND_MODULES else "command"
+    command = _command_of(argv) or "command"
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
     # Ctrl-C counted where it raises KeyboardInterrupt (not where a shell ignores it).
     counted = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    if counted:
-        signal.signal(signal.SIGINT, interrupts.handler)
-    interrupts.reset()
     try:
-        return _main(argv, process=process)
+        return _main(argv, process=process, counted=counted)
     except KeyboardInterrupt:
         print(f"wheelload {command}: interrupted", file=sys.stderr)
         return 130
     except Terminated:
         print(f"wheelload {command}: terminated", file=sys.stderr)
         return 143
-    except Exception:
-        if not interrupts.pressed():  # else what a swallowed Ctrl-C left behind
-            raise
-        print(f"wheelload {command}: interrupted", file=sys.stderr)
-        return 130
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
@@ -167,11 +131,11 @@ def _configure_logging(level: int) -> None:
     warnings_logger.propagate = False
 
 
-def _main(argv: list[str], *, process: bool) -> int:
+def _main(argv: list[str], *, process: bool, counted: bool) -> int:
     with _startup_objects():
         parser = build_parser(argv)
     try:
-        return _run(parser, argv)
+        return _run(parser, argv, counted=counted)
     finally:
         if not process:  # a caller in Python gets its objects back for collection
             gc.unfreeze()
@@ -193,18 +157,25 @@ def _startup_objects():
     gc.freeze()
 
 
-def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
+def _run(parser: argparse.ArgumentParser, argv: list[str], *, counted: bool) -> int:
+    """Parse ``argv`` and run the command; Ctrl-C presses counted meanwhile when ``counted``
+    (:mod:`wheelload.estimators.interrupts`), and an error after a press is the press."""
     args, unknown = parser.parse_known_args(argv)
-    from wheelload.models.files.build_folder import BuildFolderError  # casadi: after --version
+    # After --help and --version: casadi (the build folder), the estimators' and models' faces.
+    from wheelload.estimators import interrupts
+    from wheelload.models.files.build_folder import BuildFolderError
 
     if unknown:  # the command's own usage, not the top level's
         subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
         subparsers.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
     _configure_logging(log_level(args))
+    interrupts.reset()
+    if counted:  # main() puts Python's default handler back
+        signal.signal(signal.SIGINT, interrupts.handler)
     try:
         return int(args.handler(args) or 0)
     except (ValueError, FileNotFoundError, BuildFolderError) as error:
-        if interrupts.pressed():  # what a swallowed Ctrl-C left behind (studies/interrupts.py)
+        if interrupts.pressed():  # what a swallowed Ctrl-C left behind
             raise KeyboardInterrupt from error
         print(f"wheelload {args.command}: error: {error}", file=sys.stderr)
         return 2
@@ -219,6 +190,10 @@ def _run(parser: argparse.ArgumentParser, argv: list[str]) -> int:
             file=sys.stderr,
         )
         return 2
+    except Exception as error:
+        if not interrupts.pressed():
+            raise
+        raise KeyboardInterrupt from error  # e.g. the None a swallowed Ctrl-C left behind
 
 
 if __name__ == "__main__":

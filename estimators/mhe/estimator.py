@@ -67,6 +67,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from wheelload.estimators import interrupts
 from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf.limits import variance_ceiling
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
@@ -217,6 +218,7 @@ class MovingHorizonEstimator:
         u[INPUTS.index("az")] = STEADY_AZ
         valid = np.ones(len(INPUTS))
         for _ in range(samples):
+            interrupts.check()  # a Ctrl-C the CasADi call swallowed
             P_next = np.asarray(step(np.zeros(4), P, u, valid, dt, self.p, self.tuning)[1])
             if np.max(np.abs(P_next - P)) <= 1e-13 * np.max(np.abs(P)):
                 return P_next
@@ -272,6 +274,7 @@ class MovingHorizonEstimator:
         non-positive or non-finite ``dt`` solves nothing: the state and the last
         estimate are held and flagged ``STEP_REJECTED`` (status 0).
         """
+        interrupts.check()  # a Ctrl-C the last step's CasADi calls swallowed
         if not 0.0 < dt < MAX_INTERVAL:
             return state, self._rejected(state, sample, dt)
         u = sample.vector()
@@ -453,6 +456,7 @@ class MovingHorizonEstimator:
                 (z[:, k], Jd[:, 4 * k : 4 * k + 4], Ba[:, 2 * k : 2 * k + 2], ls[:, k], lc[:, k])
                 for k in range(n)
             ]
+        interrupts.check()  # a Ctrl-C the mapped CasADi calls swallowed: before the loops
         previous = np.concatenate([state.kf.P[None], covariances[:-1]])
         arrival = self._arrival(state, previous, dt)
         if not self.settings.extended and not self.per_sample_states:

@@ -30,6 +30,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from wheelload.estimators import interrupts
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.mhe.terms import LOAD_SCALE
@@ -37,6 +38,8 @@ from wheelload.estimators.mhe.terms import LOAD_SCALE
 SOLVED = osqp.SolverStatus.OSQP_SOLVED.value
 #: Status of a sample whose QP data are not finite: not handed to OSQP, the filter's estimate.
 UNSOLVED = osqp.SolverStatus.OSQP_UNSOLVED.value
+#: Status of a solve OSQP's own SIGINT handler stopped: a Ctrl-C that Python never saw.
+INTERRUPTED = osqp.SolverStatus.OSQP_SIGINT.value
 #: OSQP's infinity: bounds beyond it are clamped to it (as its Python wrapper does).
 OSQP_INFINITY = osqp.constant("OSQP_INFTY")
 #: Largest :math:`|F_z|` [m g] an estimate may take: a QP solution beyond it is not
@@ -122,6 +125,14 @@ def linear_term(
     return q.ravel()
 
 
+def check_interrupted(status: int) -> None:
+    """KeyboardInterrupt when OSQP stopped the solve on Ctrl-C (:data:`INTERRUPTED`), so that
+    the press stops the run instead of a sample falling back to the filter's estimate
+    (:func:`wheelload.estimators.interrupts.caught`)."""
+    if status == INTERRUPTED:
+        interrupts.caught()
+
+
 def low_level(solver: osqp.OSQP):
     """OSQP's solver object behind its Python wrapper (``update_data_vec``, ``update_data_mat``).
 
@@ -197,6 +208,7 @@ class MheWorkspace:
         solver.warm_start(x=x, y=y if y.size else None)
         with quiet_stdout(self.polish):
             result = solver.solve(raise_error=False)
+        check_interrupted(result.info.status_val)
         self.rho = self.low_level.get_settings().rho  # adapted during the solve
         return result, self.rho
 

@@ -30,6 +30,7 @@ from wheelload.estimators.mhe.qp import (
     SOLVED,
     UNSOLVED,
     MheWorkspace,
+    check_interrupted,
     csc_value_order,
     finite_data,
     prior_solution,
@@ -99,6 +100,7 @@ class LowLevelSolver:
         # OSQP adapts rho during the solve; the window passes back what the solver holds,
         # so it is read once, when the workspace is handed back (release)
         info = solver.info
+        check_interrupted(info.status_val)
         return int(info.status_val), int(info.iter), self.rho
 
     def solution(self) -> tuple[np.ndarray, np.ndarray]:
@@ -489,6 +491,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                     osqp_solver.solve()
                 info = osqp_solver.info
                 code, iters = info.status_val, info.iter
+                check_interrupted(code)
                 if code == SOLVED:
                     solution = osqp_solver.solution
                     x_sol = solution.x

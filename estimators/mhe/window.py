@@ -52,7 +52,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
-from wheelload.estimators.mhe.qp import OSQP_INFINITY, low_level
+from wheelload.estimators.mhe.qp import OSQP_INFINITY, check_interrupted, low_level
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.settings import L1_CORE, BiasStates, Loss, ResidualLoss
 
@@ -380,7 +380,9 @@ class WindowQP:
         self.solver.update(Px=H[self.rows, self.cols][self.order], q=g, l=low, u=high)
         self.solver.warm_start(x=x, y=y)
         with quiet_stdout(self.solver_settings.polish):
-            return self.solver.solve(raise_error=False)
+            result = self.solver.solve(raise_error=False)
+        check_interrupted(result.info.status_val)
+        return result
 
     def solve_raw(self, Px, g, low, high, x, y) -> tuple[int, int, np.ndarray, np.ndarray]:
         """:meth:`solve` through OSQP's solver object: ``(status, iterations, x, y)``.
@@ -398,6 +400,7 @@ class WindowQP:
         with quiet_stdout(self.solver_settings.polish):
             solver.solve()
         info = solver.info
+        check_interrupted(info.status_val)
         return int(info.status_val), int(info.iter), solver.solution.x, solver.solution.y
 
     def bias_information(self, sample: WindowSample, rho_s, rho_c) -> np.ndarray:

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from wheelload.models.files.temporaries import replacing
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, show_progress
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS
@@ -25,7 +26,7 @@ TRAITS = CommandTraits(vehicle=True, writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "ablation",
-        help="pooled RMSE / Max of the KF with each model term on and off",
+        help=CATALOG["ablation"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument(

@@ -13,6 +13,7 @@ import numpy as np
 
 from wheelload.estimators import read_log
 from wheelload.estimators.logs.readers import channel_map_template, channel_names, load_channel_map
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -20,9 +21,7 @@ TRAITS = CommandTraits()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "channels", help="channel maps: a template, a log's channels, check a map on a log"
-    )
+    parser = subparsers.add_parser("channels", help=CATALOG["channels"].summary)
     parser.add_argument("map", nargs="?", help="channel map TOML file to check")
     parser.add_argument("--template", action="store_true", help="print a commented channel map")
     parser.add_argument("--list", metavar="LOG", help="print the channel names of LOG")

@@ -18,6 +18,7 @@ from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
 from wheelload.estimators.logs.output_files import check_output_folder
 from wheelload.models import load_vehicle
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -73,7 +74,7 @@ TRAITS = CommandTraits(vehicle=True, writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "codegen",
-        help="generate the two-stage KF (default) or the MHE as C",
+        help=CATALOG["codegen"].summary,
         description="kf: write PREFIX.h, PREFIX.c (the library, libm only), PREFIX_example.c "
         "(CSV log in, CSV estimates out; needs the v_* travel-rate columns), "
         "PREFIX_selftest.c and a Makefile. mhe: write the embedded MHE (OSQP embedded "

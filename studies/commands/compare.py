@@ -13,24 +13,13 @@ import argparse
 from pathlib import Path
 
 from wheelload.estimators import SuspensionModel
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
     add_suspension_option,
     log_of,
     vehicle_of,
-)
-from wheelload.studies.pipeline.comparison import (
-    compare_methods,
-    format_table,
-    long_table,
-    parse_methods,
-)
-from wheelload.studies.plots.comparison import (
-    check_writable,
-    figure_paths,
-    plot_comparison,
-    write_csv,
 )
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -40,7 +29,7 @@ TRAITS = CommandTraits(log=True, scores=True, vehicle=True, writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "compare",
-        help="compare estimators on a log with reference loads (paper-style table, figures)",
+        help=CATALOG["compare"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("log", help="log file (.csv or .parquet) with fz_fl..fz_rr reference")
@@ -59,6 +48,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # imported to run, not for --help (studies/commands/__init__.py)
+    from wheelload.studies.pipeline.comparison import (
+        compare_methods,
+        format_table,
+        long_table,
+        parse_methods,
+    )
+    from wheelload.studies.plots.comparison import (
+        check_writable,
+        figure_paths,
+        plot_comparison,
+        write_csv,
+    )
+
     names = parse_methods(args.methods)
     log_path = Path(args.log)
     csv = Path(args.csv) if args.csv else None

@@ -6,6 +6,7 @@ import argparse
 import os
 from pathlib import Path
 
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options
 
 DOCS_PACKAGES = ("sphinx", "furo", "myst_parser")
@@ -18,7 +19,7 @@ TRAITS = CommandTraits(writes=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "docs",
-        help="build the HTML documentation site: guide, API reference, executed journeys",
+        help=CATALOG["docs"].summary,
         description="Build the documentation site with warnings as errors. The journeys' "
         "commands run while it builds (a few minutes). Needs the docs extra: "
         "pip install -e '.[docs]'.",

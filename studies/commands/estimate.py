@@ -17,6 +17,7 @@ from pathlib import Path
 from wheelload.estimators import SuspensionModel
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.estimators.registry import method
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -36,7 +37,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "estimate",
-        help="estimate the four wheel loads of a log (or many); default: the two-stage KF",
+        help=CATALOG["estimate"].summary,
     )
     parser.add_argument(
         "log", nargs="*", help="log file(s), folder(s) or glob(s): .csv .parquet .mf4 .erg"

@@ -11,20 +11,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators.identification import FitLoss
-from wheelload.estimators.identification.report import (
-    correlation_table,
-    markdown_report,
-    parameter_table,
-    rmse_table,
-)
 from wheelload.models.vehicle.file import (
     check_output_path,
     write_text_atomically,
     write_vehicle_text,
 )
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
-from wheelload.studies.pipeline.identification import identify_vehicle
 
 REPORT_FILES = (
     "report.md",
@@ -43,7 +36,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "identify",
-        help="identify spring, damper and anti-roll-bar maps from rig data and drive logs",
+        help=CATALOG["identify"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
@@ -91,6 +84,11 @@ def _knots(args: argparse.Namespace) -> tuple[float, ...]:
 
 
 def handle(args: argparse.Namespace) -> int:
+    # imported to run, not for --help (studies/commands/__init__.py)
+    from wheelload.estimators.identification import FitLoss
+    from wheelload.estimators.identification.report import parameter_table
+    from wheelload.studies.pipeline.identification import identify_vehicle
+
     vehicle_path = Path(args.vehicle)
     vehicle_of(vehicle_path, args)  # the vehicle file's errors before the outputs'
     inputs = (vehicle_path, *map(Path, args.rig), *map(Path, args.drive))
@@ -129,6 +127,13 @@ def handle(args: argparse.Namespace) -> int:
 
 
 def _write_report(result, keys, report: Path, vehicle_path: Path, out: Path) -> None:
+    # imported to run, not for --help (studies/commands/__init__.py)
+    from wheelload.estimators.identification.report import (
+        correlation_table,
+        markdown_report,
+        parameter_table,
+        rmse_table,
+    )
     from wheelload.studies.plots.identification import plot_maps, plot_residuals
 
     report.mkdir(parents=True, exist_ok=True)

@@ -13,6 +13,7 @@ import argparse
 import dataclasses
 from pathlib import Path
 
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
 from wheelload.studies.drive.scenarios import SCENARIOS as SCENARIO_TABLE
 from wheelload.studies.experiments.identification_study import StudySettings, run_study
@@ -28,7 +29,7 @@ TRAITS = CommandTraits(vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "identify-study",
-        help="identify and tune from a wrong vehicle file on plant logs; print the tables",
+        help=CATALOG["identify-study"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--out", default="identify-study", help="folder for logs and tables")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from wheelload.estimators.registry import methods, tyre_methods
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -12,9 +13,7 @@ TRAITS = CommandTraits()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "methods", help="list the estimators (names for --method / --methods)"
-    )
+    parser = subparsers.add_parser("methods", help=CATALOG["methods"].summary)
     add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.estimators.registry import build
 from wheelload.models import WHEELS, example_vehicle_path
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -14,17 +14,13 @@ from wheelload.studies.commands.options import (
     log_of,
     vehicle_of,
 )
-from wheelload.studies.experiments.sensor_sets import reference_split, sensor_set_table, split_sweep
-from wheelload.studies.pipeline.log_settings import expand_logs
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, vehicle=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "sensor-sets", help="partial sensor sets and the roll-split sweep on a log"
-    )
+    parser = subparsers.add_parser("sensor-sets", help=CATALOG["sensor-sets"].summary)
     parser.add_argument("log", help="log (CSV or Parquet) with all channels and reference loads")
     add_vehicle_option(parser)
     parser.add_argument(
@@ -36,6 +32,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # imported to run, not for --help (studies/commands/__init__.py)
+    from wheelload.estimators.registry import build
+    from wheelload.studies.experiments.sensor_sets import (
+        reference_split,
+        sensor_set_table,
+        split_sweep,
+    )
+    from wheelload.studies.pipeline.log_settings import expand_logs
+
     vehicle = vehicle_of(args.vehicle or example_vehicle_path(), args)
     (path,) = expand_logs([args.log])
     frame = log_of(path, args).to_frame()

@@ -11,6 +11,7 @@ from pathlib import Path
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.payload import Payload
 from wheelload.models.vehicle.file import example_vehicle_path
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -36,7 +37,7 @@ TRAITS = CommandTraits(vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "simulate",
-        help="simulate a scenario and write a log with reference loads",
+        help=CATALOG["simulate"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument(

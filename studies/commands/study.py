@@ -18,6 +18,7 @@ from pathlib import Path
 from wheelload.estimators import SuspensionModel, read_log
 from wheelload.estimators.logs.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
@@ -39,7 +40,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True, work
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    study = subparsers.add_parser("study", help="run a comparison study and print its table")
+    study = subparsers.add_parser("study", help=CATALOG["study"].summary)
     study.add_argument(
         "name",
         choices=["mhe-vs-kf", *experiments.NAMES],

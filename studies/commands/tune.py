@@ -20,16 +20,6 @@ from pathlib import Path
 import numpy as np
 
 from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
-from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
-from wheelload.estimators.identification.tuning import (
-    NIS_BAND,
-    RATIO_AGREEMENT,
-    RATIOS,
-    RMSE_TOLERANCE,
-    FilterRuns,
-    tune,
-    tuned_vehicle,
-)
 from wheelload.models.vehicle.description import SIGMA_KEYS
 from wheelload.models.vehicle.file import (
     add_values,
@@ -37,6 +27,7 @@ from wheelload.models.vehicle.file import (
     prepend_comment,
     write_vehicle_text,
 )
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -46,7 +37,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "tune",
-        help="fit the filter's noise densities to logs (innovation likelihood)",
+        help=CATALOG["tune"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
@@ -70,6 +61,18 @@ def register(subparsers) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
+    # imported to run, not for --help (studies/commands/__init__.py)
+    from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
+    from wheelload.estimators.identification.tuning import (
+        NIS_BAND,
+        RATIO_AGREEMENT,
+        RATIOS,
+        RMSE_TOLERANCE,
+        FilterRuns,
+        tune,
+        tuned_vehicle,
+    )
+
     vehicle_path = Path(args.vehicle)
     inputs = (vehicle_path, *map(Path, args.logs))
     out = check_output_path(args.out, inputs, args.force)
@@ -202,6 +205,8 @@ def evaluation_table(vehicle, tuned, logs) -> str:
     """Per-log and pooled ±2σ coverage, RMSE and σ–``|error|`` correlation, input and tuned."""
     if any(signals.reference is None for signals in logs):
         raise ValueError("--evaluate needs logs with reference loads fz_*")
+    from wheelload.estimators.identification.tuning import FilterRuns  # SciPy: not for --help
+
     lines = [
         "held-out logs: ±2σ coverage [%], pooled RMSE [N], correlation of σ and |error|,"
         " rows gated [%]; input file -> tuned",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from wheelload.models import load_vehicle, static_loads, vehicle_mass_centre, vehicle_template
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -12,9 +13,7 @@ TRAITS = CommandTraits(vehicle=True)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "vehicle", help="print a commented vehicle-file template, or check a vehicle file"
-    )
+    parser = subparsers.add_parser("vehicle", help=CATALOG["vehicle"].summary)
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--template", action="store_true", help="print a commented template")
     group.add_argument("file", nargs="?", help="vehicle TOML file to check and summarise")

@@ -19,6 +19,7 @@ from wheelload.models.vehicle.file import (
     edited_vehicle_text,
     write_vehicle_text,
 )
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
 
 #: The shared option groups this command takes (options.CommandTraits).
@@ -28,7 +29,7 @@ TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "weigh",
-        help="vehicle mass and CG position from logs at rest on one or more slopes",
+        help=CATALOG["weigh"].summary,
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="logs at rest (.csv or .parquet)")

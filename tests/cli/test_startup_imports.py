@@ -3,13 +3,20 @@
 Structural, not timed: a fresh interpreter runs ``wheelload estimate --example
 --out FILE`` (the lean single-log path) and reports ``sys.modules``; none of the
 modules below may be among them (each was imported once and cost start-up time).
+``wheelload --help`` imports no command module at all, and ``wheelload COMMAND --help``
+that command's parser only, none of the numerics it runs with.
 """
 
 import gc
 import json
 import os
+import re
 import subprocess
 import sys
+
+import pytest
+
+from wheelload.studies.cli import CATALOG
 
 #: Modules the single-log path does not use: worker processes and the many-log driver,
 #: the batched C, the identification fits (scipy), pandas, the MHE's OSQP, the family,
@@ -44,23 +51,29 @@ NOT_FOR_ONE_LOG = (
 
 def _modules_after(argv: list[str]) -> set[str]:
     """``sys.modules`` of a fresh interpreter after ``wheelload ARGV`` (its output dropped)."""
+    return _run_fresh(argv)[1]
+
+
+def _run_fresh(argv: list[str]) -> tuple[str, set[str]]:
+    """What ``wheelload ARGV`` prints on stdout in a fresh interpreter, and its ``sys.modules``."""
     code = (
         "import contextlib, io, json, sys\n"
         "from wheelload.studies.cli import main\n"
-        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "out = io.StringIO()\n"
+        "with contextlib.redirect_stdout(out):\n"
         "    try:\n"
         f"        status = main({argv!r})\n"
         "    except SystemExit as end:\n"
         "        status = end.code\n"
-        "print(json.dumps([status, sorted(sys.modules)]))\n"
+        "print(json.dumps([status, out.getvalue(), sorted(sys.modules)]))\n"
     )
     done = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, env=dict(os.environ)
     )
     assert done.returncode == 0, done.stderr
-    status, modules = json.loads(done.stdout.strip().splitlines()[-1])
+    status, output, modules = json.loads(done.stdout.strip().splitlines()[-1])
     assert status == 0, done.stderr
-    return set(modules)
+    return output, set(modules)
 
 
 def test_one_log_imports_nothing_it_does_not_run(tmp_path):
@@ -80,6 +93,36 @@ def test_the_version_imports_no_numerics():
     modules = _modules_after(["--version"])
     loaded = ("casadi.casadi", "numpy", "pyarrow", "wheelload.models")
     assert sorted(m for m in loaded if m in modules) == []
+
+
+#: What the commands run with, none of it needed to list or describe them (casadi.casadi: the
+#: extension itself, "casadi" being a stand-in until used, studies/deferred.py).
+HEAVY = ("casadi.casadi", "scipy", "pandas", "pyarrow", "matplotlib", "osqp", "dask")
+
+
+def test_the_help_imports_no_command_and_lists_every_command():
+    """``wheelload --help`` reads the summaries from studies/commands/__init__.py alone."""
+    text, modules = _run_fresh(["--help"])
+    assert sorted(m for m in HEAVY if m in modules) == []
+    commands = {m for m in modules if m.startswith("wheelload.studies.commands.")}
+    assert commands <= {"wheelload.studies.commands.options"}  # the table is the package itself
+    assert re.findall(r"^ {4}(\S+)", text, re.MULTILINE) == list(CATALOG)  # the names, in order
+    unwrapped = re.sub(r"\s+", "", text)  # the summaries as wrapped to the terminal's width
+    assert [n for n, c in CATALOG.items() if re.sub(r"\s+", "", c.summary) not in unwrapped] == []
+
+
+@pytest.mark.parametrize(
+    "command",
+    ["vehicle", "estimate", "methods", "compare", "channels", "sensor-sets", "weigh", "identify",
+     "tune", "docs"],
+)  # fmt: skip
+def test_a_commands_help_imports_only_its_parser(command):
+    """``wheelload COMMAND --help`` builds that command's parser: none of what it runs with."""
+    text, modules = _run_fresh([command, "--help"])
+    assert text.startswith(f"usage: wheelload {command}")
+    assert sorted(m for m in HEAVY if m in modules) == []
+    others = {c.module for name, c in CATALOG.items() if name != command}
+    assert sorted(others & modules) == []
 
 
 def test_the_collector_skips_the_startup_objects_and_a_caller_gets_them_back(capsys):

@@ -17,6 +17,7 @@ from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.registry import build
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.bench.numpy_kf import joint_filter
+from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_message_options,
@@ -46,8 +47,7 @@ TRAITS = CommandTraits()
 def register(subparsers: argparse._SubParsersAction) -> None:
     bench = subparsers.add_parser(
         "bench",
-        help="timings beside their alternatives, hostile inputs, fault injection "
-        "(wheelload bench --help lists them)",
+        help=CATALOG["bench"].summary,
     )
     benchmarks = bench.add_subparsers(dest="what", required=True, metavar="WHAT")
     parser = benchmarks.add_parser("kf", help="two-stage KF: compiled run, step, numpy loop")
