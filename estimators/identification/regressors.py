@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators import interrupts
 from wheelload.estimators.identification.data import DataKind, DataSet
 from wheelload.estimators.identification.model import WHEELS, SuspensionFitModel
 from wheelload.estimators.loops.compiled import CompiledLoop
@@ -260,7 +261,9 @@ def chunks(
         for start, stop in data.blocks(size):
             used = used_samples(data, start, stop)
             if used.size:
-                yield _rows(model, data, index, used, theta, instrumented)
+                rows = _rows(model, data, index, used, theta, instrumented)
+                interrupts.check()  # a Ctrl-C the regressors' CasADi call swallowed
+                yield rows
 
 
 #: Samples per data set in the rows a chunked fit keeps for its figures.
