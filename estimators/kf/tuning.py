@@ -18,6 +18,7 @@ import numpy as np
 
 from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
+from wheelload.estimators.logs.signals import step_blocks
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.measurement_noise import INPUT_DENSITIES
@@ -145,7 +146,14 @@ def noise_densities(vehicle: Vehicle) -> np.ndarray:
 
 
 def nominal_interval(t: np.ndarray) -> float:
-    """Median of the positive finite sample intervals of a log (default if none)."""
-    dt = np.diff(np.asarray(t, float))
-    dt = dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)]
-    return float(order_statistics.median(dt)) if dt.size else DEFAULT_SAMPLE_INTERVAL
+    """Median of the positive finite sample intervals of a log (default if none), a block
+    of time stamps at a time (a long log's may be on disk)."""
+    t = np.asarray(t, float)
+    passes = step_blocks(t)
+
+    def kept():
+        for _, dt in passes():
+            yield dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)]
+
+    count = sum(dt.size for dt in kept())
+    return float(order_statistics.blocked_median(kept, count)) if count else DEFAULT_SAMPLE_INTERVAL

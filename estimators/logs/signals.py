@@ -447,7 +447,7 @@ def check_time_column(t: np.ndarray, source: str) -> Steps:
 TIME_BLOCK = 1 << 16
 
 
-def _step_blocks(t: np.ndarray):
+def step_blocks(t: np.ndarray):
     """A pass over the steps ``t[k + 1] - t[k]``, ``(first k, steps)`` a block at a time,
     the pages of a column on disk dropped after each (:mod:`.spill`)."""
 
@@ -469,7 +469,7 @@ def _check_time(t: np.ndarray, source: str) -> None:
         if missing.size:
             row = start + missing[0]
             raise LogError(f"{source}: column 't' has no valid time stamp at row {row}")
-    for start, steps in _step_blocks(t)():
+    for start, steps in step_blocks(t)():
         bad = np.flatnonzero(steps <= 0.0)
         if bad.size:
             row = start + bad[0] + 1
@@ -491,7 +491,7 @@ class Steps:
     def of(t: np.ndarray) -> Steps:
         """The steps of increasing time stamps ``t`` (at least 2), a block at a time: the
         median by exact selection (``np.median``'s number)."""
-        blocks = _step_blocks(t)
+        blocks = step_blocks(t)
         steps = lambda: (values for _, values in blocks())  # noqa: E731
         median = float(order_statistics.blocked_median(steps, t.size - 1))
         deviation = max(float(np.max(np.abs(values - median))) for values in steps())

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from wheelload.estimators.kf.tuning import MAX_INTERVAL, nominal_interval
 from wheelload.estimators.logs.signals import Steps
 from wheelload.estimators.logs.spill import Appended, columns, on_disk, release, row_values
 
@@ -72,3 +73,17 @@ def test_the_steps_of_time_stamps_on_disk_are_numpys():
     assert steps.median == np.median(dt)
     assert steps.deviation == np.max(np.abs(dt - np.median(dt)))
     assert steps.uniform() and not Steps.of(np.array([0.0, 1.0, 3.0])).uniform()
+
+
+def test_the_nominal_interval_of_time_stamps_on_disk_is_numpys():
+    """The KF's interval (median of the positive finite steps below MAX_INTERVAL) of a
+    time column on disk with gaps and a missing stamp: numpy's median of those steps."""
+    rng = np.random.default_rng(11)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 200_001))
+    t[70_000:] += 5.0  # a gap past MAX_INTERVAL
+    t[123_456] = np.nan
+    stored = row_values(t.size, spill_bytes=0)
+    stored[:] = t
+    dt = np.diff(t)
+    expected = np.median(dt[np.isfinite(dt) & (dt > 0) & (dt < MAX_INTERVAL)])
+    assert nominal_interval(stored) == expected
