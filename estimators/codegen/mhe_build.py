@@ -16,6 +16,7 @@ Example
 from __future__ import annotations
 
 import ctypes
+import re
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,11 +26,12 @@ import numpy as np
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.mhe import (
     EXAMPLE,
-    FILTER_PREFIX,
     TEMPLATES,
     generate_mhe,
+    include_directories,
     mhe_includes,
     mhe_sources,
+    relative_includes,
 )
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
@@ -130,12 +132,35 @@ def build_mhe_library(
 
 
 def compiled_sources(folder: Path, command: tuple[str, ...]) -> list[str]:
-    """The embedded MHE's C files for ``command``, the linked KF (the largest, the same for
-    every window of a vehicle) as its object compiled once (``cached_object``)."""
-    linked = folder / f"{FILTER_PREFIX}.c"
-    header = (folder / f"{FILTER_PREFIX}.h",)
-    return [str(cached_object(path, header, command) if path == linked else path)
+    """The embedded MHE's C files for ``command`` as objects each compiled once per text, the
+    headers it includes and ``command`` (``cached_object``): the linked KF, OSQP's sources
+    and a window built again (another test, another run) are not compiled again."""
+    directories = include_directories(folder)
+    command = (*command, *relative_includes(folder))
+    return [str(cached_object(path, included_headers(path, directories), command, root=folder))
             for path in mhe_sources(folder)]  # fmt: skip
+
+
+def included_headers(source: Path, directories: list[Path]) -> tuple[Path, ...]:
+    """Every header ``source`` includes with ``#include "..."``, directly or through another,
+    found beside the including file or in ``directories`` (gcc's order for ``-I``); the
+    others (``<...>``, not found) are the system's."""
+    found: dict[Path, None] = {}
+    pending = [source]
+    while pending:
+        current = pending.pop()
+        for match in _INCLUDE.finditer(current.read_text()):
+            for directory in (current.parent, *directories):
+                header = directory / match.group(1)
+                if header.is_file():
+                    if header not in found and header != source:
+                        found[header] = None
+                        pending.append(header)
+                    break
+    return tuple(sorted(found))
+
+
+_INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
 
 
 def n_bias(folder: Path) -> int:

@@ -146,6 +146,7 @@ def _compile(
     work.mkdir(mode=0o700)
     try:
         for file_name, text in sources.items():
+            (work / file_name).parent.mkdir(parents=True, exist_ok=True)
             (work / file_name).write_text(text)
         output = work / target.name
         link = () if "-c" in command else ("-lm",)
@@ -230,12 +231,15 @@ def _sources_key(sources: dict[str, str]) -> str:
     return "".join(f"\n{file}\n{body}" for file, body in sources.items())
 
 
-def cached_object(source: Path, headers: tuple[Path, ...], command: tuple[str, ...]) -> Path:
+def cached_object(source: Path, headers: tuple[Path, ...], command: tuple[str, ...],
+                  root: Path | None = None) -> Path:  # fmt: skip
     """The object file ``command`` (compiler and flags, ``-c`` added) makes of the C file
     ``source`` including ``headers``, compiled once per text and command
     (:func:`_cached_build`): a large generated library is compiled once however many
-    programs link it."""
-    files = {path.name: path.read_text() for path in (source, *headers)}
+    programs link it. The files keep their paths relative to ``root`` (default: the
+    source's folder), so ``-I`` flags in ``command`` are relative to it."""
+    root = source.parent if root is None else root
+    files = {str(path.relative_to(root)): path.read_text() for path in (source, *headers)}
     name = source.stem
     return _cached_build(_sources_key(files), lambda: files, name, ".o", (*command, "-c"), Path,
                          "build the program")  # fmt: skip
