@@ -49,6 +49,15 @@ def kf(vehicle):
 
 
 @pytest.fixture(scope="module")
+def model(kf):
+    """The model's gates, suspension and equilibrium functions mapped over N samples, and
+    the roll-split row, built once for every example."""
+    maps = [f().map(N) for f in (gates_function, suspension_function, equilibrium_function)]
+    split = np.asarray(roll_split_function()(kf.p)).ravel()
+    return maps, split
+
+
+@pytest.fixture(scope="module")
 def own_sigma_kf(vehicle):
     """The KF reporting its own sigma, sqrt(P_ii)."""
     kf = TwoStageKF(vehicle)
@@ -106,7 +115,7 @@ def held(u, valid, dt, hold_time):
     return u_term, valid_term
 
 
-def measurements(vehicle, kf, u, dt):
+def measurements(vehicle, kf, model, u, dt):
     """z (n, 4), A (n, 3, 4), b (n, 3); a missing or implausible input enters the model
     terms it feeds with its last valid value for the hold time, then as 0 with those
     terms gated off, as in the filter (the rows it feeds are unused)."""
@@ -114,18 +123,18 @@ def measurements(vehicle, kf, u, dt):
     u, valid = held(np.where(valid, u, 0.0), valid, dt, GuardSettings().hold_time)
     u, valid = u.T, valid.T
     n = u.shape[1]
-    gates = gates_function().map(n)(valid.astype(float), kf.p)[0]
-    z = np.asarray(suspension_function().map(n)(u, gates, kf.p)).T
-    A, b = equilibrium_function().map(n)(u, gates, kf.p)
+    (gates_map, suspension_map, equilibrium_map), _ = model
+    gates = gates_map(valid.astype(float), kf.p)[0]
+    z = np.asarray(suspension_map(u, gates, kf.p)).T
+    A, b = equilibrium_map(u, gates, kf.p)
     return z, np.asarray(A).reshape(3, n, 4).transpose(1, 0, 2), np.asarray(b).T
 
 
-def reference_step(numpy_step, kf, x, P, z, A, b, dt, nominal, rows):
+def reference_step(numpy_step, kf, split, x, P, z, A, b, dt, nominal, rows):
     """Numpy step: predict, then the scalar updates of ``rows`` (0-6) only, and the
     roll-split row (y = 0, noise SPLIT_NOISE_RATIO x the roll row's) when no travel row
     is used but the roll row is (the IMU-only mode of models/roll_split.py)."""
     q, r_s, r_c = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
-    split = np.asarray(roll_split_function()(kf.p)).ravel()
     H, y_all = np.vstack([np.eye(4), A, split]), np.concatenate([z, b, [0.0]])
     r = np.concatenate([np.full(4, r_s), r_c, [SPLIT_NOISE_RATIO * r_c[2]]]) / nominal
     if 6 in rows and not set(rows) & {0, 1, 2, 3}:
@@ -136,7 +145,7 @@ def reference_step(numpy_step, kf, x, P, z, A, b, dt, nominal, rows):
 @HYPOTHESIS
 @given(faults=faults)
 def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(
-    vehicle, base, kf, numpy_step, faults
+    vehicle, base, kf, model, numpy_step, faults
 ):
     signals = with_faults(base, faults)
     estimate, P = kf.run_with_covariance(signals)
@@ -155,12 +164,22 @@ def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(
     assert not np.any(flags & StepFlag.STEP_REJECTED)
     # Each sample's state is the numpy step with exactly the used rows.
     dt, nominal = sample_intervals(signals.t), nominal_interval(signals.t)
-    z, A, b = measurements(vehicle, kf, u, dt)
+    z, A, b = measurements(vehicle, kf, model, u, dt)
     skipped = [flag.value for flag in StepFlag.update_flags()]
     for k in range(1, len(signals)):
         rows = [i for i in range(7) if not flags[k] & skipped[i]]
         x, P_k = reference_step(
-            numpy_step, kf, estimate.loads[k - 1], P[k - 1], z[k], A[k], b[k], dt[k], nominal, rows
+            numpy_step,
+            kf,
+            model[1],
+            estimate.loads[k - 1],
+            P[k - 1],
+            z[k],
+            A[k],
+            b[k],
+            dt[k],
+            nominal,
+            rows,
         )
         np.testing.assert_allclose(estimate.loads[k], x, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(P[k], P_k, rtol=1e-8, atol=1e-6)
