@@ -54,9 +54,15 @@ void wheelload_kinematic(long n, double T, const double *K, const double *z,
 
 
 def steady_gain(T: float, q: float, r: float) -> np.ndarray:
-    """The steady-state Kalman gain ``K`` (2,) of the module's model (Riccati iterated)."""
+    """The steady-state Kalman gain ``K`` (2,) of the module's model (Riccati iterated, once
+    per ``T, q, r``: a tuning search asks for the same gains thousands of times)."""
     if not (T > 0.0 and q > 0.0 and r > 0.0):
         raise ValueError(f"sample interval {T}, jerk density {q}, noise {r} must be positive")
+    return np.array(_steady_gain(float(T), float(q), float(r)))
+
+
+@functools.lru_cache(maxsize=256)
+def _steady_gain(T: float, q: float, r: float) -> tuple[float, float]:
     F = np.array([[1.0, T], [0.0, 1.0]])
     Q = q * np.array([[T**3 / 3.0, T**2 / 2.0], [T**2 / 2.0, T]])
     P = Q.copy()
@@ -66,9 +72,9 @@ def steady_gain(T: float, q: float, r: float) -> np.ndarray:
         gain = predicted[:, 0] / (predicted[0, 0] + r)
         P = predicted - np.outer(gain, predicted[0])
         if np.allclose(gain, K, rtol=1e-13, atol=0.0):
-            return gain
+            return tuple(gain)
         K = gain
-    return K
+    return tuple(K)
 
 
 @functools.cache
