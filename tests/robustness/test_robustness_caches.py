@@ -103,11 +103,20 @@ def copy_build(built, tmp_path: Path) -> Path:
 def test_truncated_libraries_are_rebuilt_with_a_note_and_the_output_equals_a_clean_run(
     built, tmp_path
 ):
+    """Every other library truncated in place (mapped as it is, this was SIGBUS, rc 135), the
+    others replaced by a new empty file."""
     tmpdir = copy_build(built, tmp_path)
     libraries = sorted(build_folder_in(tmpdir).glob("*.so"))
-    for library in libraries:
+    assert len(libraries) >= 2
+    sizes = {}
+    for k, library in enumerate(libraries):
         assert checked_library(library) is None  # recorded at build time
-        os.truncate(library, 4000)  # in place: mapped as it is, this was SIGBUS (rc 135)
+        if k % 2:
+            library.unlink()
+            library.write_bytes(b"")
+        else:
+            os.truncate(library, 4000)
+        sizes[library] = library.stat().st_size
         assert checked_library(library) is not None
     out = tmp_path / "loads.csv"
     run = wheelload("estimate", example_log_path(), "--vehicle", example_vehicle_path(),
@@ -115,7 +124,10 @@ def test_truncated_libraries_are_rebuilt_with_a_note_and_the_output_equals_a_cle
     assert run.returncode == 0, run.stderr
     notes = [line for line in run.stderr.splitlines() if "note: cached library" in line]
     assert len(notes) == len(libraries), run.stderr
-    assert all("is rebuilt: its 4000 bytes are not those recorded" in n for n in notes), notes
+    for library, size in sizes.items():
+        said = f"{library} is rebuilt: its {size} bytes are not those recorded"
+        assert any(said in note for note in notes), (said, notes)
+        assert checked_library(library) is None  # built again, with its record
     assert "Traceback" not in run.stderr
     assert out.read_bytes() == built[1].read_bytes()  # the numbers of a clean run, to the bit
     for library in libraries:
@@ -184,9 +196,10 @@ def study_copy(study, tmp_path: Path) -> Path:
     return out
 
 
-def trial_entry(cache: Path) -> Path:
-    """A trial's entry (the truth is the largest; recomputing a trial is quick)."""
-    return min(cache.glob("*.npz"), key=lambda p: p.stat().st_size)
+def trial_entries(cache: Path) -> list[Path]:
+    """The trials' entries, smallest first (the truth is the largest; recomputing a trial is
+    quick)."""
+    return sorted(cache.glob("*.npz"), key=lambda p: (p.stat().st_size, p.name))
 
 
 class _Plant:
@@ -199,52 +212,36 @@ class _Plant:
         return (Path.touch, (self.path,))
 
 
-def _rerun_recomputes_one(study, out: Path, entry: Path) -> str:
+def test_damaged_or_planted_entries_are_never_executed_and_each_is_recomputed(study, tmp_path):
+    """Four entries spoiled four ways in one study folder; one rerun recomputes exactly those
+    four, each with its note, and gives the first run's table to the byte."""
+    out = study_copy(study, tmp_path)
+    pickled, object_npz, truncated, renamed, donor = trial_entries(out / ".cache")[:5]
+    marker = tmp_path / "planted-code-ran"
+    pickled.write_bytes(pickle.dumps(_Plant(marker)))
+    payload = np.empty(1, dtype=object)  # an NPZ whose member is a pickled object array
+    payload[0] = _Plant(marker)
+    with object_npz.open("wb") as stream:
+        np.savez(stream, manifest=np.frombuffer(b"{}", np.uint8), a0=payload)
+    pickle.loads(pickle.dumps(_Plant(tmp_path / "payload-works")))  # the payload is live
+    assert (tmp_path / "payload-works").exists()
+    os.truncate(truncated, truncated.stat().st_size // 2)
+    shutil.copy(donor, renamed)  # a valid entry, but under the wrong name
     run = wheelload(*STUDY, "--out", out, "--force", tmpdir=study[0])
     assert run.returncode == 0, run.stderr
     assert "Traceback" not in run.stderr
+    assert not marker.exists()
     notes = [line for line in run.stderr.splitlines() if "note: cache entry" in line]
-    assert len(notes) == 1 and str(entry) in notes[0] and "recomputed" in notes[0], run.stderr
-    assert "1 jobs computed" in run.stdout, run.stdout
-    # the recomputed trial is the one the first run cached: the same table
+    assert len(notes) == 4 and all("recomputed" in note for note in notes), run.stderr
+    said = {entry: next(note for note in notes if str(entry) in note)
+            for entry in (pickled, object_npz, truncated, renamed)}  # fmt: skip
+    for entry in (pickled, object_npz, truncated):
+        assert "truncated or damaged" in said[entry], said[entry]
+    assert "written under another key" in said[renamed]
+    assert "4 jobs computed" in run.stdout, run.stdout
+    # the recomputed trials are the ones the first run cached: the same table
     table = "iso-dlc_table.csv"
     assert (out / table).read_bytes() == (study[1] / table).read_bytes()
-    return notes[0]
-
-
-@pytest.mark.parametrize("form", ["pickle", "npz-with-object-array"])
-def test_a_planted_entry_is_never_executed_and_is_recomputed(study, tmp_path, form):
-    out = study_copy(study, tmp_path)
-    entry = trial_entry(out / ".cache")
-    marker = tmp_path / "planted-code-ran"
-    if form == "pickle":
-        entry.write_bytes(pickle.dumps(_Plant(marker)))
-    else:  # an NPZ whose member is a pickled object array
-        payload = np.empty(1, dtype=object)
-        payload[0] = _Plant(marker)
-        with entry.open("wb") as stream:
-            np.savez(stream, manifest=np.frombuffer(b"{}", np.uint8), a0=payload)
-    pickle.loads(pickle.dumps(_Plant(tmp_path / "payload-works")))  # the payload is live
-    assert (tmp_path / "payload-works").exists()
-    note = _rerun_recomputes_one(study, out, entry)
-    assert not marker.exists()
-    assert "truncated or damaged" in note
-
-
-def test_a_truncated_entry_is_recomputed_with_a_note(study, tmp_path):
-    out = study_copy(study, tmp_path)
-    entry = trial_entry(out / ".cache")
-    os.truncate(entry, entry.stat().st_size // 2)
-    _rerun_recomputes_one(study, out, entry)
-
-
-def test_an_entry_of_another_key_is_recomputed(study, tmp_path):
-    out = study_copy(study, tmp_path)
-    first, second = sorted(out / ".cache" / p.name for p in (study[1] / ".cache").glob("*.npz")
-                           if p.stat().st_size < 100_000)[:2]  # fmt: skip
-    shutil.copy(second, first)  # a valid entry, but under the wrong name
-    note = _rerun_recomputes_one(study, out, first)
-    assert "written under another key" in note
 
 
 def test_the_cache_folder_is_private(study, tmp_path):
