@@ -45,3 +45,17 @@ def fixed_mass():
 def fixed_vehicle():
     """The example vehicle with the payload filter off (see :func:`fixed_mass`)."""
     return _fixed_mass(load_vehicle(example_vehicle_path()))
+
+
+def pytest_collection_modifyitems(items):
+    """The test files in descending order of their ``heavy(seconds)`` mark (unmarked files:
+    0 s, in collection order), each file's tests in their own order: with ``--dist loadfile
+    --no-loadscope-reorder`` the longest files start first, so no worker is left with one
+    at the end while the other waits (longest processing time first)."""
+    seconds = {}
+    for item in items:
+        mark = item.get_closest_marker("heavy")
+        seconds.setdefault(item.path, mark.args[0] if mark else 0.0)
+    files = sorted(seconds, key=lambda path: -seconds[path])  # stable: ties keep their order
+    rank = {path: k for k, path in enumerate(files)}
+    items.sort(key=lambda item: rank[item.path])

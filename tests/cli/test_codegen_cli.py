@@ -2,8 +2,12 @@
 
 import subprocess
 
+import pytest
+
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
+
+pytestmark = pytest.mark.heavy(19)  # seconds (tests/conftest.py)
 
 
 def test_codegen_command_writes_a_library_its_makefile_builds(tmp_path, capsys):

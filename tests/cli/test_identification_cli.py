@@ -19,6 +19,8 @@ from wheelload.studies.cli import main
 from wheelload.studies.experiments.identification_study import StudySettings, wrong_vehicle_text
 from wheelload.studies.metrics import pooled_metrics
 
+pytestmark = pytest.mark.heavy(55)  # seconds (tests/conftest.py)
+
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):

@@ -28,6 +28,8 @@ import scipy.sparse as sp
 from wheelload.models import example_vehicle_path
 from wheelload.studies.pipeline.example_log import example_log_path
 
+pytestmark = pytest.mark.heavy(25)  # seconds (tests/conftest.py)
+
 #: The command with Ctrl-C's default handling, also where this test runs with SIGINT
 #: ignored (a background job of a shell inherits SIG_IGN, which Python then keeps).
 INTERRUPTIBLE = [sys.executable, "-c", "import runpy, signal, sys; "

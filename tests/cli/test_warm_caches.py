@@ -15,8 +15,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from wheelload.models import example_vehicle_path
 from wheelload.models.files.function_cache import PACKAGE_ROOT
+
+pytestmark = pytest.mark.heavy(19)  # seconds (tests/conftest.py)
 
 
 def _estimate(tmpdir: Path | None, out: Path, *args: str, package: Path | None = None) -> bytes:

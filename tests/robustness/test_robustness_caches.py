@@ -27,6 +27,8 @@ from wheelload.models import example_vehicle_path
 from wheelload.models.files.build_folder import build_folder, checked_library
 from wheelload.studies.pipeline.example_log import example_log_path
 
+pytestmark = pytest.mark.heavy(38)  # seconds (tests/conftest.py)
+
 COMMAND = [sys.executable, "-m", "wheelload.studies.cli"]
 
 

@@ -28,7 +28,10 @@ from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.models import GRAVITY, INPUTS, example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 
-pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+pytestmark = [
+    pytest.mark.heavy(8),
+    pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc"),
+]
 
 SHARES = (0.001, 0.01, 0.1)
 REQUIRED = INPUTS[:12]  # d, v, ax, ay, az, vx: what every update needs

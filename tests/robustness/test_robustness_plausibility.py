@@ -26,6 +26,8 @@ from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.experiments.faults.log_corruptions import SHORT_SCENARIOS
 from wheelload.studies.pipeline.example_log import example_log_path
 
+pytestmark = pytest.mark.heavy(7)  # seconds (tests/conftest.py)
+
 SUV = Path(example_vehicle_path()).with_name("suv.toml")
 UNITS = {"vx": "m/s", "ax": "m/s^2", "ay": "m/s^2", "az": "m/s^2"}
 UNITS |= {name: "rad/s" for name in ("wx", "wy", "wz")}

@@ -20,6 +20,8 @@ from wheelload.studies.experiments.faults.log_corruptions import (
     report_of,
 )
 
+pytestmark = pytest.mark.heavy(10)  # seconds (tests/conftest.py)
+
 #: Corruption -> what the one-line error must say, on a log with braking in a turn.
 EXPECTED = {
     "vx in km/h": "column 'vx' looks like km/h",

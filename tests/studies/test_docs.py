@@ -17,7 +17,7 @@ from wheelload.studies.docs.build import DocsBuildError, build_docs
 from wheelload.studies.docs.reference import packages
 from wheelload.studies.docs.run_blocks import run_block
 
-pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+pytestmark = [pytest.mark.heavy(77), pytest.mark.filterwarnings("ignore::DeprecationWarning")]
 
 
 @pytest.fixture(scope="module")

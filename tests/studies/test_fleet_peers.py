@@ -15,6 +15,8 @@ from wheelload.estimators import TwoStageKF
 from wheelload.studies.bench.fleet import fixed_mass, make_fleet, peer_arrays
 from wheelload.studies.bench.fleet_peers import numba_fleet, numpy_fleet
 
+pytestmark = pytest.mark.heavy(10)  # seconds (tests/conftest.py)
+
 TOLERANCE = 1e-9
 
 

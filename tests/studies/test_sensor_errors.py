@@ -24,6 +24,8 @@ from wheelload.studies.experiments.sensor_errors import (
 )
 from wheelload.studies.metrics import wheel_metrics
 
+pytestmark = pytest.mark.heavy(10)  # seconds (tests/conftest.py)
+
 
 def test_the_quick_table_holds_every_row_and_matches_a_direct_run(tmp_path, capsys):
     out = tmp_path / "errors"

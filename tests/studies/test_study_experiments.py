@@ -23,6 +23,8 @@ from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, v
 from wheelload.studies.experiments.vehicle_file_ablation import ablation_variants, model_switches
 from wheelload.studies.metrics import wheel_metrics
 
+pytestmark = pytest.mark.heavy(14)  # seconds (tests/conftest.py)
+
 
 def _settings() -> Settings:
     path = example_vehicle_path()

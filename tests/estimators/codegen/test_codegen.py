@@ -31,6 +31,8 @@ from wheelload.models import INPUTS, example_vehicle_path, suspension_function
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
+pytestmark = pytest.mark.heavy(28)  # seconds (tests/conftest.py)
+
 LOADS = [f"fz_{w}" for w in WHEELS]
 STD = [f"fz_std_{w}" for w in WHEELS]
 
