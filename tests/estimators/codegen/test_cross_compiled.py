@@ -26,11 +26,15 @@ from wheelload.studies.pipeline.example_log import example_log_path
 
 CROSS = "arm-linux-gnueabihf-gcc"
 MISSING = [tool for tool in (CROSS, "qemu-arm", "gcc") if shutil.which(tool) is None]
-pytestmark = pytest.mark.skipif(
-    bool(MISSING),
-    reason=f"needs {', '.join(MISSING)} (Debian: apt-get install gcc-arm-linux-gnueabihf "
-    "qemu-user); .ci/run installs them where apt-get is available",
-)
+pytestmark = [
+    pytest.mark.heavy(45),  # seconds with the cross tools (tests/conftest.py)
+    pytest.mark.skipif(
+        bool(MISSING),
+        reason=f"needs {', '.join(MISSING)} (Debian: apt-get install gcc-arm-linux-gnueabihf "
+        "qemu-user); .ci/run installs them where apt-get is available",
+    ),
+]
+
 LOADS = ["fz_fl", "fz_fr", "fz_rl", "fz_rr"]
 
 
