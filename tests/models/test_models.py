@@ -3,6 +3,8 @@
 Tolerances are 1e-9 relative: both sides are exact algebra in double precision.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -93,6 +95,23 @@ def test_anti_roll_bar_adds_load_to_the_more_compressed_wheel(vehicle, p):
     arb = front.arb_rate * front.arb_ratio * d
     np.testing.assert_allclose(change, [front.spring_rate * d + arb, -arb, 0, 0], rtol=1e-12)
     assert change[0] > front.spring_rate * d and change[1] < 0
+
+
+def test_anti_roll_bar_wheel_rate_is_linear_in_its_motion_ratio(p):
+    """Eq. 6-8 by hand: F_L = k_arb gamma (d_L - d_R). A bar of 20 kN/m with gamma 0.6
+    (bar deflection per unit of wheel-travel difference) and 10 mm of difference gives
+    20000 * 0.6 * 0.010 = 120 N at the left wheel, -120 N at the right; a squared ratio
+    (the wheel-rate convention k gamma^2) would give 72 N. The paper's Table I bar
+    (15 000 N/m referred to the wheel-travel difference, gamma = 1) on the rear axle: 150 N.
+    """
+    bar = dataclasses.replace(p, arb_rate_front=20000.0, arb_ratio_front=0.6)
+    d = [0.010, 0.0, 0.0, 0.0]
+    change = suspension(bar, d, [0] * 4) - suspension(bar, [0] * 4, [0] * 4)
+    spring = bar.spring_front * 0.010
+    np.testing.assert_allclose(change, [spring + 120.0, -120.0, 0, 0], rtol=1e-12)
+    rear = [0.0, 0.0, 0.0, 0.010]
+    change = suspension(p, rear, [0] * 4) - suspension(p, [0] * 4, [0] * 4)
+    np.testing.assert_allclose(change[2], -150.0, rtol=1e-12)
 
 
 def test_damper_is_asymmetric_push_in_bump_pull_in_rebound(vehicle, p):

@@ -50,7 +50,7 @@ def log():
 
 def run_example(example, out, *overrides):
     return subprocess.run([str(example), str(example_log_path()), str(out), *overrides],
-                          capture_output=True, text=True, timeout=60)  # fmt: skip
+                          capture_output=True, text=True)  # fmt: skip
 
 
 def changed_vehicle(vehicle, *, spring_front=None, roll_split_front=None):

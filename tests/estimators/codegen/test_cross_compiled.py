@@ -52,7 +52,7 @@ def assert_arm32(binary):
 
 def qemu(binary, *arguments):
     result = subprocess.run(
-        ["qemu-arm", str(binary), *map(str, arguments)], capture_output=True, text=True, timeout=300
+        ["qemu-arm", str(binary), *map(str, arguments)], capture_output=True, text=True
     )
     assert result.returncode == 0, result.stderr
     return result

@@ -8,6 +8,8 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wheelload.estimators.family.tyres.forces import (
     Inputs,
@@ -76,6 +78,56 @@ def test_tyre_split_ends():
     np.testing.assert_allclose(split([3000.0, 2000.0]).reshape(2, 2).sum(axis=1), 1.0)
     # The more loaded tyre takes more, but less than its load share in the linear range.
     assert 0.5 < linear[1] < loads[1] / loads[:2].sum()
+
+
+def rigid_body_sums(steer, fx, fy, *, lf, lr, track_front, track_rear):
+    """Independent check of eq. 2-3: each tyre's (F_x, F_y) turned from its own frame into
+    the body's (front wheels by the steer angle), summed, and the yaw moment about the CG
+    as x F_y - y F_x over the contact points (x = l_f, -l_r; y = +t/2 left, -t/2 right)."""
+    x = np.array([lf, lf, -lr, -lr])
+    y = 0.5 * np.array([track_front, -track_front, track_rear, -track_rear])
+    angle = np.array([steer, steer, 0.0, 0.0])
+    bx = fx * np.cos(angle) - fy * np.sin(angle)
+    by = fx * np.sin(angle) + fy * np.cos(angle)
+    return np.array([bx.sum(), by.sum(), (x * by - y * bx).sum()])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    steer=st.floats(-0.3, 0.3),
+    fx=st.lists(st.floats(-6000, 6000), min_size=4, max_size=4),
+    fy=st.lists(st.floats(-6000, 6000), min_size=4, max_size=4),
+    share=st.floats(-0.5, 0.5),
+)
+def test_body_force_rows_equal_the_rigid_body_sums(steer, fx, fy, share):
+    """:func:`body_force_rows` in the state (F_yf, F_yr, e) with e = (F_y,fr - F_y,fl) -
+    s F_yf, and the longitudinal forces' offset, equal the rigid-body sums of four tyres
+    (yaw row times I_z). Tolerance 1e-9 relative to the largest force: a few products."""
+    k = dict(lf=1.2, lr=1.5, track_front=1.6, track_rear=1.58)
+    fx, fy = np.array(fx), np.array(fy)
+    state = np.array([fy[0] + fy[1], fy[2] + fy[3], (fy[1] - fy[0]) - share * (fy[0] + fy[1])])
+    h, offset = body_force_rows(steer, fx, share_front=share, inertia_z=2500.0, **k)
+    rows = np.array(h) @ state + np.array(offset).ravel()
+    rows[2] *= 2500.0
+    scale = 1e-9 * max(1.0, np.abs(fx).max(), np.abs(fy).max())
+    np.testing.assert_allclose(rows, rigid_body_sums(steer, fx, fy, **k), rtol=0, atol=scale * 3)
+
+
+def test_steady_turn_with_steer_and_front_braking():
+    """A left turn (F_y 3 kN front, 2.5 kN rear) with 0.05 rad of steer and 1 kN of braking
+    on each front wheel, by hand: the braking forces turn with the wheels, so they push
+    the car to the right by 2 kN sin(0.05) = 100 N and the front lateral force retards it
+    by 3 kN sin(0.05); the front braking's yaw moment is l_f F_xf sin(delta)."""
+    steer, k = 0.05, dict(lf=1.2, lr=1.5, track_front=1.6, track_rear=1.58)
+    fx = np.array([-1000.0, -1000.0, 0.0, 0.0])
+    fy = np.array([1500.0, 1500.0, 1250.0, 1250.0])
+    h, offset = body_force_rows(steer, fx, share_front=0.0, inertia_z=1.0, **k)
+    rows = np.array(h) @ np.array([3000.0, 2500.0, 0.0]) + np.array(offset).ravel()
+    c, s = np.cos(steer), np.sin(steer)
+    assert rows[0] == pytest.approx(-2000.0 * c - 3000.0 * s, rel=1e-12)
+    assert rows[1] == pytest.approx(3000.0 * c + 2500.0 - 2000.0 * s, rel=1e-12)
+    assert rows[2] == pytest.approx(1.2 * (3000.0 * c - 2000.0 * s) - 1.5 * 2500.0, rel=1e-12)
+    np.testing.assert_allclose(rows, rigid_body_sums(steer, fx, fy, **k), rtol=1e-12)
 
 
 def _inputs(vehicle, fyf, fyr, steer, rate, spin):

@@ -8,11 +8,13 @@ plant's. Exactness checks compare with an independent numpy Kalman filter
 
 import dataclasses
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
+from wheelload.estimators.kf.innovation_gate import gate_rows
 from wheelload.estimators.kf.monitor_state import STARTED
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.logs.inputs import input_matrix
@@ -85,3 +87,33 @@ def test_gate_never_locks_the_data_out(vehicle, dlc):
             assert dlc.t[released[0]] - dlc.t[0] <= GuardSettings().gate_release_time + 0.011
     assert errors["guarded"] < 150.0
     assert errors["guarded"] <= 1.05 * errors["plain"]
+
+
+def rule(passes, reject_time, other_group_failed, count):
+    """The gate's release rule, read from its docstring: a row is taken when it passes, or
+    has failed for gate_release_time, or rows of the other group fail too (for an
+    equilibrium row also a suspension row earlier in the sample), or at least three rows
+    fail against the prediction (a transient, not a sensor)."""
+    released = reject_time >= GuardSettings().gate_release_time or other_group_failed
+    return passes or released or count >= 3
+
+
+@pytest.mark.parametrize("count", range(8))
+@pytest.mark.parametrize("groups", [(0, 0), (1, 0), (0, 1), (1, 1)], ids=str)
+def test_gate_transient_rule_on_constructed_failures(count, groups):
+    """Every row of a sample against a constructed prior -- which groups failed, how many
+    rows -- with the suspension rows passing (y = 0) or failing (y = 10 sigma), the
+    equilibrium rows failing, and each row failing before for 0, half or all of the
+    release time: taken exactly where the rule says. Exact (0/1)."""
+    g = GuardSettings()
+    suspension_prior, constraint_prior = groups
+    for reject_time in (0.0, 0.5 * g.gate_release_time, g.gate_release_time):
+        for suspension_fails in (False, True):
+            gate, _ = gate_rows(ca.DM(np.full(7, reject_time)), ca.DM.zeros(7), g,
+                                (suspension_prior, constraint_prior, count))  # fmt: skip
+            for i in range(7):
+                fails = suspension_fails if i < 4 else True
+                taken = float(gate(i, 10.0 if fails else 0.0, 1.0))
+                other = constraint_prior if i < 4 else (suspension_prior or suspension_fails)
+                expected = rule(not fails, reject_time, other, count)
+                assert taken == float(expected), (i, reject_time, suspension_fails)

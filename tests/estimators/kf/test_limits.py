@@ -7,10 +7,15 @@ plant's.
 
 import dataclasses
 
+import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators.kf import limits
+from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.tuning import with_filter_sigma
 from wheelload.models import GRAVITY
 from wheelload.studies.experiments.faults.fault_injection import pooled_rmse
@@ -53,3 +58,79 @@ def test_extreme_tuning_never_breaks_the_filter(vehicle, dlc, tuning):
     state, sample = kf.initial_state(), Sample(d=dlc.d[0], v=dlc.v[0], acc=dlc.acc[0], vx=dlc.vx[0])
     state, one = kf.step(state, sample, 0.01)
     assert np.isfinite(one.loads).all() and np.all(np.diag(state.P) > 0)
+
+
+# --- the envelope and the ceiling as properties of the step's limit functions ----------
+
+WEIGHT = 1650.0 * GRAVITY
+LIMITS = GuardSettings()
+
+
+def numeric(function, *arguments):
+    """``function`` of CasADi symbols evaluated at numeric arguments (a Function of them)."""
+    symbols = [ca.SX.sym(f"a{k}", *np.shape(a)) if np.ndim(a) else ca.SX.sym(f"a{k}")
+               for k, a in enumerate(arguments)]  # fmt: skip
+    outputs = function(*symbols)
+    outputs = outputs if isinstance(outputs, tuple) else (outputs,)
+    evaluate = ca.Function("f", symbols, list(outputs))
+    values = evaluate(*[ca.DM(np.asarray(a, dtype=float)) for a in arguments])
+    values = values if isinstance(values, (list, tuple)) else [values]
+    return [np.asarray(v) for v in values]
+
+
+def within_envelope(x, x_prior, total):
+    """Independent reading of the envelope (estimators/kf/limits.py): every |F_z| within
+    load_limit m g and the total no further outside the log's vertical-row range, widened
+    by total_margin m g, than before the update."""
+    low = WEIGHT + total[0] - LIMITS.total_margin * WEIGHT
+    high = WEIGHT + total[1] + LIMITS.total_margin * WEIGHT
+    excess = lambda value: max(value - high, low - value, 0.0)  # noqa: E731
+    bounded = np.all(np.abs(x) <= LIMITS.load_limit * WEIGHT)
+    return bool(bounded and excess(np.sum(x)) <= excess(np.sum(x_prior)))
+
+
+loads = st.lists(st.floats(-6 * WEIGHT, 6 * WEIGHT), min_size=4, max_size=4)
+
+
+@settings(max_examples=200, deadline=None)
+@given(x=loads, x_prior=loads, low=st.floats(-WEIGHT, 0.0), high=st.floats(0.0, WEIGHT))
+def test_load_envelope_is_two_sided_and_equals_its_definition(x, x_prior, low, high):
+    """Exact agreement (a boolean) on random updates, two to six m g either side."""
+    (ok,) = numeric(lambda a, b, t: limits.within_load_limit(a, b, t, WEIGHT, LIMITS),
+                    np.array(x), np.array(x_prior), np.array([low, high]))  # fmt: skip
+    assert bool(ok) == within_envelope(np.array(x), np.array(x_prior), (low, high))
+
+
+def test_a_huge_negative_load_is_outside_the_envelope():
+    static = np.full(4, WEIGHT / 4)
+    for wheel in range(4):
+        x = static.copy()
+        x[wheel] = -4.0 * WEIGHT
+        x[(wheel + 1) % 4] += 5.0 * WEIGHT  # the total unchanged: only the bound can refuse
+        (ok,) = numeric(lambda a, b, t: limits.within_load_limit(a, b, t, WEIGHT, LIMITS),
+                        x, static, np.zeros(2))  # fmt: skip
+        assert not bool(ok), wheel
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), over=st.lists(st.booleans(), min_size=4, max_size=4))
+def test_covariance_ceiling_keeps_p_positive_semidefinite_and_its_correlations(seed, over):
+    """A random covariance with some variances far above the ceiling (m g)^2: the limited
+    P has its diagonal in [floor^2, ceiling], stays symmetric positive semidefinite, and
+    keeps every correlation coefficient (the ceiling scales row and column, D P D).
+    Tolerances 1e-9 relative: a few products and one square root per entry."""
+    rng = np.random.default_rng(seed)
+    ceiling = WEIGHT**2
+    root = rng.normal(size=(4, 4))
+    P = root @ root.T + 0.1 * np.eye(4)
+    scale = np.where(over, rng.uniform(2.0, 1e3, 4) * WEIGHT, rng.uniform(10.0, 0.5 * WEIGHT, 4))
+    P = P / np.sqrt(np.outer(np.diag(P), np.diag(P))) * np.outer(scale, scale)
+    limited, changed = numeric(lambda a: limits.limit_covariance(a, 1.0, ceiling), P)
+    diagonal = np.diag(limited)
+    assert np.all(diagonal <= ceiling * (1 + 1e-12)) and np.all(diagonal >= 1.0)
+    np.testing.assert_allclose(diagonal, np.minimum(np.diag(P), ceiling), rtol=1e-12)
+    np.testing.assert_allclose(limited, limited.T, rtol=0, atol=1e-12 * ceiling)
+    assert np.linalg.eigvalsh(limited).min() >= -1e-9 * ceiling
+    correlation = lambda M: M / np.sqrt(np.outer(np.diag(M), np.diag(M)))  # noqa: E731
+    np.testing.assert_allclose(correlation(limited), correlation(P), rtol=1e-9, atol=1e-12)
+    assert bool(changed) == any(over)

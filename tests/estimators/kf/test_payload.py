@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import tomllib
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -176,3 +177,36 @@ def test_a_log_starting_in_a_turn_has_no_start_up_transient(logs):
     error_whole = np.abs(kf.run(whole).loads - whole.reference)[start : start + 100].max()
     assert error_cut < 1.2 * error_whole + 20.0
     assert abs(cut.acc[0, 1]) > 5.0  # the cut starts in the turn, far from the static loads
+
+
+def test_moment_rows_move_the_moments_never_the_mass():
+    """One payload update from the prior (theta = 0, diagonal P) while braking at 5 m/s^2,
+    with loads 400 N off the file's pitch and roll balance: taking only a moment row
+    (pitch, then roll) leaves the mass exactly where it was and moves the first moments;
+    the vertical row alone moves the mass (payload.update: the mass is weighed by the
+    vertical row). Exact zero: the gain's mass entry is P_00 J_0 with J_0 = 0."""
+    from wheelload.estimators.kf import payload
+    from wheelload.estimators.kf.tuning import payload_tuning
+    from wheelload.models import gates_function
+    from wheelload.models.inputs import input_vector
+
+    vehicle = load_vehicle(VEHICLES["sports_car"])
+    p = ModelParameters.from_vehicle(vehicle).vector()
+    u = np.nan_to_num(input_vector(d=np.zeros(4), acc=[-5.0, 0.0, GRAVITY], vx=20.0))
+    gates = np.asarray(gates_function()(np.ones(len(INPUTS)), p)[0]).ravel()
+    A, b = equilibrium_function()(u, gates, p)
+    z = np.linalg.lstsq(np.asarray(A), np.asarray(b).ravel(), rcond=None)[0]
+    z = z + 400.0 * np.array([1.0, -1.0, -1.0, 1.0]) + np.array([0.0, 0.0, 200.0, 200.0])
+    tuning = payload_tuning(vehicle)
+    theta, P = ca.SX.sym("theta", 4), ca.SX.sym("P", 4, 4)
+    moved = {}
+    for name, mask in (("vertical", [1, 0, 0]), ("pitch", [0, 1, 0]), ("roll", [0, 0, 1])):
+        result = payload.update(theta, P, ca.DM(z), ca.DM(u), ca.DM(gates), ca.DM(p),
+                                ca.DM(mask), 0.01, tuning, payload.residual_function())  # fmt: skip
+        f = ca.Function("update", [theta, P], [result.theta, result.used])
+        new, used = (np.asarray(v).ravel() for v in f(np.zeros(4), payload.prior(tuning)))
+        np.testing.assert_array_equal(used, mask)
+        moved[name] = new
+    assert moved["vertical"][0] != 0.0
+    assert moved["pitch"][0] == 0.0 and moved["roll"][0] == 0.0
+    assert moved["pitch"][1] != 0.0 and moved["roll"][2] != 0.0

@@ -9,7 +9,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators import Sample, TwoStageKF
-from wheelload.estimators.kf.projection import ProjectionKF, Weighting, project
+from wheelload.estimators.kf.projection import (
+    ProjectionKF,
+    Weighting,
+    project,
+    projection_update,
+)
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
@@ -109,3 +114,30 @@ def test_projection_invariants(vehicle, seed, weighting):
     assert np.linalg.eigvalsh(P_new).min() >= -1e-9 * np.abs(P).max()
     if weighting is Weighting.MAXIMUM_PROBABILITY:
         assert np.abs(A @ P_new).max() <= 1e-8 * np.abs(A).max() * np.abs(P).max()
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_each_weighting_is_its_closed_form_projection(vehicle, seed):
+    """The filter's second stage against the closed forms (Simon & Chia eq. 9, 35), numpy:
+    W = P^-1 gives x + P A^T (A P A^T)^-1 (b - A x) and W = I gives
+    x + A^T (A A^T)^-1 (b - A x); with a P far from isotropic the two differ by far more
+    than the tolerance (1e-9 relative to the loads), so swapping them cannot pass."""
+    rng = np.random.default_rng(seed)
+    A = equilibrium_matrix(vehicle)
+    root = rng.normal(size=(4, 4)) * np.array([10.0, 40.0, 160.0, 640.0])
+    P = root @ root.T + np.eye(4)
+    x = rng.uniform(2000, 6000, size=4)
+    b = A @ (x + rng.normal(size=4) * 300.0)
+    closed = {
+        Weighting.MAXIMUM_PROBABILITY: x + P @ A.T @ np.linalg.solve(A @ P @ A.T, b - A @ x),
+        Weighting.LEAST_SQUARES: x + A.T @ np.linalg.solve(A @ A.T, b - A @ x),
+    }
+    assert np.abs(closed[Weighting.MAXIMUM_PROBABILITY] - closed[Weighting.LEAST_SQUARES]).max() > 1
+    xs, Ps = ca.SX.sym("x", 4), ca.SX.sym("P", 4, 4)
+    for weighting, expected in closed.items():
+        update = projection_update(weighting)
+        x_new, P_new, *_ = update(xs, Ps, ca.DM(b), ca.DM(A), ca.DM.zeros(3), ca.DM.ones(3))
+        f = ca.Function("stage", [xs, Ps], [x_new, P_new])
+        got, _ = f(x, P)
+        np.testing.assert_allclose(np.asarray(got).ravel(), expected, rtol=1e-9, atol=1e-9)
