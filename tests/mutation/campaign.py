@@ -58,7 +58,14 @@ class Area:
 AREAS = {
     "models": Area(
         ("models/**/*.py",),
-        ("tests/models", "tests/equivalence", "tests/estimators/family/test_tyre_forces.py"),
+        (
+            "tests/models/test_models.py",
+            "tests/models/test_model_terms.py",
+            "tests/models/plant",
+            "tests/equivalence",
+            "tests/estimators/family/test_tyre_forces.py",
+            "tests/models",
+        ),
         exclude=("models/files/*.py",),
     ),
     "kf-step": Area(
@@ -150,7 +157,7 @@ def _copy_checkout(target: Path) -> Path:
     return package
 
 
-def _pytest(package: Path, tests: tuple[str, ...], scratch: Path, timeout: float):
+def _pytest(package: Path, tests: tuple[str, ...], scratch: Path, timeout: float | None):
     """Run ``tests`` of the copy in ``package`` with that copy on the path; (rc, output)."""
     env = {**os.environ, "PYTHONPATH": str(package.parent), "TMPDIR": str(scratch),
            "PYTHONDONTWRITEBYTECODE": "1"}  # fmt: skip
@@ -172,13 +179,16 @@ def _first_failure(output: str) -> str:
     return lines[-1][:120] if lines else "no output"
 
 
-def _run_one(area: str, mutant: Mutant, package: Path, scratch: Path, timeout: float) -> Outcome:
+def _run_one(area: str, mutant: Mutant, package: Path, scratch: Path, timeout: float | None,
+             tests: tuple[str, ...] | None = None) -> Outcome:  # fmt: skip
+    """``mutant`` written into the copy ``package``, the area's ``tests`` run, the copy
+    restored."""
     target = package / mutant.path
     original = target.read_text()
     target.write_text(mutant.apply(original))
     began = time.perf_counter()
     try:
-        rc, output = _pytest(package, AREAS[area].tests, scratch, timeout)
+        rc, output = _pytest(package, tests or AREAS[area].tests, scratch, timeout)
     finally:
         target.write_text(original)
     seconds = time.perf_counter() - began
