@@ -61,9 +61,9 @@ AREAS = {
         (
             "tests/models/test_models.py",
             "tests/models/test_model_terms.py",
+            "tests/estimators/family",
             "tests/models/plant",
             "tests/equivalence",
-            "tests/estimators/family/test_tyre_forces.py",
             "tests/models",
         ),
         exclude=("models/files/*.py",),
