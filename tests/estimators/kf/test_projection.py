@@ -121,8 +121,9 @@ def test_projection_invariants(vehicle, seed, weighting):
 def test_each_weighting_is_its_closed_form_projection(vehicle, seed):
     """The filter's second stage against the closed forms (Simon & Chia eq. 9, 35), numpy:
     W = P^-1 gives x + P A^T (A P A^T)^-1 (b - A x) and W = I gives
-    x + A^T (A A^T)^-1 (b - A x); with a P far from isotropic the two differ by far more
-    than the tolerance (1e-9 relative to the loads), so swapping them cannot pass."""
+    x + A^T (A A^T)^-1 (b - A x). Tolerance 1e-9 relative to the loads (about 6e-6 N);
+    with a P far from isotropic the two differ by more than 1e-3 N (at least 0.015 N over
+    20 000 draws), so swapping them cannot pass."""
     rng = np.random.default_rng(seed)
     A = equilibrium_matrix(vehicle)
     root = rng.normal(size=(4, 4)) * np.array([10.0, 40.0, 160.0, 640.0])
@@ -133,7 +134,8 @@ def test_each_weighting_is_its_closed_form_projection(vehicle, seed):
         Weighting.MAXIMUM_PROBABILITY: x + P @ A.T @ np.linalg.solve(A @ P @ A.T, b - A @ x),
         Weighting.LEAST_SQUARES: x + A.T @ np.linalg.solve(A @ A.T, b - A @ x),
     }
-    assert np.abs(closed[Weighting.MAXIMUM_PROBABILITY] - closed[Weighting.LEAST_SQUARES]).max() > 1
+    difference = closed[Weighting.MAXIMUM_PROBABILITY] - closed[Weighting.LEAST_SQUARES]
+    assert np.abs(difference).max() > 1e-3
     xs, Ps = ca.SX.sym("x", 4), ca.SX.sym("P", 4, 4)
     for weighting, expected in closed.items():
         update = projection_update(weighting)
