@@ -1,5 +1,7 @@
 """Vehicle file: loading, validation messages that name the key, template."""
 
+import dataclasses
+import math
 import tomllib
 
 import pytest
@@ -13,6 +15,7 @@ from wheelload.models import (
     vehicle_from_dict,
     vehicle_template,
 )
+from wheelload.models.vehicle.plausibility import check_vehicle_ranges
 
 
 def table():
@@ -75,3 +78,37 @@ def test_template_is_a_valid_commented_vehicle_file(tmp_path):
     path = tmp_path / "template.toml"
     path.write_text(text)
     assert load_vehicle(path).name == "sports_car"
+
+
+def _with_axle(vehicle, axle, **values):
+    suspension = vehicle.suspension
+    changed = dataclasses.replace(getattr(suspension, axle), **values)
+    return dataclasses.replace(
+        vehicle, suspension=dataclasses.replace(suspension, **{axle: changed})
+    )
+
+
+@pytest.mark.parametrize("axle", ["front", "rear"])
+def test_spring_damper_and_bar_ranges_at_their_published_bounds(vehicle, axle):
+    """The ranges of the suspension keys, 2 % inside and outside each bound, from the
+    definitions by hand: ride frequency f = sqrt(k / m_c) / 2 pi within 0.5-5 Hz on the
+    sprung corner mass m_c (lever rule: m_s l_r / L / 2 front, m_s l_f / L / 2 rear),
+    damping ratio c / (2 sqrt(k m_c)) up to 3, the bar up to 10 times the spring."""
+    g = vehicle.geometry
+    lever = g.lr if axle == "front" else g.lf
+    corner = vehicle.mass.sprung * lever / (g.lf + g.lr) / 2.0
+    spring = getattr(vehicle.suspension, axle).spring_rate
+
+    def flagged(name, **values):
+        """Whether the key ``name`` is reported with ``values`` set on the axle."""
+        changed = _with_axle(vehicle, axle, **values)
+        return f"suspension.{axle}.{name}" in {v.key for v in check_vehicle_ranges(changed)}
+
+    for hz, outside in ((0.49, True), (0.51, False), (4.9, False), (5.1, True)):
+        rate = corner * (2.0 * math.pi * hz) ** 2
+        assert flagged("spring_rate", spring_rate=rate) == outside, hz
+    critical = 2.0 * math.sqrt(spring * corner)
+    assert not flagged("damper_push", damper_push=2.94 * critical)
+    assert flagged("damper_push", damper_push=3.06 * critical)
+    assert not flagged("arb_rate", arb_rate=9.8 * spring)
+    assert flagged("arb_rate", arb_rate=10.2 * spring)

@@ -80,3 +80,7 @@ def test_body_inertia_comes_from_the_vehicle_file():
     assert estimator.A[3, 2] == pytest.approx(-k.pitch / (iyy + arm_inertia), rel=1e-9)
     sports = BodyInertia(roll=518.04, pitch=1677.0)  # the constants it used to take
     assert not np.allclose(RoadAngleKF(suv, inertia=sports).A, estimator.A)
+    # A body inertia given without an axis height has its axis on the ground too.
+    assert RoadAngleKF(suv, inertia=sports).A[1, 0] == pytest.approx(
+        -k.roll / (518.04 + arm_inertia), rel=1e-9
+    )

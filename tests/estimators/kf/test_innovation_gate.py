@@ -14,7 +14,7 @@ import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
-from wheelload.estimators.kf.innovation_gate import gate_rows
+from wheelload.estimators.kf.innovation_gate import gate_rows, prior_failures
 from wheelload.estimators.kf.monitor_state import STARTED
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.logs.inputs import input_matrix
@@ -117,3 +117,21 @@ def test_gate_transient_rule_on_constructed_failures(count, groups):
                 other = constraint_prior if i < 4 else (suspension_prior or suspension_fails)
                 expected = rule(not fails, reject_time, other, count)
                 assert taken == float(expected), (i, reject_time, suspension_fails)
+
+
+@pytest.mark.parametrize("failing", [(), (0,), (2, 3), (4,), (5, 6), (1, 4, 6), tuple(range(7))])
+def test_prior_failures_name_the_groups_and_count_the_rows(failing):
+    """Rows failing against the prediction (y = 10 sigma) among rows that pass (y = 0),
+    with one further failing row absent (available = 0, not counted): which group failed
+    and how many rows, exactly."""
+    y = np.array([10.0 if i in failing else 0.0 for i in range(7)])
+    available = np.ones(7)
+    absent = next((i for i in range(7) if i not in failing), None)
+    if absent is not None:
+        y[absent], available[absent] = 10.0, 0.0
+    suspension, constraint, count = prior_failures(
+        ca.DM(y), ca.DM.ones(7), ca.DM(available), ca.DM.zeros(7), GuardSettings()
+    )
+    assert float(suspension) == float(any(i < 4 for i in failing))
+    assert float(constraint) == float(any(i >= 4 for i in failing))
+    assert float(count) == len(failing)

@@ -134,3 +134,21 @@ def test_covariance_ceiling_keeps_p_positive_semidefinite_and_its_correlations(s
     correlation = lambda M: M / np.sqrt(np.outer(np.diag(M), np.diag(M)))  # noqa: E731
     np.testing.assert_allclose(correlation(limited), correlation(P), rtol=1e-9, atol=1e-12)
     assert bool(changed) == any(over)
+
+
+@pytest.mark.parametrize("floor", [0.3, 1.0, 7.0])
+def test_covariance_floor_raises_small_variances_to_its_square(floor):
+    """floor_covariance and limit_covariance with a floor of ``floor`` N: a variance below
+    floor^2 becomes floor^2 (off-diagonals kept), one above is kept, and the flag says
+    which happened; exact."""
+    P = np.diag([0.25 * floor**2, 4.0 * floor**2, 0.5 * floor**2, 1e4])
+    P[0, 3] = P[3, 0] = 0.1 * floor
+    expected = P.copy()
+    expected[0, 0] = expected[2, 2] = floor**2
+    for limit in (lambda a: limits.floor_covariance(a, floor),
+                  lambda a: limits.limit_covariance(a, floor, WEIGHT**2)):  # fmt: skip
+        limited, changed = numeric(limit, P)
+        np.testing.assert_array_equal(limited, expected)
+        assert bool(changed)
+        _, unchanged = numeric(limit, np.diag([2.0 * floor**2] * 3 + [1e4]))
+        assert not bool(unchanged)

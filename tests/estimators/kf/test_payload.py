@@ -210,3 +210,28 @@ def test_moment_rows_move_the_moments_never_the_mass():
     assert moved["vertical"][0] != 0.0
     assert moved["pitch"][0] == 0.0 and moved["roll"][0] == 0.0
     assert moved["pitch"][1] != 0.0 and moved["roll"][2] != 0.0
+
+
+def test_plausible_payloads_end_at_the_cars_own_reach():
+    """payload.plausible by hand: mass within [-m/2, m]; the first moments within half the
+    wheelbase, half the front track and 1 m of height times the loaded mass (m + dm),
+    1 % inside and outside each bound; exact 0/1."""
+    from wheelload.estimators.kf import payload
+
+    vehicle = load_vehicle(VEHICLES["sports_car"])
+    p = ModelParameters.from_vehicle(vehicle)
+    m, added = p.mass, 200.0
+    reach = (0.5 * (p.lf + p.lr), 0.5 * p.track_front, 1.0)
+
+    def plausible(theta):
+        return float(payload.plausible(ca.DM(theta), ca.DM(p.vector())))
+
+    assert plausible([added, 0.0, 0.0, 0.0]) == 1.0
+    assert plausible([0.99 * m, 0, 0, 0]) == 1.0 and plausible([1.01 * m, 0, 0, 0]) == 0.0
+    assert plausible([-0.49 * m, 0, 0, 0]) == 1.0 and plausible([-0.51 * m, 0, 0, 0]) == 0.0
+    for axis in range(3):
+        for scale, expected in ((0.99, 1.0), (1.01, 0.0)):
+            for sign in (1.0, -1.0):
+                theta = [added, 0.0, 0.0, 0.0]
+                theta[1 + axis] = sign * scale * reach[axis] * (m + added)
+                assert plausible(theta) == expected, (axis, scale, sign)
