@@ -239,11 +239,12 @@ def _cell(text: str) -> str:
     return (text[:70] + "...") if len(text) > 73 else text.replace("|", "\\|")
 
 
-def campaign(areas, sample, seed, workers, timeout_factor, only=(), progress=print):
-    """Run the campaign (the mutants at ``only``'s file:line places, if given); the
-    outcomes in the order drawn."""
-    chosen = [(a, m) for a, m in draw(areas, sample, seed) if not only or m.where in only]
-    areas = list(dict.fromkeys(area for area, _ in chosen))
+def campaign(chosen, workers, timeout_factor, known=None, progress=print) -> list[Outcome]:
+    """Run the ``chosen`` (area, mutant) pairs but those whose outcome is ``known`` (by
+    index); every outcome in the order chosen."""
+    outcomes: dict[int, Outcome] = dict(known or {})
+    todo = [(k, area, m) for k, (area, m) in enumerate(chosen) if k not in outcomes]
+    areas = list(dict.fromkeys(area for _, area, _ in todo))
     with tempfile.TemporaryDirectory(prefix="wheelload-mutation-") as folder:
         folder = Path(folder)
         scratch = folder / "tmp"  # one build folder for all workers: unchanged C builds once
@@ -259,26 +260,45 @@ def campaign(areas, sample, seed, workers, timeout_factor, only=(), progress=pri
             timeouts[area] = max(60.0, timeout_factor * (time.perf_counter() - began))
             progress(f"{area}: tests pass unmutated in {time.perf_counter() - began:.0f} s")
         free = list(packages)
-        outcomes: dict[int, Outcome] = {}
         with concurrent.futures.ThreadPoolExecutor(workers) as pool:
             pending = {}
-            for index, (area, mutant) in enumerate(chosen):
+
+            def collect(future):
+                k, package = pending.pop(future)
+                outcomes[k] = future.result()
+                free.append(package)
+                _report(progress, k, len(chosen), outcomes[k])
+
+            for index, area, mutant in todo:
                 if len(pending) == workers:
                     done, _ = concurrent.futures.wait(
                         pending, return_when=concurrent.futures.FIRST_COMPLETED)  # fmt: skip
                     for future in done:
-                        k, package = pending.pop(future)
-                        outcomes[k] = future.result()
-                        free.append(package)
-                        _report(progress, k, len(chosen), outcomes[k])
+                        collect(future)
                 package = free.pop()
                 future = pool.submit(_run_one, area, mutant, package, scratch, timeouts[area])
                 pending[future] = (index, package)
-            for future in concurrent.futures.as_completed(pending):
-                k, _ = pending[future]
-                outcomes[k] = future.result()
-                _report(progress, k, len(chosen), outcomes[k])
+            for future in concurrent.futures.as_completed(list(pending)):
+                collect(future)
     return [outcomes[k] for k in range(len(chosen))]
+
+
+def read_table(path: Path, chosen) -> dict[int, Outcome]:
+    """The killed mutants of an earlier table of the same draw, by index (survivors and
+    equivalents are run again); an error if the draw is not the table's."""
+    known = {}
+    for line in path.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
+        if len(cells) != 7 or not cells[0].isdigit():
+            continue
+        k = int(cells[0]) - 1
+        area, mutant = chosen[k] if k < len(chosen) else (None, None)
+        if mutant is None or (area, mutant.where) != (cells[1], cells[3]):
+            sys.exit(f"campaign: row {k + 1} of {path} is not this draw's mutant: run the "
+                     "campaign anew (the sources or --seed/--sample changed)")  # fmt: skip
+        if cells[5] in ("killed", "timeout"):
+            known[k] = Outcome(area, mutant, cells[5], cells[6], 0.0)
+    return known
 
 
 def _report(progress, k, total, outcome):
@@ -301,16 +321,24 @@ def main(argv=None) -> int:
     parser.add_argument("--only", action="append", default=[], metavar="FILE:LINE",
                         help="run only the drawn mutants at this place (repeat)")  # fmt: skip
     parser.add_argument("--list", action="store_true", help="list the drawn mutants and stop")
+    parser.add_argument("--update", type=Path, metavar="TABLE",
+                        help="keep TABLE's killed mutants, run the rest again")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.update and args.only:
+        parser.error("give --update or --only, not both")
     if args.out and args.out.exists() and not args.force:
         parser.error(f"{args.out} exists: give another --out or --force")
-    areas = args.area or list(AREAS)
+    if args.update and not args.update.is_file():
+        parser.error(f"no table {args.update}: give the --out of an earlier run")
+    chosen = [(area, m) for area, m in draw(args.area or list(AREAS), args.sample, args.seed)
+              if not args.only or m.where in args.only]  # fmt: skip
     if args.list:
-        for area, m in draw(areas, args.sample, args.seed):
+        for area, m in chosen:
             print(f"{area:9s} {m.where} {m.operator:11s} {_cell(m.before)} -> {_cell(m.after)}")
         return 0
-    outcomes = campaign(areas, args.sample, args.seed, args.workers, args.timeout_factor,
-                        args.only, progress=lambda line: print(line, flush=True))  # fmt: skip
+    known = read_table(args.update, chosen) if args.update else None
+    outcomes = campaign(chosen, args.workers, args.timeout_factor, known,
+                        progress=lambda line: print(line, flush=True))  # fmt: skip
     table = score_table(outcomes)
     print(table)
     if args.out:

@@ -5,7 +5,17 @@ import ast
 from pathlib import Path
 
 import pytest
-from campaign import AREAS, ROOT, Outcome, _copy_checkout, _run_one, named_mutants, score_table
+from campaign import (
+    AREAS,
+    ROOT,
+    Outcome,
+    _copy_checkout,
+    _run_one,
+    draw,
+    named_mutants,
+    read_table,
+    score_table,
+)
 from mutants import Mutant, mutants
 
 SOURCE = '''"""Docstring 1 + 2."""
@@ -105,3 +115,17 @@ def test_a_real_run_kills_a_wrong_unit_and_lets_a_no_op_live(checkout_copy, tmp_
     assert outcome.status == "survived"
     source = (checkout_copy / wrong_mph.path).read_text()
     assert source == (ROOT / wrong_mph.path).read_text()  # the copy restored
+
+
+def test_an_earlier_table_keeps_its_killed_mutants_and_refuses_another_draw(tmp_path):
+    chosen = draw(["readers"], 3, seed=0)
+    statuses = ["killed", "survived", "timeout", "equivalent"]
+    outcomes = [Outcome(area, m, statuses[k % 4], f"t{k}", 1.0)
+                for k, (area, m) in enumerate(chosen)]  # fmt: skip
+    table = tmp_path / "table.md"
+    table.write_text(score_table(outcomes))
+    known = read_table(table, chosen)
+    assert sorted(known) == [k for k, o in enumerate(outcomes) if o.status in statuses[::2]]
+    assert all(known[k].mutant == chosen[k][1] and known[k].by == f"t{k}" for k in known)
+    with pytest.raises(SystemExit, match="not this draw's mutant"):
+        read_table(table, draw(["readers"], 3, seed=1))
