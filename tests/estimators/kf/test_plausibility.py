@@ -6,11 +6,15 @@ plant's. The outlier's estimate equals, bitwise, the estimate of the same log wi
 outlier replaced by a missing value; the carried state stays finite whatever the input.
 """
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GUARDS_OFF
+from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
+from wheelload.estimators.kf.monitor_state import CREDIT, HELD, MONITOR_SIZE
+from wheelload.estimators.kf.plausibility import rate_consistency
+from wheelload.models.inputs import BODY_RATES, INPUTS
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())
 
@@ -53,3 +57,24 @@ def test_monitor_state_stays_finite_with_missing_and_implausible_inputs(vehicle,
         state, estimate = kf.step(state, sample, 0.01)
         assert np.isfinite(state.m).all() and np.isfinite(state.x).all()
         assert np.isfinite(state.P).all()
+
+
+def test_a_body_rate_jump_faster_than_any_body_turns_is_not_taken():
+    """rate_consistency on a constructed monitor state: each body rate held at 0.1 rad/s,
+    its hold credit 10 ms into the hold time; a new sample that moved by more than
+    max_angular_acceleration x 10 ms is not taken (0), one that moved by less is (1), and
+    a jump sets the derivative's settling time. Exact."""
+    g = GuardSettings()
+    elapsed = 0.01
+    rates = [INPUTS.index(name) for name in BODY_RATES]
+    m = np.zeros(MONITOR_SIZE)
+    m[HELD] = 0.1
+    m[CREDIT] = g.hold_time - elapsed
+    ones = ca.DM.ones(len(INPUTS))
+    for step, taken in ((0.5, 1.0), (1.5, 0.0)):
+        u = np.zeros(len(INPUTS))
+        u[rates] = 0.1 + step * g.max_angular_acceleration * elapsed
+        ok, settle = rate_consistency(ca.DM(u), ones, ones, ca.DM(m), 0.0, g)
+        np.testing.assert_array_equal(np.asarray(ok).ravel()[rates], taken)
+        expected = 0.0 if taken else g.rate_settle_time
+        np.testing.assert_array_equal(np.asarray(settle).ravel(), expected)
