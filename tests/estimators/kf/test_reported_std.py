@@ -7,14 +7,17 @@ scenario but the Nordschleife lap; the held-out test runs a stretch of that lap.
 
 import tomllib
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from wheelload.estimators import TwoStageKF
 from wheelload.estimators.identification.sigma_fit import fit_sigma, scores, sigma_data
+from wheelload.estimators.kf.monitor_state import MONITOR_SIZE, SIGMA_INNOVATION, SIGMA_RESIDUAL
+from wheelload.estimators.kf.reported_std import SIGMA_TIME, sigma_features
 from wheelload.estimators.kf.tuning import SIGMA_TUNING
 from wheelload.estimators.logs.signals import signals_from_frame
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models import GRAVITY, INPUTS, example_vehicle_path, load_vehicle
 from wheelload.models.vehicle.description import SIGMA_KEYS, vehicle_from_dict
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
@@ -154,3 +157,37 @@ def test_a_feature_no_log_exercises_keeps_the_given_coefficient(vehicle, dlc):
     seen = np.setdiff1d(np.arange(len(SIGMA_KEYS)), unseen)
     np.testing.assert_array_equal(fit.coefficients[seen], plain.coefficients[seen])
     assert fit.coverage == pytest.approx(plain.coverage)
+
+
+def test_features_and_running_means_of_a_constructed_sample():
+    """sigma_features by hand on one sample: delta = A^T (A A^T)^-1 (b - A z), the running
+    means q + alpha (value - q) with alpha = dt / (SIGMA_TIME + dt) from a carried mean,
+    and the features that read them (|delta|, its RMS, |y|, its RMS, sqrt(P_ii));
+    tolerance 1e-12 relative (a 3 x 3 solve)."""
+    rng = np.random.default_rng(5)
+    A = np.vstack([np.ones(4), [1.2, 1.2, -1.5, -1.5], [0.8, -0.8, 0.79, -0.79]])
+    z = rng.uniform(3000.0, 5000.0, 4)
+    b = A @ z + np.array([300.0, -150.0, 80.0])
+    y = np.array([40.0, -25.0, 10.0, 5.0])
+    P = np.diag([400.0, 900.0, 1600.0, 2500.0])
+    u = np.zeros(len(INPUTS))
+    u[INPUTS.index("ax")], u[INPUTS.index("ay")], u[INPUTS.index("az")] = 2.0, -3.0, GRAVITY
+    m = np.zeros(MONITOR_SIZE)
+    m[SIGMA_RESIDUAL] = [100.0, 400.0, 900.0, 1600.0]
+    m[SIGMA_INNOVATION] = [25.0, 36.0, 49.0, 64.0]
+    dt = 0.01
+    g, means = (np.asarray(v) for v in sigma_features(
+        ca.DM(P), ca.DM(u), ca.DM(z), ca.DM(A), ca.DM(b), ca.DM.ones(4), ca.DM.ones(3),
+        ca.DM(y), ca.DM(m), dt))  # fmt: skip
+    delta = A.T @ np.linalg.solve(A @ A.T, b - A @ z)
+    alpha = dt / (SIGMA_TIME + dt)
+    residual = m[SIGMA_RESIDUAL] + alpha * (delta**2 - m[SIGMA_RESIDUAL])
+    innovation = m[SIGMA_INNOVATION] + alpha * (y**2 - m[SIGMA_INNOVATION])
+    np.testing.assert_allclose(means.ravel(), np.concatenate([residual, innovation]), rtol=1e-12)
+    column = {key: k for k, key in enumerate(SIGMA_KEYS)}
+    assert len(column) == g.shape[1] == 14
+    expected = np.column_stack([np.sqrt(np.diag(P)), np.ones(4), np.full(4, 2.0),
+                                np.full(4, 3.0), np.zeros(4), np.zeros(4), np.abs(delta),
+                                np.sqrt(residual), np.abs(y), np.sqrt(innovation),
+                                np.zeros((4, 4))])  # fmt: skip
+    np.testing.assert_allclose(g, expected, rtol=1e-12, atol=1e-12)
