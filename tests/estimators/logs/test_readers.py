@@ -172,6 +172,14 @@ def test_a_can_dropout_longer_than_the_gap_is_missing_not_held():
         (("sign = -1", "sign = 2", 1), r"key 'channels.ay.sign' must be 1 or -1"),
         (("[channels.vx]", "[channels.speed]", 1), r"unknown channel 'channels.speed'"),
         (('source = "IMU_GyrZ"', 'source = "Gyro_Z"', 1), r"drive.mf4: no channel 'Gyro_Z'"),
+        (
+            ('source = "IMU_GyrZ"', "source = 5", 1),
+            r"key 'channels.wz.source' must be a non-empty string",
+        ),
+        (
+            ('source = "IMU_GyrZ"', 'source = "  "', 1),
+            r"key 'channels.wz.source' must be a non-empty string",
+        ),
     ],
 )
 def test_channel_map_errors_name_the_key(tmp_path, channel_map, edit, message):
@@ -332,3 +340,22 @@ def _si_unit(name: str) -> str:
     from wheelload.estimators.logs.readers.channel_map import TARGETS
 
     return TARGETS[name].value
+
+
+def test_erg_with_no_records_has_empty_channels_and_a_partial_record_is_refused(tmp_path):
+    """A header-only ERG (a run that logged nothing) reads as channels of no samples; one
+    byte short of a whole record is a truncated file, said with its sizes."""
+    from wheelload.estimators.logs.readers.channel_map import ChannelMapError
+    from wheelload.estimators.logs.readers.erg import read_erg_channels
+
+    path = tmp_path / "empty.erg"
+    write_erg(path, {"Time": np.array([]), "IMU_AccX": np.array([])},
+              {"Time": "s", "IMU_AccX": "m/s^2"})  # fmt: skip
+    (channel,) = read_erg_channels(path, ["IMU_AccX"]).values()
+    assert channel.t.size == channel.values.size == 0 and channel.unit == "m/s^2"
+    whole = tmp_path / "whole.erg"
+    write_erg(whole, {"Time": np.array([0.0, 0.01]), "IMU_AccX": np.array([0.1, 0.2])},
+              {"Time": "s", "IMU_AccX": "m/s^2"})  # fmt: skip
+    whole.write_bytes(whole.read_bytes()[:-1])
+    with pytest.raises(ChannelMapError, match=r"31 data bytes is not a whole number of 16-byte"):
+        read_erg_channels(whole, ["IMU_AccX"])
