@@ -152,3 +152,24 @@ def test_covariance_floor_raises_small_variances_to_its_square(floor):
         assert bool(changed)
         _, unchanged = numeric(limit, np.diag([2.0 * floor**2] * 3 + [1e4]))
         assert not bool(unchanged)
+
+
+def test_an_update_that_brings_the_total_back_is_taken(vehicle, dlc):
+    """A running filter whose loads sum to 0.5 m g too much (each wheel 2 kN high, P wide
+    enough for every row to pass the gate): the first update takes the total back towards
+    the vertical row's m a_z (the envelope refuses only updates that carry the total
+    further out, estimators/kf/limits.py), to within 10 % of where it was."""
+    from wheelload.estimators.kf.monitor_state import STARTED
+
+    kf = TwoStageKF(vehicle)
+    start = kf.initial_state()
+    m = start.m.copy()
+    m[STARTED] = 1
+    weight = vehicle.mass.total * GRAVITY
+    state = dataclasses.replace(start, x=start.x + 0.125 * weight, P=np.eye(4) * 1e8, m=m)
+    sample = Sample(d=dlc.d[0], v=dlc.v[0], acc=dlc.acc[0], vx=dlc.vx[0])
+    after, estimate = kf.step(state, sample, 0.01)
+    before_off = abs(state.x.sum() - weight)
+    assert before_off == pytest.approx(0.5 * weight)
+    assert abs(after.x.sum() - dlc.acc[0, 2] * vehicle.mass.total) < 0.1 * before_off
+    assert not estimate.flags & StepFlag.update_flags()[0]  # the FL row was taken

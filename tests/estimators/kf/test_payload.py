@@ -235,3 +235,19 @@ def test_plausible_payloads_end_at_the_cars_own_reach():
                 theta = [added, 0.0, 0.0, 0.0]
                 theta[1 + axis] = sign * scale * reach[axis] * (m + added)
                 assert plausible(theta) == expected, (axis, scale, sign)
+
+
+def test_the_payload_holds_while_a_travel_sensor_is_missing(plant_log):
+    """The payload update needs every wheel's pseudo-measurement: with d_rr missing for 1 s
+    of the lane change, the mass and CG hold exactly (the covariance may only grow) and
+    every output stays finite; after the gap they move again."""
+    vehicle = load_vehicle(VEHICLES["sports_car"])
+    signals = plant_log("iso-dlc")
+    d, v = signals.d.copy(), signals.v.copy()
+    d[300:400, 3] = v[300:400, 3] = np.nan
+    estimate = TwoStageKF(vehicle).run(dataclasses.replace(signals, d=d, v=v))
+    mass = estimate.mass_properties
+    assert np.isfinite(mass).all() and np.isfinite(estimate.loads).all()
+    np.testing.assert_array_equal(mass[300:400], np.repeat(mass[299:300], 100, axis=0))
+    assert np.all(np.diff(estimate.mass_properties_std[300:400], axis=0) >= 0)
+    assert np.any(mass[400:] != mass[399])
