@@ -18,12 +18,12 @@ from wheelload.estimators.family.tyres.forces import (
     TyreSettings,
     discrete_observer,
 )
-from wheelload.estimators.family.tyres.step import CORE
+from wheelload.estimators.family.tyres.step import CORE, LateralSplit
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
 from wheelload.estimators.samples import step_through
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.models.family.tyre_forces import body_force_rows, tyre_split
+from wheelload.models.family.tyre_forces import body_force_rows, load_share_split, tyre_split
 from wheelload.studies.drive.scenario_runner import run_scenario
 
 
@@ -244,3 +244,105 @@ def test_registered_apart_from_the_load_methods(dlc):
         build("tyre-pid", vehicle).run(bare)
     pid = build("tyre-pid", vehicle).run(dlc.slice(0, 50))
     assert pid.fy is None and pid.fx.shape == (50, 4)
+
+
+#: The paper's covariances of the lateral filter (§IV, as printed): Q_y = 0.11^2 I and
+#: R_y = 0.018^2 I, changing to 0.036^2 I and 0.4^2 I in high slip: the scales on Q and R.
+PAPER_HIGH_SLIP = ((0.036 / 0.11) ** 2, (0.4 / 0.018) ** 2)
+
+
+def lateral_reference(method, x, P, fx, inputs, dt, scales=(1.0, 1.0)):
+    """One sample of the lateral filter in numpy (eq. 10-16): random-walk forces and the
+    yaw rate integrated by eq. 3's row, then a Kalman update on S_x, S_y at the IMU (lever
+    arm m x_imu r_dot) and the gyro's r; the left/right split by F_z shares (the paper's
+    simple alternative, TyreSettings(split=LOAD)). Returns x, P, F_y per wheel."""
+    k, s = method.constants, method.settings
+    loads = np.asarray(inputs.loads)
+    shares = np.concatenate([loads[:2] / loads[:2].sum(), loads[2:] / loads[2:].sum()])
+    h, offset = (np.asarray(a) for a in body_force_rows(
+        inputs.steer, fx, lf=k.lf, lr=k.lr, track_front=k.track_front, track_rear=k.track_rear,
+        share_front=shares[1] - shares[0], inertia_z=k.yaw_inertia))  # fmt: skip
+    offset = offset.ravel()
+    F = np.eye(4)
+    F[3, :3] = dt * h[2]
+    x = F @ x + np.array([0.0, 0.0, 0.0, dt * offset[2]])
+    Q = scales[0] * dt * np.diag([s.force_rate**2, s.force_rate**2, s.split_rate**2,
+                                  s.yaw_rate_noise**2])  # fmt: skip
+    P = F @ P @ F.T + Q
+    lever = k.mass * k.imu_x
+    H = np.zeros((3, 4))
+    H[0, :3], H[1, :3], H[2, 3] = h[0], h[1] + lever * h[2], 1.0
+    z = np.array([inputs.sums[0] - offset[0], inputs.sums[1] - offset[1] - lever * offset[2],
+                  inputs.rate])  # fmt: skip
+    R = scales[1] * np.diag([s.force_noise**2, s.force_noise**2, s.gyro_noise**2])
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    x = x + K @ (z - H @ x)
+    P = (np.eye(4) - K @ H) @ P @ (np.eye(4) - K @ H).T + K @ R @ K.T
+    G = np.array([[shares[0], 0, -0.5], [shares[1], 0, 0.5], [0, shares[2], 0],
+                  [0, shares[3], 0]])  # fmt: skip
+    return x, P, G @ x[:3]
+
+
+@pytest.fixture(scope="module")
+def load_split():
+    return TyreForces(load_vehicle(example_vehicle_path()), TyreSettings(split=LateralSplit.LOAD))
+
+
+def braking_turn(spin=60.0, loads=(3200.0, 4600.0, 3600.0, 5100.0)):
+    """A braking left turn: unequal torques and loads, steer, yaw rate and force sums."""
+    return Inputs(spin=np.full(4, spin), torque=np.array([-420.0, -380.0, -150.0, -170.0]),
+                  steer=0.04, rate=0.35, sums=np.array([-3500.0, 9000.0]),
+                  loads=np.array(loads))  # fmt: skip
+
+
+def test_first_sample_by_hand(load_split):
+    """F_x starts in equilibrium: T / R less the rolling resistance f_r F_z tanh(w / 0.5),
+    its sigma the spin noise through the observer's gain, the rolling resistance's share
+    and the force share (TyreSettings); F_y is the lateral filter's first update from
+    (0, 0, 0, r) with the prior sigmas, against the numpy reference. Tolerance 1e-9
+    relative: the same algebra in another order."""
+    method, inputs, dt = load_split, braking_turn(), 0.01
+    k, s = method.constants, method.settings
+    core, fx, fx_std, fy, fy_std = method.core_step(method.initial_state().core, inputs, dt)
+    rolling = k.rolling * inputs.loads * np.tanh(inputs.spin / 0.5)
+    np.testing.assert_allclose(fx, inputs.torque / k.radius - rolling, rtol=1e-12)
+    gains = np.array([discrete_observer(k.inertia[i], k.radius[i], s.observer_frequency,
+                                        s.observer_damping, dt)[5] for i in range(4)])  # fmt: skip
+    expected_std = np.sqrt((gains * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2
+                           + (s.force_share_std * fx) ** 2)  # fmt: skip
+    np.testing.assert_allclose(fx_std, expected_std, rtol=1e-12)
+    x0 = np.array([0.0, 0.0, 0.0, inputs.rate])
+    P0 = np.diag([s.initial_force_std**2] * 2 + [s.split_std**2, s.gyro_noise**2])
+    x, P, fy_expected = lateral_reference(method, x0, P0, fx, inputs, dt)
+    np.testing.assert_allclose(core[CORE.x], x, rtol=1e-9)
+    np.testing.assert_allclose(core[CORE.P].reshape(4, 4), P, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(fy, fy_expected, rtol=1e-9)
+    assert np.all(fy_std > 0)
+
+
+def test_high_slip_takes_the_papers_covariances(load_split):
+    """A second sample whose spins jumped by 1 rad/s in 10 ms (100 rad/s^2, over the
+    40 rad/s^2 threshold): the lateral update equals the reference with the paper's
+    high-slip Q and R (0.036^2 / 0.11^2 and 0.4^2 / 0.018^2 times the nominal), and the
+    same sample without the jump equals the nominal one."""
+    method, dt = load_split, 0.01
+    core, *_ = method.core_step(method.initial_state().core, braking_turn(), dt)
+    for spin, scales in ((61.0, PAPER_HIGH_SLIP), (60.0, (1.0, 1.0))):
+        inputs = braking_turn(spin=spin)
+        after, fx, _, fy, _ = method.core_step(core, inputs, dt)
+        x, P, fy_expected = lateral_reference(method, core[CORE.x],
+                                              core[CORE.P].reshape(4, 4), fx, inputs, dt,
+                                              scales)  # fmt: skip
+        np.testing.assert_allclose(after[CORE.x], x, rtol=1e-9)
+        np.testing.assert_allclose(fy, fy_expected, rtol=1e-9)
+
+
+def test_rigid_body_baseline_splits_by_load_share():
+    """load_share_split by hand: 1000 N over loads (1, 1, 2, 4) kN is 125, 125, 250,
+    500 N; a negative load (a lifted wheel's estimate) takes no share; no load at all
+    takes none either (no division by zero)."""
+    loads = np.array([[1000.0, 1000.0, 2000.0, 4000.0], [-500.0, 1000.0, 1000.0, 2000.0],
+                      [0.0, 0.0, 0.0, 0.0]])  # fmt: skip
+    split = load_share_split(np.array([1000.0, 800.0, 50.0]), loads)
+    np.testing.assert_allclose(split, [[125.0, 125.0, 250.0, 500.0], [0.0, 200.0, 200.0, 400.0],
+                                       [0.0, 0.0, 0.0, 0.0]], rtol=1e-12)  # fmt: skip
