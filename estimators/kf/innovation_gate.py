@@ -8,6 +8,7 @@ rejection time and innovation spread) is carried in the monitor state
 
 Example
 -------
+>>> y, S = prior_innovations(x_pred, P_pred, z, b, A, r_s, r_c)
 >>> prior = prior_failures(y, S, available, m[SPREAD], settings)
 >>> gate, record = gate_rows(m[REJECT], m[SPREAD], settings, prior)
 """
@@ -17,6 +18,20 @@ from __future__ import annotations
 import casadi as ca
 
 from wheelload.estimators.kf.guard import GuardSettings
+
+
+def prior_innovations(x, P, z, b, A, r_s, r_c):
+    r"""Each row's innovation and its variance against the predicted state ``x, P``,
+    before any update of the sample (the seven rows of eq. 20-25 at once):
+
+    .. math:: y = \begin{pmatrix} z \\ b \end{pmatrix} - H x, \quad
+              S_{ii} = h_i P h_i^\top + r_i, \quad
+              H = \begin{pmatrix} I \\ A \end{pmatrix}, \quad r = (r_s, r_c)
+    """
+    H = ca.vertcat(ca.DM.eye(4), A)
+    y = ca.vertcat(z, b) - ca.mtimes(H, x)
+    S = ca.vertcat(*[ca.mtimes(ca.mtimes(H[i, :], P), H[i, :].T) for i in range(7)])
+    return y, S + ca.vertcat(r_s, r_c)
 
 
 def prior_failures(y, S, available, m_spread, g: GuardSettings):

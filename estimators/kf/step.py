@@ -234,11 +234,7 @@ def step_expressions(
     # An invalid interval holds the state, so the start waits for the first valid one.
     started = m[monitor_state.STARTED]
     P_pred = ca.if_else(ca.logic_or(started, 1 - dt_ok), P_pred, ceiling * ca.DM.eye(4))
-    H = ca.vertcat(ca.DM.eye(4), A)
-    y_prior = ca.vertcat(z, b) - ca.mtimes(H, x_pred)
-    S_prior = ca.vertcat(
-        *[ca.mtimes(ca.mtimes(H[i, :], P_pred), H[i, :].T) for i in range(7)]
-    ) + ca.vertcat(rs, rc)
+    y_prior, S_prior = innovation_gate.prior_innovations(x_pred, P_pred, z, b, A, rs, rc)
     prior = innovation_gate.prior_failures(
         y_prior, S_prior, ca.vertcat(mask_s, mask_c), spread, settings
     )

@@ -129,7 +129,18 @@ def named_mutants() -> list[tuple[str, Mutant]]:
 
 
 #: Mutants that compute the same numbers as the original, by (file:line, after): why.
-EQUIVALENT: dict[tuple[str, str], str] = {}
+EQUIVALENT: dict[tuple[str, str], str] = {
+    ("models/parameters.py:168", "(5)"): "the placeholder static loads when none are given: "
+    "four of them are read and every derived value replaces them",
+    ("models/loaded_vehicle.py:52", "(moment_y + added * p.cg_y)"): "cg_y is 0 in every "
+    "vehicle file's parameters (ModelParameters.from_vehicle never sets it)",
+    ("estimators/kf/projection.py:76", "(1)"): "x.shape[1] is 1: ca.DM.eye(1) is CasADi's "
+    "scalar 1, so W^-1 A^T is A^T all the same (W = I)",
+    ("estimators/logs/readers/chunks.py:29", "(2)"): "CSV_BLOCK sets the bytes read at a "
+    "time, not the values: the chunks of rows are cut from any block",
+    ("estimators/logs/readers/chunks.py:53", "(2)"): "the block that reads the header line: "
+    "a larger one reads the same names",
+}
 
 
 @dataclass(frozen=True)
@@ -228,10 +239,14 @@ def score_table(outcomes: list[Outcome]) -> str:
     lines += ["", "| # | area | mutant | file:line | before -> after | status | killed by |",
               "|---|---|---|---|---|---|---|"]  # fmt: skip
     for k, o in enumerate(outcomes, 1):
-        change = f"`{_cell(o.mutant.before)}` -> `{_cell(o.mutant.after)}`"
-        lines.append(f"| {k} | {o.area} | {o.mutant.operator} | {o.mutant.where} | {change} | "
+        lines.append(f"| {k} | {o.area} | {o.mutant.operator} | {o.mutant.where} | "
+                     f"{_change(o.mutant)} | "
                      f"{o.status} | {_cell(o.by)} |")  # fmt: skip
     return "\n".join(lines) + "\n"
+
+
+def _change(mutant: Mutant) -> str:
+    return f"`{_cell(mutant.before)}` -> `{_cell(mutant.after)}`"
 
 
 def _cell(text: str) -> str:
@@ -284,20 +299,18 @@ def campaign(chosen, workers, timeout_factor, known=None, progress=print) -> lis
 
 
 def read_table(path: Path, chosen) -> dict[int, Outcome]:
-    """The killed mutants of an earlier table of the same draw, by index (survivors and
-    equivalents are run again); an error if the draw is not the table's."""
-    known = {}
+    """The outcomes an earlier table holds for the ``chosen`` mutants, by index: the killed
+    ones, matched by area, place and change (survivors and equivalents are run again)."""
+    killed = {}
     for line in path.read_text().splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
-        if len(cells) != 7 or not cells[0].isdigit():
-            continue
-        k = int(cells[0]) - 1
-        area, mutant = chosen[k] if k < len(chosen) else (None, None)
-        if mutant is None or (area, mutant.where) != (cells[1], cells[3]):
-            sys.exit(f"campaign: row {k + 1} of {path} is not this draw's mutant: run the "
-                     "campaign anew (the sources or --seed/--sample changed)")  # fmt: skip
-        if cells[5] in ("killed", "timeout"):
-            known[k] = Outcome(area, mutant, cells[5], cells[6], 0.0)
+        if len(cells) == 7 and cells[0].isdigit() and cells[5] in ("killed", "timeout"):
+            killed[cells[1], cells[3], cells[4]] = (cells[5], cells[6])
+    known = {}
+    for k, (area, m) in enumerate(chosen):
+        found = killed.get((area, m.where, _change(m)))
+        if found:
+            known[k] = Outcome(area, m, found[0], found[1], 0.0)
     return known
 
 
@@ -322,7 +335,7 @@ def main(argv=None) -> int:
                         help="run only the drawn mutants at this place (repeat)")  # fmt: skip
     parser.add_argument("--list", action="store_true", help="list the drawn mutants and stop")
     parser.add_argument("--update", type=Path, metavar="TABLE",
-                        help="keep TABLE's killed mutants, run the rest again")  # fmt: skip
+                        help="keep the killed mutants TABLE holds, run the rest")  # fmt: skip
     args = parser.parse_args(argv)
     if args.update and args.only:
         parser.error("give --update or --only, not both")

@@ -14,7 +14,7 @@ import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
-from wheelload.estimators.kf.innovation_gate import gate_rows, prior_failures
+from wheelload.estimators.kf.innovation_gate import gate_rows, prior_failures, prior_innovations
 from wheelload.estimators.kf.monitor_state import STARTED
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.logs.inputs import input_matrix
@@ -140,3 +140,21 @@ def test_prior_failures_name_the_groups_and_count_the_rows(failing):
     assert float(suspension) == float(any(i < 4 for i in failing))
     assert float(constraint) == float(any(i >= 4 for i in failing))
     assert float(count) == len(failing)
+
+
+def test_prior_innovations_of_each_row_against_numpy():
+    """y = [z; b] - H x and S_ii = h_i P h_i^T + r_i with H = [I; A], numpy, on a P far
+    from diagonal and noise variances of very different size per row (a swap of any two
+    would show). Tolerance 1e-12 relative."""
+    rng = np.random.default_rng(11)
+    A = np.vstack([np.ones(4), [1.2, 1.2, -1.5, -1.5], [0.8, -0.8, 0.79, -0.79]])
+    root = rng.normal(size=(4, 4)) * 100.0
+    P = root @ root.T
+    x, z, b = rng.uniform(3000, 5000, 4), rng.uniform(3000, 5000, 4), rng.normal(size=3) * 1e4
+    r_s, r_c = np.array([1e2, 2e3, 3e4, 4e5]), np.array([5e6, 6e7, 7e8])
+    y, S = (np.asarray(v).ravel() for v in prior_innovations(
+        ca.DM(x), ca.DM(P), ca.DM(z), ca.DM(b), ca.DM(A), ca.DM(r_s), ca.DM(r_c)))  # fmt: skip
+    H = np.vstack([np.eye(4), A])
+    np.testing.assert_allclose(y, np.concatenate([z, b]) - H @ x, rtol=1e-12)
+    expected = np.einsum("ij,jk,ik->i", H, P, H) + np.concatenate([r_s, r_c])
+    np.testing.assert_allclose(S, expected, rtol=1e-12)
