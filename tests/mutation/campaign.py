@@ -136,6 +136,10 @@ EQUIVALENT: dict[tuple[str, str], str] = {
     "vehicle file's parameters (ModelParameters.from_vehicle never sets it)",
     ("estimators/kf/projection.py:76", "(1)"): "x.shape[1] is 1: ca.DM.eye(1) is CasADi's "
     "scalar 1, so W^-1 A^T is A^T all the same (W = I)",
+    ("estimators/kf/projection.py:60", "(1)"): "a row left out (mask 0) meets a zero gain "
+    "column (K = W^-1 A^T M S^-1): any residual there gives the same update",
+    ("estimators/kf/plausibility.py:105", "(1 + jump)"): "rate_gated is read as a truth "
+    "value only (logic_or): -1 and 1 are both true",
     ("estimators/logs/readers/chunks.py:29", "(2)"): "CSV_BLOCK sets the bytes read at a "
     "time, not the values: the chunks of rows are cut from any block",
     ("estimators/logs/readers/chunks.py:53", "(2)"): "the block that reads the header line: "

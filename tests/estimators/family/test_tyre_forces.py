@@ -285,7 +285,9 @@ def lateral_reference(method, x, P, fx, inputs, dt, scales=(1.0, 1.0)):
 
 @pytest.fixture(scope="module")
 def load_split():
-    return TyreForces(load_vehicle(example_vehicle_path()), TyreSettings(split=LateralSplit.LOAD))
+    """The F_z split, with random walks of e and r other than 1 (so a square shows)."""
+    settings = TyreSettings(split=LateralSplit.LOAD, split_rate=3.0, yaw_rate_noise=0.02)
+    return TyreForces(load_vehicle(example_vehicle_path()), settings)
 
 
 def braking_turn(spin=60.0, loads=(3200.0, 4600.0, 3600.0, 5100.0)):

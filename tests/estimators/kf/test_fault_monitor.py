@@ -93,6 +93,22 @@ def test_accelerometer_fault_isolated_by_its_axis(vehicle, logs):
     assert fi.detection_delay(estimate.faults, "ay", signals.t[k]) < 2.0
 
 
+@pytest.mark.parametrize("axis", [0, 2], ids=["ax", "az"])
+def test_a_longitudinal_or_vertical_accelerometer_fault_is_no_travel_fault(vehicle, logs, axis):
+    """A 3 m/s^2 offset on ax or az is named as that axis, flagged as an IMU fault from
+    its confirmation on, and never as a travel fault."""
+    signals = logs["iso-dlc"]
+    k = int(fi.ONSET * len(signals))
+    acc = signals.acc.copy()
+    acc[k:, axis] += 3.0
+    estimate = TwoStageKF(vehicle).run(type(signals)(**{**signals.__dict__, "acc": acc}))
+    name = ("ax", "ay", "az")[axis]
+    assert list(estimate.faults["channel"]) == [name]
+    imu = estimate.flags & StepFlag.IMU_FAULT != 0
+    np.testing.assert_array_equal(imu, signals.t >= estimate.faults["start"].iloc[0])
+    assert not np.any(estimate.flags & StepFlag.TRAVEL_FAULT)
+
+
 def test_estimate_command_reports_the_fault(logs, tmp_path, capsys):
     signals, onset = inject(logs["iso-dlc"], FAULTS["dead"])
     log = tmp_path / "dead.csv"

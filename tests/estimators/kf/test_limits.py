@@ -173,3 +173,31 @@ def test_an_update_that_brings_the_total_back_is_taken(vehicle, dlc):
     assert before_off == pytest.approx(0.5 * weight)
     assert abs(after.x.sum() - dlc.acc[0, 2] * vehicle.mass.total) < 0.1 * before_off
     assert not estimate.flags & StepFlag.update_flags()[0]  # the FL row was taken
+
+
+@pytest.mark.parametrize("travel", [0.040, -0.040])
+def test_an_update_that_carries_the_total_out_is_refused(vehicle, dlc, travel):
+    """A running filter (the lane change's first 200 samples seen, so the vertical row's
+    range is the log's own) meets 40 mm of travel on every wheel that the IMU does not
+    see, with P wide enough for every row to pass the gate: the update would move the
+    total by +0.85 or -0.66 m g (measured with the margin lifted), beyond the range
+    widened by total_margin (0.25 m g), so it is not taken: the loads are the prediction,
+    every row is flagged skipped and LOAD_LIMITED is set; a tenth of that travel (the
+    total moved by 0.04 m g) is taken."""
+    kf = TwoStageKF(vehicle)
+    state = kf.initial_state()
+    dt = np.diff(dlc.t)
+    for k in range(200):
+        state, _ = kf.step(state, Sample(d=dlc.d[k], v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k]),
+                           dt[k - 1] if k else 0.01)  # fmt: skip
+    wide = dataclasses.replace(state, P=np.eye(4) * 1e8)
+    k = 200
+    sample = Sample(d=dlc.d[k] + travel, v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k])
+    after, estimate = kf.step(wide, sample, dt[k - 1])
+    np.testing.assert_array_equal(after.x, wide.x)
+    skipped = sum(StepFlag.update_flags()[:7])
+    assert estimate.flags[0] & skipped == skipped
+    assert estimate.flags[0] & StepFlag.LOAD_LIMITED
+    small = Sample(d=dlc.d[k] + 0.1 * travel, v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k])
+    _, taken = kf.step(wide, small, dt[k - 1])
+    assert not taken.flags[0] & (skipped | StepFlag.LOAD_LIMITED)

@@ -162,14 +162,15 @@ def test_a_feature_no_log_exercises_keeps_the_given_coefficient(vehicle, dlc):
 def test_features_and_running_means_of_a_constructed_sample():
     """sigma_features by hand on one sample: delta = A^T (A A^T)^-1 (b - A z), the running
     means q + alpha (value - q) with alpha = dt / (SIGMA_TIME + dt) from a carried mean,
-    and the features that read them (|delta|, its RMS, |y|, its RMS, sqrt(P_ii));
+    and the features that read them (|delta|, its RMS, |y|, its RMS, sqrt(P_ii), also
+    below 1 N);
     tolerance 1e-12 relative (a 3 x 3 solve)."""
     rng = np.random.default_rng(5)
     A = np.vstack([np.ones(4), [1.2, 1.2, -1.5, -1.5], [0.8, -0.8, 0.79, -0.79]])
     z = rng.uniform(3000.0, 5000.0, 4)
     b = A @ z + np.array([300.0, -150.0, 80.0])
     y = np.array([40.0, -25.0, 10.0, 5.0])
-    P = np.diag([400.0, 900.0, 1600.0, 2500.0])
+    P = np.diag([0.25, 900.0, 1600.0, 2500.0])  # below 1 N^2 (a covariance floor < 1 N)
     u = np.zeros(len(INPUTS))
     u[INPUTS.index("ax")], u[INPUTS.index("ay")], u[INPUTS.index("az")] = 2.0, -3.0, GRAVITY
     m = np.zeros(MONITOR_SIZE)
