@@ -201,3 +201,26 @@ def test_an_update_that_carries_the_total_out_is_refused(vehicle, dlc, travel):
     small = Sample(d=dlc.d[k] + 0.1 * travel, v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k])
     _, taken = kf.step(wide, small, dt[k - 1])
     assert not taken.flags[0] & (skipped | StepFlag.LOAD_LIMITED)
+
+
+def test_the_vertical_rows_range_grows_without_ax(vehicle, dlc):
+    """The envelope's range of the vertical row (its b less the weight, carried in the
+    monitor state) takes a sample whose az reads 2 m/s^2 high whether or not ax is there
+    (the vertical row needs az, not ax; the pitch row needs both): with ax missing it
+    grows to within 1 % of where it grows with ax, about 2 m (aerodynamic lift aside)."""
+    from wheelload.estimators.kf.monitor_state import TOTAL
+
+    kf = TwoStageKF(vehicle)
+    state = kf.initial_state()
+    dt = np.diff(dlc.t)
+    for k in range(100):
+        state, _ = kf.step(state, Sample(d=dlc.d[k], v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k]),
+                           dt[k - 1] if k else 0.01)  # fmt: skip
+    high = {}
+    for name, ax in (("with ax", dlc.acc[100, 0]), ("without ax", np.nan)):
+        acc = np.array([ax, dlc.acc[100, 1], GRAVITY + 2.0])
+        after, _ = kf.step(state, Sample(d=dlc.d[100], v=dlc.v[100], acc=acc, vx=dlc.vx[100]),
+                           dt[99])  # fmt: skip
+        high[name] = after.m[TOTAL][1]
+    assert high["with ax"] == pytest.approx(2.0 * vehicle.mass.total, rel=0.1)
+    assert high["without ax"] == pytest.approx(high["with ax"], rel=0.01)

@@ -192,3 +192,19 @@ def test_features_and_running_means_of_a_constructed_sample():
                                 np.sqrt(residual), np.abs(y), np.sqrt(innovation),
                                 np.zeros((4, 4))])  # fmt: skip
     np.testing.assert_allclose(g, expected, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("az", [0.0, GRAVITY - 1.5])
+def test_heave_feature_of_a_wheel_without_travel(az):
+    """A wheel without its travel (RR) has the features 1, |a_x|, |a_y| and |a_z - g|; the
+    last is 0 where a_z is missing (0 in ``u``), 1.5 m/s^2 where it reads g - 1.5."""
+    A = np.vstack([np.ones(4), [1.2, 1.2, -1.5, -1.5], [0.8, -0.8, 0.79, -0.79]])
+    u = np.zeros(len(INPUTS))
+    u[INPUTS.index("ax")], u[INPUTS.index("ay")], u[INPUTS.index("az")] = 2.0, -3.0, az
+    g, _ = sigma_features(ca.DM.eye(4) * 100.0, ca.DM(u), ca.DM.zeros(4), ca.DM(A),
+                          ca.DM.zeros(3), ca.DM([1, 1, 1, 0]), ca.DM.ones(3), ca.DM.zeros(4),
+                          ca.DM.zeros(MONITOR_SIZE), 0.01)  # fmt: skip
+    g = np.asarray(g)
+    heave = 0.0 if az == 0.0 else 1.5
+    np.testing.assert_allclose(g[3, -4:], [1.0, 2.0, 3.0, heave], rtol=1e-12)
+    np.testing.assert_array_equal(g[:3, -4:], 0.0)
