@@ -45,7 +45,7 @@ def _press(argv: list[str], after: float, out) -> None:
     time.sleep(after)
     assert run.poll() is None, run.communicate()
     run.send_signal(signal.SIGINT)
-    _, err = run.communicate(timeout=60)
+    _, err = run.communicate(timeout=600)  # a guard against a hang, not a speed check
     assert run.returncode == 130, err
     assert err == f"wheelload {argv[0]}: interrupted\n"
     assert not out.exists()
