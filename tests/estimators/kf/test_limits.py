@@ -175,6 +175,15 @@ def test_an_update_that_brings_the_total_back_is_taken(vehicle, dlc):
     assert not estimate.flags & StepFlag.update_flags()[0]  # the FL row was taken
 
 
+def running(kf, signals, samples):
+    """``kf``'s state after the first ``samples`` samples of ``signals``, step by step."""
+    state, dt = kf.initial_state(), np.diff(signals.t)
+    for k in range(samples):
+        sample = Sample(d=signals.d[k], v=signals.v[k], acc=signals.acc[k], vx=signals.vx[k])
+        state, _ = kf.step(state, sample, dt[k - 1] if k else 0.01)
+    return state
+
+
 @pytest.mark.parametrize("travel", [0.040, -0.040])
 def test_an_update_that_carries_the_total_out_is_refused(vehicle, dlc, travel):
     """A running filter (the lane change's first 200 samples seen, so the vertical row's
@@ -185,11 +194,7 @@ def test_an_update_that_carries_the_total_out_is_refused(vehicle, dlc, travel):
     every row is flagged skipped and LOAD_LIMITED is set; a tenth of that travel (the
     total moved by 0.04 m g) is taken."""
     kf = TwoStageKF(vehicle)
-    state = kf.initial_state()
-    dt = np.diff(dlc.t)
-    for k in range(200):
-        state, _ = kf.step(state, Sample(d=dlc.d[k], v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k]),
-                           dt[k - 1] if k else 0.01)  # fmt: skip
+    state, dt = running(kf, dlc, 200), np.diff(dlc.t)
     wide = dataclasses.replace(state, P=np.eye(4) * 1e8)
     k = 200
     sample = Sample(d=dlc.d[k] + travel, v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k])
@@ -211,11 +216,7 @@ def test_the_vertical_rows_range_grows_without_ax(vehicle, dlc):
     from wheelload.estimators.kf.monitor_state import TOTAL
 
     kf = TwoStageKF(vehicle)
-    state = kf.initial_state()
-    dt = np.diff(dlc.t)
-    for k in range(100):
-        state, _ = kf.step(state, Sample(d=dlc.d[k], v=dlc.v[k], acc=dlc.acc[k], vx=dlc.vx[k]),
-                           dt[k - 1] if k else 0.01)  # fmt: skip
+    state, dt = running(kf, dlc, 100), np.diff(dlc.t)
     high = {}
     for name, ax in (("with ax", dlc.acc[100, 0]), ("without ax", np.nan)):
         acc = np.array([ax, dlc.acc[100, 1], GRAVITY + 2.0])
