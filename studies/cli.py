@@ -173,7 +173,9 @@ def _run(parser: argparse.ArgumentParser, argv: list[str], *, counted: bool) -> 
     if counted:  # main() puts Python's default handler back
         signal.signal(signal.SIGINT, interrupts.handler)
     try:
-        return int(args.handler(args) or 0)
+        code = int(args.handler(args) or 0)
+        interrupts.check()  # a press an extension swallowed never ends in a success
+        return code
     except (ValueError, FileNotFoundError, BuildFolderError) as error:
         if interrupts.pressed():  # what a swallowed Ctrl-C left behind
             raise KeyboardInterrupt from error

@@ -23,6 +23,7 @@ import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
+from wheelload.estimators import interrupts
 from wheelload.models.files.temporaries import temporary_file
 
 
@@ -151,7 +152,8 @@ def atomic_write(path: Path, *, replace: bool = False) -> Iterator[Path]:
     by suffix see the right one). Without ``replace``, an existing ``path`` is
     never overwritten (the rename is a hard link, which fails if the name
     exists). On an error, Ctrl-C or SIGTERM (the command line turns it into an
-    exception) the temporary file is removed and ``path`` is untouched; the
+    exception) the temporary file is removed and ``path`` is untouched (a press that an
+    extension swallowed, counted by the command line, too); the
     temporaries of a killed run are removed when the folder is written next
     (:mod:`wheelload.models.files.temporaries`).
     """
@@ -161,6 +163,7 @@ def atomic_write(path: Path, *, replace: bool = False) -> Iterator[Path]:
     try:
         os.chmod(temporary, 0o666 & ~_umask())
         yield temporary
+        interrupts.check()  # a Ctrl-C an extension swallowed while writing: no output
         if replace:
             os.replace(temporary, path)
         else:

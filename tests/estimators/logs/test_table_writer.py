@@ -4,6 +4,8 @@ The CSV's floats are in shortest round-trip form, so the tolerance between a CSV
 read back and the Parquet (binary doubles) is zero: any difference is a bug.
 """
 
+import signal
+
 import numpy as np
 import pandas as pd
 import pyarrow.csv as pc
@@ -73,3 +75,24 @@ def test_a_writer_error_reaches_the_caller_and_leaves_nothing(tmp_path):
             write({"t": np.arange(3.0), "fz_fl": np.ones(3)})
             write({"t": np.arange(3.0)})  # another set of columns: refused by the writer
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_press_an_extension_swallowed_leaves_no_output(tmp_path):
+    """Ctrl-C counted by the command line's handler but swallowed by an extension (as
+    CasADi's evaluation does) while the table was written: the output is not put in place,
+    the temporary is removed, and the press is raised."""
+    from wheelload.estimators import interrupts
+
+    path = tmp_path / "loads.csv"
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with table_writer(path) as write:
+                write({"t": np.arange(3.0)})
+                try:
+                    interrupts.handler(signal.SIGINT, None)  # counted, raised ...
+                except KeyboardInterrupt:
+                    pass  # ... and swallowed
+                write({"t": np.arange(3.0, 6.0)})
+    finally:
+        interrupts.reset()
+    assert not path.exists() and list(tmp_path.iterdir()) == []
