@@ -245,7 +245,7 @@ def score_table(outcomes: list[Outcome]) -> str:
     for k, o in enumerate(outcomes, 1):
         lines.append(f"| {k} | {o.area} | {o.mutant.operator} | {o.mutant.where} | "
                      f"{_change(o.mutant)} | "
-                     f"{o.status} | {_cell(o.by)} |")  # fmt: skip
+                     f"{o.status} | {_escaped(o.by)} |")  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
@@ -255,7 +255,12 @@ def _change(mutant: Mutant) -> str:
 
 def _cell(text: str) -> str:
     text = " ".join(text.split())
-    return (text[:70] + "...") if len(text) > 73 else text.replace("|", "\\|")
+    return _escaped(text[:70] + "...") if len(text) > 73 else _escaped(text)
+
+
+def _escaped(text: str) -> str:
+    """``text`` on one line, safe in a Markdown table cell."""
+    return " ".join(text.split()).replace("|", "\\|")
 
 
 def campaign(chosen, workers, timeout_factor, known=None, progress=print) -> list[Outcome]:
