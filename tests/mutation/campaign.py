@@ -352,6 +352,8 @@ def main(argv=None) -> int:
         parser.error(f"{args.out} exists: give another --out or --force")
     if args.update and not args.update.is_file():
         parser.error(f"no table {args.update}: give the --out of an earlier run")
+    if args.update and args.out and args.out.resolve() == args.update.resolve():
+        parser.error(f"{args.out} is the table read by --update: give another --out")
     chosen = [(area, m) for area, m in draw(args.area or list(AREAS), args.sample, args.seed)
               if not args.only or m.where in args.only]  # fmt: skip
     if args.list:
