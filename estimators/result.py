@@ -133,6 +133,45 @@ class SensorFault:
     statistic: float
 
 
+@dataclass(frozen=True, kw_only=True)
+class ModelError:
+    """A vehicle-file parameter the log's residuals point at, and its likely value."""
+
+    name: str  # e.g. "anti-roll bars", "travel zero d_fl"
+    keys: tuple[str, ...]  # the file keys (or the channel, for a travel zero)
+    unit: str
+    file_value: tuple[float, ...]
+    fitted_value: tuple[float, ...]
+    explained: float  # share of the residual's variation it explains (0-1)
+    runner_up: str = ""  # a hypothesis that explains almost as much, if any
+
+    def message(self) -> str:
+        """One line for the user: what fits, what the file says, where to change it."""
+        if self.name.startswith("travel zero"):
+            channel = self.keys[0]
+            offset = self.fitted_value[0] * 1e3
+            side = "high" if offset > 0 else "low"
+            return (
+                f"model error: {channel} reads {abs(offset):.1f} mm {side} at rest (its zero; "
+                f"the travel warp of the quiet samples), taken off for the estimate; re-zero "
+                f"the sensor or fix the channel map's offset"
+            )
+        fitted = ", ".join(_number(x) for x in self.fitted_value)
+        given = ", ".join(_number(x) for x in self.file_value)
+        also = f"; the {self.runner_up} fit almost as well" if self.runner_up else ""
+        return (
+            f"model error: the log's load transfer fits {self.name} of {fitted} {self.unit}, "
+            f"not the file's {given} ({', '.join(self.keys)}: it explains "
+            f"{100 * self.explained:.0f} % of the equilibrium residual{also}); "
+            f"check the vehicle file, not the sensors"
+        )
+
+
+def _number(x: float) -> str:
+    return f"{x:,.0f}".replace(",", " ") if abs(x) >= 100 else f"{x:.3g}"
+
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Estimate:
     """Wheel-load estimates of ``n`` samples, wheel order FL, FR, RL, RR.
@@ -154,6 +193,9 @@ class Estimate:
     flags: np.ndarray  # (n,) StepFlag bits
     has_std: bool = True
     sensor_faults: tuple[SensorFault, ...] = ()  # isolated sensor faults, in time order
+    # Vehicle-file parameters or travel zeros the log's residuals point at
+    # (estimators/kf/model_error.py), at most one a log.
+    model_errors: tuple[ModelError, ...] = ()
     # The loaded car's mass [kg], CG ahead of and left of the file's CG and CG height [m]
     # (MASS_PROPERTIES order), estimated online, and their std; None for a method without.
     mass_properties: np.ndarray | None = None  # (n, 4)

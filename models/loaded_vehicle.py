@@ -47,9 +47,10 @@ def loaded_parameters(p: ModelParameters, payload) -> ModelParameters:
     sprung = p.sprung_mass + added
     # Written as increments, so that no payload gives the file's numbers to the bit.
     sprung_dz = (added * (p.cg_height - p.sprung_cg_height) + moment_z) / sprung
-    # The sprung CG moves by the payload's share of the sprung mass about it.
+    # The sprung CG moves by the payload's share of the sprung mass about it (the unsprung
+    # masses sit on the centreline, so the sprung CG is cg_y m / m_s left of it).
     sprung_dx = (moment_x - added * _sprung_offset_x(p)) / sprung
-    sprung_dy = (moment_y - added * p.cg_y) / sprung
+    sprung_dy = (moment_y - added * p.cg_y * (p.mass / p.sprung_mass - 1.0)) / sprung
     return dataclasses.replace(
         p,
         mass=total,
@@ -77,6 +78,13 @@ def mass_properties(p: ModelParameters, payload) -> ca.SX:
     """:data:`MASS_PROPERTIES` of the loaded vehicle: ``[m', δx, y_c', h']``."""
     loaded = loaded_parameters(p, payload)
     return ca.vertcat(loaded.mass, p.lf - loaded.lf, loaded.cg_y, loaded.cg_height)
+
+
+def payload_of(p: ModelParameters, properties) -> tuple:
+    """The payload ``[mass, moment_x, moment_y, moment_z]`` whose :func:`mass_properties`
+    are ``properties`` (``[m', δx, y_c', h']``): its inverse."""
+    total, ahead, left, height = (properties[i] for i in range(4))
+    return (total - p.mass, total * ahead, total * (left - p.cg_y), total * (height - p.cg_height))
 
 
 def loaded_parameters_function(name: str = "loaded_parameters") -> ca.Function:

@@ -10,8 +10,10 @@ also in the other wheel of the axle; an accelerometer bias :math:`g`
 gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
 its signature explains ``isolation_fraction`` of the residual energy and
 its estimated fault exceeds the limit (at least ``parity_spread_factor`` times
-the fault the residual's own spread looks like, :func:`parity_spread`) for
-``fault_confirm_time``
+the fault the residual's own spread looks like, :func:`parity_spread`, and the
+spread a payload not yet learnt may leave; for an accelerometer axis plus
+``model_gain_fraction`` of its own low-passed acceleration, since a residual that
+grows with it is a gain the vehicle file has wrong) for ``fault_confirm_time``
 (generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
 Engineering Systems*, 1998, ch. 5). An isolated channel is dropped from
 the updates until it has been clean for ``fault_clear_time``.
@@ -32,6 +34,7 @@ from wheelload.estimators.kf.monitor_state import (
     ANCHOR,
     CLEAR,
     D_PREV,
+    EXCITATION,
     FAULT,
     FROZEN,
     JUMP,
@@ -44,8 +47,9 @@ from wheelload.estimators.kf.monitor_state import (
     REJECT,
     SPREAD,
     TRAVEL_SEEN,
+    UNEXPLAINED,
 )
-from wheelload.models import ModelParameters, gates_function
+from wheelload.models import GRAVITY, ModelParameters, gates_function
 from wheelload.models.inputs import (
     INPUTS,
     SPECIFIC_FORCE,
@@ -107,7 +111,9 @@ class MonitorOutput:
     seen: ca.SX  # (4,) 1 once a travel channel has had a valid sample
 
 
-def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> MonitorOutput:
+def monitor(
+    m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings, unexplained=None
+) -> MonitorOutput:
     r"""One sample of the fault monitor (module docstring).
 
     ``valid`` (:data:`~wheelload.models.INPUTS`): inputs finite and plausible;
@@ -117,7 +123,12 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
     z / \partial d` for the travels [per m] and :math:`\partial b /
     \partial a` for the accelerometer [per m/s^2]; ``dt`` 0 for a rejected
     step; ``r_c`` the constraint noise densities (the residual metric
-    :math:`W = \mathrm{diag}(1/r_c)`).
+    :math:`W = \mathrm{diag}(1/r_c)`); ``unexplained`` (3 x 3, default 0): the covariance
+    of the residual that the car's unknown payload may leave,
+    :math:`J_\vartheta P_\vartheta J_\vartheta^T` (:mod:`wheelload.estimators.kf.payload`). A payload moves the
+    residual like a bias: while it is not yet learnt (a log that starts in a turn, a stop
+    where people got in) a channel's fault must stand out of that spread too, so a
+    changed car is not blamed on a sensor.
     """
     d = ca.vertcat(*[u[INPUTS.index(name)] for name in TRAVEL])
     d_prev, frozen, rbar = m[D_PREV], m[FROZEN], m[RBAR]
@@ -169,6 +180,12 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
     alpha = all_valid * dt / (g.parity_time_constant + dt)
     r = b - ca.mtimes(A, z)
     rbar_next = rbar + alpha * (r - rbar)
+    # The payload's share, low-passed alike: a payload just learnt leaves the old residual
+    # in rbar for a time constant, and its spread with it.
+    unexplained_next = low_passed_covariance(m[UNEXPLAINED], unexplained, alpha)
+    acc = ca.vertcat(*[u[INPUTS.index(name)] for name in SPECIFIC_FORCE])
+    excitation = ca.vertcat(acc[0], acc[1], acc[2] - GRAVITY)
+    excitation_next = m[EXCITATION] + alpha * (excitation - m[EXCITATION])
     # W = diag(1/r_c) up to a scale (the tests are scale-free): the products of the
     # other two densities, so that no division is repeated at every use.
     w = ca.vertcat(r_c[1] * r_c[2], r_c[0] * r_c[2], r_c[0] * r_c[1])
@@ -187,8 +204,15 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
         isolated = projection * magnitude > g.isolation_fraction * energy
         # The fault the model's own clean residual would look like on this channel:
         # sqrt(sum (w s)^2 spread) / (s' W s), the spread of the magnitude estimate.
-        floor_j = ca.sqrt(ca.sum1(w * w * s * s * spread)) * inverse_norm
+        ws = w * s
+        floor_j = ca.sqrt(ca.sum1(ws * ws * spread) + payload_term(ws, unexplained_next)) * inverse_norm
         limit_j = ca.fmax(limits[j], g.parity_spread_factor * floor_j)
+        if j >= 4:
+            # An axis' acceleration as the rest of the car sees it: its low-passed reading
+            # less the fault this residual says it carries (a bias is taken off, a gain
+            # of the file is not).
+            seen_j = excitation_next[j - 4] - magnitude
+            limit_j = limit_j + g.model_gain_fraction * ca.fabs(seen_j)
         candidate = ca.logic_and(ca.fabs(magnitude) > limit_j, isolated)
         persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)
         parity_fault = persist_j >= g.fault_confirm_time
@@ -218,6 +242,8 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
         moved_next,
         *jump,
         *spread_next,
+        unexplained_next,
+        excitation_next,
     )
     return MonitorOutput(
         m_next,
@@ -227,6 +253,26 @@ def monitor(m, u, valid, z, A, b, signatures, dt, r_c, g: GuardSettings) -> Moni
         ca.vertcat(*jump),
         ca.vertcat(*[ca.logic_or(seen[i], d_valid[i]) for i in range(4)]),
     )
+
+
+_UPPER = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+
+
+def low_passed_covariance(previous, covariance, alpha):
+    """The upper triangle of a 3 x 3 covariance, low-passed by ``alpha`` (0 without one)."""
+    if covariance is None:
+        return ca.DM.zeros(len(_UPPER))
+    now = ca.vertcat(*[covariance[i, j] for i, j in _UPPER])
+    return previous + alpha * (now - previous)
+
+
+def payload_term(ws, upper):
+    """:math:`(W s)^T C (W s)` with ``C`` given by its upper triangle: the payload's share
+    of a channel's fault spread."""
+    total = 0
+    for k, (i, j) in enumerate(_UPPER):
+        total = total + (1 if i == j else 2) * ws[i] * upper[k] * ws[j]
+    return total
 
 
 def parity_spread(m, rbar, dt, fault, g: GuardSettings):

@@ -52,6 +52,11 @@ class GuardSettings:
     ay_fault: float = 0.3  # m/s^2, smallest ay fault isolated
     az_fault: float = 1.2  # m/s^2, smallest az fault isolated
     isolation_fraction: float = 0.9  # share of residual energy one channel must explain
+    # A residual that grows with an accelerometer axis' own excitation (ax, ay, az - g,
+    # low-passed, less the fault estimated: what the rest of the car says it is) is a gain
+    # of the model (springs, bars, mass, CG height) the file has wrong, not a sensor bias:
+    # an axis' fault must exceed this fraction of the excitation too.
+    model_gain_fraction: float = 0.5
     fault_confirm_time: float = 0.2  # s a parity fault must persist
     fault_clear_time: float = 1.0  # s clean before an isolated channel is taken back
     # S in the gate and the spread's clip times this: ``wheelload tune`` scales the noise
@@ -137,6 +142,7 @@ def guard_settings_for(vehicle: Vehicle, base: GuardSettings = DEFAULT_GUARD) ->
         ax_fault=limits.ax_fault,
         ay_fault=limits.ay_fault,
         az_fault=limits.az_fault,
+        model_gain_fraction=limits.model_gain_fraction,
     )
 
 

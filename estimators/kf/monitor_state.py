@@ -23,8 +23,13 @@ D_PREV, FROZEN, RBAR = slice(0, 4), slice(4, 8), slice(8, 11)
 PERSIST, CLEAR, FAULT, REJECT = slice(11, 18), slice(18, 25), slice(25, 32), slice(32, 39)
 SPREAD, ANCHOR, MOVED, JUMP = slice(39, 46), slice(46, 50), slice(50, 54), slice(54, 58)
 PARITY_MEAN, PARITY_VARIANCE, PARITY_WEIGHT = slice(58, 61), slice(61, 64), slice(64, 65)
+# The low-passed covariance the unknown payload leaves in the residual (upper triangle:
+# 00, 01, 02, 11, 12, 22), beside the low-passed residual it may explain.
+UNEXPLAINED = slice(65, 71)
+# Each accelerometer axis' excitation (ax, ay, az - g), low-passed like the residual.
+EXCITATION = slice(71, 74)
 #: Slots of the fault monitor proper; the held inputs follow (:func:`hold_inputs`).
-MONITOR_END = 65
+MONITOR_END = 74
 # Each input's last valid value, its remaining hold time, and each rate derivative's
 # remaining settle time after a gated rate.
 HELD = slice(MONITOR_END, MONITOR_END + len(INPUTS))

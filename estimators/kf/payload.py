@@ -87,6 +87,18 @@ class Update:
     used: ca.SX  # (3,) rows used
 
 
+def applied(theta, tuning):
+    r"""The payload the loads take: each of mass, :math:`S_x`, :math:`S_y` weighted by its
+    evidence, :math:`\vartheta_k^3 / (\vartheta_k^2 + a_k^2)` with :math:`a_k` the payload
+    the sensors' own errors make appear (``payload_apparent_mass``, ``_moment``): the
+    posterior mean when the residual is either a sensor error of that size or a payload
+    (a real one, far above it, is taken whole; the height is taken as estimated)."""
+    s = _settings(tuning)
+    scale = (s["payload_apparent_mass"], s["payload_apparent_moment"], s["payload_apparent_moment"])
+    weighted = [theta[k] * theta[k] ** 2 / (theta[k] ** 2 + scale[k] ** 2) for k in range(3)]
+    return ca.vertcat(*weighted, theta[3])
+
+
 def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Function) -> Update:
     """Extended Kalman update on the equilibrium rows at the pseudo-measured loads ``z``.
 
@@ -100,13 +112,15 @@ def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Func
     J = ca.vertcat(J[0, :], ca.horzcat(ca.DM.zeros(2, 1), J[1:3, 1:]))
     # r(theta) ~ r0 + J (theta' - theta) = 0: the measurement J theta' = J theta - r0.
     target = ca.mtimes(J, theta) - r0
-    # The model's mismatch grows with the load transfer it must explain: while the car
-    # corners or brakes the residual says less about the payload.
-    horizontal = u[_AX] ** 2 + u[_AY] ** 2
+    # The model's mismatch grows with the load transfer it must explain, and it is
+    # coloured: a payload's moment g S is the same at every acceleration, so a steady turn
+    # teaches S_y little (and a grade S_x) beyond what the quiet driving taught. Each
+    # moment row is weighed by its own load transfer, the vertical row by both.
+    excitation = {"vertical": u[_AX] ** 2 + u[_AY] ** 2, "pitch": u[_AX] ** 2, "roll": u[_AY] ** 2}
     r = ca.vertcat(
         *[
             s[f"payload_residual_density_{row}"]
-            * (1 + horizontal / s[f"payload_acceleration_scale_{row}"] ** 2) ** 2
+            * (1 + excitation[row] / s[f"payload_acceleration_scale_{row}"] ** 2) ** 2
             / dt_nominal
             for row in ("vertical", "pitch", "roll")
         ]
@@ -122,6 +136,13 @@ def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Func
     theta_new = ca.if_else(ok, theta_new, theta)
     P_new = ca.if_else(ok, P_new, P)
     return Update(theta=theta_new, P=P_new, used=used * ok)
+
+
+def unexplained(theta, P, z, u, gates, p, tuning, residual: ca.Function):
+    """:math:`J P J^T` (3 x 3): the covariance of the equilibrium residual that the payload's
+    uncertainty leaves (0 when it is not estimated: the file is then taken as the car)."""
+    _, J = residual(theta, z, u, gates, p)
+    return ca.mtimes([J, P, J.T]) * _settings(tuning)["payload_estimate"]
 
 
 def plausible(theta, p):
@@ -157,8 +178,17 @@ def residual_function(equilibrium: ca.Function | None = None) -> ca.Function:
     )
 
 
-def reported(theta, P, p):
-    """Mass properties of the loaded car (``MASS_PROPERTIES``) and their std (delta method)."""
+def estimated(tuning) -> ca.SX:
+    """1 for each of ``MASS_PROPERTIES`` the filter estimates: all with ``payload_estimate``
+    but the height, which needs ``payload_position_std_z`` > 0 too (else it is assumed)."""
+    s = _settings(tuning)
+    on = s["payload_estimate"]
+    return ca.vertcat(on, on, on, on * (s["payload_position_std_z"] > 0))
+
+
+def reported(theta, P, p, tuning):
+    """Mass properties of the loaded car (``MASS_PROPERTIES``) and their std (delta method);
+    the std of one not :func:`estimated` is 0 (an assumed value, not a certain one)."""
     theta_sym = ca.SX.sym("theta", N_PAYLOAD)
     p_sym, p_unpacked = ModelParameters.symbolic()
     values = mass_properties(p_unpacked, theta_sym)
@@ -166,4 +196,4 @@ def reported(theta, P, p):
                     [values, ca.jacobian(values, theta_sym)])  # fmt: skip
     value, J = f(theta, p)
     variance = ca.diag(ca.mtimes([J, P, J.T]))
-    return value, ca.sqrt(ca.fmax(variance, 0))
+    return value, ca.sqrt(ca.fmax(variance, 0)) * estimated(tuning)

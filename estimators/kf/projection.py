@@ -110,6 +110,8 @@ class ProjectionKF(TwoStageKF):
         Static wheel loads [N]; default: the vehicle file's.
     guard_settings
         The guards (:class:`~wheelload.estimators.kf.guard.GuardSettings`); default the file's.
+    check_file
+        As :class:`~wheelload.estimators.kf.two_stage.TwoStageKF`'s.
     """
 
     def __init__(
@@ -119,10 +121,14 @@ class ProjectionKF(TwoStageKF):
         weighting: Weighting = Weighting.MAXIMUM_PROBABILITY,
         static: np.ndarray | None = None,
         guard_settings: GuardSettings | None = None,
+        check_file: bool = True,
     ) -> None:
         if not isinstance(weighting, Weighting):
             raise TypeError(f"weighting must be a Weighting, got {weighting!r}")
         step = projection_step_function(weighting)
-        super().__init__(vehicle, static=static, step=step, guard_settings=guard_settings)
+        super().__init__(
+            vehicle, static=static, step=step, guard_settings=guard_settings,
+            check_file=check_file,
+        )  # fmt: skip
         self.weighting = weighting
         self.name = f"projection KF ({weighting.value})"

@@ -181,7 +181,7 @@ def step_expressions(
         dt_used,
         payload_tuning,
     )
-    p = loaded_parameters_function()(p_file, theta)
+    p = loaded_parameters_function()(p_file, payload.applied(theta, payload_tuning))
 
     # Missing or implausible inputs are replaced by zero and skip the updates they feed;
     # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
@@ -208,7 +208,15 @@ def step_expressions(
     parity = fault_monitor.parity_model(suspension, equilibrium, u_term, valid_term, p)
     # The fault monitor's parity test weighs the constant densities (the paper's R_c).
     rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
-    watch = fault_monitor.monitor(m, u, valid_plausible, *parity, dt_used, rc_density, settings)
+    # What the payload not yet learnt may leave in the residual (a changed car, no fault).
+    gates_term = gates_function()(valid_term, p)[0]
+    residual_theta = payload.residual_function(equilibrium)
+    unexplained = payload.unexplained(
+        theta, P_theta, z, u_term, gates_term, p_file, payload_tuning, residual_theta
+    )
+    watch = fault_monitor.monitor(
+        m, u, valid_plausible, *parity, dt_used, rc_density, settings, unexplained
+    )
     valid = valid_plausible * _channel_drop(watch.channel_ok)
     # The updates the channels left after the guards feed (an isolated channel's rows are
     # skipped; the model terms keep their inputs, as for the monitor).
@@ -266,12 +274,13 @@ def step_expressions(
     # The payload filter on the equilibrium at the pseudo-measured loads (every wheel's
     # suspension row and the equilibrium row available).
     all_travel = mask_s[0] * mask_s[1] * mask_s[2] * mask_s[3]
-    gates_term = gates_function()(valid_term, p)[0]
     loaded = payload.update(
         theta, P_theta, z, u_term, gates_term, p_file, all_travel * mask_c * bounded,
-        dt_nominal, payload_tuning, payload.residual_function(equilibrium),
+        dt_nominal, payload_tuning, residual_theta,
     )  # fmt: skip
-    mass_properties, mass_properties_std = payload.reported(loaded.theta, loaded.P, p_file)
+    mass_properties, mass_properties_std = payload.reported(
+        loaded.theta, loaded.P, p_file, payload_tuning
+    )
 
     # The reported sigma: P and the model's mismatch terms (the gain does not see them).
     features, sigma_means = reported_std.sigma_features(

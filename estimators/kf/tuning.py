@@ -41,6 +41,8 @@ PAYLOAD_TUNING = (
     "payload_acceleration_scale_vertical",
     "payload_acceleration_scale_pitch",
     "payload_acceleration_scale_roll",
+    "payload_apparent_mass",
+    "payload_apparent_moment",
 )
 
 
@@ -62,6 +64,8 @@ def payload_tuning(vehicle: Vehicle) -> np.ndarray:
             t.standstill_speed,
             t.gate,
             *t.acceleration_scale,
+            t.apparent_mass,
+            t.apparent_moment,
         ]  # fmt: skip
     )
 

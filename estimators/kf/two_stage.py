@@ -16,6 +16,7 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -122,6 +123,13 @@ class TwoStageKF:
     step
         The step Function, e.g. ``step_function(suspension=...)`` with another
         model; default :func:`step_function`.
+    check_file
+        Before a whole-log :meth:`run`, ask the model-error channel
+        (:mod:`~wheelload.estimators.kf.model_error`) whether a vehicle-file parameter or
+        a corner's travel zero explains the log's residuals: a travel zero is taken off
+        the travel for the run, a file parameter widens the reported σ by the loads'
+        change it implies; either is in ``Estimate.model_errors``. The per-sample
+        :meth:`step` and :meth:`live` filter without it (they see one sample at a time).
     """
 
     name = "two-stage KF"
@@ -134,8 +142,11 @@ class TwoStageKF:
         step: ca.Function | None = None,
         guard_settings: GuardSettings | None = None,
         sample_interval: float | None = None,
+        check_file: bool = True,
     ) -> None:
         self.vehicle = vehicle
+        self.check_file = check_file
+        self._static = static
         self.parameters = ModelParameters.from_vehicle(vehicle, static)
         self.p = self.parameters.vector()
         if guard_settings is None:
@@ -314,6 +325,30 @@ class TwoStageKF:
         return CompiledLoop(self.step_function, N_CARRIED, ("u", "u_valid", "dt"))
 
     def _run(self, signals: Signals, state: FilterState | None, with_covariance: bool):
+        if not self.check_file:
+            return self._filter(signals, state, with_covariance)
+        from wheelload.estimators.kf.model_error import diagnose
+
+        estimate, covariances, innovations = self._filter(signals, state, with_covariance)
+        # The samples about an isolated sensor fault are the fault channel's, not the file's;
+        # given static loads (a still period, corner weights) have taken the travel zeros.
+        diagnosis = diagnose(
+            signals,
+            self.vehicle,
+            exclude=_about_faults(signals.t, estimate.sensor_faults, FAULT_MARGIN),
+            travel_zero=self._static is None,
+            mass_properties=None if len(signals) == 0 else estimate.mass_properties[-1],
+        )
+        if np.any(diagnosis.travel_zero):
+            estimate, covariances, innovations = self._filter(
+                diagnosis.corrected(signals), state, with_covariance
+            )
+        if diagnosis.finding is not None:
+            std = np.sqrt(estimate.std**2 + diagnosis.load_change**2)
+            estimate = dataclasses.replace(estimate, std=std, model_errors=(diagnosis.finding,))
+        return estimate, covariances, innovations
+
+    def _filter(self, signals: Signals, state: FilterState | None, with_covariance: bool):
         state = state or self.initial_state()
         u = input_matrix(signals).T
         valid = np.isfinite(u).astype(float)
@@ -359,6 +394,19 @@ class TwoStageKF:
         """
         estimate, _, innovations = self._run(signals, state, with_covariance=False)
         return estimate, innovations
+
+
+#: Seconds about an isolated fault left out of the file check: the parity residual's low
+#: pass and confirmation before it, the clear time after (guard defaults, with room).
+FAULT_MARGIN = 2.0
+
+
+def _about_faults(t: np.ndarray, faults, margin: float) -> np.ndarray:
+    """Samples within ``margin`` of an isolated sensor fault (n,)."""
+    near = np.zeros(t.shape, bool)
+    for fault in faults:
+        near |= (t >= fault.start - margin) & (t <= fault.end + margin)
+    return near
 
 
 def sensor_faults(

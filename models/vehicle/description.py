@@ -206,6 +206,10 @@ class FaultTuning:
     ax_fault: float = 1.2  # m/s^2
     ay_fault: float = 0.3  # m/s^2
     az_fault: float = 1.2  # m/s^2
+    # An accelerometer fault must also exceed this fraction of its axis' own low-passed
+    # excitation (ax, ay, az - g): a residual that grows with it is a file gain, a model
+    # error (no bars in the file read as an ay fault on a lane change without it).
+    model_gain_fraction: float = 0.5
 
     def _check(self) -> None:
         for field in dataclasses.fields(self):
@@ -255,12 +259,24 @@ class PayloadTuning:
     standstill_density: float = 500.0  # kg^2/s, random walk while standing (loading)
     standstill_speed: float = 0.5  # m/s, |vx| below which the car is standing
     gate: float = 16.0  # chi^2_1 threshold of a residual row (4 sigma)
-    # m/s^2 per row: residual density x (1 + (ax^2 + ay^2) / a_s^2)^2
-    acceleration_scale: Vector3 = (1.0, 3.0, 3.0)
+    # m/s^2 per row: residual density x (1 + a^2 / a_s^2)^2 with a^2 = ax^2 + ay^2 (vertical
+    # row), ax^2 (pitch), ay^2 (roll). The vertical row's mismatch hardly grows in a turn
+    # (on the bundled cars' logs its spread is 25-140 N at every |a|), so the mass is
+    # weighed in turns too; a moment row's grows with its own load transfer and is
+    # coloured (a steady turn is one long sample of it).
+    acceleration_scale: Vector3 = (5.0, 1.5, 1.5)
+    # The payload that the sensors' own errors make appear (kg; kg m for S_x, S_y): an
+    # accelerometer bias of 0.1 m/s^2 on a 1600 kg car reads as 16 kg, 0.05 m/s^2 in ax or
+    # ay as 4 kg m, travel sensors 0.5 mm apart front to rear as 5-10 kg m. The loads take
+    # an estimate weighted by its evidence, theta^2 / (theta^2 + apparent^2), so a sensor
+    # error is not learnt as a changed car.
+    apparent_mass: float = 15.0
+    apparent_moment: float = 10.0
 
     def _check(self) -> None:
         for key in ("mass_std", "drift_density", "standstill_density", "standstill_speed",
-                    "gate"):  # fmt: skip
+                    "gate", "apparent_mass",
+                    "apparent_moment"):  # fmt: skip
             require_positive(self, key)
         for key in ("residual_density", "acceleration_scale"):
             if min(getattr(self, key)) <= 0.0:

@@ -280,6 +280,7 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.faults.ax_fault": _fixed(0.01, 10.0, "an ax fault of 0.01 m/s^2 to 1 g"),
     "filter.faults.ay_fault": _fixed(0.01, 10.0, "an ay fault of 0.01 m/s^2 to 1 g"),
     "filter.faults.az_fault": _fixed(0.01, 10.0, "an az fault of 0.01 m/s^2 to 1 g"),
+    "filter.faults.model_gain_fraction": _fixed(1e-6, 10.0, "a fraction of the excitation"),
     "filter.bias.acceleration_bias_density": _fixed(
         1e-12, 1.0, "accelerometer bias random walk, (m/s^2)^2/s"
     ),
@@ -315,6 +316,8 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.payload.standstill_speed": _fixed(0.01, 5.0, "0.01-5 m/s"),
     "filter.payload.gate": _fixed(1.0, 1e4, "chi^2_1 threshold, 1-100 sigma"),
     "filter.payload.acceleration_scale": _fixed(0.1, 50.0, "0.1-50 m/s^2"),
+    "filter.payload.apparent_mass": lambda v: Range(0.01, 0.2 * v.mass.total, "0.01 kg to 20 % of m"),
+    "filter.payload.apparent_moment": lambda v: Range(0.01, 0.1 * v.mass.total, "0.01 to 0.1 m kg m"),
     "plant.body.width": _body_width,
     "plant.wheels.spin_inertia_front": _spin(0),
     "plant.wheels.spin_inertia_rear": _spin(1),

@@ -120,11 +120,6 @@ def tuned_file(folder):
     return out
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="with the bundled suspension noise of 200 N^2 s the sigma tune fits on the two "
-    "tuning logs overcovers the lane change (99.8 %, band 90-99 %)",
-)
 def test_tune_writes_a_calibrated_filter_section(folder, tuned_file):
     """Tuned on the lane change and the steady turn; on the slope log (not used): ±2σ covers
     90-98 % of the error and the pooled RMSE is at most 2 % above the input tuning's (the
