@@ -171,7 +171,6 @@ def _number(x: float) -> str:
     return f"{x:,.0f}".replace(",", " ") if abs(x) >= 100 else f"{x:.3g}"
 
 
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Estimate:
     """Wheel-load estimates of ``n`` samples, wheel order FL, FR, RL, RR.

@@ -125,9 +125,10 @@ def monitor(
     step; ``r_c`` the constraint noise densities (the residual metric
     :math:`W = \mathrm{diag}(1/r_c)`); ``unexplained`` (3 x 3, default 0): the covariance
     of the residual that the car's unknown payload may leave,
-    :math:`J_\vartheta P_\vartheta J_\vartheta^T` (:mod:`wheelload.estimators.kf.payload`). A payload moves the
-    residual like a bias: while it is not yet learnt (a log that starts in a turn, a stop
-    where people got in) a channel's fault must stand out of that spread too, so a
+    :math:`J_\vartheta P_\vartheta J_\vartheta^T` (:mod:`wheelload.estimators.kf.payload`).
+    A payload moves the residual like a bias: while it is not yet learnt (a log that
+    starts in a turn, a stop where people got in) a channel's fault must stand out of
+    that spread too, so a
     changed car is not blamed on a sensor.
     """
     d = ca.vertcat(*[u[INPUTS.index(name)] for name in TRAVEL])
@@ -205,7 +206,9 @@ def monitor(
         # The fault the model's own clean residual would look like on this channel:
         # sqrt(sum (w s)^2 spread) / (s' W s), the spread of the magnitude estimate.
         ws = w * s
-        floor_j = ca.sqrt(ca.sum1(ws * ws * spread) + payload_term(ws, unexplained_next)) * inverse_norm
+        floor_j = (
+            ca.sqrt(ca.sum1(ws * ws * spread) + payload_term(ws, unexplained_next)) * inverse_norm
+        )
         limit_j = ca.fmax(limits[j], g.parity_spread_factor * floor_j)
         if j >= 4:
             # An axis' acceleration as the rest of the car sees it: its low-passed reading

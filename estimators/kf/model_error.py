@@ -44,6 +44,7 @@ import numpy as np
 from wheelload.estimators.kf.fault_monitor import parity_model
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.result import ModelError
 from wheelload.models import (
     INPUTS,
     ModelParameters,
@@ -51,7 +52,6 @@ from wheelload.models import (
     equilibrium_function,
     suspension_function,
 )
-from wheelload.estimators.result import ModelError
 from wheelload.models.conventions import WHEELS
 from wheelload.models.files.function_cache import Builder
 from wheelload.models.files.function_library import compiled_function
@@ -92,7 +92,8 @@ def _mass(vehicle: Vehicle, step: float) -> Vehicle:
     mass = vehicle.mass
     added = step * mass.sprung
     return dataclasses.replace(
-        vehicle, mass=dataclasses.replace(mass, sprung=mass.sprung + added, total=mass.total + added)
+        vehicle,
+        mass=dataclasses.replace(mass, sprung=mass.sprung + added, total=mass.total + added),
     )
 
 
@@ -280,9 +281,7 @@ def diagnose(
         runner_up=HYPOTHESES[rivals[0]].name if close else "",
     )
     every = _rows(U, p, dp[:, [best]] * size)
-    return Diagnosis(
-        finding=finding, travel_zero=np.zeros(4), load_change=_load_change(every)
-    )
+    return Diagnosis(finding=finding, travel_zero=np.zeros(4), load_change=_load_change(every))
 
 
 def _rows(U, p, dp) -> dict[str, np.ndarray]:

@@ -316,8 +316,12 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.payload.standstill_speed": _fixed(0.01, 5.0, "0.01-5 m/s"),
     "filter.payload.gate": _fixed(1.0, 1e4, "chi^2_1 threshold, 1-100 sigma"),
     "filter.payload.acceleration_scale": _fixed(0.1, 50.0, "0.1-50 m/s^2"),
-    "filter.payload.apparent_mass": lambda v: Range(0.01, 0.2 * v.mass.total, "0.01 kg to 20 % of m"),
-    "filter.payload.apparent_moment": lambda v: Range(0.01, 0.1 * v.mass.total, "0.01 to 0.1 m kg m"),
+    "filter.payload.apparent_mass": lambda v: Range(
+        0.01, 0.2 * v.mass.total, "0.01 kg to 20 % of m"
+    ),
+    "filter.payload.apparent_moment": lambda v: Range(
+        0.01, 0.1 * v.mass.total, "0.01 to 0.1 m kg m"
+    ),
     "plant.body.width": _body_width,
     "plant.wheels.spin_inertia_front": _spin(0),
     "plant.wheels.spin_inertia_rear": _spin(1),
