@@ -39,6 +39,7 @@ import numpy as np
 
 from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf import guard
+from wheelload.estimators.kf.model_error import Diagnosis
 from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -212,9 +213,15 @@ class LogStream:
         return check_wiring(w.t, w.vx, w.acc, w.d, w.rates)
 
     def chunks(
-        self, kf: TwoStageKF, *, faults: list[SensorFault] | None = None
+        self,
+        kf: TwoStageKF,
+        *,
+        faults: list[SensorFault] | None = None,
+        diagnosis: Diagnosis | None = None,
     ) -> Iterator[EstimateChunk]:
-        """The estimates, chunk by chunk; ``faults`` receives the isolated sensor faults."""
+        """The estimates, chunk by chunk; ``faults`` receives the isolated sensor faults.
+        With a file check's ``diagnosis`` (:mod:`~wheelload.estimators.kf.model_error`) its
+        travel zero is taken off and its file parameter widens σ, as in ``TwoStageKF.run``."""
         loop = filter_loop(kf)
         state0 = kf.initial_state()
         state = [np.ascontiguousarray(np.ravel(a, order="F"), dtype=float)
@@ -225,12 +232,18 @@ class LogStream:
         start = 0
         for t, columns in self.signal_chunks():
             n = len(t)
+            if diagnosis is not None and np.any(diagnosis.travel_zero):
+                columns = {**columns, **{name: columns[name] - diagnosis.travel_zero[i]
+                                         for i, name in enumerate(TRAVEL)}}  # fmt: skip
             values = [columns.get(name) for name in INPUTS]
             block = np.empty((loop.n_columns, n))
             flags = np.empty(n, dtype=np.uint32)
             dt_first = float(t[1] - t[0]) if start == 0 else float(t[0] - self.t[start - 1])
             loop(state, [kf.p, tuning], values, t, dt_first, list(block), flags, base)
             tracker.add(t, block[11:18], block[18:25])
+            if diagnosis is not None and diagnosis.change is not None:
+                change = diagnosis.load_change(_input_rows(columns, n))
+                block[4:8] = np.sqrt(block[4:8] ** 2 + change.T**2)
             reference = None
             if self.reference_present is not None:
                 reference = np.column_stack(
@@ -240,6 +253,18 @@ class LogStream:
             yield EstimateChunk(t=t, block=block, flags=flags, reference=reference)
         if faults is not None:
             faults.extend(tracker.finish())
+
+    def thinned_inputs(self, most: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every k-th sample's time and inputs (:data:`INPUTS` x m), at most about ``most``
+        samples: the whole log as the file check reads it, without holding it."""
+        step = max(1, len(self) // most)
+        times, blocks, start = [], [], 0
+        for t, columns in self.signal_chunks():
+            keep = np.arange((-start) % step, len(t), step)
+            times.append(t[keep])
+            blocks.append(_input_rows(columns, len(t))[:, keep])
+            start += len(t)
+        return np.concatenate(times), np.hstack(blocks)
 
     def signal_chunks(
         self, extra: tuple[str, ...] = ()
@@ -288,6 +313,14 @@ class LogStream:
             yield t, columns
         if start != len(self.t):
             raise LogError(f"{self.source}: changed while it was read: read it again")
+
+
+def _input_rows(columns: dict[str, np.ndarray], n: int) -> np.ndarray:
+    """A chunk's inputs as the models take them (:data:`INPUTS` x n; NaN where absent)."""
+    return np.vstack(
+        [np.broadcast_to(columns[name], (n,)) if name in columns else np.full(n, np.nan)
+         for name in INPUTS]
+    )  # fmt: skip
 
 
 class _FaultTracker:

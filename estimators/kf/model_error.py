@@ -38,25 +38,17 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf.fault_monitor import parity_model
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.result import ModelError
-from wheelload.models import (
-    INPUTS,
-    ModelParameters,
-    Vehicle,
-    equilibrium_function,
-    suspension_function,
-)
+from wheelload.models import INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.models.files.function_cache import Builder
 from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, input_index
-from wheelload.models.loaded_vehicle import loaded_parameters_function, payload_of
+from wheelload.models.loaded_vehicle import payload_of
 
 #: Share of the residual's variation the best hypothesis must explain to be named (the
 #: bundled cars' exact files: at most 0.40 on 20 scenario logs; a file 20 % off: 0.58-0.96).
@@ -162,10 +154,15 @@ HYPOTHESES: tuple[Hypothesis, ...] = (
 )
 
 
-def model_error_function() -> ca.Function:
+def model_error_function():
     """``(u, valid, p, dp[np x K]) -> (r[3], S[3 x K], T[3 x 4], Z[4 x K], B[3 x K], A)``:
     the parity residual :math:`r = b - A z`, its change along each file step, per metre of
     each corner's travel, and the steps' changes of :math:`z` and :math:`b`."""
+    import casadi as ca
+
+    from wheelload.estimators.kf.fault_monitor import parity_model  # the symbolic models
+    from wheelload.models import equilibrium_function, suspension_function
+
     u = ca.SX.sym("u", len(INPUTS))
     valid = ca.SX.sym("valid", len(INPUTS))
     p = ca.SX.sym("p", len(ModelParameters.names()))
@@ -185,6 +182,7 @@ def model_error_function() -> ca.Function:
 
 
 MODEL_ERROR_FUNCTION = Builder("wheelload.estimators.kf.model_error", "model_error_function")
+LOADED_PARAMETERS = Builder("wheelload.models.loaded_vehicle", "loaded_parameters_function")
 
 
 def _weighted_fit(r, S, weight):
@@ -205,12 +203,13 @@ def _weighted_fit(r, S, weight):
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Diagnosis:
     """What :func:`diagnose` found: the finding (None: the file explains the log), the
-    travel zero to take off each corner [m] (4,), and the change of the loads [N] the
-    finding implies per sample (n, 4; zeros without one), the estimate's σ to widen."""
+    travel zero to take off each corner [m] (4,), and for a file parameter its step in
+    the parameter vector ``change`` at the parameters ``p`` checked (the loaded car)."""
 
     finding: ModelError | None
     travel_zero: np.ndarray
-    load_change: np.ndarray
+    p: np.ndarray | None = None
+    change: np.ndarray | None = None
 
     def corrected(self, signals: Signals) -> Signals:
         """``signals`` with the travel zero taken off (the same object when there is none)."""
@@ -218,9 +217,24 @@ class Diagnosis:
             return signals
         return dataclasses.replace(signals, d=signals.d - self.travel_zero)
 
+    def load_change(self, U: np.ndarray) -> np.ndarray:
+        """The loads' change [N] (n, 4) the finding implies on the samples of ``U`` (inputs
+        x n): what the estimate's σ is widened by (zeros without a file parameter)."""
+        if self.change is None:
+            return np.zeros((U.shape[1], 4))
+        return _load_change(_rows(U, self.p, self.change[:, None]))
 
-def diagnose(
-    signals: Signals,
+
+NOTHING = Diagnosis(finding=None, travel_zero=np.zeros(4))
+
+
+def diagnose(signals: Signals, vehicle: Vehicle, **options) -> Diagnosis:
+    """:func:`diagnose_inputs` on a whole log's :class:`Signals`."""
+    return diagnose_inputs(input_matrix(signals), vehicle, **options)
+
+
+def diagnose_inputs(
+    U: np.ndarray,
     vehicle: Vehicle,
     exclude: np.ndarray | None = None,
     *,
@@ -228,20 +242,18 @@ def diagnose(
     mass_properties: np.ndarray | None = None,
 ) -> Diagnosis:
     """The vehicle-file parameter or travel zero the log's residuals point at (module
-    docstring), its size, and the loads' change it implies. ``exclude`` (n,): samples
-    left out (an isolated sensor fault's); ``travel_zero`` False: the travel zeros are
-    known (static loads measured at the log's rest), only the file is checked;
-    ``mass_properties`` (``MASS_PROPERTIES``): the car as the online payload estimate
-    found it, checked instead of the file's masses (a payload is no model error)."""
-    U = input_matrix(signals)
-    n = U.shape[1]
-    nothing = Diagnosis(finding=None, travel_zero=np.zeros(4), load_change=np.zeros((n, 4)))
+    docstring) and its size, from the log's inputs ``U`` (inputs x n, possibly thinned).
+    ``exclude`` (n,): samples left out (an isolated sensor fault's); ``travel_zero``
+    False: the travel zeros are known (static loads measured at the log's rest), only
+    the file is checked; ``mass_properties`` (``MASS_PROPERTIES``): the car as the online
+    payload estimate found it, checked instead of the file's masses (a payload is no
+    model error)."""
     usable = np.all(np.isfinite(U[_required()]), axis=0)
     if exclude is not None:
         usable &= ~np.asarray(exclude, bool)
     index = np.flatnonzero(usable)
     if index.size < 100:
-        return nothing
+        return NOTHING
     index = index[:: max(1, index.size // MAX_SAMPLES)]
     parameters = ModelParameters.from_vehicle(vehicle)
     p = parameters.vector()
@@ -250,14 +262,14 @@ def diagnose(
     )
     if mass_properties is not None:
         payload = np.array(payload_of(parameters, mass_properties), float)
-        p = np.asarray(loaded_parameters_function()(p, payload)).ravel()
+        p = compiled_function(LOADED_PARAMETERS)(p, payload)[0].ravel()
     rows = _rows(U[:, index], p, dp)
     r, S, T = rows["r"], rows["S"], rows["T"]
     zero = zero_offset(np.nan_to_num(U[:, index]), r, T, vehicle) if travel_zero else None
     if zero is not None:
         offsets = np.zeros(4)
         offsets[TRAVEL.index(zero.keys[0])] = zero.fitted_value[0]
-        return Diagnosis(finding=zero, travel_zero=offsets, load_change=np.zeros((n, 4)))
+        return Diagnosis(finding=zero, travel_zero=offsets)
     weight = 1.0 / np.sqrt(np.asarray(vehicle.filter.constraint_noise_density, float))
     fits = [_weighted_fit(r, S[:, :, k], weight) for k in range(len(HYPOTHESES))]
     explained = np.array([1.0 - left / base if base > 0 else 0.0 for _, left, base in fits])
@@ -265,7 +277,7 @@ def diagnose(
     best = int(order[0])
     size, left, base = fits[best]
     if explained[best] < EXPLAINED or np.sqrt(max(base - left, 0.0)) < SIGNIFICANT * np.sqrt(left):
-        return nothing
+        return NOTHING
     hypothesis = HYPOTHESES[best]
     rivals = [k for k in order[1:] if HYPOTHESES[k].family != hypothesis.family]
     close = rivals and explained[rivals[0]] > RIVAL * explained[best]
@@ -280,8 +292,7 @@ def diagnose(
         explained=float(explained[best]),
         runner_up=HYPOTHESES[rivals[0]].name if close else "",
     )
-    every = _rows(U, p, dp[:, [best]] * size)
-    return Diagnosis(finding=finding, travel_zero=np.zeros(4), load_change=_load_change(every))
+    return Diagnosis(finding=finding, travel_zero=np.zeros(4), p=p, change=dp[:, best] * size)
 
 
 def _rows(U, p, dp) -> dict[str, np.ndarray]:

@@ -335,7 +335,7 @@ class TwoStageKF:
         diagnosis = diagnose(
             signals,
             self.vehicle,
-            exclude=_about_faults(signals.t, estimate.sensor_faults, FAULT_MARGIN),
+            exclude=about_faults(signals.t, estimate.sensor_faults, FAULT_MARGIN),
             travel_zero=self._static is None,
             mass_properties=None if len(signals) == 0 else estimate.mass_properties[-1],
         )
@@ -344,7 +344,8 @@ class TwoStageKF:
                 diagnosis.corrected(signals), state, with_covariance
             )
         if diagnosis.finding is not None:
-            std = np.sqrt(estimate.std**2 + diagnosis.load_change**2)
+            change = diagnosis.load_change(input_matrix(signals))
+            std = np.sqrt(estimate.std**2 + change**2)
             estimate = dataclasses.replace(estimate, std=std, model_errors=(diagnosis.finding,))
         return estimate, covariances, innovations
 
@@ -401,7 +402,7 @@ class TwoStageKF:
 FAULT_MARGIN = 2.0
 
 
-def _about_faults(t: np.ndarray, faults, margin: float) -> np.ndarray:
+def about_faults(t: np.ndarray, faults, margin: float) -> np.ndarray:
     """Samples within ``margin`` of an isolated sensor fault (n,)."""
     near = np.zeros(t.shape, bool)
     for fault in faults:

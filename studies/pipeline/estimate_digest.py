@@ -61,6 +61,7 @@ class EstimateDigest:
         self.scored = 0
         self.reference_sum = None if self.wheels is None else np.zeros(len(self.wheels))
         self.mass_properties = None  # (8,) the last sample's values and std, if estimated
+        self.model_errors = ()  # the file check's finding, if any (Estimate.model_errors)
         self.errors = None
         if self.wheels is not None and self.wheels.size:
             self.errors = ErrorStore(len(self.wheels), samples)

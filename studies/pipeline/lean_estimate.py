@@ -67,7 +67,6 @@ def estimate_lean(
     """
     from wheelload.estimators import scan_log
     from wheelload.estimators.logs.checks import describe, raise_for_wiring
-    from wheelload.estimators.logs.output_files import table_writer
     from wheelload.estimators.logs.plausibility import (
         check_plausibility,
         describe_plausibility,
@@ -96,17 +95,13 @@ def estimate_lean(
     vehicle, reason = payload_reference(vehicle, settings)
     notes += reason
     kf = build("kf", vehicle, static=static)
-    digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
-    faults: list[SensorFault] = []
-    with contextlib.ExitStack() as stack:
-        write = (
-            stack.enter_context(table_writer(Path(out), replace=force)) if out is not None else None
-        )
-        for chunk in stream.chunks(kf, faults=faults):
-            if write is not None:
-                write(chunk.columns())
-            digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
-            digest.add_mass_properties(chunk.mass_properties)
+    digest, faults = _estimate_chunks(stream, kf, out, force)
+    # The file check (estimators/kf/model_error.py) on every k-th sample; a finding that
+    # changes the estimates (a travel zero taken off, σ widened) runs the log again.
+    diagnosis = file_check(stream, vehicle, faults, digest, static_given=static is not None)
+    if diagnosis.finding is not None:
+        digest, faults = _estimate_chunks(stream, kf, out, True, diagnosis)
+        digest.model_errors = (diagnosis.finding,)
     stats = stream.channel_stats
     warnings = channel_warnings(
         stream.source,
@@ -125,6 +120,43 @@ def estimate_lean(
         faults=tuple(faults),
         notes=tuple(notes),
         warnings=tuple(warnings),
+    )
+
+
+def _estimate_chunks(stream: LogStream, kf, out: Path | None, force: bool, diagnosis=None):
+    """The log's estimates chunk by chunk into a digest (and ``out``); the faults found."""
+    from wheelload.estimators.logs.output_files import table_writer
+
+    digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
+    faults: list[SensorFault] = []
+    with contextlib.ExitStack() as stack:
+        write = (
+            stack.enter_context(table_writer(Path(out), replace=force)) if out is not None else None
+        )
+        for chunk in stream.chunks(kf, faults=faults, diagnosis=diagnosis):
+            if write is not None:
+                write(chunk.columns())
+            digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
+            digest.add_mass_properties(chunk.mass_properties)
+    return digest, faults
+
+
+def file_check(stream: LogStream, vehicle: Vehicle, faults, digest, *, static_given: bool):
+    """:func:`~wheelload.estimators.kf.model_error.diagnose_inputs` on the streamed log:
+    its thinned inputs, the samples about its faults left out, the payload found."""
+    from wheelload.estimators.kf.model_error import MAX_SAMPLES, NOTHING, diagnose_inputs
+    from wheelload.estimators.kf.two_stage import FAULT_MARGIN, about_faults
+
+    if len(stream) == 0:
+        return NOTHING
+    t, inputs = stream.thinned_inputs(MAX_SAMPLES)
+    properties = digest.mass_properties
+    return diagnose_inputs(
+        inputs,
+        vehicle,
+        about_faults(t, faults, FAULT_MARGIN),
+        travel_zero=not static_given,
+        mass_properties=None if properties is None else properties[:4],
     )
 
 

@@ -45,6 +45,7 @@ def digest_of(estimate: Estimate, signals: Signals) -> EstimateDigest:
         samples=len(estimate), reference_wheels=wheels, has_std=estimate.has_std
     )
     digest.add(estimate.loads, estimate.std, estimate.flags, reference)
+    digest.model_errors = estimate.model_errors
     if estimate.mass_properties is not None:
         digest.add_mass_properties(
             np.hstack([estimate.mass_properties, estimate.mass_properties_std])
@@ -178,6 +179,7 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
     lines.append(f"sensor set: {header.mode}")
     if digest.mass_properties is not None:
         lines.append(mass_properties_line(digest.mass_properties))
+    lines.extend(finding.message() for finding in digest.model_errors)
     lines.append(_row_use(digest))
     lines.append(f"samples with a skipped update (missing or guarded input): {digest.skipped}")
     if digest.assumed:
@@ -203,12 +205,28 @@ def summary_text(header: LogHeader, digest: EstimateDigest, faults, vehicle_name
 
 
 def mass_properties_line(values: np.ndarray) -> str:
-    """The online mass and CG at the end of the log (values then std, ``MASS_PROPERTIES``)."""
-    (mass, x, y, height), (s_mass, s_x, s_y, s_height) = values[:4], values[4:]
+    """The online mass and CG at the end of the log (values then std, ``MASS_PROPERTIES``);
+    a property with std 0 is not estimated and is said to be assumed (the file's, or the
+    payload at the CG's height), never ± 0."""
+    (mass, x, y, height), spread = values[:4], values[4:]
+    if not np.any(spread > 0):
+        return (
+            f"mass and CG as the file gives them (not estimated online): {mass:.0f} kg, "
+            f"CG {height:.3f} m high"
+        )
+
+    def shown(value: float, spread: float, form: str, unit: str) -> str:
+        return f"{value:{form}} ± {spread:.3f} {unit}" if spread > 0 else f"{value:{form}} {unit}"
+
+    height_text = (
+        f"{height:.3f} ± {spread[3]:.3f} m high"
+        if spread[3] > 0
+        else f"{height:.3f} m high (assumed: the payload at the CG's height)"
+    )
     return (
-        f"mass and CG estimated online (end of log): {mass:.0f} ± {s_mass:.0f} kg; CG "
-        f"{x:+.3f} ± {s_x:.3f} m ahead and {y:+.3f} ± {s_y:.3f} m left of the file's, "
-        f"{height:.3f} ± {s_height:.3f} m high"
+        f"mass and CG estimated online (end of log): {mass:.0f} ± {spread[0]:.0f} kg; CG "
+        f"{shown(x, spread[1], '+.3f', 'm')} ahead and {shown(y, spread[2], '+.3f', 'm')} "
+        f"left of the file's, {height_text}"
     )
 
 
