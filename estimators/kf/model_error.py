@@ -203,13 +203,14 @@ def _weighted_fit(r, S, weight):
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Diagnosis:
     """What :func:`diagnose` found: the finding (None: the file explains the log), the
-    travel zero to take off each corner [m] (4,), and for a file parameter its step in
-    the parameter vector ``change`` at the parameters ``p`` checked (the loaded car)."""
+    travel zero to take off each corner [m] (4,), and for a file parameter its fitted step
+    in the parameter vector, with a rival's that fits almost as well (columns of
+    ``change``), at the parameters ``p`` checked (the loaded car)."""
 
     finding: ModelError | None
     travel_zero: np.ndarray
     p: np.ndarray | None = None
-    change: np.ndarray | None = None
+    change: np.ndarray | None = None  # (len(p), 1 or 2)
 
     def corrected(self, signals: Signals) -> Signals:
         """``signals`` with the travel zero taken off (the same object when there is none)."""
@@ -219,10 +220,12 @@ class Diagnosis:
 
     def load_change(self, U: np.ndarray) -> np.ndarray:
         """The loads' change [N] (n, 4) the finding implies on the samples of ``U`` (inputs
-        x n): what the estimate's σ is widened by (zeros without a file parameter)."""
+        x n), the larger of its and its rival's: what the estimate's σ is widened by
+        (zeros without a file parameter)."""
         if self.change is None:
             return np.zeros((U.shape[1], 4))
-        return _load_change(_rows(U, self.p, self.change[:, None]))
+        rows = _rows(U, self.p, self.change)
+        return np.max([_load_change(rows, k) for k in range(self.change.shape[1])], axis=0)
 
 
 NOTHING = Diagnosis(finding=None, travel_zero=np.zeros(4))
@@ -260,16 +263,19 @@ def diagnose_inputs(
     dp = np.column_stack(
         [ModelParameters.from_vehicle(h.step(vehicle)).vector() - p for h in HYPOTHESES]
     )
-    if mass_properties is not None:
-        payload = np.array(payload_of(parameters, mass_properties), float)
-        p = compiled_function(LOADED_PARAMETERS)(p, payload)[0].ravel()
     rows = _rows(U[:, index], p, dp)
-    r, S, T = rows["r"], rows["S"], rows["T"]
-    zero = zero_offset(np.nan_to_num(U[:, index]), r, T, vehicle) if travel_zero else None
+    # A zero is read against the file's car: the online payload takes up a zero's
+    # equilibrium signature (its warp it cannot), which tells the corner.
+    zero = zero_offset(U[:, index], rows["r"], rows["T"], vehicle) if travel_zero else None
     if zero is not None:
         offsets = np.zeros(4)
         offsets[TRAVEL.index(zero.keys[0])] = zero.fitted_value[0]
         return Diagnosis(finding=zero, travel_zero=offsets)
+    if mass_properties is not None:
+        payload = np.array(payload_of(parameters, mass_properties), float)
+        p = compiled_function(LOADED_PARAMETERS)(p, payload)[0].ravel()
+        rows = _rows(U[:, index], p, dp)
+    r, S = rows["r"], rows["S"]
     weight = 1.0 / np.sqrt(np.asarray(vehicle.filter.constraint_noise_density, float))
     fits = [_weighted_fit(r, S[:, :, k], weight) for k in range(len(HYPOTHESES))]
     explained = np.array([1.0 - left / base if base > 0 else 0.0 for _, left, base in fits])
@@ -292,7 +298,9 @@ def diagnose_inputs(
         explained=float(explained[best]),
         runner_up=HYPOTHESES[rivals[0]].name if close else "",
     )
-    return Diagnosis(finding=finding, travel_zero=np.zeros(4), p=p, change=dp[:, best] * size)
+    steps = [best, *([rivals[0]] if close else [])]
+    change = np.column_stack([dp[:, k] * fits[k][0] for k in steps])
+    return Diagnosis(finding=finding, travel_zero=np.zeros(4), p=p, change=change)
 
 
 def _rows(U, p, dp) -> dict[str, np.ndarray]:
@@ -313,15 +321,16 @@ def _rows(U, p, dp) -> dict[str, np.ndarray]:
     }
 
 
-def _load_change(rows) -> np.ndarray:
-    r"""The loads' change (n, 4) of the finding's step (column 0 of ``Z``, ``B``): the
-    pseudo-measurement's change projected onto the equilibrium's,
-    :math:`\Delta x = \Delta z + A^+ (\Delta b - A \Delta z)`, :math:`A^+ = A^T (A A^T)^{-1}`
-    (where the filter's loads sit between the two)."""
-    dz, db, A = rows["Z"][:, :, 0], rows["B"][:, :, 0], rows["A"]
+def _load_change(rows, k: int) -> np.ndarray:
+    r"""The loads' change (n, 4) of step ``k`` (column ``k`` of ``Z``, ``B``): per wheel
+    the larger of the pseudo-measurement's change :math:`\Delta z` and its projection onto
+    the equilibrium's, :math:`\Delta z + A^+ (\Delta b - A \Delta z)`,
+    :math:`A^+ = A^T (A A^T)^{-1}` (the filter's loads sit between the two)."""
+    dz, db, A = rows["Z"][:, :, k], rows["B"][:, :, k], rows["A"]
     gap = db - np.einsum("nij,nj->ni", A, dz)
     gram = np.einsum("nij,nkj->nik", A, A)
-    return dz + np.einsum("nji,nj->ni", A, np.linalg.solve(gram, gap[..., None])[..., 0])
+    projected = dz + np.einsum("nji,nj->ni", A, np.linalg.solve(gram, gap[..., None])[..., 0])
+    return np.maximum(np.abs(dz), np.abs(projected))
 
 
 def _required() -> list[int]:

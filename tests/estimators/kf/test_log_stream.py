@@ -240,3 +240,36 @@ def test_arrow_columns_read_as_to_numpy_reads_them():
         assert got.dtype == np.float64
         assert np.array_equal(got, expected, equal_nan=True)
         assert got.flags.writeable == expected.flags.writeable
+
+
+@pytest.mark.parametrize("wrong", ["no bars", "travel zero"])
+def test_the_streamed_file_check_equals_run(tmp_path, example, vehicle, wrong):
+    """A file without anti-roll bars, or d_fl 3 mm off its zero: the streamed path's file
+    check (every sample of this short log, read in chunks) names what ``TwoStageKF.run``
+    names and gives its loads and widened σ to the bit."""
+    import dataclasses
+
+    from wheelload.estimators.kf.model_error import MAX_SAMPLES, diagnose_inputs
+
+    frame = example.copy()
+    if wrong == "travel zero":
+        frame["d_fl"] += 0.003
+    else:
+        axles = {
+            axle: dataclasses.replace(getattr(vehicle.suspension, axle), arb_rate=0.0)
+            for axle in ("front", "rear")
+        }
+        vehicle = vehicle.replace(suspension=dataclasses.replace(vehicle.suspension, **axles))
+    path = tmp_path / "log.csv"
+    frame.to_csv(path, index=False)
+    whole = TwoStageKF(vehicle).run(read_log(path, wiring_checks=False))
+    stream = scan_log(path, rows=ROWS, wiring_checks=False)
+    _, inputs = stream.thinned_inputs(MAX_SAMPLES)
+    lean = TwoStageKF(vehicle, check_file=False)
+    properties = lean.run(read_log(path, wiring_checks=False)).mass_properties[-1]
+    diagnosis = diagnose_inputs(inputs, vehicle, mass_properties=properties)
+    assert (diagnosis.finding,) == whole.model_errors
+    chunks = list(stream.chunks(lean, diagnosis=diagnosis))
+    for name in ("loads", "std"):
+        got = np.concatenate([getattr(c, name) for c in chunks])
+        assert np.array_equal(got, getattr(whole, name)), name
