@@ -193,7 +193,7 @@ class Estimate:
     has_std: bool = True
     sensor_faults: tuple[SensorFault, ...] = ()  # isolated sensor faults, in time order
     # Vehicle-file parameters or travel zeros the log's residuals point at
-    # (estimators/kf/model_error.py), at most one a log.
+    # (estimators/logs/model_error.py), at most one a log.
     model_errors: tuple[ModelError, ...] = ()
     # The loaded car's mass [kg], CG ahead of and left of the file's CG and CG height [m]
     # (MASS_PROPERTIES order), estimated online, and their std; None for a method without.

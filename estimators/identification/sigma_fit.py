@@ -88,6 +88,9 @@ class SigmaFit:
     scale: float  # factor on the likelihood's variance for the pooled coverage target
     coverage: float  # on the fit's data
     correlation: float  # Pearson r of sigma and |error| on the fit's data
+    # Each log's coverage with the model fitted on the other logs (empty with one log):
+    # what the calibration promises a log it has not seen.
+    held_out: tuple[float, ...] = ()
 
 
 def scores(data: list[SigmaData], coefficients: np.ndarray) -> tuple[float, float]:
@@ -209,12 +212,38 @@ def _within_band(
 def calibrate_sigma(vehicle: Vehicle, logs: tuple[Signals, ...]) -> SigmaFit:
     """The reported-sigma model fitted on logs with reference loads, with the KF of
     ``vehicle`` (its guards and densities); a feature the logs never exercise keeps the
-    file's coefficient."""
+    file's coefficient. With two logs or more, each log's coverage is also measured with
+    the model fitted on the others (``held_out``)."""
     data = [sigma_data(TwoStageKF(vehicle), signals) for signals in logs]
-    return fit_sigma(data, held=np.array(vehicle.filter.sigma_model()))
+    held = np.array(vehicle.filter.sigma_model())
+    fit = fit_sigma(data, held=held)
+    if len(data) < 2:
+        return fit
+    held_out = []
+    for k, left_out in enumerate(data):
+        others = [d for j, d in enumerate(data) if j != k]
+        held_out.append(scores([left_out], fit_sigma(others, held=held).coefficients)[0])
+    return dataclasses.replace(fit, held_out=tuple(held_out))
 
 
 def with_sigma(vehicle: Vehicle, coefficients: np.ndarray) -> Vehicle:
     """``vehicle`` with its ``[filter] sigma_*`` coefficients replaced."""
     named = {key: float(value) for key, value in zip(SIGMA_KEYS, coefficients, strict=True)}
     return vehicle.replace(filter=dataclasses.replace(vehicle.filter, **named))
+
+
+#: Least ±2σ coverage a tuned file may promise a log it was not tuned on.
+MIN_HELD_OUT_COVERAGE = 0.90
+
+
+def coverage_warnings(what: str, coverages) -> list[str]:
+    """A warning for each ``(log, coverage)`` below :data:`MIN_HELD_OUT_COVERAGE`, with the
+    figure and what to do (``wheelload tune`` prints them)."""
+    return [
+        f"{what} is {100 * coverage:.1f} % on {name}, below "
+        f"{100 * MIN_HELD_OUT_COVERAGE:.0f} %: the reported σ is calibrated on logs unlike "
+        "it; tune on logs that include its kind of driving, or keep the input file's "
+        "sigma_* keys"
+        for name, coverage in coverages
+        if coverage < MIN_HELD_OUT_COVERAGE
+    ]

@@ -2,7 +2,8 @@ r"""The filter step's sensor-fault monitor: detection and isolation, carried in 
 
 A travel channel that does not change for ``stuck_time`` while ``stuck_corners``
 other corners move is *stuck*; the parity residual :math:`r = b - A z` of the raw
-suspension loads (every model term the inputs allow, :func:`parity_model`),
+suspension loads (every model term the inputs allow,
+:func:`~wheelload.models.terms.parity_model`),
 low-pass filtered, is matched against the signature of
 each channel (a travel fault :math:`f` in corner :math:`i` gives
 :math:`r = -A (\partial z / \partial d_i) f`, through the anti-roll bar
@@ -49,54 +50,13 @@ from wheelload.estimators.kf.monitor_state import (
     TRAVEL_SEEN,
     UNEXPLAINED,
 )
-from wheelload.models import GRAVITY, ModelParameters, gates_function
+from wheelload.models import GRAVITY
 from wheelload.models.inputs import (
     INPUTS,
     SPECIFIC_FORCE,
     TRAVEL,
     TRAVEL_RATE,
-    input_index,
 )
-
-#: The [model] switches in the parameter vector: on for the monitor's parity test.
-_TERM_SWITCHES = [k for k, name in enumerate(ModelParameters.names()) if name.startswith("term_")]
-
-
-def parity_model(suspension: ca.Function, equilibrium: ca.Function, u, valid, p):
-    r"""``(z, A, b, signatures)`` of the parity test, with every model term switched on.
-
-    The monitor checks the travels and the IMU against the vehicle's complete physics
-    (each term whose inputs are valid in the sample), whatever the vehicle file's
-    ``[model]`` switches choose for the estimator's updates: a model without the link
-    or road-frame terms (the paper's) leaves a parity residual of several hundred N
-    on a clean lap, which the signatures of the travel faults explain. ``u``: the
-    sanitised inputs, ``valid`` their validity, ``p`` the parameter vector.
-
-    Signatures in the parity space from the models' Jacobians: a travel fault moves
-    :math:`b - A z` by :math:`-A\,\partial z / \partial d`, an accelerometer fault by
-    :math:`\partial b / \partial a`.
-    """
-    p = ca.vertcat(*[1 if k in _TERM_SWITCHES else p[k] for k in range(p.shape[0])])
-    gates, _ = gates_function()(valid, p)
-    z = suspension(u, gates, p)
-    A, b = equilibrium(u, gates, p)
-    travel, acc = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
-    d_sym, acc_sym = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
-    u_d = with_entries(u, travel, d_sym)
-    u_acc = with_entries(u, acc, acc_sym)
-    d_now = ca.vertcat(*[u[k] for k in travel])
-    acc_now = ca.vertcat(*[u[k] for k in acc])
-    Jd = ca.substitute(ca.jacobian(suspension(u_d, gates, p), d_sym), d_sym, d_now)
-    B = ca.substitute(ca.jacobian(equilibrium(u_acc, gates, p)[1], acc_sym), acc_sym, acc_now)
-    return z, A, b, ca.horzcat(-ca.mtimes(A, Jd), B)
-
-
-def with_entries(u: ca.SX, index: list[int], values: ca.SX) -> ca.SX:
-    """``u`` with the entries at ``index`` replaced by ``values``."""
-    entries = [u[k] for k in range(u.shape[0])]
-    for j, k in enumerate(index):
-        entries[k] = values[j]
-    return ca.vertcat(*entries)
 
 
 @dataclass(frozen=True)
@@ -117,7 +77,8 @@ def monitor(
     r"""One sample of the fault monitor (module docstring).
 
     ``valid`` (:data:`~wheelload.models.INPUTS`): inputs finite and plausible;
-    ``z`` (4) raw suspension loads; ``A``, ``b`` the equilibrium (:func:`parity_model`);
+    ``z`` (4) raw suspension loads; ``A``, ``b`` the equilibrium
+    (:func:`~wheelload.models.terms.parity_model`);
     ``signatures`` (3 x 7): the change
     of :math:`b - A z` per unit fault of each channel, :math:`-A\,\partial
     z / \partial d` for the travels [per m] and :math:`\partial b /

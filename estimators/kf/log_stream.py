@@ -39,11 +39,16 @@ import numpy as np
 
 from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf import guard
-from wheelload.estimators.kf.model_error import Diagnosis
 from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
-from wheelload.estimators.kf.two_stage import TwoStageKF
+from wheelload.estimators.kf.two_stage import FAULT_MARGIN, TwoStageKF, about_faults
 from wheelload.estimators.logs.checks import MOVING, WINDOW, check_wiring
+from wheelload.estimators.logs.model_error import (
+    MAX_SAMPLES,
+    NOTHING,
+    Diagnosis,
+    diagnose_inputs,
+)
 from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns, read_chunks
 from wheelload.estimators.logs.signals import (
     HUB,
@@ -220,7 +225,7 @@ class LogStream:
         diagnosis: Diagnosis | None = None,
     ) -> Iterator[EstimateChunk]:
         """The estimates, chunk by chunk; ``faults`` receives the isolated sensor faults.
-        With a file check's ``diagnosis`` (:mod:`~wheelload.estimators.kf.model_error`) its
+        With a file check's ``diagnosis`` (:mod:`~wheelload.estimators.logs.model_error`) its
         travel zero is taken off and its file parameter widens σ, as in ``TwoStageKF.run``."""
         loop = filter_loop(kf)
         state0 = kf.initial_state()
@@ -253,6 +258,25 @@ class LogStream:
             yield EstimateChunk(t=t, block=block, flags=flags, reference=reference)
         if faults is not None:
             faults.extend(tracker.finish())
+
+    def file_check(
+        self, vehicle, faults, mass_properties: np.ndarray | None, *, static_given: bool
+    ) -> Diagnosis:
+        """The file check of ``TwoStageKF.run`` on this log, read in chunks: every k-th
+        sample (:data:`~wheelload.estimators.logs.model_error.MAX_SAMPLES` at most), the
+        samples about the ``faults`` isolated left out, the car as ``mass_properties``
+        (the payload estimate's at the end) found it; the travel zeros are known when
+        static loads were given."""
+        if len(self) == 0:
+            return NOTHING
+        t, inputs = self.thinned_inputs(MAX_SAMPLES)
+        return diagnose_inputs(
+            inputs,
+            vehicle,
+            about_faults(t, faults, FAULT_MARGIN),
+            travel_zero=not static_given,
+            mass_properties=mass_properties,
+        )
 
     def thinned_inputs(self, most: int) -> tuple[np.ndarray, np.ndarray]:
         """Every k-th sample's time and inputs (:data:`INPUTS` x m), at most about ``most``

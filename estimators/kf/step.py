@@ -67,6 +67,7 @@ from wheelload.models.loaded_vehicle import loaded_parameters_function
 from wheelload.models.measurement_noise import DENSITIES as NOISE_DENSITY_ORDER
 from wheelload.models.measurement_noise import measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
+from wheelload.models.terms import parity_model
 
 _NOISE_INDEX = [TUNING_INDEX[name] for name in NOISE_DENSITY_ORDER]
 _RC_INDEX = [TUNING_INDEX[f"constraint_noise_{row}"] for row in ("vertical", "pitch", "roll")]
@@ -205,7 +206,7 @@ def step_expressions(
     # Fault monitor: an isolated channel is dropped like a missing one. Its parity test
     # uses every model term the inputs allow (held inputs included), whatever the
     # [model] switches.
-    parity = fault_monitor.parity_model(suspension, equilibrium, u_term, valid_term, p)
+    parity = parity_model(suspension, equilibrium, u_term, valid_term, p)
     # The fault monitor's parity test weighs the constant densities (the paper's R_c).
     rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
     # What the payload not yet learnt may leave in the residual (a changed car, no fault).

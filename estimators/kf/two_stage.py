@@ -125,7 +125,7 @@ class TwoStageKF:
         model; default :func:`step_function`.
     check_file
         Before a whole-log :meth:`run`, ask the model-error channel
-        (:mod:`~wheelload.estimators.kf.model_error`) whether a vehicle-file parameter or
+        (:mod:`~wheelload.estimators.logs.model_error`) whether a vehicle-file parameter or
         a corner's travel zero explains the log's residuals: a travel zero is taken off
         the travel for the run, a file parameter widens the reported σ by the loads'
         change it implies; either is in ``Estimate.model_errors``. The per-sample
@@ -327,7 +327,7 @@ class TwoStageKF:
     def _run(self, signals: Signals, state: FilterState | None, with_covariance: bool):
         if not self.check_file:
             return self._filter(signals, state, with_covariance)
-        from wheelload.estimators.kf.model_error import diagnose
+        from wheelload.estimators.logs.model_error import diagnose
 
         estimate, covariances, innovations = self._filter(signals, state, with_covariance)
         # The samples about an isolated sensor fault are the fault channel's, not the file's;

@@ -35,7 +35,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf import fault_monitor, guard, plausibility
+from wheelload.estimators.kf import guard, plausibility
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.step import model_rows
 from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX
@@ -50,6 +50,7 @@ from wheelload.models import (
 from wheelload.models.input_validity import sanitise
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, input_index
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
+from wheelload.models.terms import with_entries
 
 TERMS_NAME = "wheelload_mhe_terms"
 LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
@@ -202,10 +203,8 @@ def residual_function(
     travel, axes = input_index(TRAVEL), input_index(SPECIFIC_FORCE)
     d_now = ca.vertcat(*[u[k] for k in travel])
     acc_now = ca.vertcat(*[u[k] for k in axes])
-    Jd = ca.substitute(
-        ca.jacobian(suspension(fault_monitor.with_entries(u, travel, d), gates, p), d), d, d_now
-    )
-    b_sym = equilibrium(fault_monitor.with_entries(u, axes, acc), gates, p)[1]
+    Jd = ca.substitute(ca.jacobian(suspension(with_entries(u, travel, d), gates, p), d), d, d_now)
+    b_sym = equilibrium(with_entries(u, axes, acc), gates, p)[1]
     Ba = ca.substitute(ca.jacobian(b_sym, acc[0:2]), acc, acc_now)
     r_s, r_c = row_densities(u_raw, valid, tuning)
     ls = ca.sqrt(mask_s * dt / r_s)

@@ -15,6 +15,7 @@ file's are kept)."""
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +63,11 @@ def register(subparsers) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     # imported to run, not for --help (studies/commands/__init__.py)
-    from wheelload.estimators.identification.sigma_fit import calibrate_sigma, with_sigma
+    from wheelload.estimators.identification.sigma_fit import (
+        calibrate_sigma,
+        coverage_warnings,
+        with_sigma,
+    )
     from wheelload.estimators.identification.tuning import (
         NIS_BAND,
         RATIO_AGREEMENT,
@@ -181,6 +186,11 @@ def handle(args: argparse.Namespace) -> int:
             f"reported sigma calibrated on the tuning logs: ±2σ coverage "
             f"{100 * sigma.coverage:.1f} %, r(σ, |error|) {sigma.correlation:.2f}"
         )
+        for warning in coverage_warnings(
+            "a tuning log's ±2σ coverage with sigma fitted on the other logs",
+            zip((Path(s.source).name for s in runs.logs), sigma.held_out),
+        ):
+            print(f"warning: {warning}", file=sys.stderr)
     else:
         print(
             "no reference loads fz_* in every log: cannot calibrate the reported sigma; "
@@ -205,6 +215,7 @@ def evaluation_table(vehicle, tuned, logs) -> str:
     """Per-log and pooled ±2σ coverage, RMSE and σ–``|error|`` correlation, input and tuned."""
     if any(signals.reference is None for signals in logs):
         raise ValueError("--evaluate needs logs with reference loads fz_*")
+    from wheelload.estimators.identification.sigma_fit import coverage_warnings
     from wheelload.estimators.identification.tuning import FilterRuns  # SciPy: not for --help
 
     lines = [
@@ -214,6 +225,7 @@ def evaluation_table(vehicle, tuned, logs) -> str:
         f"{'r in':>7}{'r tuned':>9}{'gated in':>10}{'gated tuned':>13}",
     ]
     groups = [(Path(s.source).name, (s,)) for s in logs] + [("pooled", logs)]
+    tuned_coverage = []
     for name, group in groups:
         before = FilterRuns(vehicle, group, filter_sigma=False).consistency(
             noise_densities(vehicle)
@@ -225,4 +237,8 @@ def evaluation_table(vehicle, tuned, logs) -> str:
             f"{before.sigma_error_correlation:7.2f}{after.sigma_error_correlation:9.2f}"
             f"{100 * before.gated:10.1f}{100 * after.gated:13.1f}"
         )
+        tuned_coverage.append((name, after.coverage))
+    what = "a held-out log's ±2σ coverage with the tuned file"
+    for warning in coverage_warnings(what, tuned_coverage):
+        print(f"warning: {warning}", file=sys.stderr)
     return "\n".join(lines)

@@ -96,9 +96,10 @@ def estimate_lean(
     notes += reason
     kf = build("kf", vehicle, static=static)
     digest, faults = _estimate_chunks(stream, kf, out, force)
-    # The file check (estimators/kf/model_error.py) on every k-th sample; a finding that
+    # The file check (estimators/logs/model_error.py) on every k-th sample; a finding that
     # changes the estimates (a travel zero taken off, σ widened) runs the log again.
-    diagnosis = file_check(stream, vehicle, faults, digest, static_given=static is not None)
+    properties = None if digest.mass_properties is None else digest.mass_properties[:4]
+    diagnosis = stream.file_check(vehicle, faults, properties, static_given=static is not None)
     if diagnosis.finding is not None:
         digest, faults = _estimate_chunks(stream, kf, out, True, diagnosis)
         digest.model_errors = (diagnosis.finding,)
@@ -139,25 +140,6 @@ def _estimate_chunks(stream: LogStream, kf, out: Path | None, force: bool, diagn
             digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
             digest.add_mass_properties(chunk.mass_properties)
     return digest, faults
-
-
-def file_check(stream: LogStream, vehicle: Vehicle, faults, digest, *, static_given: bool):
-    """:func:`~wheelload.estimators.kf.model_error.diagnose_inputs` on the streamed log:
-    its thinned inputs, the samples about its faults left out, the payload found."""
-    from wheelload.estimators.kf.model_error import MAX_SAMPLES, NOTHING, diagnose_inputs
-    from wheelload.estimators.kf.two_stage import FAULT_MARGIN, about_faults
-
-    if len(stream) == 0:
-        return NOTHING
-    t, inputs = stream.thinned_inputs(MAX_SAMPLES)
-    properties = digest.mass_properties
-    return diagnose_inputs(
-        inputs,
-        vehicle,
-        about_faults(t, faults, FAULT_MARGIN),
-        travel_zero=not static_given,
-        mass_properties=None if properties is None else properties[:4],
-    )
 
 
 def static_loads_for(stream: LogStream, vehicle: Vehicle, settings):

@@ -249,7 +249,7 @@ def test_the_streamed_file_check_equals_run(tmp_path, example, vehicle, wrong):
     names and gives its loads and widened σ to the bit."""
     import dataclasses
 
-    from wheelload.estimators.kf.model_error import MAX_SAMPLES, diagnose_inputs
+    from wheelload.estimators.logs.model_error import MAX_SAMPLES, diagnose_inputs
 
     frame = example.copy()
     if wrong == "travel zero":

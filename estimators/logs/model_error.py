@@ -160,8 +160,8 @@ def model_error_function():
     each corner's travel, and the steps' changes of :math:`z` and :math:`b`."""
     import casadi as ca
 
-    from wheelload.estimators.kf.fault_monitor import parity_model  # the symbolic models
-    from wheelload.models import equilibrium_function, suspension_function
+    from wheelload.models import equilibrium_function, suspension_function  # symbolic
+    from wheelload.models.terms import parity_model
 
     u = ca.SX.sym("u", len(INPUTS))
     valid = ca.SX.sym("valid", len(INPUTS))
@@ -181,7 +181,7 @@ def model_error_function():
                        ["u", "valid", "p", "dp"], ["r", "S", "T", "Z", "B", "A"])  # fmt: skip
 
 
-MODEL_ERROR_FUNCTION = Builder("wheelload.estimators.kf.model_error", "model_error_function")
+MODEL_ERROR_FUNCTION = Builder("wheelload.estimators.logs.model_error", "model_error_function")
 LOADED_PARAMETERS = Builder("wheelload.models.loaded_vehicle", "loaded_parameters_function")
 
 

@@ -1,4 +1,4 @@
-"""The model-error channel (estimators/kf/model_error.py): a wrong vehicle file or a corner's
+"""The model-error channel (estimators/logs/model_error.py): a wrong vehicle file or a corner's
 travel zero is named, sized and never blamed on a healthy sensor.
 
 Plant logs of the sports car (the file the plant ran on is exact); each wrong file changes
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import TwoStageKF
-from wheelload.estimators.kf.model_error import diagnose
+from wheelload.estimators.logs.model_error import diagnose
 from wheelload.studies.experiments.faults import fault_injection as fi
 
 SCENARIOS = ("iso-dlc", "brake-in-turn")
