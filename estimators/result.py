@@ -89,6 +89,16 @@ class StepFlag(enum.IntFlag):
         return (*tuple(cls)[:7], *_TERM_FLAGS)
 
     @classmethod
+    def doubtful_mask(cls) -> int:
+        """Bits of a sample whose inputs a guard doubted (implausible, gated, jumped, held,
+        load-limited, a fault isolated): no sample to judge the vehicle file by."""
+        return int(
+            cls.INNOVATION_GATED | cls.TRAVEL_IMPLAUSIBLE | cls.ACCELERATION_IMPLAUSIBLE
+            | cls.SPEED_IMPLAUSIBLE | cls.TRAVEL_FAULT | cls.IMU_FAULT | cls.TRAVEL_JUMP
+            | cls.RATE_IMPLAUSIBLE | cls.INPUT_HELD | cls.LOAD_LIMITED
+        )  # fmt: skip
+
+    @classmethod
     def skipped_mask(cls) -> int:
         """Bits of a sample whose update was skipped or whose step was rejected.
 

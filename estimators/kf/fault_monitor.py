@@ -12,9 +12,10 @@ gives :math:`r = (\partial b / \partial a) g`), and a channel is isolated when
 its signature explains ``isolation_fraction`` of the residual energy and
 its estimated fault exceeds the limit (at least ``parity_spread_factor`` times
 the fault the residual's own spread looks like, :func:`parity_spread`, and the
-spread a payload not yet learnt may leave; for an accelerometer axis plus
-``model_gain_fraction`` of its own low-passed acceleration, since a residual that
-grows with it is a gain the vehicle file has wrong) for ``fault_confirm_time``
+spread a payload not yet learnt may leave; for an accelerometer axis its fault is the
+``bias_share`` of it must not grow with the axis' acceleration, :func:`gain_bias_split`,
+since a residual that grows with it is a gain the vehicle file has wrong) for
+``fault_confirm_time``
 (generalised likelihood ratio, Gertler, *Fault Detection and Diagnosis in
 Engineering Systems*, 1998, ch. 5). An isolated channel is dropped from
 the updates until it has been clean for ``fault_clear_time``.
@@ -38,6 +39,7 @@ from wheelload.estimators.kf.monitor_state import (
     EXCITATION,
     FAULT,
     FROZEN,
+    GAIN_SUMS,
     JUMP,
     MOVED,
     PARITY_MEAN,
@@ -156,6 +158,7 @@ def monitor(
     limits = [g.travel_fault] * 4 + [g.ax_fault, g.ay_fault, g.az_fault]
     inverse_stuck_time = 1 / g.stuck_time
     statistic, active, persist_next, clear_next, fault_next = [], [], [], [], []
+    gain_sums_next = []
     for j in range(7):
         s = signatures[:, j]
         norm = ca.sum1(w * s * s)
@@ -172,11 +175,18 @@ def monitor(
         )
         limit_j = ca.fmax(limits[j], g.parity_spread_factor * floor_j)
         if j >= 4:
-            # An axis' acceleration as the rest of the car sees it: its low-passed reading
-            # less the fault this residual says it carries (a bias is taken off, a gain
-            # of the file is not).
-            seen_j = excitation_next[j - 4] - magnitude
-            limit_j = limit_j + g.model_gain_fraction * ca.fabs(seen_j)
+            # An axis' fault estimate must be a bias for at least bias_share: the part that
+            # does not grow with the acceleration the rest of the car says the axis saw (a
+            # gain of the file does, gain_bias_split).
+            sums_j, bias = gain_bias_split(
+                m[GAIN_SUMS][5 * (j - 4) : 5 * (j - 4) + 5],
+                excitation_next[j - 4] - magnitude,
+                magnitude,
+                all_valid * dt,
+                g,
+            )
+            gain_sums_next.append(sums_j)
+            isolated = ca.logic_and(isolated, ca.fabs(bias) >= g.bias_share * ca.fabs(magnitude))
         candidate = ca.logic_and(ca.fabs(magnitude) > limit_j, isolated)
         persist_j = ca.if_else(candidate, persist[j] + all_valid * dt, 0)
         parity_fault = persist_j >= g.fault_confirm_time
@@ -208,6 +218,7 @@ def monitor(
         *spread_next,
         unexplained_next,
         excitation_next,
+        *gain_sums_next,
     )
     return MonitorOutput(
         m_next,
@@ -217,6 +228,36 @@ def monitor(
         ca.vertcat(*jump),
         ca.vertcat(*[ca.logic_or(seen[i], d_valid[i]) for i in range(4)]),
     )
+
+
+def gain_bias_split(sums, seen, fault, dt, g: GuardSettings):
+    r"""The bias part of an accelerometer axis' fault estimate; and the next sums it needs.
+
+    The fault estimate :math:`\hat g` (from the low-passed residual) is fitted as
+    :math:`\hat g = b + k\,a` over the last ``gain_time_constant`` (exponentially weighted
+    means :math:`\bar 1, \bar a, \overline{a^2}, \bar g, \overline{a g}`), with
+    :math:`a` the acceleration the rest of the car says the axis saw (its low-passed reading
+    less :math:`\hat g`): a sensor bias is :math:`b`, a gain of the file (bars, springs,
+    mass, CG height: the load transfer it scales) is :math:`k`. Both are kept small by
+    :math:`\lambda = ` ``gain_ridge`` times :math:`\bar 1 b^2` and
+    :math:`\bar 1 a_g^2 k^2`, ``a_g`` = ``gain_acceleration``: where the axis saw less
+    than :math:`a_g` the estimate is taken as a bias, in a steady turn above it as a
+    gain, and where the acceleration varies the two are told apart.
+
+    .. math:: \begin{bmatrix} \bar 1 (1 + \lambda) & \bar a \\
+              \bar a & \overline{a^2} + \lambda \bar 1 a_g^2 \end{bmatrix}
+              \begin{bmatrix} b \\ k \end{bmatrix} =
+              \begin{bmatrix} \bar g \\ \overline{a g} \end{bmatrix}
+    """
+    beta = dt / (g.gain_time_constant + dt)
+    new = [seen * 0 + 1, seen, seen * seen, fault, seen * fault]
+    sums_next = ca.vertcat(*[sums[i] + beta * (new[i] - sums[i]) for i in range(5)])
+    one, a, aa, gg, ag = (sums_next[i] for i in range(5))
+    ridge = g.gain_ridge
+    k_row = aa + ridge * one * g.gain_acceleration**2
+    det = one * (1 + ridge) * k_row - a * a
+    bias = (gg * k_row - a * ag) / ca.if_else(det > 0, det, 1) * (det > 0)
+    return sums_next, bias
 
 
 _UPPER = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))

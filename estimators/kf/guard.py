@@ -52,11 +52,15 @@ class GuardSettings:
     ay_fault: float = 0.3  # m/s^2, smallest ay fault isolated
     az_fault: float = 1.2  # m/s^2, smallest az fault isolated
     isolation_fraction: float = 0.9  # share of residual energy one channel must explain
-    # A residual that grows with an accelerometer axis' own excitation (ax, ay, az - g,
-    # low-passed, less the fault estimated: what the rest of the car says it is) is a gain
-    # of the model (springs, bars, mass, CG height) the file has wrong, not a sensor bias:
-    # an axis' fault must exceed this fraction of the excitation too.
-    model_gain_fraction: float = 0.5
+    # An accelerometer axis' fault estimate is split into a bias and a part that grows with
+    # the axis' acceleration (a gain the file has wrong: springs, bars, mass, CG height) over
+    # gain_time_constant; below gain_acceleration a steady estimate is a bias, above it a
+    # gain (fault_monitor.gain_bias_split); gain_ridge weighs that preference. The axis is
+    # isolated only when the bias is at least bias_share of the estimate.
+    gain_time_constant: float = 1.0  # s
+    gain_acceleration: float = 1.0  # m/s^2
+    gain_ridge: float = 0.05
+    bias_share: float = 0.33  # least share of an axis' fault estimate that is a bias
     fault_confirm_time: float = 0.2  # s a parity fault must persist
     fault_clear_time: float = 1.0  # s clean before an isolated channel is taken back
     # S in the gate and the spread's clip times this: ``wheelload tune`` scales the noise
@@ -142,7 +146,7 @@ def guard_settings_for(vehicle: Vehicle, base: GuardSettings = DEFAULT_GUARD) ->
         ax_fault=limits.ax_fault,
         ay_fault=limits.ay_fault,
         az_fault=limits.az_fault,
-        model_gain_fraction=limits.model_gain_fraction,
+        gain_acceleration=limits.gain_acceleration,
     )
 
 

@@ -26,10 +26,12 @@ PARITY_MEAN, PARITY_VARIANCE, PARITY_WEIGHT = slice(58, 61), slice(61, 64), slic
 # The low-passed covariance the unknown payload leaves in the residual (upper triangle:
 # 00, 01, 02, 11, 12, 22), beside the low-passed residual it may explain.
 UNEXPLAINED = slice(65, 71)
-# Each accelerometer axis' excitation (ax, ay, az - g), low-passed like the residual.
+# Each accelerometer axis' excitation (ax, ay, az - g), low-passed like the residual, and
+# per axis the weighted means of the bias/gain split (fault_monitor.gain_bias_split).
 EXCITATION = slice(71, 74)
+GAIN_SUMS = slice(74, 89)
 #: Slots of the fault monitor proper; the held inputs follow (:func:`hold_inputs`).
-MONITOR_END = 74
+MONITOR_END = 89
 # Each input's last valid value, its remaining hold time, and each rate derivative's
 # remaining settle time after a gated rate.
 HELD = slice(MONITOR_END, MONITOR_END + len(INPUTS))

@@ -335,7 +335,8 @@ class TwoStageKF:
         diagnosis = diagnose(
             signals,
             self.vehicle,
-            exclude=about_faults(signals.t, estimate.sensor_faults, FAULT_MARGIN),
+            exclude=about_faults(signals.t, estimate.sensor_faults, FAULT_MARGIN)
+            | (estimate.flags & StepFlag.doubtful_mask() != 0),
             travel_zero=self._static is None,
             mass_properties=None if len(signals) == 0 else estimate.mass_properties[-1],
         )

@@ -15,8 +15,10 @@ payload and the travel-zero check take those), weighted least squares
 
 gives the size :math:`\delta_k` and the share of the residual's variation it explains,
 :math:`e_k = 1 - E_k / E_0`. The best hypothesis is named when it explains at least
-:data:`EXPLAINED` of it and moves the residual by more than the model's own scatter
-(:data:`SIGNIFICANT` times the residual's spread without it). A gain the file has wrong
+:data:`EXPLAINED` of it, moves the residual by more than the model's own scatter
+(:data:`SIGNIFICANT` times the residual's spread without it) and fits a car (no negative
+stiffness or mass, within :data:`PLAUSIBLE_FACTOR` of the file; samples a guard doubted
+are left out). A gain the file has wrong
 grows with the excitation; a sensor bias does not (that is the fault monitor's).
 
 A corner's travel zero (a potentiometer not zeroed) is told by the travel *warp*:
@@ -285,16 +287,19 @@ def diagnose_inputs(
     if explained[best] < EXPLAINED or np.sqrt(max(base - left, 0.0)) < SIGNIFICANT * np.sqrt(left):
         return NOTHING
     hypothesis = HYPOTHESES[best]
-    rivals = [k for k in order[1:] if HYPOTHESES[k].family != hypothesis.family]
-    close = rivals and explained[rivals[0]] > RIVAL * explained[best]
     file_value = hypothesis.value(vehicle)
     stepped = hypothesis.value(hypothesis.step(vehicle))
+    fitted = tuple(v + size * (s - v) for v, s in zip(file_value, stepped, strict=True))
+    if not _plausible(fitted, file_value):
+        return NOTHING  # a sensor the guards did not catch, not a car
+    rivals = [k for k in order[1:] if HYPOTHESES[k].family != hypothesis.family]
+    close = rivals and explained[rivals[0]] > RIVAL * explained[best]
     finding = ModelError(
         name=hypothesis.name,
         keys=hypothesis.keys,
         unit=hypothesis.unit,
         file_value=file_value,
-        fitted_value=tuple(v + size * (s - v) for v, s in zip(file_value, stepped, strict=True)),
+        fitted_value=fitted,
         explained=float(explained[best]),
         runner_up=HYPOTHESES[rivals[0]].name if close else "",
     )
@@ -331,6 +336,19 @@ def _load_change(rows, k: int) -> np.ndarray:
     gram = np.einsum("nij,nkj->nik", A, A)
     projected = dz + np.einsum("nji,nj->ni", A, np.linalg.solve(gram, gap[..., None])[..., 0])
     return np.maximum(np.abs(dz), np.abs(projected))
+
+
+#: A fitted value further than this factor from the file's (either way) is no car's.
+PLAUSIBLE_FACTOR = 2.0
+
+
+def _plausible(fitted, file_value) -> bool:
+    """Whether a fit is a car's: no negative value, and within :data:`PLAUSIBLE_FACTOR` of
+    a file value that is not 0 (a bar the file leaves out may be any stiffness)."""
+    for new, old in zip(fitted, file_value, strict=True):
+        if new < 0 or (old > 0 and not old / PLAUSIBLE_FACTOR <= new <= old * PLAUSIBLE_FACTOR):
+            return False
+    return True
 
 
 def _required() -> list[int]:

@@ -206,10 +206,10 @@ class FaultTuning:
     ax_fault: float = 1.2  # m/s^2
     ay_fault: float = 0.3  # m/s^2
     az_fault: float = 1.2  # m/s^2
-    # An accelerometer fault must also exceed this fraction of its axis' own low-passed
-    # excitation (ax, ay, az - g): a residual that grows with it is a file gain, a model
-    # error (no bars in the file read as an ay fault on a lane change without it).
-    model_gain_fraction: float = 0.5
+    # m/s^2: an accelerometer fault estimate that grows with its axis' acceleration is a
+    # gain the file has wrong, not a bias; a steady one above this acceleration is taken as
+    # a gain (without the split, no bars in the file read as an ay fault on a lane change).
+    gain_acceleration: float = 1.0
 
     def _check(self) -> None:
         for field in dataclasses.fields(self):

@@ -280,7 +280,7 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.faults.ax_fault": _fixed(0.01, 10.0, "an ax fault of 0.01 m/s^2 to 1 g"),
     "filter.faults.ay_fault": _fixed(0.01, 10.0, "an ay fault of 0.01 m/s^2 to 1 g"),
     "filter.faults.az_fault": _fixed(0.01, 10.0, "an az fault of 0.01 m/s^2 to 1 g"),
-    "filter.faults.model_gain_fraction": _fixed(1e-6, 10.0, "a fraction of the excitation"),
+    "filter.faults.gain_acceleration": _fixed(0.01, 20.0, "0.01-20 m/s^2"),
     "filter.bias.acceleration_bias_density": _fixed(
         1e-12, 1.0, "accelerometer bias random walk, (m/s^2)^2/s"
     ),

@@ -109,17 +109,18 @@ def biased_lap(lap, tmp_path_factory):
 
 def test_paper_model_still_isolates_an_accelerometer_bias(biased_lap, capsys):
     """The paper-model filter names a +1 m/s^2 ay bias as ay, and nothing else, like the
-    vehicle file's own model: its parity test uses the same complete physics. The file's
-    model calls it at 21.5 s, the paper model at 22.8 s (1.5 and 2.8 s after the onset;
-    7.6 s for both before the payload filter took up part of the corners' model residual,
-    which kept the ay signature below the isolation fraction, 0.9 of the residual energy)."""
+    vehicle file's own model: its parity test uses the same complete physics. On the lap
+    an axis is isolated only where its fault estimate is a bias (it does not grow with the
+    cornering, fault_monitor.gain_bias_split): the paper model calls it at 23.3 s, the
+    file's model at 27.4 s (3.3 and 7.4 s after the onset; 2.8 and 1.5 s before the split,
+    which on a lane change isolated a healthy ay for a file without bars)."""
     log, paper = biased_lap
     channels, loads = estimate(log, paper, capsys)
     assert set(channels) == {"ay"}
     flagged = loads["t"][loads["status"].to_numpy() & StepFlag.IMU_FAULT != 0]
     full = TwoStageKF(load_vehicle(example_vehicle_path())).run(read_log(log)).faults
     assert set(full["channel"]) == {"ay"}
-    assert 0.0 <= flagged.min() - full["start"].iloc[0] <= 2.0
+    assert 20.0 <= full["start"].iloc[0] <= 30.0
     assert 20.0 <= flagged.min() <= 30.0
 
 
