@@ -150,10 +150,13 @@ class MovingHorizonEstimator:
         self.name = self.settings.label()
         s = self.settings
         self.hard = s.constraint is Constraint.HARD
+        # The filter behind the window, sample by sample as in the C: no whole-log file check.
         self.filter = (
-            ProjectionKF(vehicle, weighting=Weighting.MAXIMUM_PROBABILITY, static=static)
+            ProjectionKF(
+                vehicle, weighting=Weighting.MAXIMUM_PROBABILITY, static=static, check_file=False
+            )
             if self.hard
-            else TwoStageKF(vehicle, static=static)
+            else TwoStageKF(vehicle, static=static, check_file=False)
         )
         self.p = self.filter.p
         self.tuning = self.filter.tuning
