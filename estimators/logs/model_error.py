@@ -45,7 +45,7 @@ import numpy as np
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.result import ModelError
-from wheelload.models import INPUTS, ModelParameters, Vehicle
+from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.models.files.function_cache import Builder
 from wheelload.models.files.function_library import compiled_function
@@ -266,6 +266,13 @@ def diagnose_inputs(
         [ModelParameters.from_vehicle(h.step(vehicle)).vector() - p for h in HYPOTHESES]
     )
     rows = _rows(U[:, index], p, dp)
+    # A residual beyond what the car's weight can make is a sample no guard caught (a spike
+    # of 1e30): left out, as are the samples the guards doubted.
+    kept = _physical(rows["r"], parameters)
+    rows = {name: value[kept] for name, value in rows.items()}
+    index = index[kept]
+    if index.size < 100:
+        return NOTHING
     # A zero is read against the file's car: the online payload takes up a zero's
     # equilibrium signature (its warp it cannot), which tells the corner.
     zero = zero_offset(U[:, index], rows["r"], rows["T"], vehicle) if travel_zero else None
@@ -336,6 +343,17 @@ def _load_change(rows, k: int) -> np.ndarray:
     gram = np.einsum("nij,nkj->nik", A, A)
     projected = dz + np.einsum("nji,nj->ni", A, np.linalg.solve(gram, gap[..., None])[..., 0])
     return np.maximum(np.abs(dz), np.abs(projected))
+
+
+def _physical(r, parameters: ModelParameters) -> np.ndarray:
+    """Samples (n,) whose residual rows are within the whole weight, and its moment over the
+    wheelbase and track, times the filter's load limit (3)."""
+    weight = parameters.mass * GRAVITY
+    scale = 3.0 * weight * np.array(
+        [1.0, parameters.lf + parameters.lr, max(parameters.track_front, parameters.track_rear)]
+    )
+    with np.errstate(invalid="ignore"):
+        return np.all(np.isfinite(r) & (np.abs(r) <= scale), axis=1)
 
 
 #: A fitted value further than this factor from the file's (either way) is no car's.

@@ -321,10 +321,6 @@ def test_unsprung_masses_stay_within_their_physical_range(folder, capsys):
         assert low - 1e-6 <= table.loc[name, "value"] <= high + 1e-6
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the sigma tune fits on its two logs overcovers them (99.3 %, band 90-99 %)",
-)
 def test_tune_writes_the_reported_sigma_and_says_when_it_cannot(folder, tuned_file, capsys):
     """With reference loads the tuned file carries the reported-σ model fitted on its logs
     (its σ covers each tuning log 90-98 %, the fit's band to a point); a log without them
