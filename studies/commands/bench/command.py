@@ -37,6 +37,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench.family",
     "wheelload.studies.commands.bench.hostile",
     "wheelload.studies.commands.bench.identify",
+    "wheelload.studies.commands.bench.discernment",
 )
 
 
