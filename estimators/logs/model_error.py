@@ -349,8 +349,12 @@ def _physical(r, parameters: ModelParameters) -> np.ndarray:
     """Samples (n,) whose residual rows are within the whole weight, and its moment over the
     wheelbase and track, times the filter's load limit (3)."""
     weight = parameters.mass * GRAVITY
-    scale = 3.0 * weight * np.array(
-        [1.0, parameters.lf + parameters.lr, max(parameters.track_front, parameters.track_rear)]
+    scale = (
+        3.0
+        * weight
+        * np.array(
+            [1.0, parameters.lf + parameters.lr, max(parameters.track_front, parameters.track_rear)]
+        )
     )
     with np.errstate(invalid="ignore"):
         return np.all(np.isfinite(r) & (np.abs(r) <= scale), axis=1)
