@@ -69,8 +69,9 @@ QUIET_ACCELERATION = 1.0
 TRAVEL_ZERO_LIMIT = 1.5e-3
 #: The quiet samples' two halves must agree on the travel warp to this share of it.
 CONSISTENT = 0.5
-#: At most this many samples are fitted (a long log is thinned evenly).
-MAX_SAMPLES = 20000
+#: At most this many samples are fitted (a long log is thinned evenly: 5000 samples of a
+#: lap still hold every corner of it, at a fifth of a second apart).
+MAX_SAMPLES = 5000
 
 
 def _axles(vehicle: Vehicle, axles, **changes) -> Vehicle:
@@ -156,10 +157,8 @@ HYPOTHESES: tuple[Hypothesis, ...] = (
 )
 
 
-def model_error_function():
-    """``(u, valid, p, dp[np x K]) -> (r[3], S[3 x K], T[3 x 4], Z[4 x K], B[3 x K], A)``:
-    the parity residual :math:`r = b - A z`, its change along each file step, per metre of
-    each corner's travel, and the steps' changes of :math:`z` and :math:`b`."""
+def _parity_rows(K: int):
+    """The symbols ``(u, valid, p, dp)`` and the parity model's ``(z, A, b, T)`` on them."""
     import casadi as ca
 
     from wheelload.models import equilibrium_function, suspension_function  # symbolic
@@ -168,22 +167,40 @@ def model_error_function():
     u = ca.SX.sym("u", len(INPUTS))
     valid = ca.SX.sym("valid", len(INPUTS))
     p = ca.SX.sym("p", len(ModelParameters.names()))
-    dp = ca.SX.sym("dp", p.shape[0], len(HYPOTHESES))
+    dp = ca.SX.sym("dp", p.shape[0], K)
     z, A, b, signatures = parity_model(suspension_function(), equilibrium_function(), u, valid, p)
+    return (u, valid, p, dp), (z, A, b, signatures[:, :4])
+
+
+def model_error_function():
+    """``(u, valid, p, dp[np x K]) -> (r[3], S[3 x K], T[3 x 4])``: the parity residual
+    :math:`r = b - A z`, its change along each file step and per metre of each corner's
+    travel."""
+    import casadi as ca
+
+    inputs, (z, A, b, T) = _parity_rows(len(HYPOTHESES))
+    p, dp = inputs[2], inputs[3]
     r = b - ca.mtimes(A, z)
-    outputs = [
-        r,
-        ca.mtimes(ca.jacobian(r, p), dp),
-        signatures[:, :4],
-        ca.mtimes(ca.jacobian(z, p), dp),
-        ca.mtimes(ca.jacobian(b, p), dp),
-        A,
-    ]
-    return ca.Function("model_error_rows", [u, valid, p, dp], outputs,
-                       ["u", "valid", "p", "dp"], ["r", "S", "T", "Z", "B", "A"])  # fmt: skip
+    outputs = [r, ca.mtimes(ca.jacobian(r, p), dp), T]
+    return ca.Function("model_error_rows", list(inputs), outputs,
+                       ["u", "valid", "p", "dp"], ["r", "S", "T"])  # fmt: skip
+
+
+def load_change_function():
+    """``(u, valid, p, dp[np x 2]) -> (Z[4 x 2], B[3 x 2], A)``: the changes of :math:`z` and
+    :math:`b` along a finding's step and its rival's, and :math:`A` (only built for a
+    finding)."""
+    import casadi as ca
+
+    inputs, (z, A, b, _) = _parity_rows(2)
+    p, dp = inputs[2], inputs[3]
+    outputs = [ca.mtimes(ca.jacobian(z, p), dp), ca.mtimes(ca.jacobian(b, p), dp), A]
+    return ca.Function("model_error_load_change", list(inputs), outputs,
+                       ["u", "valid", "p", "dp"], ["Z", "B", "A"])  # fmt: skip
 
 
 MODEL_ERROR_FUNCTION = Builder("wheelload.estimators.logs.model_error", "model_error_function")
+LOAD_CHANGE_FUNCTION = Builder("wheelload.estimators.logs.model_error", "load_change_function")
 LOADED_PARAMETERS = Builder("wheelload.models.loaded_vehicle", "loaded_parameters_function")
 
 
@@ -226,7 +243,15 @@ class Diagnosis:
         (zeros without a file parameter)."""
         if self.change is None:
             return np.zeros((U.shape[1], 4))
-        rows = _rows(U, self.p, self.change)
+        change = np.zeros((self.change.shape[0], 2))
+        change[:, : self.change.shape[1]] = self.change
+        valid = np.isfinite(U).astype(float)
+        dz, db, A = compiled_function(LOAD_CHANGE_FUNCTION).map(
+            np.nan_to_num(U), valid, self.p, change
+        )
+        n = U.shape[1]
+        rows = {name: out.reshape(out.shape[0], n, -1).transpose(1, 0, 2)
+                for name, out in zip(("Z", "B", "A"), (dz, db, A), strict=True)}  # fmt: skip
         return np.max([_load_change(rows, k) for k in range(self.change.shape[1])], axis=0)
 
 
@@ -317,14 +342,11 @@ def diagnose_inputs(
 
 def _rows(U, p, dp) -> dict[str, np.ndarray]:
     """:func:`model_error_function` on the samples of ``U`` (inputs x n), compiled; each
-    output sample-first: r (n, 3), S (n, 3, K), T (n, 3, 4), Z (n, 4, K), B (n, 3, K),
-    A (n, 3, 4). ``dp`` may have fewer columns than :data:`HYPOTHESES` (zero-padded)."""
+    output sample-first: r (n, 3), S (n, 3, K), T (n, 3, 4)."""
     n = U.shape[1]
-    padded = np.zeros((dp.shape[0], len(HYPOTHESES)))
-    padded[:, : dp.shape[1]] = dp
     valid = np.isfinite(U).astype(float)
-    outputs = compiled_function(MODEL_ERROR_FUNCTION).map(np.nan_to_num(U), valid, p, padded)
-    names = ("r", "S", "T", "Z", "B", "A")
+    outputs = compiled_function(MODEL_ERROR_FUNCTION).map(np.nan_to_num(U), valid, p, dp)
+    names = ("r", "S", "T")
     return {
         name: out.reshape(out.shape[0], n, -1).transpose(1, 0, 2).squeeze(-1)
         if name == "r"
