@@ -22,7 +22,8 @@ from wheelload.studies.drive.payload_schedule import PayloadSchedule
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.sensors import sensor_grade
 from wheelload.studies.experiments.faults.fault_injection import bundled_vehicles
-from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled, value
+from wheelload.studies.experiments.mismatch import mass_edits
+from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled
 
 SCENARIOS = (
     "iso-dlc", "brake-in-turn", "accel-in-turn", "bounce-sweep", "slope-20",
@@ -40,15 +41,6 @@ AXLES = ("suspension.front", "suspension.rear")
 ZERO = 3e-3
 
 
-def _mass(text: str, factor: float) -> tuple[Edit, ...]:
-    sprung = factor * float(value(text, "mass", "sprung"))
-    unsprung = float(value(text, "mass", "unsprung_front")) + float(
-        value(text, "mass", "unsprung_rear")
-    )
-    return (Edit(table="mass", key="sprung", value=sprung),
-            Edit(table="mass", key="total", value=sprung + unsprung))  # fmt: skip
-
-
 def wrong_files(text: str) -> list[Variant]:
     """The issue's wrong files: bars removed, springs and mass 20 % off."""
     return [
@@ -58,8 +50,8 @@ def wrong_files(text: str) -> list[Variant]:
                 edits=tuple(scaled(text, a, "spring_rate", 0.8) for a in AXLES)),
         Variant(label="springs +20 %",
                 edits=tuple(scaled(text, a, "spring_rate", 1.2) for a in AXLES)),
-        Variant(label="mass -20 %", edits=_mass(text, 0.8)),
-        Variant(label="mass +20 %", edits=_mass(text, 1.2)),
+        Variant(label="mass -20 %", edits=mass_edits(text, 0.8)),
+        Variant(label="mass +20 %", edits=mass_edits(text, 1.2)),
     ]  # fmt: skip
 
 

@@ -17,7 +17,8 @@ ERROR = 0.20
 AXLES = ("suspension.front", "suspension.rear")
 
 
-def _mass(text: str, factor: float) -> tuple[Edit, ...]:
+def mass_edits(text: str, factor: float) -> tuple[Edit, ...]:
+    """The edits that scale the sprung mass by ``factor`` (and the total with it)."""
     sprung = factor * float(value(text, "mass", "sprung"))
     unsprung = float(value(text, "mass", "unsprung_front")) + float(
         value(text, "mass", "unsprung_rear")
@@ -39,7 +40,7 @@ def mismatch_variants(text: str) -> list[Variant]:
                     edits=tuple(scaled(text, a, key, k) for a in AXLES
                                 for key in ("damper_push", "damper_pull"))),
             Variant(label=f"ARB {tag}", edits=tuple(scaled(text, a, "arb_rate", k) for a in AXLES)),
-            Variant(label=f"mass {tag}", edits=_mass(text, k)),
+            Variant(label=f"mass {tag}", edits=mass_edits(text, k)),
             Variant(label=f"CG height {tag}", edits=(scaled(text, "geometry", "cg_height", k),)),
         ]  # fmt: skip
     return variants
