@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from wheelload.studies.bench.discernment import PAYLOADS, rows
+from wheelload.studies.drive.sensors import sensor_grade
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
@@ -24,6 +25,10 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     grades = tuple(g.strip() for g in args.grades.split(",") if g.strip())
+    if not grades:
+        raise ValueError("--grades: give at least one sensor grade, e.g. mti-1")
+    for grade in grades:
+        sensor_grade(grade)  # an unknown grade is named before anything is simulated
     table = list(rows(grades, args.quick))
     exact = {(r.car, r.scenario, r.grade): r for r in table if r.case == "exact"}
     print("| car | scenario | grade | file | RMSE [N] | x exact | isolated | named | "
