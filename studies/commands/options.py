@@ -32,7 +32,8 @@ def add_suspension_option(parser: argparse.ArgumentParser) -> None:
         help="vehicle model of the family methods (B-F, ycoo, umvf, road-angle, corner): "
         "full = the KF's own suspension and equilibrium model with the vehicle file's terms "
         "(default: a comparison on one model), paper = the source papers' bare spring/damper/"
-        "bar model and body-axis equilibrium; kf, projection and mhe use the vehicle file's",
+        "bar model and body-axis equilibrium; kf, projection and mhe keep theirs (the "
+        "vehicle file's; wheelload study --model chooses it)",
     )
 
 

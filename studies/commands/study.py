@@ -32,6 +32,7 @@ from wheelload.studies.experiments import mhe_vs_kf
 from wheelload.studies.experiments.faults.sensor_faults import Fault
 from wheelload.studies.experiments.runs.cache import ResultCache
 from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
+from wheelload.studies.experiments.runs.estimator_model import WORDS, EstimatorModel, on_model
 from wheelload.studies.experiments.runs.folder_lock import folder_lock
 from wheelload.studies.experiments.runs.runner import Runner, check_scheduler
 
@@ -89,20 +90,29 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     # the experiments' own options (--quick, --force and --out are shared with mhe-vs-kf)
     study.add_argument("--cache", help="cache folder (default DIR/.cache)")
     add_suspension_option(study)
+    study.add_argument(
+        "--model",
+        metavar="{" + ",".join(m.value for m in EstimatorModel) + "}",
+        default=EstimatorModel.FULL.value,
+        help="vehicle model of kf, projection and mhe (and of the family methods with "
+        f"--suspension full, the KF's own model): full = {WORDS[EstimatorModel.FULL]} "
+        f"(default); paper = {WORDS[EstimatorModel.PAPER]}. The plant keeps the vehicle file",
+    )
     add_common_options(study, TRAITS)
     study.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    model = EstimatorModel.parse(args.model)  # a wrong name is one line, before any work
     if args.name != "mhe-vs-kf":
-        return _experiment(args)
-    return _mhe_vs_kf(args)
+        return _experiment(args, model)
+    return _mhe_vs_kf(args, model)
 
 
-def _mhe_vs_kf(args: argparse.Namespace) -> int:
+def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
     """The mhe-vs-kf study: the robust sweep (default) or the equivalence sweep and figure."""
     vehicle_path = vehicle_file(args)
-    vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
+    vehicle = on_model(load_vehicle(vehicle_path, allow_unusual=args.allow_unusual), model)
     paths = [Path(p) for p in args.logs]
     given = set(paths)
     out = Path(args.out or "mhe-vs-kf")
@@ -177,7 +187,7 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     return 0
 
 
-def _experiment(args: argparse.Namespace) -> int:
+def _experiment(args: argparse.Namespace, model: EstimatorModel) -> int:
     """Run experiment ``args.name`` into ``args.out``; print what was computed and cached."""
     if args.name not in experiments.NAMES:
         raise ValueError(
@@ -192,10 +202,10 @@ def _experiment(args: argparse.Namespace) -> int:
         raise ValueError(f"{out}: exists and is not a folder; give a folder to --out")
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):  # before any work: a second study into ``out`` refuses at once
-        return _run_experiment(args, out)
+        return _run_experiment(args, out, model)
 
 
-def _run_experiment(args: argparse.Namespace, out: Path) -> int:
+def _run_experiment(args: argparse.Namespace, out: Path, model: EstimatorModel) -> int:
     vehicle_path = vehicle_file(args)
     if not vehicle_path.is_file():
         raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")
@@ -206,6 +216,7 @@ def _run_experiment(args: argparse.Namespace, out: Path) -> int:
         vehicles_folder=example_vehicle_path().parent,
         quick=args.quick,
         suspension=SuspensionModel.parse(args.suspension),
+        model=model,
     )
     runner = Runner(
         cache=ResultCache(folder=Path(args.cache) if args.cache else out / ".cache"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 from functools import partial
@@ -21,7 +22,8 @@ from wheelload.studies.experiments import (
 from wheelload.studies.experiments.forces import tyre_forces
 from wheelload.studies.experiments.report.variants import variants_markdown
 from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
-from wheelload.studies.experiments.runs.context import Context
+from wheelload.studies.experiments.runs.context import Context, Settings, model_caption
+from wheelload.studies.experiments.runs.estimator_model import WORDS
 
 STUDIES: dict[str, Callable[[Context], Section]] = {
     "iso-dlc": partial(headline.run, scenario="iso-dlc"),
@@ -52,19 +54,29 @@ text under each table says so.
 
 
 MODEL_TEXT = {
-    SuspensionModel.FULL: "the two-stage KF's full vehicle model (every model term the "
-    "vehicle file switches on), so that the tables rank estimators on one model",
+    SuspensionModel.FULL: "the two-stage KF's own vehicle model (every model term of the "
+    "estimators' vehicle file, `--model`), so that the tables rank estimators on one model",
     SuspensionModel.PAPER: "the source papers' bare model (spring, damper and anti-roll bar, "
-    "eq. 9; body-axis equilibrium, eq. 15-16); kf, projection and mhe keep the vehicle file's",
+    "eq. 9; body-axis equilibrium, eq. 15-16); kf, projection and mhe follow `--model`",
 }
 
 
-def model_line(suspension: SuspensionModel) -> str:
-    """The report's line naming the vehicle model the family methods ran on."""
+def model_line(settings: Settings) -> str:
+    """The report's lines naming the vehicle models the estimators ran on."""
+    model, suspension = settings.model, settings.suspension
     return (
+        f"Vehicle model of kf, projection and mhe: **{model.value}** "
+        f"(`--model {model.value}`): {WORDS[model]}.\n\n"
         f"Vehicle model of the family methods: **{suspension.value}** "
         f"(`--suspension {suspension.value}`): {MODEL_TEXT[suspension]}.\n"
     )
+
+
+def captioned(section: Section, settings: Settings) -> Section:
+    """``section`` with the line naming its vehicle models under its heading."""
+    heading, _, body = section.markdown.partition("\n")
+    text = f"{heading}\n\n{model_caption(settings)}\n{body}"
+    return dataclasses.replace(section, markdown=text)
 
 
 def plant_runs(context: Context) -> list:
@@ -86,18 +98,18 @@ def run_study(name: str, context: Context) -> list[Section]:
         times["plant runs"] = time.perf_counter() - start
     for study in names:
         start = time.perf_counter()
-        sections.append(STUDIES[study](context))
+        sections.append(captioned(STUDIES[study](context), context.settings))
         times[study] = time.perf_counter() - start
         if name != "all":
-            model = model_line(context.settings.suspension)
+            model = model_line(context.settings)
             context.outputs.write_text(f"{study}.md", f"{model}\n{sections[-1].markdown}\n")
     if name == "all":
         mode = "--quick (short segments, few trials)" if context.settings.quick else "full"
         lines = [
             PREAMBLE,
             f"Mode: {mode}. Vehicle: `{context.settings.vehicle_path.name}`.\n",
-            model_line(context.settings.suspension),
-            variants_markdown(context.settings.suspension),
+            model_line(context.settings),
+            variants_markdown(context.settings.suspension, context.settings.model),
         ]
         lines += [section.markdown + "\n" for section in sections]
         lines.append("## Wall time per study [s] (this run; cached parts take no time)\n")

@@ -33,7 +33,12 @@ from wheelload.studies.experiments.runs.cache import cache_key
 from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
 from wheelload.studies.experiments.runs.context import Context
 from wheelload.studies.experiments.runs.runner import Job
-from wheelload.studies.experiments.runs.units import TRUTH, TrialSpec, measured
+from wheelload.studies.experiments.runs.units import (
+    TRUTH,
+    TrialSpec,
+    estimators_vehicle,
+    measured,
+)
 from wheelload.studies.experiments.vehicles import vehicle_files
 
 SIGMA_DATA = "sigma-data"
@@ -63,7 +68,7 @@ def sigma_trial_imu_only(spec: TrialSpec, folder: Path) -> tuple[np.ndarray, np.
 
 def _trial(log: pd.DataFrame, spec: TrialSpec) -> tuple[np.ndarray, np.ndarray]:
     signals = signals_from_frame(log, source=spec.truth.scenario, wiring_checks=False)
-    kf = build("kf", vehicle_from_dict(tomllib.loads(spec.vehicle_text)))
+    kf = build("kf", estimators_vehicle(spec))
     data = sigma_data(kf, signals).thinned(STRIDE)
     return data.error, data.features
 
@@ -130,7 +135,8 @@ def run(context: Context) -> Section:
     jobs = [
         Job(kind=units[c.sensors][0], function=units[c.sensors][1],
             spec=TrialSpec(truth=s.truth, vehicle_text=s.vehicle_text, methods=s.methods,
-                           noise=s.noise, seed=s.seed, truth_key=cache_key(TRUTH, s.truth)))
+                           noise=s.noise, seed=s.seed, truth_key=cache_key(TRUTH, s.truth),
+                           model=context.settings.model))
         for c, s in zip(cases, specs)
     ]  # fmt: skip
     data = [SigmaData(error=e, features=g) for e, g in context.runner.run(jobs, "sigma")]

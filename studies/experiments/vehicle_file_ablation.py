@@ -24,7 +24,8 @@ the one thing the paper's does (§IV-E1):
   weight). Rc scale k: the constraint noise density × k.
 
 Every boolean of the file's ``[model]`` section (the model-fidelity terms), when the
-file has one, adds a case with that switch flipped.
+file has one, adds a case with that switch flipped; on the paper's model (``--model paper``,
+:mod:`~wheelload.studies.experiments.runs.estimator_model`: every term off) there is none.
 
 The Rc sweep's optimum is set beside the filter's noise calibration on the same log
 (:func:`~wheelload.studies.experiments.equilibrium_residuals.noise_calibration`): the
@@ -48,6 +49,7 @@ from wheelload.studies.experiments.report.tables import markdown, pooled_table
 from wheelload.studies.experiments.runs.cache import cache_key
 from wheelload.studies.experiments.runs.common import Section, simulate, trials, truth_spec
 from wheelload.studies.experiments.runs.context import Context
+from wheelload.studies.experiments.runs.estimator_model import EstimatorModel, on_model
 from wheelload.studies.experiments.runs.units import TRUTH, TrialSpec, measured
 from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled, value
 
@@ -79,27 +81,29 @@ def model_switches(text: str) -> list[Variant]:
     ]
 
 
-def held_roll_split(text: str) -> Edit:
+def held_roll_split(text: str, model: EstimatorModel = EstimatorModel.FULL) -> Edit:
     """``suspension.roll_split_front`` set to the value the unedited file ``text`` gives the
-    filter (its own, or the default of its springs and bars)."""
-    vehicle = vehicle_from_dict(tomllib.loads(text))
+    filter on ``model`` (its own, or the default of its springs and bars)."""
+    vehicle = on_model(vehicle_from_dict(tomllib.loads(text)), model)
     split = float(ModelParameters.from_vehicle(vehicle).roll_split_front)
     return Edit(table="suspension", key="roll_split_front", value=split, optional=True)
 
 
-def ablation_variants(text: str) -> list[Variant]:
-    """The cases of Table V as edits of the vehicle file ``text``, then the model switches."""
+def ablation_variants(text: str, model: EstimatorModel = EstimatorModel.FULL) -> list[Variant]:
+    """The cases of Table V as edits of the vehicle file ``text``, then the model switches
+    (none on the paper's model, whose terms are all off)."""
     constraint = ("filter", "constraint_noise_density")
     no_bars = tuple(Edit(table=a, key="arb_rate", value=0.0) for a in AXLES)
+    switches = model_switches(text) if model is EstimatorModel.FULL else []
     return [
         Variant(label="baseline"),
         Variant(label="no aero", edits=(Edit(table="aero", key="lift_coefficient", value=0.0),)),
-        Variant(label="no ARB", edits=(*no_bars, held_roll_split(text))),
+        Variant(label="no ARB", edits=(*no_bars, held_roll_split(text, model))),
         Variant(label="symmetric damper", edits=_damper(text, AXLES[0]) + _damper(text, AXLES[1])),
         Variant(label="no constraints", edits=(scaled(text, *constraint, NO_CONSTRAINT_SCALE),)),
         *[Variant(label=f"Rc scale {k:g}", edits=(scaled(text, *constraint, k),))
           for k in RC_SCALES],
-        *model_switches(text),
+        *switches,
     ]  # fmt: skip
 
 
@@ -131,10 +135,10 @@ def rc_words(ours: dict[str, float], calibration: dict[str, float]) -> str:
 
 
 def run(context: Context) -> Section:
-    text = context.settings.vehicle_text
+    text, model = context.settings.vehicle_text, context.settings.model
     truth = truth_spec(context, "nordschleife")
     simulate(context, [truth])
-    variants = ablation_variants(text)
+    variants = ablation_variants(text, model)
     specs = [TrialSpec(truth=truth, vehicle_text=v.apply(text), methods=("kf",)) for v in variants]
     results = trials(context, specs, "ablation")
     metrics = {v.label: r.metrics["kf"] for v, r in zip(variants, results) if "kf" in r.metrics}
@@ -148,14 +152,18 @@ def run(context: Context) -> Section:
     log = measured(
         replace(specs[0], truth_key=cache_key(TRUTH, truth)), context.runner.cache.folder
     )
-    calibration = noise_calibration(vehicle_from_dict(tomllib.loads(text)), log)
+    calibration = noise_calibration(on_model(vehicle_from_dict(tomllib.loads(text)), model), log)
     switches = model_switches(text)
-    note = (
-        f"The model-fidelity terms add {len(switches)} cases (the file's `[model]` switches)."
-        if switches
-        else "The model-fidelity terms (issue 9) are not yet in this vehicle file: no `[model]` "
-        "section, so no case for them; each of its switches becomes a case when it lands."
-    )
+    if model is EstimatorModel.PAPER:
+        note = "On the paper's model every `[model]` term is off: no case flips one."
+    elif switches:
+        count = len(switches)
+        note = f"The model-fidelity terms add {count} cases (the file's `[model]` switches)."
+    else:
+        note = (
+            "The model-fidelity terms (issue 9) are not yet in this vehicle file: no `[model]` "
+            "section, so no case for them; each of its switches becomes a case when it lands."
+        )
     body = "\n\n".join(
         [
             "## Ablation on the Nordschleife, method A (Table V)",

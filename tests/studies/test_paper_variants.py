@@ -14,6 +14,7 @@ from wheelload.models import ModelParameters, example_vehicle_path
 from wheelload.models.vehicle.description import vehicle_from_dict
 from wheelload.studies.experiments.report.shape import changes_from
 from wheelload.studies.experiments.report.variants import VARIANTS, Fidelity, variants_markdown
+from wheelload.studies.experiments.runs.estimator_model import EstimatorModel
 from wheelload.studies.experiments.vehicle_file_ablation import ablation_variants
 
 
@@ -55,8 +56,12 @@ def test_every_baseline_variant_is_registered_and_c_has_both():
     assert c["C"].paper_model is Fidelity.STRENGTHENED
     assert c["C-paper"].paper_model is Fidelity.PAPER_FAITHFUL
     assert {v.paper for v in VARIANTS} == set("ABCDEF")
-    text = variants_markdown(SuspensionModel.PAPER)
+    text = variants_markdown(SuspensionModel.PAPER, EstimatorModel.FULL)
     assert "| C-paper | paper-faithful |" in text and "| C | strengthened |" in text
+    # the kf's variant follows --model, the family methods' --suspension
+    assert "| A | kf | strengthened |" in text and "| B | B | paper-faithful |" in text
+    text = variants_markdown(SuspensionModel.FULL, EstimatorModel.PAPER)
+    assert "| A | kf | paper-faithful |" in text and "| B | B | strengthened |" in text
 
 
 def test_trend_sentence_is_computed_from_the_numbers():

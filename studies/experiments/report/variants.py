@@ -9,6 +9,8 @@ import enum
 from dataclasses import dataclass
 
 from wheelload.estimators import SuspensionModel
+from wheelload.estimators.registry import method
+from wheelload.studies.experiments.runs.estimator_model import EstimatorModel
 
 
 class Fidelity(enum.Enum):
@@ -23,17 +25,20 @@ class BaselineVariant:
 
     paper: str  # the paper's letter
     method: str  # registered name
-    paper_model: Fidelity  # with --suspension paper (the kf: a file with every [model] off)
-    full_model: Fidelity  # with --suspension full (the kf: the file's [model] terms)
+    # A family method's with --suspension paper / full; the kf's with --model paper (every
+    # [model] term and the payload estimate off) / full (the file's terms): variants_markdown
+    paper_model: Fidelity
+    full_model: Fidelity
     note: str
 
 
 VARIANTS = (
     BaselineVariant(paper="A", method="kf", paper_model=Fidelity.PAPER_FAITHFUL,
                     full_model=Fidelity.STRENGTHENED,
-                    note="§III's two-stage KF; the full model adds the vehicle file's [model] "
-                    "terms (road frame, body and unsprung inertia, links, stops, lever arm) and "
-                    "the fault monitor"),
+                    note="§III's two-stage KF, with the project's guards and fault monitor on "
+                    "either model; the full model adds the vehicle file's [model] terms (road "
+                    "frame, body and unsprung inertia, links, stops, lever arm) and the online "
+                    "payload estimate"),
     BaselineVariant(paper="B", method="B", paper_model=Fidelity.PAPER_FAITHFUL,
                     full_model=Fidelity.STRENGTHENED,
                     note="Alatorre's algebraic transfer with low-pass suspension pitch/roll; the "
@@ -62,12 +67,14 @@ VARIANTS = (
 )  # fmt: skip
 
 
-def variants_markdown(suspension: SuspensionModel) -> str:
-    """The report's section naming each baseline's variant on the study's vehicle model."""
+def variants_markdown(suspension: SuspensionModel, model: EstimatorModel) -> str:
+    """The report's section naming each baseline's variant on the study's vehicle models: a
+    family method's by ``suspension`` (``--suspension``), the kf's by ``model`` (``--model``)."""
     rows = [
         "## Which variant of each paper method runs",
         "",
-        f"On the vehicle model of this run (`--suspension {suspension.value}`). Where our "
+        f"On the vehicle models of this run (`--model {model.value}` for the kf, "
+        f"`--suspension {suspension.value}` for the others). Where our "
         "variant is stronger than the paper's, the paper-faithful one runs beside it "
         "(C-paper beside C), and the tables set both against the paper's cells.",
         "",
@@ -75,6 +82,8 @@ def variants_markdown(suspension: SuspensionModel) -> str:
         "| --- | --- | --- | --- |",
     ]
     for v in VARIANTS:
-        fidelity = v.paper_model if suspension is SuspensionModel.PAPER else v.full_model
+        family = method(v.method).model_choice
+        paper = suspension is SuspensionModel.PAPER if family else model is EstimatorModel.PAPER
+        fidelity = v.paper_model if paper else v.full_model
         rows.append(f"| {v.paper} | {v.method} | {fidelity.value} | {v.note} |")
     return "\n".join(rows) + "\n"

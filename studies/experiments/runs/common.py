@@ -65,7 +65,9 @@ def trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialRe
 
     Every trial runs the family methods on the study's vehicle model
     (:attr:`~wheelload.studies.experiments.runs.context.Settings.suspension`); a method
-    without that choice keeps the default, so its cached result serves either model.
+    without that choice keeps the default, so its cached result serves either model. Every
+    method is built on the study's estimators' model
+    (:attr:`~wheelload.studies.experiments.runs.context.Settings.model`).
     """
     simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
     jobs, owners = [], []
@@ -77,6 +79,7 @@ def trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialRe
                 methods=(name,),
                 truth_key=truth_key,
                 suspension=_model(name, context),
+                model=context.settings.model,
             )
             jobs.append(Job(kind=TRIAL, function=run_trial, spec=single))
             owners.append(i)
@@ -98,9 +101,11 @@ KF_BATCH = 16
 
 def kf_trials(context: Context, specs: list[TrialSpec], label: str) -> list[TrialResult]:
     """As :func:`trials` for specs of the KF alone (one vehicle file), :data:`KF_BATCH`
-    measured logs per unit of work stepped side by side in the generated C."""
+    measured logs per unit of work stepped side by side in the generated C, on the study's
+    estimators' model."""
     simulate(context, list(dict.fromkeys(spec.truth for spec in specs)))
-    keyed = [replace(spec, truth_key=cache_key(TRUTH, spec.truth)) for spec in specs]
+    model = context.settings.model
+    keyed = [replace(spec, truth_key=cache_key(TRUTH, spec.truth), model=model) for spec in specs]
     batches = [tuple(keyed[i : i + KF_BATCH]) for i in range(0, len(keyed), KF_BATCH)]
     jobs = [Job(kind=KF_TRIALS, function=run_kf_trials, spec=KfTrials(specs=batch))
             for batch in batches]  # fmt: skip

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.models.files.temporaries import replacing
+from wheelload.studies.experiments.runs.estimator_model import SHORT_WORDS, EstimatorModel
 from wheelload.studies.experiments.runs.runner import Runner
 
 QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode
@@ -21,13 +22,16 @@ QUICK_TRIALS = 2  # Monte Carlo trials per noise scale in --quick mode
 
 @dataclass(frozen=True, kw_only=True)
 class Settings:
-    """A study's inputs: the plant's (and the estimators') vehicle file, the mode and the
-    vehicle model of the family methods (:class:`~wheelload.estimators.SuspensionModel`)."""
+    """A study's inputs: the plant's (and the estimators') vehicle file, the mode, the
+    estimators' vehicle model (:class:`~wheelload.studies.experiments.runs.estimator_model.
+    EstimatorModel`: the file's or the paper's) and that of the family methods
+    (:class:`~wheelload.estimators.SuspensionModel`)."""
 
     vehicle_path: Path
     vehicles_folder: Path  # every *.toml here is a bundled vehicle (study `vehicles`)
     quick: bool = False
     suspension: SuspensionModel = DEFAULT_MODEL
+    model: EstimatorModel = EstimatorModel.FULL
 
     @property
     def vehicle_text(self) -> str:
@@ -36,6 +40,15 @@ class Settings:
     @property
     def shorten(self) -> float:
         return QUICK_SHORTEN if self.quick else 1.0
+
+
+def model_caption(settings: Settings) -> str:
+    """The line under a table naming the vehicle models it is on (``--model``, ``--suspension``)."""
+    model, suspension = settings.model.value, settings.suspension.value
+    return (
+        f"*Model:* kf, projection and mhe on the **{model}** model (`--model {model}`: "
+        f"{SHORT_WORDS[settings.model]}); the family methods on `--suspension {suspension}`."
+    )
 
 
 @dataclass(kw_only=True)

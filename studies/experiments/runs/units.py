@@ -5,7 +5,8 @@
 truth frame. :func:`run_trial` measures that frame with the sensor models at
 noise scale ``s`` and seed (paper §IV-F: the noise is drawn afresh on one
 simulated drive), builds each method through the registry from the
-estimator's vehicle file (which a study may edit: ablation, mismatch), the
+estimator's vehicle file (which a study may edit: ablation, mismatch) on the spec's
+estimators' model (``wheelload study --model``: the file's or the paper's), the
 family methods on the spec's vehicle model (``wheelload study --suspension``), and
 scores it with the paper's metrics (eq. 26-34) over the evaluation window.
 """
@@ -31,6 +32,7 @@ from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.sensors import MTI_1, NoiseScaling, measure, sensor_grade
 from wheelload.studies.experiments.runs.cache import ResultCache
+from wheelload.studies.experiments.runs.estimator_model import EstimatorModel, on_model
 from wheelload.studies.metrics import wheel_metrics
 
 TRUTH = "truth"
@@ -67,6 +69,7 @@ class TrialSpec:
     window: tuple[float, float] | None = None  # scored samples, t in [start, end] s
     keep_estimates: bool = False  # keep the loads for figures
     suspension: SuspensionModel = DEFAULT_MODEL  # vehicle model of the family methods
+    model: EstimatorModel = EstimatorModel.FULL  # the estimators' model (wheelload study --model)
     truth_key: str = ""  # cache key of ``truth``, set by the process that plans the jobs
     mass_properties_at: float | None = None  # s, keep the estimated mass properties then
 
@@ -124,8 +127,13 @@ def _truth(folder: str, key: str) -> pd.DataFrame:
 
 
 @lru_cache(maxsize=8)
-def _vehicle(text: str) -> Vehicle:
-    return vehicle_from_dict(tomllib.loads(text))
+def _vehicle(text: str, model: EstimatorModel) -> Vehicle:
+    return on_model(vehicle_from_dict(tomllib.loads(text)), model)
+
+
+def estimators_vehicle(spec: TrialSpec) -> Vehicle:
+    """The vehicle the estimators of ``spec`` are built on: its file on its model."""
+    return _vehicle(spec.vehicle_text, spec.model)
 
 
 def measured(spec: TrialSpec, folder: Path) -> pd.DataFrame:
@@ -152,7 +160,7 @@ def run_trial(spec: TrialSpec, folder: Path) -> TrialResult:
         mask = (t >= spec.window[0]) & (t <= spec.window[1])
         if not mask.any():
             raise ValueError(f"{spec.truth.scenario}: window {spec.window} holds no sample")
-    vehicle = _vehicle(spec.vehicle_text)
+    vehicle = estimators_vehicle(spec)
     metrics, errors, seconds, estimates, masses = {}, {}, {}, {}, {}
     for name in spec.methods:
         try:
@@ -203,9 +211,9 @@ def run_kf_trials(batch: KfTrials, folder: Path) -> list[TrialResult]:
     """
     from wheelload.estimators.codegen.batched import run_batched
 
-    texts = {spec.vehicle_text for spec in batch.specs}
+    texts = {(spec.vehicle_text, spec.model) for spec in batch.specs}
     if len(texts) != 1 or any(spec.methods != ("kf",) for spec in batch.specs):
-        raise ValueError("KfTrials: one vehicle file and the method 'kf' only")
+        raise ValueError("KfTrials: one vehicle file and model, and the method 'kf' only")
     logs, masks = [], []
     for spec in batch.specs:
         log = measured(spec, folder)
@@ -217,7 +225,7 @@ def run_kf_trials(batch: KfTrials, folder: Path) -> list[TrialResult]:
                 raise ValueError(f"{spec.truth.scenario}: window {spec.window} holds no sample")
         logs.append(signals)
         masks.append(mask)
-    estimator = build("kf", _vehicle(texts.pop()))
+    estimator = build("kf", estimators_vehicle(batch.specs[0]))
     with tempfile.TemporaryDirectory() as temporary:
         path = Path(temporary) / "vehicle.toml"
         path.write_text(batch.specs[0].vehicle_text, encoding="utf-8")
