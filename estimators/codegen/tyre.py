@@ -24,16 +24,18 @@ from wheelload.estimators.family.tyres.step import CORE, WHEEL_INPUTS
 from wheelload.models import INPUTS, WHEELS, Vehicle
 
 #: Inputs and outputs of the C tyre kernel, in order.
-TYRE_KERNEL_INPUTS = ("core", "wheels", "wheels_valid", "u", "u_valid", "loads", "dt")
+TYRE_KERNEL_INPUTS = ("core", "wheels", "wheels_valid", "u", "u_valid", "loads",
+                      "mass_properties", "dt")  # fmt: skip
 TYRE_KERNEL_OUTPUTS = ("core_next", "fx", "fx_std", "fy", "fy_std", "high_slip")
 #: Kernel inputs that hold exactly 0 or 1.
 TYRE_BOOLEAN_INPUTS = (2, 4)
 
 
 def tyre_kernel_function(vehicle: Vehicle, sample_interval: float) -> ca.Function:
-    """``tyre_kernel(core, wheels, wheels_valid, u, u_valid, loads, dt)``: the force sums
-    from the KF's input ``u`` (:data:`~wheelload.models.INPUTS` order, 0 where missing),
-    then the observers' core step, discretised at ``sample_interval``.
+    """``tyre_kernel(core, wheels, wheels_valid, u, u_valid, loads, mass_properties, dt)``:
+    the force sums from the KF's input ``u`` (:data:`~wheelload.models.INPUTS` order, 0
+    where missing) and its online mass properties, then the observers' core step,
+    discretised at ``sample_interval``.
 
     A force sum is valid where every input it depends on is (the acceleration components
     it reads, and the speed for the drag), as NaN would propagate in Python.
@@ -44,14 +46,15 @@ def tyre_kernel_function(vehicle: Vehicle, sample_interval: float) -> ca.Functio
     wheels_valid = ca.SX.sym("wheels_valid", len(WHEEL_INPUTS))
     u, u_valid = ca.SX.sym("u", len(INPUTS)), ca.SX.sym("u_valid", len(INPUTS))
     loads, dt = ca.SX.sym("loads", 4), ca.SX.sym("dt")
+    loaded = ca.SX.sym("mass_properties", 4)
 
     def channel(name: str):
         return u[INPUTS.index(name)], u_valid[INPUTS.index(name)]
 
     d = ca.vertcat(*[channel(f"d_{wheel}")[0] for wheel in WHEELS])
     acc = ca.vertcat(*[channel(axis)[0] for axis in ("ax", "ay", "az")])
-    vx, (rate, rate_valid) = channel("vx")[0], channel("wz")
-    sums = method.force_sum_function(d, acc, vx, rate)
+    (vx, vx_valid), (rate, rate_valid) = channel("vx"), channel("wz")
+    sums = method.force_sum_function(d, acc, vx, rate, loaded)
     sums_valid = []
     for row in range(2):
         valid = 1
@@ -61,10 +64,11 @@ def tyre_kernel_function(vehicle: Vehicle, sample_interval: float) -> ca.Functio
         sums_valid.append(valid)
     observer = ca.DM(method.observer_input(sample_interval))
     outputs = method.core_function(core, wheels, wheels_valid, sums, ca.vertcat(*sums_valid),
-                                   rate, rate_valid, loads, dt, observer)  # fmt: skip
+                                   rate, rate_valid, vx, vx_valid, loads, loaded, dt,
+                                   observer)  # fmt: skip
     return ca.Function(
         "tyre_kernel",
-        [core, wheels, wheels_valid, u, u_valid, loads, dt],
+        [core, wheels, wheels_valid, u, u_valid, loads, loaded, dt],
         list(outputs),
         list(TYRE_KERNEL_INPUTS),
         list(TYRE_KERNEL_OUTPUTS),
@@ -80,7 +84,7 @@ def tyre_substitutions(
     body = emit_statements(
         kernel,
         ["core[{}]", "wheels[{}]", "wheels_valid[{}]", "u[{}]", "u_valid[{}]", "loads[{}]",
-         "dt"],
+         "mass_properties[{}]", "dt"],
         [f"{name}[{{}}]" for name in TYRE_KERNEL_OUTPUTS],
         precision,
         real,

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf import guard
+from wheelload.estimators.kf import guard, monitor_state
 from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.monitor_state import MONITOR_SIZE
 from wheelload.estimators.kf.step_cache import (
@@ -46,6 +46,7 @@ from wheelload.estimators.protocol import Sample, sample_intervals
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
+from wheelload.models.loaded_vehicle import PAYLOAD_STATES, mass_properties
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -176,6 +177,12 @@ class TwoStageKF:
         tuning = np.array(self.tuning, float)
         tuning[_INTERVAL_INDEX] = sample_interval
         return tuning
+
+    def state_mass_properties(self, state: FilterState) -> np.ndarray:
+        """The loaded car's ``[m', δx, y_c', h']`` that ``state`` carries (its payload states;
+        the file's car for the initial state): the ``mass_properties`` :meth:`run` reports."""
+        theta = np.asarray(state.m, float)[monitor_state.PAYLOAD]
+        return np.asarray(_mass_properties_function()(self.p, theta), float).ravel()
 
     def initial_state(self) -> FilterState:
         """Static loads with covariance ``initial_std^2 I`` (at most ``(m g)^2``)."""
@@ -435,3 +442,12 @@ def sensor_faults(
                 )
             )
     return tuple(sorted(rows, key=lambda fault: fault.start))
+
+
+@functools.cache
+def _mass_properties_function() -> ca.Function:
+    """``(p, payload[4]) -> [m', δx, y_c', h']``
+    (:func:`~wheelload.models.loaded_vehicle.mass_properties`)."""
+    p_vector, p = ModelParameters.symbolic()
+    payload = ca.SX.sym("payload", len(PAYLOAD_STATES))
+    return ca.Function("mass_properties", [p_vector, payload], [mass_properties(p, payload)])

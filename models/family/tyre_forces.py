@@ -7,18 +7,26 @@ from the paper's printed equations:
 - Wheel spin (eq. 1): :math:`J \dot\omega = T - R F_x - f_r R F_z \tanh(\omega/\omega_s)`
   (:func:`longitudinal_force`), the plant's own wheel equation with the rolling
   resistance named apart (the paper's :math:`\Omega_x`).
-- The printed observer (eq. 4-5) feeds back :math:`\tilde F_x = F_x - \hat F_x`, which is
-  unknown online. Its implementable form (:func:`observer_matrices`) is the wheel model
-  driven by the measured torque plus a PI correction on the spin error
-  :math:`\tilde\omega = \omega - \hat\omega`:
+- The printed observer (eq. 4-5) needs the spin acceleration :math:`\dot\omega` of eq. 4's
+  feed-through and the force error :math:`\tilde F_x = F_x - \hat F_x` of its :math:`k_3`
+  term, neither of which is measured. Its implementable form (:func:`observer_matrices`)
+  takes :math:`\dot\omega` as the observer's own estimate :math:`\hat a`, driven by the
+  spin error :math:`\tilde\omega = \omega - \hat\omega` through eq. 5's integral
+  :math:`k_2 \int \tilde\omega\, dt`:
 
-  .. math:: J \dot{\hat\omega} = T - R \hat F, \qquad
-            \hat F = -k_1 \tilde\omega - k_2 \textstyle\int \tilde\omega\, dt
+  .. math:: \hat F = \frac{T - J \hat a}{R} - k_1 \tilde\omega, \qquad
+            \dot{\hat\omega} = \hat a + \frac{R k_1}{J} \tilde\omega, \qquad
+            \dot{\hat a} = \frac{k_2}{J} \tilde\omega
 
-  whose error obeys eq. 9's :math:`J \ddot{\tilde\omega} + R k_1 \dot{\tilde\omega} + R k_2
-  \tilde\omega = \dot F`: Hurwitz for :math:`k_1, k_2 > 0`, and :math:`\hat F \to F`
-  for a constant force (the integral holds it). A falling :math:`\omega` below the model
-  (:math:`\tilde\omega < 0`) means more retarding force, hence the minus signs.
+  so the spin error obeys eq. 9 exactly, :math:`J \ddot{\tilde\omega} + R k_1
+  \dot{\tilde\omega} + k_2 \tilde\omega = J \dddot\omega`, and the force error is
+  :math:`\hat F - F = (J/R)\, \dot{\tilde\omega}`: zero for any constant spin
+  acceleration, whatever the torque does (the torque feeds through, as in eq. 4). The
+  :math:`k_3` term integrates :math:`\tilde F_x` to remove a constant model error
+  :math:`\Omega_x` (a torque or radius scale); online only the sum of the four errors is
+  seen, through the body's force balance, and its integral with the torques as regressor
+  is a torque-gain state of the lateral filter
+  (:mod:`~wheelload.estimators.family.tyres.step`).
 - Body forces (eq. 2-3, :func:`body_force_rows`): the tyres' forces in the road plane
   equal the whole-vehicle mass times the specific force in the road frame (the body's
   roll and pitch relative to the road from the travels, eq. 7 and 4-5 of the main paper)
@@ -40,7 +48,11 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from wheelload.models.plant.dynamics import SPIN_SMOOTHING
+#: rad/s: the rolling resistance fades below this spin (it opposes the rolling direction).
+SPIN_SMOOTHING = 0.5
+#: The paper's observer gains (§IV) and the wheel they were set for: k1 [N s/rad],
+#: k2 [N m/rad], k3 [1/s]; I_w [kg m^2], R_e [m].
+PAPER_GAINS = {"k1": 3.41, "k2": 16.22, "k3": 67.84, "inertia": 1.7, "radius": 0.346}
 
 
 def rolling_resistance_force(fz, spin, coefficient: float):
@@ -56,27 +68,38 @@ def longitudinal_force(torque, spin_rate, fz, spin, *, inertia, radius, coeffici
 def observer_matrices(
     *, inertia: float, radius: float, k1: float, k2: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    r"""``(A, B, C, D)`` of the PI spin observer (module docstring), continuous time.
+    r"""``(A, B, C, D)`` of the spin observer in eq. 4-5's form (module docstring),
+    continuous time.
 
-    State :math:`z = (\hat\omega, \xi = \int \tilde\omega\, dt)`, input
-    :math:`u = (T, \omega)`, output the total retarding force :math:`\hat F = C z + D u`:
+    State :math:`z = (\hat\omega, \hat a)`, input :math:`u = (T, \omega)`, output the
+    force :math:`\hat F = C z + D u` before the rolling resistance:
 
-    .. math:: \dot z = \begin{pmatrix} -R k_1/J & R k_2/J \\ -1 & 0 \end{pmatrix} z
-              + \begin{pmatrix} 1/J & R k_1/J \\ 0 & 1 \end{pmatrix} u
+    .. math:: \dot z = \begin{pmatrix} -R k_1/J & 1 \\ -k_2/J & 0 \end{pmatrix} z
+              + \begin{pmatrix} 0 & R k_1/J \\ 0 & k_2/J \end{pmatrix} u, \qquad
+              \hat F = (k_1, -J/R)\, z + (1/R, -k_1)\, u
     """
-    a = np.array([[-radius * k1 / inertia, radius * k2 / inertia], [-1.0, 0.0]])
-    b = np.array([[1.0 / inertia, radius * k1 / inertia], [0.0, 1.0]])
-    return a, b, np.array([k1, -k2]), np.array([0.0, -k1])
+    a = np.array([[-radius * k1 / inertia, 1.0], [-k2 / inertia, 0.0]])
+    b = np.array([[0.0, radius * k1 / inertia], [0.0, k2 / inertia]])
+    return a, b, np.array([k1, -inertia / radius]), np.array([1.0 / radius, -k1])
 
 
 def observer_gains(*, inertia: float, radius: float, frequency: float, damping: float):
     r"""``(k1, k2)`` placing eq. 9's poles at natural frequency ``frequency`` [Hz] and
-    ``damping``: :math:`R k_2 / J = \omega_n^2`, :math:`R k_1 / J = 2 \zeta \omega_n`."""
+    ``damping``: :math:`k_2 / J = \omega_n^2`, :math:`R k_1 / J = 2 \zeta \omega_n`."""
     omega_n = 2.0 * np.pi * frequency
-    return 2.0 * damping * omega_n * inertia / radius, omega_n**2 * inertia / radius
+    return 2.0 * damping * omega_n * inertia / radius, omega_n**2 * inertia
 
 
-def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, inertia_z):
+def observer_poles(*, k1: float, k2: float, inertia: float, radius: float):
+    """``(frequency [Hz], damping)`` of eq. 9 for gains ``k1, k2`` on a wheel: the inverse
+    of :func:`observer_gains` (the paper's gains map to another wheel by their poles)."""
+    omega_n = float(np.sqrt(k2 / inertia))
+    return omega_n / (2.0 * np.pi), radius * k1 / inertia / (2.0 * omega_n)
+
+
+def body_force_rows(
+    steer, fx, *, lf, lr, track_front, track_rear, share_front, inertia_z, cg_shift=(0.0, 0.0)
+):
     r"""Rows of :math:`(S_x, S_y, I_z \dot r)` in the lateral state
     :math:`(F_{yf}, F_{yr}, e)` and the part the longitudinal forces ``fx`` (4,) give.
 
@@ -85,7 +108,9 @@ def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, 
     (:func:`tyre_split`, or :func:`load_shares`: the split the paper names as the simple
     alternative; :math:`e` carries what differs).
     Returns ``(H (3, 3), offset (3,))``, the yaw row divided by ``inertia_z`` (yaw
-    acceleration).
+    acceleration). ``cg_shift`` :math:`(\delta x, \delta y)`: the CG moved ahead and left
+    of the file's (a payload); the yaw moment about it is
+    :math:`M - \delta x \sum B_y + \delta y \sum B_x` with the body-frame sums of rows 1-2.
     """
     c, s = ca.cos(steer), ca.sin(steer)
     fxf, fxr = fx[0] + fx[1], fx[2] + fx[3]
@@ -99,6 +124,9 @@ def body_force_rows(steer, fx, *, lf, lr, track_front, track_rear, share_front, 
     offset = ca.vertcat(
         fxf * c + fxr, fxf * s, (lf * fxf * s + half_f * bar_xf * c + half_r * bar_xr) / inertia_z
     )
+    dx, dy = cg_shift[0] / inertia_z, cg_shift[1] / inertia_z
+    h[2, :] = h[2, :] - dx * h[1, :] + dy * h[0, :]
+    offset[2] = offset[2] - dx * offset[1] + dy * offset[0]
     return h, offset
 
 
@@ -151,7 +179,23 @@ def wheel_lateral_forces(axles, shares):
 
 
 def load_share_split(total, loads):
-    """``total`` (n,) split over the wheels by normal-load share (n, 4): the rigid-body
-    baseline's :math:`F_i = S F_{z,i} / \\sum F_z`."""
+    r"""``total`` (n,) split over the wheels by normal-load share (n, 4): the rigid-body
+    baseline's :math:`F_i = S F_{z,i} / \sum F_z`."""
     weights = np.maximum(loads, 0.0)
     return total[:, None] * weights / np.maximum(weights.sum(axis=1, keepdims=True), 1.0)
+
+
+def wheel_slip_velocity(spin, radius, speed, rate, steer, positions):
+    r"""Each wheel's slip velocity :math:`R_i \omega_i - v_i` [m/s] (4,): its rolling speed
+    less the speed of its centre along its heading, :math:`v_i = (v_x - r y_i) \cos\delta_i
+    + r x_i \sin\delta_i` (front wheels steered by :math:`\delta`, rear 0; the body's
+    lateral speed, unknown, taken as 0: it changes slowly). ``positions``: (x, y) per
+    wheel from the CG [m]. Free rolling keeps it near 0 (a constant offset where the
+    rolling radius differs from ``radius``); a wheel past its force peak spins up or locks.
+    """
+    result = []
+    for i, (x, y) in enumerate(positions):
+        angle = steer if i < 2 else 0.0
+        along = (speed - rate * y) * ca.cos(angle) + rate * x * ca.sin(angle)
+        result.append(radius[i] * spin[i] - along)
+    return ca.vertcat(*result)

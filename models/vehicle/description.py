@@ -1,7 +1,8 @@
 """Vehicle parameters: a frozen, validated description read from a TOML file.
 
 The file layout mirrors the dataclasses below: one table per section, one key
-per field. Every key is required (except the optional ``[plant]`` section),
+per field. Every key is required (except the optional ``[wheels]``, ``[cornering]``
+and ``[plant]`` sections),
 unknown keys are rejected, and every error names the file and the key. SI
 units; positions relative to the sprung-mass CG in ISO 8855 axes (x forward,
 y left, z up).
@@ -33,6 +34,7 @@ from wheelload.models.vehicle.section_checks import (
     require_positive,
     require_share,
 )
+from wheelload.models.vehicle.wheel_section import Cornering, Wheels
 
 TOTAL_MASS_TOLERANCE = 0.5  # kg, allowed |total - (sprung + unsprung)|
 
@@ -394,6 +396,8 @@ class Vehicle:
     suspension: Suspension
     model: ModelTerms
     filter: FilterTuning
+    wheels: Wheels | None = None  # the tyre-force estimators (models/vehicle/wheel_section.py)
+    cornering: Cornering | None = None  # their left/right split, beyond the paper
     plant: Plant | None = None  # ground-truth simulator only (models/vehicle/plant_section.py)
 
     def _check(self) -> None:

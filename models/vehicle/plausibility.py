@@ -322,6 +322,14 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.payload.apparent_moment": lambda v: Range(
         0.01, 0.1 * v.mass.total, "0.01 to 0.1 m kg m"
     ),
+    "wheels.spin_inertia_front": _spin(0),
+    "wheels.spin_inertia_rear": _spin(1),
+    "wheels.rolling_resistance": _fixed(0.0, 0.05, "road tyres"),
+    "cornering.nominal_load_front": _nominal(0),
+    "cornering.nominal_load_rear": _nominal(1),
+    "cornering.friction": _fixed(0.1, 3.0, "ice to racing slicks"),
+    "cornering.friction_load_sensitivity": _fixed(-0.5, 0.1, "magic-formula p_D2"),
+    "cornering.cornering_load": _fixed(0.5, 5.0, "p_Ky2 of road tyres"),
     "plant.body.width": _body_width,
     "plant.wheels.spin_inertia_front": _spin(0),
     "plant.wheels.spin_inertia_rear": _spin(1),
@@ -377,7 +385,7 @@ def vehicle_keys(cls: type = Vehicle, prefix: str = "") -> list[str]:
 def _value(vehicle: Vehicle, key: str) -> object:
     value: object = vehicle
     for part in key.split("."):
-        value = getattr(value, part)
+        value = None if value is None else getattr(value, part)
     return value
 
 
@@ -385,10 +393,8 @@ def check_vehicle_ranges(vehicle: Vehicle) -> list[Violation]:
     """Every key outside its accepted interval (:data:`RANGES`); optional keys only if given."""
     violations = []
     for key, rule in RANGES.items():
-        if key.startswith("plant.") and vehicle.plant is None:
-            continue
         value = _value(vehicle, key)
-        if value is None:  # an optional key left out: its default is derived
+        if value is None:  # an optional key or section left out
             continue
         values = value if isinstance(value, tuple) else (value,)
         ranges = rule(vehicle)

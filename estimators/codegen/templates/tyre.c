@@ -15,14 +15,15 @@ ${wheel_names}
 };
 
 /* The observers' step (CasADi Function tyre_kernel): inputs core, wheels, wheels_valid,
- * u, u_valid, loads, dt; outputs core_next, fx, fx_std, fy, fy_std, high_slip.
+ * u, u_valid, loads, mass_properties, dt; outputs core_next, fx, fx_std, fy, fy_std, high_slip.
  * ${tyre_flops} arithmetic operations. */
 static void ${prefix}_tyre_kernel(const ${prefix}_real core[${PREFIX}_TYRE_N_CORE],
                                   const ${prefix}_real wheels[${PREFIX}_TYRE_N_WHEEL],
                                   const ${prefix}_real wheels_valid[${PREFIX}_TYRE_N_WHEEL],
                                   const ${prefix}_real u[${PREFIX}_N_INPUTS],
                                   const ${prefix}_real u_valid[${PREFIX}_N_INPUTS],
-                                  const ${prefix}_real loads[4], ${prefix}_real dt,
+                                  const ${prefix}_real loads[4],
+                                  const ${prefix}_real mass_properties[4], ${prefix}_real dt,
                                   ${prefix}_real core_next[${PREFIX}_TYRE_N_CORE],
                                   ${prefix}_real fx[4], ${prefix}_real fx_std[4],
                                   ${prefix}_real fy[4], ${prefix}_real fy_std[4],
@@ -64,8 +65,8 @@ ${input_copy}
         w[k] = finite ? wheels[k] : ZERO;
     }
     if (FINITE(dt) && dt > ZERO) {
-        ${prefix}_tyre_kernel(state->core, w, w_valid, u, u_valid, loads->loads, dt, next, fx,
-                              fx_std, fy, fy_std, slip);
+        ${prefix}_tyre_kernel(state->core, w, w_valid, u, u_valid, loads->loads,
+                              loads->mass_properties, dt, next, fx, fx_std, fy, fy_std, slip);
         accepted = 1;
         for (k = 0; k < ${PREFIX}_TYRE_N_CORE; ++k) {
             accepted &= FINITE(next[k]);

@@ -71,7 +71,7 @@ from wheelload.models.family.tyre_forces import (
     observer_gains,
     observer_matrices,
 )
-from wheelload.models.plant.dynamics import corners, vehicle_plant
+from wheelload.models.mass_properties import static_loads
 
 #: The paper's nominal and high-slip covariances (§IV): Q 0.11^2 -> 0.036^2, R 0.018^2 -> 0.4^2.
 HIGH_SLIP_Q = (0.036 / 0.11) ** 2
@@ -86,7 +86,7 @@ class TyreInputError(ValueError):
 class TyreSettings:
     """Observer and filter settings (SI units)."""
 
-    observer_frequency: float = 3.0  # Hz, natural frequency of eq. 9's poles
+    observer_frequency: float = 1.0  # Hz, natural frequency of eq. 9's poles
     observer_damping: float = 0.8  # -
     spin_noise: float = 0.02  # rad/s, 1 sigma white spin noise (sigma of F_x)
     rolling_resistance_std: float = 0.3  # share of the rolling resistance (sigma of F_x)
@@ -101,14 +101,24 @@ class TyreSettings:
     force_noise: float = 120.0  # N, 1 sigma of the force sums S_x, S_y (model error)
     gyro_noise: float = 0.002  # rad/s, 1 sigma of the yaw rate
     initial_force_std: float = 500.0  # N
-    slip_threshold: float = 40.0  # rad/s^2, |d omega / dt| of any wheel: high slip
-    split: LateralSplit = LateralSplit.TYRE
+    torque_gain_std: float = 0.1  # -, initial sigma of the torque gain g (1 nominal)
+    torque_gain_rate: float = 0.001  # 1/sqrt(s), random walk of g
+    # S_x's bias: an MTi-class a_x turn-on bias (0.1 m/s^2) times m, and the drag's error.
+    force_bias_std: float = 200.0  # N, initial sigma
+    force_bias_rate: float = 5.0  # N/sqrt(s), random walk
+    slip_rate: float = 6.0  # m/s^2, |d(R w - v)/dt| of any wheel, low-passed: high slip
+    slip_time: float = 0.05  # s, time constant of that low-pass
+    # None: the tyres' load sensitivity where the file has [cornering], else the paper's
+    # normal-load share.
+    split: LateralSplit | None = None
     missing_std: float = 1.0e4  # N, sigma of an F_x held through a missing spin or torque
 
     def __post_init__(self) -> None:
         for key in ("observer_frequency", "observer_damping", "force_rate", "split_rate",
                     "split_std", "yaw_rate_noise", "force_noise", "gyro_noise",
-                    "initial_force_std", "slip_threshold"):  # fmt: skip
+                    "initial_force_std", "torque_gain_std", "torque_gain_rate",
+                    "force_bias_std", "force_bias_rate", "slip_rate",
+                    "slip_time"):  # fmt: skip
             if not getattr(self, key) > 0:
                 raise ValueError(f"tyre settings: {key} must be > 0, got {getattr(self, key)}")
 
@@ -134,34 +144,52 @@ class Constants:
     lr: float
     track_front: float
     track_rear: float
+    positions: tuple[tuple[float, float], ...]  # wheel centres (x, y) from the CG [m]
     imu_x: float  # IMU ahead of the sprung CG [m]
-    nominal_loads: tuple[float, float]  # F_z0 front, rear [N]
+    cg_y: float  # the file's lateral CG [m] (the KF's mass properties' origin)
+    nominal_loads: tuple[float, float]  # F_z0 front, rear [N] (the split's, if any)
     friction: float  # mu_y0
     load_sensitivity: float  # p_D2
     cornering_load: float  # p_Ky2
 
 
 def vehicle_constants(vehicle: Vehicle) -> Constants:
-    """:class:`Constants` of ``vehicle`` (its ``[plant]`` section for the wheels and tyres)."""
-    items = corners(vehicle)
-    g = vehicle.geometry
-    tyre = vehicle_plant(vehicle).tyre
+    """:class:`Constants` of ``vehicle``: its ``[wheels]`` section (required), its
+    ``[cornering]`` section where it has one, and the rest of the description."""
+    if vehicle.wheels is None:
+        raise TyreInputError(
+            f"vehicle '{vehicle.name}' has no [wheels] section: the tyre-force methods need "
+            "spin_inertia_front, spin_inertia_rear [kg m^2] and rolling_resistance [-] "
+            "(see 'wheelload vehicle --template')"
+        )
+    g, t, m, wheels = vehicle.geometry, vehicle.tyres, vehicle.mass, vehicle.wheels
+    loads = static_loads(vehicle)
+    radii = (t.radius_front, t.radius_front, t.radius_rear, t.radius_rear)
+    rates = (t.vertical_stiffness_front,) * 2 + (t.vertical_stiffness_rear,) * 2
+    positions = ((g.lf, 0.5 * g.track_front), (g.lf, -0.5 * g.track_front),
+                 (-g.lr, 0.5 * g.track_rear), (-g.lr, -0.5 * g.track_rear))  # fmt: skip
+    unsprung = (m.unsprung_front / 2,) * 2 + (m.unsprung_rear / 2,) * 2
+    cornering = vehicle.cornering
     return Constants(
-        inertia=np.array([c.spin_inertia for c in items]),
-        radius=np.array([c.radius - c.static_load / c.tyre_rate for c in items]),
-        rolling=float(tyre.rolling_resistance),
-        mass=float(vehicle.mass.total),
-        yaw_inertia=float(vehicle.mass.inertia[2])
-        + sum(c.unsprung * (c.x**2 + c.y**2) for c in items),
+        inertia=np.array([wheels.spin_inertia_front] * 2 + [wheels.spin_inertia_rear] * 2),
+        radius=np.array([r - f / k for r, f, k in zip(radii, loads, rates)]),
+        rolling=float(wheels.rolling_resistance),
+        mass=float(m.total),
+        yaw_inertia=float(m.inertia[2])
+        + sum(mu * (x**2 + y**2) for mu, (x, y) in zip(unsprung, positions)),
         lf=float(g.lf),
         lr=float(g.lr),
         track_front=float(g.track_front),
         track_rear=float(g.track_rear),
+        positions=positions,
         imu_x=float(g.imu_position[0]),
-        nominal_loads=(items[0].nominal_load, items[2].nominal_load),
-        friction=float(tyre.friction_y),
-        load_sensitivity=float(tyre.friction_load_sensitivity),
-        cornering_load=float(tyre.cornering_load_y),
+        cg_y=float(ModelParameters.from_vehicle(vehicle).cg_y),
+        nominal_loads=(0.0, 0.0)
+        if cornering is None
+        else (cornering.nominal_load_front, cornering.nominal_load_rear),
+        friction=0.0 if cornering is None else cornering.friction,
+        load_sensitivity=0.0 if cornering is None else cornering.friction_load_sensitivity,
+        cornering_load=0.0 if cornering is None else cornering.cornering_load,
     )
 
 
@@ -199,8 +227,10 @@ class Inputs:
     torque: np.ndarray  # (4,) N m
     steer: float  # rad
     rate: float  # yaw rate [rad/s]
+    speed: float  # v_x [m/s]
     sums: np.ndarray  # (2,) S_x, S_y [N] (:meth:`TyreForces.force_sums`)
     loads: np.ndarray  # (4,) the KF's F_z [N]
+    mass_properties: np.ndarray  # (4,) the KF's [m', δx, y_c', h']
 
 
 def _given(values, size: int) -> np.ndarray:
@@ -222,7 +252,7 @@ class TyreForces:
         lateral: bool = True,
     ) -> None:
         self.vehicle = vehicle
-        self.settings = settings
+        self.settings = replace(settings, split=lateral_split(vehicle, settings.split))
         self.show_fx = longitudinal
         self.lateral = lateral  # the lateral filter runs on the observer's F_x either way
         self.constants = vehicle_constants(vehicle)
@@ -235,25 +265,41 @@ class TyreForces:
 
     @functools.cached_property
     def force_sum_function(self) -> ca.Function:
-        r"""``force_sums(d[4], acc[3], vx, rate) -> sums[2]``: :math:`(S_x, S_y)`, the tyres'
-        force sums from the specific force in the road frame (module docstring), the drag
-        added and the centripetal lever-arm term :math:`r^2 x_{imu}` removed from :math:`a_x`."""
+        r"""``force_sums(d[4], acc[3], vx, rate, mass_properties[4]) -> sums[2]``:
+        :math:`(S_x, S_y)`, the tyres' force sums from the specific force in the road frame
+        (module docstring) times the loaded car's mass :math:`m'`, the drag added and the
+        centripetal lever-arm term :math:`r^2 (x_{imu} - \delta x)` removed from
+        :math:`a_x` (``mass_properties``: the KF's ``[m', δx, y_c', h']``)."""
         k = self.constants
         d, acc = ca.SX.sym("d", 4), ca.SX.sym("acc", 3)
         vx, rate = ca.SX.sym("vx"), ca.SX.sym("rate")
+        loaded = ca.SX.sym("mass_properties", 4)
         _, _, road = self._attitude(d, acc)
         _, drag = aero_forces(vx, self._parameters)
-        sums = ca.vertcat(k.mass * (road[0] + rate**2 * k.imu_x) + drag, k.mass * road[1])
-        return ca.Function("force_sums", [d, acc, vx, rate], [sums],
-                           ["d", "acc", "vx", "rate"], ["sums"])  # fmt: skip
+        mass, lever = loaded[0], k.imu_x - loaded[1]
+        sums = ca.vertcat(mass * (road[0] + rate**2 * lever) + drag, mass * road[1])
+        return ca.Function("force_sums", [d, acc, vx, rate, loaded], [sums],
+                           ["d", "acc", "vx", "rate", "mass_properties"], ["sums"])  # fmt: skip
 
-    def force_sums(self, d: np.ndarray, acc: np.ndarray, vx, rate) -> np.ndarray:
+    def file_mass_properties(self) -> np.ndarray:
+        """``[m, 0, y_c, h]`` of the file: the loaded car where no payload is estimated."""
+        p = self._parameters
+        return np.array([p.mass, 0.0, p.cg_y, p.cg_height], float)
+
+    def mass_properties_of(self, loads: Estimate) -> np.ndarray:
+        """``(n, 4)`` mass properties of the KF's estimate, the file's where it has none."""
+        if loads.mass_properties is None:
+            return np.tile(self.file_mass_properties(), (loads.loads.shape[0], 1))
+        return np.asarray(loads.mass_properties, float)
+
+    def force_sums(self, d: np.ndarray, acc: np.ndarray, vx, rate, mass_properties) -> np.ndarray:
         """``(n, 2)`` :meth:`force_sum_function` of ``n`` samples (a missing travel or yaw
         rate taken as 0; a missing acceleration or speed gives NaN where it enters)."""
         n = d.shape[0]
         sums = self.force_sum_function.map(n)(
             np.nan_to_num(d).T, np.asarray(acc, float).T, np.asarray(vx, float)[None],
             np.nan_to_num(np.asarray(rate, float))[None],
+            np.asarray(mass_properties, float).reshape(n, 4).T,
         )  # fmt: skip
         return np.asarray(sums).reshape(2, n).T
 
@@ -278,7 +324,8 @@ class TyreForces:
         arguments = _core_arguments(
             np.concatenate([inputs.spin, inputs.torque, [inputs.steer]])[None],
             np.asarray(inputs.sums, float)[None], np.array([inputs.rate]),
-            np.asarray(inputs.loads, float)[None],
+            np.array([inputs.speed]), np.asarray(inputs.loads, float)[None],
+            np.asarray(inputs.mass_properties, float)[None],
         )  # fmt: skip
         out = self.core_function(core, *[a[0] for a in arguments], dt, self.observer_input(dt))
         core, fx, fx_std, fy, fy_std, _ = (np.asarray(o, float).ravel() for o in out)
@@ -298,12 +345,14 @@ class TyreForces:
     def step(self, state: TyreState, sample: Sample, dt: float) -> tuple[TyreState, Estimate]:
         kf_state, loads = self.kf.step(state.kf, sample, dt)
         rate = np.nan if sample.rates is None else float(sample.rates[2])
+        loaded = self.kf.state_mass_properties(kf_state)[None]
         inputs = Inputs(
             spin=_given(sample.spin, 4), torque=_given(sample.torque, 4),
             steer=np.nan if sample.steer is None else float(sample.steer), rate=rate,
+            speed=float(sample.vx),
             sums=self.force_sums(np.asarray(sample.d)[None], np.asarray(sample.acc)[None],
-                                 [sample.vx], [rate])[0],
-            loads=loads.loads[0],
+                                 [sample.vx], [rate], loaded)[0],
+            loads=loads.loads[0], mass_properties=loaded[0],
         )  # fmt: skip
         core, *outputs = self.core_step(state.core, inputs, float(dt))
         rows = [np.asarray(o, float).reshape(1, 4) for o in outputs]
@@ -316,28 +365,45 @@ class TyreForces:
         loads = self.kf.run(signals)
         n = len(signals)
         rates = np.full(n, np.nan) if signals.rates is None else signals.rates[:, 2]
-        sums = self.force_sums(signals.d, signals.acc, signals.vx, rates)
+        loaded = self.mass_properties_of(loads)
+        sums = self.force_sums(signals.d, signals.acc, signals.vx, rates, loaded)
         dts = np.concatenate([np.diff(signals.t)[:1], np.diff(signals.t)])
         unique, which = np.unique(np.round(dts, 9), return_inverse=True)
         observer = np.array([self.observer_input(dt) for dt in unique])[which]
         wheels = np.column_stack([signals.spin, signals.torque, signals.steer])
-        arguments = _core_arguments(wheels, sums, rates, loads.loads)
+        arguments = _core_arguments(wheels, sums, rates, signals.vx, loads.loads, loaded)
         _, _, (fx, fx_std, fy, fy_std, _) = self._loop(
             [np.zeros(CORE.size)], [], [*arguments, dts[:, None], observer]
         )
         return self._estimate(loads, fx, fx_std, fy, fy_std)
 
 
-def _core_arguments(wheels, sums, rates, loads) -> list[np.ndarray]:
+def _core_arguments(wheels, sums, rates, speeds, loads, mass_properties) -> list[np.ndarray]:
     """Per-sample inputs of the core step before ``dt``: values with 0 where missing and
-    their validity flags (n rows each)."""
+    their validity flags (n rows each), then the KF's loads and mass properties."""
 
     def split(values):
         values = np.asarray(values, float).reshape(len(values), -1)
         valid = np.isfinite(values)
         return np.where(valid, values, 0.0), valid.astype(float)
 
-    return [*split(wheels), *split(sums), *split(rates), np.asarray(loads, float)]
+    return [*split(wheels), *split(sums), *split(rates), *split(speeds),
+            np.asarray(loads, float), np.asarray(mass_properties, float)]  # fmt: skip
+
+
+def lateral_split(vehicle: Vehicle, split: LateralSplit | None) -> LateralSplit:
+    """The left/right split: ``split`` where given, else the tyres' load sensitivity if the
+    file has ``[cornering]``, else the paper's normal-load share (a one-line error for
+    ``TYRE`` without ``[cornering]``)."""
+    if split is None:
+        return LateralSplit.LOAD if vehicle.cornering is None else LateralSplit.TYRE
+    if split is LateralSplit.TYRE and vehicle.cornering is None:
+        raise TyreInputError(
+            f"vehicle '{vehicle.name}' has no [cornering] section: the tyre split needs the "
+            "tyres' load sensitivity (see 'wheelload vehicle --template'), or use "
+            "split=LateralSplit.LOAD"
+        )
+    return split
 
 
 def require_wheel_channels(signals: Signals) -> None:
@@ -361,14 +427,16 @@ class RigidSplit(TyreForces):
         kf_state, loads = self.kf.step(state.kf, sample, dt)
         rate = np.nan if sample.rates is None else float(sample.rates[2])
         sums = self.force_sums(np.asarray(sample.d)[None], np.asarray(sample.acc)[None],
-                               [sample.vx], [rate])  # fmt: skip
+                               [sample.vx], [rate],
+                               self.kf.state_mass_properties(kf_state)[None])  # fmt: skip
         split = [load_share_split(sums[:, axis], loads.loads) for axis in (0, 1)]
         return replace(state, kf=kf_state), replace(loads, fx=split[0], fy=split[1])
 
     def run(self, signals: Signals) -> Estimate:
         loads = self.kf.run(signals)
         rates = np.full(len(signals), np.nan) if signals.rates is None else signals.rates[:, 2]
-        sums = self.force_sums(signals.d, signals.acc, signals.vx, rates)
+        sums = self.force_sums(signals.d, signals.acc, signals.vx, rates,
+                               self.mass_properties_of(loads))  # fmt: skip
         split = [load_share_split(sums[:, axis], loads.loads) for axis in (0, 1)]
         return replace(loads, fx=split[0], fy=split[1])
 

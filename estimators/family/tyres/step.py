@@ -33,6 +33,7 @@ from wheelload.models.family.tyre_forces import (
     rolling_resistance_force,
     tyre_split,
     wheel_lateral_forces,
+    wheel_slip_velocity,
 )
 
 
@@ -46,18 +47,22 @@ class LateralSplit(enum.Enum):
 class CoreLayout:
     """Where each part of the observers' state lies in the flat ``core`` vector."""
 
-    observer: slice = slice(0, 16)  # per wheel: omega_hat, xi, last torque, last spin
-    x: slice = slice(16, 20)  # lateral filter: F_yf, F_yr, e, r
-    P: slice = slice(20, 36)  # its covariance, 4 x 4 column-major
-    last_spin: slice = slice(36, 40)  # spins of the last sample with all four
-    last_fx: slice = slice(40, 44)  # the last F_x (held through a missing spin or torque)
-    observer_started: int = 44  # 1 once a sample had every spin and torque
-    lateral_started: int = 45  # 1 after the first sample
-    spin_seen: int = 46  # 1 once last_spin holds a sample
-    size: int = 47
+    observer: slice = slice(0, 16)  # per wheel: omega_hat, a_hat, last torque, last spin
+    x: slice = slice(16, 22)  # lateral filter: F_yf, F_yr, e, r, torque gain g, S_x bias
+    P: slice = slice(22, 58)  # its covariance, 6 x 6 column-major
+    last_slip: slice = slice(58, 62)  # slip velocities R w - v of the last sample with all
+    slip_rate: slice = slice(62, 66)  # their rates, low-passed over slip_time
+    last_fx: slice = slice(66, 70)  # the last F_x (held through a missing spin or torque)
+    observer_started: int = 70  # 1 once a sample had every spin and torque
+    lateral_started: int = 71  # 1 after the first sample
+    slip_seen: int = 72  # 1 once last_slip holds a sample
+    size: int = 73
 
 
 CORE = CoreLayout()
+#: The lateral filter's state: axle forces, front difference, yaw rate, torque gain and
+#: the bias of S_x (the accelerometer's a_x bias times m, the drag's error).
+LATERAL_STATES = ("F_yf", "F_yr", "e", "r", "g", "b_x")
 #: Per-sample inputs of the wheels: spins (4) [rad/s], torques (4) [N m], steer [rad].
 WHEEL_INPUTS = (
     "omega_fl", "omega_fr", "omega_rl", "omega_rr",
@@ -66,7 +71,7 @@ WHEEL_INPUTS = (
 #: Entries per wheel of :func:`observer_inputs`: Phi (2 x 2), Gamma1, Gamma2 row-major, gain.
 OBSERVER_ENTRIES = 13
 CORE_INPUTS = ("core", "wheels", "wheels_valid", "sums", "sums_valid", "rate", "rate_valid",
-               "loads", "dt", "observer")  # fmt: skip
+               "speed", "speed_valid", "loads", "mass_properties", "dt", "observer")  # fmt: skip
 CORE_OUTPUTS = ("core_next", "fx", "fx_std", "fy", "fy_std", "high_slip")
 
 
@@ -91,12 +96,14 @@ def _select(condition, when_true, when_false):
 
 
 def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float]) -> ca.Function:
-    """``tyre_core(core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, loads,
-    dt, observer) -> (core_next, fx, fx_std, fy, fy_std, high_slip)`` (module docstring).
+    """``tyre_core(core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, speed,
+    speed_valid, loads, mass_properties, dt, observer) -> (core_next, fx, fx_std, fy, fy_std,
+    high_slip)`` (module docstring).
 
     ``constants``: :class:`~wheelload.estimators.family.tyres.forces.Constants`;
     ``settings``: :class:`~wheelload.estimators.family.tyres.forces.TyreSettings`;
-    ``high_slip_scales``: the factors on Q and R in high slip.
+    ``high_slip_scales``: the factors on Q and R in high slip; ``mass_properties``: the
+    KF's online ``[m', δx, y_c', h']`` (the file's where the payload is not estimated).
     """
     k, s = constants, settings
     core = ca.SX.sym("core", CORE.size)
@@ -105,72 +112,98 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     sums = ca.SX.sym("sums", 2)
     sums_valid = ca.SX.sym("sums_valid", 2)
     rate, rate_valid = ca.SX.sym("rate"), ca.SX.sym("rate_valid")
+    speed, speed_valid = ca.SX.sym("speed"), ca.SX.sym("speed_valid")
     loads = ca.SX.sym("loads", 4)
+    mass_properties = ca.SX.sym("mass_properties", 4)
     dt = ca.SX.sym("dt")
     observer = ca.SX.sym("observer", 4 * OBSERVER_ENTRIES)
     spin, torque, steer = wheels[0:4], wheels[4:8], wheels[8]
     spins_valid = _all(wheels_valid[0:4])
     inputs_valid = spins_valid * _all(wheels_valid[4:8])
     started = core[CORE.observer_started]
+    n = len(LATERAL_STATES)
 
-    # F_x: the spin observers (tyre_forces._fx), held where a spin or torque is missing.
-    observers, fx, fx_std = [], [], []
-    last_fx = core[CORE.last_fx]
+    # F_x: eq. 4-5's spin observers; their force split into the torque's feed-through
+    # T / R (scaled by the lateral filter's torque gain g) and the rest.
+    observers, fx_rest, fx_torque, fx_noise = [], [], [], []
     for i in range(4):
-        k1, k2 = observer_gains(inertia=k.inertia[i], radius=k.radius[i],
-                                frequency=s.observer_frequency,
-                                damping=s.observer_damping)  # fmt: skip
+        k1, _ = observer_gains(inertia=k.inertia[i], radius=k.radius[i],
+                               frequency=s.observer_frequency,
+                               damping=s.observer_damping)  # fmt: skip
         entries = observer[OBSERVER_ENTRIES * i : OBSERVER_ENTRIES * (i + 1)]
         phi, g1, g2 = (ca.reshape(entries[4 * j : 4 * j + 4], 2, 2).T for j in range(3))
         gain = entries[12]
         state = core[CORE.observer][4 * i : 4 * i + 4]
         z, previous = state[0:2], state[2:4]
         u = ca.vertcat(torque[i], spin[i])
-        # Start in equilibrium: F = -k2 xi = T / R, no spin error.
-        first = ca.vertcat(spin[i], -(torque[i] / k.radius[i]) / k2)
+        first = ca.vertcat(spin[i], 0.0)  # start rolling steadily: F = T / R
         z = _select(started, ca.mtimes(phi, z) + ca.mtimes(g1, previous)
                     + ca.mtimes(g2, u - previous), first)  # fmt: skip
         observers.append(_select(inputs_valid, ca.vertcat(z, u), state))
         rolling = rolling_resistance_force(loads[i], spin[i], k.rolling)
-        force = k1 * z[0] - k2 * z[1] - k1 * spin[i] - rolling  # C z + D u - rolling
-        std = ca.sqrt((gain * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2
-                      + (s.force_share_std * force) ** 2)  # fmt: skip
-        fx.append(_select(inputs_valid, force, last_fx[i]))
-        fx_std.append(_select(inputs_valid, std, s.missing_std))
-    fx, fx_std = ca.vertcat(*fx), ca.vertcat(*fx_std)
+        # C z + D u of observer_matrices, the torque's part apart.
+        fx_rest.append(k1 * z[0] - k.inertia[i] / k.radius[i] * z[1] - k1 * spin[i] - rolling)
+        fx_torque.append(torque[i] / k.radius[i])
+        fx_noise.append((gain * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2)
+    fx_rest, fx_torque = ca.vertcat(*fx_rest), ca.vertcat(*fx_torque)
 
-    # F_y: the lateral filter (tyre_forces._fy), initialised on the first sample.
+    # The lateral filter (eq. 10-16) with the torque gain, initialised on the first sample.
     lateral = core[CORE.lateral_started]
-    x = _select(lateral, core[CORE.x], ca.vertcat(0.0, 0.0, 0.0, rate * rate_valid))
-    P0 = ca.diag(ca.DM([s.initial_force_std**2] * 2 + [s.split_std**2, s.gyro_noise**2]))
-    P = _select(lateral, ca.reshape(core[CORE.P], 4, 4), P0)
+    x = _select(lateral, core[CORE.x], ca.vertcat(0.0, 0.0, 0.0, rate * rate_valid, 1.0, 0.0))
+    P0 = ca.diag(ca.DM([s.initial_force_std**2] * 2
+                       + [s.split_std**2, s.gyro_noise**2, s.torque_gain_std**2,
+                          s.force_bias_std**2]))  # fmt: skip
+    P = _select(lateral, ca.reshape(core[CORE.P], n, n), P0)
     steer = steer * wheels_valid[8]
-    last_spin = core[CORE.last_spin]
-    fastest = ca.mmax(ca.fabs(spin - last_spin) - s.slip_threshold * dt)
-    high_slip = core[CORE.spin_seen] * spins_valid * (dt > 0) * (fastest >= 0)
+
+    # §IV's high slip: a wheel's slip velocity R w - v changing faster than slip_rate,
+    # low-passed over slip_time (a kerb's spin oscillation averages out).
+    slip_velocity = wheel_slip_velocity(spin, k.radius, speed, rate * rate_valid, steer,
+                                        k.positions)  # fmt: skip
+    slip_valid = spins_valid * speed_valid
+    seen = core[CORE.slip_seen] * slip_valid * (dt > 0)
+    raw_rate = (slip_velocity - core[CORE.last_slip]) / ca.fmax(dt, 1e-9)
+    blend = dt / (s.slip_time + dt)
+    slip_rate = _select(seen, core[CORE.slip_rate] + blend * (raw_rate - core[CORE.slip_rate]),
+                        core[CORE.slip_rate])  # fmt: skip
+    high_slip = seen * (ca.mmax(ca.fabs(slip_rate)) >= s.slip_rate)
     q_scale = _select(high_slip, high_slip_scales[0], 1.0)
     r_scale = _select(high_slip, high_slip_scales[1], 1.0)
+
+    # The loaded car: mass, CG shift (the KF's payload).
+    mass, shift = mass_properties[0], ca.vertcat(mass_properties[1], mass_properties[2] - k.cg_y)
     if s.split is LateralSplit.LOAD:
         shares = load_shares(loads)
     else:
         shares = tyre_split(loads, x[0:2], nominal_loads=k.nominal_loads, friction=k.friction,
                             load_sensitivity=k.load_sensitivity,
                             cornering_load=k.cornering_load)  # fmt: skip
-    h, offset = body_force_rows(steer, fx, lf=k.lf, lr=k.lr, track_front=k.track_front,
-                                track_rear=k.track_rear, share_front=shares[1] - shares[0],
-                                inertia_z=k.yaw_inertia)  # fmt: skip
-    # Predict: forces random walk, r integrated from eq. 3's yaw acceleration.
-    F = ca.SX.eye(4)
-    F[3, 0:3] = dt * h[2, :]
-    x = ca.mtimes(F, x) + ca.vertcat(0.0, 0.0, 0.0, dt * offset[2])
+    rows = dict(
+        lf=k.lf,
+        lr=k.lr,
+        track_front=k.track_front,
+        track_rear=k.track_rear,
+        share_front=shares[1] - shares[0],
+        inertia_z=k.yaw_inertia,
+        cg_shift=shift,
+    )
+    h, offset = body_force_rows(steer, fx_rest, **rows)
+    _, by_gain = body_force_rows(steer, fx_torque, **rows)  # the rows' g column
+    h = ca.horzcat(h, by_gain)
+    # Predict: forces and gain random walks, r integrated from eq. 3's yaw acceleration.
+    F = ca.SX.eye(n)
+    F[3, [0, 1, 2, 4]] = dt * h[2, [0, 1, 2, 3]]
+    x = ca.mtimes(F, x) + ca.vertcat(0.0, 0.0, 0.0, dt * offset[2], 0.0, 0.0)
     Q = q_scale * dt * ca.diag(ca.DM([s.force_rate**2, s.force_rate**2, s.split_rate**2,
-                                      s.yaw_rate_noise**2]))  # fmt: skip
+                                      s.yaw_rate_noise**2, s.torque_gain_rate**2,
+                                      s.force_bias_rate**2]))  # fmt: skip
     P = ca.mtimes([F, P, F.T]) + Q
     # Update: S_x, S_y at the IMU (lever arm: m x_imu r_dot), and the gyro's r.
-    lever = k.mass * k.imu_x
+    lever = mass * (k.imu_x - shift[0])
     H = ca.vertcat(
-        ca.horzcat(h[0, :], 0.0), ca.horzcat(h[1, :] + lever * h[2, :], 0.0),
-        ca.DM([[0.0, 0.0, 0.0, 1.0]]),
+        ca.horzcat(h[0, 0:3], 0.0, h[0, 3], 1.0),
+        ca.horzcat(h[1, 0:3] + lever * h[2, 0:3], 0.0, h[1, 3] + lever * h[2, 3], 0.0),
+        ca.DM([[0.0, 0.0, 0.0, 1.0, 0.0, 0.0]]),
     )  # fmt: skip
     z = ca.vertcat(sums[0] - offset[0], sums[1] - offset[1] - lever * offset[2], rate)
     R = r_scale * ca.diag(ca.DM([s.force_noise**2, s.force_noise**2, s.gyro_noise**2]))
@@ -178,14 +211,23 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     fy, G = wheel_lateral_forces(x[0:3], shares)  # the shares of the predicted forces
     fy_std = ca.sqrt(ca.fmax(ca.diag(ca.mtimes([G, P[0:3, 0:3], G.T])), 0.0))
 
+    # F_x with the updated gain, held where a spin or torque is missing.
+    force = fx_rest + x[4] * fx_torque
+    variance = ca.vertcat(*fx_noise) + (s.force_share_std * force) ** 2 + fx_torque**2 * P[4, 4]
+    last_fx = core[CORE.last_fx]
+    fx = _select(inputs_valid, force, last_fx)
+    fx_std = _select(inputs_valid, ca.sqrt(variance), s.missing_std)
+
     core_next = ca.vertcat(
-        *observers, x, ca.reshape(P, 16, 1),
-        _select(spins_valid, spin, last_spin), fx,
-        ca.fmax(started, inputs_valid), 1.0, ca.fmax(core[CORE.spin_seen], spins_valid),
+        *observers, x, ca.reshape(P, n * n, 1),
+        _select(slip_valid, slip_velocity, core[CORE.last_slip]), slip_rate, fx,
+        ca.fmax(started, inputs_valid), 1.0, ca.fmax(core[CORE.slip_seen], slip_valid),
     )  # fmt: skip
+    inputs = [core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, speed,
+              speed_valid, loads, mass_properties, dt, observer]  # fmt: skip
     return ca.Function(
         "tyre_core",
-        [core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, loads, dt, observer],
+        inputs,
         [core_next, fx, fx_std, fy, fy_std, high_slip],
         list(CORE_INPUTS),
         list(CORE_OUTPUTS),

@@ -23,18 +23,26 @@ from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
 from wheelload.estimators.samples import step_through
 from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.models.family.tyre_forces import body_force_rows, load_share_split, tyre_split
+from wheelload.models.family.tyre_forces import (
+    PAPER_GAINS,
+    body_force_rows,
+    load_share_split,
+    observer_gains,
+    observer_poles,
+    tyre_split,
+)
 from wheelload.studies.drive.scenario_runner import run_scenario
 
 
 def test_spin_observer_recovers_a_constant_force():
     """Eq. 1 on a synthetic wheel (J = 1.6 kg m^2, R = 0.32 m, T = 300 N m, F_x = 600 N):
-    the observer starts at F = T / R = 937.5 N and settles on 600 N; its error obeys
-    eq. 9 (3 Hz, damping 0.8), so after 3 s it is below 1e-6 N (e^{-0.8 * 2 pi 3 * 3})."""
+    the observer starts rolling steadily, F = T / R = 937.5 N, and settles on 600 N; its
+    force error is (J / R) times the spin error's rate, which obeys eq. 9 (3 Hz, damping
+    0.8), so after 3 s it is below 1e-6 N (e^{-0.8 * 2 pi 3 * 3} = 2e-20 of 1.7e3 N)."""
     inertia, radius, torque, force, dt = 1.6, 0.32, 300.0, 600.0, 0.01
     phi, gamma1, gamma2, c, d, _ = discrete_observer(inertia, radius, 3.0, 0.8, dt)
     omega = 50.0
-    z = np.array([omega, (torque / radius) / c[1]])
+    z = np.array([omega, 0.0])
     previous = np.array([torque, omega])
     estimates = [c @ z + d @ previous]
     for _ in range(300):
@@ -47,9 +55,35 @@ def test_spin_observer_recovers_a_constant_force():
     assert abs(estimates[-1] - force) < 1e-6
 
 
+def test_torque_feeds_through_as_in_eq_4():
+    """Eq. 4's feed-through: a torque step with the spin unchanged moves the force estimate
+    by the step over R at once (the PI observer without it moved only as its poles let)."""
+    inertia, radius, dt = 1.6, 0.32, 0.01
+    phi, gamma1, gamma2, c, d, _ = discrete_observer(inertia, radius, 1.0, 0.8, dt)
+    z, previous = np.array([50.0, 0.0]), np.array([100.0, 50.0])
+    u = np.array([-400.0, 50.0])
+    z = phi @ z + gamma1 @ previous + gamma2 @ (u - previous)
+    assert c @ z + d @ u == pytest.approx(-400.0 / radius, rel=1e-12)
+
+
+def test_papers_gains_map_by_their_poles():
+    """§IV's k1 = 3.41, k2 = 16.22 on the paper's wheel (I_w = 1.7 kg m^2, R_e = 0.346 m):
+    eq. 9's poles by hand, omega_n = sqrt(k2 / I_w) = 3.089 rad/s (0.4916 Hz) and
+    zeta = R_e k1 / I_w / (2 omega_n) = 0.1123; observer_gains gives the gains back."""
+    k = PAPER_GAINS
+    frequency, damping = observer_poles(k1=k["k1"], k2=k["k2"], inertia=k["inertia"],
+                                        radius=k["radius"])  # fmt: skip
+    omega_n = np.sqrt(16.22 / 1.7)
+    assert frequency == pytest.approx(omega_n / (2 * np.pi), rel=1e-12)
+    assert damping == pytest.approx(0.346 * 3.41 / 1.7 / (2 * omega_n), rel=1e-12)
+    assert (frequency, damping) == pytest.approx((0.4916, 0.1123), abs=1e-4)
+    gains = observer_gains(inertia=1.7, radius=0.346, frequency=frequency, damping=damping)
+    np.testing.assert_allclose(gains, (3.41, 16.22), rtol=1e-12)
+
+
 def test_spin_observer_poles_are_eq_9():
     """The discrete observer's eigenvalues are exp(s dt) of eq. 9's characteristic
-    polynomial J s^2 + R k1 s + R k2 (natural frequency and damping as set)."""
+    polynomial J s^2 + R k1 s + k2 (natural frequency and damping as set)."""
     dt, frequency, damping = 0.01, 3.0, 0.8
     phi, *_ = discrete_observer(1.6, 0.32, frequency, damping, dt)
     wn = 2 * np.pi * frequency
@@ -137,8 +171,13 @@ def _inputs(vehicle, fyf, fyr, steer, rate, spin):
     k = TyreForces(vehicle).constants
     torque = k.radius * k.rolling * 4000.0 * np.tanh(spin / 0.5)
     return Inputs(spin=np.full(4, spin), torque=torque, steer=steer, rate=rate,
+                  speed=spin * k.radius[0],
                   sums=np.array([-fyf * np.sin(steer), fyf * np.cos(steer) + fyr]),
-                  loads=np.full(4, 4000.0))  # fmt: skip
+                  loads=np.full(4, 4000.0), mass_properties=_file_mass(vehicle))  # fmt: skip
+
+
+def _file_mass(vehicle):
+    return TyreForces(vehicle).file_mass_properties()
 
 
 def test_force_sums_of_a_steady_sample():
@@ -148,8 +187,14 @@ def test_force_sums_of_a_steady_sample():
     method = TyreForces(vehicle)
     m, x_imu, rate = vehicle.mass.total, vehicle.geometry.imu_position[0], 0.4
     acc = np.array([[0.5 - rate**2 * x_imu, 3.0, 9.80665]])
-    sums = method.force_sums(np.zeros((1, 4)), acc, [0.0], [rate])
+    sums = method.force_sums(np.zeros((1, 4)), acc, [0.0], [rate], method.file_mass_properties())
     np.testing.assert_allclose(sums[0], [0.5 * m, 3.0 * m], rtol=1e-12)
+    # The KF's online payload: 150 kg more, the CG 0.2 m further ahead (the IMU's lever arm
+    # 0.2 m shorter): the sums are the loaded car's.
+    loaded = method.file_mass_properties() + np.array([150.0, 0.2, 0.0, 0.0])
+    acc = np.array([[0.5 - rate**2 * (x_imu - 0.2), 3.0, 9.80665]])
+    sums = method.force_sums(np.zeros((1, 4)), acc, [0.0], [rate], loaded)
+    np.testing.assert_allclose(sums[0], [0.5 * (m + 150), 3.0 * (m + 150)], rtol=1e-12)
 
 
 def test_lateral_filter_settles_on_the_axle_forces():
@@ -174,22 +219,6 @@ def test_lateral_filter_settles_on_the_axle_forces():
     # e (the front difference beyond the split) is seen only through sin(steer) in the
     # yaw row: it is still settling, hence 5 N per wheel.
     assert fy[0] == pytest.approx(fyf / 2, abs=5.0) and fy[3] == pytest.approx(fyr / 2, abs=1.0)
-
-
-def test_high_slip_switches_the_covariances():
-    """§IV: a wheel spin changing faster than slip_threshold makes the filter trust its
-    model (Q down, R up): the same step in a_y moves the estimate far less."""
-    vehicle = load_vehicle(example_vehicle_path())
-    method = TyreForces(vehicle)
-    core = method.initial_state().core
-    for _ in range(200):
-        core, *_ = method.core_step(core, _inputs(vehicle, 0.0, 0.0, 0.0, 0.0, 60.0), 0.01)
-    moved = {}
-    for spin in (60.0, 61.0):  # 0 or 100 rad/s^2 at dt = 0.01 s
-        after, *_ = method.core_step(core, _inputs(vehicle, 2000.0, 0.0, 0.0, 0.0, spin), 0.01)
-        moved[spin] = after[CORE.x][0] + after[CORE.x][1]
-    assert moved[61.0] < 0.1 * moved[60.0]
-    assert TyreSettings().slip_threshold < 100.0
 
 
 @pytest.fixture(scope="module")
@@ -251,36 +280,46 @@ def test_registered_apart_from_the_load_methods(dlc):
 PAPER_HIGH_SLIP = ((0.036 / 0.11) ** 2, (0.4 / 0.018) ** 2)
 
 
-def lateral_reference(method, x, P, fx, inputs, dt, scales=(1.0, 1.0)):
-    """One sample of the lateral filter in numpy (eq. 10-16): random-walk forces and the
-    yaw rate integrated by eq. 3's row, then a Kalman update on S_x, S_y at the IMU (lever
-    arm m x_imu r_dot) and the gyro's r; the left/right split by F_z shares (the paper's
-    simple alternative, TyreSettings(split=LOAD)). Returns x, P, F_y per wheel."""
+def lateral_reference(method, x, P, fx_rest, inputs, dt, scales=(1.0, 1.0)):
+    """One sample of the lateral filter in numpy (eq. 10-16): random-walk forces, torque
+    gain g and S_x bias, the yaw rate integrated by eq. 3's row, then a Kalman update on
+    S_x, S_y at the IMU (lever arm m x_imu r_dot) and the gyro's r; F_x = ``fx_rest`` +
+    g T / R; the left/right split by F_z shares (the paper's simple alternative,
+    TyreSettings(split=LOAD)). Returns x, P, F_y per wheel, F_x."""
     k, s = method.constants, method.settings
     loads = np.asarray(inputs.loads)
     shares = np.concatenate([loads[:2] / loads[:2].sum(), loads[2:] / loads[2:].sum()])
-    h, offset = (np.asarray(a) for a in body_force_rows(
-        inputs.steer, fx, lf=k.lf, lr=k.lr, track_front=k.track_front, track_rear=k.track_rear,
-        share_front=shares[1] - shares[0], inertia_z=k.yaw_inertia))  # fmt: skip
-    offset = offset.ravel()
-    F = np.eye(4)
-    F[3, :3] = dt * h[2]
-    x = F @ x + np.array([0.0, 0.0, 0.0, dt * offset[2]])
+
+    def rows(fx):
+        h, offset = body_force_rows(
+            inputs.steer, fx, lf=k.lf, lr=k.lr, track_front=k.track_front,
+            track_rear=k.track_rear, share_front=shares[1] - shares[0], inertia_z=k.yaw_inertia,
+        )  # fmt: skip
+        return np.asarray(h), np.asarray(offset).ravel()
+
+    torque = inputs.torque / k.radius
+    (h, offset), (_, by_gain) = rows(fx_rest), rows(torque)
+    F = np.eye(6)
+    F[3, :3], F[3, 4] = dt * h[2], dt * by_gain[2]
+    x = F @ x + np.array([0.0, 0.0, 0.0, dt * offset[2], 0.0, 0.0])
     Q = scales[0] * dt * np.diag([s.force_rate**2, s.force_rate**2, s.split_rate**2,
-                                  s.yaw_rate_noise**2])  # fmt: skip
+                                  s.yaw_rate_noise**2, s.torque_gain_rate**2,
+                                  s.force_bias_rate**2])  # fmt: skip
     P = F @ P @ F.T + Q
     lever = k.mass * k.imu_x
-    H = np.zeros((3, 4))
-    H[0, :3], H[1, :3], H[2, 3] = h[0], h[1] + lever * h[2], 1.0
+    H = np.zeros((3, 6))
+    H[0, :3], H[0, 4], H[0, 5] = h[0], by_gain[0], 1.0
+    H[1, :3], H[1, 4] = h[1] + lever * h[2], by_gain[1] + lever * by_gain[2]
+    H[2, 3] = 1.0
     z = np.array([inputs.sums[0] - offset[0], inputs.sums[1] - offset[1] - lever * offset[2],
                   inputs.rate])  # fmt: skip
     R = scales[1] * np.diag([s.force_noise**2, s.force_noise**2, s.gyro_noise**2])
     K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
     x = x + K @ (z - H @ x)
-    P = (np.eye(4) - K @ H) @ P @ (np.eye(4) - K @ H).T + K @ R @ K.T
+    P = (np.eye(6) - K @ H) @ P @ (np.eye(6) - K @ H).T + K @ R @ K.T
     G = np.array([[shares[0], 0, -0.5], [shares[1], 0, 0.5], [0, shares[2], 0],
                   [0, shares[3], 0]])  # fmt: skip
-    return x, P, G @ x[:3]
+    return x, P, G @ x[:3], fx_rest + x[4] * torque
 
 
 @pytest.fixture(scope="module")
@@ -290,52 +329,66 @@ def load_split():
     return TyreForces(load_vehicle(example_vehicle_path()), settings)
 
 
-def braking_turn(spin=60.0, loads=(3200.0, 4600.0, 3600.0, 5100.0)):
+def braking_turn(method, spin=60.0, speed=None, loads=(3200.0, 4600.0, 3600.0, 5100.0)):
     """A braking left turn: unequal torques and loads, steer, yaw rate and force sums."""
     return Inputs(spin=np.full(4, spin), torque=np.array([-420.0, -380.0, -150.0, -170.0]),
-                  steer=0.04, rate=0.35, sums=np.array([-3500.0, 9000.0]),
-                  loads=np.array(loads))  # fmt: skip
+                  steer=0.04, rate=0.35,
+                  speed=60.0 * method.constants.radius[2] if speed is None else speed,
+                  sums=np.array([-3500.0, 9000.0]), loads=np.array(loads),
+                  mass_properties=method.file_mass_properties())  # fmt: skip
 
 
 def test_first_sample_by_hand(load_split):
-    """F_x starts in equilibrium: T / R less the rolling resistance f_r F_z tanh(w / 0.5),
-    its sigma the spin noise through the observer's gain, the rolling resistance's share
-    and the force share (TyreSettings); F_y is the lateral filter's first update from
-    (0, 0, 0, r) with the prior sigmas, against the numpy reference. Tolerance 1e-9
-    relative: the same algebra in another order."""
-    method, inputs, dt = load_split, braking_turn(), 0.01
+    """F_x starts rolling steadily: g T / R less the rolling resistance f_r F_z
+    tanh(w / 0.5), g the torque gain after the first update; its sigma the spin noise
+    through the observer's gain, the rolling resistance's share, the force share and the
+    gain's (TyreSettings); F_y is the lateral filter's first update from (0, 0, 0, r, 1, 0)
+    with the prior sigmas, against the numpy reference. Tolerance 1e-9 relative: the same
+    algebra in another order."""
+    method, dt = load_split, 0.01
+    inputs = braking_turn(method)
     k, s = method.constants, method.settings
     core, fx, fx_std, fy, fy_std = method.core_step(method.initial_state().core, inputs, dt)
     rolling = k.rolling * inputs.loads * np.tanh(inputs.spin / 0.5)
-    np.testing.assert_allclose(fx, inputs.torque / k.radius - rolling, rtol=1e-12)
+    x0 = np.array([0.0, 0.0, 0.0, inputs.rate, 1.0, 0.0])
+    P0 = np.diag(
+        [s.initial_force_std**2] * 2
+        + [s.split_std**2, s.gyro_noise**2, s.torque_gain_std**2, s.force_bias_std**2]
+    )
+    x, P, fy_expected, fx_expected = lateral_reference(method, x0, P0, -rolling, inputs, dt)
+    np.testing.assert_allclose(core[CORE.x], x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(core[CORE.P].reshape(6, 6), P, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(fy, fy_expected, rtol=1e-9)
+    np.testing.assert_allclose(fx, fx_expected, rtol=1e-9)
     gains = np.array([discrete_observer(k.inertia[i], k.radius[i], s.observer_frequency,
                                         s.observer_damping, dt)[5] for i in range(4)])  # fmt: skip
     expected_std = np.sqrt((gains * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2
-                           + (s.force_share_std * fx) ** 2)  # fmt: skip
-    np.testing.assert_allclose(fx_std, expected_std, rtol=1e-12)
-    x0 = np.array([0.0, 0.0, 0.0, inputs.rate])
-    P0 = np.diag([s.initial_force_std**2] * 2 + [s.split_std**2, s.gyro_noise**2])
-    x, P, fy_expected = lateral_reference(method, x0, P0, fx, inputs, dt)
-    np.testing.assert_allclose(core[CORE.x], x, rtol=1e-9)
-    np.testing.assert_allclose(core[CORE.P].reshape(4, 4), P, rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(fy, fy_expected, rtol=1e-9)
+                           + (s.force_share_std * fx) ** 2
+                           + (inputs.torque / k.radius) ** 2 * P[4, 4])  # fmt: skip
+    np.testing.assert_allclose(fx_std, expected_std, rtol=1e-9)
     assert np.all(fy_std > 0)
 
 
 def test_high_slip_takes_the_papers_covariances(load_split):
-    """A second sample whose spins jumped by 1 rad/s in 10 ms (100 rad/s^2, over the
-    40 rad/s^2 threshold): the lateral update equals the reference with the paper's
-    high-slip Q and R (0.036^2 / 0.11^2 and 0.4^2 / 0.018^2 times the nominal), and the
-    same sample without the jump equals the nominal one."""
+    """§IV's switch on the slip condition: a second sample whose spins jumped by 2 rad/s in
+    10 ms with the car's speed unchanged (slip velocity rate R 200 rad/s^2 = 64 m/s^2; a
+    sixth of it after the 50 ms low-pass, over the 6 m/s^2 threshold): the lateral update
+    equals the reference with the paper's high-slip Q and R (0.036^2 / 0.11^2 and
+    0.4^2 / 0.018^2 times the nominal). The same jump with the car's speed rising with it
+    (the wheels rolling with the car) and no jump at all are nominal."""
     method, dt = load_split, 0.01
-    core, *_ = method.core_step(method.initial_state().core, braking_turn(), dt)
-    for spin, scales in ((61.0, PAPER_HIGH_SLIP), (60.0, (1.0, 1.0))):
-        inputs = braking_turn(spin=spin)
+    radius = method.constants.radius[2]
+    core, *_ = method.core_step(method.initial_state().core, braking_turn(method), dt)
+    cases = ((62.0, 60.0 * radius, PAPER_HIGH_SLIP), (62.0, 62.0 * radius, (1.0, 1.0)),
+             (60.0, 60.0 * radius, (1.0, 1.0)))  # fmt: skip
+    for spin, speed, scales in cases:
+        inputs = braking_turn(method, spin=spin, speed=speed)
         after, fx, _, fy, _ = method.core_step(core, inputs, dt)
-        x, P, fy_expected = lateral_reference(method, core[CORE.x],
-                                              core[CORE.P].reshape(4, 4), fx, inputs, dt,
-                                              scales)  # fmt: skip
-        np.testing.assert_allclose(after[CORE.x], x, rtol=1e-9)
+        rest = fx - after[CORE.x][4] * inputs.torque / method.constants.radius
+        x, P, fy_expected, _ = lateral_reference(method, core[CORE.x],
+                                                 core[CORE.P].reshape(6, 6), rest, inputs,
+                                                 dt, scales)  # fmt: skip
+        np.testing.assert_allclose(after[CORE.x], x, rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(fy, fy_expected, rtol=1e-9)
 
 
