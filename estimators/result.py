@@ -78,6 +78,10 @@ class StepFlag(enum.IntFlag):
     RATE_IMPLAUSIBLE = 1 << 25
     INPUT_HELD = 1 << 26  # a missing or gated input's last valid value fed the model terms
     LOAD_LIMITED = 1 << 27  # an update would leave +-load_limit m g: the sample is a prediction
+    # Bit 28: the tyre step (estimators/family/tyres): a wheel's slip velocity changed faster
+    # than R times the paper's w_th (high slip, corner-based paper Sec. IV); with
+    # TyreSettings.switch_covariances the lateral filter took the paper's high-slip Q, R.
+    HIGH_SLIP = 1 << 28
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:

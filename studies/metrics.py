@@ -106,3 +106,17 @@ def pooled_force_error(estimate: np.ndarray, reference: np.ndarray) -> tuple[flo
     keep = np.isfinite(estimate) & np.isfinite(reference)
     errors = (estimate - reference)[keep]
     return float(np.sqrt(np.mean(errors**2))), float(np.sqrt(np.mean(reference[keep] ** 2)))
+
+
+def normalized_rms_error(estimate: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    r"""The corner-based paper's NRMS per wheel [%] (§IV, Table I): the RMSE over the
+    largest magnitude of the reference, :math:`\rho_e = 100 \sqrt{\sum_i (\hat\tau_i -
+    \tau_i)^2 / N} / \max_i |\tau_i|`, over the samples where both are finite; NaN for a
+    wheel whose reference is zero throughout."""
+    estimate, reference = np.asarray(estimate, float), np.asarray(reference, float)
+    keep = np.isfinite(estimate) & np.isfinite(reference)
+    errors = np.where(keep, estimate - reference, 0.0)
+    count = np.maximum(keep.sum(axis=0), 1)
+    largest = np.max(np.where(keep, np.abs(reference), 0.0), axis=0)
+    rmse = np.sqrt(np.sum(errors**2, axis=0) / count)
+    return np.where(largest > 0.0, 100.0 * rmse / np.where(largest > 0.0, largest, 1.0), np.nan)

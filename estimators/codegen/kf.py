@@ -552,6 +552,7 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
         return {"tyre_forces": "0", "wheel_channel_names": "", "tyre_columns": "",
                 "tyre_example_note": "", "tyre_objects": "", "tyre_rule": ""}  # fmt: skip
     columns = [f"{name}_{wheel}" for name in ("fx", "fx_std", "fy", "fy_std") for wheel in WHEELS]
+    columns.append("high_slip")
     return {
         **tyre_substitutions(vehicle, options.sample_interval, options.precision, prefix),
         "tyre_forces": "1",
@@ -561,7 +562,7 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
             f"\n * Built with the tyre-force step ({prefix}_tyre.h): the log needs the columns "
             f"\n * {' '.join(WHEEL_INPUTS)} too, and the estimates get\n * "
             + " ".join(f"{c}_*" for c in ("fx", "fx_std", "fy", "fy_std"))
-            + " after status."
+            + " high_slip after status."
         ),
         "tyre_objects": f" {prefix}_tyre.o",
         "tyre_rule": (

@@ -330,6 +330,7 @@ static void write_forces(FILE *out, const ${prefix}_tyre_output *forces)
             fprintf(out, ",${digits}", (double)columns[j][k]);
         }
     }
+    fprintf(out, ",%d", forces->high_slip);
 }
 #endif
 

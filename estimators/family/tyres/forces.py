@@ -1,20 +1,31 @@
 r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage KF's loads.
 
 - ``tyre-pid`` (§III-A, eq. 4-9): :math:`F_x` of each wheel from its spin and torque, the
-  PI spin observer of :func:`~wheelload.models.family.tyre_forces.observer_matrices`
-  (the printed eq. 4-5 need the unknown :math:`F_x`; the implementable form has eq. 9's
-  error dynamics), discretised exactly with the torque and spin linear between samples
-  (first-order hold; the paper's Remark 1 holds them, which lags a spin ramp by half a
-  sample), minus the rolling resistance on the KF's :math:`F_z`.
+  spin observer of :func:`~wheelload.models.family.tyre_forces.observer_matrices` in eq.
+  4's form (the torque's feed-through :math:`T/R` and the :math:`k_3` term; the paper's
+  gains map by their poles, :func:`~wheelload.models.family.tyre_forces.observer_gains`),
+  discretised exactly with the torque and spin linear between samples (first-order hold;
+  the paper's Remark 1 holds them, which lags a spin ramp by half a sample), minus the
+  rolling resistance on the KF's :math:`F_z`. The torque's feed-through is scaled by a
+  gain :math:`g` (1 nominal) that the lateral filter estimates from :math:`S_x`, so a
+  torque signal a few % off is learned, its σ in :math:`F_x`'s.
 - ``tyre-lateral`` (§III-B, eq. 10-16): a Kalman filter on
-  :math:`(F_{yf}, F_{yr}, e, r)`: the axles' lateral forces, the front left/right
+  :math:`(F_{yf}, F_{yr}, e, r, g, b_x)`: the axles' lateral forces, the front left/right
   difference beyond the load split (the paper's :math:`\bar F_{yf}`; see
   :func:`~wheelload.models.family.tyre_forces.body_force_rows`) and the yaw rate; measured
   the tyres' force sums from the accelerometer (road frame, drag, IMU lever arm) and the
-  gyro's yaw rate. Random-walk forces (:math:`A_y = 0`, eq. 10), the yaw rate integrated
-  from eq. 3. Covariance switching (§IV): where any wheel's spin acceleration reaches
-  ``slip_threshold`` the filter takes the paper's high-slip pair, :math:`Q` times
-  :math:`(0.036/0.11)^2` and :math:`R` times :math:`(0.4/0.018)^2` (the paper's ratios).
+  gyro's yaw rate; :math:`g` and :math:`b_x` (the bias of :math:`S_x`: the
+  accelerometer's, the drag's) enter the :math:`S_x` row. Random-walk forces
+  (:math:`A_y = 0`, eq. 10), the yaw rate integrated from eq. 3. High slip (§IV): the
+  paper's :math:`|\dot\omega_{ij}| \ge \dot\omega_{th}` (40 rad/s²) taken on the
+  wheel's slip velocity, :math:`|\tfrac{d}{dt}(R\omega - v)| / R
+  \ge \dot\omega_{th}` (low-passed over ``slip_time``): :math:`R\dot\omega = \dot v (1 +
+  \kappa) + v \dot\kappa`, so the slip's own change counts and the car's deceleration
+  (1 g braking: :math:`\dot\omega \approx` 30 rad/s²) does not. It sets
+  ``StepFlag.HIGH_SLIP``; with ``switch_covariances`` the filter also takes the paper's
+  high-slip pair, :math:`Q` times :math:`(0.036/0.11)^2` and :math:`R` times
+  :math:`(0.4/0.018)^2` (the paper's ratios). Off by default: on the plant's laps and kerb
+  it raised the F_y error wherever it acted (the force sums it mutes stay valid in slip).
 - ``tyre-forces``: the KF's :math:`F_z` with σ, ``tyre-pid``'s :math:`F_x` and
   ``tyre-lateral``'s :math:`F_y`, each with σ.
 - ``tyre-rigid``: the baseline, the same force sums :math:`S_x, S_y` split to the wheels by
@@ -29,9 +40,12 @@ difference beyond it (:math:`e`) has a tight prior: it is seen only through
 
 All four run the registered two-stage KF for :math:`F_z` and need the log's ``omega_*``,
 ``torque_*`` and ``steer`` (rigid: none of them); a missing one is a one-line error. The
-wheel's spin inertia and rolling-resistance coefficient come from the vehicle file's
-``[plant]`` section, the only place the file holds them, as do the tyre coefficients of the
-left/right split (:func:`~wheelload.models.family.tyre_forces.tyre_split`). σ of
+wheels' spin inertia and rolling-resistance coefficient come from the vehicle file's
+``[wheels]`` section (required), the tyre coefficients of the left/right split
+(:func:`~wheelload.models.family.tyre_forces.tyre_split`) from its optional
+``[cornering]`` section (beyond the paper, which assumes no tyre model; without it the
+split is the paper's normal-load share); no estimator reads ``[plant]``. The force sums
+and the yaw row take the KF's online mass properties (its payload estimate). σ of
 :math:`F_x`: the spin noise through the observer (its impulse response's energy), 30 % of
 the rolling resistance and 4 % of the force (loaded radius, torque); of :math:`F_y`: the
 filter's covariance mapped to the wheels.
@@ -62,7 +76,7 @@ from wheelload.estimators.kf.method import build_kf
 from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.protocol import MethodInfo, Sample
-from wheelload.estimators.result import Estimate
+from wheelload.estimators.result import Estimate, StepFlag
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.aero import aero_forces
 from wheelload.models.body_attitude import attitude_function
@@ -106,8 +120,10 @@ class TyreSettings:
     # S_x's bias: an MTi-class a_x turn-on bias (0.1 m/s^2) times m, and the drag's error.
     force_bias_std: float = 200.0  # N, initial sigma
     force_bias_rate: float = 5.0  # N/sqrt(s), random walk
-    slip_rate: float = 6.0  # m/s^2, |d(R w - v)/dt| of any wheel, low-passed: high slip
+    # High slip: |d(R w - v)/dt| / R of any wheel, low-passed, at least the paper's w_th.
+    slip_acceleration: float = 40.0  # rad/s^2
     slip_time: float = 0.05  # s, time constant of that low-pass
+    switch_covariances: bool = False  # in high slip, the paper's Q and R (module docstring)
     # None: the tyres' load sensitivity where the file has [cornering], else the paper's
     # normal-load share.
     split: LateralSplit | None = None
@@ -117,7 +133,7 @@ class TyreSettings:
         for key in ("observer_frequency", "observer_damping", "force_rate", "split_rate",
                     "split_std", "yaw_rate_noise", "force_noise", "gyro_noise",
                     "initial_force_std", "torque_gain_std", "torque_gain_rate",
-                    "force_bias_std", "force_bias_rate", "slip_rate",
+                    "force_bias_std", "force_bias_rate", "slip_acceleration",
                     "slip_time"):  # fmt: skip
             if not getattr(self, key) > 0:
                 raise ValueError(f"tyre settings: {key} must be > 0, got {getattr(self, key)}")
@@ -328,14 +344,17 @@ class TyreForces:
             np.asarray(inputs.mass_properties, float)[None],
         )  # fmt: skip
         out = self.core_function(core, *[a[0] for a in arguments], dt, self.observer_input(dt))
-        core, fx, fx_std, fy, fy_std, _ = (np.asarray(o, float).ravel() for o in out)
-        return core, fx, fx_std, fy, fy_std
+        core, fx, fx_std, fy, fy_std, high_slip = (np.asarray(o, float).ravel() for o in out)
+        return core, fx, fx_std, fy, fy_std, high_slip
 
     # -- the protocol -----------------------------------------------------------------
 
-    def _estimate(self, loads: Estimate, fx, fx_std, fy, fy_std) -> Estimate:
+    def _estimate(self, loads: Estimate, fx, fx_std, fy, fy_std, high_slip) -> Estimate:
+        """The KF's ``loads`` with the forces and ``HIGH_SLIP`` where the switching acted."""
+        slipping = np.asarray(high_slip, float).ravel() > 0.5
         return replace(
             loads,
+            flags=loads.flags | np.where(slipping, int(StepFlag.HIGH_SLIP), 0),
             fx=fx if self.show_fx else None,
             fx_std=fx_std if self.show_fx else None,
             fy=fy if self.lateral else None,
@@ -355,8 +374,8 @@ class TyreForces:
             loads=loads.loads[0], mass_properties=loaded[0],
         )  # fmt: skip
         core, *outputs = self.core_step(state.core, inputs, float(dt))
-        rows = [np.asarray(o, float).reshape(1, 4) for o in outputs]
-        return TyreState(kf=kf_state, core=core), self._estimate(loads, *rows)
+        rows = [np.asarray(o, float).reshape(1, 4) for o in outputs[:4]]
+        return TyreState(kf=kf_state, core=core), self._estimate(loads, *rows, outputs[4])
 
     def run(self, signals: Signals) -> Estimate:
         """The whole log: the KF's ``run`` for the loads, then the observers' step looped in
@@ -372,10 +391,10 @@ class TyreForces:
         observer = np.array([self.observer_input(dt) for dt in unique])[which]
         wheels = np.column_stack([signals.spin, signals.torque, signals.steer])
         arguments = _core_arguments(wheels, sums, rates, signals.vx, loads.loads, loaded)
-        _, _, (fx, fx_std, fy, fy_std, _) = self._loop(
+        _, _, (fx, fx_std, fy, fy_std, high_slip) = self._loop(
             [np.zeros(CORE.size)], [], [*arguments, dts[:, None], observer]
         )
-        return self._estimate(loads, fx, fx_std, fy, fy_std)
+        return self._estimate(loads, fx, fx_std, fy, fy_std, high_slip)
 
 
 def _core_arguments(wheels, sums, rates, speeds, loads, mass_properties) -> list[np.ndarray]:

@@ -156,7 +156,7 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     P = _select(lateral, ca.reshape(core[CORE.P], n, n), P0)
     steer = steer * wheels_valid[8]
 
-    # §IV's high slip: a wheel's slip velocity R w - v changing faster than slip_rate,
+    # §IV's high slip: a wheel's slip velocity R w - v changing faster than R w_th,
     # low-passed over slip_time (a kerb's spin oscillation averages out).
     slip_velocity = wheel_slip_velocity(spin, k.radius, speed, rate * rate_valid, steer,
                                         k.positions)  # fmt: skip
@@ -166,9 +166,11 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     blend = dt / (s.slip_time + dt)
     slip_rate = _select(seen, core[CORE.slip_rate] + blend * (raw_rate - core[CORE.slip_rate]),
                         core[CORE.slip_rate])  # fmt: skip
-    high_slip = seen * (ca.mmax(ca.fabs(slip_rate)) >= s.slip_rate)
-    q_scale = _select(high_slip, high_slip_scales[0], 1.0)
-    r_scale = _select(high_slip, high_slip_scales[1], 1.0)
+    spin_acceleration = ca.fabs(slip_rate) / ca.DM(k.radius)
+    high_slip = seen * (ca.mmax(spin_acceleration) >= s.slip_acceleration)
+    switched = high_slip * float(s.switch_covariances)
+    q_scale = _select(switched, high_slip_scales[0], 1.0)
+    r_scale = _select(switched, high_slip_scales[1], 1.0)
 
     # The loaded car: mass, CG shift (the KF's payload).
     mass, shift = mass_properties[0], ca.vertcat(mass_properties[1], mass_properties[2] - k.cg_y)

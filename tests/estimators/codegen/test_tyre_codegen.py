@@ -13,6 +13,7 @@ from wheelload.estimators import read_log
 from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.registry import build
+from wheelload.estimators.result import StepFlag
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.drive.scenario_runner import run_scenario
 
@@ -70,6 +71,8 @@ def test_c_equals_python_in_double(tmp_path_factory, logs, which):
     for name, values in (("fz", python.loads), ("fx", python.fx), ("fx_std", python.fx_std),
                          ("fy", python.fy), ("fy_std", python.fy_std)):  # fmt: skip
         np.testing.assert_allclose(_columns(c, name), values, rtol=0, atol=1e-9, err_msg=name)
+    slipping = (python.flags & StepFlag.HIGH_SLIP) != 0
+    np.testing.assert_array_equal(c["high_slip"].to_numpy() == 1, slipping)
     if which == "gaps":
         held = _columns(c, "fx")[300:311]
         np.testing.assert_array_equal(held, np.repeat(held[:1], 11, axis=0))

@@ -5,6 +5,7 @@ the two-stage KF under both methods: about 15 s in all.
 """
 
 import dataclasses
+import tomllib
 
 import numpy as np
 import pytest
@@ -17,12 +18,13 @@ from wheelload.estimators.family.tyres.forces import (
     TyreInputError,
     TyreSettings,
     discrete_observer,
+    lateral_split,
 )
 from wheelload.estimators.family.tyres.step import CORE, LateralSplit
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
 from wheelload.estimators.samples import step_through
-from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models import example_vehicle_path, load_vehicle, vehicle_from_dict
 from wheelload.models.family.tyre_forces import (
     PAPER_GAINS,
     body_force_rows,
@@ -213,7 +215,7 @@ def test_lateral_filter_settles_on_the_axle_forces():
     inputs = _inputs(vehicle, fyf, fyr, steer, 0.4, 60.0)
     core = method.initial_state().core
     for _ in range(500):
-        core, _, _, fy, _ = method.core_step(core, inputs, 0.01)
+        core, _, _, fy, _, _ = method.core_step(core, inputs, 0.01)
     x = core[CORE.x]
     assert x[0] == pytest.approx(fyf, abs=1.0) and x[1] == pytest.approx(fyr, abs=1.0)
     # e (the front difference beyond the split) is seen only through sin(steer) in the
@@ -260,6 +262,7 @@ def test_step_equals_run(dlc):
         ran, stepped = method.run(short), step_through(method, short)
         np.testing.assert_allclose(stepped.fy, ran.fy, rtol=1e-9, atol=1e-6)
         np.testing.assert_allclose(stepped.fx, ran.fx, rtol=1e-9, atol=1e-6)
+        np.testing.assert_array_equal(stepped.flags, ran.flags)
 
 
 def test_registered_apart_from_the_load_methods(dlc):
@@ -348,7 +351,9 @@ def test_first_sample_by_hand(load_split):
     method, dt = load_split, 0.01
     inputs = braking_turn(method)
     k, s = method.constants, method.settings
-    core, fx, fx_std, fy, fy_std = method.core_step(method.initial_state().core, inputs, dt)
+    core, fx, fx_std, fy, fy_std, high_slip = method.core_step(
+        method.initial_state().core, inputs, dt
+    )
     rolling = k.rolling * inputs.loads * np.tanh(inputs.spin / 0.5)
     x0 = np.array([0.0, 0.0, 0.0, inputs.rate, 1.0, 0.0])
     P0 = np.diag(
@@ -366,24 +371,31 @@ def test_first_sample_by_hand(load_split):
                            + (s.force_share_std * fx) ** 2
                            + (inputs.torque / k.radius) ** 2 * P[4, 4])  # fmt: skip
     np.testing.assert_allclose(fx_std, expected_std, rtol=1e-9)
-    assert np.all(fy_std > 0)
+    assert np.all(fy_std > 0) and high_slip[0] == 0.0
 
 
 def test_high_slip_takes_the_papers_covariances(load_split):
-    """§IV's switch on the slip condition: a second sample whose spins jumped by 2 rad/s in
-    10 ms with the car's speed unchanged (slip velocity rate R 200 rad/s^2 = 64 m/s^2; a
-    sixth of it after the 50 ms low-pass, over the 6 m/s^2 threshold): the lateral update
-    equals the reference with the paper's high-slip Q and R (0.036^2 / 0.11^2 and
-    0.4^2 / 0.018^2 times the nominal). The same jump with the car's speed rising with it
-    (the wheels rolling with the car) and no jump at all are nominal."""
-    method, dt = load_split, 0.01
-    radius = method.constants.radius[2]
-    core, *_ = method.core_step(method.initial_state().core, braking_turn(method), dt)
-    cases = ((62.0, 60.0 * radius, PAPER_HIGH_SLIP), (62.0, 62.0 * radius, (1.0, 1.0)),
-             (60.0, 60.0 * radius, (1.0, 1.0)))  # fmt: skip
-    for spin, speed, scales in cases:
+    """§IV's switch on the slip condition: a second sample whose spins jumped by 3 rad/s in
+    10 ms with the car's speed unchanged (slip velocity rate over R: 300 rad/s^2; a sixth
+    of it after the 50 ms low-pass, 50 over the paper's 40 rad/s^2): flagged, and with
+    ``switch_covariances`` the lateral update equals the reference with the paper's
+    high-slip Q and R (0.036^2 / 0.11^2 and 0.4^2 / 0.018^2 times the nominal); without it
+    the nominal ones. A 2 rad/s jump (33 rad/s^2 after the low-pass), the same jump with the
+    car's speed rising with it (the wheels rolling with the car) and no jump are nominal."""
+    dt = 0.01
+    settings = dataclasses.replace(load_split.settings, switch_covariances=True)
+    switching = TyreForces(load_split.vehicle, settings)
+    radius = load_split.constants.radius[2]
+    cases = ((switching, 63.0, 60.0 * radius, PAPER_HIGH_SLIP, 1.0),
+             (load_split, 63.0, 60.0 * radius, (1.0, 1.0), 1.0),
+             (switching, 62.0, 60.0 * radius, (1.0, 1.0), 0.0),
+             (switching, 63.0, 63.0 * radius, (1.0, 1.0), 0.0),
+             (switching, 60.0, 60.0 * radius, (1.0, 1.0), 0.0))  # fmt: skip
+    for method, spin, speed, scales, flagged in cases:
+        core, *_ = method.core_step(method.initial_state().core, braking_turn(method), dt)
         inputs = braking_turn(method, spin=spin, speed=speed)
-        after, fx, _, fy, _ = method.core_step(core, inputs, dt)
+        after, fx, _, fy, _, high_slip = method.core_step(core, inputs, dt)
+        assert high_slip[0] == flagged
         rest = fx - after[CORE.x][4] * inputs.torque / method.constants.radius
         x, P, fy_expected, _ = lateral_reference(method, core[CORE.x],
                                                  core[CORE.P].reshape(6, 6), rest, inputs,
@@ -401,3 +413,22 @@ def test_rigid_body_baseline_splits_by_load_share():
     split = load_share_split(np.array([1000.0, 800.0, 50.0]), loads)
     np.testing.assert_allclose(split, [[125.0, 125.0, 250.0, 500.0], [0.0, 200.0, 200.0, 400.0],
                                        [0.0, 0.0, 0.0, 0.0]], rtol=1e-12)  # fmt: skip
+
+
+def _vehicle_without(section):
+    data = tomllib.loads(example_vehicle_path().read_text(encoding="utf-8"))
+    del data[section]
+    return vehicle_from_dict(data)
+
+
+def test_the_vehicle_files_wheels_and_cornering_sections():
+    """[wheels] is required (a one-line error naming it and its keys); without
+    [cornering] the split is the paper's normal-load share, and asking for the tyre split
+    then is a one-line error naming the section."""
+    with pytest.raises(TyreInputError, match=r"no \[wheels\] section: .*spin_inertia_front"):
+        TyreForces(_vehicle_without("wheels"))
+    bare = _vehicle_without("cornering")
+    assert lateral_split(bare, None) is LateralSplit.LOAD
+    assert lateral_split(load_vehicle(example_vehicle_path()), None) is LateralSplit.TYRE
+    with pytest.raises(TyreInputError, match=r"no \[cornering\] section"):
+        TyreForces(bare, TyreSettings(split=LateralSplit.TYRE))
