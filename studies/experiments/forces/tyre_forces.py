@@ -5,8 +5,8 @@ observer and adaptive lateral KF) beside the rigid-body baseline ``tyre-rigid`` 
 force sums of the accelerometer split by the KF's load share), both reached through the
 registry. Metrics: pooled RMSE over the four wheels as a percentage of the reference's
 pooled RMS (the reference forces are the plant's, in each tyre's frame), the paper's
-NRMS ρe (RMSE over the largest |reference|, per wheel, averaged over the four) and the
-share of samples on which the high-slip covariances acted (``StepFlag.HIGH_SLIP``). The
+NRMS ρe (RMSE over the largest magnitude of the reference, per wheel, averaged over the
+four) and the share of samples flagged in high slip (``StepFlag.HIGH_SLIP``). The
 iso-dlc is scored on the paper's window as the load tables are.
 
 Beyond the exact file (:data:`CONDITIONS`), on the paper's Table I manoeuvres, a kerb
@@ -188,8 +188,9 @@ def run(context: Context) -> Section:
             "(wheel spins with 0.02 rad/s noise, wheel torques as applied), F_y from its "
             "adaptive lateral KF on the KF's loads and online mass properties. `rigid`: "
             "m a_x + drag and m a_y (road frame) split by the KF's load share. ρe: the "
-            "paper's NRMS, RMSE over the largest |reference| per wheel, mean of the four. "
-            "High slip: % of the scored samples with the paper's high-slip covariances. "
+            "paper's NRMS, RMSE over the largest magnitude of the reference per wheel, "
+            "mean of the four. "
+            "High slip: % of the scored samples flagged `HIGH_SLIP`. "
             "Conditions: 150 kg in the rear seats / boot that the file does not know; the "
             "logged wheel torques × 1.05; the plant's tyre friction 0.3 (snow), the file's "
             "unchanged; the paper's high-slip Q and R where high slip is flagged (off by "
