@@ -48,6 +48,7 @@ _LAZY_MODULES = {
     ),
     "wheelload.estimators.logs.inputs": ("input_matrix",),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
+    "wheelload.estimators.family.tyres.forces": ("TyreSettings",),
     "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
     "wheelload.estimators.kernels.order_statistics": ("linear_percentile", "median", "percentile"),
     "wheelload.estimators.samples": ("step_through",),

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.family.tyres.forces import TyreSettings
+from wheelload.estimators import TyreSettings
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.estimators.result import StepFlag
