@@ -299,8 +299,7 @@ class TyreForces:
 
     def file_mass_properties(self) -> np.ndarray:
         """``[m, 0, y_c, h]`` of the file: the loaded car where no payload is estimated."""
-        p = self._parameters
-        return np.array([p.mass, 0.0, p.cg_y, p.cg_height], float)
+        return self.kf.state_mass_properties(self.kf.initial_state())
 
     def mass_properties_of(self, loads: Estimate) -> np.ndarray:
         """``(n, 4)`` mass properties of the KF's estimate, the file's where it has none."""
