@@ -5,23 +5,19 @@ MHE's OSQP and scipy.sparse are slow to import, and a command pays only for the
 modules it runs (one log's estimate needs neither the projection KF nor the MHE).
 """
 
-from wheelload.models.files.lazy_names import lazy_names
+from wheelload.models.runtime.lazy_names import lazy_names
 
 #: Names imported on first use, by module: the filters, settings and tools the command line
 #: and the studies take from this face (they reach estimators through the registry).
 _LAZY_MODULES = {
     "wheelload.estimators.kf.projection": ("ProjectionKF", "Weighting"),
+    "wheelload.estimators.kernels.c_emitter": ("Precision",),
     "wheelload.estimators.kf.step": ("step_function",),
     "wheelload.estimators.kf.step_cache": ("UPDATE_ROWS",),
     "wheelload.estimators.kf.two_stage": ("FilterState", "TwoStageKF"),
-    "wheelload.estimators.logs.signals": (
-        "LogError",
-        "Signals",
-        "read_log",
-        "signals_from_frame",
-        "write_log",
-    ),
-    "wheelload.estimators.protocol": ("DEFAULT_MODEL", "Sample", "SuspensionModel"),
+    "wheelload.estimators.logs.signals": ("read_log", "signals_from_frame", "write_log"),
+    "wheelload.estimators.types": ("LogError", "Sample", "Signals"),
+    "wheelload.estimators.protocol": ("DEFAULT_MODEL", "SuspensionModel"),
     "wheelload.estimators.result": ("Estimate", "StepFlag"),
     "wheelload.estimators.mhe.settings": (
         "Arrival",
@@ -33,7 +29,7 @@ _LAZY_MODULES = {
     ),
     "wheelload.estimators.mhe.estimator": ("MovingHorizonEstimator",),
     "wheelload.estimators.mhe.qp": ("OSQP_INFINITY", "MheWorkspace"),
-    "wheelload.estimators.kf.guard": (
+    "wheelload.estimators.guards.settings": (
         "FAULT_CHANNELS",
         "GUARDS_OFF",
         "GuardSettings",

@@ -45,58 +45,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.result import Estimate
-
-
-@dataclass(frozen=True, kw_only=True)
-class Sample:
-    """One sample of the signals used by the filter (SI units).
-
-    ``rates`` (wx wy wz), ``rate_dots`` (their derivative) and ``hub``
-    (az_fl .. az_rr) are optional; an absent group is missing (NaN) in
-    :meth:`vector`, which drops the terms that need it.
-    """
-
-    d: np.ndarray  # (4,) travel
-    v: np.ndarray  # (4,) travel rate
-    acc: np.ndarray  # (3,) ax, ay, az specific force
-    vx: float
-    rates: np.ndarray | None = None  # (3,) wx, wy, wz body rates [rad/s], if logged
-    rate_dots: np.ndarray | None = None  # (3,) their derivative [rad/s^2], if logged
-    hub: np.ndarray | None = None  # (4,) az_fl..az_rr hub specific force, if logged
-    # Tyre-force inputs (not in :meth:`vector`: the load estimators do not use them).
-    spin: np.ndarray | None = None  # (4,) omega_fl..omega_rr [rad/s], if logged
-    torque: np.ndarray | None = None  # (4,) torque_fl..torque_rr [N m], if logged
-    steer: float | None = None  # front road-wheel angle [rad], if logged
-
-    def vector(self) -> np.ndarray:
-        def given(values: np.ndarray | None, size: int) -> np.ndarray:
-            return np.full(size, np.nan) if values is None else np.asarray(values, float)
-
-        return np.concatenate(
-            [
-                self.d,
-                self.v,
-                self.acc,
-                [self.vx],
-                given(self.rates, 3),
-                given(self.rate_dots, 3),
-                given(self.hub, 4),
-            ]
-        ).astype(float)
-
-    def parts(self) -> tuple[tuple[np.ndarray | float | None, int], ...]:
-        """``(values, size)`` per group in :meth:`vector` order; None for an absent group."""
-        return (
-            (self.d, 4),
-            (self.v, 4),
-            (self.acc, 3),
-            ((self.vx,), 1),
-            (self.rates, 3),
-            (self.rate_dots, 3),
-            (self.hub, 4),
-        )
+from wheelload.estimators.types import Sample, Signals
 
 
 def sample_intervals(t: np.ndarray) -> np.ndarray:

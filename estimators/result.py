@@ -48,7 +48,8 @@ class StepFlag(enum.IntFlag):
     PITCH_SKIPPED = 32
     ROLL_SKIPPED = 64
     STEP_REJECTED = 128
-    # Guards (estimators/kf/guard.py), bits 8-15, in the order of the step's ``status`` output.
+    # Guards (estimators/guards/settings.py), bits 8-15, in the
+    # order of the step's ``status`` output.
     INNOVATION_GATED = 1 << 8  # an update row skipped: y^2 > gate * S
     GATE_RELEASED = 1 << 9  # a row taken after gate_release_time of rejections
     TRAVEL_IMPLAUSIBLE = 1 << 10  # a travel or travel rate out of range: treated as missing
@@ -71,7 +72,8 @@ class StepFlag(enum.IntFlag):
     AZ_ASSUMED_G = 1 << 20
     AERO_OFF_NO_SPEED = 1 << 21
     SPEED_FROM_WHEELS = 1 << 22
-    # Bits 24-27: guards (estimators/kf/guard.py), after the eight of bits 8-15 in ``status``.
+    # Bits 24-27: guards (estimators/guards/settings.py), after the eight of bits 8-15
+    # in ``status``.
     TRAVEL_JUMP = 1 << 24  # a travel jumped faster than max_travel_rate and froze: dropped
     # a body rate or its derivative out of range, a rate jump beyond max_angular_acceleration,
     # or a derivative within rate_settle_time of one: treated as missing

@@ -1,7 +1,7 @@
 """A log as the per-sample stream of the ``Estimator`` protocol (``wheelload.estimators.protocol``).
 
-:func:`samples` turns :class:`~wheelload.estimators.logs.signals.Signals` into
-:class:`~wheelload.estimators.protocol.Sample` s (the body-rate derivative
+:func:`samples` turns :class:`~wheelload.estimators.types.Signals` into
+:class:`~wheelload.estimators.types.Sample` s (the body-rate derivative
 filtered as in the KF's ``run``); :func:`step_through` calls an estimator's
 ``step`` on each of them, the reference every ``run`` must reproduce.
 
@@ -17,9 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from wheelload.estimators.logs.signals import Signals, rate_derivatives
-from wheelload.estimators.protocol import Estimator, Sample, sample_intervals
+from wheelload.estimators.logs.signals import rate_derivatives
+from wheelload.estimators.protocol import Estimator, sample_intervals
 from wheelload.estimators.result import Estimate
+from wheelload.estimators.types import Sample, Signals
 
 
 def samples(signals: Signals) -> Iterator[Sample]:

@@ -1,12 +1,12 @@
 """Vehicle physics, written once, symbolically in CasADi.
 
 Every name of this face is imported on first use, by module (``_LAZY_MODULES``,
-:mod:`~wheelload.models.files.lazy_names`): reading a vehicle file imports none of the
+:mod:`~wheelload.models.runtime.lazy_names`): reading a vehicle file imports none of the
 symbolic models, and a warm estimate takes their numbers from compiled C
-(:mod:`~wheelload.models.files.function_library`).
+(:mod:`~wheelload.models.runtime.function_library`).
 """
 
-from wheelload.models.files.lazy_names import lazy_names
+from wheelload.models.runtime.lazy_names import lazy_names
 
 _LAZY_MODULES = {
     "wheelload.models.conventions": ("GRAVITY", "WHEELS"),

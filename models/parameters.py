@@ -25,9 +25,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from wheelload.models.files.function_cache import stored_function
-from wheelload.models.files.function_library import compiled_function
 from wheelload.models.mass_properties import level_static_loads, vehicle_mass_centre
+from wheelload.models.runtime.function_cache import stored_function
+from wheelload.models.runtime.function_library import compiled_function
 from wheelload.models.vehicle.description import Vehicle
 
 #: Per-axle parameters ``<name>_front``, ``<name>_rear`` and their
@@ -158,7 +158,7 @@ class ModelParameters:
 
         The static loads (unless given) and the roll split (unless the file gives
         ``suspension.roll_split_front``) are :func:`derived_function`'s (its compiled C,
-        :func:`~wheelload.models.files.function_library.compiled_function`).
+        :func:`~wheelload.models.runtime.function_library.compiled_function`).
         """
         terms = dataclasses.asdict(vehicle.model)
         mounting = mounting_matrix(*vehicle.geometry.imu_orientation)
@@ -265,7 +265,7 @@ def derived_values(p: ModelParameters) -> ca.SX:
 
 def derived_function() -> ca.Function:
     """``derived_parameters(p) -> derived[len(DERIVED)]``: :func:`derived_values` (built once
-    and stored, :func:`~wheelload.models.files.function_cache.stored_function`)."""
+    and stored, :func:`~wheelload.models.runtime.function_cache.stored_function`)."""
     return stored_function(_build_derived_function)
 
 

@@ -7,9 +7,9 @@ returning an exit status).
 A mistake a user can make is one line on stderr and exit status 2. Ctrl-C
 (SIGINT) is the line ``wheelload COMMAND: interrupted`` and status 130, also where an
 extension swallowed the KeyboardInterrupt and what it handed back then failed, or caught
-the signal itself (:mod:`wheelload.estimators.interrupts`); SIGTERM
+the signal itself (:mod:`wheelload.models.runtime.interrupts`); SIGTERM
 raises :class:`Terminated` in the main thread, so that every ``finally`` runs
-(temporary files are removed, :mod:`wheelload.models.files.temporaries`), then the
+(temporary files are removed, :mod:`wheelload.models.runtime.temporaries`), then the
 line ``terminated`` and status 143.
 """
 
@@ -159,11 +159,11 @@ def _startup_objects():
 
 def _run(parser: argparse.ArgumentParser, argv: list[str], *, counted: bool) -> int:
     """Parse ``argv`` and run the command; Ctrl-C presses counted meanwhile when ``counted``
-    (:mod:`wheelload.estimators.interrupts`), and an error after a press is the press."""
+    (:mod:`wheelload.models.runtime.interrupts`), and an error after a press is the press."""
     args, unknown = parser.parse_known_args(argv)
     # After --help and --version: casadi (the build folder), the estimators' and models' faces.
-    from wheelload.estimators import interrupts
-    from wheelload.models.files.build_folder import BuildFolderError
+    from wheelload.models.runtime import interrupts
+    from wheelload.models.runtime.build_folder import BuildFolderError
 
     if unknown:  # the command's own usage, not the top level's
         subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

@@ -3,7 +3,7 @@
 ``import casadi as ca`` opens most modules of ``wheelload.models`` and
 ``wheelload.estimators`` (the symbolic models are built with it) and costs about
 30 ms of CPU; a warm single-log estimate reads the stored model functions and the
-filter loop as compiled C (:mod:`wheelload.models.files.function_library`) and never
+filter loop as compiled C (:mod:`wheelload.models.runtime.function_library`) and never
 calls CasADi. :func:`defer` puts a stand-in into ``sys.modules`` that imports the
 module at the first read of one of its attributes (``ca.SX``, ``ca.Function``) and
 from then on carries the module's names; a command that builds a model still gets

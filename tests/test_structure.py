@@ -18,10 +18,48 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("models", "estimators", "studies")
 #: Modules that define the estimators' interface: nothing of an implementation below them.
-INTERFACE = ("wheelload.estimators.protocol", "wheelload.estimators.result")
+INTERFACE = (
+    "wheelload.estimators.protocol",
+    "wheelload.estimators.result",
+    "wheelload.estimators.types",
+)
 #: Rooms of the estimators that hold implementations (reached through the registry).
 IMPLEMENTATION = tuple(
-    f"wheelload.estimators.{room}" for room in ("kf", "mhe", "family", "loops", "kernels")
+    f"wheelload.estimators.{room}" for room in ("kf", "mhe", "family", "guards", "loops", "kernels")
+)
+#: Numerical helpers (a median, a first-order filter) the plain types may use.
+NUMERICAL_KERNELS = ("wheelload.estimators.kernels",)
+#: Benchmarks time implementations against each other, so they may import them directly.
+BENCHMARKS = ("wheelload.studies.bench", "wheelload.studies.commands.bench")
+#: The declared layers, lowest first: a module imports only from its own layer or below.
+#: A module belongs to the layer of the longest prefix that names it.
+LAYERS = (
+    ("runtime", ("wheelload.models.runtime",)),
+    ("models", ("wheelload.models",)),
+    ("kernels", ("wheelload.estimators.kernels",)),
+    (
+        "types",
+        (
+            "wheelload.estimators.types",
+            "wheelload.estimators.result",
+            "wheelload.estimators.estimate_figure",
+            "wheelload.estimators.protocol",
+        ),
+    ),
+    ("loops, logs", ("wheelload.estimators.loops", "wheelload.estimators.logs")),
+    ("guards", ("wheelload.estimators.guards",)),
+    ("kf", ("wheelload.estimators.kf",)),
+    (
+        "mhe, family, identification",
+        (
+            "wheelload.estimators.mhe",
+            "wheelload.estimators.family",
+            "wheelload.estimators.identification",
+        ),
+    ),
+    ("codegen", ("wheelload.estimators.codegen",)),
+    ("the door", ("wheelload.estimators",)),
+    ("studies", ("wheelload.studies",)),
 )
 #: Most modules (``__init__`` not counted) one package folder holds.
 MOST_MODULES = 16
@@ -152,7 +190,8 @@ def test_interface_modules_import_no_implementation(interface):
         {
             target
             for target, _ in imports()[interface]
-            if inside(target, IMPLEMENTATION) or target.startswith("wheelload.estimators.codegen")
+            if (inside(target, IMPLEMENTATION) and not inside(target, NUMERICAL_KERNELS))
+            or target.startswith("wheelload.estimators.codegen")
         }
     )
     assert not offending, f"{interface} imports {offending}"
@@ -163,7 +202,7 @@ def test_studies_reach_estimators_through_the_registry():
         {
             f"{module} -> {target}"
             for module, targets in imports().items()
-            if module.startswith("wheelload.studies")
+            if module.startswith("wheelload.studies") and not inside(module, BENCHMARKS)
             for target, _ in targets
             if inside(target, IMPLEMENTATION)
         }
@@ -254,3 +293,44 @@ def test_no_two_rooms_import_each_other():
         if (b, a) in between and a < b
     )
     assert not both, "\n".join(both)
+
+
+def layer(module: str) -> int:
+    """Index in :data:`LAYERS` of the longest prefix naming ``module``."""
+    best, found = -1, None
+    for index, (_, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if inside(module, (prefix,)) and len(prefix) > best:
+                best, found = len(prefix), index
+    assert found is not None, f"{module} is in no declared layer: add it to LAYERS"
+    return found
+
+
+def test_every_import_goes_down_the_declared_layers():
+    """runtime < models < kernels < types < loops, logs < guards < kf < mhe, family,
+    identification < codegen < the door (face, registry) < studies."""
+    offending = sorted(
+        f"{module} ({LAYERS[layer(module)][0]}) -> {target} ({LAYERS[layer(target)][0]})"
+        for module, targets in arrows().items()
+        for target in targets
+        if layer(target) > layer(module)
+    )
+    assert not offending, "\n".join(offending)
+
+
+def folder_graph() -> dict[str, set[str]]:
+    """room -> the rooms its modules import (a package and its sub-packages are rooms
+    of their own; a parent's ``__init__`` and its children are not an arrow)."""
+    graph = defaultdict(set)
+    for module, targets in arrows().items():
+        for target in targets:
+            a, b = room(module), room(target)
+            if a != b and not a.startswith(b + ".") and not b.startswith(a + "."):
+                graph[a].add(b)
+    return {r: graph.get(r, set()) for r in {room(m) for m in modules()}}
+
+
+def test_no_loop_between_folders():
+    """Not only pairs: a circle through any number of folders fails."""
+    found = circles(folder_graph())
+    assert not found, "folder loops: " + "; ".join(" -> ".join(c) for c in found)

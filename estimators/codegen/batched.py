@@ -37,16 +37,16 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, PACKED, CodegenOptions, generate
-from wheelload.estimators.kf.guard import FAULT_CHANNELS
+from wheelload.estimators.guards.settings import FAULT_CHANNELS
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF, sensor_faults
 from wheelload.estimators.logs.inputs import input_blocks
-from wheelload.estimators.logs.signals import Signals, input_bits
 from wheelload.estimators.result import Estimate
+from wheelload.estimators.types import Signals, input_bits
 from wheelload.models import INPUTS
-from wheelload.models.files.build_folder import build_folder, shared_library
+from wheelload.models.runtime.build_folder import build_folder, shared_library
 
 PREFIX = "wheelload_batch"
 #: The fast build of the library as a shared object: ``FAST_CFLAGS``, its warnings reported

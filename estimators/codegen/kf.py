@@ -46,12 +46,12 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count, literal
 from wheelload.estimators.codegen.runtime_parameters import (
     derivation_substitutions,
     runtime_fields,
 )
-from wheelload.estimators.kf.guard import FAULT_CHANNELS
+from wheelload.estimators.guards.settings import FAULT_CHANNELS
+from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, flop_count, literal
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import DEFAULT_SAMPLE_INTERVAL, TUNING, tuning_vector
@@ -66,9 +66,9 @@ from wheelload.models import (
     Vehicle,
     load_vehicle,
 )
-from wheelload.models.files.build_folder import cached_object
 from wheelload.models.inputs import input_description
 from wheelload.models.measurement_noise import INPUT_DENSITIES
+from wheelload.models.runtime.build_folder import cached_object
 from wheelload.models.vehicle.description import SIGMA_KEYS
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.

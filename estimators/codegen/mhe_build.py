@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.mhe import (
     EXAMPLE,
     TEMPLATES,
@@ -33,12 +32,13 @@ from wheelload.estimators.codegen.mhe import (
     mhe_sources,
     relative_includes,
 )
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.types import Signals
 from wheelload.models import Vehicle
-from wheelload.models.files.build_folder import cached_object
+from wheelload.models.runtime.build_folder import cached_object
 
 
 @dataclass(frozen=True)

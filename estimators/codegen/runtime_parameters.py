@@ -29,7 +29,7 @@ from __future__ import annotations
 import enum
 import textwrap
 
-from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, literal
+from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, literal
 from wheelload.estimators.kf.tuning import TUNING
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.parameters import (

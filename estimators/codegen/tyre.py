@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.codegen.c_emitter import Precision, emit_statements, flop_count
 from wheelload.estimators.family.tyres.forces import TyreForces
 from wheelload.estimators.family.tyres.step import CORE, WHEEL_INPUTS
+from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, flop_count
 from wheelload.models import INPUTS, WHEELS, Vehicle
 
 #: Inputs and outputs of the C tyre kernel, in order.

@@ -49,9 +49,9 @@ from wheelload.estimators.family.flat_step import step_flags, step_name
 from wheelload.estimators.family.step_method import FamilyMethod
 from wheelload.estimators.family.suspension_model import equilibrium_residual, suspension_loads
 from wheelload.estimators.kernels.kalman import sequential_update
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.estimators.result import Estimate
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.body_attitude import attitude_function
 from wheelload.models.family.road_angle import STATE_NAMES, BodyInertia, road_angle_model

@@ -32,7 +32,7 @@ import numpy as np
 
 from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.family.quarter_car import tyre_load_function
 from wheelload.models.family.standstill import UNKNOWNS, standstill_residual_function

@@ -34,10 +34,10 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
-from wheelload.estimators.protocol import DEFAULT_MODEL, Sample, SuspensionModel, sample_intervals
+from wheelload.estimators.protocol import DEFAULT_MODEL, SuspensionModel, sample_intervals
 from wheelload.estimators.result import Estimate
+from wheelload.estimators.types import Sample, Signals
 from wheelload.models import ModelParameters, Vehicle
 
 PER_SAMPLE = ("u", "u_valid", "dt")

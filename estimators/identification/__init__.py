@@ -9,7 +9,7 @@ The names below are imported on first use: the KF's still-period offsets
 pay for the fits' scipy and pandas.
 """
 
-from wheelload.models.files.lazy_names import lazy_names
+from wheelload.models.runtime.lazy_names import lazy_names
 
 #: Names imported on first use, by module.
 _LAZY_MODULES = {

@@ -31,18 +31,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators.logs import spill
-from wheelload.estimators.logs.signals import (
-    RATE_DERIVATIVES,
-    RATES,
-    TRAVEL,
-    TRAVEL_RATE,
-    LogError,
-    rate_derivatives,
-    signals_from_frame,
-)
-from wheelload.estimators.logs.spill import SPILL_BYTES, release
+from wheelload.estimators.logs.signals import rate_derivatives, signals_from_frame
+from wheelload.estimators.types import RATE_DERIVATIVES, RATES, TRAVEL, TRAVEL_RATE, LogError
 from wheelload.models.conventions import WHEELS
+from wheelload.models.runtime import spill
+from wheelload.models.runtime.spill import SPILL_BYTES, release
 
 AXLES = ("front", "rear")
 CORNER_COLUMNS = ("d", "v", "force")

@@ -35,7 +35,7 @@ exceeds ``warn_precision`` of its size is named in a milder warning.
 The linear algebra runs by default over chunks of samples with triangular
 factors kept (:mod:`~wheelload.estimators.identification.streamed`: memory
 bounded by the parameter count and one chunk; a long log's data and residuals
-stay on disk, :mod:`~wheelload.estimators.logs.spill`);
+stay on disk, :mod:`~wheelload.models.runtime.spill`);
 ``FitPath.DENSE`` holds the whole regressor matrix
 (:mod:`~wheelload.estimators.identification.dense`, the reference: the two
 agree to 1e-9 relative).
@@ -56,8 +56,8 @@ from wheelload.estimators.identification.fit_terms import FitLoss, Inliers, Prob
 from wheelload.estimators.identification.model import SuspensionFitModel
 from wheelload.estimators.identification.regressors import CHUNK, Rows, linear_free_set
 from wheelload.estimators.identification.streamed import ChunkedDesign
-from wheelload.estimators.logs.spill import SPILL_BYTES
 from wheelload.models import ModelParameters
+from wheelload.models.runtime.spill import SPILL_BYTES
 
 ZERO_FORCE = 1e-6  # N, largest regressor effect still taken as no excitation
 

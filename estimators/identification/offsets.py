@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.estimators.kernels import order_statistics
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.types import Signals
 from wheelload.models import (
     GATES,
     GRAVITY,

@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators import interrupts
 from wheelload.estimators.identification.data import DataKind, DataSet
 from wheelload.estimators.identification.model import WHEELS, SuspensionFitModel
 from wheelload.estimators.loops.compiled import CompiledLoop
+from wheelload.models.runtime import interrupts
 
 #: Samples per evaluation of the regressors: one chunk's rows (4 wheels x the parameters,
 #: and 3 instrument lags) take a few tens of MB whatever the length of the log.

@@ -1,7 +1,7 @@
 r"""The residuals' figures per data set, read a block of rows at a time.
 
 The fit keeps one residual per row (in memory, or on disk for a long log:
-:mod:`~wheelload.estimators.logs.spill`) and reads it a block at a
+:mod:`~wheelload.models.runtime.spill`) and reads it a block at a
 time, so its memory does not grow with the log:
 
 - the scale of a set's rows, :math:`\sigma_g = 1.4826\,\mathrm{MAD}` (median
@@ -21,7 +21,7 @@ import numpy as np
 
 from wheelload.estimators.identification.fit_terms import FitLoss, Layout, inliers
 from wheelload.estimators.kernels.order_statistics import blocked_median
-from wheelload.estimators.logs.spill import release
+from wheelload.models.runtime.spill import release
 
 MAD_SCALE = 1.4826  # MAD to standard deviation of a normal distribution
 BLOCK = 1 << 16  # rows per block

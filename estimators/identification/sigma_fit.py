@@ -32,7 +32,7 @@ from scipy import optimize, special
 
 from wheelload.estimators.kf.tuning import SIGMA_TUNING
 from wheelload.estimators.kf.two_stage import TwoStageKF
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.types import Signals
 from wheelload.models.vehicle.description import SIGMA_KEYS, Vehicle
 
 SETTLE = 1.0  # s, start of each log left out (initial covariance)

@@ -19,7 +19,7 @@ factor of the weighted subset as the QR of :math:`[w_g R_g[:, S]]_g`, and
 - the residuals (for the per-set MAD scale and lag-one autocorrelation,
   :mod:`~wheelload.estimators.identification.residual_stats`) in one pass per
   fit of the identifiability loop, one number per row kept (on disk for a long
-  log, :mod:`~wheelload.estimators.logs.spill`).
+  log, :mod:`~wheelload.models.runtime.spill`).
 
 Memory: a chunk of regressors and the factors, (4 F + 1)^2 numbers per data
 set; the data and the residuals of a long log stay on disk, read a chunk at a
@@ -47,7 +47,7 @@ from wheelload.estimators.identification.regressors import (
     chunks,
     sampled_rows,
 )
-from wheelload.estimators.logs.spill import SPILL_BYTES, release, row_values
+from wheelload.models.runtime.spill import SPILL_BYTES, release, row_values
 
 EPS = np.finfo(float).eps
 

@@ -62,7 +62,7 @@ from wheelload.estimators.kf.tuning import (
     with_filter_sigma,
 )
 from wheelload.estimators.kf.two_stage import TwoStageKF
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.types import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle.description import FilterTuning, Vehicle
 

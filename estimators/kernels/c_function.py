@@ -1,6 +1,6 @@
 """A C function of a small kernel source, compiled once and loaded (one for each kernel).
 
-The build is :func:`wheelload.models.files.build_folder.cached_library`'s: named by the hash
+The build is :func:`wheelload.models.runtime.build_folder.cached_library`'s: named by the hash
 of the source and the compiler command, checked against its record before it is loaded.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 import ctypes
 from collections.abc import Callable
 
-from wheelload.models.files.build_folder import COMPILER, cached_library
+from wheelload.models.runtime.build_folder import COMPILER, cached_library
 
 
 def c_function(source: str, name: str, purpose: str, argtypes: list) -> Callable[..., None]:

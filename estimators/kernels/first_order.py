@@ -15,7 +15,7 @@ bilinear transform. ``scipy.signal`` gives ``bilinear``, ``lfilter_zi`` and
 - :func:`lfilter`: the transposed direct form II recursion
   :math:`y_k = z + b_0 x_k,\; z \leftarrow x_k b_1 - y_k a_1` in C, the
   operations and order of scipy's ``lfilter`` kernel; compiled once and cached
-  like the filter's loop (:func:`wheelload.models.files.build_folder.cached_library`).
+  like the filter's loop (:func:`wheelload.models.runtime.build_folder.cached_library`).
 
 The test suite checks all three against ``scipy.signal`` for equality.
 """

@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wheelload.estimators.guards import settings as guard
 from wheelload.estimators.kernels import order_statistics
-from wheelload.estimators.kf import guard
 from wheelload.estimators.kf.step_cache import N_CARRIED, STEP_FUNCTION, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import FAULT_MARGIN, TwoStageKF, about_faults
@@ -51,6 +51,14 @@ from wheelload.estimators.logs.model_error import (
 )
 from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns, read_chunks
 from wheelload.estimators.logs.signals import (
+    VELOCITY_CUTOFF,
+    Differentiator,
+    RateEstimator,
+    check_units,
+)
+from wheelload.estimators.loops.compiled import ColumnLayout, ColumnLoop, FlagRule
+from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
+from wheelload.estimators.types import (
     HUB,
     RATE_DERIVATIVES,
     RATES,
@@ -58,24 +66,18 @@ from wheelload.estimators.logs.signals import (
     REQUIRED,
     TRAVEL,
     TRAVEL_RATE,
-    VELOCITY_CUTOFF,
     WHEEL_SPEED,
-    Differentiator,
     LogError,
-    RateEstimator,
     Signals,
     SpeedSource,
     Steps,
     check_time_column,
-    check_units,
     input_bits,
     sensor_mode,
 )
-from wheelload.estimators.logs.spill import Appended, release
-from wheelload.estimators.loops.compiled import ColumnLayout, ColumnLoop, FlagRule
-from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
 from wheelload.models import GRAVITY, INPUTS
 from wheelload.models.conventions import WHEELS
+from wheelload.models.runtime.spill import Appended, release
 
 GROUPS = (TRAVEL, TRAVEL_RATE, RATES, HUB, RATE_DERIVATIVES)
 #: Output columns of the loop: loads, their std, residual, then the fault monitor's.
@@ -186,7 +188,7 @@ class LogStream:
     path: Path
     source: str
     names: tuple[str, ...]  # our columns present in the file
-    t: np.ndarray  # on disk for a long log (:mod:`~wheelload.estimators.logs.spill`)
+    t: np.ndarray  # on disk for a long log (:mod:`~wheelload.models.runtime.spill`)
     steps: Steps  # the sample intervals' median and largest deviation
     travel_present: np.ndarray  # (4,) bool
     reference_present: np.ndarray | None  # (4,) bool, None: no fz_* column

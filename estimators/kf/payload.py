@@ -25,7 +25,7 @@ see (:math:`a_z`, a lateral or longitudinal offset) is absorbed as a small mass 
 shift, and the loads' rows stay consistent with the springs. The prior is
 :math:`\Delta m \sim N(0, \sigma_m^2)`, :math:`S \sim N(0, \sigma_m^2 \sigma_x^2)`; the
 covariance never exceeds it. The state (4) and its covariance (4 x 4) are carried in the
-step's monitor state ``m`` (:data:`~wheelload.estimators.kf.monitor_state.PAYLOAD`).
+step's monitor state ``m`` (:data:`~wheelload.estimators.guards.monitor_state.PAYLOAD`).
 """
 
 from __future__ import annotations

@@ -29,8 +29,8 @@ import functools
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kernels.kalman import ldl_solve, symmetrise
-from wheelload.estimators.kf.guard import GuardSettings
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import Vehicle
@@ -109,7 +109,8 @@ class ProjectionKF(TwoStageKF):
     static
         Static wheel loads [N]; default: the vehicle file's.
     guard_settings
-        The guards (:class:`~wheelload.estimators.kf.guard.GuardSettings`); default the file's.
+        The guards (:class:`~wheelload.estimators.guards.settings.GuardSettings`); default:
+        the file's.
     check_file
         As :class:`~wheelload.estimators.kf.two_stage.TwoStageKF`'s.
     """

@@ -23,8 +23,8 @@ force instead grows with the lateral acceleration, 0.6 kN of σ on a lap). A run
 is an exponentially weighted mean :math:`\bar q \leftarrow \bar q + \alpha (q - \bar q)`,
 :math:`\alpha = \Delta t / (\tau + \Delta t)`, :math:`\tau` = :data:`SIGMA_TIME`, carried
 in the monitor state
-(:data:`~wheelload.estimators.kf.monitor_state.SIGMA_RESIDUAL`,
-:data:`~wheelload.estimators.kf.monitor_state.SIGMA_INNOVATION`); a feature whose rows are
+(:data:`~wheelload.estimators.guards.monitor_state.SIGMA_RESIDUAL`,
+:data:`~wheelload.estimators.guards.monitor_state.SIGMA_INNOVATION`); a feature whose rows are
 missing in a sample is 0 there (its mean held). The gain never sees σ: x and P are the
 filter's own (Siegloff & Choi §III, eq. 19-25).
 
@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.kf import monitor_state
+from wheelload.estimators.guards import monitor_state
 from wheelload.models import GRAVITY
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, TRAVEL_RATE, input_index
 from wheelload.models.vehicle.description import SIGMA_KEYS
@@ -64,7 +64,7 @@ def sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt):
     missing); ``z, A, b``: the pseudo-measurement and the equilibrium rows; ``mask_s,
     mask_c``: their availability; ``y_s``: the suspension rows' innovations; ``m``: the
     monitor state; ``dt``: the interval used (0: skipped). Returns ``(g, means)``, ``means``
-    the monitor's next :data:`~wheelload.estimators.kf.monitor_state.SIGMA_SLOTS`.
+    the monitor's next :data:`~wheelload.estimators.guards.monitor_state.SIGMA_SLOTS`.
     """
     every_row = mask_s[0] * mask_s[1] * mask_s[2] * mask_s[3] * mask_c[0] * mask_c[1] * mask_c[2]
     delta = ca.mtimes(A.T, ca.solve(ca.mtimes(A, A.T), b - ca.mtimes(A, z))) * every_row

@@ -6,7 +6,7 @@ random walk (eq. 12, 19); first update with the suspension pseudo-measurement
 soft constraint :math:`b = A x + w_c` (eq. 17, 23-25). Joseph form throughout. The noise
 is built from the tuning vector (:mod:`wheelload.estimators.kf.tuning`) and the
 input-dependent densities of :mod:`wheelload.models.measurement_noise`; the guards of
-:mod:`wheelload.estimators.kf.guard` act on the masks of the updates.
+:mod:`wheelload.estimators.guards.settings` act on the masks of the updates.
 
 The step is built from the model Functions in ``wheelload.models``, so the Python filter,
 the compiled loops and the generated C share one implementation.
@@ -26,16 +26,15 @@ from wheelload.estimators.kernels.kalman import (
     sequential_update_innovations,
     upper,
 )
-from wheelload.estimators.kf import (
+from wheelload.estimators.guards import (
     fault_monitor,
-    guard,
     innovation_gate,
     limits,
     monitor_state,
-    payload,
     plausibility,
-    reported_std,
 )
+from wheelload.estimators.guards import settings as guard
+from wheelload.estimators.kf import payload, reported_std
 from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import (
     GUARD_TUNING,
@@ -150,7 +149,7 @@ def step_expressions(
     ``innovation_variance`` (7 each, update order: suspension FL, FR, RL, RR,
     then vertical, pitch, roll) are each row's pre-update innovation and its
     variance S; both are 0 for a row whose inputs are missing. The guards of
-    :mod:`wheelload.estimators.kf.guard` (plausibility, innovation gate, fault
+    :mod:`wheelload.estimators.guards.settings` (plausibility, innovation gate, fault
     monitor with state ``m``, covariance limits) act on the masks of the
     updates, so a guarded row changes neither x nor P.
     """

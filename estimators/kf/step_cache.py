@@ -4,7 +4,7 @@ Building :func:`~wheelload.estimators.kf.step.step_function` (the models'
 expressions, Jacobians, guards, common subexpressions) takes about 0.2 s of
 every ``wheelload estimate``; loading its serialised form takes about 10 ms.
 It is stored as any model Function
-(:func:`~wheelload.models.files.function_cache.stored_function`: named by a hash
+(:func:`~wheelload.models.runtime.function_cache.stored_function`: named by a hash
 of every ``.py`` file of ``wheelload.models`` and ``wheelload.estimators`` and of
 the CasADi version, so an edit of any of them builds it again); a warm estimate
 runs its stored column loop and imports neither the step's module nor the models
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.models.files.function_cache import Builder, stored_function
+from wheelload.models.runtime.function_cache import Builder, stored_function
 
 #: The step Function's name (and its C symbol).
 STEP_NAME = "wheelload_kf_step"

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from wheelload.estimators.guards.settings import GuardSettings, guard_settings_for
 from wheelload.estimators.kernels import order_statistics
-from wheelload.estimators.kf.guard import GuardSettings, guard_settings_for
-from wheelload.estimators.logs.signals import step_blocks
+from wheelload.estimators.types import step_blocks
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.measurement_noise import INPUT_DENSITIES
@@ -112,7 +112,7 @@ def tuning_vector(
     ``sample_interval`` is the log's nominal interval [s]: the measurement
     noise is :math:`R = r / \Delta t_{nominal}` whatever the gap before a
     sample. ``settings``: default the vehicle's
-    (:func:`~wheelload.estimators.kf.guard.guard_settings_for`).
+    (:func:`~wheelload.estimators.guards.settings.guard_settings_for`).
     """
     settings = guard_settings_for(vehicle) if settings is None else settings
     tuning = vehicle.filter

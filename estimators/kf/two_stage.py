@@ -24,9 +24,10 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf import guard, monitor_state
-from wheelload.estimators.kf.guard import GuardSettings
-from wheelload.estimators.kf.monitor_state import MONITOR_SIZE
+from wheelload.estimators.guards import monitor_state
+from wheelload.estimators.guards import settings as guard
+from wheelload.estimators.guards.monitor_state import MONITOR_SIZE
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.step_cache import (
     N_CARRIED,
     STEP_OUTPUT_NAMES,
@@ -40,10 +41,10 @@ from wheelload.estimators.kf.tuning import (
     tuning_vector,
 )
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
-from wheelload.estimators.protocol import Sample, sample_intervals
+from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
+from wheelload.estimators.types import Sample, Signals
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.loaded_vehicle import PAYLOAD_STATES, mass_properties
@@ -424,7 +425,7 @@ def sensor_faults(
     """One record per isolated fault: ``channel, start, end`` [s] and the peak ``statistic``.
 
     ``fault`` and ``statistic`` are the step outputs, shape (n, 7), channels
-    :data:`~wheelload.estimators.kf.guard.FAULT_CHANNELS`; ``end`` is the time of
+    :data:`~wheelload.estimators.guards.settings.FAULT_CHANNELS`; ``end`` is the time of
     the last flagged sample.
     """
     rows = []

@@ -46,12 +46,12 @@ import numpy as np
 from wheelload.estimators.kernels import order_statistics, zero_phase
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
-from wheelload.models.files.function_cache import Builder
-from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import TRAVEL, input_index
+from wheelload.models.runtime.function_cache import Builder
+from wheelload.models.runtime.function_library import compiled_function
 
 #: The model Functions the checks evaluate, by name (imported where they are built; a warm
-#: run reads them as compiled C: ``models/files/function_library.py``).
+#: run reads them as compiled C: ``models/runtime/function_library.py``).
 GATES_FUNCTION = Builder("wheelload.models.terms", "gates_function")
 SUSPENSION_FUNCTION = Builder("wheelload.models.suspension.pseudo_measurement",
                               "suspension_function")  # fmt: skip

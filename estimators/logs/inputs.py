@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.estimators.logs.signals import Signals, rate_derivatives
+from wheelload.estimators.logs.signals import rate_derivatives
+from wheelload.estimators.types import Signals
 from wheelload.models import INPUTS
 
 

@@ -43,14 +43,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.result import ModelError
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
-from wheelload.models.files.function_cache import Builder
-from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, input_index
 from wheelload.models.loaded_vehicle import payload_of
+from wheelload.models.runtime.function_cache import Builder
+from wheelload.models.runtime.function_library import compiled_function
 
 #: Share of the residual's variation the best hypothesis must explain to be named (the
 #: bundled cars' exact files: at most 0.40 on 20 scenario logs; a file 20 % off: 0.58-0.96).

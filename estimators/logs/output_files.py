@@ -23,8 +23,8 @@ import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-from wheelload.estimators import interrupts
-from wheelload.models.files.temporaries import temporary_file
+from wheelload.models.runtime import interrupts
+from wheelload.models.runtime.temporaries import temporary_file
 
 
 class OutputError(ValueError):
@@ -155,7 +155,7 @@ def atomic_write(path: Path, *, replace: bool = False) -> Iterator[Path]:
     exception) the temporary file is removed and ``path`` is untouched (a press that an
     extension swallowed, counted by the command line, too); the
     temporaries of a killed run are removed when the folder is written next
-    (:mod:`wheelload.models.files.temporaries`).
+    (:mod:`wheelload.models.runtime.temporaries`).
     """
     path = Path(path)
     check_folder(path.parent, path)

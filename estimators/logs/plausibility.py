@@ -67,8 +67,8 @@ from wheelload.estimators.logs.checks import (
     undecided_check,
 )
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
-from wheelload.models.files.function_library import compiled_function
 from wheelload.models.inputs import WHEELS
+from wheelload.models.runtime.function_library import compiled_function
 
 MAX_RATE = 5000.0  # Hz, above it no vehicle logger of body and suspension signals
 MIN_RATE = 20.0  # Hz, below it the body motion (1-3 Hz) and wheel hop are lost
@@ -310,7 +310,7 @@ def frozen_samples(t: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     """Every check of the module docstring on a
-    :class:`~wheelload.estimators.logs.signals.Signals`."""
+    :class:`~wheelload.estimators.types.Signals`."""
     rate, mistake = sample_rate_check(signals.t)
     checks, mistakes = [rate], [mistake] if mistake else []
     window = motion_window(signals.t, signals.vx)

@@ -6,7 +6,7 @@ to the next sample, like ``Function.mapaccum`` but without its per-call
 copying. The shared library is built with the system C compiler once per
 step Function, cached in a private per-user build folder by the hash of its
 source (so it is never stale; a stored step's column loop by the hash of the code
-that generates the source, :func:`~wheelload.models.files.build_folder.keyed_library`,
+that generates the source, :func:`~wheelload.models.runtime.build_folder.keyed_library`,
 which spares generating it), and called through ctypes on numpy arrays.
 """
 
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.models.files.build_folder import keyed_library, shared_library
-from wheelload.models.files.function_cache import builder_name, stored_stem
-from wheelload.models.files.function_library import Signature, stored_library
+from wheelload.models.runtime.build_folder import keyed_library, shared_library
+from wheelload.models.runtime.function_cache import builder_name, stored_stem
+from wheelload.models.runtime.function_library import Signature, stored_library
 
 LOOP = """
 #include <string.h>
@@ -321,9 +321,9 @@ class ColumnLoop:
     @classmethod
     def stored(cls, builder, layout: ColumnLayout) -> ColumnLoop:
         """The loop of ``builder()``'s stored step
-        (:func:`~wheelload.models.files.function_cache.stored_function`): its signature and
+        (:func:`~wheelload.models.runtime.function_cache.stored_function`): its signature and
         library read without CasADi when this code built them before
-        (:func:`~wheelload.models.files.function_library.stored_library`)."""
+        (:func:`~wheelload.models.runtime.function_library.stored_library`)."""
         loop = cls.__new__(cls)
         source = functools.partial(_column_source, layout=layout)
         name = f"{builder_name(builder)[1]}_columns"

@@ -3,7 +3,7 @@
 :meth:`TwoStageKF.step` calls the step Function through CasADi's virtual
 machine with numpy glue around it (about 200 µs). :class:`CompiledStep`
 compiles the same Function's instructions as straight-line C (the emitter
-of the generated library, :mod:`wheelload.estimators.codegen.c_emitter`; cached like
+of the generated library, :mod:`wheelload.estimators.kernels.c_emitter`; cached like
 the whole-log loop, :mod:`wheelload.estimators.loops.compiled`) beside a small C
 wrapper that sanitises the inputs (a non-finite input is invalid and read as
 zero, as :meth:`TwoStageKF.reference_step` does in numpy) and computes the
@@ -32,9 +32,9 @@ import ctypes
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.codegen.c_emitter import Precision, emit_statements
+from wheelload.estimators.kernels.c_emitter import Precision, emit_statements
 from wheelload.estimators.result import StepFlag
-from wheelload.models.files.build_folder import shared_library
+from wheelload.models.runtime.build_folder import shared_library
 
 #: Step inputs and outputs the wrapper expects, in the step Function's order.
 INPUTS = ("x", "P", "m", "u", "u_valid", "dt", "p", "tuning")

@@ -67,16 +67,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from wheelload.estimators import interrupts
+from wheelload.estimators.guards.limits import variance_ceiling
 from wheelload.estimators.kernels import order_statistics
-from wheelload.estimators.kf.limits import variance_ceiling
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.kf.two_stage import (
     FilterState,
     TwoStageKF,
 )
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.extended import advance_extended, initial_extended
 from wheelload.estimators.mhe.qp import (
     LOAD_LIMIT,
@@ -114,9 +112,11 @@ from wheelload.estimators.mhe.window import (
     ride_height_basis,
     travel_basis,
 )
-from wheelload.estimators.protocol import Sample, sample_intervals
+from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.types import Sample, Signals
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, Vehicle, equilibrium_function
 from wheelload.models.input_validity import MAX_INTERVAL
+from wheelload.models.runtime import interrupts
 
 #: m/s^2, the az of the made-up sample (level road, at rest) of the steady-state
 #: covariance recursion. It reaches the covariance (az = 0 gives another one; a vehicle

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import math
 
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.mhe.state import MheEstimate, MheState
-from wheelload.estimators.protocol import MethodInfo, Sample
+from wheelload.estimators.protocol import MethodInfo
+from wheelload.estimators.types import Sample, Signals
 from wheelload.models import Vehicle
 
 NOMINAL_INTERVAL = 0.01  # s, 100 Hz

@@ -30,10 +30,10 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
-from wheelload.estimators import interrupts
 from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.mhe.terms import LOAD_SCALE
+from wheelload.models.runtime import interrupts
 
 SOLVED = osqp.SolverStatus.OSQP_SOLVED.value
 #: Status of a sample whose QP data are not finite: not handed to OSQP, the filter's estimate.
@@ -128,7 +128,7 @@ def linear_term(
 def check_interrupted(status: int) -> None:
     """KeyboardInterrupt when OSQP stopped the solve on Ctrl-C (:data:`INTERRUPTED`), so that
     the press stops the run instead of a sample falling back to the filter's estimate
-    (:func:`wheelload.estimators.interrupts.caught`)."""
+    (:func:`wheelload.models.runtime.interrupts.caught`)."""
     if status == INTERRUPTED:
         interrupts.caught()
 

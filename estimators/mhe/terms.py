@@ -35,8 +35,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.kf import guard, plausibility
-from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.guards import plausibility
+from wheelload.estimators.guards import settings as guard
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.step import model_rows
 from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX
 from wheelload.estimators.mhe.settings import Constraint

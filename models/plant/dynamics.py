@@ -57,11 +57,11 @@ from dataclasses import dataclass
 import casadi as ca
 
 from wheelload.models.conventions import GRAVITY, WHEELS
-from wheelload.models.files.build_folder import cached_function
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.payload import inertia_about, sprung_body, with_point_mass
 from wheelload.models.plant.road_surface import RoadSurface, road_lookup
 from wheelload.models.plant.tyre import tyre_forces
+from wheelload.models.runtime.build_folder import cached_function
 from wheelload.models.suspension.elements import anti_roll_bar_forces, stop_force
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
 from wheelload.models.vehicle.description import Vehicle
@@ -512,7 +512,8 @@ def chunk_from_ode(
 
     ``y`` is the second output of ``ode`` at the final state. Compiled with
     the system C compiler when ``jit`` is true, once per model: the library is
-    cached by the hash of its source (:func:`~wheelload.models.files.build_folder.cached_function`).
+    cached by the hash of its source
+    (:func:`~wheelload.models.runtime.build_folder.cached_function`).
     """
     if internal_rate <= 0 or steps < 1:
         raise PlantError(f"need internal_rate > 0 and steps >= 1, got {internal_rate}, {steps}")

@@ -300,7 +300,7 @@ class FilterTuning:
     bias: BiasTuning = BiasTuning()  # [filter.bias], optional: MHE bias states
     faults: FaultTuning = FaultTuning()  # [filter.faults], optional: fault-monitor limits
     payload: PayloadTuning = PayloadTuning()  # [filter.payload], optional: online mass and CG
-    # Optional: the innovation variance S the gate compares against (estimators/kf/guard.py,
+    # Optional: the innovation variance S the gate compares against (estimators/guards/settings.py,
     # innovation_variance_scale) times this factor. ``wheelload tune`` writes 1/c when it
     # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
     # had (S scales by c, the innovations do not).

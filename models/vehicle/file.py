@@ -8,7 +8,7 @@ Writing: the copy is the original text with the value of each named
 ``[table] key`` line replaced (:func:`replace_values`), everything else kept
 verbatim. It is checked by reading it back as a vehicle, written to a
 temporary file in the target folder and renamed
-(:func:`wheelload.models.files.temporaries.replacing`). No input file is ever
+(:func:`wheelload.models.runtime.temporaries.replacing`). No input file is ever
 replaced, and an existing file only with ``force``.
 
 Example
@@ -25,8 +25,8 @@ import re
 from importlib import resources
 from pathlib import Path
 
-from wheelload.models.files.temporaries import replacing
-from wheelload.models.files.toml_file import TomlFileKind, read_toml
+from wheelload.models.runtime.temporaries import replacing
+from wheelload.models.runtime.toml_file import TomlFileKind, read_toml
 from wheelload.models.vehicle.description import Vehicle, VehicleFileError, vehicle_from_dict
 from wheelload.models.vehicle.plausibility import check_vehicle_ranges
 

@@ -2,7 +2,7 @@
 
 Used by ``wheelload bench speed`` to put the single step's time beside
 
-- its dependency-chain bound (:func:`~wheelload.estimators.codegen.c_emitter.critical_path`,
+- its dependency-chain bound (:func:`~wheelload.estimators.kernels.c_emitter.critical_path`,
   cycles) at the clock the core actually runs, measured here by a chain of
   dependent integer additions (one cycle each on every x86-64 core): the
   ``cpu MHz`` of ``/proc/cpuinfo`` is the nominal clock, and a boosting

@@ -16,10 +16,10 @@ import numpy as np
 
 from wheelload.estimators import TwoStageKF, nominal_interval
 from wheelload.estimators.codegen.batched import MAX_FILTERS, PREFIX, batch_library, run_batched
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.logs.output_files import write_frame
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, Vehicle
 from wheelload.studies.bench.fleet_peers import FleetArrays, fleet_arrays
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.estimators import TUNING_INDEX
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.types import Signals
 from wheelload.studies.bench.numpy_kf import measurement_noises, pseudo_measurements
 
 

@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from wheelload.estimators import TUNING_INDEX, input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.types import Signals
 from wheelload.models import (
     GRAVITY,
     ModelParameters,

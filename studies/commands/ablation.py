@@ -10,7 +10,7 @@ import logging
 import sys
 from pathlib import Path
 
-from wheelload.models.files.temporaries import replacing
+from wheelload.models.runtime.temporaries import replacing
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, show_progress
 from wheelload.studies.drive.scenario_options import Options

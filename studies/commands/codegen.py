@@ -13,8 +13,15 @@ import argparse
 import enum
 from pathlib import Path
 
-from wheelload.estimators import Arrival, BiasStates, Constraint, Loss, MheSettings, ResidualLoss
-from wheelload.estimators.codegen.c_emitter import Precision
+from wheelload.estimators import (
+    Arrival,
+    BiasStates,
+    Constraint,
+    Loss,
+    MheSettings,
+    Precision,
+    ResidualLoss,
+)
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
 from wheelload.estimators.logs.output_files import check_output_folder
 from wheelload.models import load_vehicle

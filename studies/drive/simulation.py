@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import interrupts
 from wheelload.models.conventions import WHEELS
 from wheelload.models.plant.dynamics import (
     INPUT_NAMES,
@@ -27,6 +26,7 @@ from wheelload.models.plant.dynamics import (
 )
 from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import FACTOR_NAMES, SlipControl, controlled_chunk_function
+from wheelload.models.runtime import interrupts
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive.driver import Driver, DriverTuning
 from wheelload.studies.drive.payload_schedule import PayloadSchedule

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from wheelload.estimators.logs.signals import Signals, derive_velocities
+from wheelload.estimators.logs.signals import derive_velocities
+from wheelload.estimators.types import Signals
 from wheelload.models import (
     GATES,
     GRAVITY,

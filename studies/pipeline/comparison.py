@@ -20,10 +20,10 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import MethodInfo
 from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import Estimate
+from wheelload.estimators.types import Signals
 from wheelload.models import Vehicle
 from wheelload.studies.identical import identical_groups, identity_notes, label
 from wheelload.studies.metrics import COLUMNS, pooled_force_error, wheel_metrics

@@ -17,9 +17,9 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from wheelload.estimators.logs.signals import Signals
+from wheelload.estimators.types import Signals
 from wheelload.models.conventions import WHEELS
-from wheelload.models.files.temporaries import replacing
+from wheelload.models.runtime.temporaries import replacing
 from wheelload.studies.pipeline.comparison import Comparison, evaluation_mask
 from wheelload.studies.plots.method_panels import (
     draw_against_reference,

@@ -8,7 +8,7 @@ Two presses at fixed times into the Nordschleife lap (about 11 s of stepping): ~
 OSQP's solve catches SIGINT with a handler of its own and returns the status
 "interrupted": Python never saw the press, and the MHE took that sample's QP as failed
 (the filter's estimate) and ran on; before the fix 1 of 6 presses into the MHE's window
-loop was lost (estimators/interrupts.py). Two presses into a 135 300-sample MHE run and
+loop was lost (models/runtime/interrupts.py). Two presses into a 135 300-sample MHE run and
 one into a long OSQP solve: ~12 s.
 """
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from wheelload.models import example_vehicle_path
-from wheelload.models.files.function_cache import PACKAGE_ROOT
+from wheelload.models.runtime.function_cache import PACKAGE_ROOT
 
 pytestmark = pytest.mark.heavy(19)  # seconds (tests/conftest.py)
 

@@ -17,9 +17,10 @@ import pytest
 from wheelload.estimators.family.algebraic import Algebraic
 from wheelload.estimators.family.quasi_static import QuasiStatic
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals, read_log
+from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.registry import build
+from wheelload.estimators.types import Signals
 from wheelload.models import (
     GRAVITY,
     ModelParameters,

@@ -15,10 +15,11 @@ from wheelload.estimators.family.strong_tracking_ukf import (
 )
 from wheelload.estimators.family.suspension_only import SuspensionOnly
 from wheelload.estimators.kf.tuning import tuning_vector
-from wheelload.estimators.logs.signals import Signals, read_log
+from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.protocol import SuspensionModel, sample_intervals
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.samples import step_through
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, ModelParameters, paper_equilibrium_function, static_loads
 from wheelload.studies.pipeline.example_log import example_log_path
 

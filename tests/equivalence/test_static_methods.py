@@ -6,10 +6,10 @@ import pytest
 from wheelload.estimators.family.algebraic import Algebraic
 from wheelload.estimators.family.quasi_static import QuasiStatic, StaticTransfer
 from wheelload.estimators.family.suspension_only import SuspensionOnly
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import SuspensionModel
 from wheelload.estimators.result import StepFlag
 from wheelload.estimators.samples import step_through
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, ModelParameters, static_loads
 
 N = 400

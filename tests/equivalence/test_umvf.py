@@ -17,9 +17,9 @@ from wheelload.estimators.family.umvf import (
     umvf_update,
     unknown_input,
 )
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import Estimator, SuspensionModel
 from wheelload.estimators.samples import step_through
+from wheelload.estimators.types import Signals
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.family.quarter_car import quarter_car_function, reduced_quarter_car_function
 

@@ -84,7 +84,7 @@ def test_discrete_frequency_response_matches_eq14_within_1_db_up_to_20_hz():
 
 def test_step_and_run_agree_and_static_loads_hold_at_rest():
     """Compiled run equals repeated step; at rest on level ground it returns the static loads."""
-    from wheelload.estimators.logs.signals import Signals
+    from wheelload.estimators.types import Signals
 
     vehicle = load_vehicle(example_vehicle_path())
     ycoo = Ycoo(vehicle)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from wheelload.models.files.build_folder import build_folder
+from wheelload.models.runtime.build_folder import build_folder
 
 
 def test_build_folder_is_private(tmp_path, monkeypatch):
@@ -43,7 +43,7 @@ def test_an_object_is_compiled_once_per_text_and_flags(tmp_path, monkeypatch):
     """cached_object: the same C text and flags give the same object file, compiled once
     (the file is not rewritten); a changed header or flag gives a new one; a damaged object
     is compiled again, never linked."""
-    from wheelload.models.files.build_folder import cached_object
+    from wheelload.models.runtime.build_folder import cached_object
 
     _private_build_folder(tmp_path, monkeypatch)
     source, header = tmp_path / "tiny.c", tmp_path / "tiny.h"
@@ -66,7 +66,7 @@ def test_an_object_is_compiled_once_per_text_and_flags(tmp_path, monkeypatch):
 def test_the_compilers_report_is_kept_beside_the_cached_object(tmp_path, monkeypatch):
     """build_report: what gcc printed when it built the object (here a -Wall warning), read
     back later without compiling again; a build without a message leaves an empty report."""
-    from wheelload.models.files.build_folder import BuildFolderError, build_report, cached_object
+    from wheelload.models.runtime.build_folder import BuildFolderError, build_report, cached_object
 
     _private_build_folder(tmp_path, monkeypatch)
     source = tmp_path / "noisy.c"
@@ -96,7 +96,7 @@ def test_processes_that_need_one_object_at_once_compile_it_once(tmp_path):
     header.write_text("#define SCALE 2\n")
     source.write_text('#include "tiny.h"\nint tiny(int x) { return SCALE * x; }\n')
     program = (
-        "from pathlib import Path; from wheelload.models.files.build_folder import cached_object;"
+        "from pathlib import Path; from wheelload.models.runtime.build_folder import cached_object;"
         f"print(cached_object(Path('{source}'), (Path('{header}'),), ('{compiler}', '-O1')))"
     )
     env = {**os.environ, "TMPDIR": str(tmp_path)}

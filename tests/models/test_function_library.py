@@ -1,4 +1,4 @@
-"""Stored Functions as compiled C (models/files/function_library.py) and the code digest.
+"""Stored Functions as compiled C (models/runtime/function_library.py) and the code digest.
 
 The C gives CasADi's virtual machine's numbers to the bit (the derived parameters
 enter every estimate); the libraries and records are real files in a private
@@ -22,9 +22,9 @@ from wheelload.models import (
     load_vehicle,
     suspension_function,
 )
-from wheelload.models.files import function_cache, function_library
-from wheelload.models.files.function_cache import PACKAGE_ROOT, SOURCE_FOLDERS, code_digest
 from wheelload.models.parameters import _build_derived_function
+from wheelload.models.runtime import function_cache, function_library
+from wheelload.models.runtime.function_cache import PACKAGE_ROOT, SOURCE_FOLDERS, code_digest
 
 
 @pytest.fixture
@@ -32,7 +32,7 @@ def private_folder(tmp_path, monkeypatch):
     """Records, stored Functions and libraries built anew in ``tmp_path``."""
     for module in (function_cache, function_library):
         monkeypatch.setattr(module, "build_folder", lambda: tmp_path)
-    from wheelload.models.files import build_folder
+    from wheelload.models.runtime import build_folder
 
     monkeypatch.setattr(build_folder, "build_folder", lambda: tmp_path)
     function_cache.stored_function.cache_clear()

@@ -16,8 +16,8 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators import Sample, TwoStageKF, read_log, write_log
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, build_program, generate
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.tuning import TUNED_DENSITIES, TUNING_INDEX, noise_densities
 from wheelload.estimators.protocol import sample_intervals

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.protocol import Sample
+from wheelload.estimators.types import Sample
 from wheelload.models import (
     GATES,
     GRAVITY,

@@ -4,8 +4,8 @@ import os
 import subprocess
 import sys
 
-from wheelload.models.files import temporaries
-from wheelload.models.files.temporaries import remove_stale, replacing, temporary_file
+from wheelload.models.runtime import temporaries
+from wheelload.models.runtime.temporaries import remove_stale, replacing, temporary_file
 
 
 def _dead_pid() -> int:

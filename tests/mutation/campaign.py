@@ -66,16 +66,16 @@ AREAS = {
             "tests/equivalence",
             "tests/models",
         ),
-        exclude=("models/files/*.py",),
+        exclude=("models/runtime/*.py",),
     ),
     "kf-step": Area(
         (
             "estimators/kf/step.py",
-            "estimators/kf/limits.py",
-            "estimators/kf/innovation_gate.py",
+            "estimators/guards/limits.py",
+            "estimators/guards/innovation_gate.py",
             "estimators/kf/projection.py",
             "estimators/kf/payload.py",
-            "estimators/kf/plausibility.py",
+            "estimators/guards/plausibility.py",
             "estimators/kf/reported_std.py",
         ),
         ("tests/estimators/kf",),
@@ -113,11 +113,11 @@ def named_mutants() -> list[tuple[str, Mutant]]:
                '"mph": (Kind.SPEED, 0.44704)', '"mph": (Kind.SPEED, 1.609)'),
         _named("tyre-step", "models/family/tyre_forces.py",
                "fxf * c + fxr, fxf * s,", "fxf * c + fxr, -fxf * s,"),
-        _named("kf-step", "estimators/kf/limits.py",
+        _named("kf-step", "estimators/guards/limits.py",
                "ca.fabs(x[i]) <= g.load_limit * weight", "x[i] <= g.load_limit * weight"),
-        _named("kf-step", "estimators/kf/limits.py",
+        _named("kf-step", "estimators/guards/limits.py",
                "ca.sqrt(ceiling / P[i, i])", "(ceiling / P[i, i])"),
-        _named("kf-step", "estimators/kf/innovation_gate.py",
+        _named("kf-step", "estimators/guards/innovation_gate.py",
                "count_prior >= 3", "count_prior >= 4"),
         _named("kf-step", "estimators/kf/projection.py",
                "P if weighting is Weighting.MAXIMUM_PROBABILITY else ca.DM.eye(x.shape[0])",
@@ -138,7 +138,7 @@ EQUIVALENT: dict[tuple[str, str], str] = {
     "scalar 1, so W^-1 A^T is A^T all the same (W = I)",
     ("estimators/kf/projection.py:60", "(1)"): "a row left out (mask 0) meets a zero gain "
     "column (K = W^-1 A^T M S^-1): any residual there gives the same update",
-    ("estimators/kf/plausibility.py:105", "(1 + jump)"): "rate_gated is read as a truth "
+    ("estimators/guards/plausibility.py:105", "(1 + jump)"): "rate_gated is read as a truth "
     "value only (logic_or): -1 and 1 are both true",
     ("estimators/logs/readers/chunks.py:29", "(2)"): "CSV_BLOCK sets the bytes read at a "
     "time, not the values: the chunks of rows are cut from any block",

@@ -24,7 +24,7 @@ import pandas as pd
 import pytest
 
 from wheelload.models import example_vehicle_path
-from wheelload.models.files.build_folder import build_folder, checked_library
+from wheelload.models.runtime.build_folder import build_folder, checked_library
 from wheelload.studies.pipeline.example_log import example_log_path
 
 pytestmark = pytest.mark.heavy(38)  # seconds (tests/conftest.py)

@@ -19,12 +19,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.mhe import embedded_settings, mhe_includes
 from wheelload.estimators.codegen.mhe_build import MAIN, compiled_sources, write_inputs
-from wheelload.estimators.logs.signals import Signals, read_log
+from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
+from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, INPUTS, example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 

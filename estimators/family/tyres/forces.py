@@ -73,10 +73,10 @@ from wheelload.estimators.family.tyres.step import (
 )
 from wheelload.estimators.kernels.discretise import expm
 from wheelload.estimators.kf.method import build_kf
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.loops.compiled import CompiledLoop
-from wheelload.estimators.protocol import MethodInfo, Sample
+from wheelload.estimators.protocol import MethodInfo
 from wheelload.estimators.result import Estimate, StepFlag
+from wheelload.estimators.types import Sample, Signals
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.aero import aero_forces
 from wheelload.models.body_attitude import attitude_function

@@ -2,12 +2,12 @@
 
 :func:`read_frame` returns our columns (SI units, one clock) as a DataFrame,
 which ``signals_from_frame`` validates into ``Signals``. The names below are
-imported on first use (:mod:`~wheelload.models.files.lazy_names`): the lean
+imported on first use (:mod:`~wheelload.models.runtime.lazy_names`): the lean
 whole-log path reads its chunks (``readers/chunks.py``) without the channel maps.
 """
 
 from wheelload.estimators.logs.readers.formats import SUFFIXES
-from wheelload.models.files.lazy_names import lazy_names
+from wheelload.models.runtime.lazy_names import lazy_names
 
 _LAZY_MODULES = {
     "wheelload.estimators.logs.readers.channel_map": (

@@ -39,7 +39,7 @@ import numpy as np
 from wheelload.estimators.logs.readers.resample import Method, resample
 from wheelload.estimators.logs.readers.units import Kind, UnitError, unit_factor
 from wheelload.models.conventions import WHEELS
-from wheelload.models.files.toml_file import TomlFileKind, read_toml
+from wheelload.models.runtime.toml_file import TomlFileKind, read_toml
 
 if TYPE_CHECKING:
     import pandas as pd

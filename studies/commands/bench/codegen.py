@@ -14,7 +14,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from wheelload.estimators.codegen.c_emitter import Precision, operation_counts
+from wheelload.estimators.kernels.c_emitter import Precision, operation_counts
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
 from wheelload.studies.bench.step_timing import c_step_ns, cpu_mhz, filterpy_step_ns, python_step_ns

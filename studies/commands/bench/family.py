@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method, methods
+from wheelload.estimators.types import Signals
 from wheelload.studies.commands.options import add_allow_unusual
 
 REFERENCE = "kf"

@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators import StepFlag
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.logs.signals import derive_velocities, signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle

@@ -15,7 +15,7 @@ over ``--repeats`` alternating repeats (min / median / max of the ratio):
   and the Monte Carlo study now use, against what they used);
 - the single C step (double, fastest of short passes) against its
   dependency-chain bound (the longest chain of the kernel's instructions at
-  :data:`~wheelload.estimators.codegen.c_emitter.LATENCY` cycles each) and its
+  :data:`~wheelload.estimators.kernels.c_emitter.LATENCY` cycles each) and its
   throughput bound (the compiled kernel's instruction mix,
   :mod:`~wheelload.studies.bench.c_step_bounds`), in cycles of the
   measured clock; and against the same step with plain C99 selects built
@@ -31,8 +31,8 @@ import tempfile
 from pathlib import Path
 
 from wheelload.estimators import TwoStageKF
-from wheelload.estimators.codegen.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions
+from wheelload.estimators.kernels.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
 from wheelload.studies.bench.c_step_bounds import compiled_mix, measured_clock_mhz

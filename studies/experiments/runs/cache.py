@@ -24,7 +24,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from wheelload.models.files.temporaries import temporary_file
+from wheelload.models.runtime.temporaries import temporary_file
 from wheelload.studies.experiments.runs.cache_entries import (
     CacheEntryError,
     read_entry,

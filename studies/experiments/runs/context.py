@@ -3,7 +3,7 @@
 Outputs never replace an existing file without ``force``; each is written to
 a temporary file in the output folder and renamed (removed on an error, Ctrl-C
 or SIGTERM; a killed run's is removed when the folder is written next:
-:mod:`wheelload.models.files.temporaries`).
+:mod:`wheelload.models.runtime.temporaries`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
-from wheelload.models.files.temporaries import replacing
+from wheelload.models.runtime.temporaries import replacing
 from wheelload.studies.experiments.runs.estimator_model import SHORT_WORDS, EstimatorModel
 from wheelload.studies.experiments.runs.runner import Runner
 

@@ -16,7 +16,6 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF, read_log, signals_from_frame, write_log
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import (
     CodegenOptions,
     ParamMode,
@@ -24,6 +23,7 @@ from wheelload.estimators.codegen.kf import (
     calibration_names,
     generate,
 )
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.logs.signals import rate_derivatives
 from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, WHEELS

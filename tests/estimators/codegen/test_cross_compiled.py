@@ -15,10 +15,10 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators import TwoStageKF, read_log
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.codegen.mhe import embedded_settings
 from wheelload.estimators.codegen.mhe_build import build_mhe_program, write_inputs
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.models import example_vehicle_path

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import read_log
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.mhe import embedded_settings
 from wheelload.estimators.codegen.mhe_build import build_mhe_library
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import (
     BiasStates,

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import read_log
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.registry import build
 from wheelload.estimators.result import StepFlag
 from wheelload.models import example_vehicle_path, load_vehicle

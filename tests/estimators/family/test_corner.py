@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.family.corner import CornerBased, CornerSettings
-from wheelload.estimators.logs.signals import Signals, read_log
+from wheelload.estimators.logs.signals import read_log
 from wheelload.estimators.protocol import Estimator, SuspensionModel
 from wheelload.estimators.samples import samples, step_through
+from wheelload.estimators.types import Signals
 from wheelload.models import (
     ModelParameters,
     example_vehicle_path,

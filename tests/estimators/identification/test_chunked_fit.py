@@ -19,8 +19,8 @@ import pytest
 
 from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
 from wheelload.estimators.identification.fit import FitLoss, FitPath, FitSettings
-from wheelload.estimators.logs.spill import on_disk
 from wheelload.models import ModelParameters
+from wheelload.models.runtime.spill import on_disk
 from wheelload.studies.pipeline.example_log import example_log_path
 
 

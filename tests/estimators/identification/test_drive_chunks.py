@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from wheelload.estimators.identification import default_model, read_drive
-from wheelload.estimators.logs.spill import on_disk
+from wheelload.models.runtime.spill import on_disk
 from wheelload.studies.pipeline.example_log import example_log_path
 
 TILES = 49

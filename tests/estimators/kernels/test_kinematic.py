@@ -12,8 +12,8 @@ from wheelload.estimators.logs.signals import (
     Differentiator,
     RateDerivativeFilter,
     RateEstimator,
-    Steps,
 )
+from wheelload.estimators.types import Steps
 from wheelload.studies.pipeline.example_log import example_log_path
 
 GYRO = 0.007 * np.pi / 180.0  # rad/s/sqrt(Hz), MTi-1 class noise density

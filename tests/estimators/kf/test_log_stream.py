@@ -13,7 +13,8 @@ import pytest
 from wheelload.estimators import TwoStageKF, read_log
 from wheelload.estimators.kf.log_stream import scan_log
 from wheelload.estimators.logs.output_files import OutputError, table_writer
-from wheelload.estimators.logs.signals import Differentiator, Steps, derive_velocities
+from wheelload.estimators.logs.signals import Differentiator, derive_velocities
+from wheelload.estimators.types import Steps
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest

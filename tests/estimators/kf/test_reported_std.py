@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import TwoStageKF
+from wheelload.estimators.guards.monitor_state import MONITOR_SIZE, SIGMA_INNOVATION, SIGMA_RESIDUAL
 from wheelload.estimators.identification.sigma_fit import fit_sigma, scores, sigma_data
-from wheelload.estimators.kf.monitor_state import MONITOR_SIZE, SIGMA_INNOVATION, SIGMA_RESIDUAL
 from wheelload.estimators.kf.reported_std import SIGMA_TIME, sigma_features
 from wheelload.estimators.kf.tuning import SIGMA_TUNING
 from wheelload.estimators.logs.signals import signals_from_frame

@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.kf.step import step_function
-from wheelload.models.files import function_cache
+from wheelload.models.runtime import function_cache
 
 
 def _c_source(function: ca.Function) -> str:

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval, with_filter_sigma
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from wheelload.estimators.kf.tuning import MAX_INTERVAL, nominal_interval
-from wheelload.estimators.logs.signals import Steps
-from wheelload.estimators.logs.spill import Appended, columns, on_disk, release, row_values
+from wheelload.estimators.types import Steps
+from wheelload.models.runtime.spill import Appended, columns, on_disk, release, row_values
 
 STATUS = Path("/proc/self/status")
 

@@ -81,7 +81,7 @@ def test_a_press_an_extension_swallowed_leaves_no_output(tmp_path):
     """Ctrl-C counted by the command line's handler but swallowed by an extension (as
     CasADi's evaluation does) while the table was written: the output is not put in place,
     the temporary is removed, and the press is raised."""
-    from wheelload.estimators import interrupts
+    from wheelload.models.runtime import interrupts
 
     path = tmp_path / "loads.csv"
     try:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GUARDS_OFF
+from wheelload.estimators.guards.settings import GUARDS_OFF
 from wheelload.estimators.kf.projection import ProjectionKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings

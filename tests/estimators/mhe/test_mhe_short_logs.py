@@ -12,10 +12,10 @@ from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators.logs.inputs import input_matrix
-from wheelload.estimators.logs.signals import Signals
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.estimators.protocol import sample_intervals
+from wheelload.estimators.types import Signals
 
 ESTIMATORS = {}
 

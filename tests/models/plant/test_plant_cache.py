@@ -3,8 +3,8 @@
 import casadi as ca
 import numpy as np
 
-from wheelload.models.files.build_folder import build_folder
 from wheelload.models.plant.dynamics import chunk_from_ode
+from wheelload.models.runtime.build_folder import build_folder
 
 
 def _ode(stiffness: float) -> ca.Function:

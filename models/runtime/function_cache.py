@@ -7,7 +7,7 @@ form takes well under a millisecond for a model Function. A stored Function is
 named by its builder (module and name) and :func:`code_digest` (a hash of every
 ``.py`` file of ``wheelload.models`` and ``wheelload.estimators`` and of the CasADi
 version), so an edit of any of them builds it again. It lives in the private build folder
-(:func:`~wheelload.models.files.build_folder.build_folder`), written to a
+(:func:`~wheelload.models.runtime.build_folder.build_folder`), written to a
 temporary file and renamed into place; a file that does not load is built
 again (with a one-line note).
 
@@ -29,8 +29,8 @@ from pathlib import Path
 
 import casadi as ca
 
-from wheelload.models.files.build_folder import build_folder
-from wheelload.models.files.temporaries import replacing
+from wheelload.models.runtime.build_folder import build_folder
+from wheelload.models.runtime.temporaries import replacing
 
 _log = logging.getLogger(__name__)
 
@@ -40,7 +40,7 @@ _STEMS: dict[int, tuple[str, ca.Function]] = {}
 
 #: The folders of the package whose sources the stored Functions and libraries are built from.
 SOURCE_FOLDERS = ("models", "estimators")
-#: The package's folder (``models/files/`` is two below it).
+#: The package's folder (``models/runtime/`` is two below it).
 PACKAGE_ROOT = Path(__file__).resolve().parents[2]
 
 

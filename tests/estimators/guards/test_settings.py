@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings, guard_settings_for
+from wheelload.estimators.guards.settings import GUARDS_OFF, GuardSettings, guard_settings_for
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.vehicle.description import VehicleFileError

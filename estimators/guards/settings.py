@@ -6,7 +6,7 @@ time. The guards build CasADi expressions inside the symbolic filter step
 (:func:`wheelload.estimators.kf.step.step_expressions`), so the Python step, the compiled
 loop and the generated C share one implementation:
 
-- :mod:`wheelload.estimators.kf.plausibility`: input ranges, rate consistency, held inputs;
+- :mod:`wheelload.estimators.guards.plausibility`: input ranges, rate consistency, held inputs;
 - :mod:`.innovation_gate`: the :math:`\chi^2_1` gate per update row, with release;
 - :mod:`.limits`: the state limit and the covariance floor and ceiling;
 - :mod:`.fault_monitor`: stuck channels and parity-space fault isolation (Gertler 1998, ch. 5);

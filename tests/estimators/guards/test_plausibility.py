@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
-from wheelload.estimators.kf.monitor_state import CREDIT, HELD, MONITOR_SIZE
-from wheelload.estimators.kf.plausibility import rate_consistency
+from wheelload.estimators.guards.monitor_state import CREDIT, HELD, MONITOR_SIZE
+from wheelload.estimators.guards.plausibility import rate_consistency
+from wheelload.estimators.guards.settings import GUARDS_OFF, GuardSettings
 from wheelload.models.inputs import BODY_RATES, INPUTS
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.guards.settings import GuardSettings
 
 
 def prior_innovations(x, P, z, b, A, r_s, r_c):

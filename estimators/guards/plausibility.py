@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.kf.guard import GuardSettings
-from wheelload.estimators.kf.monitor_state import CREDIT, HELD, SETTLE
+from wheelload.estimators.guards.monitor_state import CREDIT, HELD, SETTLE
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.models import GRAVITY, ModelParameters
 from wheelload.models.inputs import (
     BODY_RATE_DERIVATIVES,

@@ -30,7 +30,7 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from wheelload.models.files.temporaries import remove_stale, temporary_file
+from wheelload.models.runtime.temporaries import remove_stale, temporary_file
 
 _log = logging.getLogger(__name__)
 
@@ -287,7 +287,7 @@ def keyed_library(
 ) -> ctypes.CDLL:
     """As :func:`shared_library`, named by ``key`` instead of the source's text: ``source()``
     is generated only when the library is built. ``key`` must determine the source (a hash
-    of the code that generates it, :func:`~wheelload.models.files.function_cache.code_digest`,
+    of the code that generates it, :func:`~wheelload.models.runtime.function_cache.code_digest`,
     and the arguments it is generated from), so that a changed source never meets a
     library built from another."""
     return _cached_build(

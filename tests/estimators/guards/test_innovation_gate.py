@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF
-from wheelload.estimators.kf.guard import GUARDS_OFF, GuardSettings
-from wheelload.estimators.kf.innovation_gate import gate_rows, prior_failures, prior_innovations
-from wheelload.estimators.kf.monitor_state import STARTED
+from wheelload.estimators.guards.innovation_gate import gate_rows, prior_failures, prior_innovations
+from wheelload.estimators.guards.monitor_state import STARTED
+from wheelload.estimators.guards.settings import GUARDS_OFF, GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals

@@ -31,8 +31,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from wheelload.estimators.kf.guard import FAULT_CHANNELS, GuardSettings
-from wheelload.estimators.kf.monitor_state import (
+from wheelload.estimators.guards.monitor_state import (
     ANCHOR,
     CLEAR,
     D_PREV,
@@ -52,6 +51,7 @@ from wheelload.estimators.kf.monitor_state import (
     TRAVEL_SEEN,
     UNEXPLAINED,
 )
+from wheelload.estimators.guards.settings import FAULT_CHANNELS, GuardSettings
 from wheelload.models import GRAVITY
 from wheelload.models.inputs import (
     INPUTS,

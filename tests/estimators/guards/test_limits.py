@@ -14,8 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wheelload.estimators import Sample, StepFlag, TwoStageKF
-from wheelload.estimators.kf import limits
-from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.guards import limits
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.tuning import with_filter_sigma
 from wheelload.models import GRAVITY
 from wheelload.studies.experiments.faults.fault_injection import pooled_rmse
@@ -79,7 +79,7 @@ def numeric(function, *arguments):
 
 
 def within_envelope(x, x_prior, total):
-    """Independent reading of the envelope (estimators/kf/limits.py): every |F_z| within
+    """Independent reading of the envelope (estimators/guards/limits.py): every |F_z| within
     load_limit m g and the total no further outside the log's vertical-row range, widened
     by total_margin m g, than before the update."""
     low = WEIGHT + total[0] - LIMITS.total_margin * WEIGHT
@@ -158,8 +158,8 @@ def test_an_update_that_brings_the_total_back_is_taken(vehicle, dlc):
     """A running filter whose loads sum to 0.5 m g too much (each wheel 2 kN high, P wide
     enough for every row to pass the gate): the first update takes the total back towards
     the vertical row's m a_z (the envelope refuses only updates that carry the total
-    further out, estimators/kf/limits.py), to within 10 % of where it was."""
-    from wheelload.estimators.kf.monitor_state import STARTED
+    further out, estimators/guards/limits.py), to within 10 % of where it was."""
+    from wheelload.estimators.guards.monitor_state import STARTED
 
     kf = TwoStageKF(vehicle)
     start = kf.initial_state()
@@ -213,7 +213,7 @@ def test_the_vertical_rows_range_grows_without_ax(vehicle, dlc):
     monitor state) takes a sample whose az reads 2 m/s^2 high whether or not ax is there
     (the vertical row needs az, not ax; the pitch row needs both): with ax missing it
     grows to within 1 % of where it grows with ax, about 2 m (aerodynamic lift aside)."""
-    from wheelload.estimators.kf.monitor_state import TOTAL
+    from wheelload.estimators.guards.monitor_state import TOTAL
 
     kf = TwoStageKF(vehicle)
     state, dt = running(kf, dlc, 100), np.diff(dlc.t)

@@ -1,9 +1,9 @@
 """Stored model Functions as compiled C, evaluated through ctypes: no CasADi once built.
 
-A Function of :func:`~wheelload.models.files.function_cache.stored_function` is
+A Function of :func:`~wheelload.models.runtime.function_cache.stored_function` is
 emitted as C by CasADi (its outputs made dense) with a loop that evaluates it on
 ``n`` samples, compiled once into the build folder
-(:func:`~wheelload.models.files.build_folder.keyed_library`, named by the builder
+(:func:`~wheelload.models.runtime.build_folder.keyed_library`, named by the builder
 and the code digest), beside its :class:`Signature` (names and sizes, JSON). A
 later run reads both without importing CasADi: a warm single-log estimate takes
 the models' numbers (the derived parameters, the checks' pseudo-measurements and
@@ -26,8 +26,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from wheelload.models.files.build_folder import build_folder, keyed_library
-from wheelload.models.files.function_cache import (
+from wheelload.models.runtime.build_folder import build_folder, keyed_library
+from wheelload.models.runtime.function_cache import (
     builder_name,
     builder_stem,
     store_text,
@@ -199,7 +199,7 @@ def stored_library(
     both known without CasADi when this code built them before: the signature from its
     record (``<builder>_<digest>.signature.json`` in the build folder), the library keyed
     by the code digest, ``layout`` and that signature
-    (:func:`~wheelload.models.files.build_folder.keyed_library`). CasADi builds them
+    (:func:`~wheelload.models.runtime.build_folder.keyed_library`). CasADi builds them
     otherwise; a record that is not the Function's is made again."""
     stem = builder_stem(builder)
     record = build_folder() / f"{stem}{'.dense' if dense else ''}.signature.json"

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from wheelload.estimators import StepFlag, TwoStageKF, write_log
-from wheelload.estimators.kf.guard import GuardSettings
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.experiments.faults import fault_injection as fi

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.kf.guard import GuardSettings
-from wheelload.estimators.kf.monitor_state import TOTAL
+from wheelload.estimators.guards.monitor_state import TOTAL
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.models import GRAVITY
 
 

@@ -3,7 +3,7 @@
 One vector carried from sample to sample by the step (input ``m``, output ``m_next``): the
 fault monitor's slots (:mod:`.fault_monitor`), the innovation gate's rejection times and
 spreads (:mod:`.innovation_gate`), then each input's held value and hold time, the rate
-derivatives' settle times (:mod:`wheelload.estimators.kf.plausibility`), the range of the
+derivatives' settle times (:mod:`wheelload.estimators.guards.plausibility`), the range of the
 vertical row (:mod:`.limits`), the reported sigma's running means (:mod:`.reported_std`)
 and the payload filter (:mod:`wheelload.estimators.kf.payload`). It starts at zero.
 
