@@ -20,12 +20,6 @@ from __future__ import annotations
 
 import casadi as ca
 
-from wheelload.estimators.kernels.kalman import (
-    predict,
-    sequential_update,
-    sequential_update_innovations,
-    upper,
-)
 from wheelload.estimators.guards import (
     fault_monitor,
     innovation_gate,
@@ -34,6 +28,12 @@ from wheelload.estimators.guards import (
     plausibility,
 )
 from wheelload.estimators.guards import settings as guard
+from wheelload.estimators.kernels.kalman import (
+    predict,
+    sequential_update,
+    sequential_update_innovations,
+    upper,
+)
 from wheelload.estimators.kf import payload, reported_std
 from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import (

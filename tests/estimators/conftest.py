@@ -1,5 +1,5 @@
-"""Fixtures of the KF tests: a plant log, single-sample edits of it, and an independent numpy
-Kalman step to check the filter against."""
+"""Fixtures of the KF and guard tests: a plant log, single-sample edits of it, and an independent
+numpy Kalman step to check the filter against."""
 
 import dataclasses
 
