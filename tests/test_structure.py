@@ -253,9 +253,10 @@ def test_tests_import_no_command_module():
     assert not offending, f"tests importing command modules: {offending}"
 
 
-@pytest.mark.parametrize("constant", ["WHEELS", "GRAVITY"])
+@pytest.mark.parametrize("constant", ["WHEELS", "GRAVITY", "AXLES", "SUSPENSION_TABLES"])
 def test_a_shared_constant_is_defined_once(constant):
-    """The wheel order and gravity live in ``models/conventions.py``; everyone imports them."""
+    """The wheel and axle orders, the suspension tables and gravity live in
+    ``models/conventions.py``; everyone imports them."""
     homes = sorted(
         module
         for module, path in modules().items()

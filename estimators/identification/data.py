@@ -33,11 +33,10 @@ import pandas as pd
 
 from wheelload.estimators.logs.signals import rate_derivatives, signals_from_frame
 from wheelload.estimators.types import RATE_DERIVATIVES, RATES, TRAVEL, TRAVEL_RATE, LogError
-from wheelload.models.conventions import WHEELS
+from wheelload.models.conventions import AXLES, WHEELS
 from wheelload.models.runtime import spill
 from wheelload.models.runtime.spill import SPILL_BYTES, release
 
-AXLES = ("front", "rear")
 CORNER_COLUMNS = ("d", "v", "force")
 ARB_COLUMNS = ("d_left", "d_right", "force")
 BLOCK = 1 << 16  # samples per block of a pass over a data set that may be on disk

@@ -16,6 +16,7 @@ import numpy as np
 
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
+from wheelload.models.conventions import SUSPENSION_TABLES
 from wheelload.models.payload import Payload
 from wheelload.models.vehicle.description import vehicle_from_dict
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
@@ -36,7 +37,6 @@ PAYLOADS = {
     "300 kg rear": Payload(mass=300.0, x=-1.3, y=0.0, z=0.15),
     "75 kg roof": Payload(mass=75.0, x=-0.4, y=0.0, z=0.6),
 }
-AXLES = ("suspension.front", "suspension.rear")
 #: One corner's travel zero for the zero rows [m].
 ZERO = 3e-3
 
@@ -45,11 +45,11 @@ def wrong_files(text: str) -> list[Variant]:
     """The issue's wrong files: bars removed, springs and mass 20 % off."""
     return [
         Variant(label="bars removed",
-                edits=tuple(Edit(table=a, key="arb_rate", value=0.0) for a in AXLES)),
+                edits=tuple(Edit(table=a, key="arb_rate", value=0.0) for a in SUSPENSION_TABLES)),
         Variant(label="springs -20 %",
-                edits=tuple(scaled(text, a, "spring_rate", 0.8) for a in AXLES)),
+                edits=tuple(scaled(text, a, "spring_rate", 0.8) for a in SUSPENSION_TABLES)),
         Variant(label="springs +20 %",
-                edits=tuple(scaled(text, a, "spring_rate", 1.2) for a in AXLES)),
+                edits=tuple(scaled(text, a, "spring_rate", 1.2) for a in SUSPENSION_TABLES)),
         Variant(label="mass -20 %", edits=mass_edits(text, 0.8)),
         Variant(label="mass +20 %", edits=mass_edits(text, 1.2)),
     ]  # fmt: skip

@@ -26,12 +26,10 @@ import numpy as np
 import pandas as pd
 
 from wheelload.estimators.logs.output_files import check_outputs, write_text
-from wheelload.models.conventions import WHEELS
+from wheelload.models.conventions import AXLES, WHEELS
 from wheelload.models.plant.dynamics import corner_suspension_force, corners
 from wheelload.models.suspension.elements import anti_roll_bar_forces
 from wheelload.models.vehicle.description import Vehicle
-
-AXLES = ("front", "rear")
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from wheelload.models.conventions import SUSPENSION_TABLES
 from wheelload.studies.experiments.report.tables import markdown
 from wheelload.studies.experiments.runs.common import Section, all_methods, trials, truth_spec
 from wheelload.studies.experiments.runs.context import Context
@@ -14,7 +15,6 @@ from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, s
 
 SCENARIO = "hockenheim"
 ERROR = 0.20
-AXLES = ("suspension.front", "suspension.rear")
 
 
 def mass_edits(text: str, factor: float) -> tuple[Edit, ...]:
@@ -35,11 +35,12 @@ def mismatch_variants(text: str) -> list[Variant]:
         tag = f"{sign * ERROR * 100:+.0f} %"
         variants += [
             Variant(label=f"springs {tag}",
-                    edits=tuple(scaled(text, a, "spring_rate", k) for a in AXLES)),
+                    edits=tuple(scaled(text, a, "spring_rate", k) for a in SUSPENSION_TABLES)),
             Variant(label=f"dampers {tag}",
-                    edits=tuple(scaled(text, a, key, k) for a in AXLES
+                    edits=tuple(scaled(text, a, key, k) for a in SUSPENSION_TABLES
                                 for key in ("damper_push", "damper_pull"))),
-            Variant(label=f"ARB {tag}", edits=tuple(scaled(text, a, "arb_rate", k) for a in AXLES)),
+            Variant(label=f"ARB {tag}",
+                    edits=tuple(scaled(text, a, "arb_rate", k) for a in SUSPENSION_TABLES)),
             Variant(label=f"mass {tag}", edits=mass_edits(text, k)),
             Variant(label=f"CG height {tag}", edits=(scaled(text, "geometry", "cg_height", k),)),
         ]  # fmt: skip

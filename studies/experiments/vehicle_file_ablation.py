@@ -41,6 +41,7 @@ from dataclasses import replace
 import numpy as np
 
 from wheelload.models import ModelParameters
+from wheelload.models.conventions import SUSPENSION_TABLES
 from wheelload.models.vehicle.description import vehicle_from_dict
 from wheelload.studies.experiments.equilibrium_residuals import noise_calibration
 from wheelload.studies.experiments.report.paper_numbers import ABLATION
@@ -53,7 +54,6 @@ from wheelload.studies.experiments.runs.estimator_model import EstimatorModel, o
 from wheelload.studies.experiments.runs.units import TRUTH, TrialSpec, measured
 from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled, value
 
-AXLES = ("suspension.front", "suspension.rear")
 RC_SCALES = (0.25, 0.5, 2.0, 4.0)
 NO_CONSTRAINT_SCALE = 1e12
 
@@ -93,13 +93,14 @@ def ablation_variants(text: str, model: EstimatorModel = EstimatorModel.FULL) ->
     """The cases of Table V as edits of the vehicle file ``text``, then the model switches
     (none on the paper's model, whose terms are all off)."""
     constraint = ("filter", "constraint_noise_density")
-    no_bars = tuple(Edit(table=a, key="arb_rate", value=0.0) for a in AXLES)
+    no_bars = tuple(Edit(table=a, key="arb_rate", value=0.0) for a in SUSPENSION_TABLES)
     switches = model_switches(text) if model is EstimatorModel.FULL else []
     return [
         Variant(label="baseline"),
         Variant(label="no aero", edits=(Edit(table="aero", key="lift_coefficient", value=0.0),)),
         Variant(label="no ARB", edits=(*no_bars, held_roll_split(text, model))),
-        Variant(label="symmetric damper", edits=_damper(text, AXLES[0]) + _damper(text, AXLES[1])),
+        Variant(label="symmetric damper",
+                edits=tuple(e for table in SUSPENSION_TABLES for e in _damper(text, table))),
         Variant(label="no constraints", edits=(scaled(text, *constraint, NO_CONSTRAINT_SCALE),)),
         *[Variant(label=f"Rc scale {k:g}", edits=(scaled(text, *constraint, k),))
           for k in RC_SCALES],

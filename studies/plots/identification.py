@@ -16,9 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wheelload.estimators.identification import DataKind, Identification  # noqa: E402
+from wheelload.models.conventions import AXLES
 
 MAX_POINTS = 4000
-AXLES = ("front", "rear")
 LEFT = {"front": "fl", "rear": "rl"}
 
 
