@@ -471,18 +471,35 @@ def _lateral(vehicle: Vehicle, settings: TyreSettings = TyreSettings()) -> TyreF
     return method
 
 
+@dataclass(frozen=True, kw_only=True)
+class TyreOptions:
+    """Options of ``tyre-pid`` and ``tyre-lateral`` (``build(name, vehicle, **options)``)."""
+
+    settings: TyreSettings = TyreSettings()  # observer, filter noise, high slip, split
+
+
+@dataclass(frozen=True, kw_only=True)
+class TyreForcesOptions(TyreOptions):
+    """Options of ``tyre-forces`` and ``tyre-rigid``."""
+
+    longitudinal: bool = True  # report F_x
+    lateral: bool = True  # report F_y
+
+
 INFO = (
     MethodInfo(
         name="tyre-pid",
         description="F_x per wheel: PI spin observer on the wheel dynamics, KF loads",
         reference="corner-based paper §III-A, eq. 1, 4-9",
         build=_pid,
+        options=TyreOptions,
     ),
     MethodInfo(
         name="tyre-lateral",
         description="F_y per wheel: adaptive KF on axle forces and yaw rate, KF loads",
         reference="corner-based paper §III-B, eq. 2-3, 10-16, §IV covariance switching",
         build=_lateral,
+        options=TyreOptions,
     ),
     MethodInfo(
         name="tyre-forces",
@@ -490,11 +507,13 @@ INFO = (
         reference="corner-based paper §III; road-angle paper §III (vertical block feeds "
         "the lateral block)",
         build=TyreForces,
+        options=TyreForcesOptions,
     ),
     MethodInfo(
         name="tyre-rigid",
         description="baseline: m a_x, m a_y (road frame, drag) split by the KF's load share",
         reference="rigid-body baseline (corner-based paper eq. 2, load-share split)",
         build=RigidSplit,
+        options=TyreForcesOptions,
     ),
 )
