@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators.registry import build
+from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import SensorFault
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
@@ -47,10 +47,11 @@ class LeanResult:
 
 
 def takes_lean_path(path: Path, settings) -> bool:
-    """Whether the lean path can take this log (the KF, not smoothed, on a CSV/Parquet log
-    named as ours); ``settings`` an :class:`~wheelload.studies.pipeline.batch.EstimateSettings`."""
+    """Whether the lean path can take this log (a method with the compiled whole-log paths,
+    :attr:`MethodInfo.compiled_batch`, not smoothed, on a CSV/Parquet log named as ours);
+    ``settings`` an :class:`~wheelload.studies.pipeline.batch.EstimateSettings`."""
     return (
-        settings.method == "kf"
+        method(settings.method).compiled_batch
         and not settings.smooth
         and settings.channels is None
         and path.suffix.lower() in (".csv", ".parquet", ".pq")
@@ -94,7 +95,7 @@ def estimate_lean(
     notes += reason
     vehicle, reason = payload_reference(vehicle, settings)
     notes += reason
-    kf = build("kf", vehicle, static=static)
+    kf = build(settings.method, vehicle, static=static)
     digest, faults = _estimate_chunks(stream, kf, out, force)
     # The file check (estimators/logs/model_error.py) on every k-th sample; a finding that
     # changes the estimates (a travel zero taken off, σ widened) runs the log again.

@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.kf.guard import GUARDS_OFF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import (
     BiasStates,
