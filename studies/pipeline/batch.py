@@ -28,27 +28,19 @@ from wheelload.estimators import (
     read_log,
 )
 from wheelload.estimators.codegen.batched import run_batched
-from wheelload.estimators.logs.checks import check_wiring, describe, raise_for_wiring
+from wheelload.estimators.logs.checks import check_wiring
 from wheelload.estimators.logs.output_files import write_frame
-from wheelload.estimators.logs.plausibility import (
-    check_plausibility,
-    describe_plausibility,
-    raise_for_plausibility,
-)
 from wheelload.estimators.logs.signals import coarse_travel_note
 from wheelload.estimators.protocol import Estimator
 from wheelload.estimators.registry import build, method, methods
 from wheelload.models import Vehicle, load_vehicle
+from wheelload.studies.pipeline.log_preparation import prepare_log
 from wheelload.studies.pipeline.log_settings import (  # noqa: F401  (named from here too)
     EstimateSettings,
     expand_logs,
 )
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
-from wheelload.studies.pipeline.measured_static import (
-    measured_static_loads,
-    payload_reference,
-    with_travel_zeroed,
-)
+from wheelload.studies.pipeline.measured_static import measured_static_loads, with_travel_zeroed
 from wheelload.studies.pipeline.summary import LoadFigures, LogHeader, summary_row
 from wheelload.studies.workers import ignore_interrupts
 
@@ -108,22 +100,19 @@ def _prepare_log(path: Path, settings: EstimateSettings):
     static)``."""
     vehicle = _vehicle(settings.vehicle, settings.allow_unusual)
     signals = read_log(path, channels=settings.channels, wiring_checks=False)
-    notes = []
     coarse = coarse_travel_note(signals.travel_quantum, guard_settings_for(vehicle).stuck_motion)
-    if coarse is not None:
-        notes.append(coarse)
-    if settings.wiring_checks:
-        report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
-        raise_for_wiring(report, signals.source)
-        notes.append(describe(report))
-        plausibility = check_plausibility(signals, vehicle)
-        raise_for_plausibility(plausibility, signals.source)
-        notes.append(describe_plausibility(plausibility))
-    static, reasons = measured_static_loads(signals, vehicle, settings)
-    notes += reasons
-    vehicle, reasons = payload_reference(vehicle, settings)
-    notes += reasons
-    return vehicle, signals, notes, static
+    prepared = prepare_log(
+        vehicle,
+        settings,
+        source=signals.source,
+        wiring_report=lambda: check_wiring(
+            signals.t, signals.vx, signals.acc, signals.d, signals.rates
+        ),
+        checked_signals=lambda: signals,
+        static_loads=lambda vehicle: measured_static_loads(signals, vehicle, settings),
+        notes=() if coarse is None else (coarse,),
+    )
+    return prepared.vehicle, signals, list(prepared.notes), prepared.static
 
 
 def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:

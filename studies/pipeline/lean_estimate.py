@@ -22,9 +22,9 @@ from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import SensorFault
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline.log_preparation import prepare_log
 from wheelload.studies.pipeline.measured_static import (
     corner_weights,
-    payload_reference,
     still_period,
     without_travel,
 )
@@ -67,12 +67,6 @@ def estimate_lean(
     numbers: the ordinary reader then reads it and names the problem.
     """
     from wheelload.estimators import scan_log
-    from wheelload.estimators.logs.checks import describe, raise_for_wiring
-    from wheelload.estimators.logs.plausibility import (
-        check_plausibility,
-        describe_plausibility,
-        raise_for_plausibility,
-    )
     from wheelload.estimators.logs.readers.chunks import ChunkError
     from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
 
@@ -82,19 +76,15 @@ def estimate_lean(
         )
     except ChunkError:
         return None
-    vehicle = load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual)
-    notes = []
-    if settings.wiring_checks:
-        report = stream.wiring_report()
-        raise_for_wiring(report, stream.source)
-        notes.append(describe(report))
-        plausibility = check_plausibility(stream.wiring or stream.head, vehicle)
-        raise_for_plausibility(plausibility, stream.source)
-        notes.append(describe_plausibility(plausibility))
-    static, reason = static_loads_for(stream, vehicle, settings)
-    notes += reason
-    vehicle, reason = payload_reference(vehicle, settings)
-    notes += reason
+    prepared = prepare_log(
+        load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual),
+        settings,
+        source=stream.source,
+        wiring_report=stream.wiring_report,
+        checked_signals=lambda: stream.wiring or stream.head,
+        static_loads=lambda vehicle: static_loads_for(stream, vehicle, settings),
+    )
+    vehicle, static, notes = prepared.vehicle, prepared.static, prepared.notes
     kf = build(settings.method, vehicle, static=static)
     digest, faults = _estimate_chunks(stream, kf, out, force)
     # The file check (estimators/logs/model_error.py) on every k-th sample; a finding that
