@@ -86,6 +86,7 @@ from wheelload.models.family.tyre_forces import (
     observer_matrices,
 )
 from wheelload.models.mass_properties import static_loads
+from wheelload.models.vehicle.wheel_geometry import loaded_radii, wheel_centres
 
 #: The paper's nominal and high-slip covariances (§IV): Q 0.11^2 -> 0.036^2, R 0.018^2 -> 0.4^2.
 HIGH_SLIP_Q = (0.036 / 0.11) ** 2
@@ -179,16 +180,12 @@ def vehicle_constants(vehicle: Vehicle) -> Constants:
             "(see 'wheelload vehicle --template')"
         )
     g, t, m, wheels = vehicle.geometry, vehicle.tyres, vehicle.mass, vehicle.wheels
-    loads = static_loads(vehicle)
-    radii = (t.radius_front, t.radius_front, t.radius_rear, t.radius_rear)
-    rates = (t.vertical_stiffness_front,) * 2 + (t.vertical_stiffness_rear,) * 2
-    positions = ((g.lf, 0.5 * g.track_front), (g.lf, -0.5 * g.track_front),
-                 (-g.lr, 0.5 * g.track_rear), (-g.lr, -0.5 * g.track_rear))  # fmt: skip
+    positions = wheel_centres(g)
     unsprung = (m.unsprung_front / 2,) * 2 + (m.unsprung_rear / 2,) * 2
     cornering = vehicle.cornering
     return Constants(
         inertia=np.array([wheels.spin_inertia_front] * 2 + [wheels.spin_inertia_rear] * 2),
-        radius=np.array([r - f / k for r, f, k in zip(radii, loads, rates)]),
+        radius=np.array(loaded_radii(t, static_loads(vehicle))),
         rolling=float(wheels.rolling_resistance),
         mass=float(m.total),
         yaw_inertia=float(m.inertia[2])
