@@ -64,17 +64,6 @@ class UnknownMethodError(ValueError):
     """A method name that is not registered (the message lists the known ones)."""
 
 
-__all__ = [
-    "UnknownMethodError",
-    "UnknownOptionError",
-    "build",
-    "core",
-    "method",
-    "methods",
-    "tyre_methods",
-]
-
-
 def _module_infos(modules: tuple[str, ...]) -> list[MethodInfo]:
     """The ``INFO`` entries of the installed ``modules``, in order."""
     infos = []

@@ -48,6 +48,18 @@ def test_method_info_rejects_bad_names():
         MethodInfo(name="a b", description="", reference="", build=TwoStageKF)
 
 
+def test_method_info_takes_only_a_frozen_options_dataclass():
+    import dataclasses
+
+    @dataclasses.dataclass
+    class Mutable:
+        horizon: int = 3
+
+    for options in (dict, Mutable, Mutable()):
+        with pytest.raises(TypeError, match="options must be a frozen dataclass"):
+            MethodInfo(name="x", description="", reference="", build=TwoStageKF, options=options)
+
+
 def test_family_modules_export_method_info():
     # Every family module present in this build contributes its entries (one, or a tuple of
     # variants: quasi_static's C and C-paper).
