@@ -14,7 +14,8 @@ registry, :mod:`wheelload.estimators.registry`) and offers
 
 Beside the protocol: the :class:`Sample` a ``step`` takes and the intervals
 between samples (:func:`sample_intervals`), the :class:`MethodInfo` each
-registered method exports as ``INFO``, and the :class:`SuspensionModel` a
+registered method exports as ``INFO`` (with the frozen dataclass of its
+options, :class:`NoOptions` for none), and the :class:`SuspensionModel` a
 family method is built on.
 
 Conventions shared by every member:
@@ -38,6 +39,7 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -98,12 +100,21 @@ DEFAULT_MODEL = SuspensionModel.FULL
 
 
 @dataclass(frozen=True, kw_only=True)
+class NoOptions:
+    """The options of a method that takes none beside the vehicle (and its model)."""
+
+
+@dataclass(frozen=True, kw_only=True)
 class MethodInfo:
     """One registered method: its name, a one-line description, its source and its builder.
 
-    ``build(vehicle, **options)``; a method with ``model_choice`` also takes
-    ``build(vehicle, suspension=SuspensionModel...)``. Each method's module exports
-    its ``INFO`` (:mod:`wheelload.estimators.registry` collects them).
+    ``build(vehicle, **options)``, the keyword options those of ``options`` (a frozen
+    dataclass, one field a keyword, with its default and a one-line comment; the registry
+    checks names and types against it); a method with ``model_choice`` also takes
+    ``build(vehicle, suspension=SuspensionModel...)``. ``compiled_batch``: the method
+    offers the compiled whole-log paths of ``wheelload estimate`` (static loads measured
+    from the log, the chunked lean path, ``smooth``). Each method's module exports its
+    ``INFO`` (:mod:`wheelload.estimators.registry` collects them).
     """
 
     name: str
@@ -111,6 +122,8 @@ class MethodInfo:
     reference: str
     build: Callable[..., Estimator]
     model_choice: bool = False
+    options: type = NoOptions
+    compiled_batch: bool = False
 
     def __post_init__(self) -> None:
         if not self.name or any(c.isspace() or c == "," for c in self.name):
@@ -119,3 +132,6 @@ class MethodInfo:
             )
         if not callable(self.build):
             raise TypeError(f"method {self.name}: build must be callable")
+        frozen = dataclasses.is_dataclass(self.options) and self.options.__dataclass_params__.frozen
+        if not (isinstance(self.options, type) and frozen):
+            raise TypeError(f"method {self.name}: options must be a frozen dataclass")

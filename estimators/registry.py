@@ -30,6 +30,8 @@ from __future__ import annotations
 import functools
 import importlib
 
+from wheelload.estimators.method_options import UnknownOptionError as UnknownOptionError
+from wheelload.estimators.method_options import check_options
 from wheelload.estimators.protocol import DEFAULT_MODEL, Estimator, MethodInfo, SuspensionModel
 from wheelload.models import Vehicle
 
@@ -60,10 +62,6 @@ TYRE_MODULES = ("tyres.forces",)
 
 class UnknownMethodError(ValueError):
     """A method name that is not registered (the message lists the known ones)."""
-
-
-class UnknownOptionError(TypeError):
-    """An option passed to :func:`build` that the method's constructor does not take."""
 
 
 def _module_infos(modules: tuple[str, ...]) -> list[MethodInfo]:
@@ -136,19 +134,13 @@ def build(
 
     ``suspension`` chooses the vehicle model of a family method (module
     docstring); the core estimators ignore it (:attr:`MethodInfo.model_choice`).
-    ``options`` go to the method's constructor as keyword arguments (the KF's
-    ``static``, ``step``, ``guard_settings``, ...); one the method does not take
-    raises :class:`UnknownOptionError` naming the method and the option.
+    ``options`` are the fields of the method's options dataclass
+    (:attr:`MethodInfo.options`: the KF's ``static``, ``step``, ``guard_settings``,
+    ...), checked first: one it does not declare, or of another type, raises
+    :class:`UnknownOptionError` naming the option, the method and the valid options.
     """
     info = method(name)
-    try:
-        if info.model_choice:
-            return info.build(vehicle, suspension=suspension, **options)
-        return info.build(vehicle, **options)
-    except TypeError as error:
-        unknown = [key for key in options if f"'{key}'" in str(error)]
-        if unknown and "unexpected keyword argument" in str(error):
-            raise UnknownOptionError(
-                f"method {info.name!r} takes no option {unknown[0]!r}"
-            ) from None
-        raise
+    check_options(info, options)
+    if info.model_choice:
+        return info.build(vehicle, suspension=suspension, **options)
+    return info.build(vehicle, **options)

@@ -41,6 +41,7 @@ import numpy as np
 from wheelload.models.conventions import GRAVITY
 from wheelload.models.parameters import ModelParameters
 from wheelload.models.vehicle.description import Vehicle
+from wheelload.models.vehicle.wheel_geometry import wheel_centres
 
 
 def roll_axis_height(p: ModelParameters):
@@ -97,13 +98,7 @@ def corner_positions(vehicle: Vehicle) -> np.ndarray:
     """Wheel centres (x, y) relative to the IMU [m], rows FL, FR, RL, RR."""
     g = vehicle.geometry
     x_imu, y_imu = g.imu_position[0], g.imu_position[1]
-    rows = [
-        (g.lf, 0.5 * g.track_front),
-        (g.lf, -0.5 * g.track_front),
-        (-g.lr, 0.5 * g.track_rear),
-        (-g.lr, -0.5 * g.track_rear),
-    ]
-    return np.array([(x - x_imu, y - y_imu) for x, y in rows])
+    return np.array([(x - x_imu, y - y_imu) for x, y in wheel_centres(g)])
 
 
 def corner_vertical_acceleration(az, roll_acc, pitch_acc, positions):

@@ -2,7 +2,9 @@
 
 - no import circle among the package's modules;
 - interface modules (the Estimator protocol, the result type) import no implementation;
-- studies and the command line reach estimators through the registry and the package face only;
+- studies and the command line reach estimators through the registry and the package face only
+  (benchmarks, which time an implementation itself, excepted: :data:`BENCHMARKS`);
+- no estimator imports the ground-truth plant (``wheelload.models.plant``), lazily neither;
 - no module imports another module's private name;
 - a folder holds few modules (one job a room), a command module is a thin front end;
 - tests import no command module (the command line's logic lives in the pipeline).
@@ -61,6 +63,11 @@ LAYERS = (
     ("the door", ("wheelload.estimators",)),
     ("studies", ("wheelload.studies",)),
 )
+#: Benchmarks time an implementation itself (a compiled loop, a QP window, bare OSQP): the one
+#: part of the studies that may import implementations directly.
+BENCHMARKS = ("wheelload.studies.bench", "wheelload.studies.commands.bench")
+#: The ground-truth plant, which no estimator may be built from.
+PLANT = "wheelload.models.plant"
 #: Most modules (``__init__`` not counted) one package folder holds.
 MOST_MODULES = 16
 #: Most lines of a command module (parse the arguments, call the pipeline, print).
@@ -198,6 +205,8 @@ def test_interface_modules_import_no_implementation(interface):
 
 
 def test_studies_reach_estimators_through_the_registry():
+    """Studies reach implementations through the registry and the face; benchmarks, by rule
+    (:data:`BENCHMARKS`), may import the implementation they time."""
     offending = sorted(
         {
             f"{module} -> {target}"
@@ -208,6 +217,36 @@ def test_studies_reach_estimators_through_the_registry():
         }
     )
     assert not offending, "\n".join(offending)
+
+
+def test_the_benchmark_rule_names_existing_folders():
+    assert all((ROOT / Path(*room.split(".")[1:])).is_dir() for room in BENCHMARKS)
+
+
+def plant_references(module: str) -> set[str]:
+    """The plant modules ``module`` imports, or names in a string (a lazy import by name)."""
+    found = {target for target, _ in imports()[module] if inside(target, (PLANT,))}
+    for node in ast.walk(ast.parse(modules()[module].read_text())):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            if node.value == PLANT or node.value.startswith(PLANT + "."):
+                found.add(node.value)
+    return found
+
+
+def test_no_estimator_imports_the_plant():
+    """The plant is the studies' independent truth: estimators (and the C they emit) are
+    built from ``models/`` outside ``models/plant`` and the vehicle description."""
+    offending = sorted(
+        f"{module} -> {target}"
+        for module in modules()
+        if module.startswith("wheelload.estimators")
+        for target in plant_references(module)
+    )
+    assert not offending, "\n".join(offending)
+
+
+def test_the_plant_rule_sees_an_import():
+    assert plant_references("wheelload.studies.drive.simulation")
 
 
 def test_no_private_name_crosses_a_module():

@@ -34,6 +34,7 @@ standard deviation.
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -109,10 +110,18 @@ class Algebraic(FamilyMethod):
         return np.array([self.attitude_cutoff])
 
 
+@dataclass(frozen=True, kw_only=True)
+class AlgebraicOptions:
+    """Options of method B (``build("B", vehicle, **options)``)."""
+
+    attitude_cutoff: float = ATTITUDE_CUTOFF  # corner [Hz] of the pitch/roll low-pass
+
+
 INFO = MethodInfo(
     name="B",
     description="algebraic load transfer, road grade/bank via low-pass suspension pitch/roll",
     reference="Siegloff & Choi §IV-B method B; Alatorre, Victorino & Charara 2017",
     build=Algebraic,
+    options=AlgebraicOptions,
     model_choice=True,
 )

@@ -156,10 +156,18 @@ class CornerBased(FamilyMethod):
         return (corner, self.parameters.vector())
 
 
+@dataclass(frozen=True, kw_only=True)
+class CornerOptions:
+    """Options of the corner-based method (``build("corner", vehicle, **options)``)."""
+
+    settings: CornerSettings = CornerSettings()  # roll-centre height, observer gain
+
+
 INFO = MethodInfo(
     name="corner",
     description="corner loads from IMU roll/pitch (drift-compensated rate observer), roll centre",
     reference="corner-based paper §III-C, eq. 17-18; roll/pitch observer after Rehm",
     build=CornerBased,
+    options=CornerOptions,
     model_choice=True,
 )

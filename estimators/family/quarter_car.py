@@ -40,6 +40,7 @@ observer state and is flagged. No standard deviation.
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -172,10 +173,18 @@ class QuarterCarObserver(FamilyMethod):
         return corner_constants(self.vehicle, self.bandwidth)
 
 
+@dataclass(frozen=True, kw_only=True)
+class QuarterCarOptions:
+    """Options of methods E and E+C (``build("E", vehicle, **options)``)."""
+
+    bandwidth: float = OBSERVER_BANDWIDTH  # both observer poles [Hz]
+
+
 INFO = MethodInfo(
     name="E",
     description="quarter-car tyre-force observer per corner, inputs from body IMU + suspension",
     reference="Siegloff & Choi §IV-B method E; Cheon, Choi, Nam & Oh 2024",
     build=QuarterCarObserver,
+    options=QuarterCarOptions,
     model_choice=True,
 )

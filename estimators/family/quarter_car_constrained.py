@@ -31,6 +31,7 @@ from wheelload.estimators.family.quarter_car import (
     FRONT_END_CONSTANTS,
     FRONT_END_STATES,
     QuarterCarObserver,
+    QuarterCarOptions,
     front_end,
 )
 from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
@@ -91,5 +92,6 @@ INFO = MethodInfo(
     description="method E's observers followed by the KF's soft equilibrium update",
     reference="Siegloff & Choi §IV-E2 (Cheon + constraint KF); eq. 19-25",
     build=ConstrainedQuarterCar,
+    options=QuarterCarOptions,
     model_choice=True,
 )

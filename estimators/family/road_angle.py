@@ -254,10 +254,19 @@ class RoadAngleKF(FamilyMethod):
         return estimate, history[2][:, [3, 5]]
 
 
+@dataclass(frozen=True, kw_only=True)
+class RoadAngleOptions:
+    """Options of the road-angle KF (``build("road-angle", vehicle, **options)``)."""
+
+    inertia: BodyInertia | None = None  # body roll/pitch inertia; None: the vehicle file's
+    tuning: RoadAngleTuning = RoadAngleTuning()  # noise densities and time constants
+
+
 INFO = MethodInfo(
     name="road-angle",
     description="14-state KF with roll/pitch dynamics and road-frame accelerations; grade, bank",
     reference="Jiang et al., road-angle paper §II-III, eq. 4-18",
     build=RoadAngleKF,
+    options=RoadAngleOptions,
     model_choice=True,
 )

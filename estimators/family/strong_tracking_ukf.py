@@ -41,6 +41,7 @@ acceleration holds its state and is flagged.
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -179,10 +180,18 @@ class StrongTrackingUKF(FamilyMethod):
         return np.concatenate([corner_geometry(self.vehicle), q, MEASUREMENT_NOISE, fading])
 
 
+@dataclass(frozen=True, kw_only=True)
+class StrongTrackingOptions:
+    """Options of method F (``build("F", vehicle, **options)``)."""
+
+    max_fading: float = MAX_FADING  # largest fading factor (>= 1) of the strong tracking
+
+
 INFO = MethodInfo(
     name="F",
     description="strong-tracking UKF per corner on suspension compression and rate",
     reference="Siegloff & Choi §IV-B method F; Ding, Wang, Zhang & Liu 2022",
     build=StrongTrackingUKF,
+    options=StrongTrackingOptions,
     model_choice=True,
 )

@@ -388,10 +388,18 @@ class Umvf(FamilyMethod):
         return [table[index]]
 
 
+@dataclass(frozen=True, kw_only=True)
+class UmvfOptions:
+    """Options of the UMVF (``build("umvf", vehicle, **options)``)."""
+
+    tuning: UmvfTuning = UmvfTuning()  # noise of the accelerometer, travel and rate
+
+
 INFO = MethodInfo(
     name="umvf",
     description="unbiased minimum-variance unknown-input filter per corner, reduced quarter car",
     reference="ycoo-umvf paper (Energies 2021, 14, 2378) §4, eq. 17-30",
     build=Umvf,
+    options=UmvfOptions,
     model_choice=True,
 )

@@ -218,10 +218,18 @@ class Ycoo(FamilyMethod):
         return unsprung_masses(self.vehicle)
 
 
+@dataclass(frozen=True, kw_only=True)
+class YcooOptions:
+    """Options of the YCOO (``build("ycoo", vehicle, **options)``)."""
+
+    settings: YcooSettings = YcooSettings()  # controller bandwidth, damping, pole ratio
+
+
 INFO = MethodInfo(
     name="ycoo",
     description="Youla controller-output observer per corner, 30 Hz, zeta = 1/sqrt(2)",
     reference="ycoo-umvf paper (Energies 2021, 14, 2378) §3, eq. 8-15",
     build=Ycoo,
+    options=YcooOptions,
     model_choice=True,
 )

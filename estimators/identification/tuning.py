@@ -16,7 +16,7 @@ input-dependent density is kept only if it raises :math:`\ell` by 2 (a likelihoo
 test at about 5 %), else it is 0 (constant noise). The likelihood is evaluated with the
 innovation gate open: a gate removes exactly the large innovations the likelihood needs.
 Everything else (the estimates, the coverage, the RMSE) runs with the guard settings the
-filter of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s own).
+filter of the written file runs with (:class:`~wheelload.estimators.kf.two_stage.TwoStageKF`'s own).
 
 Shape that generalises: a shape fitted on a few manoeuvres must not wreck another. The
 likelihood is fitted again leaving each log out; a ratio of q or of an equilibrium row's
@@ -59,6 +59,7 @@ from wheelload.estimators.kf.tuning import (
     TUNED_DENSITIES,
     TUNING,
     TUNING_INDEX,
+    noise_densities,
     with_filter_sigma,
 )
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -501,6 +502,7 @@ __all__ = [
     "NOISE_DENSITIES",
     "TUNED_DENSITIES",
     "UPDATE_ROWS",
+    "noise_densities",
     "BlendScore",
     "blend",
     "agreed_ratios",

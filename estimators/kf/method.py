@@ -10,9 +10,31 @@ where used, so that listing the methods stays fast.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
+import casadi as ca
+import numpy as np
+
+from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.protocol import Estimator, MethodInfo
 from wheelload.models import Vehicle
+
+
+@dataclass(frozen=True, kw_only=True)
+class ProjectionOptions:
+    """Options of the projection KFs (``build("projection-mp", vehicle, **options)``)."""
+
+    static: np.ndarray | None = None  # static loads FL..RR [N]; None: the vehicle file's
+    guard_settings: GuardSettings | None = None  # input guards; None: the vehicle file's
+    check_file: bool = True  # check the vehicle file against the log (model errors)
+
+
+@dataclass(frozen=True, kw_only=True)
+class KfOptions(ProjectionOptions):
+    """Options of the two-stage KF (``build("kf", vehicle, **options)``)."""
+
+    step: ca.Function | None = None  # the step Function; None: step_function()'s default
+    sample_interval: float | None = None  # nominal interval [s] of the noise; None: each dt
 
 
 def build_kf(vehicle: Vehicle, **options) -> Estimator:
@@ -40,17 +62,21 @@ INFO = (
         description="two-stage physics-constrained KF: suspension update + soft equilibrium",
         reference="Siegloff & Choi §III, eq. 12-25 (method A)",
         build=build_kf,
+        options=KfOptions,
+        compiled_batch=True,
     ),
     MethodInfo(
         name="projection-mp",
         description="KF with exact projection onto the equilibrium, W = P^-1",
         reference="Simon & Chia 2002; Siegloff & Choi eq. 14-16",
         build=projection_builder("MAXIMUM_PROBABILITY"),
+        options=ProjectionOptions,
     ),
     MethodInfo(
         name="projection-ls",
         description="KF with exact projection onto the equilibrium, W = I",
         reference="Simon & Chia 2002; Siegloff & Choi eq. 14-16",
         build=projection_builder("LEAST_SQUARES"),
+        options=ProjectionOptions,
     ),
 )

@@ -10,6 +10,7 @@ argument. ``run`` uses the log's median interval, so ``run`` and repeated
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.mhe.state import MheEstimate, MheState
@@ -18,6 +19,14 @@ from wheelload.estimators.types import Sample, Signals
 from wheelload.models import Vehicle
 
 NOMINAL_INTERVAL = 0.01  # s, 100 Hz
+
+
+@dataclass(frozen=True, kw_only=True)
+class MheOptions:
+    """Options of the MHE (``build("mhe", vehicle, **options)``)."""
+
+    settings: MheSettings | None = None  # window, constraint, losses; None: MheSettings()
+    interval: float = NOMINAL_INTERVAL  # nominal sample interval [s] of initial_state()
 
 
 class MheMethod:
@@ -54,4 +63,5 @@ INFO = MethodInfo(
     description="moving-horizon estimator N=10, soft equilibrium, OSQP",
     reference="Rao, Rawlings & Lee 2001; Siegloff & Choi eq. 12-17",
     build=MheMethod,
+    options=MheOptions,
 )

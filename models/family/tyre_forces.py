@@ -48,16 +48,23 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-#: rad/s: the rolling resistance fades below this spin (it opposes the rolling direction).
+#: rad/s: brake and rolling-resistance torques fade below this spin (they oppose the rolling
+#: direction); the plant's wheels and the estimators' share it.
 SPIN_SMOOTHING = 0.5
 #: The paper's observer gains (§IV) and the wheel they were set for: k1 [N s/rad],
 #: k2 [N m/rad], k3 [1/s]; I_w [kg m^2], R_e [m].
 PAPER_GAINS = {"k1": 3.41, "k2": 16.22, "k3": 67.84, "inertia": 1.7, "radius": 0.346}
 
 
+def spin_direction(spin):
+    r""":math:`\tanh(\omega / \omega_s)`: the sign of a wheel's spin, smoothed below
+    :data:`SPIN_SMOOTHING` (brake and rolling-resistance torques fade to zero at rest)."""
+    return ca.tanh(spin / SPIN_SMOOTHING)
+
+
 def rolling_resistance_force(fz, spin, coefficient: float):
     r"""Rolling resistance at the contact patch [N]: :math:`f_r F_z \tanh(\omega/\omega_s)`."""
-    return coefficient * fz * ca.tanh(spin / SPIN_SMOOTHING)
+    return coefficient * fz * spin_direction(spin)
 
 
 def longitudinal_force(torque, spin_rate, fz, spin, *, inertia, radius, coefficient):

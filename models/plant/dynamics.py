@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from wheelload.models.conventions import GRAVITY, WHEELS
+from wheelload.models.family.tyre_forces import SPIN_SMOOTHING, spin_direction
 from wheelload.models.mass_properties import static_loads, vehicle_mass_centre
 from wheelload.models.payload import inertia_about, sprung_body, with_point_mass
 from wheelload.models.plant.road_surface import RoadSurface, road_lookup
@@ -66,6 +67,7 @@ from wheelload.models.suspension.elements import anti_roll_bar_forces, stop_forc
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.models.vehicle.plant_section import DamperMap, Plant
+from wheelload.models.vehicle.wheel_geometry import loaded_radii, wheel_centres
 
 STATE_NAMES = (
     ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")
@@ -88,7 +90,6 @@ OUTPUT_NAMES = (
 )
 STATE = {name: i for i, name in enumerate(STATE_NAMES)}
 OUTPUT = {name: i for i, name in enumerate(OUTPUT_NAMES)}
-SPIN_SMOOTHING = 0.5  # rad/s, brake and rolling-resistance torques fade below this spin
 
 
 class PlantError(ValueError):
@@ -133,6 +134,8 @@ def corners(vehicle: Vehicle) -> tuple[Corner, ...]:
     plant = vehicle_plant(vehicle)
     g, t, m, susp = vehicle.geometry, vehicle.tyres, vehicle.mass, vehicle.suspension
     loads = static_loads(vehicle)
+    centres = wheel_centres(g)
+    loaded = loaded_radii(t, loads)
     centre = vehicle_mass_centre(vehicle)
     rise = centre.height / (centre.lf + centre.lr)  # rigid transfer per unit F_x
     drive = plant.driveline
@@ -150,12 +153,11 @@ def corners(vehicle: Vehicle) -> tuple[Corner, ...]:
         radius = t.radius_front if front else t.radius_rear
         rate = t.vertical_stiffness_front if front else t.vertical_stiffness_rear
         unsprung = 0.5 * (m.unsprung_front if front else m.unsprung_rear)
-        track = g.track_front if front else g.track_rear
         result.append(
             Corner(
-                x=g.lf if front else -g.lr,
-                y=0.5 * track if left else -0.5 * track,
-                z_static=radius - loads[i] / rate - g.cg_height,
+                x=centres[i][0],
+                y=centres[i][1],
+                z_static=loaded[i] - g.cg_height,
                 radius=radius,
                 tyre_rate=rate,
                 unsprung=unsprung,
@@ -275,12 +277,6 @@ def loaded_body_accelerations(vehicle: Vehicle, payload, force, moment, unsprung
     omega_dot = ca.solve(lhs, f2 - coupling @ (f1 / mass))
     acc = (f1 + cross_c @ omega_dot) / mass
     return acc, omega_dot
-
-
-def spin_direction(spin):
-    """:math:`\\tanh(\\omega / \\omega_s)`: the sign of a wheel's spin, smoothed below
-    :data:`SPIN_SMOOTHING` (brake and rolling-resistance torques fade to zero at rest)."""
-    return ca.tanh(spin / SPIN_SMOOTHING)
 
 
 def wheel_torque(drive, brake, direction):

@@ -14,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import TwoStageKF, nominal_interval
 from wheelload.estimators.codegen.batched import MAX_FILTERS, PREFIX, batch_library, run_batched
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.output_files import write_frame
 from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, Vehicle

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.estimators import TUNING_INDEX
+from wheelload.estimators.kf.tuning import TUNING_INDEX
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.types import Signals
 from wheelload.studies.bench.numpy_kf import measurement_noises, pseudo_measurements
@@ -55,7 +55,7 @@ def fleet_arrays(
     """:class:`FleetArrays` of windows ``(base, start, stop)`` of equal length of ``bases``.
 
     ``tunings[j]`` carries the nominal interval window ``j``'s noise is computed with (the
-    batched step's :meth:`~wheelload.estimators.TwoStageKF.tuning_for`).
+    batched step's :meth:`~wheelload.estimators.kf.two_stage.TwoStageKF.tuning_for`).
     """
     measured = [pseudo_measurements(base, p) for base in bases]
     A = measured[0][1]

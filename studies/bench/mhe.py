@@ -18,13 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.estimators import (
-    OSQP_INFINITY,
-    MheSettings,
-    MheWorkspace,
-    MovingHorizonEstimator,
-    Signals,
-)
+from wheelload.estimators import MheSettings, Signals
+from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
+from wheelload.estimators.mhe.qp import OSQP_INFINITY, MheWorkspace
 from wheelload.models import Vehicle
 
 

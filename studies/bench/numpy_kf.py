@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.estimators import TUNING_INDEX, input_matrix
+from wheelload.estimators.kf.tuning import TUNING_INDEX
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.types import Signals
 from wheelload.models import (

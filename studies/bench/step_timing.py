@@ -14,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators import Sample
 from wheelload.estimators.codegen.batched import run_batched
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
 

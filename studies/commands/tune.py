@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
+from wheelload.estimators.identification.tuning import TUNED_DENSITIES, UPDATE_ROWS, noise_densities
 from wheelload.models.vehicle.description import SIGMA_KEYS
 from wheelload.models.vehicle.file import (
     add_values,

@@ -13,7 +13,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import input_matrix, noise_densities
+from wheelload.estimators.identification.tuning import noise_densities
+from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import (
     ModelParameters,

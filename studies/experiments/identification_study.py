@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import noise_densities, read_log
+from wheelload.estimators import read_log
 from wheelload.estimators.identification import default_model, drive_gates, identify, read_drive
 from wheelload.estimators.identification.file_keys import (
     lower_bounds,
@@ -34,7 +34,12 @@ from wheelload.estimators.identification.file_keys import (
 )
 from wheelload.estimators.identification.fit import FitSettings
 from wheelload.estimators.identification.report import file_changes
-from wheelload.estimators.identification.tuning import FilterRuns, tune, tuned_vehicle
+from wheelload.estimators.identification.tuning import (
+    FilterRuns,
+    noise_densities,
+    tune,
+    tuned_vehicle,
+)
 from wheelload.estimators.registry import build
 from wheelload.models import (
     ModelParameters,

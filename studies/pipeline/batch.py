@@ -26,30 +26,21 @@ from wheelload.estimators import (
     Signals,
     guard_settings_for,
     read_log,
-    step_function,
 )
 from wheelload.estimators.codegen.batched import run_batched
-from wheelload.estimators.logs.checks import check_wiring, describe, raise_for_wiring
+from wheelload.estimators.logs.checks import check_wiring
 from wheelload.estimators.logs.output_files import write_frame
-from wheelload.estimators.logs.plausibility import (
-    check_plausibility,
-    describe_plausibility,
-    raise_for_plausibility,
-)
 from wheelload.estimators.logs.signals import coarse_travel_note
 from wheelload.estimators.protocol import Estimator
-from wheelload.estimators.registry import build, method
+from wheelload.estimators.registry import build, method, methods
 from wheelload.models import Vehicle, load_vehicle
+from wheelload.studies.pipeline.log_preparation import prepare_log
 from wheelload.studies.pipeline.log_settings import (  # noqa: F401  (named from here too)
     EstimateSettings,
     expand_logs,
 )
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
-from wheelload.studies.pipeline.measured_static import (
-    measured_static_loads,
-    payload_reference,
-    with_travel_zeroed,
-)
+from wheelload.studies.pipeline.measured_static import measured_static_loads, with_travel_zeroed
 from wheelload.studies.pipeline.summary import LoadFigures, LogHeader, summary_row
 from wheelload.studies.workers import ignore_interrupts
 
@@ -73,11 +64,6 @@ class LogResult:
 _lock = threading.Lock()
 
 
-@functools.lru_cache(maxsize=1)
-def _step():
-    return step_function()
-
-
 @functools.lru_cache(maxsize=4)
 def _vehicle(path: Path, allow_unusual: bool = False) -> Vehicle:
     return load_vehicle(path, allow_unusual=allow_unusual)
@@ -85,17 +71,28 @@ def _vehicle(path: Path, allow_unusual: bool = False) -> Vehicle:
 
 @functools.lru_cache(maxsize=8)
 def _filter(
-    vehicle: Path, allow_unusual: bool, static: tuple[float, ...] | None, zeroed: bool
+    vehicle: Path,
+    allow_unusual: bool,
+    static: tuple[float, ...] | None,
+    zeroed: bool,
+    name: str = "kf",
 ) -> Estimator:
-    """The two-stage KF (``kf``) whose compiled loop is built, cached per process; ``zeroed``:
-    the travel is zeroed at the log's start (:func:`payload_reference`)."""
+    """The method ``name`` (one with :attr:`MethodInfo.compiled_batch`, the two-stage KF by
+    default) whose compiled loop is built, cached per process; ``zeroed``: the travel is
+    zeroed at the log's start (:func:`payload_reference`)."""
     initial = None if static is None else np.array(static)
     description = _vehicle(vehicle, allow_unusual)
     description = with_travel_zeroed(description) if zeroed else description
-    kf = build("kf", description, static=initial, step=_step())
+    kf = build(name, description, static=initial)
     kf.run(Signals(t=np.array([0.0, 0.01]), vx=np.zeros(2), acc=np.zeros((2, 3)),
                    d=np.zeros((2, 4)), v=np.zeros((2, 4))))  # fmt: skip
     return kf
+
+
+def compiled_methods() -> tuple[str, ...]:
+    """The methods whose registry entry offers the compiled whole-log paths (static loads
+    measured from the log, smoothing, the lean path): :attr:`MethodInfo.compiled_batch`."""
+    return tuple(name for name, info in methods().items() if info.compiled_batch)
 
 
 def _prepare_log(path: Path, settings: EstimateSettings):
@@ -103,39 +100,40 @@ def _prepare_log(path: Path, settings: EstimateSettings):
     static)``."""
     vehicle = _vehicle(settings.vehicle, settings.allow_unusual)
     signals = read_log(path, channels=settings.channels, wiring_checks=False)
-    notes = []
     coarse = coarse_travel_note(signals.travel_quantum, guard_settings_for(vehicle).stuck_motion)
-    if coarse is not None:
-        notes.append(coarse)
-    if settings.wiring_checks:
-        report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
-        raise_for_wiring(report, signals.source)
-        notes.append(describe(report))
-        plausibility = check_plausibility(signals, vehicle)
-        raise_for_plausibility(plausibility, signals.source)
-        notes.append(describe_plausibility(plausibility))
-    static, reasons = measured_static_loads(signals, vehicle, settings)
-    notes += reasons
-    vehicle, reasons = payload_reference(vehicle, settings)
-    notes += reasons
-    return vehicle, signals, notes, static
+    prepared = prepare_log(
+        vehicle,
+        settings,
+        source=signals.source,
+        wiring_report=lambda: check_wiring(
+            signals.t, signals.vx, signals.acc, signals.d, signals.rates
+        ),
+        checked_signals=lambda: signals,
+        static_loads=lambda vehicle: measured_static_loads(signals, vehicle, settings),
+        notes=() if coarse is None else (coarse,),
+    )
+    return prepared.vehicle, signals, list(prepared.notes), prepared.static
 
 
 def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     """Read one log, set the static loads, run the chosen estimator (default: the two-stage KF)."""
     vehicle, signals, notes, static = _prepare_log(path, settings)
-    if settings.method == "kf":
+    if method(settings.method).compiled_batch:
         key = None if static is None else tuple(float(f) for f in static)
         with _lock:  # build (or load) the compiled loop once per process, not per thread
             zeroed = not vehicle.filter.payload.travel_from_reference
-            estimator = _filter(settings.vehicle, settings.allow_unusual, key, zeroed)
+            estimator = _filter(
+                settings.vehicle, settings.allow_unusual, key, zeroed, settings.method
+            )
     elif static is not None:
         raise ValueError(
-            "--still-period and --corner-weights apply to --method kf only, "
-            f"not {settings.method!r}"
+            f"--still-period and --corner-weights apply to --method {_or(compiled_methods())} "
+            f"only, not {settings.method!r}"
         )
     elif settings.smooth:
-        raise ValueError(f"--smooth applies to --method kf only, not {settings.method!r}")
+        raise ValueError(
+            f"--smooth applies to --method {_or(compiled_methods())} only, not {settings.method!r}"
+        )
     else:
         estimator = build(settings.method, vehicle, settings.suspension)
         if method(settings.method).model_choice:
@@ -146,6 +144,11 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
     else:
         estimate = estimator.run(signals)
     return _log_result(path, vehicle, signals, notes, estimate.named(settings.method))
+
+
+def _or(names: tuple[str, ...]) -> str:
+    """``kf``, ``kf or x``, ``kf, x or y``: the names as a message lists them."""
+    return " or ".join(filter(None, (", ".join(names[:-1]), names[-1])))
 
 
 def _log_result(path: Path, vehicle: Vehicle, signals: Signals, notes, estimate) -> LogResult:

@@ -18,13 +18,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wheelload.estimators.registry import build
+from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import SensorFault
 from wheelload.models import Vehicle, load_vehicle
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
+from wheelload.studies.pipeline.log_preparation import prepare_log
 from wheelload.studies.pipeline.measured_static import (
     corner_weights,
-    payload_reference,
     still_period,
     without_travel,
 )
@@ -47,10 +47,11 @@ class LeanResult:
 
 
 def takes_lean_path(path: Path, settings) -> bool:
-    """Whether the lean path can take this log (the KF, not smoothed, on a CSV/Parquet log
-    named as ours); ``settings`` an :class:`~wheelload.studies.pipeline.batch.EstimateSettings`."""
+    """Whether the lean path can take this log (a method with the compiled whole-log paths,
+    :attr:`MethodInfo.compiled_batch`, not smoothed, on a CSV/Parquet log named as ours);
+    ``settings`` an :class:`~wheelload.studies.pipeline.batch.EstimateSettings`."""
     return (
-        settings.method == "kf"
+        method(settings.method).compiled_batch
         and not settings.smooth
         and settings.channels is None
         and path.suffix.lower() in (".csv", ".parquet", ".pq")
@@ -66,12 +67,6 @@ def estimate_lean(
     numbers: the ordinary reader then reads it and names the problem.
     """
     from wheelload.estimators import scan_log
-    from wheelload.estimators.logs.checks import describe, raise_for_wiring
-    from wheelload.estimators.logs.plausibility import (
-        check_plausibility,
-        describe_plausibility,
-        raise_for_plausibility,
-    )
     from wheelload.estimators.logs.readers.chunks import ChunkError
     from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
 
@@ -81,20 +76,16 @@ def estimate_lean(
         )
     except ChunkError:
         return None
-    vehicle = load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual)
-    notes = []
-    if settings.wiring_checks:
-        report = stream.wiring_report()
-        raise_for_wiring(report, stream.source)
-        notes.append(describe(report))
-        plausibility = check_plausibility(stream.wiring or stream.head, vehicle)
-        raise_for_plausibility(plausibility, stream.source)
-        notes.append(describe_plausibility(plausibility))
-    static, reason = static_loads_for(stream, vehicle, settings)
-    notes += reason
-    vehicle, reason = payload_reference(vehicle, settings)
-    notes += reason
-    kf = build("kf", vehicle, static=static)
+    prepared = prepare_log(
+        load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual),
+        settings,
+        source=stream.source,
+        wiring_report=stream.wiring_report,
+        checked_signals=lambda: stream.wiring or stream.head,
+        static_loads=lambda vehicle: static_loads_for(stream, vehicle, settings),
+    )
+    vehicle, static, notes = prepared.vehicle, prepared.static, prepared.notes
+    kf = build(settings.method, vehicle, static=static)
     digest, faults = _estimate_chunks(stream, kf, out, force)
     # The file check (estimators/logs/model_error.py) on every k-th sample; a finding that
     # changes the estimates (a travel zero taken off, σ widened) runs the log again.

@@ -2,7 +2,8 @@
 
 Corner weights (``--corner-weights``, kg) set the static loads; a still period
 (``--still-period``) zeroes the travel sensors over the log's first seconds and
-checks the car was at rest there (:func:`~wheelload.estimators.check_still_period`).
+checks the car was at rest there
+(:func:`~wheelload.estimators.identification.offsets.check_still_period`).
 ``settings`` is an :class:`~wheelload.studies.pipeline.batch.EstimateSettings`.
 """
 
@@ -52,7 +53,7 @@ def corner_weights(settings) -> tuple[np.ndarray | None, list[str]]:
     """``(static loads or None, notes)`` from the measured corner weights, if given."""
     if settings.corner_weights is None:
         return None, []
-    from wheelload.estimators import corner_weight_loads  # only when weights are given
+    from wheelload.estimators.identification.offsets import corner_weight_loads
 
     static = corner_weight_loads(settings.corner_weights)
     return static, [f"static loads from corner weights {settings.corner_weights} kg"]
@@ -64,7 +65,7 @@ def still_period(
     """``(static loads, notes)`` after the still-period check, if a period is given."""
     if not settings.still_period:
         return static, []
-    from wheelload.estimators import check_still_period  # only when a period is given
+    from wheelload.estimators.identification.offsets import check_still_period
 
     still = check_still_period(
         signals, vehicle, settings.still_period, static=static, noise=settings.still_noise

@@ -11,9 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import read_log
 from wheelload.estimators.identification.tuning import with_tuning
 from wheelload.estimators.kf.tuning import noise_densities
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main
 from wheelload.studies.experiments.identification_study import StudySettings, wrong_vehicle_text

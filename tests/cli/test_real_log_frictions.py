@@ -7,7 +7,8 @@ library's own reader, writer, summary or command on it.
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log, write_log
+from wheelload.estimators import read_log, write_log
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.result import SensorFault
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.cli import main

@@ -13,6 +13,7 @@ from wheelload.estimators.registry import (
     build,
     method,
     methods,
+    tyre_methods,
 )
 from wheelload.estimators.samples import step_through
 from wheelload.studies.pipeline.example_log import example_log_path
@@ -45,6 +46,18 @@ def test_lookup_is_case_insensitive_when_unambiguous():
 def test_method_info_rejects_bad_names():
     with pytest.raises(ValueError):
         MethodInfo(name="a b", description="", reference="", build=TwoStageKF)
+
+
+def test_method_info_takes_only_a_frozen_options_dataclass():
+    import dataclasses
+
+    @dataclasses.dataclass
+    class Mutable:
+        horizon: int = 3
+
+    for options in (dict, Mutable, Mutable()):
+        with pytest.raises(TypeError, match="options must be a frozen dataclass"):
+            MethodInfo(name="x", description="", reference="", build=TwoStageKF, options=options)
 
 
 def test_family_modules_export_method_info():
@@ -92,3 +105,54 @@ def test_options_reach_the_constructor(vehicle, example_signals):
 def test_an_option_the_method_does_not_take_is_named(name, vehicle):
     with pytest.raises(UnknownOptionError, match=f"method '{name}' takes no option 'horizon'"):
         build(name, vehicle, horizon=3)
+
+
+def test_an_unknown_option_names_the_valid_ones(vehicle):
+    with pytest.raises(UnknownOptionError) as error:
+        build("B", vehicle, cutoff=2.0)
+    message = str(error.value)
+    assert "\n" not in message
+    assert message == "method 'B' takes no option 'cutoff'; valid options: attitude_cutoff"
+
+
+@pytest.mark.parametrize(
+    ("name", "options", "expected"),
+    [
+        ("kf", {"guard_settings": "off"}, "option 'guard_settings' must be GuardSettings or None"),
+        ("E", {"bandwidth": "25"}, "option 'bandwidth' must be float, got str"),
+        ("mhe", {"interval": True}, "option 'interval' must be float, got bool"),
+        ("tyre-forces", {"lateral": 1}, "option 'lateral' must be bool, got int"),
+    ],
+)
+def test_an_option_of_the_wrong_type_is_named(name, options, expected, vehicle):
+    with pytest.raises(UnknownOptionError, match=f"method '{name}': {expected}") as error:
+        build(name, vehicle, **options)
+    assert "valid options: " in str(error.value) and "\n" not in str(error.value)
+
+
+def _constructor_options(info) -> dict:
+    """The keyword parameters (with their defaults) the method's constructor takes beside
+    the vehicle, its model and a projection's fixed weighting."""
+    import inspect
+
+    from wheelload.estimators.kf.projection import ProjectionKF
+
+    constructor = {"kf": TwoStageKF, "projection-mp": ProjectionKF, "projection-ls": ProjectionKF}
+    target = constructor.get(info.name, info.build)
+    parameters = inspect.signature(target).parameters.values()
+    return {
+        p.name: p.default
+        for p in parameters
+        if p.name not in ("self", "vehicle", "suspension", "weighting")
+    }
+
+
+@pytest.mark.parametrize("name", [*methods(), *tyre_methods()])
+def test_options_dataclass_declares_the_constructors_keywords(name):
+    """Each method's frozen options dataclass: one field a constructor keyword, same default."""
+    import dataclasses
+
+    info = method(name)
+    assert info.options.__dataclass_params__.frozen
+    declared = {f.name: f.default for f in dataclasses.fields(info.options)}
+    assert declared == _constructor_options(info)

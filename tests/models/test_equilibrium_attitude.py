@@ -4,7 +4,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, signals_from_frame
+from wheelload.estimators import StepFlag, signals_from_frame
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import ModelParameters, example_vehicle_path, load_vehicle
 from wheelload.models.body_attitude import attitude_from_equilibrium, attitude_travel
 from wheelload.models.conventions import WHEELS

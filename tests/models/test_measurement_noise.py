@@ -15,11 +15,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import Sample, TwoStageKF, read_log, write_log
+from wheelload.estimators import Sample, read_log, write_log
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, build_program, generate
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.tuning import TUNED_DENSITIES, TUNING_INDEX, noise_densities
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import INPUTS, example_vehicle_path, load_vehicle
 from wheelload.models.measurement_noise import DENSITIES, INPUT_DENSITIES

@@ -10,7 +10,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.types import Sample
 from wheelload.models import (
     GATES,

@@ -23,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import GRAVITY
 from wheelload.studies.drive.synthetic import slalom, synthetic_log
 from wheelload.studies.experiments.faults.hostile import envelope_excess, white_noise_signals

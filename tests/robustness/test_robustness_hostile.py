@@ -13,9 +13,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import GRAVITY, example_vehicle_path
 from wheelload.studies.cli import main

@@ -16,10 +16,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, read_log
+from wheelload.estimators import StepFlag, read_log
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.guards.settings import GUARDS_OFF
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.vehicle.description import ModelTerms
 from wheelload.studies.cli import main

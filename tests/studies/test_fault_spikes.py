@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.experiments.faults import fault_spikes as fs

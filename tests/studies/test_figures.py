@@ -14,8 +14,9 @@ import pytest  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from wheelload.estimators import StepFlag, TwoStageKF, read_log  # noqa: E402
+from wheelload.estimators import StepFlag, read_log
 from wheelload.estimators.estimate_figure import CONSERVATIVE  # noqa: E402
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.registry import methods  # noqa: E402
 from wheelload.models import example_vehicle_path, load_vehicle  # noqa: E402
 from wheelload.studies.experiments.report.figures import loads_figure  # noqa: E402

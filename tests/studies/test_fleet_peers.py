@@ -11,7 +11,7 @@ update's tolerance in ``tests/estimators/kf/test_two_stage.py``).
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.studies.bench.fleet import fixed_mass, make_fleet, peer_arrays
 from wheelload.studies.bench.fleet_peers import numba_fleet, numpy_fleet
 

@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import read_log
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.result import read_estimates
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.pipeline.batch import EstimateSettings, output_path, run_logs

@@ -6,8 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, signals_from_frame
+from wheelload.estimators import StepFlag, signals_from_frame
 from wheelload.estimators.kf.tuning import with_filter_sigma
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models.conventions import WHEELS
 from wheelload.studies.cli import main
 from wheelload.studies.metrics import wheel_metrics

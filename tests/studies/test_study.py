@@ -3,7 +3,8 @@
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import read_log
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.studies.cli import main
 from wheelload.studies.metrics import pooled_metrics
 from wheelload.studies.pipeline.example_log import example_log_path

@@ -86,6 +86,7 @@ from wheelload.models.family.tyre_forces import (
     observer_matrices,
 )
 from wheelload.models.mass_properties import static_loads
+from wheelload.models.vehicle.wheel_geometry import loaded_radii, wheel_centres
 
 #: The paper's nominal and high-slip covariances (§IV): Q 0.11^2 -> 0.036^2, R 0.018^2 -> 0.4^2.
 HIGH_SLIP_Q = (0.036 / 0.11) ** 2
@@ -179,16 +180,12 @@ def vehicle_constants(vehicle: Vehicle) -> Constants:
             "(see 'wheelload vehicle --template')"
         )
     g, t, m, wheels = vehicle.geometry, vehicle.tyres, vehicle.mass, vehicle.wheels
-    loads = static_loads(vehicle)
-    radii = (t.radius_front, t.radius_front, t.radius_rear, t.radius_rear)
-    rates = (t.vertical_stiffness_front,) * 2 + (t.vertical_stiffness_rear,) * 2
-    positions = ((g.lf, 0.5 * g.track_front), (g.lf, -0.5 * g.track_front),
-                 (-g.lr, 0.5 * g.track_rear), (-g.lr, -0.5 * g.track_rear))  # fmt: skip
+    positions = wheel_centres(g)
     unsprung = (m.unsprung_front / 2,) * 2 + (m.unsprung_rear / 2,) * 2
     cornering = vehicle.cornering
     return Constants(
         inertia=np.array([wheels.spin_inertia_front] * 2 + [wheels.spin_inertia_rear] * 2),
-        radius=np.array([r - f / k for r, f, k in zip(radii, loads, rates)]),
+        radius=np.array(loaded_radii(t, static_loads(vehicle))),
         rolling=float(wheels.rolling_resistance),
         mass=float(m.total),
         yaw_inertia=float(m.inertia[2])
@@ -471,18 +468,35 @@ def _lateral(vehicle: Vehicle, settings: TyreSettings = TyreSettings()) -> TyreF
     return method
 
 
+@dataclass(frozen=True, kw_only=True)
+class TyreOptions:
+    """Options of ``tyre-pid`` and ``tyre-lateral`` (``build(name, vehicle, **options)``)."""
+
+    settings: TyreSettings = TyreSettings()  # observer, filter noise, high slip, split
+
+
+@dataclass(frozen=True, kw_only=True)
+class TyreForcesOptions(TyreOptions):
+    """Options of ``tyre-forces`` and ``tyre-rigid``."""
+
+    longitudinal: bool = True  # report F_x
+    lateral: bool = True  # report F_y
+
+
 INFO = (
     MethodInfo(
         name="tyre-pid",
         description="F_x per wheel: PI spin observer on the wheel dynamics, KF loads",
         reference="corner-based paper §III-A, eq. 1, 4-9",
         build=_pid,
+        options=TyreOptions,
     ),
     MethodInfo(
         name="tyre-lateral",
         description="F_y per wheel: adaptive KF on axle forces and yaw rate, KF loads",
         reference="corner-based paper §III-B, eq. 2-3, 10-16, §IV covariance switching",
         build=_lateral,
+        options=TyreOptions,
     ),
     MethodInfo(
         name="tyre-forces",
@@ -490,11 +504,13 @@ INFO = (
         reference="corner-based paper §III; road-angle paper §III (vertical block feeds "
         "the lateral block)",
         build=TyreForces,
+        options=TyreForcesOptions,
     ),
     MethodInfo(
         name="tyre-rigid",
         description="baseline: m a_x, m a_y (road frame, drag) split by the KF's load share",
         reference="rigid-body baseline (corner-based paper eq. 2, load-share split)",
         build=RigidSplit,
+        options=TyreForcesOptions,
     ),
 )

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelload.estimators import Constraint, MheSettings, MovingHorizonEstimator
+from wheelload.estimators import Constraint, MheSettings
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
 from wheelload.studies.commands.options import add_vehicle_file_options, vehicle_file
@@ -61,7 +61,7 @@ def run_bench(args: argparse.Namespace) -> int:
         for constraint in Constraint:
             for bounded in (False, True):
                 settings = MheSettings(horizon=horizon, constraint=constraint, bounded=bounded)
-                estimate = MovingHorizonEstimator(vehicle, settings).run(signals)
+                estimate = build("mhe", vehicle, settings=settings).run(signals)
                 times = estimate.solve_time * 1e6
                 median = float(np.median(times))
                 print(f"{settings.label() + ' Python':38s} {median:10.1f} "
@@ -73,7 +73,7 @@ def run_bench(args: argparse.Namespace) -> int:
                 candidate.settings.extended or candidate.settings.lag
             ):
                 continue
-            estimate = MovingHorizonEstimator(vehicle, candidate.settings).run(signals)
+            estimate = build("mhe", vehicle, settings=candidate.settings).run(signals)
             times = estimate.solve_time * 1e6
             median = float(np.median(times))
             print(f"{candidate.name + ' Python':38s} {median:10.1f} "

@@ -30,9 +30,9 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions
 from wheelload.estimators.kernels.c_emitter import Precision, critical_path, flop_count
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
 from wheelload.studies.bench.c_step_bounds import compiled_mix, measured_clock_mhz

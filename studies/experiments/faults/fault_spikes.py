@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from wheelload.estimators import Signals, TwoStageKF
+from wheelload.estimators import Estimator, Signals
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, TRAVEL_RATE
 
 #: Logs of the table: the car at rest and a lane change.
@@ -52,7 +52,7 @@ def isolated_seconds(faults: pd.DataFrame, interval: float) -> float:
     return float((faults["end"] - faults["start"] + interval).sum()) if len(faults) else 0.0
 
 
-def spike_table(kf: TwoStageKF, signals: Signals, scenario: str, rmse) -> pd.DataFrame:
+def spike_table(kf: Estimator, signals: Signals, scenario: str, rmse) -> pd.DataFrame:
     """One row per channel of :data:`SPIKE_CHANNELS` spiked once at mid-log.
 
     ``rmse(loads, reference) -> float`` is the pooled RMSE; ``healthy_isolated`` names

@@ -174,7 +174,7 @@ def total_envelope(kf, signals) -> tuple[float, float]:
     An independent evaluation of :func:`wheelload.models.equilibrium_function`
     on the log's inputs (missing channels gate their terms off), not the filter's.
     """
-    from wheelload.estimators import input_matrix
+    from wheelload.estimators.logs.inputs import input_matrix
     from wheelload.models import equilibrium_function, gates_function
 
     u = input_matrix(signals)

@@ -23,10 +23,10 @@ import subprocess
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.batched import KERNEL_FLAGS, PREFIX, batch_library, run_batched
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path
 from wheelload.models.runtime.build_folder import build_report
 

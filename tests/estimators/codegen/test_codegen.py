@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, read_log, signals_from_frame, write_log
+from wheelload.estimators import StepFlag, read_log, signals_from_frame, write_log
 from wheelload.estimators.codegen.kf import (
     CodegenOptions,
     ParamMode,
@@ -25,6 +25,7 @@ from wheelload.estimators.codegen.kf import (
 )
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.step import step_function
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import rate_derivatives
 from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, WHEELS
 from wheelload.models import INPUTS, example_vehicle_path, suspension_function

@@ -19,9 +19,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import read_log
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.codegen.runtime_parameters import SetStatus, runtime_fields
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.result import WHEELS
 from wheelload.models import ModelParameters, example_vehicle_path
 from wheelload.models.parameters import derived_function

@@ -15,9 +15,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, read_log, write_log
+from wheelload.estimators import StepFlag, read_log, write_log
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, build_program, generate
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.experiments.faults import fault_injection as fi
 from wheelload.studies.experiments.faults.fault_injection import pooled_rmse

@@ -17,8 +17,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log, write_log
+from wheelload.estimators import read_log, write_log
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.result import WHEELS
 from wheelload.models import example_vehicle_path
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

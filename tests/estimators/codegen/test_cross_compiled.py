@@ -14,11 +14,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import read_log
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
 from wheelload.estimators.codegen.mhe import embedded_settings
 from wheelload.estimators.codegen.mhe_build import build_mhe_program, write_inputs
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Constraint, MheSettings
 from wheelload.models import example_vehicle_path

@@ -13,8 +13,9 @@ i.e. within 8 s (goal 2 s, not met: see the closing note).
 import numpy as np
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF, write_log
+from wheelload.estimators import StepFlag, write_log
 from wheelload.estimators.guards.settings import GuardSettings
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.experiments.faults import fault_injection as fi

@@ -12,11 +12,12 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
 from wheelload.estimators.guards.innovation_gate import gate_rows, prior_failures, prior_innovations
 from wheelload.estimators.guards.monitor_state import STARTED
 from wheelload.estimators.guards.settings import GUARDS_OFF, GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import equilibrium_function, gates_function, suspension_function

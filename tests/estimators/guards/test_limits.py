@@ -13,10 +13,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators import Sample, StepFlag
 from wheelload.estimators.guards import limits
 from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.tuning import with_filter_sigma
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import GRAVITY
 from wheelload.studies.experiments.faults.fault_injection import pooled_rmse
 

@@ -10,10 +10,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators import Sample, StepFlag
 from wheelload.estimators.guards.monitor_state import CREDIT, HELD, MONITOR_SIZE
 from wheelload.estimators.guards.plausibility import rate_consistency
 from wheelload.estimators.guards.settings import GUARDS_OFF, GuardSettings
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models.inputs import BODY_RATES, INPUTS
 
 ROWS_SKIPPED = sum(StepFlag.update_flags())

@@ -12,8 +12,9 @@ import re
 import numpy as np
 import pytest
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
 from wheelload.estimators.guards.settings import GUARDS_OFF, GuardSettings, guard_settings_for
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.vehicle.description import VehicleFileError

@@ -10,8 +10,8 @@ other order).
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.kf.step_cache import UPDATE_ROWS
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import gates_function, suspension_function

@@ -10,8 +10,9 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from wheelload.estimators import TwoStageKF, read_log
+from wheelload.estimators import read_log
 from wheelload.estimators.kf.log_stream import scan_log
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.output_files import OutputError, table_writer
 from wheelload.estimators.logs.signals import Differentiator, derive_velocities
 from wheelload.estimators.types import Steps

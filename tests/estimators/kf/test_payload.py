@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import GATES, GRAVITY, INPUTS, ModelParameters, load_vehicle
 from wheelload.models.equilibrium import equilibrium_function

@@ -8,13 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators import Sample
 from wheelload.estimators.kf.projection import (
     ProjectionKF,
     Weighting,
     project,
     projection_update,
 )
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import StepFlag
 from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function

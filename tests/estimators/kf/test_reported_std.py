@@ -11,11 +11,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.guards.monitor_state import MONITOR_SIZE, SIGMA_INNOVATION, SIGMA_RESIDUAL
 from wheelload.estimators.identification.sigma_fit import fit_sigma, scores, sigma_data
 from wheelload.estimators.kf.reported_std import SIGMA_TIME, sigma_features
 from wheelload.estimators.kf.tuning import SIGMA_TUNING
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import GRAVITY, INPUTS, example_vehicle_path, load_vehicle
 from wheelload.models.vehicle.description import SIGMA_KEYS, vehicle_from_dict

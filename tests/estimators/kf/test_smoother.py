@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.studies.cli import main
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log

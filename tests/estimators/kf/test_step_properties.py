@@ -15,9 +15,10 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators import StepFlag, TwoStageKF
+from wheelload.estimators import StepFlag
 from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.tuning import nominal_interval, with_filter_sigma
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import GRAVITY, equilibrium_function, gates_function, suspension_function

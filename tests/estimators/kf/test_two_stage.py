@@ -6,13 +6,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wheelload.estimators import FilterState, Sample, StepFlag, TwoStageKF
+from wheelload.estimators import Sample, StepFlag
 from wheelload.estimators.guards.settings import GUARDS_OFF
 from wheelload.estimators.identification.offsets import (
     check_still_period,
     still_period_static_loads,
 )
 from wheelload.estimators.kernels.kalman import update
+from wheelload.estimators.kf.two_stage import FilterState, TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.models import static_loads
 from wheelload.studies.bench.numpy_kf import joint_filter

@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.model_error import diagnose
 from wheelload.studies.experiments.faults import fault_injection as fi
 

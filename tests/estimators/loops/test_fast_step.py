@@ -12,8 +12,9 @@ rejected intervals).
 import numpy as np
 import pytest
 
-from wheelload.estimators import Sample, TwoStageKF
+from wheelload.estimators import Sample
 from wheelload.estimators.kf.projection import ProjectionKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 
 

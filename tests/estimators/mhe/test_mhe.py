@@ -6,9 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from wheelload.estimators import Sample, StepFlag, TwoStageKF
+from wheelload.estimators import Sample, StepFlag
 from wheelload.estimators.guards.settings import GUARDS_OFF
 from wheelload.estimators.kf.projection import ProjectionKF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
 from wheelload.estimators.protocol import sample_intervals

@@ -26,10 +26,10 @@ import shutil
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings

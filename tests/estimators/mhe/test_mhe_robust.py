@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from wheelload.estimators import TwoStageKF
 from wheelload.estimators.guards.settings import GUARDS_OFF
+from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import (
     BiasStates,
@@ -58,8 +58,8 @@ def test_robust_window_rejects_travel_spikes_the_kf_follows(vehicle, drive):
     spikes = rng.choice(np.arange(20, len(drive)), size=12, replace=False)
     d[spikes, rng.integers(0, 4, size=12)] += 0.03  # 30 mm single-sample spikes
     faulty = dataclasses.replace(drive, d=d)
-    # the plain KF: without the guards (innovation gate, fault monitor)
-    # of estimators/guards/settings.py
+    # the plain KF: without the guards (innovation gate, fault monitor) of
+    # estimators/guards/settings.py
     kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(faulty)
     settings = MheSettings(horizon=10, suspension_loss=HUBER, constraint_loss=HUBER)
     mhe = MovingHorizonEstimator(vehicle, settings).run(faulty)
