@@ -42,7 +42,7 @@ _LAZY_MODULES = {
     "wheelload.estimators.identification.offsets": ("check_still_period", "corner_weight_loads"),
     "wheelload.estimators.kf.tuning": (
         "TUNED_DENSITIES",
-        "TUNING_INDEX",
+        "TUNING",
         "noise_densities",
         "nominal_interval",
     ),

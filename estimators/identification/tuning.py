@@ -58,7 +58,6 @@ from wheelload.estimators.kf.tuning import (
     NOISE_DENSITIES,
     TUNED_DENSITIES,
     TUNING,
-    TUNING_INDEX,
     with_filter_sigma,
 )
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -73,7 +72,7 @@ NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of 
 #: Tuning entries that open the innovation gate for the likelihood (out of reach).
 GATE_OPEN = {"innovation_gate": 1e300, "gate_release_time": 1e300}
 _VARIANCE_SCALE = TUNING.index("innovation_variance_scale")
-_DENSITY_INDEX = [TUNING_INDEX[name] for name in TUNED_DENSITIES]
+_DENSITY_INDEX = TUNING.indices(TUNED_DENSITIES)
 #: Input size at which an input-dependent density starts its fit, adding a tenth of the
 #: constant density it goes with: damper velocity 0.1 m/s, accelerations 2 m/s^2.
 INPUT_SCALE = {

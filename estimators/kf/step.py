@@ -37,13 +37,7 @@ from wheelload.estimators.kf import (
     reported_std,
 )
 from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
-from wheelload.estimators.kf.tuning import (
-    GUARD_TUNING,
-    PAYLOAD_SLICE,
-    SIGMA_TUNING,
-    TUNING,
-    TUNING_INDEX,
-)
+from wheelload.estimators.kf.tuning import GUARD_TUNING, PAYLOAD_SLICE, SIGMA_TUNING, TUNING
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -69,8 +63,6 @@ from wheelload.models.measurement_noise import measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 from wheelload.models.terms import parity_model
 
-_NOISE_INDEX = [TUNING_INDEX[name] for name in NOISE_DENSITY_ORDER]
-_RC_INDEX = [TUNING_INDEX[f"constraint_noise_{row}"] for row in ("vertical", "pitch", "roll")]
 _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 _TRAVEL_INDEX = input_index(TRAVEL)
 _RATE_INDEX = input_index(TRAVEL_RATE)
@@ -156,14 +148,14 @@ def step_expressions(
     """
     x = ca.SX.sym("x", 4)
     P = ca.SX.sym("P", 4, 4)
-    m = ca.SX.sym("m", monitor_state.MONITOR_SIZE)
+    m = ca.SX.sym("m", monitor_state.MONITOR.size)
     u_raw = ca.SX.sym("u", len(INPUTS))
     valid_raw = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
     p_file = ca.SX.sym("p", len(ModelParameters.names()))
-    tuning = ca.SX.sym("tuning", len(TUNING))
+    tuning = ca.SX.sym("tuning", TUNING.size)
     settings = guard.unpack(tuning[GUARD_TUNING])
-    dt_nominal = tuning[TUNING_INDEX["sample_interval"]]
+    dt_nominal = TUNING.value(tuning, "sample_interval")
     payload_tuning = tuning[PAYLOAD_SLICE]
 
     # A non-positive or non-finite interval skips the whole step: the state is held.
@@ -208,7 +200,7 @@ def step_expressions(
     # [model] switches.
     parity = parity_model(suspension, equilibrium, u_term, valid_term, p)
     # The fault monitor's parity test weighs the constant densities (the paper's R_c).
-    rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
+    rc_density = TUNING.value(tuning, "constraint_noise_density")
     # What the payload not yet learnt may leave in the residual (a changed car, no fault).
     gates_term = gates_function()(valid_term, p)[0]
     residual_theta = payload.residual_function(equilibrium)
@@ -228,9 +220,10 @@ def step_expressions(
     # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
     weight = p[_P_INDEX["mass"]] * GRAVITY
     ceiling = limits.variance_ceiling(p[_P_INDEX["mass"]])
-    Q = ca.fmin(tuning[TUNING_INDEX["process_noise_density"]] * dt_used, ceiling) * ca.DM.eye(4)
+    q = TUNING.value(tuning, "process_noise_density")
+    Q = ca.fmin(q * dt_used, ceiling) * ca.DM.eye(4)
     # R_s, R_c from the inputs (models/measurement_noise.py; constant with the default zeros).
-    densities = ca.vertcat(*[tuning[k] for k in _NOISE_INDEX])
+    densities = TUNING.values(tuning, NOISE_DENSITY_ORDER)
     noise = measurement_noise or measurement_noise_function()
     rs, rc = noise(u, valid_plausible, densities, dt_nominal)
 
@@ -293,15 +286,20 @@ def step_expressions(
     available = ca.vertcat(mask_s, mask_c)
     innovation = ca.vertcat(y_s, y_c) * available
     innovation_variance = ca.vertcat(S_s, S_c) * available
-    m_next = monitor_state.with_gate_state(
-        watch.m_next,
-        innovation_gate.reject_times(reject, record, available, dt_used),
-        innovation_gate.next_spread(spread, record, available, dt_used, settings),
-    )
-    m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
-    m_next = monitor_state.with_sigma_state(m_next, sigma_means)
-    m_next = monitor_state.with_payload_state(
-        m_next, loaded.theta, loaded.P, ca.logic_or(started, dt_ok), watch.seen
+    m_next = monitor_state.MONITOR.pack(
+        {
+            **watch.m_next,
+            "reject": innovation_gate.reject_times(reject, record, available, dt_used),
+            "spread": innovation_gate.next_spread(spread, record, available, dt_used, settings),
+            **monitor_state.HOLD.unpack(hold_state),
+            "settle": settle_next,
+            "total": total,
+            **monitor_state.SIGMA_MEANS.unpack(sigma_means),
+            "payload": loaded.theta,
+            "payload_covariance": ca.vec(loaded.P),
+            "started": ca.logic_or(started, dt_ok),
+            "travel_seen": watch.seen,
+        }
     )
     status = _status(
         record, available, valid_raw, in_range, watch.fault,

@@ -153,9 +153,15 @@ def handle(args: argparse.Namespace) -> int:
     if references:
         note += f", scaled x{result.scale:.3g} to 95 % ±2σ coverage with the guards on"
     changes = {
-        ("filter", "process_noise_density"): (tuned[0], f"tuned: {note}"),
-        ("filter", "suspension_noise_density"): (tuned[1], "tuned (see above)"),
-        ("filter", "constraint_noise_density"): (list(tuned[2:5]), "tuned (see above)"),
+        ("filter", "process_noise_density"): (named["process_noise_density"], f"tuned: {note}"),
+        ("filter", "suspension_noise_density"): (
+            named["suspension_noise_density"],
+            "tuned (see above)",
+        ),
+        ("filter", "constraint_noise_density"): (
+            [named[f"constraint_noise_{r}"] for r in ("vertical", "pitch", "roll")],
+            "tuned (see above)",
+        ),
         ("filter", "suspension_noise_rate_density"): (
             named["suspension_noise_rate_density"],
             "tuned: R_s + this x v^2 / dt (models/measurement_noise.py)",
