@@ -16,7 +16,7 @@ from wheelload.estimators.codegen.kf import generate
 from wheelload.estimators.codegen.runtime_parameters import PARAMETERS, runtime_fields
 from wheelload.estimators.kf.monitor_state import MONITOR
 from wheelload.estimators.kf.step import step_function
-from wheelload.estimators.kf.tuning import TUNED, TUNING, tuning_vector
+from wheelload.estimators.kf.tuning import TUNED, TUNING, noise_densities, tuning_vector
 from wheelload.models import ModelParameters, example_vehicle_path, load_vehicle
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -103,3 +103,17 @@ def test_tune_writes_the_declared_file_keys():
             np.ravel(getattr(vehicle.filter, field.name)),
             np.ravel(TUNING.value(vector, field.name)),
         )
+
+
+def test_the_tuned_change_set_takes_the_declared_keys():
+    """``tune``'s change set: each fitted field under its declared file key, in declaration
+    order, a vector field as a list; the values are the fitted ones."""
+    from wheelload.studies.pipeline.tuning import density_changes
+
+    vehicle = load_vehicle(example_vehicle_path())
+    fitted = noise_densities(vehicle) * 2.0
+    changes = density_changes(fitted, "a note")
+    assert list(changes) == [field.file_key for field in TUNED.fields]
+    assert changes["filter", "process_noise_density"] == (fitted[0], "tuned: a note")
+    assert changes["filter", "constraint_noise_density"][0] == list(fitted[2:5])
+    assert changes["filter", "constraint_noise_acceleration_density"][0] == list(fitted[7:10])
