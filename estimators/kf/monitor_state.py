@@ -67,6 +67,15 @@ MONITOR = Layout(
         Field("travel_seen", 4, "", doc="1 once a travel channel has had a valid sample"),
     ),
 )
+#: The fault monitor's own fields (:func:`.fault_monitor.monitor` returns them by name).
+WATCH = MONITOR.subset(
+    "fault_monitor",
+    [
+        name
+        for name in MONITOR.field_names()[: MONITOR.field_names().index("held")]
+        if name not in ("reject", "spread")
+    ],
+)
 #: The held inputs' fields (:func:`.plausibility.hold_inputs`' state, in this order).
 HOLD = MONITOR.subset("hold_state", ("held", "credit"))
 #: The reported sigma's running means (:func:`.reported_std.sigma_features`, in this order).
