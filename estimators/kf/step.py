@@ -159,6 +159,24 @@ def step_expressions(
     The step is the composition of the stages of :func:`step_stages`, each a named
     Function (``wheelload_kf_<stage>``) called on the values before it.
     """
+    inputs, values, _ = step_composition(
+        suspension,
+        equilibrium,
+        constraint_update=constraint_update,
+        measurement_noise=measurement_noise,
+    )
+    return list(inputs.values()), [values[name] for name in STEP_OUTPUT_NAMES]
+
+
+def step_composition(
+    suspension: ca.Function,
+    equilibrium: ca.Function,
+    *,
+    constraint_update=sequential_update_innovations,
+    measurement_noise: ca.Function | None = None,
+) -> tuple[dict, dict, dict]:
+    """The step's symbolic inputs, every value its stages name, and each stage's Function
+    (``wheelload_kf_<stage>``; None for :data:`INLINE_STAGES`), in stage order."""
     inputs = {
         "x": ca.SX.sym("x", 4),
         "P": ca.SX.sym("P", 4, 4),
@@ -169,7 +187,7 @@ def step_expressions(
         "p_file": ca.SX.sym("p", len(ModelParameters.names())),
         "tuning": ca.SX.sym("tuning", TUNING.size),
     }
-    values = dict(inputs)
+    values, functions = dict(inputs), {}
     stages = step_stages(
         suspension,
         equilibrium,
@@ -177,9 +195,12 @@ def step_expressions(
         measurement_noise=measurement_noise or measurement_noise_function(),
     )
     for build in stages:
-        inline = stage_name(build) in INLINE_STAGES
-        values.update(stage(STAGE_PREFIX, build, values, as_function=not inline)[0])
-    return list(inputs.values()), [values[name] for name in STEP_OUTPUT_NAMES]
+        name = stage_name(build)
+        outputs, functions[name] = stage(
+            STAGE_PREFIX, build, values, as_function=name not in INLINE_STAGES
+        )
+        values.update(outputs)
+    return inputs, values, functions
 
 
 def step_stages(suspension, equilibrium, *, constraint_update, measurement_noise) -> tuple:
