@@ -9,7 +9,11 @@ input-dependent densities of :mod:`wheelload.models.measurement_noise`; the guar
 :mod:`wheelload.estimators.kf.guard` act on the masks of the updates.
 
 The step is built from the model Functions in ``wheelload.models``, so the Python filter,
-the compiled loops and the generated C share one implementation.
+the compiled loops and the generated C share one implementation. It is a composition of
+stages (:func:`step_stages`: interval, payload, plausibility and holds, model rows, fault
+monitor, masks, noise, predict, gate, suspension update, equilibrium update, roll split,
+limits, payload update, sigma, the next monitor state, outputs), each a named Function
+``wheelload_kf_<stage>`` called on the values before it (inlined: one expression graph).
 
 Example
 -------
