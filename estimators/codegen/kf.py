@@ -94,7 +94,7 @@ POSITIVE = (
     "mass",
     *[
         n
-        for n in TUNING
+        for n in TUNING.names()
         if n not in INPUT_DENSITIES and n not in SIGMA_KEYS and n not in ZERO_ALLOWED
     ],
     "initial_std",
@@ -262,7 +262,7 @@ def _substitutions(
     if runtime:
         inputs += [
             [f"params->{n}" for n in ModelParameters.names()],
-            [f"params->{n}" for n in TUNING],
+            [f"params->{n}" for n in TUNING.names()],
         ]
     body = emit_statements(
         kernel,
@@ -348,7 +348,7 @@ def _substitutions(
         "fast_cflags": " ".join(FAST_CFLAGS),
         "batch_params": "\n".join(
             f"    const {prefix}_real param_{name} = params->{name};"
-            for name in (*ModelParameters.names(), *TUNING)
+            for name in (*ModelParameters.names(), *TUNING.names())
             if runtime
         ),
         "batch_rows": _batch_rows(kernel, prefix),
@@ -423,7 +423,7 @@ def _batch_body(kernel: ca.Function, runtime: bool, precision: Precision, prefix
     if runtime:  # copied into locals before the loop (batch_params): no aliasing with stores
         inputs += [
             [f"param_{n}" for n in ModelParameters.names()],
-            [f"param_{n}" for n in TUNING],
+            [f"param_{n}" for n in TUNING.names()],
         ]
     lines.append("{")
     body = emit_statements(

@@ -30,6 +30,7 @@ import enum
 import textwrap
 
 from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, literal
+from wheelload.estimators.kernels.layout import Field, Layout
 from wheelload.estimators.kf.tuning import TUNING
 from wheelload.models import ModelParameters, Vehicle
 from wheelload.models.parameters import (
@@ -54,9 +55,25 @@ class SetStatus(enum.IntEnum):
     # library does not hold
 
 
+#: The runtime parameter struct ``PREFIX_params``, in member order: the model parameters
+#: (the step's ``p``), the tuning vector (its ``tuning``, :data:`TUNING`'s declaration), the
+#: initial standard deviation of reset.
+PARAMETERS = Layout(
+    "params",
+    (
+        *[
+            Field(name, doc="model parameter (models.parameters)")
+            for name in ModelParameters.names()
+        ],
+        *TUNING.fields,
+        Field("initial_std", unit="N", file_key=("filter", "initial_std"), doc="reset's std"),
+    ),
+)
+
+
 def runtime_fields() -> tuple[str, ...]:
-    """Fields of the runtime parameter struct: model parameters, tuning, initial std."""
-    return (*ModelParameters.names(), *TUNING, "initial_std")
+    """Members of the runtime parameter struct (:data:`PARAMETERS`), in order."""
+    return PARAMETERS.names()
 
 
 def feeds() -> dict[str, int]:
@@ -107,7 +124,6 @@ def derivation_substitutions(
             "derivation_check": "",
         }
     fields = runtime_fields()
-    index = {name: k for k, name in enumerate(fields)}
     record = record_entries()
     follow = following(vehicle)
     bits = sum(1 << DERIVED.index(name) for name in follow)
@@ -136,8 +152,8 @@ def derivation_substitutions(
         real=real,
         body="\n".join(f"    {line}" for line in body.splitlines()),
         feeds=table,
-        derived_index=", ".join(str(index[name]) for name in DERIVED),
-        record_index=", ".join(str(index[name]) for name in record),
+        derived_index=", ".join(str(PARAMETERS.index(name)) for name in DERIVED),
+        record_index=", ".join(str(PARAMETERS.index(name)) for name in record),
         fixed=f"{FIXED_BIT}u",
     )
     defaults = [f"    {bits}u, /* derived: {' '.join(follow) or 'none'} follow their sources */"]
@@ -258,12 +274,11 @@ def _runtime_check(prefix: str, record: dict[str, int]) -> str:
     """Init's check, one test per record entry: a derived parameter that follows its sources,
     a source of one, or a mass-centre input that differs from the record was written directly
     (it, or the parameters derived from it, would be stale): ``-(1 + field index)``."""
-    index = {name: k for k, name in enumerate(runtime_fields())}
     lines = []
     for j, (name, mask) in enumerate(record.items()):
         lines.append(
             f"    if (((params->derived | FIXED_BIT) & {mask}u) != 0u\n"
             f"        && params->{name} != params->record[{j}]) {{\n"
-            f"        return -{1 + index[name]};\n    }}"
+            f"        return -{1 + PARAMETERS.index(name)};\n    }}"
         )
     return "\n".join(lines)

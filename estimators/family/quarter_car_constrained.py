@@ -35,18 +35,17 @@ from wheelload.estimators.family.quarter_car import (
     front_end,
 )
 from wheelload.estimators.kernels.kalman import predict, sequential_update, upper
-from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX, tuning_vector
+from wheelload.estimators.kf.tuning import TUNING, tuning_vector
 from wheelload.estimators.protocol import DEFAULT_MODEL, MethodInfo, SuspensionModel
 from wheelload.models.measurement_noise import DENSITIES, measurement_noise_function
 
 N_STATES = FRONT_END_STATES + 4 + 16  # observer, x, P (column-major)
-_DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
 
 
 @functools.cache
 def constrained_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     """Step: state = (observer, x, P); constants = (observer constants, KF tuning)."""
-    sym = step_symbols(N_STATES, FRONT_END_CONSTANTS + len(TUNING))
+    sym = step_symbols(N_STATES, FRONT_END_CONSTANTS + TUNING.size)
     observer, F, used_s = front_end(
         sym, sym.s[:FRONT_END_STATES], sym.c[:FRONT_END_CONSTANTS], model
     )
@@ -55,8 +54,8 @@ def constrained_step(model: SuspensionModel = DEFAULT_MODEL) -> ca.Function:
     tuning = sym.c[FRONT_END_CONSTANTS:]
     A, b, mask_c = model_equilibrium(model, sym)
     mask_c = mask_c * sym.dt_ok
-    Q = tuning[0] * sym.dt * ca.DM.eye(4)
-    densities = ca.vertcat(*[tuning[k] for k in _DENSITY_INDEX])
+    Q = TUNING.value(tuning, "process_noise_density") * sym.dt * ca.DM.eye(4)
+    densities = TUNING.values(tuning, DENSITIES)
     rs, rc = measurement_noise_function()(sym.u, sym.valid, densities, sym.dt)
     x_pred, P_pred = predict(x, upper(P), Q)
     x_s, P_s = sequential_update(x_pred, P_pred, F, ca.DM.eye(4), rs, used_s)

@@ -250,8 +250,8 @@ def step_function(
     wheel_skipped = []
     for i in range(4):
         corner_ok = ok * valid[i] * valid[4 + i] * valid[10]
-        m = models[:, i]
-        corner_model = (ca.reshape(m[0:4], 2, 2), m[4:6], ca.reshape(m[6:10], 2, 2))
+        corner = models[:, i]
+        corner_model = (ca.reshape(corner[0:4], 2, 2), corner[4:6], ca.reshape(corner[6:10], 2, 2))
         y = ca.vertcat(a_s[i], d[i], v[i])
         Pi = P[:, 2 * i : 2 * i + 2]
         x_n, P_n, r_n, e = _corner_step(

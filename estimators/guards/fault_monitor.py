@@ -46,8 +46,6 @@ from wheelload.estimators.guards.monitor_state import (
     PARITY_WEIGHT,
     PERSIST,
     RBAR,
-    REJECT,
-    SPREAD,
     TRAVEL_SEEN,
     UNEXPLAINED,
 )
@@ -65,7 +63,7 @@ from wheelload.models.inputs import (
 class MonitorOutput:
     """Symbolic results of :func:`monitor`."""
 
-    m_next: ca.SX  # next monitor state
+    m_next: dict  # the fault monitor's fields of the next state (monitor_state.MONITOR), by name
     channel_ok: ca.SX  # (7,) 0 for an isolated channel (FAULT_CHANNELS order)
     statistic: ca.SX  # (7,) test statistic, >= 1 where the channel's test fires
     fault: ca.SX  # (7,) 1 while a channel is isolated
@@ -203,23 +201,24 @@ def monitor(
         clear_next.append(clear_j)
         fault_next.append(fault_j)
         active.append((1 - fault_j) * (1 - jump[j]) if j < 4 else 1 - fault_j)
-    m_next = ca.vertcat(
-        d_prev_next,
-        frozen_next,
-        rbar_next,
-        *persist_next,
-        *clear_next,
-        *fault_next,
-        m[REJECT],
-        m[SPREAD],
-        anchor_next,
-        moved_next,
-        *jump,
-        *spread_next,
-        unexplained_next,
-        excitation_next,
-        *gain_sums_next,
-    )
+    parity_mean, parity_variance, parity_weight = spread_next
+    m_next = {
+        "d_prev": d_prev_next,
+        "frozen": frozen_next,
+        "rbar": rbar_next,
+        "persist": ca.vertcat(*persist_next),
+        "clear": ca.vertcat(*clear_next),
+        "fault": ca.vertcat(*fault_next),
+        "anchor": anchor_next,
+        "moved": moved_next,
+        "jump": ca.vertcat(*jump),
+        "parity_mean": parity_mean,
+        "parity_variance": parity_variance,
+        "parity_weight": parity_weight,
+        "unexplained": unexplained_next,
+        "excitation": excitation_next,
+        "gain_sums": ca.vertcat(*gain_sums_next),
+    }
     return MonitorOutput(
         m_next,
         ca.vertcat(*active),

@@ -63,7 +63,7 @@ def prior_failures(y, S, available, m_spread, g: GuardSettings):
     return suspension, constraint, count
 
 
-def gate_rows(m_reject, m_spread, g: GuardSettings, prior=(0, 0, 0)):
+def gate_rows(m_reject, m_spread, g: GuardSettings, prior=(0, 0, 0), suspension_passes=None):
     r"""The innovation gate ``gate(i, y, S) -> 0 | 1`` and a record of its decisions.
 
     Row ``i`` passes when :math:`y^2 \le \gamma \max(k S, \bar s_i)` (:math:`k`:
@@ -76,7 +76,8 @@ def gate_rows(m_reject, m_spread, g: GuardSettings, prior=(0, 0, 0)):
     A failing row is still taken (released) when rows of the other group fail
     too (``prior``, :func:`prior_failures`, or an earlier suspension row of this
     sample), when three rows fail against the prediction, or after
-    ``gate_release_time`` of failing.
+    ``gate_release_time`` of failing. ``suspension_passes`` (4): the suspension rows'
+    decisions of this sample where they were taken elsewhere (default: this gate's record).
     """
     record = {}
     suspension_prior, constraint_prior, count_prior = prior
@@ -88,7 +89,8 @@ def gate_rows(m_reject, m_spread, g: GuardSettings, prior=(0, 0, 0)):
         else:
             other_group = suspension_prior
             for k in range(4):
-                other_group = ca.logic_or(other_group, 1 - record[k][0])
+                passed = record[k][0] if suspension_passes is None else suspension_passes[k]
+                other_group = ca.logic_or(other_group, 1 - passed)
         transient = ca.logic_or(other_group, count_prior >= 3)
         released = ca.logic_or(m_reject[i] >= g.gate_release_time, transient)
         record[i] = (passes, released, y, S)

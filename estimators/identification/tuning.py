@@ -16,7 +16,7 @@ input-dependent density is kept only if it raises :math:`\ell` by 2 (a likelihoo
 test at about 5 %), else it is 0 (constant noise). The likelihood is evaluated with the
 innovation gate open: a gate removes exactly the large innovations the likelihood needs.
 Everything else (the estimates, the coverage, the RMSE) runs with the guard settings the
-filter of the written file runs with (:class:`~wheelload.estimators.kf.two_stage.TwoStageKF`'s own).
+filter of the written file runs with (:class:`~wheelload.estimators.TwoStageKF`'s own).
 
 Shape that generalises: a shape fitted on a few manoeuvres must not wreck another. The
 likelihood is fitted again leaving each log out; a ratio of q or of an equilibrium row's
@@ -58,7 +58,6 @@ from wheelload.estimators.kf.tuning import (
     NOISE_DENSITIES,
     TUNED_DENSITIES,
     TUNING,
-    TUNING_INDEX,
     noise_densities,
     with_filter_sigma,
 )
@@ -74,7 +73,7 @@ NIS_BAND = (stats.chi2.ppf(0.025, 1), stats.chi2.ppf(0.975, 1))  # 95 % band of 
 #: Tuning entries that open the innovation gate for the likelihood (out of reach).
 GATE_OPEN = {"innovation_gate": 1e300, "gate_release_time": 1e300}
 _VARIANCE_SCALE = TUNING.index("innovation_variance_scale")
-_DENSITY_INDEX = [TUNING_INDEX[name] for name in TUNED_DENSITIES]
+_DENSITY_INDEX = TUNING.indices(TUNED_DENSITIES)
 #: Input size at which an input-dependent density starts its fit, adding a tenth of the
 #: constant density it goes with: damper velocity 0.1 m/s, accelerations 2 m/s^2.
 INPUT_SCALE = {
@@ -501,6 +500,7 @@ def tuned_vehicle(vehicle: Vehicle, result: TuningResult) -> Vehicle:
 __all__ = [
     "NOISE_DENSITIES",
     "TUNED_DENSITIES",
+    "TUNING",
     "UPDATE_ROWS",
     "noise_densities",
     "BlendScore",

@@ -35,7 +35,7 @@ import dataclasses
 import casadi as ca
 
 from wheelload.estimators.kernels.kalman import sequential_update_innovations, symmetrise
-from wheelload.estimators.kf.tuning import PAYLOAD_TUNING
+from wheelload.estimators.kf.tuning import PAYLOAD
 from wheelload.models import GATES, INPUTS, ModelParameters, equilibrium_function
 from wheelload.models.loaded_vehicle import (
     PAYLOAD_STATES,
@@ -48,7 +48,8 @@ _VX, _AX, _AY = (INPUTS.index(name) for name in ("vx", "ax", "ay"))
 
 
 def _settings(tuning: ca.SX):
-    return dict(zip(PAYLOAD_TUNING, (tuning[i] for i in range(len(PAYLOAD_TUNING))), strict=True))
+    """The payload part of the tuning vector, by entry name (:data:`PAYLOAD` layout)."""
+    return {name: PAYLOAD.value(tuning, name) for name in PAYLOAD.names()}
 
 
 def prior(tuning: ca.SX) -> ca.SX:

@@ -9,7 +9,11 @@ input-dependent densities of :mod:`wheelload.models.measurement_noise`; the guar
 :mod:`wheelload.estimators.guards.settings` act on the masks of the updates.
 
 The step is built from the model Functions in ``wheelload.models``, so the Python filter,
-the compiled loops and the generated C share one implementation.
+the compiled loops and the generated C share one implementation. It is a composition of
+stages (:func:`step_stages`: interval, payload, plausibility and holds, model rows, fault
+monitor, masks, noise, predict, gate, suspension update, equilibrium update, roll split,
+limits, payload update, sigma, the next monitor state, outputs), each a named Function
+``wheelload_kf_<stage>`` called on the values before it (inlined: one expression graph).
 
 Example
 -------
@@ -17,6 +21,8 @@ Example
 """
 
 from __future__ import annotations
+
+import functools
 
 import casadi as ca
 
@@ -28,21 +34,17 @@ from wheelload.estimators.guards import (
     plausibility,
 )
 from wheelload.estimators.guards import settings as guard
+from wheelload.estimators.guards.monitor_state import HOLD, MONITOR, SIGMA_MEANS, WATCH
 from wheelload.estimators.kernels.kalman import (
     predict,
     sequential_update,
     sequential_update_innovations,
     upper,
 )
+from wheelload.estimators.kernels.stage import stage, stage_name
 from wheelload.estimators.kf import payload, reported_std
 from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
-from wheelload.estimators.kf.tuning import (
-    GUARD_TUNING,
-    PAYLOAD_SLICE,
-    SIGMA_TUNING,
-    TUNING,
-    TUNING_INDEX,
-)
+from wheelload.estimators.kf.tuning import GUARD_TUNING, PAYLOAD_SLICE, SIGMA_TUNING, TUNING
 from wheelload.models import (
     GRAVITY,
     INPUTS,
@@ -68,8 +70,12 @@ from wheelload.models.measurement_noise import measurement_noise_function
 from wheelload.models.roll_split import SPLIT_NOISE_RATIO, roll_split_function
 from wheelload.models.terms import parity_model
 
-_NOISE_INDEX = [TUNING_INDEX[name] for name in NOISE_DENSITY_ORDER]
-_RC_INDEX = [TUNING_INDEX[f"constraint_noise_{row}"] for row in ("vertical", "pitch", "roll")]
+#: The stages' Functions are named ``wheelload_kf_<stage>``.
+STAGE_PREFIX = "wheelload_kf"
+#: Stages composed in Python, not through a Function of their own: the payload residual's
+#: users. Replayed through a Function boundary, CasADi folds 12 + 9 more operations of
+#: theirs (the step's 8269 instructions become 8248), so the emitted C would change.
+INLINE_STAGES = ("monitor", "payload_update")
 _P_INDEX = {name: k for k, name in enumerate(ModelParameters.names())}
 _TRAVEL_INDEX = input_index(TRAVEL)
 _RATE_INDEX = input_index(TRAVEL_RATE)
@@ -152,39 +158,108 @@ def step_expressions(
     :mod:`wheelload.estimators.guards.settings` (plausibility, innovation gate, fault
     monitor with state ``m``, covariance limits) act on the masks of the
     updates, so a guarded row changes neither x nor P.
-    """
-    x = ca.SX.sym("x", 4)
-    P = ca.SX.sym("P", 4, 4)
-    m = ca.SX.sym("m", monitor_state.MONITOR_SIZE)
-    u_raw = ca.SX.sym("u", len(INPUTS))
-    valid_raw = ca.SX.sym("u_valid", len(INPUTS))
-    dt = ca.SX.sym("dt")
-    p_file = ca.SX.sym("p", len(ModelParameters.names()))
-    tuning = ca.SX.sym("tuning", len(TUNING))
-    settings = guard.unpack(tuning[GUARD_TUNING])
-    dt_nominal = tuning[TUNING_INDEX["sample_interval"]]
-    payload_tuning = tuning[PAYLOAD_SLICE]
 
-    # A non-positive or non-finite interval skips the whole step: the state is held.
+    The step is the composition of the stages of :func:`step_stages`, each a named
+    Function (``wheelload_kf_<stage>``) called on the values before it.
+    """
+    inputs, values, _ = step_composition(
+        suspension,
+        equilibrium,
+        constraint_update=constraint_update,
+        measurement_noise=measurement_noise,
+    )
+    return list(inputs.values()), [values[name] for name in STEP_OUTPUT_NAMES]
+
+
+def step_composition(
+    suspension: ca.Function,
+    equilibrium: ca.Function,
+    *,
+    constraint_update=sequential_update_innovations,
+    measurement_noise: ca.Function | None = None,
+) -> tuple[dict, dict, dict]:
+    """The step's symbolic inputs, every value its stages name, and each stage's Function
+    (``wheelload_kf_<stage>``; None for :data:`INLINE_STAGES`), in stage order."""
+    inputs = {
+        "x": ca.SX.sym("x", 4),
+        "P": ca.SX.sym("P", 4, 4),
+        "m": ca.SX.sym("m", MONITOR.size),
+        "u_raw": ca.SX.sym("u", len(INPUTS)),
+        "valid_raw": ca.SX.sym("u_valid", len(INPUTS)),
+        "dt": ca.SX.sym("dt"),
+        "p_file": ca.SX.sym("p", len(ModelParameters.names())),
+        "tuning": ca.SX.sym("tuning", TUNING.size),
+    }
+    values, functions = dict(inputs), {}
+    stages = step_stages(
+        suspension,
+        equilibrium,
+        constraint_update=constraint_update,
+        measurement_noise=measurement_noise or measurement_noise_function(),
+    )
+    for build in stages:
+        name = stage_name(build)
+        outputs, functions[name] = stage(
+            STAGE_PREFIX, build, values, as_function=name not in INLINE_STAGES
+        )
+        values.update(outputs)
+    return inputs, values, functions
+
+
+def step_stages(suspension, equilibrium, *, constraint_update, measurement_noise) -> tuple:
+    """The step's stages in order, each ``build(**values) -> {name: value}`` over SX."""
+    models = {"suspension": suspension, "equilibrium": equilibrium}
+    return (
+        _interval,
+        _payload,
+        _plausibility,
+        functools.partial(_model, **models),
+        functools.partial(_monitor, **models),
+        functools.partial(_masks, **models),
+        functools.partial(_noise, measurement_noise=measurement_noise),
+        _predict,
+        _gate,
+        _suspension_update,
+        functools.partial(_equilibrium_update, constraint_update=constraint_update),
+        _roll_split,
+        _limits,
+        functools.partial(_payload_update, equilibrium=equilibrium),
+        _sigma,
+        _monitor_next,
+        _outputs,
+    )
+
+
+def _interval(dt):
+    """A non-positive or non-finite interval skips the whole step: the state is held."""
     dt_ok = interval_is_valid(dt)
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
-    dt_used = dt_safe * dt_ok
+    return {"dt_ok": dt_ok, "dt_used": dt_safe * dt_ok}
 
-    # The payload the file does not know (.payload), predicted to this sample: every row
-    # below sees the loaded vehicle; the suspension's offsets stay the reference state's.
+
+def _payload(m, u_raw, valid_raw, dt_used, p_file, tuning):
+    """The payload the file does not know (:mod:`.payload`), predicted to this sample, and
+    the loaded vehicle's parameters every row below sees (the suspension's offsets stay the
+    reference state's)."""
+    payload_tuning = tuning[PAYLOAD_SLICE]
     theta, P_theta = payload.predict(
-        m[monitor_state.PAYLOAD],
-        ca.reshape(m[monitor_state.PAYLOAD_COVARIANCE], 4, 4),
-        m[monitor_state.STARTED],
+        MONITOR.value(m, "payload"),
+        ca.reshape(MONITOR.value(m, "payload_covariance"), 4, 4),
+        MONITOR.value(m, "started"),
         sanitise(u_raw, valid_raw),
         valid_raw,
         dt_used,
         payload_tuning,
     )
     p = loaded_parameters_function()(p_file, payload.applied(theta, payload_tuning))
+    return {"theta": theta, "P_theta": P_theta, "p": p}
 
-    # Missing or implausible inputs are replaced by zero and skip the updates they feed;
-    # a body rate that jumps, or a derivative after a gated rate, counts as implausible.
+
+def _plausibility(u_raw, valid_raw, m, dt_used, p, tuning):
+    """Missing or implausible inputs are replaced by zero and skip the updates they feed (a
+    body rate that jumps, or a derivative after a gated rate, counts as implausible); the
+    model terms take each missing or gated input's last valid value for ``hold_time``."""
+    settings = guard.unpack(tuning[GUARD_TUNING])
     u_finite = sanitise(u_raw, valid_raw)
     in_range = plausibility.plausible_for(u_finite, p, settings)
     consistent, settle_next = plausibility.rate_consistency(
@@ -193,125 +268,258 @@ def step_expressions(
     in_range = in_range * consistent
     valid_plausible = valid_raw * in_range
     u = sanitise(u_raw, valid_plausible)
-    # The model terms take each missing or gated input's last valid value for
-    # ``hold_time``, then drop; the rows needing the input are skipped. ``dropped`` (the
-    # flags) marks a term without a live input, held or dropped.
     u_term, valid_term, held, hold_state = plausibility.hold_inputs(
         u, valid_plausible, m, dt_used, settings
     )
+    return {
+        "in_range": in_range, "settle_next": settle_next, "valid_plausible": valid_plausible,
+        "u": u, "u_term": u_term, "valid_term": valid_term, "held": held,
+        "hold_state": hold_state,
+    }  # fmt: skip
+
+
+def _model(u_term, valid_term, valid_plausible, p, *, suspension, equilibrium):
+    """The pseudo-measurement and the equilibrium on the terms' inputs; ``dropped`` (the
+    flags) marks a term without a live input, held or dropped."""
     z, A, b, _ = model_equations(suspension, equilibrium, u_term, valid_term, p)
     dropped = gates_function()(valid_plausible, p)[1]
-
-    # Fault monitor: an isolated channel is dropped like a missing one. Its parity test
-    # uses every model term the inputs allow (held inputs included), whatever the
-    # [model] switches.
-    parity = parity_model(suspension, equilibrium, u_term, valid_term, p)
-    # The fault monitor's parity test weighs the constant densities (the paper's R_c).
-    rc_density = ca.vertcat(*[tuning[k] for k in _RC_INDEX])
-    # What the payload not yet learnt may leave in the residual (a changed car, no fault).
     gates_term = gates_function()(valid_term, p)[0]
+    return {"z": z, "A": A, "b": b, "dropped": dropped, "gates_term": gates_term}
+
+
+def _monitor(
+    m, u, valid_plausible, u_term, valid_term, p, theta, P_theta, z, gates_term, p_file,
+    dt_used, tuning, *, suspension, equilibrium,
+):  # fmt: skip
+    """Fault monitor (:mod:`.fault_monitor`): its parity test uses every model term the
+    inputs allow (held inputs included), weighs the constant densities (the paper's R_c),
+    and allows for what the payload not yet learnt may leave in the residual."""
+    settings = guard.unpack(tuning[GUARD_TUNING])
+    parity = parity_model(suspension, equilibrium, u_term, valid_term, p)
+    rc_density = TUNING.value(tuning, "constraint_noise_density")
     residual_theta = payload.residual_function(equilibrium)
     unexplained = payload.unexplained(
-        theta, P_theta, z, u_term, gates_term, p_file, payload_tuning, residual_theta
+        theta, P_theta, z, u_term, gates_term, p_file, tuning[PAYLOAD_SLICE], residual_theta
     )
     watch = fault_monitor.monitor(
         m, u, valid_plausible, *parity, dt_used, rc_density, settings, unexplained
     )
-    valid = valid_plausible * _channel_drop(watch.channel_ok)
-    # The updates the channels left after the guards feed (an isolated channel's rows are
-    # skipped; the model terms keep their inputs, as for the monitor).
+    return {
+        "monitor_next": WATCH.pack(watch.m_next), "channel_ok": watch.channel_ok,
+        "fault_statistic": watch.statistic, "fault": watch.fault, "jump": watch.jump,
+        "seen": watch.seen,
+    }  # fmt: skip
+
+
+def _masks(u_raw, valid_plausible, channel_ok, p, dt_ok, *, suspension, equilibrium):
+    """The updates the channels left after the guards feed: an isolated channel is dropped
+    like a missing one (the model terms keep their inputs, as for the monitor)."""
+    u = sanitise(u_raw, valid_plausible)
+    valid = valid_plausible * _channel_drop(channel_ok)
     mask_s, mask_c = row_masks(suspension, equilibrium, u, u_raw, valid, p)
-    mask_s = mask_s * dt_ok
-    mask_c = mask_c * dt_ok
+    return {"mask_s": mask_s * dt_ok, "mask_c": mask_c * dt_ok}
 
-    # Measurement noise from the nominal interval: a gap grows P, never shrinks R.
-    weight = p[_P_INDEX["mass"]] * GRAVITY
+
+def _noise(u, valid_plausible, p, dt_used, tuning, *, measurement_noise):
+    """Q, R_s and R_c (models/measurement_noise.py) from the nominal interval: a gap grows P,
+    never shrinks R; the covariance ceiling and the weight of the loaded vehicle."""
     ceiling = limits.variance_ceiling(p[_P_INDEX["mass"]])
-    Q = ca.fmin(tuning[TUNING_INDEX["process_noise_density"]] * dt_used, ceiling) * ca.DM.eye(4)
-    # R_s, R_c from the inputs (models/measurement_noise.py; constant with the default zeros).
-    densities = ca.vertcat(*[tuning[k] for k in _NOISE_INDEX])
-    noise = measurement_noise or measurement_noise_function()
-    rs, rc = noise(u, valid_plausible, densities, dt_nominal)
+    q = TUNING.value(tuning, "process_noise_density")
+    Q = ca.fmin(q * dt_used, ceiling) * ca.DM.eye(4)
+    densities = TUNING.values(tuning, NOISE_DENSITY_ORDER)
+    rs, rc = measurement_noise(
+        u, valid_plausible, densities, TUNING.value(tuning, "sample_interval")
+    )
+    weight = p[_P_INDEX["mass"]] * GRAVITY
+    return {"Q": Q, "rs": rs, "rc": rc, "ceiling": ceiling, "weight": weight}
 
-    # R_s and R_c are diagonal: row-by-row updates equal the joint ones (eq. 20-25).
-    reject, spread = m[monitor_state.REJECT], m[monitor_state.SPREAD]
+
+def _predict(x, P, Q, ceiling, m, dt_ok, tuning):
+    """The random-walk prediction (eq. 19), its covariance within the limits; the first
+    sample sees no prior information, so its rows set the loads (an invalid interval holds
+    the state, so the start waits for the first valid one)."""
+    settings = guard.unpack(tuning[GUARD_TUNING])
     x_pred, P_pred = predict(x, upper(P), Q)
     P_pred, limited_pred = limits.limit_covariance(P_pred, settings.covariance_floor, ceiling)
-    # Start where the car is: the first sample sees no prior information, so its rows set
-    # the loads (a log that starts in a turn carries no start-up transient).
-    # An invalid interval holds the state, so the start waits for the first valid one.
-    started = m[monitor_state.STARTED]
+    started = MONITOR.value(m, "started")
     P_pred = ca.if_else(ca.logic_or(started, 1 - dt_ok), P_pred, ceiling * ca.DM.eye(4))
+    return {"x_pred": x_pred, "P_pred": P_pred, "limited_pred": limited_pred}
+
+
+def _gate(x_pred, P_pred, z, b, A, rs, rc, mask_s, mask_c, m, tuning):
+    """The rows that fail the innovation gate against the prediction
+    (:func:`.innovation_gate.prior_failures`): a failing row of the other group releases."""
+    settings = guard.unpack(tuning[GUARD_TUNING])
     y_prior, S_prior = innovation_gate.prior_innovations(x_pred, P_pred, z, b, A, rs, rc)
-    prior = innovation_gate.prior_failures(
-        y_prior, S_prior, ca.vertcat(mask_s, mask_c), spread, settings
+    suspension, constraint, count = innovation_gate.prior_failures(
+        y_prior, S_prior, ca.vertcat(mask_s, mask_c), MONITOR.value(m, "spread"), settings
     )
-    gate, record = innovation_gate.gate_rows(reject, spread, settings, prior)
+    return {"prior_suspension": suspension, "prior_constraint": constraint, "prior_count": count}
+
+
+def _suspension_update(
+    x_pred, P_pred, z, rs, mask_s, m, tuning, prior_suspension, prior_constraint, prior_count
+):
+    """The suspension pseudo-measurement update, row by row through the gate (eq. 20-22)."""
+    gate, record = _gate_rows(m, tuning, prior_suspension, prior_constraint, prior_count)
     x_s, P_s, y_s, S_s, use_s = sequential_update_innovations(
         x_pred, P_pred, z, ca.DM.eye(4), rs, mask_s, gate
     )
-    x_new, P_new, y_c, S_c, use_c = constraint_update(
+    return {"x_s": x_s, "P_s": P_s, "y_s": y_s, "S_s": S_s, "use_s": use_s,
+            **_decisions(record, range(4), "s")}  # fmt: skip
+
+
+def _equilibrium_update(
+    x_s, P_s, b, A, rc, mask_c, m, tuning, prior_suspension, prior_constraint, prior_count,
+    passes_s, *, constraint_update,
+):  # fmt: skip
+    """The equilibrium as a soft constraint (eq. 23-25) through the gate; a failing
+    suspension row of this sample releases the constraint rows."""
+    gate, record = _gate_rows(m, tuning, prior_suspension, prior_constraint, prior_count, passes_s)
+    x_c, P_c, y_c, S_c, use_c = constraint_update(
         x_s, P_s, b, A, rc, mask_c, lambda i, y, S: gate(4 + i, y, S)
     )
-    # No travel row at all (IMU-only): the weak roll-split row observes the warp, beside
-    # the roll moment it splits, so only when that row was used (with no data at all the
-    # step is a pure prediction).
+    return {"x_c": x_c, "P_c": P_c, "y_c": y_c, "S_c": S_c, "use_c": use_c,
+            **_decisions(record, range(4, 7), "c")}  # fmt: skip
+
+
+def _gate_rows(m, tuning, prior_suspension, prior_constraint, prior_count, passes_s=None):
+    """The innovation gate on the monitor's rejection times and spreads."""
+    return innovation_gate.gate_rows(
+        MONITOR.value(m, "reject"),
+        MONITOR.value(m, "spread"),
+        guard.unpack(tuning[GUARD_TUNING]),
+        (prior_suspension, prior_constraint, prior_count),
+        passes_s,
+    )
+
+
+def _decisions(record, rows, group: str) -> dict:
+    """The gate's record of ``rows``: passes, released, and the y and S it saw."""
+    return {
+        f"{name}_{group}": ca.vertcat(*[record[i][k] for i in rows])
+        for k, name in enumerate(("passes", "released", "gate_y", "gate_S"))
+    }
+
+
+def _roll_split(x_c, P_c, mask_s, use_c, rc, p, dt_ok):
+    """No travel row at all (IMU-only): the weak roll-split row observes the warp, beside
+    the roll moment it splits, so only when that row was used (with no data at all the step
+    is a pure prediction)."""
     no_travel = (1 - mask_s[0]) * (1 - mask_s[1]) * (1 - mask_s[2]) * (1 - mask_s[3])
     mask_split = dt_ok * no_travel * use_c[2]
     r_split = SPLIT_NOISE_RATIO * rc[2:3]
-    x_new, P_new = sequential_update(
-        x_new, P_new, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
+    x_split, P_split = sequential_update(
+        x_c, P_c, ca.DM.zeros(1), roll_split_function()(p), r_split, mask_split
     )
-    P_new, limited_new = limits.floor_covariance(P_new, settings.covariance_floor)
-    # An update that would take a load out of +-load_limit m g (or to a non-finite value)
-    # is not taken: the sample is the prediction, so no hostile sample poisons the state.
-    total = limits.total_range(m, b[0], mask_c[0], weight)
-    bounded = limits.within_load_limit(x_new, x_pred, total, weight, settings)
-    x_new = ca.if_else(bounded, x_new, x_pred)
-    P_new = ca.if_else(bounded, P_new, P_pred)
-    use_s, use_c = use_s * bounded, use_c * bounded
+    return {"x_split": x_split, "P_split": P_split}
 
-    # The payload filter on the equilibrium at the pseudo-measured loads (every wheel's
-    # suspension row and the equilibrium row available).
+
+def _limits(x_split, P_split, x_pred, P_pred, b, mask_c, use_s, use_c, m, weight, tuning):
+    """The covariance floor; an update that would take a load out of +-load_limit m g (or
+    to a non-finite value) is not taken: the sample is the prediction, so no hostile sample
+    poisons the state."""
+    settings = guard.unpack(tuning[GUARD_TUNING])
+    P_floor, limited_new = limits.floor_covariance(P_split, settings.covariance_floor)
+    total = limits.total_range(m, b[0], mask_c[0], weight)
+    bounded = limits.within_load_limit(x_split, x_pred, total, weight, settings)
+    return {
+        "x_next": ca.if_else(bounded, x_split, x_pred),
+        "P_next": ca.if_else(bounded, P_floor, P_pred),
+        "used_s": use_s * bounded, "used_c": use_c * bounded, "bounded": bounded,
+        "total": total, "limited_new": limited_new,
+    }  # fmt: skip
+
+
+def _payload_update(
+    theta, P_theta, z, u_term, gates_term, p_file, mask_s, mask_c, bounded, tuning, *,
+    equilibrium,
+):  # fmt: skip
+    """The payload filter on the equilibrium at the pseudo-measured loads (every wheel's
+    suspension row and the equilibrium row available), and the mass properties reported."""
+    payload_tuning = tuning[PAYLOAD_SLICE]
     all_travel = mask_s[0] * mask_s[1] * mask_s[2] * mask_s[3]
     loaded = payload.update(
         theta, P_theta, z, u_term, gates_term, p_file, all_travel * mask_c * bounded,
-        dt_nominal, payload_tuning, residual_theta,
+        TUNING.value(tuning, "sample_interval"), payload_tuning,
+        payload.residual_function(equilibrium),
     )  # fmt: skip
     mass_properties, mass_properties_std = payload.reported(
         loaded.theta, loaded.P, p_file, payload_tuning
     )
+    return {
+        "theta_next": loaded.theta,
+        "P_theta_next": loaded.P,
+        "mass_properties": mass_properties,
+        "mass_properties_std": mass_properties_std,
+    }
 
-    # The reported sigma: P and the model's mismatch terms (the gain does not see them).
+
+def _sigma(P_next, u, z, A, b, mask_s, mask_c, y_s, m, dt_used, tuning):
+    """The reported sigma (:mod:`.reported_std`): P and the model's mismatch terms (the gain
+    does not see them)."""
     features, sigma_means = reported_std.sigma_features(
-        P_new, u, z, A, b, mask_s, mask_c, y_s, m, dt_used
+        P_next, u, z, A, b, mask_s, mask_c, y_s, m, dt_used
     )
     std = reported_std.reported_std(features, tuning[SIGMA_TUNING])
-    residual = b - ca.mtimes(A, x_new)
-    used = ca.vertcat(use_s, use_c, (1 - dropped) * dt_ok)
+    return {"std": std, "sigma_means": sigma_means}
+
+
+def _monitor_next(
+    m, monitor_next, mask_s, mask_c, passes_s, passes_c, released_s, released_c, gate_y_s,
+    gate_y_c, gate_S_s, gate_S_c, hold_state, settle_next, total, sigma_means, theta_next,
+    P_theta_next, seen, dt_used, dt_ok, tuning,
+):  # fmt: skip
+    """The carried state after the sample, field by field (:data:`.monitor_state.MONITOR`)."""
+    record = _record(passes_s, passes_c, released_s, released_c, gate_y_s, gate_y_c,
+                     gate_S_s, gate_S_c)  # fmt: skip
     available = ca.vertcat(mask_s, mask_c)
-    innovation = ca.vertcat(y_s, y_c) * available
-    innovation_variance = ca.vertcat(S_s, S_c) * available
-    m_next = monitor_state.with_gate_state(
-        watch.m_next,
-        innovation_gate.reject_times(reject, record, available, dt_used),
-        innovation_gate.next_spread(spread, record, available, dt_used, settings),
+    reject, spread = MONITOR.value(m, "reject"), MONITOR.value(m, "spread")
+    settings = guard.unpack(tuning[GUARD_TUNING])
+    m_next = MONITOR.pack(
+        {
+            **WATCH.unpack(monitor_next),
+            "reject": innovation_gate.reject_times(reject, record, available, dt_used),
+            "spread": innovation_gate.next_spread(spread, record, available, dt_used, settings),
+            **HOLD.unpack(hold_state),
+            "settle": settle_next,
+            "total": total,
+            **SIGMA_MEANS.unpack(sigma_means),
+            "payload": theta_next,
+            "payload_covariance": ca.vec(P_theta_next),
+            "started": ca.logic_or(MONITOR.value(m, "started"), dt_ok),
+            "travel_seen": seen,
+        }
     )
-    m_next = monitor_state.with_hold_state(m_next, hold_state, settle_next, total)
-    m_next = monitor_state.with_sigma_state(m_next, sigma_means)
-    m_next = monitor_state.with_payload_state(
-        m_next, loaded.theta, loaded.P, ca.logic_or(started, dt_ok), watch.seen
-    )
+    return {"m_next": m_next}
+
+
+def _outputs(
+    x_next, A, b, mask_s, mask_c, used_s, used_c, dropped, dt_ok, y_s, y_c, S_s, S_c,
+    passes_s, passes_c, released_s, released_c, valid_raw, in_range, fault, limited_pred,
+    limited_new, jump, held, bounded,
+):  # fmt: skip
+    """The step's reported outputs: residual, used rows, innovations and the guard flags."""
+    available = ca.vertcat(mask_s, mask_c)
+    record = _record(passes_s, passes_c, released_s, released_c)
     status = _status(
-        record, available, valid_raw, in_range, watch.fault,
-        ca.logic_or(limited_pred, limited_new), watch.jump, held, 1 - bounded,
+        record, available, valid_raw, in_range, fault,
+        ca.logic_or(limited_pred, limited_new), jump, held, 1 - bounded,
     )  # fmt: skip
-    inputs = [x, P, m, u_raw, valid_raw, dt, p_file, tuning]
-    outputs = [
-        x_new, P_new, m_next, std, residual, used, z, innovation, innovation_variance,
-        status, watch.statistic, watch.fault, mass_properties, mass_properties_std,
-    ]  # fmt: skip
-    return inputs, outputs
+    return {
+        "residual": b - ca.mtimes(A, x_next),
+        "used": ca.vertcat(used_s, used_c, (1 - dropped) * dt_ok),
+        "innovation": ca.vertcat(y_s, y_c) * available,
+        "innovation_variance": ca.vertcat(S_s, S_c) * available,
+        "status": status,
+    }
+
+
+def _record(passes_s, passes_c, released_s, released_c, *seen) -> dict:
+    """The gate's record by row (update order): passes, released[, y, S]."""
+    columns = [ca.vertcat(passes_s, passes_c), ca.vertcat(released_s, released_c)]
+    columns += [ca.vertcat(seen[k], seen[k + 1]) for k in range(0, len(seen), 2)]
+    return {i: tuple(column[i] for column in columns) for i in range(7)}
 
 
 def _status(record, available, valid_raw, in_range, fault, limited, jump, held, unbounded):

@@ -14,36 +14,103 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from wheelload.estimators.guards.settings import GuardSettings, guard_settings_for
 from wheelload.estimators.kernels import order_statistics
+from wheelload.estimators.kernels.layout import Field, Layout
 from wheelload.estimators.types import step_blocks
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
-from wheelload.models.measurement_noise import INPUT_DENSITIES
-from wheelload.models.vehicle.description import SIGMA_KEYS
+from wheelload.models.vehicle.description import SIGMA_KEYS, FaultTuning
 
-#: The payload filter's entries of the tuning vector, in order.
-PAYLOAD_TUNING = (
-    "payload_estimate",
-    "payload_mass_std",
-    "payload_position_std_x",
-    "payload_position_std_y",
-    "payload_position_std_z",
-    "payload_residual_density_vertical",
-    "payload_residual_density_pitch",
-    "payload_residual_density_roll",
-    "payload_drift_density",
-    "payload_standstill_density",
-    "payload_standstill_speed",
-    "payload_gate",
-    "payload_acceleration_scale_vertical",
-    "payload_acceleration_scale_pitch",
-    "payload_acceleration_scale_roll",
-    "payload_apparent_mass",
-    "payload_apparent_moment",
+
+def _filter(key: str, unit: str, doc: str = "", parts: tuple[str, ...] = ()) -> Field:
+    """An entry the vehicle file's ``[filter]`` gives under its own name."""
+    return Field(key, unit=unit, file_key=("filter", key), doc=doc, parts=parts)
+
+
+def _payload(key: str, unit: str, parts: tuple[str, ...] = ()) -> Field:
+    """An entry of the vehicle file's ``[filter.payload]`` (payload filter, :mod:`.payload`)."""
+    return Field(f"payload_{key}", unit=unit, file_key=("filter", "payload", key), parts=parts)
+
+
+def _rows(stem: str, suffix: str = "") -> tuple[str, ...]:
+    """Per equilibrium row (vertical, pitch, roll) the entry's name."""
+    return tuple(f"{stem}_{row}{suffix}" for row in ("vertical", "pitch", "roll"))
+
+
+_FAULT_KEYS = {f.name for f in dataclasses.fields(FaultTuning)}
+#: The tuning vector, in order: each entry's name, unit and vehicle-file key.
+TUNING = Layout(
+    "tuning",
+    (
+        _filter("process_noise_density", "N^2/s", "Q = q dt I"),
+        _filter("suspension_noise_density", "N^2 s", "R_s = r_s / dt I"),
+        _filter("constraint_noise_density", "N^2 s, N^2 m^2 s, N^2 m^2 s",
+                "R_c = diag(r_c) / dt", _rows("constraint_noise")),
+        Field("sample_interval", unit="s", doc="the log's nominal (median) interval"),
+        *[
+            Field(name, file_key=("filter", "faults", name) if name in _FAULT_KEYS else None,
+                  doc="guard setting (kf.guard.GuardSettings, unit there)")
+            for name in GuardSettings.names()
+        ],
+        _filter("suspension_noise_rate_density", "N^2 s/(m/s)^2", "R_s + this v^2 / dt"),
+        _filter("suspension_noise_hub_density", "N^2 s/(m/s^2)^2",
+                "R_s + this (a_hub - az)^2 / dt"),
+        _filter("constraint_noise_acceleration_density", "N^2 s/(m/s^2)^2, N^2 m^2 s/(m/s^2)^2",
+                "R_c + this ((az - g)^2, ax^2, ay^2) / dt",
+                _rows("constraint_noise", "_acceleration")),
+        # The payload filter's entries; estimate: 1 where the file estimates the payload
+        # (estimate and travel_from_reference).
+        _payload("estimate", ""),
+        _payload("mass_std", "kg"),
+        _payload("position_std", "m", tuple(f"payload_position_std_{a}" for a in "xyz")),
+        _payload("residual_density", "N^2 s, N^2 m^2 s", _rows("payload_residual_density")),
+        _payload("drift_density", "kg^2/s"),
+        _payload("standstill_density", "kg^2/s"),
+        _payload("standstill_speed", "m/s"),
+        _payload("gate", ""),
+        _payload("acceleration_scale", "m/s^2", _rows("payload_acceleration_scale")),
+        _payload("apparent_mass", "kg"),
+        _payload("apparent_moment", "kg m"),
+        # The reported-sigma coefficients (.reported_std), last.
+        *[_filter(key, "see FilterTuning", "reported sigma (.reported_std)") for key in SIGMA_KEYS],
+    ),
+)  # fmt: skip
+#: The filter's constant noise densities (vehicle file [filter]); the input-dependent ones
+#: (default 0) are :data:`INPUT_DENSITY_FIELDS`.
+NOISE_FIELDS = ("process_noise_density", "suspension_noise_density", "constraint_noise_density")
+#: The input-dependent noise densities (models/measurement_noise.py).
+INPUT_DENSITY_FIELDS = (
+    "suspension_noise_rate_density",
+    "suspension_noise_hub_density",
+    "constraint_noise_acceleration_density",
 )
+#: Every density ``wheelload tune`` fits: the constant ones, then the input-dependent ones.
+TUNED = TUNING.subset("tuned_densities", NOISE_FIELDS + INPUT_DENSITY_FIELDS)
+#: The payload filter's part of the tuning vector.
+PAYLOAD = TUNING.subset(
+    "payload_tuning", [name for name in TUNING.field_names() if name.startswith("payload_")]
+)
+#: Scalar names of the constant densities, of every tuned density, of the payload's entries.
+NOISE_DENSITIES = TUNING.subset("noise_densities", NOISE_FIELDS).names()
+TUNED_DENSITIES = TUNED.names()
+PAYLOAD_TUNING = PAYLOAD.names()
+#: Position of each entry of the tuning vector (:meth:`Layout.index` of :data:`TUNING`).
+TUNING_INDEX = {name: TUNING.index(name) for name in TUNING.names()}
+#: The entries read from the vehicle file's ``[filter]`` under their own key.
+_FILTER_KEYS = {name: key for name, key in TUNING.file_keys().items() if key[:-1] == ("filter",)}
+#: Nominal sample interval [s] where no log gives one (100 Hz).
+DEFAULT_SAMPLE_INTERVAL = 0.01
+#: The guard settings' entries of the tuning vector (:meth:`GuardSettings.names` order).
+GUARD_TUNING = TUNING.span(GuardSettings.names()[0], GuardSettings.names()[-1])
+#: The payload filter's entries of the tuning vector (:data:`PAYLOAD_TUNING` order).
+PAYLOAD_SLICE = TUNING.span(PAYLOAD.field_names()[0], PAYLOAD.field_names()[-1])
+#: The reported-sigma coefficients (:mod:`.reported_std`): the last entries.
+SIGMA_TUNING = TUNING.span(SIGMA_KEYS[0], SIGMA_KEYS[-1])
 
 
 def payload_tuning(vehicle: Vehicle) -> np.ndarray:
@@ -52,54 +119,9 @@ def payload_tuning(vehicle: Vehicle) -> np.ndarray:
     Estimation is off where the file says travel is zeroed at the start of a log.
     """
     t = vehicle.filter.payload
-    on = t.estimate and t.travel_from_reference
-    return np.array(
-        [
-            float(on),
-            t.mass_std,
-            *t.position_std,
-            *t.residual_density,
-            t.drift_density,
-            t.standstill_density,
-            t.standstill_speed,
-            t.gate,
-            *t.acceleration_scale,
-            t.apparent_mass,
-            t.apparent_moment,
-        ]  # fmt: skip
-    )
-
-
-#: Order of the tuning vector.
-TUNING = (
-    "process_noise_density",
-    "suspension_noise_density",
-    "constraint_noise_vertical",
-    "constraint_noise_pitch",
-    "constraint_noise_roll",
-    "sample_interval",
-    *GuardSettings.names(),
-    *INPUT_DENSITIES,
-    *PAYLOAD_TUNING,
-    *SIGMA_KEYS,
-)
-#: The filter's constant noise densities: the first entries of the tuning vector (vehicle
-#: file [filter]); the input-dependent ones (default 0) are :data:`INPUT_DENSITIES`, last.
-NOISE_DENSITIES = TUNING[:5]
-#: Every density ``wheelload tune`` fits: the constant ones, then the input-dependent ones.
-TUNED_DENSITIES = NOISE_DENSITIES + INPUT_DENSITIES
-#: Position of each entry of the tuning vector.
-TUNING_INDEX = {name: k for k, name in enumerate(TUNING)}
-#: Nominal sample interval [s] where no log gives one (100 Hz).
-DEFAULT_SAMPLE_INTERVAL = 0.01
-#: The guard settings' entries of the tuning vector (:meth:`GuardSettings.names` order).
-_GUARD_START = TUNING_INDEX["sample_interval"] + 1
-GUARD_TUNING = slice(_GUARD_START, _GUARD_START + len(GuardSettings.names()))
-_VARIANCE_SCALE = TUNING_INDEX["innovation_variance_scale"]
-#: The payload filter's entries of the tuning vector (:data:`PAYLOAD_TUNING` order).
-PAYLOAD_SLICE = slice(TUNING_INDEX[PAYLOAD_TUNING[0]], TUNING_INDEX[PAYLOAD_TUNING[-1]] + 1)
-#: The reported-sigma coefficients (:mod:`.reported_std`): the last entries.
-SIGMA_TUNING = slice(TUNING_INDEX[SIGMA_KEYS[0]], TUNING_INDEX[SIGMA_KEYS[-1]] + 1)
+    values = {field.name: getattr(t, field.file_key[-1]) for field in PAYLOAD.fields}
+    values["payload_estimate"] = float(t.estimate and t.travel_from_reference)
+    return PAYLOAD.pack(values)
 
 
 def tuning_vector(
@@ -118,20 +140,16 @@ def tuning_vector(
     tuning = vehicle.filter
     if not 0.0 < sample_interval < MAX_INTERVAL:
         raise ValueError(f"sample interval must be > 0 s and finite, got {sample_interval}")
-    vector = np.array(
-        [
-            tuning.process_noise_density,
-            tuning.suspension_noise_density,
-            *tuning.constraint_noise_density,
-            sample_interval,
-            *settings.vector(),
-            *tuning.input_densities(),
-            *payload_tuning(vehicle),
-            *tuning.sigma_model(),
-        ]
+    vector = TUNING.pack(
+        {
+            **{name: getattr(tuning, key[-1]) for name, key in _FILTER_KEYS.items()},
+            "sample_interval": sample_interval,
+            **dict(zip(GuardSettings.names(), settings.vector(), strict=True)),
+            **PAYLOAD.unpack(payload_tuning(vehicle)),
+        }
     )
     # The vehicle file's [filter] gate_scale (written by ``wheelload tune``) on the gate's S.
-    vector[_VARIANCE_SCALE] *= tuning.gate_scale
+    vector[TUNING.index("innovation_variance_scale")] *= tuning.gate_scale
     return vector
 
 
@@ -146,7 +164,7 @@ def with_filter_sigma(tuning: np.ndarray) -> np.ndarray:
 def noise_densities(vehicle: Vehicle) -> np.ndarray:
     """The vehicle file's noise densities in :data:`TUNED_DENSITIES` order (constant, then
     input-dependent)."""
-    return tuning_vector(vehicle)[[TUNING_INDEX[name] for name in TUNED_DENSITIES]]
+    return TUNING.values(tuning_vector(vehicle), TUNED_DENSITIES)
 
 
 def nominal_interval(t: np.ndarray) -> float:

@@ -36,7 +36,7 @@ from wheelload.estimators.kf.step_cache import (
 )
 from wheelload.estimators.kf.tuning import (
     DEFAULT_SAMPLE_INTERVAL,
-    TUNING_INDEX,
+    TUNING,
     nominal_interval,
     tuning_vector,
 )
@@ -107,7 +107,7 @@ def flags_from_outputs(used: np.ndarray, status: np.ndarray) -> np.ndarray:
     return flags_from_used(used) | guarded
 
 
-_INTERVAL_INDEX = TUNING_INDEX["sample_interval"]
+_INTERVAL_INDEX = TUNING.index("sample_interval")
 _NO_TIME = np.array([np.nan])  # the time of a single step's estimate (shared, read-only)
 _NO_TIME.flags.writeable = False
 

@@ -70,6 +70,7 @@ import numpy as np
 from wheelload.estimators.guards.limits import variance_ceiling
 from wheelload.estimators.kernels import order_statistics
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
+from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.kf.two_stage import (
     FilterState,
     TwoStageKF,
@@ -208,9 +209,15 @@ class MovingHorizonEstimator:
 
     # -- set-up ------------------------------------------------------------------------------
 
+    @property
+    def process_noise_density(self) -> float:
+        """q of the filter's tuning (its Q = q dt I): the arrival cost's random walk."""
+        return float(TUNING.value(self.tuning, "process_noise_density"))
+
     def cost_factor(self, dt: float) -> float:
         """Cost scale :math:`c`: the QP's Hessian :math:`c s^2 H` has diagonal entries near one."""
-        q, r_s = self.tuning[0], self.tuning[1]
+        q = self.process_noise_density
+        r_s = TUNING.value(self.tuning, "suspension_noise_density")
         return 1.0 / (LOAD_SCALE**2 * (dt / r_s + 2.0 / (q * dt)))
 
     def steady_state_covariance(self, dt: float, samples: int = 20000) -> np.ndarray:
@@ -241,7 +248,9 @@ class MovingHorizonEstimator:
         cost = self.cost_factor(dt)
         if self.settings.arrival is Arrival.STEADY_STATE:
             steady = self.steady_state_covariance(dt)
-            steady = arrival_weights(steady[None], self.tuning[0] * np.array([dt]), cost)[0]
+            steady = arrival_weights(
+                steady[None], self.process_noise_density * np.array([dt]), cost
+            )[0]
         else:
             steady = np.zeros((4, 4))
         x0 = np.array(self.filter.parameters.static(), dtype=float)
@@ -325,7 +334,7 @@ class MovingHorizonEstimator:
 
         ``previous`` holds the filter covariance before each sample.
         """
-        weights = arrival_weights(previous, self.tuning[0] * dt, state.cost)
+        weights = arrival_weights(previous, self.process_noise_density * dt, state.cost)
         first = (np.arange(len(dt)) + state.k == 0)[:, None, None]
         if self.settings.arrival is Arrival.STEADY_STATE:
             weights = np.where(first, weights, state.steady)

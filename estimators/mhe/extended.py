@@ -110,7 +110,7 @@ def advance_extended(mhe, state: MheState, terms: SampleTerms, arrival: np.ndarr
         if state.k >= N - 1 and beta.size:  # the oldest sample leaves the window next
             info = info + leaving_information(mhe, state, x_warm)
     if beta.size:
-        dt = 1.0 / (mhe.tuning[0] * max(sample.link, 1e-300)) if sample.link else 0.0
+        dt = 1.0 / (mhe.process_noise_density * max(sample.link, 1e-300)) if sample.link else 0.0
         info = np.linalg.inv(np.linalg.inv(info) + np.diag(mhe.beta_density * dt))
     state = replace(
         state,

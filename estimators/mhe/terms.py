@@ -39,7 +39,7 @@ from wheelload.estimators.guards import plausibility
 from wheelload.estimators.guards import settings as guard
 from wheelload.estimators.guards.settings import GuardSettings
 from wheelload.estimators.kf.step import model_rows
-from wheelload.estimators.kf.tuning import TUNING, TUNING_INDEX
+from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.mhe.settings import Constraint
 from wheelload.models import (
     INPUTS,
@@ -57,8 +57,6 @@ TERMS_NAME = "wheelload_mhe_terms"
 LOAD_SCALE = 1000.0  # N: the QP's variables are in kN
 TERMS_INPUTS = ["u", "u_valid", "dt", "x_ref", "p", "tuning", "cost"]
 TERMS_OUTPUTS = ["H", "g", "link", "xp", "lower", "upper", "b", "used"]
-_DENSITY_INDEX = [TUNING_INDEX[name] for name in DENSITIES]
-_GUARD_INDEX = [TUNING_INDEX[name] for name in GuardSettings.names()]
 
 
 def warp_interval(xp, null: np.ndarray, lower_load: float, upper_load: float):
@@ -86,7 +84,7 @@ def plausible_inputs(u_raw, valid, p, tuning) -> ca.SX:
     range never reaches the QP). The same symbolic function as the KF's step, so the Python
     MHE and its generated C share it.
     """
-    settings = guard.unpack(ca.vertcat(*[tuning[k] for k in _GUARD_INDEX]))
+    settings = guard.unpack(TUNING.values(tuning, GuardSettings.names()))
     in_range = plausibility.plausible_for(sanitise(u_raw, valid), p, settings)
     return valid * in_range
 
@@ -99,7 +97,7 @@ def row_densities(u_raw, valid, tuning) -> tuple[ca.SX, ca.SX]:
     with the vehicle file's optional densities, :math:`r_s`, :math:`r_c` bit for bit without.
     The window weighs a row by :math:`dt / r` with the sample's own interval.
     """
-    densities = ca.vertcat(*[tuning[k] for k in _DENSITY_INDEX])
+    densities = TUNING.values(tuning, DENSITIES)
     return measurement_noise_function()(sanitise(u_raw, valid), valid, densities, 1.0)
 
 
@@ -132,7 +130,7 @@ def terms_function(
     dt = ca.SX.sym("dt")
     x_ref = ca.SX.sym("x_ref", 4)
     p = ca.SX.sym("p", len(ModelParameters.names()))
-    tuning = ca.SX.sym("tuning", len(TUNING))
+    tuning = ca.SX.sym("tuning", TUNING.size)
     cost = ca.SX.sym("cost")
 
     inputs = [u_raw, valid, dt, x_ref, p, tuning, cost]
@@ -141,7 +139,7 @@ def terms_function(
     r_s, r_c = row_densities(u_raw, valid, tuning)
     w_s = mask_s * dt / r_s
     w_c = mask_c * dt / r_c
-    link = cost * LOAD_SCALE**2 / (tuning[0] * dt)
+    link = cost * LOAD_SCALE**2 / (TUNING.value(tuning, "process_noise_density") * dt)
     n = ca.DM(null)
     if constraint is Constraint.SOFT:
         H = ca.diag(w_s) + ca.mtimes([A.T, ca.diag(w_c), A])
@@ -194,7 +192,7 @@ def residual_function(
     valid = ca.SX.sym("u_valid", len(INPUTS))
     dt = ca.SX.sym("dt")
     p = ca.SX.sym("p", len(ModelParameters.names()))
-    tuning = ca.SX.sym("tuning", len(TUNING))
+    tuning = ca.SX.sym("tuning", TUNING.size)
     inputs = [u_raw, valid, dt, p, tuning]
     valid = plausible_inputs(u_raw, valid, p, tuning)
     z, _, b, mask_s, mask_c, _ = model_rows(suspension, equilibrium, u_raw, valid, p)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.estimators.kf.tuning import TUNING_INDEX
+from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.types import Signals
 from wheelload.studies.bench.numpy_kf import measurement_noises, pseudo_measurements
@@ -55,7 +55,7 @@ def fleet_arrays(
     """:class:`FleetArrays` of windows ``(base, start, stop)`` of equal length of ``bases``.
 
     ``tunings[j]`` carries the nominal interval window ``j``'s noise is computed with (the
-    batched step's :meth:`~wheelload.estimators.kf.two_stage.TwoStageKF.tuning_for`).
+    batched step's :meth:`~wheelload.estimators.TwoStageKF.tuning_for`).
     """
     measured = [pseudo_measurements(base, p) for base in bases]
     A = measured[0][1]
@@ -68,14 +68,14 @@ def fleet_arrays(
     for j, (k, start, stop) in enumerate(windows):
         if stop - start != length:
             raise ValueError("the peers take windows of one length")
-        interval = float(tunings[j][TUNING_INDEX["sample_interval"]])
+        interval = float(TUNING.value(tunings[j], "sample_interval"))
         if (k, interval) not in noises:
             full = np.full(len(bases[k]), interval)
             noises[k, interval] = measurement_noises(bases[k], tunings[j], full)
         z[:, j], b[:, j] = measured[k][0][start:stop], measured[k][2][start:stop]
         R[:, j] = noises[k, interval][start:stop]
         dt[:, j] = sample_intervals(bases[k].t[start:stop])
-    q = float(tunings[0][0])
+    q = float(TUNING.value(tunings[0], "process_noise_density"))
     return FleetArrays(z=z, A=A, b=b, R=R, dt=dt, x0=x0, q=q, prior=weight**2)
 
 

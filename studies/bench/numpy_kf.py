@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.estimators.kf.tuning import TUNING_INDEX
+from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.types import Signals
@@ -51,7 +51,7 @@ def measurement_noises(signals: Signals, tuning: np.ndarray, dt: np.ndarray) -> 
     r"""Diagonal of :math:`\mathrm{blkdiag}(R_s, R_c)` (n, 7) of a whole log at intervals ``dt``."""
     u = input_matrix(signals)
     valid = np.isfinite(u).astype(float)
-    densities = tuning[[TUNING_INDEX[name] for name in DENSITIES]]
+    densities = TUNING.values(tuning, DENSITIES)
     noise = measurement_noise_function().map(len(signals))
     R_s, R_c = noise(np.nan_to_num(u), valid, densities, dt[None, :])
     return np.vstack([np.asarray(R_s), np.asarray(R_c)]).T
@@ -66,9 +66,10 @@ def joint_filter(signals: Signals, p: np.ndarray, tuning: np.ndarray, x0: np.nda
     I = np.eye(4)
     x, P = x0.astype(float).copy(), np.zeros((4, 4))
     weight = p[ModelParameters.names().index("mass")] * GRAVITY
+    q = TUNING.value(tuning, "process_noise_density")
     out = np.empty((len(signals), 4))
     for k in range(len(signals)):
-        P = P + tuning[0] * dt[k] * I if k else weight**2 * I
+        P = P + q * dt[k] * I if k else weight**2 * I
         R = np.diag(R_diagonal[k])
         S = H @ P @ H.T + R
         K = np.linalg.solve(S, H @ P).T

@@ -18,6 +18,7 @@ from wheelload.estimators import Sample
 from wheelload.estimators.codegen.batched import run_batched
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.kernels.c_emitter import Precision
+from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.studies.bench.numpy_kf import pseudo_measurements
@@ -105,7 +106,14 @@ def filterpy_step(kf: TwoStageKF, signals):
         return None
     z, A, b = pseudo_measurements(signals, kf.p)
     dt = sample_intervals(signals.t)
-    q, rs, rc = kf.tuning[0], kf.tuning[1], kf.tuning[2:5]
+    q, rs, rc = (
+        TUNING.value(kf.tuning, name)
+        for name in (
+            "process_noise_density",
+            "suspension_noise_density",
+            "constraint_noise_density",
+        )
+    )
     filt = KalmanFilter(dim_x=4, dim_z=4)
     initial = kf.initial_state()
     filt.x, filt.P, filt.F = initial.x[:, None].copy(), initial.P.copy(), np.eye(4)
