@@ -55,22 +55,17 @@ def noisy_vehicle(vehicle):
 
 
 @pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the MHE's window (and the numpy
-    references) hold the file's mass and CG, so the KF it is compared with does too."""
-    return fixed_vehicle
+def noisy(fixed_vehicle):
+    return noisy_vehicle(fixed_vehicle)
 
 
 @pytest.fixture(scope="module")
-def noisy(vehicle):
-    return noisy_vehicle(vehicle)
-
-
-@pytest.fixture(scope="module")
-def drive(vehicle):
+def drive(fixed_vehicle):
     """A slalom with hub accelerometers (body az plus a corner-wise oscillation)."""
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
-    log = synthetic_log(vehicle, slalom(duration=2.0), noise=noise, spring_error=0.08, seed=11)
+    log = synthetic_log(
+        fixed_vehicle, slalom(duration=2.0), noise=noise, spring_error=0.08, seed=11
+    )
     wave = 3.0 * np.sin(2 * np.pi * 4.0 * log.t[:, None] + np.arange(4))
     return dataclasses.replace(log, hub=log.acc[:, 2:3] + wave)
 
@@ -101,14 +96,14 @@ def test_window_weights_are_the_inverse_of_the_noise_functions_R(noisy, drive):
     np.testing.assert_allclose(np.vstack([ls, lc]).T, np.sqrt(1.0 / R), rtol=1e-12)
 
 
-def test_one_sample_soft_window_is_the_kf_with_input_dependent_noise(vehicle, noisy, drive):
+def test_one_sample_soft_window_is_the_kf_with_input_dependent_noise(fixed_vehicle, noisy, drive):
     settings = MheSettings(horizon=1, constraint=Constraint.SOFT, bounded=False, solver=EXACT)
     mhe = MovingHorizonEstimator(noisy, settings).run(drive)
     kf = TwoStageKF(noisy).run(drive)
     assert not mhe.fallback.any()
     np.testing.assert_allclose(mhe.loads, kf.loads, rtol=0, atol=1e-6)
     # ... and the check tells the densities apart: the constant-R filter is far from both.
-    constant = TwoStageKF(vehicle).run(drive)
+    constant = TwoStageKF(fixed_vehicle).run(drive)
     assert np.max(np.abs(constant.loads - kf.loads)) > 1.0
 
 
