@@ -21,13 +21,12 @@ tests of each estimator pin.
 """
 
 import dataclasses
-import shutil
 
 import numpy as np
 import pytest
+from c_parity import assert_c_equals_python, mhe_library, needs_gcc
 
 from wheelload.estimators import TwoStageKF
-from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
 from wheelload.estimators.logs.inputs import input_matrix
@@ -139,10 +138,10 @@ def test_numpy_joint_filter_is_the_kf_with_input_dependent_noise(noisy, drive):
     np.testing.assert_allclose(joint, kf.run(drive).loads, rtol=1e-9)
 
 
-@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+@needs_gcc
 def test_generated_c_mhe_weighs_with_the_noise_function(noisy, drive, tmp_path):
     settings = MheSettings(horizon=5, bounded=True, arrival=Arrival.STEADY_STATE)
-    c = build_mhe_library(noisy, settings, tmp_path, dt=0.01).run(drive)
+    c = mhe_library(noisy, settings, tmp_path, dt=0.01).run(drive)
     python = MovingHorizonEstimator(noisy, settings).run(drive)
     assert np.all(c.status == 1)
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=0.1)
