@@ -5,8 +5,8 @@ compile, load back, compare).
 Every test of generated C builds through here:
 
 - the KF's library (``wheelload codegen``): :func:`kf_library`, then :func:`compile_program`
-  links a main (the library's example by default) under ``STRICT_CFLAGS`` (``-std=c99 -O2
-  -Wall -Wextra -Wpedantic -Wdouble-promotion -Wconversion -Werror``, in both precisions);
+  links a main (the library's example by default) under the project's ``STRICT_CFLAGS``
+  (``estimators/codegen/kf.py``: strict warnings as errors, in both precisions);
   :func:`check_codegen` does both, runs the example on a log and compares its loads;
 - the embedded MHE: :func:`mhe_library` (gcc -O2 -fPIC, loaded with ctypes) and
   :func:`mhe_program` (its example program);
@@ -30,7 +30,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.estimators.codegen.c_emitter import Precision
 from wheelload.estimators.codegen.kf import (
     STRICT_CFLAGS,
     CodegenOptions,
@@ -48,11 +47,14 @@ def kf_library(
     vehicle_file: str | Path,
     folder: str | Path,
     options: CodegenOptions | None = None,
-    **generate_options,
+    *,
+    step=None,
+    allow_unusual: bool = False,
 ) -> GeneratedLibrary:
-    """The KF's C library of ``vehicle_file``, written into ``folder`` (``wheelload codegen``;
-    ``generate_options``: ``step``, ``allow_unusual``)."""
-    return generate(vehicle_file, Path(folder), options, **generate_options)
+    """The KF's C library of ``vehicle_file``, written into ``folder`` as ``wheelload
+    codegen`` writes it (``step``: a step Function of the test's own; ``allow_unusual``: a
+    vehicle outside the physical ranges)."""
+    return generate(vehicle_file, Path(folder), options, step, allow_unusual=allow_unusual)
 
 
 def compile_program(
@@ -75,25 +77,24 @@ def kf_program(
     vehicle_file: str | Path,
     folder: str | Path,
     options: CodegenOptions | None = None,
-    **generate_options,
+    *,
+    allow_unusual: bool = False,
 ) -> Path:
     """The example program of ``vehicle_file``'s library: :func:`kf_library`, then
     :func:`compile_program` under the strict flags."""
-    return compile_program(kf_library(vehicle_file, folder, options, **generate_options))
+    library = kf_library(vehicle_file, folder, options, allow_unusual=allow_unusual)
+    return compile_program(library)
 
 
-def mhe_library(vehicle, settings, folder: str | Path, dt: float,
-                precision: Precision = Precision.DOUBLE, *, vehicle_path=None):  # fmt: skip
-    """The embedded MHE generated into ``folder``, compiled (gcc -O2 -fPIC) and loaded: its
-    ``run(signals)`` gives the C's estimates (``vehicle_path``: the KF linked in)."""
-    return build_mhe_library(vehicle, settings, Path(folder), dt, precision,
-                             vehicle_path=vehicle_path)  # fmt: skip
+#: The embedded MHE generated into a folder, compiled (gcc -O2 -fPIC) and loaded with ctypes:
+#: ``mhe_library(vehicle, settings, folder, dt, precision, vehicle_path=...)``, whose
+#: ``run(signals)`` gives the C's estimates (``vehicle_path``: the KF linked in).
+mhe_library = build_mhe_library
 
-
-def mhe_program(vehicle, settings, folder: str | Path, dt: float, **options) -> Path:
-    """The embedded MHE's example program (one instance per input file) built in ``folder``
-    (``options``: ``precision``, ``compiler``, ``flags``, ``vehicle_path``)."""
-    return build_mhe_program(vehicle, settings, Path(folder), dt, **options)
+#: The embedded MHE's example program (one instance per input file), built in a folder:
+#: ``mhe_program(vehicle, settings, folder, dt, precision=..., compiler=..., flags=...,
+#: vehicle_path=...)`` (a cross compiler too).
+mhe_program = build_mhe_program
 
 
 def compile_c(
@@ -172,12 +173,12 @@ def check_codegen(
     rtol: float,
     atol: float,
     options: CodegenOptions | None = None,
-    **generate_options,
+    allow_unusual: bool = False,
 ) -> pd.DataFrame:
     """Generate ``vehicle_file``'s library into ``folder``, compile its example under the
     strict flags, run it on ``log`` and check its ``columns`` against ``expected`` (Python's
     values, in the same order) to ``rtol`` and ``atol``; returns the C's estimates."""
-    binary = kf_program(vehicle_file, folder, options, **generate_options)
+    binary = kf_program(vehicle_file, folder, options, allow_unusual=allow_unusual)
     c = c_estimates(binary, log, Path(folder) / "estimates.csv")
     assert_c_equals_python(c[list(columns)], expected, rtol=rtol, atol=atol, what=str(log))
     return c
