@@ -234,7 +234,7 @@ def test_unsprung_masses_stay_within_their_physical_range(folder, capsys):
 
 def test_tune_says_when_it_cannot_calibrate_sigma_and_evaluates(folder, capsys):
     """The command's front end: a log without reference loads gives one line saying σ cannot
-    be calibrated (tests/studies/test_tuning_pipeline.py checks the logic), the file is
+    be calibrated (tests/studies/pipeline/test_tuning_pipeline.py checks the logic), the file is
     written, and ``--evaluate`` prints the held-out table."""
     frame = pd.read_csv(folder / "slope-20.csv")
     bare = folder / "no_reference.csv"

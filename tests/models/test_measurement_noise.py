@@ -8,15 +8,14 @@ order); the fast step against the CasADi step bit for bit.
 """
 
 import dataclasses
-import subprocess
 
 import casadi as ca
 import numpy as np
-import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, c_estimates, kf_program
 
 from wheelload.estimators import Sample, read_log, write_log
-from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.tuning import TUNED_DENSITIES, TUNING_INDEX, noise_densities
@@ -189,32 +188,26 @@ def test_generated_c_equals_python_with_input_dependent_noise(tmp_path, noisy_lo
     }
     path = tmp_path / "noisy.toml"
     path.write_text(add_values(text, changes))
-    library = generate(
+    binary = kf_program(
         path, tmp_path / "c", CodegenOptions(precision=Precision.DOUBLE, params=mode)
     )
-    binary = build_program(library, library.example, library.header.parent / "example")
-    out = tmp_path / "c_estimates.csv"
-    args = [str(binary), str(noisy_log), str(out)]
-    subprocess.run(args, check=True)
-    c = pd.read_csv(out)
+    c = c_estimates(binary, noisy_log, tmp_path / "c_estimates.csv")
     loaded = load_vehicle(path)
     python = TwoStageKF(loaded).run(read_log(noisy_log)).to_pandas()
     default = TwoStageKF(load_vehicle(example_vehicle_path())).run(read_log(noisy_log)).to_pandas()
     for column in ("fz_fl", "fz_rr", "fz_std_fl", "fz_std_rr"):
         expected = python[column].to_numpy()
-        np.testing.assert_allclose(c[column], expected, rtol=1e-9, atol=1e-9 * np.max(expected))
+        assert_c_equals_python(c[column], expected, rtol=1e-9, atol=1e-9 * np.max(expected))
     # The noise terms changed the filter (else the comparison shows nothing new).
     assert np.max(np.abs(python["fz_std_fl"] - default["fz_std_fl"])) > 1.0
     # A density set at run time equals the file with that density.
-    changed = tmp_path / "changed.csv"
-    subprocess.run([*args[:2], str(changed), "suspension_noise_rate_density=0"], check=True)
+    overrides = ("suspension_noise_rate_density=0",)
+    changed = c_estimates(binary, noisy_log, tmp_path / "changed.csv", *overrides)
     zero = loaded.replace(
         filter=dataclasses.replace(loaded.filter, suspension_noise_rate_density=0.0)
     )
     expected = TwoStageKF(zero).run(read_log(noisy_log)).to_pandas()
-    np.testing.assert_allclose(
-        pd.read_csv(changed)["fz_fl"], expected["fz_fl"], rtol=1e-9, atol=1e-5
-    )
+    assert_c_equals_python(changed["fz_fl"], expected["fz_fl"], rtol=1e-9, atol=1e-5)
     assert np.max(np.abs(expected["fz_fl"] - python["fz_fl"])) > 0.1  # the override acted
 
 

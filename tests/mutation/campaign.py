@@ -60,6 +60,7 @@ AREAS = {
         ("models/**/*.py",),
         (
             "tests/models/test_models.py",
+            "tests/models/suspension/test_suspension.py",
             "tests/models/test_model_terms.py",
             "tests/estimators/family",
             "tests/models/plant",
@@ -86,7 +87,7 @@ AREAS = {
     ),
     "tyre-step": Area(
         ("estimators/family/tyres/*.py", "models/family/tyre_forces.py"),
-        ("tests/estimators/family/test_tyre_forces.py",),
+        ("tests/estimators/family/tyres/test_tyre_forces.py",),
     ),
 }
 

@@ -7,14 +7,14 @@ on a hostile log (every channel corrupted).
 """
 
 import re
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, compile_program, compiler_refusal, kf_library
 
 from wheelload.estimators import StepFlag
-from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.signals import signals_from_frame
@@ -89,15 +89,9 @@ def test_gated_ay_moves_no_load_more_than_the_filters_own_step(lane_change, caps
 
 def sanitizers_work(folder) -> str | None:
     """None if gcc builds and runs a program with ASan and UBSan here, else the reason."""
-    source = folder / "probe.c"
-    source.write_text("int main(void) { return 0; }\n")
-    command = ["gcc", *hostile.SANITIZE, "-o", str(folder / "probe"), str(source)]
-    try:
-        built = subprocess.run(command, capture_output=True, text=True)
-    except FileNotFoundError:
-        return "no gcc"
-    if built.returncode != 0:
-        return f"gcc cannot build with {' '.join(hostile.SANITIZE)}: {built.stderr[-200:]}"
+    refusal = compiler_refusal(hostile.SANITIZE, binary=folder / "probe")
+    if refusal:
+        return refusal
     if hostile.run_binary([str(folder / "probe")]).returncode != 0:
         return "a sanitized program does not run here (ASan needs its address space layout)"
     return None
@@ -118,9 +112,9 @@ def hostile_runs(vehicle, tmp_path_factory):
     runs["reference"] = signals.reference
     for precision in Precision:
         target = folder / precision.value
-        library = generate(example_vehicle_path(), target, CodegenOptions(precision=precision))
-        binary = build_program(
-            library, library.example, target / "example", flags=(*STRICT_CFLAGS, *hostile.SANITIZE)
+        library = kf_library(example_vehicle_path(), target, CodegenOptions(precision=precision))
+        binary = compile_program(
+            library, library.example, "example", flags=(*STRICT_CFLAGS, *hostile.SANITIZE)
         )
         done = hostile.run_binary([str(binary), str(log), str(target / "estimates.csv")])
         runs[precision] = (done, pd.read_csv(target / "estimates.csv"))
@@ -144,10 +138,10 @@ def test_generated_c_on_hostile_log_is_clean_finite_bounded_and_never_locked(
 
 def test_double_c_equals_python_on_hostile_log(hostile_runs):
     # The same symbolic step in the same operation order: 1e-9 relative as for clean logs
-    # (tests/estimators/kf/test_guard_c.py), flag for flag.
+    # (tests/estimators/codegen/test_codegen_guards.py), flag for flag.
     _, out = hostile_runs[Precision.DOUBLE]
     python = hostile_runs["python"]
-    np.testing.assert_allclose(out[hostile.LOADS], python.loads, rtol=1e-9, atol=1e-6)
+    assert_c_equals_python(out[hostile.LOADS], python.loads, rtol=1e-9, atol=1e-6)
     np.testing.assert_array_equal(out["status"].to_numpy(), python.flags & ~_PYTHON_ONLY)
 
 

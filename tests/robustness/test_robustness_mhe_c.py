@@ -11,13 +11,12 @@ samples lie in the first 70 % of the log, and the last 20 % equals the clean run
 
 import dataclasses
 import os
-import shutil
-import subprocess
 import sys
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, compile_c, compiler_refusal, needs_gcc, run_program
 
 from wheelload.estimators.codegen.mhe import embedded_settings, mhe_includes
 from wheelload.estimators.codegen.mhe_build import MAIN, compiled_sources, write_inputs
@@ -31,7 +30,7 @@ from wheelload.studies.cli import main
 
 pytestmark = [
     pytest.mark.heavy(8),
-    pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc"),
+    needs_gcc,
 ]
 
 SHARES = (0.001, 0.01, 0.1)
@@ -52,12 +51,9 @@ SETTINGS = {
 
 def _sanitizer_flags() -> list[str]:
     """``-fsanitize=address,undefined`` if gcc links it here, else none (the reason printed)."""
-    probe = subprocess.run(
-        ["gcc", "-fsanitize=address,undefined", "-x", "c", "-o", os.devnull, "-"],
-        input="int main(void) { return 0; }\n", capture_output=True, text=True,
-    )  # fmt: skip
-    if probe.returncode != 0:
-        print(f"gcc cannot link the sanitizers, built without: {probe.stderr.strip()[:200]}")
+    refusal = compiler_refusal(("-fsanitize=address,undefined",))
+    if refusal:
+        print(f"gcc cannot link the sanitizers, built without: {refusal}")
         return []
     return ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-g"]
 
@@ -77,24 +73,19 @@ def program(request, tmp_path_factory):
     folder = tmp_path_factory.mktemp(f"mhe_{request.param}")
     assert main(["codegen", "--estimator", "mhe", "--out", str(folder), *options]) == 0
     (folder / "wheelload_mhe_main.c").write_text(MAIN)
-    binary = folder / "wheelload_mhe"
     flags = ("-O1", *_sanitizer_flags(), "-std=gnu99")
-    command = ["gcc", *flags, "-o", str(binary), *mhe_includes(folder),
-               str(folder / "wheelload_mhe_main.c"), *compiled_sources(folder, ("gcc", *flags)),
-               "-lm"]  # fmt: skip
-    built = subprocess.run(command, capture_output=True, text=True)
-    assert built.returncode == 0, built.stderr[-2000:]
+    sources = [folder / "wheelload_mhe_main.c", *compiled_sources(folder, ("gcc", *flags))]
+    binary = compile_c(folder / "wheelload_mhe", sources, flags, includes=mhe_includes(folder))
     return binary, embedded_settings(settings, filter_linked=True, precision=precision), tolerance
 
 
-def run_program(binary, rows: np.ndarray, folder) -> pd.DataFrame:
+def program_estimates(binary, rows: np.ndarray, folder) -> pd.DataFrame:
     """The program over input rows (dt, then INPUTS); fails on any sanitizer report."""
     inputs, estimates = folder / "inputs.txt", folder / "estimates.csv"
     np.savetxt(inputs, rows, fmt="%.17g")  # 'nan', 'inf', '-inf' as C's strtod reads them
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0:abort_on_error=0",
                UBSAN_OPTIONS="print_stacktrace=1")  # fmt: skip
-    done = subprocess.run([str(binary), str(inputs), str(estimates)], capture_output=True,
-                          text=True, env=env)  # fmt: skip
+    done = run_program(binary, inputs, estimates, env=env, check=False)
     assert done.returncode == 0 and done.stderr == "", done.stderr[-3000:]
     estimates_frame = pd.read_csv(estimates)
     assert len(estimates_frame) == len(rows)
@@ -143,16 +134,16 @@ def test_embedded_mhe_stays_finite_bounded_and_recovers_on_hostile_inputs(progra
     vehicle = load_vehicle(example_vehicle_path())
     weight = vehicle.mass.total * GRAVITY
     rows = np.loadtxt(write_inputs(log, tmp_path / "clean.txt"))
-    clean = run_program(binary, rows, tmp_path)
+    clean = program_estimates(binary, rows, tmp_path)
     python = MovingHorizonEstimator(vehicle, settings).run(log)
     # C = Python on the clean log (SETTINGS: the tolerance and why)
-    np.testing.assert_allclose(clean[LOADS].to_numpy(), python.loads, rtol=0, atol=tolerance)
+    assert_c_equals_python(clean[LOADS].to_numpy(), python.loads, rtol=0, atol=tolerance)
     assert not clean["fallback"].any()
     tail = slice(int(0.8 * len(rows)), None)
     for label, channels in (("required channels", REQUIRED), ("every channel", INPUTS)):
         for share in SHARES:
             hostile, chosen = hostile_rows(rows, share, channels, seed=int(share * 1e4))
-            out = run_program(binary, hostile, tmp_path)
+            out = program_estimates(binary, hostile, tmp_path)
             values = out[NUMBERS].to_numpy()
             where = f"{label}, {share:.1%} hostile"
             assert np.isfinite(values).all(), where

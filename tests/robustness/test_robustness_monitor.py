@@ -9,15 +9,15 @@ of its 14151 samples (196 N guarded against 150 N plain): its parity residual
 """
 
 import re
-import subprocess
 from dataclasses import fields
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import check_codegen
 
 from wheelload.estimators import StepFlag, read_log
-from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions
 from wheelload.estimators.guards.settings import GUARDS_OFF
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -132,13 +132,10 @@ def test_compiled_c_monitor_equals_python_on_the_paper_model(biased_lap, tmp_pat
     derivatives: the C example estimates them as the Python reader does
     (tests/estimators/codegen/test_codegen_rates.py), for the monitor's complete model."""
     log, paper = biased_lap
-    library = generate(paper, tmp_path, CodegenOptions(precision=Precision.DOUBLE))
-    binary = build_program(library, library.example, tmp_path / "example")
-    out = tmp_path / "estimates.csv"
-    subprocess.run([str(binary), str(log), str(out)], check=True)
-    c = pd.read_csv(out)
     python = TwoStageKF(load_vehicle(paper)).run(read_log(log))
-    np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
+    options = CodegenOptions(precision=Precision.DOUBLE)
+    c = check_codegen(paper, tmp_path, log, python.loads, columns=LOADS, rtol=1e-9, atol=1e-6,
+                      options=options)  # fmt: skip
     np.testing.assert_array_equal(c["status"], python.flags)
     assert set(python.faults["channel"]) == {"ay"}
     assert np.any(c["status"].to_numpy() & StepFlag.IMU_FAULT)

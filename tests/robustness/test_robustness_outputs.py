@@ -1,12 +1,11 @@
 """Item 1: no command overwrites an input or an existing file without --force (real files)."""
 
 import os
-import subprocess
 
 import pandas as pd
 import pytest
+from c_parity import kf_program, run_program
 
-from wheelload.estimators.codegen.kf import build_program, generate
 from wheelload.estimators.logs.output_files import OutputError, atomic_write
 from wheelload.models import example_vehicle_path
 from wheelload.studies.cli import main
@@ -128,8 +127,7 @@ def test_atomic_write_leaves_the_old_file_on_an_error(tmp_path):
 @pytest.fixture(scope="module")
 def example_program(tmp_path_factory):
     folder = tmp_path_factory.mktemp("example_program")
-    library = generate(example_vehicle_path(), folder)
-    return build_program(library, library.example, folder / "example")
+    return kf_program(example_vehicle_path(), folder)
 
 
 def test_example_program_refuses_to_write_over_its_log(example_program, user_files):
@@ -139,7 +137,7 @@ def test_example_program_refuses_to_write_over_its_log(example_program, user_fil
     os.link(log, hard)
     symbolic.symlink_to(log)
     for target in (log, hard, symbolic, log.parent / "." / log.name):
-        result = subprocess.run([example_program, log, target], capture_output=True, text=True)
+        result = run_program(example_program, log, target, check=False)
         assert result.returncode == 2 and "is the input log" in result.stderr
         assert log.read_bytes() == before
 
@@ -152,13 +150,13 @@ def test_example_program_replaces_its_output_only_when_complete(example_program,
     lines = log.read_text().splitlines()
     lines[40] = lines[40].replace(",", ",oops", 1)
     bad.write_text("\n".join(lines) + "\n")
-    result = subprocess.run([example_program, bad, out], capture_output=True, text=True)
+    result = run_program(example_program, bad, out, check=False)
     assert result.returncode == 2 and "not a decimal number" in result.stderr
     assert out.read_text() == "previous result\n"
     assert sorted(p.name for p in log.parent.iterdir()) == sorted(
         ["drive.csv", "car.toml", "bad.csv", "estimates.csv"]
     )
-    result = subprocess.run([example_program, log, out], capture_output=True, text=True)
+    result = run_program(example_program, log, out, check=False)
     assert result.returncode == 0, result.stderr
     assert len(pd.read_csv(out)) == 1353
     assert oct(out.stat().st_mode & 0o777) == oct(0o666 & ~current_umask())

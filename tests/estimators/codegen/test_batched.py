@@ -18,13 +18,13 @@
 
 import platform
 import re
-import subprocess
 
 import numpy as np
 import pytest
+from c_parity import assert_c_equals_python, compile_program, kf_library, run_program
 
 from wheelload.estimators.codegen.batched import KERNEL_FLAGS, PREFIX, batch_library, run_batched
-from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path
@@ -33,11 +33,9 @@ from wheelload.models.runtime.build_folder import build_report
 
 @pytest.mark.parametrize("precision", list(Precision))
 def test_batched_step_is_bit_identical_to_the_single_step(tmp_path, precision):
-    library = generate(example_vehicle_path(), tmp_path, CodegenOptions(precision=precision))
-    binary = build_program(library, library.selftest, tmp_path / "selftest")
-    out = subprocess.run(
-        [str(binary), "batch-check", "3000", "16"], capture_output=True, text=True, check=True
-    ).stdout
+    library = kf_library(example_vehicle_path(), tmp_path, CodegenOptions(precision=precision))
+    binary = compile_program(library, library.selftest, "selftest")
+    out = run_program(binary, "batch-check", "3000", "16").stdout
     values = dict(re.findall(r"(\w+) (\S+)", out))
     assert float(values["max_relative"]) == 0.0, out
     assert int(values["differing_flags"]) == 0, out
@@ -58,7 +56,7 @@ def test_fast_build_is_warning_free_and_vectorises_the_batch(vehicle, tmp_path):
     ]
     # Its source is the library `wheelload codegen` writes (`make fast` compiles), header in
     # place, under the batch prefix: the same C, comments aside.
-    written = generate(example_vehicle_path(), tmp_path, CodegenOptions())
+    written = kf_library(example_vehicle_path(), tmp_path, CodegenOptions())
     text = written.source.read_text().replace(
         f'#include "{written.header.name}"', written.header.read_text(), 1
     )
@@ -90,9 +88,9 @@ def test_run_batched_equals_run_per_log(vehicle, plant_log):
     for log, estimate in zip(logs, batched, strict=True):
         expected = kf.run(log)
         scale = np.abs(expected.loads).max()
-        np.testing.assert_allclose(estimate.loads, expected.loads, rtol=1e-12, atol=1e-12 * scale)
-        np.testing.assert_allclose(estimate.std, expected.std, rtol=1e-12)
-        np.testing.assert_allclose(estimate.residual, expected.residual, atol=1e-12 * scale)
+        assert_c_equals_python(estimate.loads, expected.loads, rtol=1e-12, atol=1e-12 * scale)
+        assert_c_equals_python(estimate.std, expected.std, rtol=1e-12, atol=0)
+        assert_c_equals_python(estimate.residual, expected.residual, rtol=1e-7, atol=1e-12 * scale)
         np.testing.assert_array_equal(estimate.flags, expected.flags)
         # The same faults, their peak statistics to the loads' 1e-12 relative.
         assert [(f.channel, f.start, f.end) for f in estimate.sensor_faults] == [

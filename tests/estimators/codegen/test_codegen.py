@@ -8,20 +8,18 @@ significant digits on loads of about 4 kN; its error stays within 0.5 N.
 
 import dataclasses
 import hashlib
-import subprocess
 
 import casadi as ca
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, c_estimates, compile_program, kf_library, run_program
 
 from wheelload.estimators import StepFlag, read_log, signals_from_frame, write_log
 from wheelload.estimators.codegen.kf import (
     CodegenOptions,
     ParamMode,
-    build_program,
     calibration_names,
-    generate,
 )
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.step import step_function
@@ -38,16 +36,12 @@ LOADS = [f"fz_{w}" for w in WHEELS]
 STD = [f"fz_std_{w}" for w in WHEELS]
 
 
-def compile_program(library, main_source, name):
-    """Build by the real gcc with the strict warning flags, warnings as errors."""
-    return build_program(library, main_source, library.header.parent / name)
-
-
 def run_example(library, log_path):
+    """The library's example program, built by the real gcc with the strict warning flags
+    (warnings as errors), on the log at ``log_path``."""
     binary = compile_program(library, library.example, "example")
     out = log_path.parent / f"{library.header.parent.name}_estimates.csv"
-    subprocess.run([str(binary), str(log_path), str(out)], check=True)
-    return pd.read_csv(out)
+    return c_estimates(binary, log_path, out)
 
 
 def with_optional_channels(signals, rng):
@@ -119,7 +113,7 @@ def generated(tmp_path_factory):
             return made[precision, mode]
         out = tmp_path_factory.mktemp(f"{name}_{precision.value}_{mode.value}")
         options = CodegenOptions(precision=precision, params=mode)
-        library = generate(example_vehicle_path(), out, options, step=step)
+        library = kf_library(example_vehicle_path(), out, options, step=step)
         if step is None:
             made[precision, mode] = library
         return library
@@ -134,9 +128,7 @@ def assert_double_build_matches(c, python):
     for column in [*LOADS, *STD, *RESIDUALS, *MASS_PROPERTY_COLUMNS]:
         expected = python[column].to_numpy()
         scale = np.max(np.abs(expected))
-        np.testing.assert_allclose(
-            c[column], expected, rtol=1e-9, atol=1e-9 * scale, err_msg=column
-        )
+        assert_c_equals_python(c[column], expected, rtol=1e-9, atol=1e-9 * scale, what=column)
     np.testing.assert_array_equal(c["status"], python["status"])
 
 
@@ -224,7 +216,7 @@ def test_changed_damper_model_changes_the_c(vehicle, generated, log_path):
     expected = TwoStageKF(vehicle, step=variant).run(read_log(log_path)).to_pandas()
     default = TwoStageKF(vehicle).run(read_log(log_path)).to_pandas()
     assert np.max(np.abs(expected[LOADS].to_numpy() - default[LOADS].to_numpy())) > 1.0
-    np.testing.assert_allclose(c[LOADS], expected[LOADS], rtol=1e-9, atol=1e-5)
+    assert_c_equals_python(c[LOADS], expected[LOADS], rtol=1e-9, atol=1e-5)
 
 
 def test_float_build_long_run_stays_finite_and_positive_definite(generated):
@@ -232,7 +224,7 @@ def test_float_build_long_run_stays_finite_and_positive_definite(generated):
     Cholesky after every step. Bounded by the count, never by the clock."""
     library = generated(Precision.FLOAT, ParamMode.RUNTIME)
     binary = compile_program(library, library.selftest, "selftest")
-    result = subprocess.run([str(binary), "check", "4000000"], capture_output=True, text=True)
+    result = run_program(binary, "check", "4000000", check=False)
     report = dict(zip(*[iter(result.stdout.split())] * 2))
     assert result.returncode == 0, result.stdout
     assert report["steps"] == "4000000"
@@ -245,10 +237,7 @@ def test_runtime_params_change_the_filter_without_regenerating(vehicle, generate
     library = generated(Precision.DOUBLE, ParamMode.RUNTIME)
     binary = compile_program(library, library.example, "example")
     out = library.header.parent / "overridden.csv"
-    subprocess.run(
-        [str(binary), str(log_path), str(out), "spring_front=66000", "constraint_noise_roll=5000"],
-        check=True,
-    )
+    c = c_estimates(binary, log_path, out, "spring_front=66000", "constraint_noise_roll=5000")
     front = dataclasses.replace(vehicle.suspension.front, spring_rate=66000.0)
     noise = (*vehicle.filter.constraint_noise_density[:2], 5000.0)
     # The derived roll split follows the spring (wheelload_kf_set_param), as in Python.
@@ -259,7 +248,7 @@ def test_runtime_params_change_the_filter_without_regenerating(vehicle, generate
     expected = TwoStageKF(changed).run(read_log(log_path)).to_pandas()
     default = TwoStageKF(vehicle).run(read_log(log_path)).to_pandas()
     assert np.max(np.abs(expected[LOADS].to_numpy() - default[LOADS].to_numpy())) > 1.0
-    np.testing.assert_allclose(pd.read_csv(out)[LOADS], expected[LOADS], rtol=1e-9, atol=1e-5)
+    assert_c_equals_python(c[LOADS], expected[LOADS], rtol=1e-9, atol=1e-5)
 
 
 STEP_DRIVER = r"""
@@ -313,7 +302,7 @@ def test_bad_inputs_skip_updates_and_bad_intervals_hold_the_state(generated, log
     driver.write_text(STEP_DRIVER)
     binary = compile_program(library, driver, "step_driver")
     stdin = "\n".join(" ".join(repr(float(value)) for value in row) for row in rows)
-    result = subprocess.run([str(binary)], input=stdin, capture_output=True, text=True, check=True)
+    result = run_program(binary, stdin=stdin)
     c = np.loadtxt(result.stdout.splitlines())
     loads, flags = c[:, :4], c[:, 4].astype(int)
     assert len(c) == 200 and np.isfinite(loads).all()

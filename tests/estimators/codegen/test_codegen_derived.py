@@ -13,14 +13,14 @@ a stale roll split gave.
 """
 
 import dataclasses
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, compile_program, kf_library, run_program
 
 from wheelload.estimators import read_log
-from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions
 from wheelload.estimators.codegen.runtime_parameters import SetStatus, runtime_fields
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.result import WHEELS
@@ -36,12 +36,12 @@ TOLERANCE = 1e-9  # N
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
     """The bundled vehicle's library (double, runtime parameters)."""
-    return generate(example_vehicle_path(), tmp_path_factory.mktemp("c"), CodegenOptions())
+    return kf_library(example_vehicle_path(), tmp_path_factory.mktemp("c"), CodegenOptions())
 
 
 @pytest.fixture(scope="module")
 def example(library):
-    return build_program(library, library.example, library.header.parent / "example")
+    return compile_program(library, library.example, "example")
 
 
 @pytest.fixture(scope="module")
@@ -50,8 +50,7 @@ def log():
 
 
 def run_example(example, out, *overrides):
-    return subprocess.run([str(example), str(example_log_path()), str(out), *overrides],
-                          capture_output=True, text=True)  # fmt: skip
+    return run_program(example, example_log_path(), out, *overrides, check=False)
 
 
 def changed_vehicle(vehicle, *, spring_front=None, roll_split_front=None):
@@ -72,7 +71,7 @@ def test_a_spring_set_at_run_time_equals_the_python_filter_of_the_changed_file(
     c = pd.read_csv(out)[LOADS].to_numpy()
     changed = changed_vehicle(vehicle, spring_front=66000.0)
     python = TwoStageKF(changed).run(log).loads
-    np.testing.assert_allclose(c, python, rtol=0, atol=TOLERANCE)
+    assert_c_equals_python(c, python, rtol=0, atol=TOLERANCE)
     # The split the file's springs gave, left stale, is off by newtons.
     split = ModelParameters.from_vehicle(vehicle).roll_split_front
     stale = changed_vehicle(vehicle, spring_front=66000.0, roll_split_front=split)
@@ -88,7 +87,7 @@ def test_a_split_set_at_run_time_is_pinned_whatever_the_order(
     assert run_example(example, out, *overrides).returncode == 0
     changed = changed_vehicle(vehicle, spring_front=66000.0, roll_split_front=0.45)
     python = TwoStageKF(changed).run(log).loads
-    np.testing.assert_allclose(pd.read_csv(out)[LOADS], python, rtol=0, atol=TOLERANCE)
+    assert_c_equals_python(pd.read_csv(out)[LOADS], python, rtol=0, atol=TOLERANCE)
 
 
 def test_a_mass_centre_input_is_refused_with_the_fix(example, tmp_path):
@@ -165,8 +164,8 @@ int main(void)
 def test_set_param_statuses_and_derived_values_equal_python_to_the_bit(vehicle, library):
     driver = library.header.parent / "set_param_driver.c"
     driver.write_text(DRIVER)
-    binary = build_program(library, driver, library.header.parent / "set_param_driver")
-    lines = subprocess.run([str(binary)], capture_output=True, text=True, check=True).stdout
+    binary = compile_program(library, driver, "set_param_driver")
+    lines = run_program(binary).stdout
     report = {line.split()[0]: line.split()[1:] for line in lines.splitlines()}
     fields = runtime_fields()
     default = ModelParameters.from_vehicle(vehicle)

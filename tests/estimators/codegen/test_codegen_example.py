@@ -4,13 +4,12 @@ Rows in the example's messages count data rows from 1 (wheelload's Python
 reader counts from 0) and also give the line of the file.
 """
 
-import subprocess
-
 import numpy as np
 import pytest
+from c_parity import kf_program, run_program
 
 from wheelload.estimators import read_log
-from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.models import example_vehicle_path
 
@@ -28,8 +27,7 @@ BAD_ROW = 9  # 0-based data row that the cases below edit: row 10, line 11 of th
 
 def example_binary(tmp_path_factory, precision):
     out = tmp_path_factory.mktemp(f"example_{precision.value}")
-    library = generate(example_vehicle_path(), out, CodegenOptions(precision=precision))
-    return build_program(library, library.example, out / "example")
+    return kf_program(example_vehicle_path(), out, CodegenOptions(precision=precision))
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +66,7 @@ def run(binary, log, text_):
     """Run the example on a log with the given text; the estimates file is next to it."""
     log.write_bytes(text_.encode())
     out = log.with_suffix(".out.csv")
-    result = subprocess.run([str(binary), str(log), str(out)], capture_output=True, text=True)
+    result = run_program(binary, log, out, check=False)
     return result, out
 
 

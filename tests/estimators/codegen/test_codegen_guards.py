@@ -9,14 +9,14 @@ decisions are compared on the outlier samples only.
 """
 
 import re
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, c_estimates, kf_program
 
 from wheelload.estimators import StepFlag, read_log, write_log
-from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.models import example_vehicle_path, load_vehicle
@@ -54,11 +54,8 @@ def faulty_log(plant_log, tmp_path_factory):
 
 def run_c(vehicle_path, log_path, out_dir, precision, allow_unusual=False):
     options = CodegenOptions(precision=precision)
-    library = generate(vehicle_path, out_dir, options, allow_unusual=allow_unusual)
-    binary = build_program(library, library.example, out_dir / "example")
-    out = out_dir / "estimates.csv"
-    subprocess.run([str(binary), str(log_path), str(out)], check=True)
-    return pd.read_csv(out)
+    binary = kf_program(vehicle_path, out_dir, options, allow_unusual=allow_unusual)
+    return c_estimates(binary, log_path, out_dir / "estimates.csv")
 
 
 def check_outlier_flags(flags):
@@ -77,7 +74,7 @@ def test_double_c_guards_equal_python(vehicle, faulty_log, tmp_path):
     c = run_c(example_vehicle_path(), faulty_log, tmp_path, Precision.DOUBLE)
     signals = read_log(faulty_log)
     python = TwoStageKF(vehicle).run(signals)
-    np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
+    assert_c_equals_python(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
     np.testing.assert_array_equal(c["status"], python.flags)
     check_outlier_flags(c["status"].to_numpy())
     assert list(python.faults["channel"]) == ["d_fl", "d_rr"]
@@ -133,7 +130,7 @@ def test_extreme_tuning_never_kills_the_c_filter(plant_log, tmp_path, precision,
     python = TwoStageKF(load_vehicle(path, allow_unusual=True)).run(logged)
     assert pooled_rmse(c[LOADS].to_numpy(), signals.reference) < 250.0
     if precision is Precision.DOUBLE:
-        np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
+        assert_c_equals_python(c[LOADS], python.loads, rtol=1e-9, atol=1e-6)
 
 
 def test_codegen_options_reject_a_bad_sample_interval():

@@ -11,14 +11,14 @@ differs by more than 1 N).
 """
 
 import dataclasses
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, c_estimates, kf_program
 
 from wheelload.estimators import read_log, write_log
-from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.result import WHEELS
 from wheelload.models import example_vehicle_path
@@ -32,21 +32,18 @@ LOADS = [f"fz_{w}" for w in WHEELS]
 def example(tmp_path_factory):
     """The example program of the bundled vehicle (double, runtime parameters), built once."""
     folder = tmp_path_factory.mktemp("c")
-    library = generate(example_vehicle_path(), folder, CodegenOptions())
-    return build_program(library, library.example, folder / "example")
+    return kf_program(example_vehicle_path(), folder, CodegenOptions())
 
 
 def test_example_on_the_bundled_log_equals_the_python_filter(vehicle, example, tmp_path):
     """The bundled log has the rates and no derivative columns: the example program, with
     no extra column, equals the Python filter (``wheelload estimate``'s) to 1e-9 relative,
     flags included (before the rate filter: up to 216 N apart)."""
-    out = tmp_path / "estimates.csv"
-    subprocess.run([str(example), str(example_log_path()), str(out)], check=True)
-    c = pd.read_csv(out)
+    c = c_estimates(example, example_log_path(), tmp_path / "estimates.csv")
     python = TwoStageKF(vehicle).run(read_log(example_log_path()))
     assert python.flags.size == len(c)
     scale = np.abs(python.loads).max()
-    np.testing.assert_allclose(c[LOADS], python.loads, rtol=1e-9, atol=1e-9 * scale)
+    assert_c_equals_python(c[LOADS], python.loads, rtol=1e-9, atol=1e-9 * scale)
     np.testing.assert_array_equal(c["status"], python.flags)
 
 
@@ -64,9 +61,7 @@ def test_example_derives_the_rate_terms_as_python_does(vehicle, example, tmp_pat
     write_log(signals, log)
     assert not {"wx_dot", "wy_dot", "wz_dot"} & set(pd.read_csv(log).columns)
 
-    out = tmp_path / "estimates.csv"
-    subprocess.run([str(example), str(log), str(out)], check=True)
-    c = pd.read_csv(out)
+    c = c_estimates(example, log, tmp_path / "estimates.csv")
 
     read = read_log(log)
     derived = TwoStageKF(vehicle).run(read)
@@ -74,7 +69,7 @@ def test_example_derives_the_rate_terms_as_python_does(vehicle, example, tmp_pat
         dataclasses.replace(read, rate_dots=np.full((len(read), 3), np.nan))
     )
     scale = np.abs(derived.loads).max()
-    np.testing.assert_allclose(c[LOADS], derived.loads, rtol=1e-9, atol=1e-9 * scale)
+    assert_c_equals_python(c[LOADS], derived.loads, rtol=1e-9, atol=1e-9 * scale)
     np.testing.assert_array_equal(c["status"], derived.flags)
     # The derived derivatives feed the body-inertia terms: other loads, other flags.
     assert np.abs(derived.loads - missing.loads).max() > 1.0  # N

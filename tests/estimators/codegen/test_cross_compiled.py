@@ -8,16 +8,16 @@ is available.
 
 import dataclasses
 import shutil
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import assert_c_equals_python, compile_program, kf_library, mhe_program, run_program
 
 from wheelload.estimators import read_log
-from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions
 from wheelload.estimators.codegen.mhe import embedded_settings
-from wheelload.estimators.codegen.mhe_build import build_mhe_program, write_inputs
+from wheelload.estimators.codegen.mhe_build import write_inputs
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
@@ -52,18 +52,16 @@ def assert_arm32(binary):
 
 
 def qemu(binary, *arguments):
-    result = subprocess.run(
-        ["qemu-arm", str(binary), *map(str, arguments)], capture_output=True, text=True
-    )
+    result = run_program("qemu-arm", binary, *arguments, check=False)
     assert result.returncode == 0, result.stderr
     return result
 
 
 @pytest.mark.parametrize("precision", list(Precision))
 def test_kf_library_on_arm_matches_x86_double(vehicle, plant_log, tmp_path, precision):
-    library = generate(example_vehicle_path(), tmp_path, CodegenOptions(precision=precision))
-    binary = build_program(
-        library, library.example, tmp_path / "example_arm", compiler=CROSS,
+    library = kf_library(example_vehicle_path(), tmp_path, CodegenOptions(precision=precision))
+    binary = compile_program(
+        library, library.example, "example_arm", compiler=CROSS,
         flags=(*STRICT_CFLAGS, "-static"),
     )  # fmt: skip
     assert_arm32(binary)
@@ -91,7 +89,7 @@ def test_embedded_mhe_on_arm_matches_x86_double(vehicle, plant_log, tmp_path):
     results = {}
     for precision in Precision:
         folder = tmp_path / precision.value
-        binary = build_mhe_program(
+        binary = mhe_program(
             vehicle, settings, folder, 0.01, precision=precision, compiler=CROSS,
             flags=("-O2", "-static"),
         )  # fmt: skip
@@ -102,7 +100,7 @@ def test_embedded_mhe_on_arm_matches_x86_double(vehicle, plant_log, tmp_path):
     assert (double["osqp_float_bytes"] == 8).all() and (single["osqp_float_bytes"] == 4).all()
     assert (double["status"] == 1).all() and (single["status"] == 1).all()
     # ARM double against the x86 Python MHE (same iterations): measured 1.6e-2 N
-    np.testing.assert_allclose(double[LOADS].to_numpy(), python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(double[LOADS].to_numpy(), python.loads, rtol=0, atol=0.1)
     # stated bound for OSQP's float path on ARM against x86 double: 1 N (measured 1.8e-2 N
     # soft and 3e-5 N hard, bounded, N = 10, on the bundled plant log)
     assert np.abs(single[LOADS].to_numpy() - python.loads).max() < 1.0
@@ -133,7 +131,7 @@ def test_embedded_mhe_robust_bias_lag_on_arm_matches_x86(vehicle, plant_log, tmp
         ("arm-float", CROSS, Precision.FLOAT, ("-O2", "-static")),
     ):
         folder = tmp_path / name
-        binary = build_mhe_program(
+        binary = mhe_program(
             vehicle, settings, folder, 0.01, precision=precision, compiler=compiler,
             flags=flags, vehicle_path=example_vehicle_path(),
         )  # fmt: skip
@@ -141,7 +139,7 @@ def test_embedded_mhe_robust_bias_lag_on_arm_matches_x86(vehicle, plant_log, tmp
             assert_arm32(binary)
             qemu(binary, inputs, folder / "out.csv")
         else:
-            subprocess.run([str(binary), str(inputs), str(folder / "out.csv")], check=True)
+            run_program(binary, inputs, folder / "out.csv")
         results[name] = pd.read_csv(folder / "out.csv")
     x86, double, single = results["x86"], results["arm-double"], results["arm-float"]
     for frame in results.values():

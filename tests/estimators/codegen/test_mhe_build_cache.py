@@ -11,10 +11,10 @@ sources that include it, and to no other.
 
 import filecmp
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
+from c_parity import header_dependencies, needs_gcc
 
 from wheelload.estimators.codegen.mhe import (
     generate_mhe,
@@ -25,7 +25,7 @@ from wheelload.estimators.codegen.mhe import (
 from wheelload.estimators.codegen.mhe_build import compiled_sources, included_headers
 from wheelload.estimators.mhe.settings import MheSettings
 
-pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+pytestmark = needs_gcc
 
 FLAGS = ("gcc", "-O2", "-fPIC", "-std=gnu99")
 
@@ -53,10 +53,7 @@ def test_the_same_window_gives_the_same_files(windows):
 def test_the_scanned_headers_hold_every_header_gcc_reads(windows):
     folder = windows[0]
     for source in mhe_sources(folder):
-        done = subprocess.run(["gcc", "-MM", *mhe_includes(folder), str(source)],
-                              capture_output=True, text=True, check=True)  # fmt: skip
-        rule = done.stdout.replace("\\\n", " ").split(":", 1)[1].split()
-        read = {Path(name).resolve() for name in rule if name.endswith(".h")}
+        read = header_dependencies(source, mhe_includes(folder))
         scanned = {path.resolve() for path in included_headers(source, include_directories(folder))}
         assert read <= scanned, (source.name, sorted(read - scanned))
 

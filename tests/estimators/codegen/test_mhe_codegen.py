@@ -1,20 +1,19 @@
 """The generated embedded MHE (OSQP embedded C + CasADi sample routine) equals the Python MHE."""
 
 import dataclasses
-import shutil
 
 import numpy as np
 import pytest
+from c_parity import assert_c_equals_python, mhe_library, needs_gcc
 
 from wheelload.estimators.codegen.mhe import embedded_settings
-from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.kf.projection import ProjectionKF, Weighting
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import Arrival, Constraint, MheSettings, SolverSettings
 from wheelload.models import example_vehicle_path
 from wheelload.studies.drive.synthetic import SensorNoise, steady_cornering, synthetic_log
 
-pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+pytestmark = needs_gcc
 
 
 @pytest.fixture(scope="module")
@@ -29,12 +28,12 @@ def test_generated_c_equals_python(vehicle, wheel_lift, tmp_path, constraint, bo
     settings = MheSettings(
         horizon=10, constraint=constraint, bounded=bounded, arrival=Arrival.STEADY_STATE
     )
-    library = build_mhe_library(vehicle, settings, tmp_path, dt=0.01)
+    library = mhe_library(vehicle, settings, tmp_path, dt=0.01)
     c = library.run(wheel_lift)
     python = MovingHorizonEstimator(vehicle, settings).run(wheel_lift)
     assert np.all(c.status == 1)
     # the same ADMM iterations in C and Python; a tenth of the 1e-6 kN tolerance x 1e3
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=0.1)
     if bounded:
         assert c.loads.min() >= 0.0
 
@@ -51,13 +50,13 @@ def test_generated_c_drops_the_terms_of_missing_inputs_like_python(
     settings = MheSettings(
         horizon=10, constraint=constraint, bounded=True, arrival=Arrival.STEADY_STATE
     )
-    c = build_mhe_library(vehicle, settings, tmp_path, dt=0.01).run(signals)
+    c = mhe_library(vehicle, settings, tmp_path, dt=0.01).run(signals)
     python = MovingHorizonEstimator(vehicle, settings).run(signals)
     assert np.all(c.status == 1)
     np.testing.assert_array_equal(c.flags, python.flags)
     assert c.flags[55] != 0
     # as above: the same iterations, a tenth of the solver tolerance scaled to newtons
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=0.1)
 
 
 def test_generated_c_takes_each_samples_interval_like_python(vehicle, wheel_lift, tmp_path):
@@ -67,13 +66,13 @@ def test_generated_c_takes_each_samples_interval_like_python(vehicle, wheel_lift
     t = wheel_lift.t[0] + np.cumsum(dt)
     signals = dataclasses.replace(wheel_lift, t=t)
     settings = MheSettings(horizon=8, bounded=True, arrival=Arrival.STEADY_STATE)
-    c = build_mhe_library(vehicle, settings, tmp_path, dt=float(np.median(dt))).run(signals)
+    c = mhe_library(vehicle, settings, tmp_path, dt=float(np.median(dt))).run(signals)
     python = MovingHorizonEstimator(vehicle, settings).run(signals)
     np.testing.assert_array_equal(c.status, python.status)
     assert np.all(c.status == 1)
     np.testing.assert_array_equal(c.flags, python.flags)
     # the same iterations: a tenth of the solver tolerance scaled to newtons, as above
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=0.1)
 
 
 #: Starved solvers: the bounded window needs 15-25 ADMM iterations; the unbounded one's first
@@ -94,9 +93,9 @@ def test_hard_window_in_c_falls_back_to_the_projection_kf_like_python(
     starved = STARVED[bounded]
     settings = MheSettings(horizon=10, constraint=Constraint.HARD, bounded=bounded,
                            max_load=12000.0, solver=starved)  # fmt: skip
-    c = build_mhe_library(
-        vehicle, settings, tmp_path, dt=0.01, vehicle_path=example_vehicle_path()
-    ).run(wheel_lift)
+    c = mhe_library(vehicle, settings, tmp_path, dt=0.01, vehicle_path=example_vehicle_path()).run(
+        wheel_lift
+    )
     python = MovingHorizonEstimator(vehicle, embedded_settings(settings, filter_linked=True))
     python = python.run(wheel_lift)
     failed = c.fallback
@@ -107,8 +106,8 @@ def test_hard_window_in_c_falls_back_to_the_projection_kf_like_python(
     kf = ProjectionKF(vehicle, weighting=Weighting.MAXIMUM_PROBABILITY).run(wheel_lift)
     low, high = (0.0, 12000.0) if bounded else (-np.inf, np.inf)
     # the C filter against the CasADi one: the same arithmetic in double (1e-6 N)
-    np.testing.assert_allclose(c.loads[failed], np.clip(kf.loads[failed], low, high),
+    assert_c_equals_python(c.loads[failed], np.clip(kf.loads[failed], low, high),
                                rtol=0, atol=1e-6)  # fmt: skip
-    np.testing.assert_allclose(c.std, kf.std, rtol=1e-9)
+    assert_c_equals_python(c.std, kf.std, rtol=1e-9, atol=0)
     # every row against the Python MHE: the same iterations, as above
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=0.1)

@@ -8,14 +8,13 @@ estimate of sample k - lag, row i of the Python run that of sample i.
 """
 
 import dataclasses
-import shutil
 
 import numpy as np
 import pytest
+from c_parity import assert_c_equals_python, mhe_library, needs_gcc
 
 from wheelload.estimators import read_log
 from wheelload.estimators.codegen.mhe import embedded_settings
-from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import (
@@ -29,7 +28,7 @@ from wheelload.estimators.mhe.settings import (
 from wheelload.models import example_vehicle_path
 from wheelload.studies.pipeline.example_log import example_log_path
 
-pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+pytestmark = needs_gcc
 
 HUBER = ResidualLoss(kind=Loss.HUBER, threshold=2.0)
 BOTH = BiasStates.TRAVEL | BiasStates.ACCELERATION
@@ -67,7 +66,7 @@ def faulted_log():
 
 
 def run_both(vehicle, signals, settings, precision, folder):
-    c = build_mhe_library(
+    c = mhe_library(
         vehicle, settings, folder, 0.01, precision, vehicle_path=example_vehicle_path()
     ).run(signals)
     realised = embedded_settings(settings, filter_linked=True, precision=precision)
@@ -85,18 +84,18 @@ def test_double_c_equals_python(vehicle, faulted_log, tmp_path, name):
     assert c.flags[201] != 0
     # tolerance 0.01 N on loads and 0.05 on the residuals [N, N m] (loads measured <= 1.9e-3 N
     # soft Huber/L1, 8e-7 N hard: the solvers' 1e-9 tolerance, see the ride-height test)
-    np.testing.assert_allclose(c.loads[lag:], python.loads[:n], rtol=0, atol=0.01)
-    np.testing.assert_allclose(c.residual[lag:], python.residual[:n], rtol=0, atol=0.05)
+    assert_c_equals_python(c.loads[lag:], python.loads[:n], rtol=0, atol=0.01)
+    assert_c_equals_python(c.residual[lag:], python.residual[:n], rtol=0, atol=0.05)
     # the linked filter's (soft: two-stage KF, hard: projection KF): the same arithmetic
-    np.testing.assert_allclose(c.std, python.std, rtol=1e-9)
+    assert_c_equals_python(c.std, python.std, rtol=1e-9, atol=0)
     assert c.std.min() > 0.0
     if settings.bias_states != BiasStates.NONE:
         # reported: four travel offsets, then the accelerometer biases in use
         accelerations = len(settings.bias_states.acceleration_columns)
         assert c.bias.shape[1] == python.bias.shape[1] == 4 + accelerations
         # travel offsets: 1 um (measured 2e-8 m); ax/ay biases: 1e-4 m/s^2 (measured 6e-6)
-        np.testing.assert_allclose(c.bias[:, :4], python.bias[:, :4], rtol=0, atol=1e-6)
-        np.testing.assert_allclose(c.bias[:, 4:], python.bias[:, 4:], rtol=0, atol=1e-4)
+        assert_c_equals_python(c.bias[:, :4], python.bias[:, :4], rtol=0, atol=1e-6)
+        assert_c_equals_python(c.bias[:, 4:], python.bias[:, 4:], rtol=0, atol=1e-4)
 
 
 def test_float_c_within_the_stated_bound(vehicle, faulted_log, tmp_path):
@@ -107,7 +106,7 @@ def test_float_c_within_the_stated_bound(vehicle, faulted_log, tmp_path):
     1.9 N (at 1e-6) and 7.0 N (at 1e-5) from it on this log.
     """
     settings = MheSettings(horizon=6, bounded=True, suspension_loss=HUBER, bias_states=BOTH, lag=2)
-    c = build_mhe_library(
+    c = mhe_library(
         vehicle, settings, tmp_path, 0.01, Precision.FLOAT, vehicle_path=example_vehicle_path()
     ).run(faulted_log)
     exact = MovingHorizonEstimator(vehicle, dataclasses.replace(settings, solver=TIGHT))
@@ -131,10 +130,10 @@ def test_ride_height_and_ay_bias_in_c_equal_python_to_a_micronewton(vehicle, fau
     c, python, _, _ = run_both(vehicle, faulted_log, settings, Precision.DOUBLE, tmp_path)
     assert np.all(c.status == 1) and not c.fallback.any()
     np.testing.assert_array_equal(c.flags, python.flags)
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=1e-6)
-    np.testing.assert_allclose(c.std, python.std, rtol=1e-9)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=1e-6)
+    assert_c_equals_python(c.std, python.std, rtol=1e-9, atol=0)
     # four travel offsets (the two axles' ride heights) [m], then ay [m/s^2]
     assert c.bias.shape[1] == python.bias.shape[1] == 5
-    np.testing.assert_allclose(c.bias[:, :4], python.bias[:, :4], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(c.bias[:, 4], python.bias[:, 4], rtol=0, atol=1e-9)
+    assert_c_equals_python(c.bias[:, :4], python.bias[:, :4], rtol=0, atol=1e-9)
+    assert_c_equals_python(c.bias[:, 4], python.bias[:, 4], rtol=0, atol=1e-9)
     assert np.all(c.bias[:, 0] == c.bias[:, 1]) and np.abs(c.bias[:, :4]).max() > 1e-4

@@ -17,10 +17,18 @@ import subprocess
 import numpy as np
 import pandas as pd
 import pytest
+from c_parity import (
+    assert_c_equals_python,
+    compile_c,
+    mhe_library,
+    mhe_program,
+    needs_gcc,
+    run_program,
+)
 
 from wheelload.estimators import read_log
 from wheelload.estimators.codegen.mhe import embedded_settings, generate_mhe
-from wheelload.estimators.codegen.mhe_build import build_mhe_program, write_inputs
+from wheelload.estimators.codegen.mhe_build import write_inputs
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.settings import (
     BiasStates,
@@ -33,7 +41,7 @@ from wheelload.models import example_vehicle_path
 from wheelload.studies.drive.synthetic import SensorNoise, steady_cornering, synthetic_log
 from wheelload.studies.pipeline.example_log import example_log_path
 
-pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+pytestmark = needs_gcc
 
 LOADS = ["fz_fl", "fz_fr", "fz_rl", "fz_rr"]
 #: Both sides solve to 1e-9 kN: they agree far below a newton whatever the ADMM path.
@@ -70,14 +78,14 @@ def logs(vehicle):
 
 
 def run(binary, *pairs):
-    subprocess.run([str(binary), *map(str, pairs)], check=True, capture_output=True)
+    run_program(binary, *pairs)
 
 
 @pytest.mark.parametrize("driver", list(DRIVERS))
 def test_two_interleaved_instances_each_equal_one_alone_and_python(vehicle, logs, tmp_path, driver):
     settings, tolerance = DRIVERS[driver]
-    binary = build_mhe_program(vehicle, settings, tmp_path / "c", 0.01,
-                               vehicle_path=example_vehicle_path())  # fmt: skip
+    binary = mhe_program(vehicle, settings, tmp_path / "c", 0.01,
+                         vehicle_path=example_vehicle_path())  # fmt: skip
     inputs = {name: write_inputs(log, tmp_path / f"{name}.txt") for name, log in logs.items()}
     run(binary, inputs["plant"], tmp_path / "plant_pair.csv",
         inputs["corner"], tmp_path / "corner_pair.csv")  # fmt: skip
@@ -92,8 +100,8 @@ def test_two_interleaved_instances_each_equal_one_alone_and_python(vehicle, logs
         assert len(c) == len(log) and (c["status"] == 1).all() and not c["fallback"].any()
         python = MovingHorizonEstimator(vehicle, realised).run(log)
         n = len(log) - lag  # row k of the C is the estimate of sample k - lag
-        np.testing.assert_allclose(c[LOADS].to_numpy()[lag:], python.loads[:n], rtol=0,
-                                   atol=tolerance, err_msg=name)  # fmt: skip
+        assert_c_equals_python(c[LOADS].to_numpy()[lag:], python.loads[:n], rtol=0,
+                               atol=tolerance, what=name)  # fmt: skip
         np.testing.assert_array_equal(c["flags"], python.flags, err_msg=name)
     # the two logs give different estimates: an instance that read the other's would show
     plant, corner = (pd.read_csv(tmp_path / f"{n}_pair.csv")[LOADS] for n in ("plant", "corner"))
@@ -104,10 +112,8 @@ def test_a_reset_sets_the_solver_up_afresh(vehicle, tmp_path):
     """A log run twice in one loaded library gives the same numbers to the bit: the reset
     restores the instance's whole solver (before, the file-scope solver kept its adapted
     state across logs: the second run of the bundled log was 2.6e-3 N off, soft N = 20)."""
-    from wheelload.estimators.codegen.mhe_build import build_mhe_library
-
-    library = build_mhe_library(vehicle, MheSettings(horizon=20, bounded=True), tmp_path, 0.01,
-                                vehicle_path=example_vehicle_path())  # fmt: skip
+    library = mhe_library(vehicle, MheSettings(horizon=20, bounded=True), tmp_path, 0.01,
+                          vehicle_path=example_vehicle_path())  # fmt: skip
     log = read_log(example_log_path())
     first, second = library.run(log), library.run(log)
     np.testing.assert_array_equal(first.loads, second.loads)
@@ -157,11 +163,13 @@ def test_a_state_not_reset_where_it_is_is_refused(vehicle, tmp_path):
     subprocess.run(["make", "-s", "-C", str(folder), "libwheelload_mhe.a"], check=True,
                    capture_output=True)  # fmt: skip
     (folder / "misuse.c").write_text(MISUSE)
-    binary = folder / "misuse"
-    subprocess.run(["gcc", "-O2", "-std=gnu99", "-Wall", "-Werror", "-o", str(binary),
-                    *mhe_includes(folder), str(folder / "misuse.c"),
-                    str(folder / "libwheelload_mhe.a"), "-lm"], check=True)  # fmt: skip
-    lines = subprocess.run([str(binary)], capture_output=True, text=True, check=True).stdout
+    binary = compile_c(
+        folder / "misuse",
+        [folder / "misuse.c", folder / "libwheelload_mhe.a"],
+        ("-O2", "-std=gnu99", "-Wall", "-Werror"),
+        includes=mhe_includes(folder),
+    )
+    lines = run_program(binary).stdout
     report = {line.split()[0]: line.split()[1:] for line in lines.splitlines()}
     assert report["never_reset"] == ["-1", "255"]  # WHEELLOAD_MHE_NOT_RESET, nothing estimated
     assert report["copy"] == ["-1", "255"]
@@ -193,7 +201,7 @@ def test_the_mhe_makefile_takes_gcc_unless_cc_is_given_and_builds_the_example(
     linked = [line for line in make_commands(folder).splitlines() if "-o wheelload_mhe " in line]
     assert linked and "libwheelload_mhe.a -lm" in linked[0]
     inputs = write_inputs(logs["corner"], tmp_path / "corner.txt")
-    reference = build_mhe_program(vehicle, settings, tmp_path / "reference", 0.01)
+    reference = mhe_program(vehicle, settings, tmp_path / "reference", 0.01)
     run(reference, inputs, tmp_path / "reference.csv")
     compilers = [("cc", {"CC": "cc"}, [])]
     if shutil.which("clang"):

@@ -4,13 +4,12 @@ Python ``tyre-forces`` method on a plant lane change (real gcc, strict flags, CS
 One iso-dlc simulation (1353 samples), one library per precision; about 20 s in all.
 """
 
-import subprocess
-
 import numpy as np
 import pytest
+from c_parity import assert_c_equals_python, kf_program, run_program
 
 from wheelload.estimators import read_log
-from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
+from wheelload.estimators.codegen.kf import CodegenOptions
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.registry import build
 from wheelload.estimators.result import StepFlag
@@ -40,13 +39,12 @@ def logs(tmp_path_factory):
 def _example(tmp_path_factory, precision):
     out = tmp_path_factory.mktemp(f"tyre_{precision.value}")
     options = CodegenOptions(precision=precision, tyre_forces=True)
-    library = generate(example_vehicle_path(), out, options)
-    return build_program(library, library.example, out / "example")
+    return kf_program(example_vehicle_path(), out, options)
 
 
 def _run(binary, log):
     out = log.with_name(f"{log.stem}.{binary.parent.name}.out.csv")
-    result = subprocess.run([str(binary), str(log), str(out)], capture_output=True, text=True)
+    result = run_program(binary, log, out, check=False)
     assert result.returncode == 0, result.stderr
     import pandas as pd
 
@@ -70,7 +68,7 @@ def test_c_equals_python_in_double(tmp_path_factory, logs, which):
     c, python = _run(binary, logs[which]), _python(logs[which])
     for name, values in (("fz", python.loads), ("fx", python.fx), ("fx_std", python.fx_std),
                          ("fy", python.fy), ("fy_std", python.fy_std)):  # fmt: skip
-        np.testing.assert_allclose(_columns(c, name), values, rtol=0, atol=1e-9, err_msg=name)
+        assert_c_equals_python(_columns(c, name), values, rtol=0, atol=1e-9, what=name)
     slipping = (python.flags & StepFlag.HIGH_SLIP) != 0
     np.testing.assert_array_equal(c["high_slip"].to_numpy() == 1, slipping)
     if which == "gaps":
@@ -97,6 +95,6 @@ def test_example_names_a_missing_wheel_channel(tmp_path_factory, logs):
     keep = [k for k, name in enumerate(names) if name != "torque_rr"]
     bare = logs["clean"].with_name("bare.csv")
     bare.write_text("".join(",".join(row.split(",")[k] for k in keep) + "\n" for row in text))
-    result = subprocess.run([str(binary), str(bare), "-"], capture_output=True, text=True)
+    result = run_program(binary, bare, "-", check=False)
     assert result.returncode == 2
     assert "missing column 'torque_rr'" in result.stderr

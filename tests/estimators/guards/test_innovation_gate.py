@@ -41,16 +41,9 @@ def reference_step(numpy_step, kf, x, P, signals, k, dt, rows):
     return numpy_step(x, P, q, dt, H, y_all, r, rows)
 
 
-@pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the numpy reference step holds the
-    file's mass and CG."""
-    return fixed_vehicle
-
-
-def test_gated_row_is_skipped_exactly(vehicle, dlc, numpy_step, with_values):
+def test_gated_row_is_skipped_exactly(fixed_vehicle, dlc, numpy_step, with_values):
     """A 30 mm spike on d_fl (in range) fails the gate: the FL row alone is skipped."""
-    kf = TwoStageKF(vehicle)
+    kf = TwoStageKF(fixed_vehicle)
     row = 600
     spiked = with_values(dlc, row, d_fl=dlc.d[row, 0] + 0.030)
     estimate, covariances = kf.run_with_covariance(spiked)
@@ -67,17 +60,17 @@ def test_gated_row_is_skipped_exactly(vehicle, dlc, numpy_step, with_values):
     np.testing.assert_allclose(estimate.loads[row], x, rtol=1e-9)
     np.testing.assert_allclose(covariances[row], P, rtol=1e-9)
     # The spike would otherwise move FL by hundreds of N more.
-    unguarded = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(spiked)
+    unguarded = TwoStageKF(fixed_vehicle, guard_settings=GUARDS_OFF).run(spiked)
     error = abs(estimate.loads[row, 0] - dlc.reference[row, 0])
     assert abs(unguarded.loads[row, 0] - dlc.reference[row, 0]) > 300.0 + error
 
 
-def test_gate_never_locks_the_data_out(vehicle, dlc):
+def test_gate_never_locks_the_data_out(fixed_vehicle, dlc):
     """Started 3 kN off with a confident covariance and a slow random walk, every row fails
     the gate at first: the rows are taken (released) within ``gate_release_time`` + one
     sample, and after 2 s the guarded filter is as good as the plain one (within 5 %)."""
-    tuning = dataclasses.replace(vehicle.filter, initial_std=20.0, process_noise_density=1e5)
-    slow = vehicle.replace(filter=tuning)
+    tuning = dataclasses.replace(fixed_vehicle.filter, initial_std=20.0, process_noise_density=1e5)
+    slow = fixed_vehicle.replace(filter=tuning)
     late = dlc.t - dlc.t[0] > 2.0
     errors = {}
     for name, settings in (("guarded", None), ("plain", GUARDS_OFF)):

@@ -8,7 +8,6 @@ other order).
 """
 
 import numpy as np
-import pytest
 
 from wheelload.estimators.kf.step_cache import UPDATE_ROWS
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -18,22 +17,15 @@ from wheelload.models import gates_function, suspension_function
 from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
 
 
-@pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the numpy reference step holds the
-    file's mass and CG."""
-    return fixed_vehicle
-
-
-def test_first_suspension_innovation_equals_independent_computation(vehicle):
+def test_first_suspension_innovation_equals_independent_computation(fixed_vehicle):
     drive = synthetic_log(
-        vehicle,
+        fixed_vehicle,
         slalom(duration=4.0),
         noise=SensorNoise(acceleration=0.05, travel=0.0003),
         spring_error=0.1,
         seed=5,
     )
-    kf = TwoStageKF(vehicle)
+    kf = TwoStageKF(fixed_vehicle)
     estimate, covariances = kf.run_with_covariance(drive)
     same, innovations = kf.run_innovations(drive)
     np.testing.assert_array_equal(same.loads, estimate.loads)

@@ -2,7 +2,6 @@
 
 import numpy as np
 import pandas as pd
-import pytest
 
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.protocol import sample_intervals
@@ -21,18 +20,13 @@ def numpy_rts(x, P, dt, q):
     return xs, Ps
 
 
-@pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the MHE's window (and the numpy
-    references) hold the file's mass and CG, so the KF it is compared with does too."""
-    return fixed_vehicle
-
-
-def test_compiled_smoother_equals_numpy_rts_and_beats_the_filter(vehicle):
+def test_compiled_smoother_equals_numpy_rts_and_beats_the_filter(fixed_vehicle):
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
-    signals = synthetic_log(vehicle, slalom(duration=10.0), noise=noise, spring_error=0.08, seed=4)
+    signals = synthetic_log(
+        fixed_vehicle, slalom(duration=10.0), noise=noise, spring_error=0.08, seed=4
+    )
     signals.t[500:] += 0.02  # one longer interval: the smoother takes each sample's own dt
-    kf = TwoStageKF(vehicle)
+    kf = TwoStageKF(fixed_vehicle)
     filtered, P = kf.run_with_covariance(signals)
     smoothed = kf.smooth(signals)
     xs, Ps = numpy_rts(filtered.loads, P, sample_intervals(signals.t), kf.tuning[0])
@@ -60,17 +54,19 @@ def test_estimate_smooth_writes_the_smoothed_loads(tmp_path, capsys):
     assert not np.allclose(frame["fz_fl"], pd.read_csv(filtered)["fz_fl"])
 
 
-def test_mhe_lagged_output_is_the_rts_smoother(vehicle):
+def test_mhe_lagged_output_is_the_rts_smoother(fixed_vehicle):
     """Linear-Gaussian window with the Kalman arrival: its lag-L output is the fixed-lag
     smoother, equal to RTS once the smoother gain has decayed within L samples."""
     from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
     from wheelload.estimators.mhe.settings import MheSettings, SolverSettings
 
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
-    signals = synthetic_log(vehicle, slalom(duration=3.0), noise=noise, spring_error=0.08, seed=9)
+    signals = synthetic_log(
+        fixed_vehicle, slalom(duration=3.0), noise=noise, spring_error=0.08, seed=9
+    )
     tight = SolverSettings(eps_abs=1e-9, eps_rel=1e-9, max_iter=20000)
-    lagged = MovingHorizonEstimator(vehicle, MheSettings(horizon=8, lag=6, solver=tight))
+    lagged = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=8, lag=6, solver=tight))
     lagged = lagged.run(signals)
-    smoothed = TwoStageKF(vehicle).smooth(signals)
+    smoothed = TwoStageKF(fixed_vehicle).smooth(signals)
     # gain decay over 6 samples and solver tolerance: measured 9e-4 N on the plant log (lag 5)
     np.testing.assert_allclose(lagged.loads[:-6], smoothed.loads[:-6], rtol=0, atol=0.01)

@@ -32,23 +32,18 @@ HYPOTHESIS = settings(
 
 
 @pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the numpy reference step holds the
-    file's mass and CG."""
-    return fixed_vehicle
-
-
-@pytest.fixture(scope="module")
-def base(vehicle):
+def base(fixed_vehicle):
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
-    return synthetic_log(vehicle, slalom(duration=N / 100), noise=noise, spring_error=0.1, seed=4)
+    return synthetic_log(
+        fixed_vehicle, slalom(duration=N / 100), noise=noise, spring_error=0.1, seed=4
+    )
 
 
 @pytest.fixture(scope="module")
-def kf(vehicle):
+def kf(fixed_vehicle):
     """The step's properties, sample by sample: no whole-log file check before the run (a
     hostile log's warp would take a travel zero off)."""
-    return TwoStageKF(vehicle, check_file=False)
+    return TwoStageKF(fixed_vehicle, check_file=False)
 
 
 @pytest.fixture(scope="module")
@@ -61,9 +56,9 @@ def model(kf):
 
 
 @pytest.fixture(scope="module")
-def own_sigma_kf(vehicle):
+def own_sigma_kf(fixed_vehicle):
     """The KF reporting its own sigma, sqrt(P_ii)."""
-    kf = TwoStageKF(vehicle)
+    kf = TwoStageKF(fixed_vehicle)
     kf.tuning = with_filter_sigma(kf.tuning)
     return kf
 
@@ -155,7 +150,7 @@ ONE_TRAVEL_LEFT = [(row, channel, np.nan, True) for row in range(150, 160)
 @given(faults=faults)
 @example(faults=ONE_TRAVEL_LEFT)
 def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(
-    vehicle, base, kf, model, numpy_step, faults
+    fixed_vehicle, base, kf, model, numpy_step, faults
 ):
     signals = with_faults(base, faults)
     estimate, P = kf.run_with_covariance(signals)
@@ -164,7 +159,7 @@ def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(
     assert np.all(np.diagonal(P, axis1=1, axis2=2) > 0)
     # Plausibility flags, channel group by channel group.
     u = input_matrix(signals).T
-    bad = ~in_range(vehicle, u)
+    bad = ~in_range(fixed_vehicle, u)
     flags = estimate.flags
     np.testing.assert_array_equal(flags & StepFlag.TRAVEL_IMPLAUSIBLE != 0, bad[:, 0:8].any(1))
     np.testing.assert_array_equal(
@@ -174,7 +169,7 @@ def test_guarded_filter_is_finite_flags_exact_and_skips_rows_exactly(
     assert not np.any(flags & StepFlag.STEP_REJECTED)
     # Each sample's state is the numpy step with exactly the used rows.
     dt, nominal = sample_intervals(signals.t), nominal_interval(signals.t)
-    z, A, b = measurements(vehicle, kf, model, u, dt)
+    z, A, b = measurements(fixed_vehicle, kf, model, u, dt)
     skipped = [flag.value for flag in StepFlag.update_flags()]
     for k in range(1, len(signals)):
         rows = [i for i in range(7) if not flags[k] & skipped[i]]

@@ -23,22 +23,17 @@ TIGHT = SolverSettings(eps_abs=1e-9, eps_rel=1e-9, polish=True, max_iter=20000)
 
 
 @pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the MHE's window (and the numpy
-    references) hold the file's mass and CG, so the KF it is compared with does too."""
-    return fixed_vehicle
+def drive(fixed_vehicle):
+    return synthetic_log(
+        fixed_vehicle, slalom(duration=3.0), noise=NOISE, spring_error=0.08, seed=5
+    )
 
 
 @pytest.fixture(scope="module")
-def drive(vehicle):
-    return synthetic_log(vehicle, slalom(duration=3.0), noise=NOISE, spring_error=0.08, seed=5)
-
-
-@pytest.fixture(scope="module")
-def wheel_lift(vehicle):
+def wheel_lift(fixed_vehicle):
     """A 15 m/s^2 left turn: the inner (left) wheels' linear loads go below zero."""
     manoeuvre = steady_cornering(ay=15.0, duration=3.0)
-    return synthetic_log(vehicle, manoeuvre, noise=NOISE, spring_error=0.08, seed=6)
+    return synthetic_log(fixed_vehicle, manoeuvre, noise=NOISE, spring_error=0.08, seed=6)
 
 
 def right_hand_sides(vehicle, signals):
@@ -46,38 +41,40 @@ def right_hand_sides(vehicle, signals):
     return pseudo_measurements(signals, p)[2]  # b with the vehicle's model terms
 
 
-def test_one_sample_soft_window_with_kalman_arrival_is_the_kf(vehicle, drive):
+def test_one_sample_soft_window_with_kalman_arrival_is_the_kf(fixed_vehicle, drive):
     settings = MheSettings(horizon=1, constraint=Constraint.SOFT, bounded=False, solver=TIGHT)
-    mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
-    kf = TwoStageKF(vehicle).run(drive)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(drive)
+    kf = TwoStageKF(fixed_vehicle).run(drive)
     assert not mhe.fallback.any()
     # solver tolerance 1e-9 in kN on 4 kN loads, with polishing: measured 1.4e-5 N
     np.testing.assert_allclose(mhe.loads, kf.loads, rtol=0, atol=1e-3)
 
 
-def test_one_sample_hard_window_is_the_maximum_probability_projection(vehicle, drive):
+def test_one_sample_hard_window_is_the_maximum_probability_projection(fixed_vehicle, drive):
     settings = MheSettings(horizon=1, constraint=Constraint.HARD, solver=TIGHT)
-    mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(drive)
     # the projection's guards off: its innovation gate rejects the roll row of two samples
     # (8 % spring error against the exact constraint's S = A P A^T); the hard window has none
-    projected = ProjectionKF(vehicle, guard_settings=GUARDS_OFF).run(drive)
+    projected = ProjectionKF(fixed_vehicle, guard_settings=GUARDS_OFF).run(drive)
     np.testing.assert_allclose(mhe.loads, projected.loads, rtol=0, atol=1e-3)
 
 
-def test_soft_unbounded_window_with_exact_arrival_keeps_the_kf_estimate(vehicle, drive):
+def test_soft_unbounded_window_with_exact_arrival_keeps_the_kf_estimate(fixed_vehicle, drive):
     """Linear-Gaussian MHE with the Kalman arrival cost is the KF for any N."""
-    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10)).run(drive)
-    kf = TwoStageKF(vehicle).run(drive)
+    mhe = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=10)).run(drive)
+    kf = TwoStageKF(fixed_vehicle).run(drive)
     # default tolerances 1e-6 kN: a few tenths of a newton
     np.testing.assert_allclose(mhe.loads, kf.loads, rtol=0, atol=1.0)
 
 
 @pytest.mark.parametrize("bounded", [False, True])
 @pytest.mark.parametrize("arrival", list(Arrival))
-def test_hard_window_satisfies_equilibrium_on_every_sample(vehicle, wheel_lift, bounded, arrival):
+def test_hard_window_satisfies_equilibrium_on_every_sample(
+    fixed_vehicle, wheel_lift, bounded, arrival
+):
     settings = MheSettings(horizon=10, constraint=Constraint.HARD, bounded=bounded, arrival=arrival)
-    mhe = MovingHorizonEstimator(vehicle, settings).run(wheel_lift)
-    b = right_hand_sides(vehicle, wheel_lift)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(wheel_lift)
+    b = right_hand_sides(fixed_vehicle, wheel_lift)
     feasible = ~mhe.fallback
     relative = np.abs(mhe.residual) / np.abs(b).max(axis=1, keepdims=True)
     assert feasible.mean() > 0.9
@@ -85,25 +82,25 @@ def test_hard_window_satisfies_equilibrium_on_every_sample(vehicle, wheel_lift, 
 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
-def test_bounds_keep_every_load_at_or_above_zero(vehicle, wheel_lift, constraint):
+def test_bounds_keep_every_load_at_or_above_zero(fixed_vehicle, wheel_lift, constraint):
     # The synthetic log obeys the paper's model exactly; the terms beyond it
     # (road frame, link loads) would be a model mismatch here.
-    vehicle = paper_model(vehicle)
-    assert TwoStageKF(vehicle).run(wheel_lift).loads.min() < -50.0  # the KF reports lift-off
+    fixed_vehicle = paper_model(fixed_vehicle)
+    assert TwoStageKF(fixed_vehicle).run(wheel_lift).loads.min() < -50.0  # the KF reports lift-off
     settings = MheSettings(horizon=10, constraint=constraint, bounded=True, max_load=2.0e4)
-    mhe = MovingHorizonEstimator(vehicle, settings).run(wheel_lift)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(wheel_lift)
     assert mhe.loads.min() >= 0.0  # exactly: in-tolerance violations are clipped
     assert mhe.loads.max() <= 2.0e4
     assert np.all(np.isfinite(mhe.loads))
     assert (mhe.loads.min(axis=1) == 0.0).sum() > 10  # the bound is active during lift-off
 
 
-def test_iteration_cap_falls_back_to_the_kf_and_flags_it(vehicle, drive):
+def test_iteration_cap_falls_back_to_the_kf_and_flags_it(fixed_vehicle, drive):
     # bounded: an unbounded window's QP is solved at its first iteration (qp.UNCONSTRAINED_SETTINGS)
     solver = SolverSettings(max_iter=1, check_termination=1)
     settings = MheSettings(horizon=5, bounded=True, solver=solver)
-    mhe = MovingHorizonEstimator(vehicle, settings).run(drive)
-    kf = TwoStageKF(vehicle).run(drive)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(drive)
+    kf = TwoStageKF(fixed_vehicle).run(drive)
     capped = mhe.status != 1
     assert capped.any()
     assert np.array_equal(mhe.fallback, capped)
@@ -125,13 +122,13 @@ def test_settings_reject_bad_values():
 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
-def test_step_equals_run_with_missing_inputs(vehicle, wheel_lift, constraint):
+def test_step_equals_run_with_missing_inputs(fixed_vehicle, wheel_lift, constraint):
     d, acc = wheel_lift.d.copy(), wheel_lift.acc.copy()
     d[12, 1] = np.nan  # a travel sensor drops out: its suspension rows are skipped
     acc[20, 1] = np.inf  # a lateral acceleration glitch: the roll row is skipped
     signals = dataclasses.replace(wheel_lift, d=d, acc=acc).slice(0, 40)
     mhe = MovingHorizonEstimator(
-        vehicle, MheSettings(horizon=5, constraint=constraint, bounded=True)
+        fixed_vehicle, MheSettings(horizon=5, constraint=constraint, bounded=True)
     )
     whole = mhe.run(signals)
     dt = sample_intervals(signals.t)
@@ -148,16 +145,16 @@ def test_step_equals_run_with_missing_inputs(vehicle, wheel_lift, constraint):
     assert np.all(np.isfinite(whole.loads))
 
 
-def test_polishing_prints_nothing(vehicle, wheel_lift, capfd):
+def test_polishing_prints_nothing(fixed_vehicle, wheel_lift, capfd):
     for bounded in (False, True):
         settings = MheSettings(horizon=5, bounded=bounded, solver=TIGHT)
-        MovingHorizonEstimator(vehicle, settings).run(wheel_lift.slice(0, 50))
+        MovingHorizonEstimator(fixed_vehicle, settings).run(wheel_lift.slice(0, 50))
     assert capfd.readouterr().out == ""
 
 
 @pytest.mark.parametrize("dt", [0.0, -0.01, math.nan])
-def test_invalid_interval_holds_the_estimate_and_solving_goes_on(vehicle, drive, dt):
-    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=5))
+def test_invalid_interval_holds_the_estimate_and_solving_goes_on(fixed_vehicle, drive, dt):
+    mhe = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=5))
     state = mhe.initial_state(0.01)
     samples = [Sample(d=drive.d[k], v=drive.v[k], acc=drive.acc[k], vx=drive.vx[k])
                for k in range(4)]  # fmt: skip
@@ -174,10 +171,10 @@ def test_invalid_interval_holds_the_estimate_and_solving_goes_on(vehicle, drive,
 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
-def test_a_run_is_a_function_of_its_log_alone(vehicle, wheel_lift, constraint):
+def test_a_run_is_a_function_of_its_log_alone(fixed_vehicle, wheel_lift, constraint):
     """The same log twice on one estimator object: the same numbers, bit for bit."""
     mhe = MovingHorizonEstimator(
-        vehicle, MheSettings(horizon=8, constraint=constraint, bounded=True)
+        fixed_vehicle, MheSettings(horizon=8, constraint=constraint, bounded=True)
     )
     first = mhe.run(wheel_lift)
     mhe.run(wheel_lift.slice(100, 200))  # another log between the two runs
@@ -187,16 +184,16 @@ def test_a_run_is_a_function_of_its_log_alone(vehicle, wheel_lift, constraint):
 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
-def test_without_any_input_the_estimate_is_held_and_sigma_grows(vehicle, constraint):
+def test_without_any_input_the_estimate_is_held_and_sigma_grows(fixed_vehicle, constraint):
     """Every input missing for 20 s: no drift, no swing, sigma grows, recovery after."""
-    signals = synthetic_log(vehicle, slalom(duration=24.0), noise=NOISE, seed=8)
+    signals = synthetic_log(fixed_vehicle, slalom(duration=24.0), noise=NOISE, seed=8)
     gap = slice(200, 2200)
     missing = {name: getattr(signals, name).copy() for name in ("d", "v", "acc", "vx")}
     for values in missing.values():
         values[gap] = np.nan
     signals = dataclasses.replace(signals, **missing)
     settings = MheSettings(horizon=10, constraint=constraint, bounded=True)
-    estimate = MovingHorizonEstimator(vehicle, settings).run(signals)
+    estimate = MovingHorizonEstimator(fixed_vehicle, settings).run(signals)
     held = estimate.loads[gap]
     last = estimate.loads[gap.start - 1]
     # the first N gap samples still see data in the window; from then on the window has none
@@ -215,7 +212,7 @@ def test_without_any_input_the_estimate_is_held_and_sigma_grows(vehicle, constra
 
 @pytest.mark.parametrize("constraint", list(Constraint))
 @pytest.mark.parametrize("bounded", [False, True])
-def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint, bounded):
+def test_ring_buffer_window_equals_the_per_sample_state_path(fixed_vehicle, constraint, bounded):
     """``run``'s ring buffers (estimators/mhe/ring.py) against the MheState-per-sample loop.
 
     Same arithmetic and the same OSQP calls in the same order: bit-identical,
@@ -242,8 +239,8 @@ def test_ring_buffer_window_equals_the_per_sample_state_path(vehicle, constraint
         settings = MheSettings(
             horizon=6, constraint=constraint, bounded=bounded, lag=lag, solver=solver
         )
-        ring = MovingHorizonEstimator(vehicle, settings).run(signals)
-        reference = MovingHorizonEstimator(vehicle, settings)
+        ring = MovingHorizonEstimator(fixed_vehicle, settings).run(signals)
+        reference = MovingHorizonEstimator(fixed_vehicle, settings)
         reference.per_sample_states = True
         states = reference.run(signals)
         for name in ("loads", "std", "residual", "flags", "status", "iterations", "fallback"):

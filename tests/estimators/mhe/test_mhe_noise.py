@@ -21,12 +21,11 @@ tests of each estimator pin.
 """
 
 import dataclasses
-import shutil
 
 import numpy as np
 import pytest
+from c_parity import assert_c_equals_python, mhe_library, needs_gcc
 
-from wheelload.estimators.codegen.mhe_build import build_mhe_library
 from wheelload.estimators.family.quarter_car import QuarterCarObserver
 from wheelload.estimators.family.quarter_car_constrained import ConstrainedQuarterCar
 from wheelload.estimators.kf.two_stage import TwoStageKF
@@ -55,22 +54,17 @@ def noisy_vehicle(vehicle):
 
 
 @pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the MHE's window (and the numpy
-    references) hold the file's mass and CG, so the KF it is compared with does too."""
-    return fixed_vehicle
+def noisy(fixed_vehicle):
+    return noisy_vehicle(fixed_vehicle)
 
 
 @pytest.fixture(scope="module")
-def noisy(vehicle):
-    return noisy_vehicle(vehicle)
-
-
-@pytest.fixture(scope="module")
-def drive(vehicle):
+def drive(fixed_vehicle):
     """A slalom with hub accelerometers (body az plus a corner-wise oscillation)."""
     noise = SensorNoise(acceleration=0.05, travel=0.0003)
-    log = synthetic_log(vehicle, slalom(duration=2.0), noise=noise, spring_error=0.08, seed=11)
+    log = synthetic_log(
+        fixed_vehicle, slalom(duration=2.0), noise=noise, spring_error=0.08, seed=11
+    )
     wave = 3.0 * np.sin(2 * np.pi * 4.0 * log.t[:, None] + np.arange(4))
     return dataclasses.replace(log, hub=log.acc[:, 2:3] + wave)
 
@@ -101,14 +95,14 @@ def test_window_weights_are_the_inverse_of_the_noise_functions_R(noisy, drive):
     np.testing.assert_allclose(np.vstack([ls, lc]).T, np.sqrt(1.0 / R), rtol=1e-12)
 
 
-def test_one_sample_soft_window_is_the_kf_with_input_dependent_noise(vehicle, noisy, drive):
+def test_one_sample_soft_window_is_the_kf_with_input_dependent_noise(fixed_vehicle, noisy, drive):
     settings = MheSettings(horizon=1, constraint=Constraint.SOFT, bounded=False, solver=EXACT)
     mhe = MovingHorizonEstimator(noisy, settings).run(drive)
     kf = TwoStageKF(noisy).run(drive)
     assert not mhe.fallback.any()
     np.testing.assert_allclose(mhe.loads, kf.loads, rtol=0, atol=1e-6)
     # ... and the check tells the densities apart: the constant-R filter is far from both.
-    constant = TwoStageKF(vehicle).run(drive)
+    constant = TwoStageKF(fixed_vehicle).run(drive)
     assert np.max(np.abs(constant.loads - kf.loads)) > 1.0
 
 
@@ -144,10 +138,10 @@ def test_numpy_joint_filter_is_the_kf_with_input_dependent_noise(noisy, drive):
     np.testing.assert_allclose(joint, kf.run(drive).loads, rtol=1e-9)
 
 
-@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+@needs_gcc
 def test_generated_c_mhe_weighs_with_the_noise_function(noisy, drive, tmp_path):
     settings = MheSettings(horizon=5, bounded=True, arrival=Arrival.STEADY_STATE)
-    c = build_mhe_library(noisy, settings, tmp_path, dt=0.01).run(drive)
+    c = mhe_library(noisy, settings, tmp_path, dt=0.01).run(drive)
     python = MovingHorizonEstimator(noisy, settings).run(drive)
     assert np.all(c.status == 1)
-    np.testing.assert_allclose(c.loads, python.loads, rtol=0, atol=0.1)
+    assert_c_equals_python(c.loads, python.loads, rtol=0, atol=0.1)

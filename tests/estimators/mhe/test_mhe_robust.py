@@ -22,15 +22,10 @@ HUBER = ResidualLoss(kind=Loss.HUBER, threshold=2.0)
 
 
 @pytest.fixture(scope="module")
-def vehicle(fixed_vehicle):
-    """The example vehicle with the payload filter off: the MHE's window (and the numpy
-    references) hold the file's mass and CG, so the KF it is compared with does too."""
-    return fixed_vehicle
-
-
-@pytest.fixture(scope="module")
-def drive(vehicle):
-    return synthetic_log(vehicle, slalom(duration=4.0), noise=NOISE, spring_error=0.08, seed=11)
+def drive(fixed_vehicle):
+    return synthetic_log(
+        fixed_vehicle, slalom(duration=4.0), noise=NOISE, spring_error=0.08, seed=11
+    )
 
 
 def pooled_rmse(loads, reference):
@@ -38,13 +33,13 @@ def pooled_rmse(loads, reference):
 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
-def test_huber_with_a_far_corner_is_the_quadratic_window(vehicle, drive, constraint):
+def test_huber_with_a_far_corner_is_the_quadratic_window(fixed_vehicle, drive, constraint):
     """The auxiliary-variable QP with an unreachable corner equals the plain window."""
     signals = drive.slice(0, 150)
     far = ResidualLoss(kind=Loss.HUBER, threshold=1e4)
-    plain = MovingHorizonEstimator(vehicle, MheSettings(horizon=8, constraint=constraint))
+    plain = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=8, constraint=constraint))
     robust = MovingHorizonEstimator(
-        vehicle, MheSettings(horizon=8, constraint=constraint, suspension_loss=far)
+        fixed_vehicle, MheSettings(horizon=8, constraint=constraint, suspension_loss=far)
     )
     # two QPs with different variables, each to 1e-6 kN: measured 0.33 N apart
     np.testing.assert_allclose(
@@ -52,7 +47,7 @@ def test_huber_with_a_far_corner_is_the_quadratic_window(vehicle, drive, constra
     )
 
 
-def test_robust_window_rejects_travel_spikes_the_kf_follows(vehicle, drive):
+def test_robust_window_rejects_travel_spikes_the_kf_follows(fixed_vehicle, drive):
     d = drive.d.copy()
     rng = np.random.default_rng(3)
     spikes = rng.choice(np.arange(20, len(drive)), size=12, replace=False)
@@ -60,10 +55,10 @@ def test_robust_window_rejects_travel_spikes_the_kf_follows(vehicle, drive):
     faulty = dataclasses.replace(drive, d=d)
     # the plain KF: without the guards (innovation gate, fault monitor) of
     # estimators/guards/settings.py
-    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(faulty)
+    kf = TwoStageKF(fixed_vehicle, guard_settings=GUARDS_OFF).run(faulty)
     settings = MheSettings(horizon=10, suspension_loss=HUBER, constraint_loss=HUBER)
-    mhe = MovingHorizonEstimator(vehicle, settings).run(faulty)
-    clean = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(drive)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(faulty)
+    clean = TwoStageKF(fixed_vehicle, guard_settings=GUARDS_OFF).run(drive)
     kf_error = pooled_rmse(kf.loads, drive.reference)
     mhe_error = pooled_rmse(mhe.loads, drive.reference)
     assert not mhe.fallback.any()
@@ -71,9 +66,9 @@ def test_robust_window_rejects_travel_spikes_the_kf_follows(vehicle, drive):
     assert mhe_error < 0.75 * kf_error  # measured 30 % below the plain KF (147 vs 209 N)
 
 
-def test_l1_loss_runs_and_stays_finite(vehicle, drive):
+def test_l1_loss_runs_and_stays_finite(fixed_vehicle, drive):
     settings = MheSettings(horizon=5, suspension_loss=ResidualLoss(kind=Loss.L1))
-    mhe = MovingHorizonEstimator(vehicle, settings).run(drive.slice(0, 120))
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings).run(drive.slice(0, 120))
     assert np.all(np.isfinite(mhe.loads)) and not mhe.fallback.any()
     assert pooled_rmse(mhe.loads, drive.reference[:120]) < 300.0
 
@@ -88,15 +83,19 @@ def iso_dlc():
 
 
 @pytest.fixture(scope="module")
-def travel_bias_runs(vehicle, iso_dlc):
+def travel_bias_runs(fixed_vehicle, iso_dlc):
     """Travel-bias MHE on the clean plant log and with both front sensors 4 mm high."""
     from wheelload.studies.experiments.faults.sensor_faults import Fault, inject
 
-    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, bias_states=BiasStates.TRAVEL))
+    mhe = MovingHorizonEstimator(
+        fixed_vehicle, MheSettings(horizon=10, bias_states=BiasStates.TRAVEL)
+    )
     return mhe.run(iso_dlc), mhe.run(inject(iso_dlc, Fault.TRAVEL_OFFSET))
 
 
-def test_bias_states_take_up_a_4_mm_front_offset_on_a_plant_log(vehicle, iso_dlc, travel_bias_runs):
+def test_bias_states_take_up_a_4_mm_front_offset_on_a_plant_log(
+    fixed_vehicle, iso_dlc, travel_bias_runs
+):
     """The offset moves the travel-bias estimate by 4 mm and leaves the loads where they were.
 
     Reference for the offset: the same estimator on the clean log (the plant's
@@ -112,7 +111,9 @@ def test_bias_states_take_up_a_4_mm_front_offset_on_a_plant_log(vehicle, iso_dlc
     assert np.abs(change[first_second][-1] - [0.004, 0.004, 0.0, 0.0]).max() < 0.0005
     expected = np.tile([0.004, 0.004, 0.0, 0.0], (len(change) - 100, 1))
     np.testing.assert_allclose(change[100:], expected, rtol=0, atol=0.0005)
-    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF).run(inject(iso_dlc, Fault.TRAVEL_OFFSET))
+    kf = TwoStageKF(fixed_vehicle, guard_settings=GUARDS_OFF).run(
+        inject(iso_dlc, Fault.TRAVEL_OFFSET)
+    )
     offset_error = pooled_rmse(offset.loads, iso_dlc.reference)
     assert offset_error < 0.7 * pooled_rmse(kf.loads, iso_dlc.reference)  # 30 % below
     assert offset_error < 1.02 * pooled_rmse(clean.loads, iso_dlc.reference)
@@ -132,28 +133,28 @@ def test_bias_states_recover_the_absolute_4_mm_offset_within_half_a_millimetre(t
     np.testing.assert_allclose(fifth_second, [0.004, 0.004, 0.0, 0.0], rtol=0, atol=0.0005)
 
 
-def test_lagged_output_and_rts_beat_the_filter_on_a_plant_log(vehicle, iso_dlc):
+def test_lagged_output_and_rts_beat_the_filter_on_a_plant_log(fixed_vehicle, iso_dlc):
     """50 ms lag (N = 10, lag 5) and the RTS smoother against the (guarded) KF on iso-dlc.
 
     Measured 23.27 N and 23.27 N against 23.48 N (-0.9 %: the filter trusts the bundled
     suspension noise more, so less is left to smooth); the lag-5 output of the soft window
     with the Kalman arrival is the fixed-lag smoother, equal to the RTS to 1e-3 N here.
     """
-    kf = TwoStageKF(vehicle)
+    kf = TwoStageKF(fixed_vehicle)
     filtered = pooled_rmse(kf.run(iso_dlc).loads, iso_dlc.reference)
     smoothed = pooled_rmse(kf.smooth(iso_dlc).loads, iso_dlc.reference)
-    lagged = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, lag=5)).run(iso_dlc)
+    lagged = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=10, lag=5)).run(iso_dlc)
     lagged_error = pooled_rmse(lagged.loads, iso_dlc.reference)
     assert smoothed < 0.995 * filtered and lagged_error < 0.995 * filtered
     assert abs(lagged_error - smoothed) < 0.01 * smoothed
 
 
 @pytest.mark.parametrize("constraint", list(Constraint))
-def test_lagged_output_beats_the_filter_and_says_so(vehicle, drive, constraint):
+def test_lagged_output_beats_the_filter_and_says_so(fixed_vehicle, drive, constraint):
     lagged = MovingHorizonEstimator(
-        vehicle, MheSettings(horizon=10, constraint=constraint, lag=5)
+        fixed_vehicle, MheSettings(horizon=10, constraint=constraint, lag=5)
     ).run(drive)
-    filtered = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, constraint=constraint))
+    filtered = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=10, constraint=constraint))
     filtered = filtered.run(drive)
     assert lagged.lag == 5 and (lagged.to_pandas()["lag"] == 5).all()
     # a 50 ms fixed-lag smoother: measured 2.5 % (soft) and 5.3 % (hard) below the filter
@@ -179,10 +180,10 @@ def test_settings_reject_bad_extensions():
         MheSettings(constraint=Constraint.HARD, bias_states=BiasStates.LATERAL)
 
 
-def test_ride_height_offsets_are_orthogonal_to_the_warp(vehicle):
+def test_ride_height_offsets_are_orthogonal_to_the_warp(fixed_vehicle):
     """Per-axle offsets move no load along the equilibrium's null vector (observable)."""
     mhe = MovingHorizonEstimator(
-        vehicle, MheSettings(bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL)
+        fixed_vehicle, MheSettings(bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL)
     )
     from wheelload.models import INPUTS
 
@@ -196,7 +197,7 @@ def test_ride_height_offsets_are_orthogonal_to_the_warp(vehicle):
     assert mhe.acceleration_columns == [1]  # ay only
 
 
-def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle, iso_dlc):
+def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(fixed_vehicle, iso_dlc):
     """Bundled plant log (iso-dlc); front-left travel stuck from 20 % of the log.
 
     Huber at 0.5σ on the suspension rows: the model's own residuals on this plant are
@@ -206,9 +207,9 @@ def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle, iso_dlc
     from wheelload.studies.experiments.faults.sensor_faults import Fault, inject
 
     huber = ResidualLoss(kind=Loss.HUBER, threshold=0.5)
-    mhe = MovingHorizonEstimator(vehicle, MheSettings(horizon=10, suspension_loss=huber))
+    mhe = MovingHorizonEstimator(fixed_vehicle, MheSettings(horizon=10, suspension_loss=huber))
     # against the plain KF; the guarded KF (fault monitor) isolates the stuck sensor itself
-    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
+    kf = TwoStageKF(fixed_vehicle, guard_settings=GUARDS_OFF)
     stuck = inject(iso_dlc, Fault.STUCK)
     robust_error = pooled_rmse(mhe.run(stuck).loads, iso_dlc.reference)
     kf_error = pooled_rmse(kf.run(stuck).loads, iso_dlc.reference)
@@ -216,11 +217,11 @@ def test_huber_window_on_a_plant_log_with_a_stuck_travel_sensor(vehicle, iso_dlc
     clean_error = pooled_rmse(mhe.run(iso_dlc).loads, iso_dlc.reference)
     # on the clean log it costs nothing: measured 27.3 N against the KF's 27.4 N (guarded
     # or not: no guard acts on the clean log)
-    guarded = pooled_rmse(TwoStageKF(vehicle).run(iso_dlc).loads, iso_dlc.reference)
+    guarded = pooled_rmse(TwoStageKF(fixed_vehicle).run(iso_dlc).loads, iso_dlc.reference)
     assert clean_error < 1.05 * guarded
 
 
-def test_step_equals_run_for_the_extended_window(vehicle, drive):
+def test_step_equals_run_for_the_extended_window(fixed_vehicle, drive):
     from wheelload.estimators import Sample
     from wheelload.estimators.protocol import sample_intervals
 
@@ -228,7 +229,7 @@ def test_step_equals_run_for_the_extended_window(vehicle, drive):
     settings = MheSettings(
         horizon=6, suspension_loss=HUBER, constraint_loss=HUBER, bias_states=BiasStates.TRAVEL
     )
-    mhe = MovingHorizonEstimator(vehicle, settings)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings)
     whole = mhe.run(signals)
     dt = sample_intervals(signals.t)
     state = mhe.initial_state(float(np.median(dt)))
@@ -240,7 +241,7 @@ def test_step_equals_run_for_the_extended_window(vehicle, drive):
         np.testing.assert_allclose(one.bias[0], whole.bias[k], rtol=0, atol=1e-6)
 
 
-def test_ride_heights_and_ay_bias_take_up_both_slow_faults_on_a_plant_log(vehicle, iso_dlc):
+def test_ride_heights_and_ay_bias_take_up_both_slow_faults_on_a_plant_log(fixed_vehicle, iso_dlc):
     """Front ride height 4 mm off, or ay biased by 0.5 m/s^2 from 20 % of the log (iso-dlc).
 
     Three slow unknowns against three equilibrium rows, so they are told apart (travel
@@ -254,8 +255,8 @@ def test_ride_heights_and_ay_bias_take_up_both_slow_faults_on_a_plant_log(vehicl
         suspension_loss=ResidualLoss(kind=Loss.HUBER, threshold=0.2),
         bias_states=BiasStates.RIDE_HEIGHT | BiasStates.LATERAL,
     )
-    mhe = MovingHorizonEstimator(vehicle, settings)
-    kf = TwoStageKF(vehicle, guard_settings=GUARDS_OFF)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings)
+    kf = TwoStageKF(fixed_vehicle, guard_settings=GUARDS_OFF)
     for fault in (Fault.TRAVEL_OFFSET, Fault.ACCELERATION_BIAS):
         faulty = inject(iso_dlc, fault)
         estimate = mhe.run(faulty)
@@ -276,14 +277,14 @@ def test_ride_heights_and_ay_bias_take_up_both_slow_faults_on_a_plant_log(vehicl
     ],
     ids=["soft-l1-huber-5-bias", "hard-bounded-huber-travel", "soft-ride-height-ay"],
 )  # fmt: skip
-def test_sparse_window_values_equal_the_dense_assembly(vehicle, drive, settings):
+def test_sparse_window_values_equal_the_dense_assembly(fixed_vehicle, drive, settings):
     """Each sample's Px and q at the fixed pattern against the dense assembly of the same window.
 
     The same terms summed in the same order at each entry; only the links' products
     are batched: equal to 1e-12 of the largest entry. The dense matrix has nothing
     outside the pattern (no entry the values could drop).
     """
-    mhe = MovingHorizonEstimator(vehicle, settings)
+    mhe = MovingHorizonEstimator(fixed_vehicle, settings)
     qp = mhe.window_qp
     sparse = qp.assemble_values
     outside = np.ones((qp.n, qp.n), dtype=bool)

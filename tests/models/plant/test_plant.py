@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from wheelload.models import GRAVITY, load_vehicle, static_loads, vehicle_mass_centre
+from wheelload.models import GRAVITY, static_loads, vehicle_mass_centre
 from wheelload.models.plant.dynamics import (
     INPUT_NAMES,
     OUTPUT,
@@ -19,18 +19,12 @@ from wheelload.models.plant.dynamics import (
 )
 from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.suspension.elements import stop_force
-from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.roads import build_road
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.simulation import simulate
 
 LOADS = ["fz_fl", "fz_fr", "fz_rl", "fz_rr"]
-
-
-@pytest.fixture(scope="module")
-def vehicle():
-    return load_vehicle(example_vehicle_path())
 
 
 def test_damper_map_passes_through_table_points(vehicle):

@@ -7,20 +7,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from wheelload.models import GRAVITY, load_vehicle, vehicle_mass_centre
+from wheelload.models import GRAVITY, vehicle_mass_centre
 from wheelload.models.plant.dynamics import vehicle_plant
-from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.drive.roads import iso8608_profile
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.simulation import simulate
 
 LOADS = ["fz_fl", "fz_fr", "fz_rl", "fz_rr"]
-
-
-@pytest.fixture(scope="module")
-def vehicle():
-    return load_vehicle(example_vehicle_path())
 
 
 def _start(vehicle, name):

@@ -1,6 +1,6 @@
 """Study ``tyre-forces``: its metric and its verdict (the study itself runs ~2 min even
 with --quick, so its parts are tested here and the estimators on the plant in
-tests/estimators/family/test_tyre_forces.py)."""
+tests/estimators/family/tyres/test_tyre_forces.py)."""
 
 import numpy as np
 import pytest

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.signal import butter, sosfiltfilt
 
-from wheelload.models import GRAVITY, example_vehicle_path, load_vehicle
+from wheelload.models import GRAVITY
 from wheelload.models.plant.dynamics import vehicle_plant
 from wheelload.studies.drive import tracks
 from wheelload.studies.drive.laps import GRIP_MARGIN
@@ -16,11 +16,6 @@ from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS, scenario_run
 from wheelload.studies.drive.simulation import simulate
 from wheelload.studies.drive.speed_profile import cornering_friction, lap_speed_profile
-
-
-@pytest.fixture(scope="module")
-def vehicle():
-    return load_vehicle(example_vehicle_path())
 
 
 def _lap(road):

@@ -8,18 +8,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wheelload.models import load_vehicle
-from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.cli import main
 from wheelload.studies.drive.scenario_log import LOG_COLUMNS, WHEEL_COLUMNS, metadata_path
 from wheelload.studies.drive.scenario_options import Options
 from wheelload.studies.drive.scenarios import SCENARIOS, dlc_lanes, scenario_run
 from wheelload.studies.drive.simulation import simulate
-
-
-@pytest.fixture(scope="module")
-def vehicle():
-    return load_vehicle(example_vehicle_path())
 
 
 def test_iso_dlc_stays_inside_the_cones(vehicle):
