@@ -38,7 +38,7 @@ import numpy as np
 from wheelload.estimators.guards import plausibility
 from wheelload.estimators.guards import settings as guard
 from wheelload.estimators.guards.settings import GuardSettings
-from wheelload.estimators.kf.step import model_rows
+from wheelload.estimators.kf.model_rows import model_rows
 from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.mhe.settings import Constraint
 from wheelload.models import (
