@@ -35,7 +35,8 @@ from wheelload.estimators.result import StepFlag
 from wheelload.models import Vehicle, vehicle_from_dict
 from wheelload.models.payload import Payload
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
-from wheelload.studies.drive.scenarios import SCENARIOS
+from wheelload.studies.drive.scenario_options import BeyondGrip
+from wheelload.studies.drive.scenarios import BEYOND_GRIP, SCENARIOS
 from wheelload.studies.experiments.payload import PLACES
 from wheelload.studies.experiments.report.tables import markdown
 from wheelload.studies.experiments.runs.cache import cache_key
@@ -69,7 +70,13 @@ class Condition:
     torque_scale: float = 1.0
     friction: float | None = None
     switch_covariances: bool = False  # the paper's high-slip Q, R where high slip is flagged
+    beyond_grip: BeyondGrip | None = None  # the turns driven beyond the grip, ABS/TCS cycling
     scenarios: tuple[str, ...] = TABLE_I + KERBS[:2]
+
+    @property
+    def quick_scenarios(self) -> tuple[str, ...]:
+        """With ``--quick``: the lane change, or the braking turn when beyond the grip."""
+        return BEYOND_GRIP[:1] if self.beyond_grip is not None else TABLE_I[:1]
 
     def plant_text(self, text: str) -> str:
         """The plant's vehicle file: ``text`` with its tyres' friction set."""
@@ -81,6 +88,9 @@ class Condition:
 
 
 EXACT = Condition(label="exact")
+#: The Table I turns on snow with the speed change asked beyond the grip: the threshold
+#: ABS (braking) and traction control (accelerating) cycle past the force peak.
+ABS_TCS = "ABS/TCS, μ 0.3"
 _BOOT = PLACES["rear seats / boot"]
 CONDITIONS = (
     Condition(label="150 kg aboard",
@@ -89,6 +99,9 @@ CONDITIONS = (
     Condition(label="torque +5 %", torque_scale=1.05),
     Condition(label="μ 0.3", friction=0.3, scenarios=TABLE_I),
     Condition(label="paper's switching", switch_covariances=True, scenarios=TABLE_I + KERBS),
+    Condition(label=ABS_TCS, friction=0.3, beyond_grip=BeyondGrip(), scenarios=BEYOND_GRIP),
+    Condition(label=f"{ABS_TCS}, switching", friction=0.3, beyond_grip=BeyondGrip(),
+              switch_covariances=True, scenarios=BEYOND_GRIP),
 )  # fmt: skip
 
 
@@ -154,10 +167,10 @@ def plan(context: Context) -> list[tuple[tuple[str, str, str], TyreTrial]]:
             if condition is EXACT:
                 scenarios = QUICK_SCENARIOS if quick else tuple(SCENARIOS)
             else:
-                scenarios = TABLE_I[:1] if quick else condition.scenarios
+                scenarios = condition.quick_scenarios if quick else condition.scenarios
             for scenario in scenarios:
                 truth = truth_spec(context, scenario, vehicle_text=condition.plant_text(text))
-                truth = replace(truth, payload=condition.payload)
+                truth = replace(truth, payload=condition.payload, beyond_grip=condition.beyond_grip)
                 trial = TrialSpec(truth=truth, vehicle_text=text, methods=METHODS,
                                   window=window(scenario))  # fmt: skip
                 scored = TyreTrial(
