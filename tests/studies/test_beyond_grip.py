@@ -13,13 +13,16 @@ from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.estimators.result import StepFlag
 from wheelload.models import example_vehicle_path, vehicle_from_dict
+from wheelload.models.conventions import GRAVITY
 from wheelload.models.plant.dynamics import vehicle_plant
+from wheelload.models.plant.equilibrium import initial_state
 from wheelload.models.plant.slip_control import SlipControl, peak_slip_ratio
 from wheelload.studies.drive.driver import Driver, DriverTuning
 from wheelload.studies.drive.scenario_options import BeyondGrip, Options
 from wheelload.studies.drive.scenarios import scenario_run
 from wheelload.studies.drive.sensors import MTI_1, measure
 from wheelload.studies.drive.simulation import simulate
+from wheelload.studies.drive.speed_profile import cornering_friction
 from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant
 
 pytestmark = pytest.mark.heavy(30.0)
@@ -108,7 +111,7 @@ def test_trigger_stays_off_on_the_exact_file_and_the_kerb(name):
 def test_default_runs_are_unchanged(vehicle):
     """Without ``beyond_grip`` the turns' speed targets are the closed forms they always
     were (to the bit), with the default driver and slip control; the driver's grip limit
-    is the tyres' own friction."""
+    is the tyres' own friction unless another is assumed (to 1e-12: one product)."""
     s_brake = scenario_run("brake-in-turn", vehicle).road.s
     brake = np.sqrt(np.clip(20.0**2 - 2.0 * 5.0 * (s_brake - 200.0), 8.0**2, 20.0**2))
     s_accel = scenario_run("accel-in-turn", vehicle).road.s
@@ -117,11 +120,16 @@ def test_default_runs_are_unchanged(vehicle):
         run = scenario_run(name, vehicle)
         assert np.array_equal(run.speed, speed)
         assert run.tuning == DriverTuning() and run.slip_control == SlipControl()
+    # Asked to stop from 20 m/s on the straight, the driver brakes at his grip limit:
+    # 0.9 of the tyres' cornering friction by default, 0.9 of the assumed one if given.
     run = scenario_run("brake-in-turn", vehicle)
-    told = dataclasses.replace(run.tuning, assumed_friction=1.15)
-    own = Driver(vehicle=vehicle, road=run.road, speed=run.speed)
-    dry = Driver(vehicle=vehicle, road=run.road, speed=run.speed, tuning=told)
-    assert own._friction != dry._friction == pytest.approx(0.9 * 1.15, rel=1e-12)
+    state = initial_state(vehicle, run.road.surface, 0.0, 20.0, 0.0, solve=False)
+    mass = vehicle.mass.total
+    for assumed, friction in ((None, cornering_friction(vehicle)), (1.15, 1.15)):
+        tuning = dataclasses.replace(run.tuning, assumed_friction=assumed)
+        driver = Driver(vehicle=vehicle, road=run.road, speed=0.0 * run.speed, tuning=tuning)
+        limit = 0.9 * friction * mass * GRAVITY
+        assert driver.force(state, 0.01) == pytest.approx(-limit, rel=1e-12)
 
 
 def test_default_log_is_bit_identical_with_the_option_absent(vehicle):
