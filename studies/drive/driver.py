@@ -69,6 +69,10 @@ class DriverTuning:
     ease_error: float = 0.5  # m, path error from which drive is eased out ...
     ease_span: float = 1.0  # m, ... reaching zero drive this much further
     force_rate: float = 4.0  # g/s, rate limit of the longitudinal force (pedal speed)
+    # The friction the grip limit assumes; None: the tyres' own (cornering_friction). A
+    # value above the road's makes the driver demand beyond the grip (dry-road habits on
+    # snow): ABS and traction control then hold the wheels.
+    assumed_friction: float | None = None
 
 
 def understeer_gradient(vehicle: Vehicle) -> float:
@@ -109,7 +113,9 @@ class Driver:
         g = self.vehicle.geometry
         self._length = g.lf + g.lr
         self._radius = [c.radius for c in corners(self.vehicle)]
-        self._friction = self.tuning.friction_use * cornering_friction(self.vehicle)
+        assumed = self.tuning.assumed_friction
+        friction = cornering_friction(self.vehicle) if assumed is None else assumed
+        self._friction = self.tuning.friction_use * friction
         # The plant's own centre line: the integral of the curvature it drives on.
         self._line = integrate_centre_line(self.road.s, self.road.surface.curvature)
 

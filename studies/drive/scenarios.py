@@ -3,7 +3,7 @@
 | name | source | what |
 | --- | --- | --- |
 | iso-dlc | main paper §IV-C; ISO 3888-1 | double lane change, 80 km/h entry |
-| brake-in-turn, accel-in-turn | combined-slip checks | 100 m / 60 m radius turns |
+| brake-in-turn, accel-in-turn | combined-slip checks | 100 m / 60 m turns; ``beyond_grip`` |
 | bounce-sweep | ycoo paper §5, Fig. 6 | sine bumps, wavelength down to 1.6 m at 20 km/h |
 | slope-20 | ycoo paper Fig. 7 | flat road onto a 20 % grade |
 | chicane-bank-30 | road-angle paper §V | ±0.5 g chicane at 30 km/h, 30 % bank |
@@ -13,11 +13,15 @@
 | stop-and-go | this project | 10 s at rest (a passenger gets in), then 80 km/h and a lane change |
 | hockenheim | main paper Table IV; issue 4 | flying lap of the Hockenheim GP circuit, 4.57 km |
 | nordschleife | main paper Table III; issue 4 | flying lap of the Nordschleife, 20.7 km |
+
+``beyond_grip`` (:class:`~wheelload.studies.drive.scenario_options.BeyondGrip`): the turns'
+speed change asked beyond a low-μ road's grip, the ABS / TCS cycling past the force peak.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -26,7 +30,7 @@ from wheelload.models.plant.dynamics import vehicle_plant
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive import laps
 from wheelload.studies.drive.roads import Road, build_road, iso8608_profile, smooth_step
-from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenario_options import BeyondGrip, Options
 from wheelload.studies.drive.simulation import Run
 
 KMH = 1.0 / 3.6
@@ -90,20 +94,47 @@ def _turn(vehicle: Vehicle, options: Options, radius: float, length: float) -> R
     return build_road(s, curvature=curvature, half_width=5.0, roughness=_rough(s, vehicle, options))
 
 
+def _speed_change(
+    s: np.ndarray, at: float, speeds: tuple[float, float], rate: float, beyond: BeyondGrip | None
+) -> np.ndarray:
+    """Speed target: ``speeds[0]`` until ``at``, then changing at ``rate`` to ``speeds[1]``;
+    with ``beyond`` both speeds scaled and the rate its own (:class:`BeyondGrip`)."""
+    if beyond is not None:
+        speeds = (beyond.speed_scale * speeds[0], beyond.speed_scale * speeds[1])
+        rate = beyond.speed_rate
+    sign = 1.0 if speeds[1] > speeds[0] else -1.0
+    low, high = sorted(speeds)
+    return np.sqrt(np.clip(speeds[0] ** 2 + sign * 2.0 * rate * (s - at), low**2, high**2))
+
+
+def _beyond_grip(run: Run, beyond: BeyondGrip | None) -> Run:
+    """``run`` with the driver's assumed friction and the slip control of ``beyond``."""
+    if beyond is None:
+        return run
+    tuning = replace(run.tuning, assumed_friction=beyond.driver_friction)
+    return replace(run, tuning=tuning, slip_control=beyond.slip_control)
+
+
 def brake_in_turn(vehicle: Vehicle, options: Options) -> Run:
-    """Steady 0.4 g on a 100 m left turn at 20 m/s, then braking at 5 m/s^2 to 8 m/s."""
+    """Steady 0.4 g on a 100 m left turn at 20 m/s, then braking at 5 m/s^2 to 8 m/s.
+
+    With ``options.beyond_grip`` (:class:`BeyondGrip`): slower, braking beyond the grip.
+    """
     road = _turn(vehicle, options, 100.0, 500.0)
-    start_brake = 200.0
-    speed = np.sqrt(np.clip(20.0**2 - 2.0 * 5.0 * (road.s - start_brake), 8.0**2, 20.0**2))
-    return Run(road=road, speed=speed, start=0.0, stop=340.0, max_time=25.0)
+    speed = _speed_change(road.s, 200.0, (20.0, 8.0), 5.0, options.beyond_grip)
+    run = Run(road=road, speed=speed, start=0.0, stop=340.0, max_time=25.0)
+    return _beyond_grip(run, options.beyond_grip)
 
 
 def accel_in_turn(vehicle: Vehicle, options: Options) -> Run:
-    """Steady 0.25 g on a 60 m left turn at 12 m/s, then accelerating at 3 m/s^2 to 19 m/s."""
+    """Steady 0.25 g on a 60 m left turn at 12 m/s, then accelerating at 3 m/s^2 to 19 m/s.
+
+    With ``options.beyond_grip`` (:class:`BeyondGrip`): slower, accelerating beyond the grip.
+    """
     road = _turn(vehicle, options, 60.0, 400.0)
-    start_accel = 120.0
-    speed = np.sqrt(np.clip(12.0**2 + 2.0 * 3.0 * (road.s - start_accel), 12.0**2, 19.0**2))
-    return Run(road=road, speed=speed, start=0.0, stop=300.0, max_time=25.0)
+    speed = _speed_change(road.s, 120.0, (12.0, 19.0), 3.0, options.beyond_grip)
+    run = Run(road=road, speed=speed, start=0.0, stop=300.0, max_time=25.0)
+    return _beyond_grip(run, options.beyond_grip)
 
 
 def bounce_sweep(vehicle: Vehicle, options: Options) -> Run:
@@ -253,9 +284,18 @@ SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
 }
 
 
+#: The scenarios that take :attr:`Options.beyond_grip`: the paper's Table I turns on snow.
+BEYOND_GRIP = ("brake-in-turn", "accel-in-turn")
+
+
 def scenario_run(name: str, vehicle: Vehicle, options: Options | None = None) -> Run:
     """The :class:`Run` of a named scenario (default options), or an error listing the names."""
     options = Options() if options is None else options
     if name not in SCENARIOS:
         raise ValueError(f"unknown scenario '{name}'; choose from {', '.join(SCENARIOS)}")
+    if options.beyond_grip is not None and name not in BEYOND_GRIP:
+        raise ValueError(
+            f"scenario '{name}' has no speed change beyond the grip; "
+            f"beyond_grip applies to {', '.join(BEYOND_GRIP)}"
+        )
     return SCENARIOS[name](vehicle, options)

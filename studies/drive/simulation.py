@@ -65,6 +65,9 @@ class Truth:
     frame: pd.DataFrame
     wall_time: float
     build_time: float
+    # The plant's slip state on the frame's samples: transient slip ratios ``kappa_*`` and
+    # the slip control's torque factors ``slip_factor_*`` (not logged: no sensor sees them).
+    slip: pd.DataFrame | None = None
 
 
 def simulate(
@@ -135,6 +138,7 @@ def simulate(
     states = np.empty((count, n_x))
     outputs = np.empty((count, n_y))
     inputs = np.empty((count, len(INPUT_NAMES)))
+    factors = np.empty((count, len(FACTOR_NAMES)))
     s_limit = run.road.s[-1] - 10.0
     recorded = 0
     tic = time.perf_counter()
@@ -146,6 +150,7 @@ def simulate(
         z_dm, y_dm = chunk(z, request)
         z, y = z_dm.full().ravel(), y_dm.full().ravel()
         states[k], outputs[k], inputs[k] = z[:n_x], y[:n_y], y[n_y : n_y + len(INPUT_NAMES)]
+        factors[k] = z[n_x:]
         recorded = k + 1
         if not np.all(np.isfinite(z)):
             raise SimulationError(f"plant state not finite at t = {(k + 1) * dt:.3f} s")
@@ -155,10 +160,20 @@ def simulate(
     frame = truth_frame(states[:recorded], outputs[:recorded], inputs[:recorded], dt, run.road)
     frame = frame.assign(**wheel_columns(vehicle, states[:recorded], outputs[:recorded],
                                          inputs[:recorded]))  # fmt: skip
+    slip = slip_frame(states[:recorded], factors[:recorded])
     if run.record_from is not None:
-        frame = frame[frame["s"] >= run.record_from].reset_index(drop=True)
+        kept = (frame["s"] >= run.record_from).to_numpy()
+        frame = frame[kept].reset_index(drop=True)
         frame["t"] -= frame["t"].iloc[0]
-    return Truth(frame=frame, wall_time=wall, build_time=build_time)
+        slip = slip[kept].reset_index(drop=True)
+    return Truth(frame=frame, wall_time=wall, build_time=build_time, slip=slip)
+
+
+def slip_frame(states: np.ndarray, factors: np.ndarray) -> pd.DataFrame:
+    """The plant's transient slip ratios and the slip control's torque factors per wheel."""
+    columns = {f"kappa_{w}": states[:, STATE[f"kappa_{w}"]] for w in WHEELS}
+    columns.update({name: factors[:, i] for i, name in enumerate(FACTOR_NAMES)})
+    return pd.DataFrame(columns)
 
 
 def truth_frame(

@@ -12,10 +12,13 @@ iso-dlc is scored on the paper's window as the load tables are.
 Beyond the exact file (:data:`CONDITIONS`), on the paper's Table I manoeuvres, a kerb
 and a lap: 150 kg aboard that the file does not know, a wheel-torque signal 5 % high
 (a scale error of the drive-train model), a snowy road (the plant's friction 0.3, the
-file's unchanged), and the paper's covariance switch on. High slip
-(``StepFlag.HIGH_SLIP``) is flagged in every run; the switch it drives is off by
-default. ``--quick``: the lane change and short lap segments, the conditions on the lane
-change only.
+file's unchanged), and the paper's covariance switch on; and the paper's snowy turns as it
+names them for the switch (:data:`ABS_TCS`): the brake-in-turn and accel-in-turn on the
+snowy road with the speed change asked beyond the grip and threshold ABS / TCS cycling past
+the force peak (:class:`~wheelload.studies.drive.scenario_options.BeyondGrip`), the switch
+off and on. High slip (``StepFlag.HIGH_SLIP``) is flagged in every run; the switch it
+drives is off by default. ``--quick``: the lane change and short lap segments, the
+conditions on the lane change only (the ABS/TCS ones on the braking turn).
 """
 
 from __future__ import annotations
@@ -35,7 +38,8 @@ from wheelload.estimators.result import StepFlag
 from wheelload.models import Vehicle, vehicle_from_dict
 from wheelload.models.payload import Payload
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
-from wheelload.studies.drive.scenarios import SCENARIOS
+from wheelload.studies.drive.scenario_options import BeyondGrip
+from wheelload.studies.drive.scenarios import BEYOND_GRIP, SCENARIOS
 from wheelload.studies.experiments.payload import PLACES
 from wheelload.studies.experiments.report.tables import markdown
 from wheelload.studies.experiments.runs.cache import cache_key
@@ -69,7 +73,13 @@ class Condition:
     torque_scale: float = 1.0
     friction: float | None = None
     switch_covariances: bool = False  # the paper's high-slip Q, R where high slip is flagged
+    beyond_grip: BeyondGrip | None = None  # the turns driven beyond the grip, ABS/TCS cycling
     scenarios: tuple[str, ...] = TABLE_I + KERBS[:2]
+
+    @property
+    def quick_scenarios(self) -> tuple[str, ...]:
+        """With ``--quick``: the lane change, or the braking turn when beyond the grip."""
+        return BEYOND_GRIP[:1] if self.beyond_grip is not None else TABLE_I[:1]
 
     def plant_text(self, text: str) -> str:
         """The plant's vehicle file: ``text`` with its tyres' friction set."""
@@ -81,6 +91,10 @@ class Condition:
 
 
 EXACT = Condition(label="exact")
+#: The Table I turns on snow with the speed change asked beyond the grip: the threshold
+#: ABS (braking) and traction control (accelerating) cycle past the force peak.
+ABS_TCS = "ABS/TCS, μ 0.3"
+_BEYOND = BeyondGrip()
 _BOOT = PLACES["rear seats / boot"]
 CONDITIONS = (
     Condition(label="150 kg aboard",
@@ -89,7 +103,14 @@ CONDITIONS = (
     Condition(label="torque +5 %", torque_scale=1.05),
     Condition(label="μ 0.3", friction=0.3, scenarios=TABLE_I),
     Condition(label="paper's switching", switch_covariances=True, scenarios=TABLE_I + KERBS),
+    Condition(label=ABS_TCS, friction=0.3, beyond_grip=_BEYOND, scenarios=BEYOND_GRIP),
+    Condition(label=f"{ABS_TCS}, switching", friction=0.3, beyond_grip=_BEYOND,
+              switch_covariances=True, scenarios=BEYOND_GRIP),
 )  # fmt: skip
+
+
+#: The conditions with the paper's switch on, each beside its run without it.
+SWITCHED = (("paper's switching", EXACT.label), (f"{ABS_TCS}, switching", ABS_TCS))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -154,10 +175,10 @@ def plan(context: Context) -> list[tuple[tuple[str, str, str], TyreTrial]]:
             if condition is EXACT:
                 scenarios = QUICK_SCENARIOS if quick else tuple(SCENARIOS)
             else:
-                scenarios = TABLE_I[:1] if quick else condition.scenarios
+                scenarios = condition.quick_scenarios if quick else condition.scenarios
             for scenario in scenarios:
                 truth = truth_spec(context, scenario, vehicle_text=condition.plant_text(text))
-                truth = replace(truth, payload=condition.payload)
+                truth = replace(truth, payload=condition.payload, beyond_grip=condition.beyond_grip)
                 trial = TrialSpec(truth=truth, vehicle_text=text, methods=METHODS,
                                   window=window(scenario))  # fmt: skip
                 scored = TyreTrial(
@@ -194,7 +215,13 @@ def run(context: Context) -> Section:
             "Conditions: 150 kg in the rear seats / boot that the file does not know; the "
             "logged wheel torques × 1.05; the plant's tyre friction 0.3 (snow), the file's "
             "unchanged; the paper's high-slip Q and R where high slip is flagged (off by "
-            "default). The iso-dlc is scored on t = 5-12 s. A scenario whose reference RMS "
+            f"default). {ABS_TCS}: the plant's friction 0.3, the turns "
+            f"{_BEYOND.speed_scale:g} times as fast, the speed change asked at "
+            f"{_BEYOND.speed_rate:g} m/s² with the driver's grip limit on a friction of "
+            f"{_BEYOND.driver_friction:g}, ABS / TCS releasing at "
+            f"{_BEYOND.slip_control.slip_release:g} times the peak slip (past the force "
+            "peak: the modulator cycles); `, switching`: with the paper's Q and R. "
+            "The iso-dlc is scored on t = 5-12 s. A scenario whose reference RMS "
             "is a few newtons (standstill, the bounce sweep's F_x: rolling resistance) gives "
             f"a large % of a small force; below {MIN_REFERENCE_RMS:g} N (straight running: "
             "no lateral force) no % is given.",
@@ -266,14 +293,16 @@ def firing_line(table: pd.DataFrame) -> str:
         if kept.size:
             words += f"; on {name} (exact file) {span(kept)}"
     words += " of the scored samples."
-    switched = table[condition == "paper's switching"]
-    if switched.size:
-        base = table[exact]["Fy tyre-forces %"].droplevel("condition")
+    for switched_label, base_label in SWITCHED:
+        switched = table[condition == switched_label]
+        if not switched.size:
+            continue
+        base = table[condition == base_label]["Fy tyre-forces %"].droplevel("condition")
         change = switched["Fy tyre-forces %"].droplevel("condition") - base.reindex(
             switched.index.droplevel("condition")
         )
         words += (
             f" The paper's covariance switch moved F_y by {change.min():+.1f} to "
-            f"{change.max():+.1f} points on its rows (exact file otherwise)."
+            f"{change.max():+.1f} points on its rows ({switched_label} against {base_label})."
         )
     return words

@@ -28,7 +28,7 @@ from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build
 from wheelload.models.vehicle.description import Vehicle, vehicle_from_dict
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
-from wheelload.studies.drive.scenario_options import Options
+from wheelload.studies.drive.scenario_options import BeyondGrip, Options
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.sensors import MTI_1, NoiseScaling, measure, sensor_grade
 from wheelload.studies.experiments.runs.cache import ResultCache
@@ -53,6 +53,7 @@ class TruthSpec:
     seed: int = 0
     payload: PayloadSchedule | None = None
     output_rate: float = 100.0  # Hz
+    beyond_grip: BeyondGrip | None = None  # the turns driven beyond the grip (Options)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -108,7 +109,7 @@ def simulate_truth(spec: TruthSpec, folder: Path) -> pd.DataFrame:
     with tempfile.TemporaryDirectory() as temporary:
         path = Path(temporary) / "vehicle.toml"
         path.write_text(spec.vehicle_text, encoding="utf-8")
-        options = Options(seed=spec.seed, shorten=spec.shorten)
+        options = Options(seed=spec.seed, shorten=spec.shorten, beyond_grip=spec.beyond_grip)
         result = run_scenario(
             spec.scenario,
             path,

@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 
 from wheelload.studies.experiments.catalog import STUDIES
-from wheelload.studies.experiments.forces.tyre_forces import firing_line, goal_line, tyre_table
+from wheelload.studies.experiments.forces.tyre_forces import (
+    ABS_TCS,
+    firing_line,
+    goal_line,
+    tyre_table,
+)
 from wheelload.studies.metrics import normalized_rms_error, pooled_force_error
 
 
@@ -65,4 +70,18 @@ def test_firing_line_reads_each_road_and_the_switch():
     words = firing_line(tyre_table(labels, rows))
     assert "Table I manoeuvres on exact 0.0-1.0 %, μ 0.3 12.5-12.5 %" in words
     assert "on the kerb (exact file) 2.0-2.0 %; on the laps (exact file) 4.0-4.0 %" in words
-    assert "moved F_y by +1.5 to +1.5 points" in words
+    assert "moved F_y by +1.5 to +1.5 points on its rows (paper's switching against exact)" in words
+
+
+def test_firing_line_reads_the_switch_beyond_the_grip():
+    """Beyond the grip the switch is read against the same runs without it, and the
+    ABS/TCS rows' shares are listed with the other conditions'."""
+    cases = (("brake-in-turn", ABS_TCS), ("accel-in-turn", ABS_TCS),
+             ("brake-in-turn", f"{ABS_TCS}, switching"),
+             ("accel-in-turn", f"{ABS_TCS}, switching"))  # fmt: skip
+    labels = [("car", scenario, condition) for scenario, condition in cases]
+    rows = [dict(ROW, **{"high slip %": share, "tyre-forces fy %": fy})
+            for share, fy in ((3.0, 10.0), (1.0, 12.0), (3.0, 9.0), (1.0, 12.5))]  # fmt: skip
+    words = firing_line(tyre_table(labels, rows))
+    assert f"{ABS_TCS} 1.0-3.0 %, {ABS_TCS}, switching 1.0-3.0 %" in words
+    assert f"by -1.0 to +0.5 points on its rows ({ABS_TCS}, switching against {ABS_TCS})" in words
