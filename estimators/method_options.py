@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+import sys
 import types
 import typing
 from collections.abc import Callable
@@ -40,17 +41,30 @@ def check_options(info: MethodInfo, options: dict[str, Any]) -> None:
     declare, or whose value is not of the declared type."""
     names = valid_options(info)
     listed = ", ".join(names) or "none"
-    hints = typing.get_type_hints(info.options) if options else {}
     for key, value in options.items():
         if key not in names:
             raise UnknownOptionError(
                 f"method {info.name!r} takes no option {key!r}; valid options: {listed}"
             )
-        if not accepts(value, hints[key]):
+        hint = field_type(info.options, key)
+        if not accepts(value, hint):
             raise UnknownOptionError(
-                f"method {info.name!r}: option {key!r} must be {type_name(hints[key])}, got "
+                f"method {info.name!r}: option {key!r} must be {type_name(hint)}, got "
                 f"{type(value).__name__}; valid options: {listed}"
             )
+
+
+def field_type(options: type, name: str) -> Any:
+    """The annotated type of field ``name`` of the options dataclass, evaluated alone (the
+    other fields' annotations, which may name a slow module's types, are left unread)."""
+    for cls in options.__mro__:
+        annotation = cls.__dict__.get("__annotations__", {}).get(name)
+        if annotation is not None:
+            if not isinstance(annotation, str):
+                return annotation
+            namespace = vars(sys.modules[cls.__module__])
+            return eval(annotation, namespace)  # noqa: S307 (the module's own annotation)
+    raise KeyError(name)
 
 
 def accepts(value: Any, hint: Any) -> bool:

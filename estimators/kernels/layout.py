@@ -108,7 +108,7 @@ class Layout:
     def values(self, vector, names: Iterable[str]):
         """Scalar entries ``names`` of ``vector``, stacked in that order."""
         picked = [self.index(name) for name in names]
-        if isinstance(vector, (ca.SX, ca.MX, ca.DM)):
+        if _casadi(vector, ("SX", "MX", "DM")):
             return ca.vertcat(*[vector[k] for k in picked])
         return np.asarray(vector)[picked]
 
@@ -124,7 +124,7 @@ class Layout:
         if missing or unknown:
             raise KeyError(f"layout '{self.name}': missing {missing}, unknown {unknown}")
         pieces = [values[name] for name in self.field_names()]
-        if any(isinstance(piece, (ca.SX, ca.MX)) for piece in pieces):
+        if any(_casadi(piece, ("SX", "MX")) for piece in pieces):
             return ca.vertcat(*pieces)
         return np.concatenate([np.ravel(np.asarray(piece, float)) for piece in pieces])
 
@@ -149,3 +149,10 @@ class Layout:
         size = vector.numel() if hasattr(vector, "numel") else np.size(vector)
         if size != self.size:
             raise ValueError(f"layout '{self.name}' has {self.size} entries, got {size}")
+
+
+def _casadi(value, kinds: tuple[str, ...]) -> bool:
+    """Whether ``value`` is a CasADi matrix of one of ``kinds``, read from its type's name, so
+    that a NumPy caller never loads CasADi (the command line defers it until used)."""
+    kind = type(value)
+    return kind.__module__.startswith("casadi") and kind.__name__ in kinds
