@@ -25,6 +25,7 @@ from wheelload.estimators.codegen.fmu_variables import FMU_INPUTS, OUTPUT_GROUPS
 from wheelload.estimators.codegen.kf import STRICT_CFLAGS, CodegenOptions
 from wheelload.estimators.codegen.runtime_parameters import PARAMETERS
 from wheelload.estimators.family.tyres.step import WHEEL_INPUTS
+from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.registry import build
 from wheelload.models import WHEELS, example_vehicle_path, load_vehicle
 from wheelload.models.parameters import MASS_CENTRE_INPUTS
@@ -214,12 +215,49 @@ def test_refused_parameter_leaves_the_previous_value(fmu, name, value, reason):
         slave.freeInstance()
 
 
-def test_wrapper_compiles_under_the_strict_flags(fmu, tmp_path):
-    """The FMI wrapper compiles under the project's strict warning flags (warnings as errors)
-    with FMPy's FMI 3.0 headers, as the library's sources do (tests/estimators/codegen)."""
-    generated, unzipped = fmu
-    headers = f"-I{fmpy.__path__[0]}/c-code"
-    wrapper = unzipped / "sources" / generated.sources[-1]
+@pytest.mark.parametrize("precision", list(Precision))
+def test_wrapper_compiles_under_the_strict_flags(tmp_path, precision):
+    """The FMI wrapper compiles under the project's strict warning flags (warnings as errors,
+    conversions included: its variables are Float64 over a library in either precision) with
+    FMPy's FMI 3.0 headers, as the library's own sources do (tests/estimators/codegen)."""
+    generated = generate_fmu(example_vehicle_path(), tmp_path, CodegenOptions(precision=precision))
+    with zipfile.ZipFile(generated.path) as archive:
+        archive.extractall(tmp_path / "unzipped")
+    wrapper = tmp_path / "unzipped" / "sources" / generated.sources[-1]
     assert wrapper.name.endswith("_fmu.c")
+    headers = f"-I{fmpy.__path__[0]}/c-code"
     compile_c(tmp_path / "fmu.o", [wrapper], (*STRICT_CFLAGS, "-fPIC", "-c"), includes=(headers,),
               libraries=())  # fmt: skip
+
+
+def _after_steps(unzipped, description, inputs, steps):
+    """The real outputs of a fresh instance after communication steps of the sizes
+    ``steps`` from t = 0, its inputs held at ``inputs`` (name: value)."""
+    by_name = {v.name: v.valueReference for v in description.modelVariables}
+    slave = _instance(unzipped, description)
+    try:
+        slave.enterInitializationMode(startTime=0.0)
+        slave.setFloat64([by_name[name] for name in inputs], list(inputs.values()))
+        slave.exitInitializationMode()
+        t = 0.0
+        for h in steps:
+            slave.doStep(t, h)
+            t += h
+        return slave.getFloat64([by_name[name] for name in OUTPUTS])
+    finally:
+        slave.freeInstance()
+
+
+def test_the_fixed_internal_step_runs_each_sample_once(fmu, logs):
+    """Samples lie at startTime + k * interval, and each runs in the communication step that
+    holds it: one step of two intervals, two of one and four of half an interval give the same
+    outputs (the library run twice on the held inputs), and they are not those of one sample."""
+    generated, unzipped = fmu
+    description = fmpy.read_model_description(str(generated.path))
+    _, frame = logs["clean"]
+    names = [name for name in (*FMU_INPUTS, *WHEEL_INPUTS) if name in frame.columns]
+    inputs = {name: float(frame[name].iloc[400]) for name in names}
+    two = _after_steps(unzipped, description, inputs, [2 * INTERVAL])
+    assert _after_steps(unzipped, description, inputs, [INTERVAL, INTERVAL]) == two
+    assert _after_steps(unzipped, description, inputs, [INTERVAL / 2] * 4) == two
+    assert _after_steps(unzipped, description, inputs, [INTERVAL]) != two
