@@ -8,7 +8,8 @@ as ``wheelload codegen --tyre-forces`` writes them, the FMI wrapper ``PREFIX_fmu
 compiles the sources with its own FMI 3.0 headers (FMPy, Simulink's FMU Import block, a HIL
 tool chain); the headers are not shipped. The FMU runs at the library's fixed interval
 (``fixedInternalStepSize``); its tunable parameters are the run-time parameter struct's
-fields, set through ``PREFIX_set_param`` and checked as ``PREFIX_init`` checks them.
+fields, set through ``PREFIX_set_param`` and checked as ``PREFIX_init`` checks them (the tyre
+step's vehicle numbers are folded into its C and are not among them).
 
 The FMU needs the tyre step (it is the combined step) and run-time parameters.
 

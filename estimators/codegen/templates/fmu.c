@@ -18,7 +18,8 @@
  * Parameters: fields of ${prefix}_params, set through ${prefix}_set_param and then checked as
  * ${prefix}_init checks them; a refused value returns fmi3Error with the reason logged and
  * leaves the previous value in force. Setting a source of a derived parameter (a spring)
- * recomputes it, as ${prefix}_set_param does.
+ * recomputes it, as ${prefix}_set_param does. The tyre step's vehicle numbers are folded into
+ * ${prefix}_tyre.c (see ${prefix}_tyre.h): no parameter of the FMU reaches them.
  */
 #include "${prefix}.h"
 #include "${prefix}_tyre.h"
@@ -47,13 +48,13 @@ static const struct {
 ${variable_table}
 };
 
-typedef enum { INSTANTIATED, INITIALIZATION, STEP, TERMINATED } mode_t_;
+typedef enum { INSTANTIATED, INITIALIZATION, STEP, TERMINATED } fmu_mode;
 
 typedef struct {
     fmi3InstanceEnvironment environment;
     fmi3LogMessageCallback log;
     int logging;
-    mode_t_ mode;
+    fmu_mode mode;
     double start_time;
     double time;
     unsigned long samples; /* samples run since startTime */
