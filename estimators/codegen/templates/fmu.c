@@ -84,19 +84,13 @@ static fmi3Status refuse(const instance_t *instance, const char *what, const cha
     return fmi3Error;
 }
 
-/* The variable of value reference vr if it is of kind kind (or any kind with -1), else
- * -1 with the reason logged. */
-static int lookup(const instance_t *instance, fmi3ValueReference vr, int kind, const char *call)
+/* The index within its kind of the variable of value reference vr, or -1 with the reason
+ * logged. */
+static int lookup(const instance_t *instance, fmi3ValueReference vr, const char *call)
 {
     char why[96];
     if (vr >= N_VARIABLES) {
         (void)snprintf(why, sizeof why, "value reference %lu is not a variable of this FMU",
-                       (unsigned long)vr);
-        (void)refuse(instance, call, why);
-        return -1;
-    }
-    if (kind >= 0 && variables[vr].kind != kind) {
-        (void)snprintf(why, sizeof why, "value reference %lu is not of this call's type",
                        (unsigned long)vr);
         (void)refuse(instance, call, why);
         return -1;
@@ -358,7 +352,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
     }
     for (k = 0; k < nValueReferences; ++k) {
         const fmi3ValueReference vr = valueReferences[k];
-        const int index = lookup(self, vr, -1, "fmi3GetFloat64");
+        const int index = lookup(self, vr, "fmi3GetFloat64");
         if (index < 0) {
             return fmi3Error;
         }
@@ -395,7 +389,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
     }
     for (k = 0; k < nValueReferences; ++k) {
         const fmi3ValueReference vr = valueReferences[k];
-        const int index = lookup(self, vr, -1, "fmi3SetFloat64");
+        const int index = lookup(self, vr, "fmi3SetFloat64");
         if (index < 0) {
             return fmi3Error;
         }
@@ -428,7 +422,7 @@ fmi3Status fmi3GetUInt32(fmi3Instance instance, const fmi3ValueReference valueRe
     }
     for (k = 0; k < nValueReferences; ++k) {
         const fmi3ValueReference vr = valueReferences[k];
-        if (lookup(self, vr, -1, "fmi3GetUInt32") < 0) {
+        if (lookup(self, vr, "fmi3GetUInt32") < 0) {
             return fmi3Error;
         }
         if (variables[vr].kind == FMU_KIND_STATUS) {
