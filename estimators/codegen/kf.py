@@ -225,6 +225,16 @@ def representable(values: np.ndarray, precision: Precision) -> np.ndarray:
     return np.clip(np.asarray(values, float), -float(largest), float(largest))
 
 
+def calibration_values(vehicle: Vehicle, options: CodegenOptions) -> dict[str, float]:
+    """The fields of ``PREFIX_default_params`` by name (:func:`calibration_names`): the
+    vehicle's model parameters, its tuning at the options' sample interval and reset's
+    initial std, each :func:`representable` in the options' precision."""
+    p = ModelParameters.from_vehicle(vehicle).vector()
+    tuning = tuning_vector(vehicle, options.sample_interval)
+    values = np.array([*p, *tuning, vehicle.filter.initial_std])
+    return dict(zip(calibration_names(), representable(values, options.precision)))
+
+
 def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -241,15 +251,8 @@ def _substitutions(
     step: ca.Function,
     kernel: ca.Function,
 ) -> dict[str, str]:
-    parameters = ModelParameters.from_vehicle(vehicle)
-    p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
     rate_gain = RateDerivativeFilter().gain(options.sample_interval)
-    values = dict(
-        zip(
-            calibration_names(),
-            representable(np.array([*p, *tuning, vehicle.filter.initial_std]), options.precision),
-        )
-    )
+    values = calibration_values(vehicle, options)
     precision, prefix = options.precision, options.prefix
     real = precision.value
     runtime = options.params is ParamMode.RUNTIME

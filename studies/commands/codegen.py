@@ -47,6 +47,7 @@ KF_OPTIONS = {
     "prefix": "wheelload_kf",
     "sample_interval": CodegenOptions().sample_interval,
     "tyre_forces": False,
+    "fmu": False,
 }
 MHE_OPTIONS = {
     "horizon": 10,
@@ -125,6 +126,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "the KF's loads): PREFIX_tyre.h/.c; the example then reads omega_*, torque_*, steer "
         "and writes fx_*, fy_* and their sigma",
     )
+    kf.add_argument(
+        "--fmu",
+        action="store_const",
+        const=True,
+        help="write OUT/PREFIX.fmu instead: a source FMU (FMI 3.0 co-simulation) of the "
+        "combined F_x, F_y, F_z step (implies --tyre-forces; needs --params runtime), "
+        "the parameters tunable, a fixed step of --sample-interval",
+    )
     mhe = parser.add_argument_group("mhe only")
     mhe.add_argument("--horizon", type=int, help="window length N (default 10)")
     mhe.add_argument(
@@ -172,6 +181,8 @@ def run(args: argparse.Namespace) -> int:
         sample_interval=values["sample_interval"],
         tyre_forces=values["tyre_forces"],
     )
+    if values["fmu"]:
+        return _run_fmu(args, vehicle_path, options)
     library = generate(vehicle_path, args.out, options, allow_unusual=args.allow_unusual)
     for path in (library.header, library.source, *(library.tyre or ()), library.example,
                  library.selftest):  # fmt: skip
@@ -179,6 +190,20 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"{library.flops} arithmetic operations per step ({options.precision.value}, "
         f"{options.params.value} parameters); build with: make -C {args.out}"
+    )
+    return 0
+
+
+def _run_fmu(args: argparse.Namespace, vehicle_path: Path, options: CodegenOptions) -> int:
+    from wheelload.estimators.codegen.fmu import generate_fmu
+
+    fmu = generate_fmu(vehicle_path, args.out, options, allow_unusual=args.allow_unusual,
+                       force=args.force)  # fmt: skip
+    print(fmu.path)
+    print(
+        f"source FMU (FMI 3.0 co-simulation, fixed step {fmu.interval} s, sources "
+        f"{' '.join(fmu.sources)}); build with an importer's FMI 3.0 headers, e.g. "
+        f"python3 -m fmpy compile {fmu.path}"
     )
     return 0
 

@@ -1,6 +1,7 @@
 """``wheelload codegen``: the command writes a library that its own Makefile builds and runs."""
 
 import subprocess
+import zipfile
 
 import pytest
 
@@ -121,3 +122,20 @@ def test_the_generated_makefile_takes_gcc_unless_cc_is_given(tmp_path, capsys):
     assert sum(" -c " in line for line in built) == 1
     assert "my-cc -std=c99" in commands(CC="my-cc")
     assert "other-cc -std=c99" in commands("CC=other-cc")
+
+
+def test_codegen_fmu_writes_one_source_fmu_and_refuses_baked_parameters(tmp_path, capsys):
+    """``--fmu`` writes OUT/PREFIX.fmu alone (the FMU's own tests: tests/estimators/codegen/
+    test_fmu.py); baked parameters, which an FMU could not tune, are refused in one line."""
+    out = tmp_path / "fmu"
+    assert main(["codegen", "--fmu", "--out", str(out), "--prefix", "car7"]) == 0
+    assert str(out / "car7.fmu") in capsys.readouterr().out
+    assert [path.name for path in out.iterdir()] == ["car7.fmu"]
+    with zipfile.ZipFile(out / "car7.fmu") as archive:
+        names = set(archive.namelist())
+    assert {"modelDescription.xml", "sources/buildDescription.xml", "sources/car7_fmu.c",
+            "sources/car7_tyre.c"} <= names  # fmt: skip
+    argv = ["codegen", "--fmu", "--params", "baked", "--out", str(tmp_path / "baked")]
+    assert main(argv) == 2
+    assert "--fmu: the FMU's tunable parameters" in capsys.readouterr().err
+    assert not (tmp_path / "baked").exists()

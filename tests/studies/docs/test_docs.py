@@ -49,7 +49,8 @@ def test_every_package_has_a_reference_page_with_rendered_math(site):
 
 def test_the_journeys_are_pages_of_the_site(site):
     index = (site / "index.html").read_text()
-    for journey in ("own-car", "identify-tune", "compare", "c-on-an-ecu", "fleets", "studies"):
+    journeys = ("own-car", "identify-tune", "compare", "c-on-an-ecu", "fmu", "fleets", "studies")
+    for journey in journeys:
         assert (site / "journeys" / f"{journey}.html").is_file()
         assert f"journeys/{journey}.html" in index
 
@@ -60,6 +61,16 @@ def test_the_c_example_equals_python_on_the_bundled_log(site):
     difference = _number(site, page, r"four loads: ([0-9.e+-]+) N$")
     assert difference < 1e-9
     assert "status bits equal on every sample: True" in _text(site / page)
+
+
+def test_the_fmu_equals_python_on_a_lane_change(site):
+    """Tolerance 1e-9 N, as the C library's (tests/estimators/codegen/test_fmu.py); the tunable
+    spring reached the filter."""
+    page = "journeys/fmu.html"
+    for group in ("fz", "fx", "fy"):
+        assert _number(site, page, rf"^{group}: .* wheels: ([0-9.e+-]+) N$") < 1e-9
+    assert "status bits equal on every sample: True" in _text(site / page)
+    assert _number(site, page, r"front left moves by up to ([0-9.]+) N$") > 1.0
 
 
 def test_dask_and_local_processes_give_the_same_fleet_summary(site):
