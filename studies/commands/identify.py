@@ -40,7 +40,9 @@ def register(subparsers) -> None:
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
-    parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
+    parser.add_argument(
+        "--out", required=True, metavar="FILE", help="file: the new vehicle file (.toml)"
+    )
     parser.add_argument("--report", metavar="DIR", help="write report.md, CSV tables and figures")
     parser.add_argument("--rig", action="append", default=[], metavar="CSV", help="rig file")
     parser.add_argument(
@@ -61,7 +63,9 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--fix", default="", help="parameters held at the file value, NAME,...")
     parser.add_argument(
-        "--precision",
+        "--max-relative-std",
+        dest="precision",
+        metavar="RATIO",
         type=float,
         default=0.25,
         help="hold a parameter whose 1σ relative precision is worse than this (default 0.25)",

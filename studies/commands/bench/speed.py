@@ -74,7 +74,12 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
     parser.add_argument(
-        "--logs", type=int, default=16, help="logs for run_batched vs run (default 16)"
+        "--log-count",
+        dest="logs",
+        type=int,
+        default=16,
+        metavar="N",
+        help="number of logs for run_batched vs run (default 16)",
     )
     parser.add_argument(
         "--log-samples", type=int, default=20_000, help="samples per log (default 2e4, 1 kHz)"
