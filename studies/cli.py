@@ -47,7 +47,9 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
     )
     parser.add_argument("--version", action=_Version, help="show the version and exit")
-    parser.add_argument("-q", "--quiet", dest="quiet_top", action="store_true", help="only errors")
+    parser.add_argument(
+        "-q", "--quiet", dest="quiet_top", action="store_true", help="only the results and errors"
+    )
     parser.add_argument(
         "-v", "--verbose", dest="verbose_top", action="count", help="more on stderr (-vv debug)"
     )

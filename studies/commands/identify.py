@@ -51,7 +51,12 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--robust", choices=("huber", "soft-l1"), help="robust loss instead of least squares"
     )
-    parser.add_argument("--damper", choices=("linear", "piecewise"), default="linear")
+    parser.add_argument(
+        "--damper",
+        choices=("linear", "piecewise"),
+        default="linear",
+        help="damper map: linear (default) or piecewise linear in the velocity (--knots)",
+    )
     parser.add_argument(
         "--knots", help="inner velocity knots of the piecewise damper [m/s], e.g. 0.1,0.3"
     )

@@ -164,17 +164,23 @@ def add_common_options(parser: argparse.ArgumentParser, traits: CommandTraits) -
 
 
 def add_message_options(parser: argparse.ArgumentParser) -> None:
-    """``-q`` (errors only) and ``-v`` (``-vv``: debug), through :mod:`logging`."""
+    """``-q`` (the results and errors only) and ``-v`` (``-vv``: each check's numbers),
+    through :mod:`logging` (:mod:`~wheelload.studies.pipeline.run_messages`)."""
     group = parser.add_argument_group(GROUPS["messages"])
     group.add_argument(
-        "-q", "--quiet", action="store_true", default=None, help="only errors on stderr"
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=None,
+        help="only the results and errors (no notes, warnings or bundled-car line)",
     )
     group.add_argument(
         "-v",
         "--verbose",
         action="count",
         default=None,
-        help="more on stderr: -v what is read and done, -vv debug",
+        help="more on stderr: -v what is read, derived and done with timings per phase, "
+        "-vv each check's numbers",
     )
 
 

@@ -68,7 +68,7 @@ def register(subparsers) -> None:
         default=MTI_1.name,
         help=f"sensor grade (default {MTI_1.name}; clean: noise-free)",
     )
-    parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz]")
+    parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz] (default 100)")
     parser.add_argument(
         "--internal-rate",
         type=float,

@@ -78,7 +78,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     horizons = " ".join(map(str, mhe_vs_kf.HORIZONS))
     study.add_argument("--horizons", type=int, nargs="+",
-                       help=f"mhe-vs-kf equivalence sweep: N (default {horizons})")  # fmt: skip
+                       help=f"mhe-vs-kf equivalence: window lengths ({horizons})")  # fmt: skip
     study.add_argument(
         "--out", metavar="PREFIX|DIR",
         help="prefix for mhe-vs-kf: PREFIX.csv and PREFIX-vs-kf.csv or PREFIX.png (default "

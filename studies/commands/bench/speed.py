@@ -70,7 +70,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         "--samples",
         type=int,
         default=1000,
-        help=f"C (filter-)steps per timing pass, fastest of {PASSES} passes (default 1000)",
+        help=f"samples: C (filter-)steps per timing pass, fastest of {PASSES} (default 1000)",
     )
     parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
     parser.add_argument(
