@@ -27,7 +27,7 @@ import threading
 from collections.abc import Sequence
 
 from wheelload.studies.commands import CATALOG
-from wheelload.studies.commands.options import log_level
+from wheelload.studies.commands.options import log_level, told
 from wheelload.studies.deferred import defer
 
 #: The modules that register the commands, in the order the help lists them.
@@ -177,6 +177,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str], *, counted: bool) -> 
     try:
         code = int(args.handler(args) or 0)
         interrupts.check()  # a press an extension swallowed never ends in a success
+        told(args)  # the lines held back while the arguments were checked
         return code
     except (ValueError, FileNotFoundError, BuildFolderError) as error:
         if interrupts.pressed():  # what a swallowed Ctrl-C left behind

@@ -8,8 +8,6 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-logger = logging.getLogger(__name__)
-
 
 def add_allow_unusual(parser: argparse.ArgumentParser) -> None:
     """``--allow-unusual``: accept a vehicle file outside the physical ranges."""
@@ -76,8 +74,16 @@ def quiet(args: argparse.Namespace) -> bool:
 
 
 def tell(args: argparse.Namespace, line: str) -> None:
-    """A line for the user on stderr (not a result), unless ``-q``."""
+    """A line for the user on stderr (not a result), unless ``-q``; held until the
+    arguments are checked (:func:`told`), so that a mistake stays one line."""
     if not quiet(args):
+        vars(args).setdefault("untold", []).append(line)
+
+
+def told(args: argparse.Namespace) -> None:
+    """Print the lines :func:`tell` holds: the arguments are checked, the work starts (the
+    console command calls it too when the command has run)."""
+    for line in vars(args).pop("untold", []):
         print(line, file=sys.stderr)
 
 
@@ -212,13 +218,9 @@ def log_of(path: str | Path, args: argparse.Namespace):
     from wheelload.estimators import read_log
     from wheelload.studies.pipeline.run_messages import log_signals, phase
 
-    channels = getattr(args, "channels", None)
+    channels, skip = getattr(args, "channels", None), getattr(args, "skip_wiring_checks", False)
     with phase(f"read {path}"):
-        signals = read_log(
-            path,
-            channels=channels,
-            wiring_checks=not getattr(args, "skip_wiring_checks", False),
-        )
+        signals = read_log(path, channels=channels, wiring_checks=not skip)
     log_signals(signals, channels)
     return signals
 

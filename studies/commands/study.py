@@ -28,6 +28,7 @@ from wheelload.studies.commands.options import (
     check_logs_exist,
     refuse_unused,
     show_progress,
+    told,
     vehicle_file,
     vehicle_for_logs,
 )
@@ -134,6 +135,9 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
     check_outputs(outputs, [*paths, *([args.vehicle] if args.vehicle else [])], force=args.force)
     vehicle_path = vehicle_for_logs(args, paths)
     vehicle = on_model(load_vehicle(vehicle_path, allow_unusual=args.allow_unusual), model)
+    if args.scenarios is None and not paths:
+        raise ValueError("give --logs or --scenarios")
+    told(args)  # the arguments are checked: the work starts
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
             from wheelload.studies.drive.scenario_runner import simulate_logs
@@ -146,8 +150,6 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
             for name, path, samples in simulated:
                 print(f"{name}: {samples} samples simulated")
                 paths.append(path)
-        if not paths:
-            raise ValueError("give --logs or --scenarios")
         logs = [
             read_log(
                 path,
@@ -235,6 +237,7 @@ def _run_experiment(args: argparse.Namespace, out: Path, model: EstimatorModel) 
         progress=show_progress(args),
     )
     outputs = Outputs(folder=out, force=args.force)
+    told(args)  # the arguments are checked: the work starts
     start = time.perf_counter()
     with runner:
         experiments.run_study(args.name, Context(settings=settings, runner=runner, outputs=outputs))
