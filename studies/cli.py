@@ -27,7 +27,7 @@ import threading
 from collections.abc import Sequence
 
 from wheelload.studies.commands import CATALOG
-from wheelload.studies.commands.options import log_level
+from wheelload.studies.commands.options import log_level, told
 from wheelload.studies.deferred import defer
 
 #: The modules that register the commands, in the order the help lists them.
@@ -47,7 +47,9 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
         description="Wheel normal-load estimation from suspension travel and IMU signals.",
     )
     parser.add_argument("--version", action=_Version, help="show the version and exit")
-    parser.add_argument("-q", "--quiet", dest="quiet_top", action="store_true", help="only errors")
+    parser.add_argument(
+        "-q", "--quiet", dest="quiet_top", action="store_true", help="only the results and errors"
+    )
     parser.add_argument(
         "-v", "--verbose", dest="verbose_top", action="count", help="more on stderr (-vv debug)"
     )
@@ -175,6 +177,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str], *, counted: bool) -> 
     try:
         code = int(args.handler(args) or 0)
         interrupts.check()  # a press an extension swallowed never ends in a success
+        told(args)  # the lines held back while the arguments were checked
         return code
     except (ValueError, FileNotFoundError, BuildFolderError) as error:
         if interrupts.pressed():  # what a swallowed Ctrl-C left behind

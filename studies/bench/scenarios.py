@@ -53,8 +53,13 @@ def register_bench(subparsers) -> None:
         "scenarios", help="wall time of each plant scenario", description=__doc__
     )
     parser.add_argument("names", nargs="*", metavar="NAME", help="scenarios (default: all)")
-    parser.add_argument("--internal-rate", type=float, default=1000.0)
-    parser.add_argument("--rate", type=float, default=100.0)
+    parser.add_argument(
+        "--internal-rate",
+        type=float,
+        default=1000.0,
+        help="plant integration rate [Hz], a multiple of --rate (default 1000)",
+    )
+    parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz] (default 100)")
     parser.set_defaults(handler=handle)
 
 

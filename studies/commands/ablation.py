@@ -41,7 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--quick", action="store_true", help="laps cut to 10 %% of their length (tests)"
     )
-    parser.add_argument("--out", help="also write the long table as CSV")
+    parser.add_argument("--out", metavar="FILE", help="file: also write the long table as CSV")
     add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 

@@ -23,7 +23,9 @@ TRAITS = CommandTraits()
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("channels", help=CATALOG["channels"].summary)
     parser.add_argument("map", nargs="?", help="channel map TOML file to check")
-    parser.add_argument("--template", action="store_true", help="print a commented channel map")
+    parser.add_argument(
+        "--template", action="store_true", help="print a commented channel-map template"
+    )
     parser.add_argument("--list", metavar="LOG", help="print the channel names of LOG")
     parser.add_argument("--log", help="read this log through MAP and summarise it")
     add_common_options(parser, TRAITS)

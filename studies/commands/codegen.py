@@ -97,7 +97,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     add_vehicle_option(parser)
     parser.add_argument(
-        "--out", required=True, help="output folder: new or empty (created if missing)"
+        "--out", required=True, metavar="DIR", help="folder: new or empty (created if missing)"
     )
     parser.add_argument(
         "--precision",

@@ -18,6 +18,7 @@ from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
     add_suspension_option,
+    check_logs_exist,
     log_of,
     vehicle_of,
 )
@@ -33,15 +34,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("log", help="log file (.csv or .parquet) with fz_fl..fz_rr reference")
-    parser.add_argument("--vehicle", required=True, help="vehicle TOML file")
+    parser.add_argument("--vehicle", required=True, metavar="FILE", help="vehicle TOML file")
     parser.add_argument(
         "--methods",
         default="kf,B,C,D,E,E+C,F",
         help="comma-separated method names (see `wheelload methods`; default kf,B,C,D,E,E+C,F)",
     )
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per method (default 3)")
-    parser.add_argument("--figures", help="folder for one PNG per wheel: LOGNAME_compare_fl.png ..")
-    parser.add_argument("--csv", help="write the table (one row per method and wheel) to this CSV")
+    parser.add_argument(
+        "--figures",
+        metavar="DIR",
+        help="folder (created if missing) for one PNG per wheel: LOGNAME_compare_fl.png ..",
+    )
+    parser.add_argument(
+        "--csv", metavar="FILE", help="write the table (one row per method and wheel) to this CSV"
+    )
     add_suspension_option(parser)
     add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
@@ -70,6 +77,12 @@ def run(args: argparse.Namespace) -> int:
     for path in outputs:
         if log_path.exists() and path.exists() and path.samefile(log_path):
             raise ValueError(f"{path} is the input log: choose another output file")
+    check_logs_exist([log_path], "LOG")
+    if args.figures:
+        folder = Path(args.figures)
+        if folder.exists() and not folder.is_dir():
+            raise ValueError(f"{folder}: exists and is not a folder; give a folder to --figures")
+        folder.mkdir(parents=True, exist_ok=True)
     check_writable(outputs, args.force)
     vehicle = vehicle_of(args.vehicle, args)
     signals = log_of(log_path, args)
@@ -79,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
         end = float(signals.t[-1]) if args.end is None else args.end
         window = (start, end)
     suspension = SuspensionModel.parse(args.suspension)
+    print(f"{log_path.name} on vehicle '{vehicle.name}' ({args.vehicle})")
     print(f"family methods on the {suspension.value} vehicle model (--suspension)")
     comparison = compare_methods(
         signals, vehicle, names, window=window, repeat=args.repeat, suspension=suspension

@@ -24,7 +24,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "commands run while it builds (a few minutes). Needs the docs extra: "
         "pip install -e '.[docs]'.",
     )
-    parser.add_argument("--out", required=True, help="folder of the site (absent or empty)")
+    parser.add_argument(
+        "--out", required=True, metavar="DIR", help="folder of the site (absent or empty)"
+    )
     parser.add_argument(
         "--jobs",
         type=int,

@@ -22,6 +22,7 @@ from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
     add_suspension_option,
+    quiet,
     show_progress,
     vehicle_file,
 )
@@ -42,22 +43,28 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "log", nargs="*", help="log file(s), folder(s) or glob(s): .csv .parquet .mf4 .erg"
     )
-    parser.add_argument("--vehicle", help="vehicle TOML file")
+    parser.add_argument(
+        "--vehicle", metavar="FILE", help="vehicle TOML file (required with a log of yours)"
+    )
     parser.add_argument(
         "--example",
         action="store_true",
-        help="use the bundled example log and vehicle (sports car)",
+        help="use the bundled example log and vehicle (the sports car; --vehicle: another)",
     )
     parser.add_argument(
         "--method", default="kf", help="estimator name (see `wheelload methods`; default kf)"
     )
     parser.add_argument(
         "--out",
-        help="one log: write the estimates to this .parquet or .csv (Parquet is the recommended "
+        metavar="FILE|DIR",
+        help="file for one log: the estimates as .parquet or .csv (Parquet is the recommended "
         "format for long logs: about a third of the CSV's size, faster to write and to read; "
-        "CSV numbers read back to the same doubles); many: into this folder",
+        "CSV numbers read back to the same doubles); folder for many: one file per log and "
+        "summary.csv",
     )
-    parser.add_argument("--plot", help="one log: save a figure of the estimates (.png .pdf .svg)")
+    parser.add_argument(
+        "--plot", metavar="FILE", help="one log: save a figure of the estimates (.png .pdf .svg)"
+    )
     parser.add_argument(
         "--smooth",
         action="store_true",
@@ -177,10 +184,8 @@ def _print_summary(settings: EstimateSettings, text: str, notes, warnings, args)
     """The method, the log's summary, its notes and warnings, and where the estimates went."""
     print(f"method {settings.method}: {method(settings.method).description}")
     print(text)
-    for note in notes:
-        print(note)
-    for warning in warnings:
-        print(f"warning: {warning}")
+    for line in () if quiet(args) else (*notes, *(f"warning: {w}" for w in warnings)):
+        print(line)  # -q: the results only
     if args.out:
         print(f"estimates written to {args.out}")
 
@@ -208,6 +213,8 @@ def _run_many(paths: list[Path], settings: EstimateSettings, args: argparse.Name
     shown = table[[c for c in columns + ["error"] if c in table.columns]]
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     for log, messages in zip(table["log"], table.get("messages", [""] * len(table))):
+        if quiet(args):  # the results only
+            break
         for message in messages.split(MESSAGE_SEPARATOR) if isinstance(messages, str) else ():
             print(f"{log}: {message}")  # each log's checks and notes, named
     if folder is not None:

@@ -40,7 +40,9 @@ def register(subparsers) -> None:
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
-    parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
+    parser.add_argument(
+        "--out", required=True, metavar="FILE", help="file: the new vehicle file (.toml)"
+    )
     parser.add_argument("--report", metavar="DIR", help="write report.md, CSV tables and figures")
     parser.add_argument("--rig", action="append", default=[], metavar="CSV", help="rig file")
     parser.add_argument(
@@ -49,7 +51,12 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--robust", choices=("huber", "soft-l1"), help="robust loss instead of least squares"
     )
-    parser.add_argument("--damper", choices=("linear", "piecewise"), default="linear")
+    parser.add_argument(
+        "--damper",
+        choices=("linear", "piecewise"),
+        default="linear",
+        help="damper map: linear (default) or piecewise linear in the velocity (--knots)",
+    )
     parser.add_argument(
         "--knots", help="inner velocity knots of the piecewise damper [m/s], e.g. 0.1,0.3"
     )
@@ -61,7 +68,9 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--fix", default="", help="parameters held at the file value, NAME,...")
     parser.add_argument(
-        "--precision",
+        "--max-relative-std",
+        dest="precision",
+        metavar="RATIO",
         type=float,
         default=0.25,
         help="hold a parameter whose 1σ relative precision is worse than this (default 0.25)",

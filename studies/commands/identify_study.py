@@ -32,7 +32,12 @@ def register(subparsers) -> None:
         help=CATALOG["identify-study"].summary,
         description=__doc__.splitlines()[0],
     )
-    parser.add_argument("--out", default="identify-study", help="folder for logs and tables")
+    parser.add_argument(
+        "--out",
+        default="identify-study",
+        metavar="DIR",
+        help="folder for logs and tables (default identify-study)",
+    )
     parser.add_argument("--quick", action="store_true", help="three scenarios only")
     parser.add_argument(
         "--identify-on",

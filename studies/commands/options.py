@@ -8,8 +8,6 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-logger = logging.getLogger(__name__)
-
 
 def add_allow_unusual(parser: argparse.ArgumentParser) -> None:
     """``--allow-unusual``: accept a vehicle file outside the physical ranges."""
@@ -39,14 +37,54 @@ def add_suspension_option(parser: argparse.ArgumentParser) -> None:
 
 def add_vehicle_option(parser: argparse.ArgumentParser) -> None:
     """``--vehicle FILE``, the bundled sports car by default (:func:`vehicle_file`)."""
-    parser.add_argument("--vehicle", help="vehicle TOML file (default: bundled sports car)")
+    parser.add_argument(
+        "--vehicle",
+        metavar="FILE",
+        help="vehicle TOML file (default: the bundled sports car, named on stderr; "
+        "required with a log of yours)",
+    )
 
 
 def vehicle_file(args: argparse.Namespace) -> Path:
-    """The ``--vehicle`` file, or the bundled sports car's."""
+    """The ``--vehicle`` file, or the bundled sports car's, named on stderr (:func:`tell`)."""
     from wheelload.models import example_vehicle_path  # casadi: not for --version
+    from wheelload.studies.pipeline.vehicle_choice import bundled_line
 
-    return Path(args.vehicle) if args.vehicle else example_vehicle_path()
+    if args.vehicle:
+        return Path(args.vehicle)
+    tell(args, bundled_line(args.command))
+    return example_vehicle_path()
+
+
+def vehicle_for_logs(args: argparse.Namespace, logs) -> Path:
+    """The ``--vehicle`` file; without it the bundled car's for logs recorded on it (named on
+    stderr), a one-line error for a log of the user's
+    (:func:`~wheelload.studies.pipeline.vehicle_choice.vehicle_for_logs`)."""
+    from wheelload.studies.pipeline import vehicle_choice
+
+    path = vehicle_choice.vehicle_for_logs(args.vehicle, logs, args.command)
+    if not args.vehicle:
+        tell(args, vehicle_choice.bundled_line(args.command))
+    return path
+
+
+def quiet(args: argparse.Namespace) -> bool:
+    """``-q``: only results and errors."""
+    return bool(getattr(args, "quiet", None) or getattr(args, "quiet_top", None))
+
+
+def tell(args: argparse.Namespace, line: str) -> None:
+    """A line for the user on stderr (not a result), unless ``-q``; held until the
+    arguments are checked (:func:`told`), so that a mistake stays one line."""
+    if not quiet(args):
+        vars(args).setdefault("untold", []).append(line)
+
+
+def told(args: argparse.Namespace) -> None:
+    """Print the lines :func:`tell` holds: the arguments are checked, the work starts (the
+    console command calls it too when the command has run)."""
+    for line in vars(args).pop("untold", []):
+        print(line, file=sys.stderr)
 
 
 def add_vehicle_file_options(parser: argparse.ArgumentParser) -> None:
@@ -71,7 +109,10 @@ class CommandTraits:
     vehicle: bool = False
     writes: bool = False
     many_logs: bool = False
-    workers: int = 1  # the default of --workers
+
+
+#: ``--workers``' default on every command: one local process (the command's own).
+WORKERS = 1
 
 
 #: Titles of the option groups (``wheelload COMMAND --help`` shows them as sections).
@@ -114,8 +155,10 @@ def add_common_options(parser: argparse.ArgumentParser, traits: CommandTraits) -
         group.add_argument(
             "--workers",
             type=int,
-            default=traits.workers,
-            help=f"local processes (default {traits.workers})",
+            default=WORKERS,
+            metavar="N",
+            help=f"local processes (default {WORKERS}: this one; more run logs or jobs in "
+            "parallel)",
         )
         group.add_argument("--dask", metavar="ADDRESS", help="run on this Dask scheduler")
         group.add_argument(
@@ -127,23 +170,29 @@ def add_common_options(parser: argparse.ArgumentParser, traits: CommandTraits) -
 
 
 def add_message_options(parser: argparse.ArgumentParser) -> None:
-    """``-q`` (errors only) and ``-v`` (``-vv``: debug), through :mod:`logging`."""
+    """``-q`` (the results and errors only) and ``-v`` (``-vv``: each check's numbers),
+    through :mod:`logging` (:mod:`~wheelload.studies.pipeline.run_messages`)."""
     group = parser.add_argument_group(GROUPS["messages"])
     group.add_argument(
-        "-q", "--quiet", action="store_true", default=None, help="only errors on stderr"
+        "-q",
+        "--quiet",
+        action="store_true",
+        default=None,
+        help="only the results and errors (no notes, warnings or bundled-car line)",
     )
     group.add_argument(
         "-v",
         "--verbose",
         action="count",
         default=None,
-        help="more on stderr: -v what is read and done, -vv debug",
+        help="more on stderr: -v what is read, derived and done with timings per phase, "
+        "-vv each check's numbers",
     )
 
 
 def log_level(args: argparse.Namespace) -> int:
     """The :mod:`logging` level of ``-q`` / ``-v`` (default: warnings)."""
-    if getattr(args, "quiet", None) or getattr(args, "quiet_top", None):
+    if quiet(args):
         return logging.ERROR
     verbose = (getattr(args, "verbose", None) or 0) + (getattr(args, "verbose_top", None) or 0)
     return {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
@@ -157,18 +206,43 @@ def show_progress(args: argparse.Namespace) -> bool:
 def vehicle_of(path: str | Path, args: argparse.Namespace):
     """The vehicle file at ``path`` with the command's ``--allow-unusual``."""
     from wheelload.models import load_vehicle
+    from wheelload.studies.pipeline.run_messages import log_vehicle
 
-    return load_vehicle(Path(path), allow_unusual=getattr(args, "allow_unusual", False))
+    vehicle = load_vehicle(Path(path), allow_unusual=getattr(args, "allow_unusual", False))
+    log_vehicle(path, vehicle)
+    return vehicle
 
 
 def log_of(path: str | Path, args: argparse.Namespace):
     """The log at ``path`` through the command's ``--channels`` and wiring checks."""
     from wheelload.estimators import read_log
+    from wheelload.studies.pipeline.run_messages import log_signals, phase
 
-    signals = read_log(
-        path,
-        channels=getattr(args, "channels", None),
-        wiring_checks=not getattr(args, "skip_wiring_checks", False),
-    )
-    logger.info("read %s: %d samples", path, len(signals))
+    channels, skip = getattr(args, "channels", None), getattr(args, "skip_wiring_checks", False)
+    with phase(f"read {path}"):
+        signals = read_log(path, channels=channels, wiring_checks=not skip)
+    log_signals(signals, channels)
     return signals
+
+
+def check_logs_exist(paths, option: str) -> None:
+    """A one-line error for the first of ``paths`` (given to ``option``) that is not a file,
+    before any long computation."""
+    for path in map(Path, paths):
+        if not path.is_file():
+            what = "a folder, not a log file" if path.is_dir() else "no such log file"
+            raise ValueError(f"{path}: {what} ({option})")
+
+
+def refuse_unused(args: argparse.Namespace, unused: dict[str, object], where: str) -> None:
+    """A one-line error naming the options of ``unused`` (option: its default) given with
+    another value, which ``where`` (e.g. ``study iso-dlc``) does not use: an accepted
+    option acts or is refused, before any work."""
+    given = [
+        option
+        for option, default in unused.items()
+        if getattr(args, option.lstrip("-").replace("-", "_")) not in (default, None, False)
+    ]
+    if given:
+        verb, them = ("is", "it") if len(given) == 1 else ("are", "them")
+        raise ValueError(f"{', '.join(given)} {verb} not used by {where}: leave {them} out")

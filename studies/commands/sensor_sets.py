@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelload.models import WHEELS, example_vehicle_path
+from wheelload.models import WHEELS
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
     add_vehicle_option,
     log_of,
+    vehicle_for_logs,
     vehicle_of,
 )
 
@@ -41,10 +42,11 @@ def run(args: argparse.Namespace) -> int:
     )
     from wheelload.studies.pipeline.log_settings import expand_logs
 
-    vehicle = vehicle_of(args.vehicle or example_vehicle_path(), args)
     (path,) = expand_logs([args.log])
+    vehicle = vehicle_of(vehicle_for_logs(args, [path]), args)
     frame = log_of(path, args).to_frame()
     table = sensor_set_table(frame, vehicle, Path(path).name)
+    print(f"{Path(path).name} on vehicle '{vehicle.name}'")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     default = float(build("kf", vehicle).parameters.roll_split_front)
     missing = [f"fz_{w}" for w in WHEELS if not frame[f"fz_{w}"].notna().any()]

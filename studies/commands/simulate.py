@@ -10,11 +10,12 @@ from pathlib import Path
 
 from wheelload.estimators.logs.output_files import check_figure_suffix, check_outputs, table_format
 from wheelload.models.payload import Payload
-from wheelload.models.vehicle.file import example_vehicle_path
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
     add_common_options,
+    add_vehicle_option,
+    vehicle_file,
     vehicle_of,
 )
 from wheelload.studies.drive.payload_schedule import PayloadChange, PayloadSchedule
@@ -51,11 +52,12 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--out",
         required=True,
-        help=f"log file (.csv or .parquet); for {RIG_SWEEP} the corner-rig CSV (the bar-rig "
+        metavar="FILE",
+        help=f"file: the log (.csv or .parquet); for {RIG_SWEEP} the corner-rig CSV (the bar-rig "
         "file is written beside it as <stem>_arb.csv)",
     )
     parser.add_argument("--plot", help="save a figure (.png, .pdf, .svg) of the run")
-    parser.add_argument("--vehicle", default=None, help="vehicle file (default: bundled)")
+    add_vehicle_option(parser)
     parser.add_argument("--seed", type=int, default=0, help="random seed (noise, roughness)")
     parser.add_argument(
         "--noise", type=float, default=1.0, help="sensor noise scale s (0 = clean signals)"
@@ -66,7 +68,7 @@ def register(subparsers) -> None:
         default=MTI_1.name,
         help=f"sensor grade (default {MTI_1.name}; clean: noise-free)",
     )
-    parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz]")
+    parser.add_argument("--rate", type=float, default=100.0, help="output rate [Hz] (default 100)")
     parser.add_argument(
         "--internal-rate",
         type=float,
@@ -149,7 +151,7 @@ def payload_schedule(args: argparse.Namespace) -> PayloadSchedule | None:
 
 
 def handle(args: argparse.Namespace) -> int:
-    vehicle = args.vehicle or example_vehicle_path()
+    vehicle = vehicle_file(args)
     if args.name == RIG_SWEEP:
         return _rig(args, vehicle)
     payload = payload_schedule(args)
@@ -179,7 +181,8 @@ def handle(args: argparse.Namespace) -> int:
         plot_scenario(result.truth.frame, args.plot, title, replace=args.force)
     info = result.metadata["summary"]
     print(
-        f"{args.name}: {len(result.log)} samples, {info['duration_s']:.1f} s simulated in "
+        f"{args.name} on vehicle '{result.metadata['vehicle']}': {len(result.log)} samples, "
+        f"{info['duration_s']:.1f} s simulated in "
         f"{result.truth.wall_time:.2f} s (+{result.truth.build_time:.1f} s build); "
         f"log {args.out}, metadata {sidecar}"
     )

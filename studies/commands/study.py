@@ -20,12 +20,17 @@ from wheelload.estimators.logs.output_files import atomic_write, check_outputs
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
+    WORKERS,
     CommandTraits,
     add_common_options,
     add_suspension_option,
     add_vehicle_option,
+    check_logs_exist,
+    refuse_unused,
     show_progress,
+    told,
     vehicle_file,
+    vehicle_for_logs,
 )
 from wheelload.studies.experiments import catalog as experiments
 from wheelload.studies.experiments import mhe_vs_kf
@@ -37,7 +42,11 @@ from wheelload.studies.experiments.runs.folder_lock import folder_lock
 from wheelload.studies.experiments.runs.runner import Runner, check_scheduler
 
 #: The shared option groups this command takes (options.CommandTraits).
-TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True, workers=2)
+TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True)
+
+#: The options of mhe-vs-kf only (None or False on the parser: given or not).
+MHE_VS_KF = ("--logs", "--scenarios", "--sweep", "--faults", "--horizon", "--horizons",
+             "--channels", "--skip-wiring-checks")  # fmt: skip
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -47,48 +56,39 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         choices=["mhe-vs-kf", *experiments.NAMES],
         help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
     )
-    study.add_argument("--logs", nargs="+", default=[], help="logs with reference loads")
+    study.add_argument("--logs", nargs="+", metavar="LOG",
+                       help="mhe-vs-kf: logs with reference loads")  # fmt: skip
     study.add_argument(
-        "--scenarios",
-        nargs="*",
-        default=None,
-        help="simulate these plant scenarios first (no names: "
+        "--scenarios", nargs="*",
+        help="mhe-vs-kf: simulate these plant scenarios first (no names: "
         + ", ".join(mhe_vs_kf.STUDY_SCENARIOS) + ", those that exist)",
     )  # fmt: skip
     study.add_argument(
-        "--sweep",
-        choices=["robust", "equivalence"],
-        default="robust",
-        help="robust (default): robust losses, bias states, lagged output and the RTS smoother "
-        "on clean and faulted logs; equivalence: KF, projection KF and the plain MHE family",
-    )
+        "--sweep", choices=["robust", "equivalence"],
+        help="mhe-vs-kf: robust (default): robust losses, bias states, lagged output and the "
+        "RTS smoother on clean and faulted logs; equivalence: KF, projection KF, plain MHEs",
+    )  # fmt: skip
+    study.add_argument("--faults", nargs="+", choices=[f.value for f in Fault],
+                       help="mhe-vs-kf robust sweep: faults injected (default: all)")  # fmt: skip
+    study.add_argument("--horizon", type=int,
+                       help="mhe-vs-kf robust sweep: window length (default 10)")  # fmt: skip
     study.add_argument(
-        "--faults",
-        nargs="+",
-        choices=[fault.value for fault in Fault],
-        default=[fault.value for fault in Fault],
-        help="robust sweep: the faults injected (default: all)",
-    )
-    study.add_argument("--horizon", type=int, default=10, help="robust sweep: window length")
-    study.add_argument(
-        "--quick",
-        action="store_true",
+        "--quick", action="store_true",
         help="short segments, few trials; mhe-vs-kf robust sweep: the KF with and without its "
         "guards, RTS, the lagged and the Huber 0.5σ MHE only",
-    )
+    )  # fmt: skip
+    horizons = " ".join(map(str, mhe_vs_kf.HORIZONS))
+    study.add_argument("--horizons", type=int, nargs="+",
+                       help=f"mhe-vs-kf equivalence: window lengths ({horizons})")  # fmt: skip
     study.add_argument(
-        "--horizons",
-        type=int,
-        nargs="+",
-        default=list(mhe_vs_kf.HORIZONS),
-        help="equivalence sweep",
-    )
-    study.add_argument(
-        "--out", help="mhe-vs-kf: output prefix (default mhe-vs-kf); others: output folder"
-    )
+        "--out", metavar="PREFIX|DIR",
+        help="prefix for mhe-vs-kf: PREFIX.csv and PREFIX-vs-kf.csv or PREFIX.png (default "
+        "mhe-vs-kf); folder for the others: tables, figures, REPORT.md (required)",
+    )  # fmt: skip
     add_vehicle_option(study)
     # the experiments' own options (--quick, --force and --out are shared with mhe-vs-kf)
-    study.add_argument("--cache", help="cache folder (default DIR/.cache)")
+    study.add_argument("--cache", metavar="DIR",
+                       help="folder of the results cache (default DIR/.cache)")  # fmt: skip
     add_suspension_option(study)
     study.add_argument(
         "--model",
@@ -105,24 +105,39 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     model = EstimatorModel.parse(args.model)  # a wrong name is one line, before any work
     if args.name != "mhe-vs-kf":
+        refuse_unused(args, dict.fromkeys(MHE_VS_KF), f"study {args.name}")
         return _experiment(args, model)
+    from wheelload.estimators import DEFAULT_MODEL
+
+    unused = {"--cache": None, "--dask": None, "--workers": WORKERS, "--no-progress": False,
+              "--suspension": DEFAULT_MODEL.value}  # fmt: skip
+    refuse_unused(args, unused, "study mhe-vs-kf (the KF, projection KF and MHE only)")
+    sweep = args.sweep or "robust"
+    other = ("--horizons",) if sweep == "robust" else ("--faults", "--horizon", "--quick")
+    refuse_unused(args, dict.fromkeys(other), f"study mhe-vs-kf --sweep {sweep}")
+    if args.horizon is not None and args.horizon < 2:
+        raise ValueError("--horizon must be >= 2 for the robust sweep (the lagged output)")
     return _mhe_vs_kf(args, model)
 
 
 def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
     """The mhe-vs-kf study: the robust sweep (default) or the equivalence sweep and figure."""
-    vehicle_path = vehicle_file(args)
-    vehicle = on_model(load_vehicle(vehicle_path, allow_unusual=args.allow_unusual), model)
-    paths = [Path(p) for p in args.logs]
+    paths = [Path(p) for p in args.logs or ()]
     given = set(paths)
+    check_logs_exist(paths, "--logs")
     out = Path(args.out or "mhe-vs-kf")
     second = (
         out.with_name(out.name + "-vs-kf.csv")
-        if args.sweep == "robust"
+        if args.sweep != "equivalence"
         else out.with_suffix(".png")
     )
     outputs = [out.with_suffix(".csv"), second]
-    check_outputs(outputs, [*paths, vehicle_path], force=args.force)
+    check_outputs(outputs, [*paths, *([args.vehicle] if args.vehicle else [])], force=args.force)
+    vehicle_path = vehicle_for_logs(args, paths)
+    vehicle = on_model(load_vehicle(vehicle_path, allow_unusual=args.allow_unusual), model)
+    if args.scenarios is None and not paths:
+        raise ValueError("give --logs or --scenarios")
+    told(args)  # the arguments are checked: the work starts
     with tempfile.TemporaryDirectory() as folder:
         if args.scenarios is not None:
             from wheelload.studies.drive.scenario_runner import simulate_logs
@@ -135,8 +150,6 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
             for name, path, samples in simulated:
                 print(f"{name}: {samples} samples simulated")
                 paths.append(path)
-        if not paths:
-            raise ValueError("give --logs or --scenarios")
         logs = [
             read_log(
                 path,
@@ -145,11 +158,11 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
             )
             for path in paths
         ]
-    if args.sweep == "robust":
+    print(f"vehicle '{vehicle.name}' ({vehicle_path}), model {model.value} (--model)")
+    if args.sweep != "equivalence":
         return _robust(args, logs, paths, vehicle)
-    table = mhe_vs_kf.mhe_vs_kf(
-        logs, vehicle, mhe_vs_kf.StudySettings(horizons=tuple(args.horizons))
-    )
+    horizons = tuple(args.horizons or mhe_vs_kf.HORIZONS)
+    table = mhe_vs_kf.mhe_vs_kf(logs, vehicle, mhe_vs_kf.StudySettings(horizons=horizons))
     with atomic_write(outputs[0], replace=args.force) as temporary:
         table.to_csv(temporary)
     with atomic_write(outputs[1], replace=args.force) as temporary:
@@ -162,10 +175,9 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
 
 def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     """The robust sweep: RMSE table, change against the KF, written as CSV."""
-    if args.horizon < 2:
-        raise ValueError("--horizon must be >= 2 for the robust sweep (the lagged output)")
-    faults = tuple(Fault(name) for name in args.faults)
-    candidates = mhe_vs_kf.robust_candidates(args.horizon, quick=args.quick)
+    horizon = 10 if args.horizon is None else args.horizon
+    faults = tuple(Fault(name) for name in args.faults or [fault.value for fault in Fault])
+    candidates = mhe_vs_kf.robust_candidates(horizon, quick=args.quick)
     table = mhe_vs_kf.robust_sweep(logs, vehicle, faults, candidates)
     change = mhe_vs_kf.against_kf(table, faults)
     out = Path(args.out or "mhe-vs-kf")
@@ -225,11 +237,13 @@ def _run_experiment(args: argparse.Namespace, out: Path, model: EstimatorModel) 
         progress=show_progress(args),
     )
     outputs = Outputs(folder=out, force=args.force)
+    told(args)  # the arguments are checked: the work starts
     start = time.perf_counter()
     with runner:
         experiments.run_study(args.name, Context(settings=settings, runner=runner, outputs=outputs))
     print(
-        f"study {args.name}: {runner.computed} jobs computed, {runner.cached} from the cache, "
+        f"study {args.name} on vehicle '{settings.vehicle_name}': {runner.computed} jobs "
+        f"computed, {runner.cached} from the cache, "
         f"{time.perf_counter() - start:.1f} s; {len(outputs.written)} files in {out}"
     )
     return 0

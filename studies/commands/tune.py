@@ -21,7 +21,13 @@ from pathlib import Path
 
 from wheelload.models.vehicle.file import check_output_path, write_vehicle_text
 from wheelload.studies.commands import CATALOG
-from wheelload.studies.commands.options import CommandTraits, add_common_options, log_of, vehicle_of
+from wheelload.studies.commands.options import (
+    CommandTraits,
+    add_common_options,
+    check_logs_exist,
+    log_of,
+    vehicle_of,
+)
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, vehicle=True, writes=True)
@@ -34,8 +40,15 @@ def register(subparsers) -> None:
         description=__doc__.splitlines()[0],
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="log files (.csv or .parquet)")
-    parser.add_argument("--vehicle", required=True, help="vehicle file to start from (read only)")
-    parser.add_argument("--out", required=True, help="new vehicle file (.toml)")
+    parser.add_argument(
+        "--vehicle",
+        required=True,
+        metavar="FILE",
+        help="vehicle TOML file to start from (read only)",
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="FILE", help="file: the new vehicle file (.toml)"
+    )
     parser.add_argument(
         "--evaluate",
         nargs="+",
@@ -60,8 +73,16 @@ def handle(args: argparse.Namespace) -> int:
     vehicle_path = Path(args.vehicle)
     inputs = (vehicle_path, *map(Path, args.logs))
     out = check_output_path(args.out, inputs, args.force)
+    check_logs_exist(args.logs, "LOG")
+    check_logs_exist(args.evaluate, "--evaluate")
     vehicle = vehicle_of(vehicle_path, args)
     logs = tuple(log_of(path, args) for path in args.logs)
+    evaluated = tuple(log_of(path, args) for path in args.evaluate)  # read before the fit
+    for path, log in zip(args.evaluate, evaluated):
+        if log.reference is None:
+            raise ValueError(
+                f"{path}: no reference loads fz_fl..fz_rr; --evaluate needs logs with them"
+            )
     tuned = tune_file(vehicle, logs, iterations=args.iterations)
     print("\n".join(tuned.report))
     for warning in tuned.warnings:
@@ -74,8 +95,7 @@ def handle(args: argparse.Namespace) -> int:
         allow_unusual=args.allow_unusual,
     )
     print(f"vehicle file written to {out}")
-    if args.evaluate:
-        evaluated = tuple(log_of(path, args) for path in args.evaluate)
+    if evaluated:
         table, warnings = evaluation_table(vehicle, tuned.vehicle, evaluated)
         for warning in warnings:
             print(f"warning: {warning}", file=sys.stderr)

@@ -16,7 +16,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("vehicle", help=CATALOG["vehicle"].summary)
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--template", action="store_true", help="print a commented template")
-    group.add_argument("file", nargs="?", help="vehicle TOML file to check and summarise")
+    group.add_argument(
+        "file", nargs="?", metavar="FILE", help="vehicle TOML file to check and summarise"
+    )
     add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)
 
@@ -25,7 +27,18 @@ def run(args: argparse.Namespace) -> int:
     if args.template:
         print(vehicle_template(), end="")
         return 0
-    vehicle = load_vehicle(args.file, allow_unusual=args.allow_unusual)
+    from wheelload.studies.pipeline.run_messages import (
+        log_vehicle,
+        log_vehicle_ranges,
+        log_vehicle_terms,
+        phase,
+    )
+
+    with phase(f"read and check {args.file}"):
+        vehicle = load_vehicle(args.file, allow_unusual=args.allow_unusual)
+    log_vehicle(args.file, vehicle)
+    log_vehicle_terms(vehicle)
+    log_vehicle_ranges(vehicle)
     centre = vehicle_mass_centre(vehicle)
     loads = static_loads(vehicle)
     print(f"{args.file}: valid vehicle '{vehicle.name}'")

@@ -34,7 +34,9 @@ def register(subparsers) -> None:
     )
     parser.add_argument("logs", nargs="+", metavar="LOG", help="logs at rest (.csv or .parquet)")
     parser.add_argument("--vehicle", required=True, help="vehicle TOML file (suspension, geometry)")
-    parser.add_argument("--out", help="write an updated copy of the vehicle file here")
+    parser.add_argument(
+        "--out", metavar="FILE", help="file: write an updated copy of the vehicle file here"
+    )
     parser.add_argument(
         "--max-speed", type=float, default=0.3, help="speed below which a sample is at rest [m/s]"
     )

@@ -65,6 +65,7 @@ def model_line(settings: Settings) -> str:
     """The report's lines naming the vehicle models the estimators ran on."""
     model, suspension = settings.model, settings.suspension
     return (
+        f"Vehicle: **{settings.vehicle_name}** (`{settings.vehicle_path}`).\n\n"
         f"Vehicle model of kf, projection and mhe: **{model.value}** "
         f"(`--model {model.value}`): {WORDS[model]}.\n\n"
         f"Vehicle model of the family methods: **{suspension.value}** "
@@ -107,7 +108,7 @@ def run_study(name: str, context: Context) -> list[Section]:
         mode = "--quick (short segments, few trials)" if context.settings.quick else "full"
         lines = [
             PREAMBLE,
-            f"Mode: {mode}. Vehicle: `{context.settings.vehicle_path.name}`.\n",
+            f"Mode: {mode}.\n",
             model_line(context.settings),
             variants_markdown(context.settings.suspension, context.settings.model),
         ]

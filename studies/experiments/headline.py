@@ -125,7 +125,8 @@ def run(context: Context, scenario: str) -> Section:
             f"{len(result.t)} samples scored. Every registered method, per wheel and pooled:",
             markdown(table),
             *(f"*Note:* {note}." for note in notes),
-            f"Beside the paper's {label}: each cell is ours (paper), methods A-F = "
+            f"Ours on the vehicle **{context.settings.vehicle_name}** beside the paper's {label} "
+            "(the paper's Table I sports car): each cell is ours (paper), methods A-F = "
             "kf, B, C, D, E, F; C-paper (the paper's C as stated) beside the paper's C too.",
             markdown(beside_paper(result.metrics, paper)),
             "**Shape.** " + compare_ranking(ours_rmse, paper_rmse, "RMSE averaged over wheels"),

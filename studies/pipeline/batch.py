@@ -41,6 +41,7 @@ from wheelload.studies.pipeline.log_settings import (  # noqa: F401  (named from
 )
 from wheelload.studies.pipeline.log_warnings import load_warnings, signal_warnings
 from wheelload.studies.pipeline.measured_static import measured_static_loads, with_travel_zeroed
+from wheelload.studies.pipeline.run_messages import log_signals, phase
 from wheelload.studies.pipeline.summary import LoadFigures, LogHeader, summary_row
 from wheelload.studies.workers import ignore_interrupts
 
@@ -99,7 +100,9 @@ def _prepare_log(path: Path, settings: EstimateSettings):
     """Read one log, run the wiring checks, set the static loads: ``(vehicle, signals, notes,
     static)``."""
     vehicle = _vehicle(settings.vehicle, settings.allow_unusual)
-    signals = read_log(path, channels=settings.channels, wiring_checks=False)
+    with phase("read"):
+        signals = read_log(path, channels=settings.channels, wiring_checks=False)
+    log_signals(signals, settings.channels)
     coarse = coarse_travel_note(signals.travel_quantum, guard_settings_for(vehicle).stuck_motion)
     prepared = prepare_log(
         vehicle,
@@ -138,11 +141,12 @@ def estimate_log(path: Path, settings: EstimateSettings) -> LogResult:
         estimator = build(settings.method, vehicle, settings.suspension)
         if method(settings.method).model_choice:
             notes.append(f"{settings.suspension.value} vehicle model (--suspension)")
-    if settings.smooth:
-        estimate = estimator.smooth(signals)
-        notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")
-    else:
-        estimate = estimator.run(signals)
+    with phase(f"filter ({settings.method}{', smoothed' if settings.smooth else ''})"):
+        if settings.smooth:
+            estimate = estimator.smooth(signals)
+            notes.append("loads smoothed over the whole log (Rauch-Tung-Striebel, not causal)")
+        else:
+            estimate = estimator.run(signals)
     return _log_result(path, vehicle, signals, notes, estimate.named(settings.method))
 
 
@@ -171,7 +175,8 @@ def write_table(frame: pd.DataFrame, path: Path, *, replace: bool = False) -> No
     An existing file is replaced only with ``replace`` (``--force``); pyarrow
     writes it (:func:`~wheelload.estimators.logs.output_files.write_frame`).
     """
-    write_frame(frame, path, replace=replace)
+    with phase(f"write {path}"):
+        write_frame(frame, path, replace=replace)
 
 
 def log_row(path: Path, result: LogResult) -> dict:

@@ -12,6 +12,8 @@ logs, for each log of many (:mod:`wheelload.studies.pipeline.batch`).
 from __future__ import annotations
 
 import contextlib
+import logging
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -28,6 +30,9 @@ from wheelload.studies.pipeline.measured_static import (
     still_period,
     without_travel,
 )
+from wheelload.studies.pipeline.run_messages import log_stream, phase
+
+logger = logging.getLogger(__name__)
 
 if TYPE_CHECKING:
     from wheelload.estimators import LogStream
@@ -71,11 +76,13 @@ def estimate_lean(
     from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
 
     try:
-        stream = scan_log(
-            path, still_period=settings.still_period, wiring_checks=settings.wiring_checks
-        )
+        with phase("read (scan)"):
+            stream = scan_log(
+                path, still_period=settings.still_period, wiring_checks=settings.wiring_checks
+            )
     except ChunkError:
         return None
+    log_stream(stream)
     prepared = prepare_log(
         load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual),
         settings,
@@ -121,15 +128,25 @@ def _estimate_chunks(stream: LogStream, kf, out: Path | None, force: bool, diagn
 
     digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
     faults: list[SensorFault] = []
+    start, writing = time.perf_counter(), 0.0
     with contextlib.ExitStack() as stack:
         write = (
             stack.enter_context(table_writer(Path(out), replace=force)) if out is not None else None
         )
         for chunk in stream.chunks(kf, faults=faults, diagnosis=diagnosis):
             if write is not None:
+                handed = time.perf_counter()
                 write(chunk.columns())
+                writing += time.perf_counter() - handed
             digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
             digest.add_mass_properties(chunk.mass_properties)
+        closing = time.perf_counter()
+    writing += time.perf_counter() - closing
+    total = time.perf_counter() - start
+    again = ", run again after the file check" if diagnosis is not None else ""
+    logger.info("filter (chunks read, estimated, digested%s): %.3f s", again, total - writing)
+    if out is not None:
+        logger.info("write %s (handing chunks to the writer, closing it): %.3f s", out, writing)
     return digest, faults
 
 

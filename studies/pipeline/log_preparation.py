@@ -17,6 +17,7 @@ Example
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -25,6 +26,9 @@ import numpy as np
 
 from wheelload.models import Vehicle
 from wheelload.studies.pipeline.measured_static import payload_reference
+from wheelload.studies.pipeline.run_messages import log_checks, log_vehicle, phase
+
+logger = logging.getLogger(__name__)
 
 if TYPE_CHECKING:
     from wheelload.estimators import Signals
@@ -67,13 +71,19 @@ def prepare_log(
     )
 
     told = list(notes)
-    if settings.wiring_checks:
-        report = wiring_report()
-        raise_for_wiring(report, source)
-        told.append(describe(report))
-        plausibility = check_plausibility(checked_signals(), vehicle)
-        raise_for_plausibility(plausibility, source)
-        told.append(describe_plausibility(plausibility))
+    log_vehicle(settings.vehicle, vehicle)
+    with phase("checks"):
+        if settings.wiring_checks:
+            report = wiring_report()
+            log_checks("wiring", report)
+            raise_for_wiring(report, source)
+            told.append(describe(report))
+            plausibility = check_plausibility(checked_signals(), vehicle)
+            log_checks("plausibility", plausibility)
+            raise_for_plausibility(plausibility, source)
+            told.append(describe_plausibility(plausibility))
+        else:
+            logger.info("wiring and plausibility checks skipped (--skip-wiring-checks)")
     static, reasons = static_loads(vehicle)
     told += reasons
     vehicle, reasons = payload_reference(vehicle, settings)

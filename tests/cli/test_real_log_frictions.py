@@ -95,7 +95,7 @@ def test_sensor_sets_on_front_only_references_scores_what_it_can(plant, tmp_path
     rear and the log's own split said to be unavailable, exit 0."""
     log = tmp_path / "front_reference.csv"
     plant.drop(columns=["fz_rl", "fz_rr"]).to_csv(log, index=False)
-    assert main(["sensor-sets", str(log)]) == 0
+    assert main(["sensor-sets", str(log), "--vehicle", str(example_vehicle_path())]) == 0
     out = capsys.readouterr().out
     assert "the log's own n/a (needs reference loads on all four wheels; no fz_rl, fz_rr)" in out
     sweep = out[out.index("roll_split_front") :].splitlines()[1:]

@@ -63,7 +63,10 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         "fleet", help="many logs: run_batched vs the kernel, numpy and numba; 1/2 workers, Dask"
     )
     add_vehicle_option(parser)
-    parser.add_argument("--logs", type=int, default=1000, help="logs (default 1000)")
+    parser.add_argument(
+        "--log-count", dest="logs", type=int, default=1000, metavar="N",
+        help="number of logs (default 1000)",
+    )  # fmt: skip
     parser.add_argument("--samples", type=int, default=2000, help="samples per log (default 2000)")
     parser.add_argument("--repeats", type=int, default=3, help="repeats in turn (default 3)")
     parser.add_argument(

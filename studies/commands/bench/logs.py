@@ -39,7 +39,10 @@ from wheelload.studies.pipeline.summary_compare import compare
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("logs", help="many logs: serial, local processes, Dask")
-    parser.add_argument("--logs", type=int, default=200, help="number of logs (default 200)")
+    parser.add_argument(
+        "--log-count", dest="logs", type=int, default=200, metavar="N",
+        help="number of logs (default 200)",
+    )  # fmt: skip
     parser.add_argument("--samples", type=int, default=300, help="samples per log (default 300)")
     parser.add_argument("--workers", type=int, nargs="+", default=[2], help="worker counts")
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3)")

@@ -26,7 +26,9 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench mhe``."""
     bench = subparsers.add_parser("mhe", help="MHE and KF time per sample, Python and C")
     bench.add_argument("--samples", type=int, default=3000, help="samples per run (default 3000)")
-    bench.add_argument("--horizons", type=int, nargs="+", default=[10, 20])
+    bench.add_argument(
+        "--horizons", type=int, nargs="+", default=[10, 20], help="window lengths N (default 10 20)"
+    )
     bench.add_argument("--no-c", action="store_true", help="skip the generated C")
     bench.add_argument(
         "--repeats",

@@ -70,11 +70,16 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         "--samples",
         type=int,
         default=1000,
-        help=f"C (filter-)steps per timing pass, fastest of {PASSES} passes (default 1000)",
+        help=f"samples: C (filter-)steps per timing pass, fastest of {PASSES} (default 1000)",
     )
     parser.add_argument("--batch", type=int, default=16, help="filters side by side (1-64)")
     parser.add_argument(
-        "--logs", type=int, default=16, help="logs for run_batched vs run (default 16)"
+        "--log-count",
+        dest="logs",
+        type=int,
+        default=16,
+        metavar="N",
+        help="number of logs for run_batched vs run (default 16)",
     )
     parser.add_argument(
         "--log-samples", type=int, default=20_000, help="samples per log (default 2e4, 1 kHz)"

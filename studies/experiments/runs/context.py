@@ -38,6 +38,13 @@ class Settings:
         return Path(self.vehicle_path).read_text(encoding="utf-8")
 
     @property
+    def vehicle_name(self) -> str:
+        """The vehicle file's ``name`` (the car every table and figure names)."""
+        import tomllib
+
+        return str(tomllib.loads(self.vehicle_text).get("name", Path(self.vehicle_path).stem))
+
+    @property
     def shorten(self) -> float:
         return QUICK_SHORTEN if self.quick else 1.0
 
@@ -46,6 +53,7 @@ def model_caption(settings: Settings) -> str:
     """The line under a table naming the vehicle models it is on (``--model``, ``--suspension``)."""
     model, suspension = settings.model.value, settings.suspension.value
     return (
+        f"*Vehicle:* **{settings.vehicle_name}** (`{Path(settings.vehicle_path).name}`). "
         f"*Model:* kf, projection and mhe on the **{model}** model (`--model {model}`: "
         f"{SHORT_WORDS[settings.model]}); the family methods on `--suspension {suspension}`."
     )
