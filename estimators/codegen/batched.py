@@ -4,9 +4,10 @@
 the two-stage KF's C library is generated from the filter's own step
 Function (:mod:`wheelload.estimators.codegen.kf`, runtime parameters, double),
 built once per model structure with the Makefile's ``FAST_CFLAGS`` (cached in the
-private build folder under :func:`~wheelload.estimators.codegen.structure.structure_key`
-and the flags: an edit of the vehicle file's values reuses it, the values are set
-through the parameter struct before each run) and stepped ``n`` filters at a
+private build folder by its text and flags, and found again through a record under
+:func:`~wheelload.estimators.codegen.structure.structure_key` without generating it: an
+edit of the vehicle file's values reuses the build, the values are set through the
+parameter struct before each run) and stepped ``n`` filters at a
 time through ``wheelload_batch_step_batch`` (struct of arrays, vectorised
 across the filters). One C call runs a whole batch of logs: the driver
 reads each log's own arrays in place (channel by channel, with their
@@ -50,7 +51,7 @@ from wheelload.estimators.logs.output_files import write_text
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.types import Signals, input_bits
 from wheelload.models import INPUTS, load_vehicle
-from wheelload.models.runtime.build_folder import build_folder, keyed_library
+from wheelload.models.runtime.build_folder import build_folder, checked_library, shared_library
 
 PREFIX = "wheelload_batch"
 #: The fast build of the library as a shared object: ``FAST_CFLAGS``, its warnings reported
@@ -250,34 +251,51 @@ def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
 
 @functools.lru_cache(maxsize=4)
 def _library(step: ca.Function, key: str, vehicle_path: Path) -> BatchLibrary:
-    """:func:`batch_library` of the structure ``key``, generated from ``vehicle_path`` if
-    it has to be built."""
-    generated: dict[str, str] = {}
+    """:func:`batch_library` of the structure ``key``: the libraries its record names
+    (:func:`structure_record`), or those of the C generated from ``vehicle_path``.
 
-    def generate_sources() -> dict[str, str]:
-        if not generated:
-            generated.update(library_sources(step, vehicle_path))
-        return generated
-
-    what = f"the many-logs library (model structure {key[:12]})"
-    why = "first build of this model structure; an edit of the vehicle file's values reuses it"
-    kernel = keyed_library(
-        key, lambda: generate_sources()["kernel"], PREFIX, compiler=KERNEL_FLAGS, what=what, why=why
-    )
-    loaded = keyed_library(
-        key,
-        lambda: generate_sources()["driver"],
-        f"{PREFIX}_driver",
-        compiler=SHARED_FLAGS,
-        what=f"the many-logs driver (model structure {key[:12]})",
-        why=why,
-    )
-    getattr(loaded, f"{PREFIX}_run_batch").restype = None
-    library = BatchLibrary(kernel=kernel, driver=loaded)
-    kept = source_path(library.path)
-    if not kept.exists():
-        write_text(kept, generate_sources()["kernel"], replace=True)
+    The generated C is compiled only when its text is new (``shared_library``, cached by the
+    text and flags): a structure met for the first time after an edit of the package's code
+    that leaves the C as it was (or with a vehicle file built before) loads its build.
+    """
+    record = structure_record(key)
+    names = _recorded(record)
+    if names is not None:
+        library = BatchLibrary(kernel=ctypes.CDLL(str(names[0])), driver=ctypes.CDLL(str(names[1])))
+    else:
+        sources = library_sources(step, vehicle_path)
+        what = f"the many-logs library (model structure {key[:12]})"
+        why = "first build of this model structure; edits of the vehicle file's values reuse it"
+        kernel = shared_library(sources["kernel"], PREFIX, KERNEL_FLAGS, what=what, why=why)
+        driver = shared_library(
+            sources["driver"], f"{PREFIX}_driver", SHARED_FLAGS, what=f"its driver ({key[:12]})"
+        )
+        library = BatchLibrary(kernel=kernel, driver=driver)
+        kept = source_path(library.path)
+        if not kept.exists():
+            write_text(kept, sources["kernel"], replace=True)
+        write_text(record, f"{library.path.name}\n{Path(driver._name).name}\n", replace=True)
+    getattr(library.driver, f"{PREFIX}_run_batch").restype = None
     return library
+
+
+def structure_record(key: str) -> Path:
+    """The build folder's record of the libraries built for the model structure ``key``
+    (their file names, kernel then driver)."""
+    return build_folder() / f"{PREFIX}_{key[:32]}.structure"
+
+
+def _recorded(record: Path) -> tuple[Path, Path] | None:
+    """The kernel and driver ``record`` names, when both are in place and match their build
+    records (:func:`checked_library`); None otherwise (they are built or found again)."""
+    try:
+        names = record.read_text().split()
+    except OSError:
+        return None
+    paths = tuple(record.with_name(name) for name in names)
+    if len(paths) != 2 or any(checked_library(path) is not None for path in paths):
+        return None
+    return paths[0], paths[1]
 
 
 def library_sources(step: ca.Function, vehicle_path: Path) -> dict[str, str]:

@@ -3,9 +3,9 @@
 With run-time parameters (:attr:`~wheelload.estimators.codegen.kf.ParamMode.RUNTIME`) every
 number of the vehicle file reaches the generated step through the parameter struct, set
 before a run; the code itself follows from the generator's other inputs. Their key,
-:func:`structure_key`, names a compiled library instead of the file's text, so that a
-comment, +1 kg or a new spring rate reuses the library and only a change of structure
-builds it again. It hashes, each in full:
+:func:`structure_key`, names the record of a compiled library instead of the file's text,
+so that a comment, +1 kg or a new spring rate reuses the library and only a change of
+structure generates it again (and compiles it, when its text is new). It hashes, each in full:
 
 - the generator's code: the ``.py`` files it is made of
   (:func:`~wheelload.models.runtime.function_cache.code_digest`) and its C templates;

@@ -256,12 +256,14 @@ def _held(target: Path):
 COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
 
 
-def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
+def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str,
+                   what: str | None = None, why: str = "first build of this source"):  # fmt: skip
     """``source`` compiled once by ``command`` (gcc and its flags) into a shared library
-    loaded with ``load`` (:func:`_cached_build`). ``purpose`` completes "gcc is needed to ..."."""
+    loaded with ``load`` (:func:`_cached_build`). ``purpose`` completes "gcc is needed to ...";
+    ``what`` and ``why`` name a long build (:func:`_announced`)."""
     sources = {f"{name}.c": source}
     return _cached_build(_sources_key(sources), lambda: sources, name, ".so", command, load,
-                         purpose)  # fmt: skip
+                         purpose, what, why)  # fmt: skip
 
 
 def _sources_key(sources: dict[str, str]) -> str:
@@ -309,11 +311,13 @@ def shared_library(
     name: str,
     compiler: tuple[str, ...] = COMPILER,
     purpose: str = "run the filter over a log in compiled code",
+    *,
+    what: str | None = None,
+    why: str = "first build of this source",
 ) -> ctypes.CDLL:
     """``source`` compiled once (:func:`cached_library`) and loaded with ctypes."""
-    return cached_library(
-        source, name, compiler, lambda library: ctypes.CDLL(str(library)), purpose
-    )
+    load = lambda library: ctypes.CDLL(str(library))  # noqa: E731
+    return cached_library(source, name, compiler, load, purpose, what, why)
 
 
 def keyed_library(
@@ -322,7 +326,6 @@ def keyed_library(
     name: str,
     purpose: str = "run the filter over a log in compiled code",
     *,
-    compiler: tuple[str, ...] = COMPILER,
     what: str | None = None,
     why: str = "first build of this code",
 ) -> ctypes.CDLL:
@@ -336,7 +339,7 @@ def keyed_library(
         lambda: {f"{name}.c": source()},
         name,
         ".so",
-        compiler,
+        COMPILER,
         lambda library: ctypes.CDLL(str(library)),
         purpose,
         what,
