@@ -202,8 +202,9 @@ class BatchLibrary:
     Two shared objects: the library alone (the kernel, the slow build) and the small driver,
     which reaches the library's batched step, parameter fields and default calibration
     through pointers (so the self-test can be linked against the very same kernel). Both
-    are cached under the model structure (:func:`batch_library`). ``source`` is the kernel's
-    C text as compiled (the header in place of its ``#include``), kept beside it.
+    are found through the record of their model structure (:func:`batch_library`).
+    ``source`` is the kernel's C text as compiled (the header in place of its
+    ``#include``), kept beside it.
     """
 
     kernel: ctypes.CDLL
