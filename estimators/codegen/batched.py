@@ -3,8 +3,11 @@
 :func:`run_batched` filters several logs (or Monte Carlo trials) at once:
 the two-stage KF's C library is generated from the filter's own step
 Function (:mod:`wheelload.estimators.codegen.kf`, runtime parameters, double),
-built once with the Makefile's ``FAST_CFLAGS`` (cached in the private build
-folder by the hash of its source and flags) and stepped ``n`` filters at a
+built once per model structure with the Makefile's ``FAST_CFLAGS`` (cached in the
+private build folder by its text and flags, and found again through a record under
+:func:`~wheelload.estimators.codegen.structure.structure_key` without generating it: an
+edit of the vehicle file's values reuses the build, the values are set through the
+parameter struct before each run) and stepped ``n`` filters at a
 time through ``wheelload_batch_step_batch`` (struct of arrays, vectorised
 across the filters). One C call runs a whole batch of logs: the driver
 reads each log's own arrays in place (channel by channel, with their
@@ -38,15 +41,17 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.kf import FAST_CFLAGS, PACKED, CodegenOptions, generate
+from wheelload.estimators.codegen.structure import structure_key
 from wheelload.estimators.guards.settings import FAULT_CHANNELS
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF, sensor_faults
 from wheelload.estimators.logs.inputs import input_blocks
+from wheelload.estimators.logs.output_files import write_text
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.types import Signals, input_bits
-from wheelload.models import INPUTS
-from wheelload.models.runtime.build_folder import build_folder, shared_library
+from wheelload.models import INPUTS, load_vehicle
+from wheelload.models.runtime.build_folder import build_folder, checked_library, shared_library
 
 PREFIX = "wheelload_batch"
 #: The fast build of the library as a shared object: ``FAST_CFLAGS``, its warnings reported
@@ -194,21 +199,26 @@ LANES = 8
 class BatchLibrary:
     """The generated library (its batched step) and the driver that feeds it logs.
 
-    Two shared objects: the library alone (the kernel, the slow build, cached by
-    its source's hash) and the small driver, which reaches the library's batched step,
-    parameter fields and default calibration through pointers (so a driver change rebuilds in
-    a second, and the self-test can be linked against the very same kernel). ``source`` is
-    the kernel's C text as compiled (the header in place of its ``#include``).
+    Two shared objects: the library alone (the kernel, the slow build) and the small driver,
+    which reaches the library's batched step, parameter fields and default calibration
+    through pointers (so the self-test can be linked against the very same kernel). Both
+    are found through the record of their model structure (:func:`batch_library`).
+    ``source`` is the kernel's C text as compiled (the header in place of its
+    ``#include``), kept beside it.
     """
 
     kernel: ctypes.CDLL
     driver: ctypes.CDLL
-    source: str
 
     @property
     def path(self) -> Path:
         """The library's shared object (the kernel)."""
         return Path(self.kernel._name)
+
+    @property
+    def source(self) -> str:
+        """The kernel's C text as compiled (:func:`source_path`)."""
+        return source_path(self.path).read_text()
 
     def symbol(self, name: str) -> ctypes.c_void_p:
         """Address of ``wheelload_batch_<name>`` in the library (function or constant)."""
@@ -217,19 +227,85 @@ class BatchLibrary:
         )
 
 
-@functools.lru_cache(maxsize=4)
-def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
-    """The generated library for ``step`` and the batch driver, built and loaded.
+def source_path(library: Path) -> Path:
+    """Where the C text a batch library was compiled from is kept: ``<library>.c``."""
+    return library.with_name(library.name + ".c")
 
-    The library is generated from a copy of the vehicle file under one name
-    (``vehicle.toml``): its text, and so its cached build, depends on the file's contents,
-    not on what the file is called (the calibration itself is set at run time).
+
+#: The generator's options of the batch library (double, runtime parameters, its prefix).
+OPTIONS = CodegenOptions(precision=Precision.DOUBLE, prefix=PREFIX)
+
+
+def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
+    """The generated library for ``step`` and the batch driver, built once per model
+    structure and loaded.
+
+    The C is the same for every vehicle file of one structure (:func:`structure_key`: the
+    step, the options, the file's switches and sections; not its numbers, texts or
+    comments): the calibration is set at run time through the parameter struct
+    (:func:`run_batched`), so an edit of the file's values loads the library built before.
+    A first build of a structure is announced on stderr when it takes long.
     """
-    options = CodegenOptions(precision=Precision.DOUBLE, prefix=PREFIX)
+    vehicle = load_vehicle(vehicle_path, allow_unusual=True)
+    return _library(step, structure_key(step, vehicle, OPTIONS), Path(vehicle_path))
+
+
+@functools.lru_cache(maxsize=4)
+def _library(step: ca.Function, key: str, vehicle_path: Path) -> BatchLibrary:
+    """:func:`batch_library` of the structure ``key``: the libraries its record names
+    (:func:`structure_record`), or those of the C generated from ``vehicle_path``.
+
+    The generated C is compiled only when its text is new (``shared_library``, cached by the
+    text and flags): a structure met for the first time after an edit of the package's code
+    that leaves the C as it was (or with a vehicle file built before) loads its build.
+    """
+    record = structure_record(key)
+    names = _recorded(record)
+    if names is not None:
+        library = BatchLibrary(kernel=ctypes.CDLL(str(names[0])), driver=ctypes.CDLL(str(names[1])))
+    else:
+        sources = library_sources(step, vehicle_path)
+        what = f"the many-logs library (model structure {key[:12]})"
+        why = "first build of this model structure; edits of the vehicle file's values reuse it"
+        kernel = shared_library(sources["kernel"], PREFIX, KERNEL_FLAGS, what=what, why=why)
+        driver = shared_library(
+            sources["driver"], f"{PREFIX}_driver", SHARED_FLAGS, what=f"its driver ({key[:12]})"
+        )
+        library = BatchLibrary(kernel=kernel, driver=driver)
+        kept = source_path(library.path)
+        if not kept.exists():
+            write_text(kept, sources["kernel"], replace=True)
+        write_text(record, f"{library.path.name}\n{Path(driver._name).name}\n", replace=True)
+    getattr(library.driver, f"{PREFIX}_run_batch").restype = None
+    return library
+
+
+def structure_record(key: str) -> Path:
+    """The build folder's record of the libraries built for the model structure ``key``
+    (their file names, kernel then driver)."""
+    return build_folder() / f"{PREFIX}_{key[:32]}.structure"
+
+
+def _recorded(record: Path) -> tuple[Path, Path] | None:
+    """The kernel and driver ``record`` names, when both are in place and match their build
+    records (:func:`checked_library`); None otherwise (they are built or found again)."""
+    try:
+        names = record.read_text().split()
+    except OSError:
+        return None
+    paths = tuple(record.with_name(name) for name in names)
+    if len(paths) != 2 or any(checked_library(path) is not None for path in paths):
+        return None
+    return paths[0], paths[1]
+
+
+def library_sources(step: ca.Function, vehicle_path: Path) -> dict[str, str]:
+    """The kernel's C (header in place) and the driver's (header and driver) for the vehicle
+    file (copied under one name, ``vehicle.toml``: the text does not depend on its name)."""
     with tempfile.TemporaryDirectory(dir=build_folder()) as folder:
         vehicle = Path(folder) / "vehicle.toml"
         vehicle.write_bytes(Path(vehicle_path).read_bytes())
-        library = generate(vehicle, Path(folder) / "c", options, step, allow_unusual=True)
+        library = generate(vehicle, Path(folder) / "c", OPTIONS, step, allow_unusual=True)
         header = library.header.read_text()
         source = library.source.read_text().replace(f'#include "{PREFIX}.h"', header, 1)
     driver = (
@@ -237,10 +313,7 @@ def batch_library(step: ca.Function, vehicle_path: Path) -> BatchLibrary:
         .replace("${PREFIX}", PREFIX.upper())
         .replace("${max_filters}", str(MAX_FILTERS))
     )
-    kernel = shared_library(source, PREFIX, KERNEL_FLAGS)
-    loaded = shared_library(header + driver, f"{PREFIX}_driver", SHARED_FLAGS)
-    getattr(loaded, f"{PREFIX}_run_batch").restype = None
-    return BatchLibrary(kernel=kernel, driver=loaded, source=source)
+    return {"kernel": source, "driver": header + driver}
 
 
 def _pointer(array: np.ndarray) -> ctypes.c_void_p:
@@ -291,7 +364,14 @@ def run_batched(
     """
     if not logs:
         return []
-    library = batch_library(kf.step_function, Path(vehicle_path))
+    return run_on_library(batch_library(kf.step_function, Path(vehicle_path)), kf, logs)
+
+
+def run_on_library(
+    library: BatchLibrary, kf: TwoStageKF, logs: Sequence[Signals]
+) -> list[Estimate]:
+    """:func:`run_batched` through a given build of the library (one for ``kf``'s step and
+    a vehicle file of its structure), ``kf``'s values set at run time."""
     estimates: dict[int, Estimate] = {}
     groups: dict[float, list[int]] = {}
     for index, log in enumerate(logs):

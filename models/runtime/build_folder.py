@@ -15,6 +15,10 @@ mapped (a truncated library mapped into memory kills the process with SIGBUS).
 What the compiler printed while building an output (its warnings, and the reports asked
 for by flags such as ``-fopt-info``) is kept beside it (``<output>.report``,
 :func:`build_report`), so a cached build says what gcc said of it without compiling again.
+
+A compile still running after :data:`ANNOUNCE_AFTER` seconds is announced on the
+``wheelload`` logger at the level of notes (shown at the default verbosity): what is being
+built and why, then ``done`` with its time, so that a long first build is never silent.
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ import logging
 import os
 import stat
 import tempfile
+import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -170,8 +176,36 @@ def _compile(
         shutil.rmtree(work, ignore_errors=True)
 
 
+#: Seconds a compile runs before it is announced (module docstring).
+ANNOUNCE_AFTER = 2.0
+
+
+@contextlib.contextmanager
+def _announced(what: str, why: str):
+    """Log ``compiling <what> (<why>) ...`` once the block has run :data:`ANNOUNCE_AFTER`
+    seconds, and ``... done in <t> s`` when it ends; nothing for a shorter block."""
+    start = time.perf_counter()
+    announced = threading.Event()
+
+    def announce() -> None:
+        announced.set()
+        _log.warning("wheelload: note: compiling %s (%s) ...", what, why)
+
+    timer = threading.Timer(ANNOUNCE_AFTER, announce)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+        if announced.is_set():
+            seconds = time.perf_counter() - start
+            _log.warning("wheelload: note: compiling %s: done in %.1f s", what, seconds)
+
+
 def _cached_build(key: str, sources: Callable[[], dict[str, str]], name: str, suffix: str,
-                  command: tuple[str, ...], load, purpose: str):  # fmt: skip
+                  command: tuple[str, ...], load, purpose: str,
+                  what: str | None = None, why: str = "first build of this source"):  # fmt: skip
     """``load`` of what ``command`` makes of ``sources()`` (:func:`_compile`), made once.
 
     The output is named by the hash of the command and ``key`` (the sources' text, or what
@@ -179,7 +213,8 @@ def _cached_build(key: str, sources: Callable[[], dict[str, str]], name: str, su
     compiler's report (:func:`build_report`), the record (size and SHA-256) and then the
     output renamed into place. A cached output is used only when it matches its record
     (:func:`checked_library`); one that does not, or does not load, is built again with a
-    one-line note.
+    one-line note. A long build is announced (:func:`_announced`) as ``what`` (default: the
+    output's name) and ``why``.
     """
     digest = hashlib.sha256((" ".join(command) + key).encode()).hexdigest()[:16]
     folder = build_folder()
@@ -194,8 +229,10 @@ def _cached_build(key: str, sources: Callable[[], dict[str, str]], name: str, su
                     first = (str(error) or type(error).__name__).splitlines()[0]
                     problem = f"it does not load ({first})"
             _log.warning("wheelload: note: cached library %s is rebuilt: %s", target, problem)
+            why = f"the cached build is damaged: {problem}"
         remove_stale(folder)
-        data, report = _compile(sources(), target, command, purpose)
+        with _announced(what or target.name, why):
+            data, report = _compile(sources(), target, command, purpose)
         _put(folder, _report(target), report.encode())
         # The record first: an output in place always has its record, and a crash between
         # the two renames leaves a record without its output (built again, never used).
@@ -219,12 +256,14 @@ def _held(target: Path):
 COMPILER = ("gcc", "-O2", "-std=c99", "-fPIC", "-shared")
 
 
-def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str):
+def cached_library(source: str, name: str, command: tuple[str, ...], load, purpose: str,
+                   what: str | None = None, why: str = "first build of this source"):  # fmt: skip
     """``source`` compiled once by ``command`` (gcc and its flags) into a shared library
-    loaded with ``load`` (:func:`_cached_build`). ``purpose`` completes "gcc is needed to ..."."""
+    loaded with ``load`` (:func:`_cached_build`). ``purpose`` completes "gcc is needed to ...";
+    ``what`` and ``why`` name a long build (:func:`_announced`)."""
     sources = {f"{name}.c": source}
     return _cached_build(_sources_key(sources), lambda: sources, name, ".so", command, load,
-                         purpose)  # fmt: skip
+                         purpose, what, why)  # fmt: skip
 
 
 def _sources_key(sources: dict[str, str]) -> str:
@@ -272,11 +311,13 @@ def shared_library(
     name: str,
     compiler: tuple[str, ...] = COMPILER,
     purpose: str = "run the filter over a log in compiled code",
+    *,
+    what: str | None = None,
+    why: str = "first build of this source",
 ) -> ctypes.CDLL:
     """``source`` compiled once (:func:`cached_library`) and loaded with ctypes."""
-    return cached_library(
-        source, name, compiler, lambda library: ctypes.CDLL(str(library)), purpose
-    )
+    load = lambda library: ctypes.CDLL(str(library))  # noqa: E731
+    return cached_library(source, name, compiler, load, purpose, what, why)
 
 
 def keyed_library(
@@ -284,12 +325,15 @@ def keyed_library(
     source: Callable[[], str],
     name: str,
     purpose: str = "run the filter over a log in compiled code",
+    *,
+    what: str | None = None,
+    why: str = "first build of this code",
 ) -> ctypes.CDLL:
     """As :func:`shared_library`, named by ``key`` instead of the source's text: ``source()``
     is generated only when the library is built. ``key`` must determine the source (a hash
     of the code that generates it, :func:`~wheelload.models.runtime.function_cache.code_digest`,
     and the arguments it is generated from), so that a changed source never meets a
-    library built from another."""
+    library built from another. ``what`` and ``why`` name a long build (:func:`_announced`)."""
     return _cached_build(
         f"\nkey {key}",
         lambda: {f"{name}.c": source()},
@@ -298,4 +342,6 @@ def keyed_library(
         COMPILER,
         lambda library: ctypes.CDLL(str(library)),
         purpose,
+        what,
+        why,
     )

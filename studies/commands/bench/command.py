@@ -38,6 +38,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench.hostile",
     "wheelload.studies.commands.bench.identify",
     "wheelload.studies.commands.bench.discernment",
+    "wheelload.studies.commands.bench.recompile",
 )
 
 

@@ -1,6 +1,7 @@
 """The compiled-code cache is private to the user, or refused."""
 
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -110,3 +111,27 @@ def test_processes_that_need_one_object_at_once_compile_it_once(tmp_path):
     assert all(worker.returncode == 0 for worker in workers)
     assert len(paths) == 1 and Path(paths.pop()).is_file()
     assert counter.read_text().count("run") == 1
+
+
+def test_a_long_compile_is_announced_with_what_why_and_its_time(tmp_path, monkeypatch, caplog):
+    """A compile past ANNOUNCE_AFTER (here 0 s, so that a small one is) is announced as a
+    note, at the level shown by default: what, why, then done with its time. A library
+    loaded from the build folder announces nothing."""
+    import logging
+
+    from wheelload.models.runtime import build_folder as folder
+    from wheelload.models.runtime.build_folder import keyed_library
+
+    _private_build_folder(tmp_path, monkeypatch)
+    monkeypatch.setattr(folder, "ANNOUNCE_AFTER", 0.0)
+    source = lambda: "int tiny(int x) { return 2 * x; }\n"  # noqa: E731
+    with caplog.at_level(logging.WARNING, logger="wheelload"):
+        keyed_library("k1", source, "tiny", what="the tiny library", why="first build of it")
+    notes = [record.getMessage() for record in caplog.records]
+    assert notes[0] == "wheelload: note: compiling the tiny library (first build of it) ..."
+    assert re.fullmatch(r"wheelload: note: compiling the tiny library: done in \d+\.\d s", notes[1])
+    assert all(record.levelno == logging.WARNING for record in caplog.records)
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="wheelload"):
+        keyed_library("k1", source, "tiny", what="the tiny library", why="first build of it")
+    assert caplog.records == []
