@@ -2,7 +2,7 @@
 
 Over ``--repeats`` repeats, each with a new value edit of a copy of the vehicle file (a
 comment line and the front spring rate, :func:`~wheelload.studies.bench.recompile.edited_copy`),
-prints the seconds from the edited file to the estimates of ``--logs`` copies of the bundled
+prints the seconds from the edited file to the estimates of ``--log-count`` copies of the bundled
 example log (min / median / max) for the many-logs library keyed by the model structure
 (after) and by the generated text (before: a compile per edit), each as a ratio against the
 single-log estimate of the same file in the same repeat, and after / before. The first build
@@ -39,7 +39,10 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     )
     add_vehicle_option(parser)
     parser.add_argument("--repeats", type=int, default=3, help="edits timed (default 3)")
-    parser.add_argument("--logs", type=int, default=5, help="logs of the run (default 5)")
+    parser.add_argument(
+        "--log-count", dest="logs", type=int, default=5, metavar="N",
+        help="copies of the example log in the run (default 5)",
+    )  # fmt: skip
     parser.add_argument(
         "--after-only", action="store_true", help="leave out the text-keyed library (before)"
     )
@@ -48,7 +51,7 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.repeats < 1 or args.logs < 2:
-        raise ValueError("--repeats >= 1 and --logs >= 2 are needed")
+        raise ValueError("--repeats >= 1 and --log-count >= 2 are needed")
     vehicle_path = vehicle_file(args)
     log = read_log(example_log_path())
     logs = [log] * args.logs
