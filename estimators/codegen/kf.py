@@ -243,7 +243,7 @@ def _substitutions(
 ) -> dict[str, str]:
     parameters = ModelParameters.from_vehicle(vehicle)
     p, tuning = parameters.vector(), tuning_vector(vehicle, options.sample_interval)
-    rate_gain = RateDerivativeFilter().gain(options.sample_interval)
+    rate_filter = RateDerivativeFilter()
     values = dict(
         zip(
             calibration_names(),
@@ -322,9 +322,12 @@ def _substitutions(
             f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
         ),
         "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
-        "rate_gain_0": literal(float(rate_gain[0]), precision),
-        "rate_gain_1": literal(float(rate_gain[1]), precision),
+        "rate_jerk_density": literal(float(rate_filter.jerk_density), precision),
+        "rate_gyro_noise_density": literal(float(rate_filter.gyro_noise_density), precision),
         "rate_interval": literal(float(options.sample_interval), precision),
+        "nominal_interval": param("sample_interval"),
+        "interval_band": param("interval_band"),
+        "short_index": str(StepFlag.guard_flags().index(StepFlag.INTERVAL_SHORT)),
         "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
         "input_cases": "\n".join(
             f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)
@@ -550,7 +553,8 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
     prefix = options.prefix
     if not options.tyre_forces:
         return {"tyre_forces": "0", "wheel_channel_names": "", "tyre_columns": "",
-                "tyre_example_note": "", "tyre_objects": "", "tyre_rule": ""}  # fmt: skip
+                "tyre_example_note": "", "tyre_objects": "", "tyre_rule": "",
+                "tyre_refusal_report": ""}  # fmt: skip
     columns = [f"{name}_{wheel}" for name in ("fx", "fx_std", "fy", "fy_std") for wheel in WHEELS]
     columns.append("high_slip")
     return {
@@ -565,11 +569,22 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
             + " high_slip after status."
         ),
         "tyre_objects": f" {prefix}_tyre.o",
+        "tyre_refusal_report": _TYRE_REFUSAL_REPORT.replace("PREFIX", prefix),
         "tyre_rule": (
             f"\n{prefix}_tyre.o: {prefix}_tyre.c {prefix}_tyre.h {prefix}.h\n"
             f"\t$(CC) $(CFLAGS) -c -o $@ {prefix}_tyre.c\n"
         ),
     }
+
+
+_TYRE_REFUSAL_REPORT = """
+#if TYRE_FORCES
+    if (tyre.interval_refusals > 0u) {
+        fprintf(stderr, "%lu tyre steps refused: their interval is not the %g s the tyre "
+                "step is discretised at; regenerate with wheelload codegen --interval SECONDS"
+                "\\n", (unsigned long)tyre.interval_refusals, (double)PREFIX_tyre_interval);
+    }
+#endif"""
 
 
 def build_program(

@@ -9,18 +9,20 @@ the Python method runs (:func:`~wheelload.estimators.family.tyres.step.tyre_core
 composed with the force sums of :meth:`TyreForces.force_sum_function
 <wheelload.estimators.family.tyres.forces.TyreForces.force_sum_function>`), with the
 vehicle's numbers and the settings folded in; the spin observers are discretised at the
-library's sample interval (a log at another rate needs the library generated for it, as
-the rate filter does). The example program then reads ``omega_*``, ``torque_*`` and
+library's sample interval (``--interval``) and the C refuses a step at another dt
+(``interval_refused``, counted) rather than give forces of the wrong discretisation.
+The example program then reads ``omega_*``, ``torque_*`` and
 ``steer`` and writes ``fx_*``, ``fy_*`` and their σ beside the loads.
 """
 
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 from wheelload.estimators.family.tyres.forces import TyreForces
 from wheelload.estimators.family.tyres.step import CORE, WHEEL_INPUTS
-from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, flop_count
+from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, flop_count, literal
 from wheelload.models import INPUTS, WHEELS, Vehicle
 
 #: Inputs and outputs of the C tyre kernel, in order.
@@ -75,6 +77,15 @@ def tyre_kernel_function(vehicle: Vehicle, sample_interval: float) -> ca.Functio
     )
 
 
+def interval_tolerance(sample_interval: float, precision: Precision) -> float:
+    """Largest difference of a step's dt from ``sample_interval`` the C tyre step takes [s]:
+    half a nanosecond in double (the Python step discretises at dt rounded to 1 ns, so the
+    same observer), 16 float roundings of the interval in float."""
+    if precision is Precision.DOUBLE:
+        return 0.5e-9
+    return float(16 * np.spacing(np.float32(sample_interval)))
+
+
 def tyre_substitutions(
     vehicle: Vehicle, sample_interval: float, precision: Precision, prefix: str
 ) -> dict[str, str]:
@@ -97,4 +108,7 @@ def tyre_substitutions(
         "n_wheel": str(len(WHEEL_INPUTS)),
         "wheel_names": "\n".join(f'    "{name}",' for name in WHEEL_INPUTS),
         "last_fx": str(CORE.last_fx.start),
+        "tyre_interval_tolerance": literal(
+            interval_tolerance(sample_interval, precision), precision
+        ),
     }

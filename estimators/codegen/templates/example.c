@@ -442,7 +442,7 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
 #endif
     double t = t_first[1], t_previous = t_first[0];
     int k, status = ${prefix}_init(&state, params);
-    ${prefix}_rate_filter_reset(&rates);
+    ${prefix}_rate_filter_reset(&rates, ${nominal_interval});
     if (status > 0) {
         fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
         return 2;
@@ -481,6 +481,12 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
             }
         }
     }
+    if (state.interval_refusals > 0u) {
+        fprintf(stderr, "%lu steps refused (status bit INTERVAL_SHORT): their interval is "
+                "below sample_interval / interval_band = %g s / %g; give the log's interval: "
+                "sample_interval=SECONDS\n", (unsigned long)state.interval_refusals,
+                (double)${nominal_interval}, (double)${interval_band});
+    }${tyre_refusal_report}
     return status < 0 ? 2 : 0;
 }
 

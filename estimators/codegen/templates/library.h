@@ -15,7 +15,15 @@
  *
  * The measurement noise is set by the params field sample_interval, the
  * logger's nominal interval [s] (not the interval of each step, so that a gap
- * grows the covariance): set it to the logger's rate.
+ * grows the covariance; built with ${rate_interval} s): set it to the logger's
+ * interval. Everything else that depends on the interval (the prediction, the
+ * guards' and the fault monitor's time constants, the payload filter, the rate
+ * filter's gain) is computed from the dt of each call. A step whose dt is below
+ * sample_interval / interval_band is refused (state held, every update flag and
+ * ${PREFIX}_FLAG_INTERVAL_SHORT set, counted in the state's interval_refusals):
+ * the log is faster than sample_interval says. One above sample_interval *
+ * interval_band is taken and flagged ${PREFIX}_FLAG_INTERVAL_LONG (a gap, or a
+ * slower log: set sample_interval).
  *
  * Units SI (N, m, s, m/s^2). Wheel order FL, FR, RL, RR. Body frame ISO 8855
  * (x forward, y left, z up); ax, ay, az are specific force including gravity
@@ -67,6 +75,7 @@ typedef struct {
     ${prefix}_real P[10];
     ${prefix}_real monitor[${PREFIX}_N_MONITOR];
     ${prefix}_real mass_properties[8]; /* the last accepted step's (output), 0 after reset */
+    uint32_t interval_refusals; /* steps refused with ${PREFIX}_FLAG_INTERVAL_SHORT */
 } ${prefix}_state;
 
 #define ${PREFIX}_N_INPUTS ${n_inputs}
@@ -188,17 +197,21 @@ void ${prefix}_step_batch(const ${prefix}_batch *batch, const ${prefix}_params *
 /* Body-rate derivatives wx_dot wy_dot wz_dot from the rates wx wy wz, as
  * wheelload's Python reader estimates them for a log without them
  * (estimators/kernels/kinematic.py): per axis the steady-state kinematic Kalman
- * filter (an alpha-beta filter) with its gain for the sample interval
- * ${rate_interval} s (a log at another rate needs the library generated for it:
- * --sample-interval); a run of rates after a missing one starts afresh at
- * [w, 0]. In the library's precision (the double build gives Python's numbers). */
+ * filter (an alpha-beta filter) at the log's nominal interval, its gain computed
+ * by ${prefix}_rate_filter_reset (the Riccati recursion of the Python reader, so
+ * the same numbers at any interval); a run of rates after a missing one starts
+ * afresh at [w, 0]. In the library's precision (the double build gives Python's
+ * numbers). */
 typedef struct {
     ${prefix}_real w[3], w_dot[3];
     int running[3]; /* 0: the next finite rate starts a run */
+    ${prefix}_real interval, gain[2];
 } ${prefix}_rate_filter;
 
-/* Before a log's first sample. */
-void ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter);
+/* Before a log's first sample, for a log at the nominal interval [s] (params'
+ * sample_interval). Returns 0, or 1 for an interval not > 0 and finite (the filter
+ * then gives no derivatives: non-finite, their terms dropped and flagged). */
+int ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter, ${prefix}_real interval);
 
 /* One sample: reads input's wx wy wz and writes its wx_dot wy_dot wz_dot
  * (non-finite where the rate is). */

@@ -10,6 +10,9 @@
 #define FINITE(v) (${fabs}(v) <= ${real_max})
 #define SQRT ${sqrt}
 
+const ${prefix}_real ${prefix}_tyre_interval = ${rate_interval};
+const ${prefix}_real ${prefix}_tyre_interval_tolerance = ${tyre_interval_tolerance};
+
 const char *const ${prefix}_tyre_wheel_names[${PREFIX}_TYRE_N_WHEEL] = {
 ${wheel_names}
 };
@@ -41,6 +44,7 @@ void ${prefix}_tyre_reset(${prefix}_tyre_state *state)
     for (k = 0; k < 16; ++k) {
         state->last[k] = ZERO;
     }
+    state->interval_refusals = 0u;
 }
 
 int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_input *input,
@@ -52,7 +56,7 @@ int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_input *inpu
     ${prefix}_real w[${PREFIX}_TYRE_N_WHEEL], w_valid[${PREFIX}_TYRE_N_WHEEL];
     ${prefix}_real next[${PREFIX}_TYRE_N_CORE], fx[4], fx_std[4], fy[4], fy_std[4];
     ${prefix}_real slip[1] = {ZERO};
-    int k, accepted = 0;
+    int k, accepted = 0, off_interval = 0;
 ${input_copy}
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
         const int finite = FINITE(u[k]);
@@ -65,6 +69,10 @@ ${input_copy}
         w[k] = finite ? wheels[k] : ZERO;
     }
     if (FINITE(dt) && dt > ZERO) {
+        off_interval = !(${fabs}(dt - ${prefix}_tyre_interval) <= ${prefix}_tyre_interval_tolerance);
+        state->interval_refusals += off_interval ? 1u : 0u;
+    }
+    if (FINITE(dt) && dt > ZERO && !off_interval) {
         ${prefix}_tyre_kernel(state->core, w, w_valid, u, u_valid, loads->loads,
                               loads->mass_properties, dt, next, fx, fx_std, fy, fy_std, slip);
         accepted = 1;
@@ -94,5 +102,6 @@ ${input_copy}
     }
     output->high_slip = accepted && slip[0] > HALF;
     output->rejected = !accepted;
+    output->interval_refused = off_interval;
     return output->rejected;
 }

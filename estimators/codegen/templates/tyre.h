@@ -6,7 +6,10 @@
  * with wheelload codegen --tyre-forces.
  *
  * The spin observers are discretised at ${rate_interval} s, the library's sample
- * interval: a log at another rate needs the library generated for it. The vehicle's
+ * interval (${prefix}_tyre_interval): a step whose dt differs from it by more than
+ * ${prefix}_tyre_interval_tolerance is refused (output rejected and interval_refused, the
+ * state's interval_refusals counted, the last forces repeated); a log at another rate
+ * needs the library generated for it (wheelload codegen --interval). The vehicle's
  * numbers this step uses (mass, yaw inertia, geometry, wheel inertias and radii, tyre
  * coefficients) are folded in: ${prefix}_set_param does not reach them; regenerate for a
  * changed vehicle file.
@@ -33,7 +36,13 @@ extern const char *const ${prefix}_tyre_wheel_names[${PREFIX}_TYRE_N_WHEEL];
 typedef struct {
     ${prefix}_real core[${PREFIX}_TYRE_N_CORE];
     ${prefix}_real last[16]; /* fx, fx_std, fy, fy_std of the last accepted step */
+    uint32_t interval_refusals; /* steps refused for their interval */
 } ${prefix}_tyre_state;
+
+/* The interval [s] the observers are discretised at, and the largest difference of a
+ * step's dt from it that is taken. */
+extern const ${prefix}_real ${prefix}_tyre_interval;
+extern const ${prefix}_real ${prefix}_tyre_interval_tolerance;
 
 typedef struct {
     ${prefix}_real fx[4];     /* longitudinal tyre forces [N] */
@@ -41,8 +50,10 @@ typedef struct {
     ${prefix}_real fy[4];     /* lateral tyre forces [N] */
     ${prefix}_real fy_std[4]; /* their standard deviations [N] */
     int high_slip;            /* 1: a wheel's spin changed fast (covariances switched) */
-    int rejected;             /* 1: the step was refused (dt not > 0 or a non-finite
-                               * result): state kept, the last forces repeated */
+    int rejected;             /* 1: the step was refused (dt not > 0, dt not the tyre
+                               * interval, or a non-finite result): state kept, the last
+                               * forces repeated */
+    int interval_refused;     /* 1: refused for dt not ${prefix}_tyre_interval */
 } ${prefix}_tyre_output;
 
 /* Arithmetic operations of one tyre step (kernel, as generated). */
