@@ -47,6 +47,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.runtime_parameters import (
+    check_defaults,
     derivation_substitutions,
     runtime_fields,
 )
@@ -67,9 +68,7 @@ from wheelload.models import (
     load_vehicle,
 )
 from wheelload.models.inputs import input_description
-from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.runtime.build_folder import cached_object
-from wheelload.models.vehicle.description import SIGMA_KEYS
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -85,20 +84,6 @@ FAST_CFLAGS = (
     "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
-#: Tuning entries that may be 0: the payload filter switched off, its height not estimated.
-ZERO_ALLOWED = ("payload_position_std_z", "payload_estimate")
-#: Calibration values that must be positive (the rest must be finite).
-#: The input-dependent noise densities may be 0 (constant measurement noise), and so may the
-#: reported sigma's coefficients (a term left out) and :data:`ZERO_ALLOWED`.
-POSITIVE = (
-    "mass",
-    *[
-        n
-        for n in TUNING.names()
-        if n not in INPUT_DENSITIES and n not in SIGMA_KEYS and n not in ZERO_ALLOWED
-    ],
-    "initial_std",
-)
 
 
 class ParamMode(enum.Enum):
@@ -253,6 +238,7 @@ def _substitutions(
     precision, prefix = options.precision, options.prefix
     real = precision.value
     runtime = options.params is ParamMode.RUNTIME
+    check_defaults(values, runtime)
     fields = calibration_names() if runtime else ("initial_std",)
 
     def param(name: str) -> str:
@@ -273,10 +259,16 @@ def _substitutions(
         boolean_inputs=BOOLEAN_INPUTS,
         branch_free=options.branch_free,
     )
+    # One domain test per field (runtime_parameters.domain_code, set_param's too); then the
+    # relations between fields: 1 + the number of fields.
     checks = [
-        f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
+        f"    if (!param_in_domain({k}, params->{name})) {{\n        return {k + 1};\n    }}"
         for k, name in enumerate(fields)
     ]
+    if runtime:
+        checks.append(
+            f"    if (!relations_hold(params)) {{\n        return {len(fields) + 1};\n    }}"
+        )
     flags = [f"#define {prefix.upper()}_FLAG_{flag.name} {flag.value}u" for flag in StepFlag]
     return {
         "prefix": prefix,
@@ -358,12 +350,6 @@ def _substitutions(
         "batch_body": _indent(_batch_body(kernel, runtime, precision, prefix), 2),
         **derivation_substitutions(vehicle, runtime, precision, prefix, values),
     }
-
-
-def _check(name: str) -> str:
-    """C condition of a valid calibration value (finite; positive where it must be)."""
-    value = f"params->{name}"
-    return f"isfinite({value}) && {value} > ZERO" if name in POSITIVE else f"isfinite({value})"
 
 
 def _indent(text: str, levels: int = 1) -> str:

@@ -198,7 +198,7 @@ def _generate_into(
     settings = embedded_settings(settings, filter_linked=linked, precision=precision)
     if linked:
         hard = settings.constraint is Constraint.HARD
-        _write_filter(vehicle, Path(vehicle_path), folder, precision, hard)
+        _write_filter(vehicle, Path(vehicle_path), folder, precision, hard, dt)
     mhe = MovingHorizonEstimator(vehicle, settings)
     state = mhe.initial_state(dt)
     P0 = mhe.filter.initial_state().P
@@ -346,11 +346,17 @@ FILTER_PREFIX = "wheelload_mhe_kf"
 
 
 def _write_filter(
-    vehicle: Vehicle, vehicle_path: Path, folder: Path, precision: Precision, hard: bool
+    vehicle: Vehicle,
+    vehicle_path: Path,
+    folder: Path,
+    precision: Precision,
+    hard: bool,
+    dt: float,
 ) -> None:
     """The MHE's fallback filter for ``vehicle_path`` as ``wheelload_mhe_kf.c/.h`` in ``folder``.
 
-    Soft constraint: the two-stage KF library; hard: the same library around the
+    Its nominal interval (params ``sample_interval``) is the MHE's ``dt``. Soft
+    constraint: the two-stage KF library; hard: the same library around the
     projection KF's step (:math:`W = P^{-1}`), as the Python MHE's ``filter``.
     """
     if load_vehicle(vehicle_path, allow_unusual=True) != vehicle:
@@ -359,7 +365,8 @@ def _write_filter(
             "was read from"
         )
     with tempfile.TemporaryDirectory(dir=folder) as scratch:
-        options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX)
+        # Its nominal interval the MHE's: a step below it over interval_band is refused.
+        options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX, sample_interval=dt)
         step = projection_step_function(Weighting.MAXIMUM_PROBABILITY) if hard else None
         library = generate(vehicle_path, Path(scratch), options, step, allow_unusual=True)
         for path in (library.header, library.source):

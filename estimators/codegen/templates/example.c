@@ -377,6 +377,11 @@ static int override(${prefix}_params *params, const char *assignment)
                             "library does not hold: regenerate the library from the changed "
                             "vehicle file\n",
                             assignment, name);
+                } else if (status == ${PREFIX}_SET_OUT_OF_RANGE) {
+                    fprintf(stderr,
+                            "%s: '%s', a parameter derived from it, or a static load against "
+                            "load_limit m g is outside its range (see ${prefix}.h)\n",
+                            assignment, name);
                 } else if (status != ${PREFIX}_SET_OK) {
                     fprintf(stderr, "%s: '%s' or a parameter derived from it is not finite\n",
                             assignment, name);
@@ -443,6 +448,10 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
     double t = t_first[1], t_previous = t_first[0];
     int k, status = ${prefix}_init(&state, params);
     ${prefix}_rate_filter_reset(&rates, ${nominal_interval});
+    if (status > ${PREFIX}_N_PARAMS) {
+        fprintf(stderr, "a static load is beyond load_limit m g\n");
+        return 2;
+    }
     if (status > 0) {
         fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
         return 2;

@@ -118,10 +118,15 @@ ${derivation_fields}
 ${derived_comment}
 #define ${PREFIX}_N_DERIVED ${n_derived}
 
-/* Status of ${prefix}_set_param (params unchanged unless OK): no field of that index;
- * the value, or a parameter derived from it, is not finite; another value of a field that
- * moves the mass centre with vehicle-file values the library does not hold (regenerate the
- * library from the changed vehicle file). */
+/* Status of ${prefix}_set_param (params unchanged unless OK, the previous value in force):
+ * no field of that index; the value, or a parameter derived from it, is not finite; another
+ * value of a field that moves the mass centre with vehicle-file values the library does not
+ * hold (regenerate the library from the changed vehicle file); the value, or a parameter
+ * derived from it, is outside its field's domain, or a relation between fields would fail
+ * (each static load within +-load_limit m g). The domains and relations are those
+ * ${prefix}_init checks (one declaration: wheelload.estimators.codegen.runtime_parameters
+ * PARAMETERS and parameter_relations), so a struct built by ${prefix}_set_param alone from
+ * the defaults always passes ${prefix}_init. */
 ${set_statuses}
 
 /* The calibration of the vehicle file the library was generated from. */
@@ -143,7 +148,9 @@ ${prefix}_real *${prefix}_param_field(${prefix}_params *params, int index);
 int ${prefix}_set_param(${prefix}_params *params, int index, ${prefix}_real value);
 
 /* Check the calibration and reset the state. Returns 0; 1 + the index in
- * ${prefix}_param_names of the first invalid field; or -(1 + the index) of a
+ * ${prefix}_param_names of the first invalid field (not finite or outside its domain, the
+ * test ${prefix}_set_param makes); 1 + ${PREFIX}_N_PARAMS if a relation between fields
+ * fails (a static load beyond +-load_limit m g); or -(1 + the index) of a
  * field written directly, not by ${prefix}_set_param, that derived parameters
  * depend on (they would be stale). State left untouched unless 0. */
 int ${prefix}_init(${prefix}_state *state, const ${prefix}_params *params);
