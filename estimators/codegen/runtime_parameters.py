@@ -131,31 +131,41 @@ def relations_function() -> ca.Function:
     return ca.Function("parameter_relations", [values], [ca.vertcat(*margins)])
 
 
-def domain_code(fields: tuple[str, ...], runtime: bool, precision: Precision, prefix: str) -> str:
-    """C of the checks ``PREFIX_init`` and ``PREFIX_set_param`` share, from the one
-    declaration (:data:`PARAMETERS`' domains, :func:`relations_function`):
-    ``param_in_domain(index, value)`` (1: finite and within field ``index``'s domain) and,
-    with runtime parameters, ``relations_hold(params)``."""
+def domain_function(
+    fields: tuple[str, ...], domains: dict[str, Domain], precision: Precision, prefix: str,
+    name: str = "param_in_domain",
+) -> str:  # fmt: skip
+    """C ``static int NAME(int index, PREFIX_real value)``: 1 if ``value`` is finite and
+    within the domain of field ``index`` (of ``fields``, ``domains`` theirs)."""
     real = f"{prefix}_real"
-    domains = PARAMETERS.domains()
     cases: dict[str, list[int]] = {}
-    for k, name in enumerate(fields):
-        d = domains[name]
+    for k, field in enumerate(fields):
+        d = domains[field]
         tests = ["FINITE(value)"]
         if math.isfinite(d.low):
             tests.append(f"value {'>' if d.open_low else '>='} {literal(d.low, precision)}")
         if math.isfinite(d.high):
             tests.append(f"value {'<' if d.open_high else '<='} {literal(d.high, precision)}")
         cases.setdefault(" && ".join(tests), []).append(k)
-    lines = [
-        f"/* 1 if value is finite and within the domain of field index ({prefix}_param_names;"
-        "\n * wheelload.estimators.codegen.runtime_parameters.PARAMETERS). */",
-        f"static int param_in_domain(int index, {real} value)\n{{\n    switch (index) {{",
-    ]
+    lines = [f"static int {name}(int index, {real} value)\n{{\n    switch (index) {{"]
     for condition, indices in cases.items():
         lines += [f"    case {k}: /* {fields[k]} */" for k in indices]
         lines.append(f"        return {condition};")
     lines.append("    default:\n        return 0;\n    }\n}")
+    return "\n".join(lines)
+
+
+def domain_code(fields: tuple[str, ...], runtime: bool, precision: Precision, prefix: str) -> str:
+    """C of the checks ``PREFIX_init`` and ``PREFIX_set_param`` share, from the one
+    declaration (:data:`PARAMETERS`' domains, :func:`relations_function`):
+    ``param_in_domain(index, value)`` (1: finite and within field ``index``'s domain) and,
+    with runtime parameters, ``relations_hold(params)``."""
+    real = f"{prefix}_real"
+    lines = [
+        f"/* 1 if value is finite and within the domain of field index ({prefix}_param_names;"
+        "\n * wheelload.estimators.codegen.runtime_parameters.PARAMETERS). */",
+        domain_function(fields, PARAMETERS.domains(), precision, prefix),
+    ]
     if runtime:
         function = relations_function()
         body = emit_statements(
