@@ -21,7 +21,13 @@ import dataclasses
 import numpy as np
 import pandas as pd
 import pytest
-from c_parity import assert_c_equals_python, c_estimates, kf_program, run_program
+from c_parity import (
+    assert_c_equals_python,
+    c_estimates,
+    kf_program,
+    mhe_program,
+    run_program,
+)
 
 from wheelload.estimators import read_log, write_log
 from wheelload.estimators.codegen.kf import CodegenOptions
@@ -181,3 +187,23 @@ def test_a_library_built_for_500_hz_equals_the_python_tyre_forces(log_500_hz, tm
     assert_c_equals_python(_fx(c), python.fx, rtol=0, atol=1e-9, what="fx")
     fy = c[[f"fy_{w}" for w in WHEELS]].to_numpy()
     assert_c_equals_python(fy, python.fy, rtol=0, atol=1e-9, what="fy")
+
+
+def test_the_embedded_mhe_refuses_a_faster_log_with_the_status_bit(vehicle, log_500_hz, tmp_path):
+    """The embedded MHE generated for 0.01 s on the 500 Hz log: nothing solved, every sample
+    flagged 255 | INTERVAL_SHORT (before: solved with the cost scale, the arrival weight and
+    the linked filter's noise of 0.01 s, silently); generated for 0.002 s it solves them."""
+    from wheelload.estimators import MheSettings
+    from wheelload.estimators.codegen.mhe_build import write_inputs
+
+    rows = write_inputs(read_log(log_500_hz).slice(0, 200), tmp_path / "rows.txt")
+    settings = MheSettings(horizon=5)
+    for dt, refused in ((0.01, True), (0.002, False)):
+        folder = tmp_path / f"mhe_{dt}"
+        binary = mhe_program(vehicle, settings, folder, dt, vehicle_path=example_vehicle_path())
+        run_program(binary, rows, folder / "out.csv")
+        flags = pd.read_csv(folder / "out.csv")["flags"].to_numpy()
+        short = (flags & int(StepFlag.INTERVAL_SHORT)) != 0
+        assert short.all() if refused else not short.any(), dt
+        if refused:
+            assert ((flags & 255) == 255).all()
