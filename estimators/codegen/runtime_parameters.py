@@ -65,7 +65,7 @@ class SetStatus(enum.IntEnum):
 #: finite, in both precisions; not the vehicle file's plausibility ranges
 #: (models/vehicle/plausibility.py), which a deliberate calibration may leave.
 MODEL_DOMAINS: dict[str, Domain] = {
-    "mass": Domain(1.0, 1e6),  # kg
+    "mass": Domain(50.0, 1e6),  # kg
     **dict.fromkeys(("lf", "lr"), Domain(1e-3, 100.0)),  # m
     **dict.fromkeys(("track_front", "track_rear"), Domain(1e-2, 100.0)),  # m
     "cg_height": Domain(0.0, 100.0),  # m
@@ -81,7 +81,7 @@ MODEL_DOMAINS: dict[str, Domain] = {
     **dict.fromkeys(("static_fl", "static_fr", "static_rl", "static_rr"),
                     Domain(0.0, 1e8)),  # N, derived: checked when recomputed too
     "roll_split_front": Domain(0.0, 1.0),
-    "sprung_mass": Domain(1.0, 1e6),  # kg
+    "sprung_mass": Domain(50.0, 1e6),  # kg
     "sprung_cg_height": Domain(0.0, 100.0),  # m
     **dict.fromkeys(("inertia_xx", "inertia_yy"), Domain(1e-3, 1e9)),  # kg m^2
     **dict.fromkeys(("unsprung_front", "unsprung_rear"), Domain(0.0, 1e6)),  # kg

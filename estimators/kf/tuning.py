@@ -44,8 +44,10 @@ def _rows(stem: str, suffix: str = "") -> tuple[str, ...]:
 
 _FAULT_KEYS = {f.name for f in dataclasses.fields(FaultTuning)}
 #: Largest value a tuning entry may take (``PREFIX_set_param`` and ``PREFIX_init`` of the
-#: generated C): its square stays finite in float.
+#: generated C): its square stays finite in float; and the smallest of a positive one (a
+#: denormal divisor would make the step's arithmetic overflow).
 LARGEST = 1e15
+SMALLEST = 1e-9
 #: The values each tuning entry may take, where not ``(0, LARGEST]``.
 _DOMAINS = {
     # The constant densities: a 1-sigma of 0.01 N at 100 Hz at least (a calibrated R of 0
@@ -65,7 +67,8 @@ _DOMAINS = {
 
 def _domain(field: Field) -> Field:
     """``field`` with its domain: :data:`_DOMAINS`; ``[0, LARGEST]`` for an input-dependent
-    density or a reported-sigma coefficient (0 leaves its term out); else ``(0, LARGEST]``."""
+    density or a reported-sigma coefficient (0 leaves its term out); else
+    ``[SMALLEST, LARGEST]``."""
     if field.name in _DOMAINS:
         domain = _DOMAINS[field.name]
     elif field.name.startswith("sigma_") or field.name.endswith(
@@ -73,7 +76,7 @@ def _domain(field: Field) -> Field:
     ):
         domain = Domain(0.0, LARGEST)
     else:
-        domain = Domain(0.0, LARGEST, open_low=True)
+        domain = Domain(SMALLEST, LARGEST)
     return dataclasses.replace(field, domain=domain)
 
 

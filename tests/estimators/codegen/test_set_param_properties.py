@@ -1,17 +1,18 @@
-"""``wheelload_kf_set_param`` makes ``wheelload_kf_init``'s checks, property-based.
+"""``wheelload_kf_set_param`` makes ``wheelload_kf_init``'s checks: a sweep and Hypothesis.
 
-Hypothesis picks one to three calls of ``set_param`` (any field, hostile values: 0, ±1,
-negative, huge, NaN, ±inf, denormals, and near-default values so that accepted calls are
-drawn too) and a driver program built with the real compiler applies them, runs ``init`` and
-steps the compiled library over 3 s of the bundled log (a real log, 100 Hz). Whatever the
-calls:
+A sweep sets every field to each hostile value alone (0, ±1, negative, huge, NaN, ±inf,
+denormals), and Hypothesis picks one to three calls of ``set_param`` (any field, those
+values or the default scaled, so that accepted calls are drawn too); a driver program
+built with the real compiler applies them, runs ``init`` and steps the compiled library
+over 3 s of the bundled log (a real log, 100 Hz). Whatever the calls:
 
 - the struct ``set_param`` leaves always passes ``init`` (one declaration of the checks);
 - a refused call changes nothing: the run equals, to the bit (hex-float text), the run with
   only the accepted calls;
 - no step is rejected (every accepted calibration keeps the step's arithmetic finite), the
-  loads keep moving (never frozen), unless each held step carries INTERVAL_SHORT (a nominal
-  interval set above the log's: refused by design, with its bit);
+  loads keep moving (never frozen), unless each held step says why: INTERVAL_SHORT (a
+  nominal interval set above the log's: refused by design) or LOAD_LIMITED (a calibration
+  the log contradicts, e.g. a mass whose load limit the logged loads exceed);
 - no load leaves +-load_limit m g (m the larger of the mass in force and the online mass).
 """
 
@@ -158,6 +159,37 @@ def test_the_issue_s_refused_values_are_refused(driver):
         assert init == 0
 
 
+def _never_broken(limit, mass, table, flags):
+    """No step rejected, loads moving (or held with a guard's bit), within the load limit."""
+    # never a rejected step: every accepted calibration keeps the arithmetic finite
+    assert not (flags & int(StepFlag.STEP_REJECTED)).any()
+    assert np.isfinite(table).all()
+    # never frozen: the loads move, unless each held step says why (refused for its interval,
+    # or every update beyond the load limit: a calibration the log contradicts)
+    held = np.all(np.diff(table[:, :4], axis=0) == 0.0, axis=1)
+    said = (flags[1:] & int(StepFlag.INTERVAL_SHORT | StepFlag.LOAD_LIMITED)) != 0
+    assert not held.all() or said.all()
+    # never beyond the load limit
+    weight = limit * np.maximum(mass, table[:, 4]) * GRAVITY
+    assert (np.abs(table[:, :4]) <= weight[:, None] * (1 + 1e-12)).all()
+
+
+def test_every_field_with_every_hostile_value(driver):
+    """The sweep: each field set to each of the hostile values alone. Before: 149 of 889
+    accepted values were ones init refuses, sample_interval 0 froze the filter. Now none
+    accepted that init refuses, none breaks the filter."""
+    accepted = 0
+    for index, name in enumerate(FIELDS):
+        for value in HOSTILE:
+            statuses, init, (limit, mass), _, table, flags = _run(driver, [(index, value)])
+            assert init == 0, (name, value)
+            if statuses == [int(SetStatus.OK)]:
+                accepted += 1
+                assert PARAMETERS.domains()[name].holds(value), (name, value)
+                _never_broken(limit, mass, table, flags)
+    assert accepted > len(FIELDS)  # the sweep reaches the accepted branch
+
+
 @settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow,
           HealthCheck.function_scoped_fixture])  # fmt: skip
 @given(chosen=calls())
@@ -174,13 +206,4 @@ def test_set_param_never_breaks_the_filter(driver, chosen):
     accepted = [call for call, status in zip(chosen, statuses) if status == int(SetStatus.OK)]
     if len(accepted) < len(chosen):
         assert _run(driver, accepted)[3] == steps
-    # never a rejected step: every accepted calibration keeps the arithmetic finite
-    assert not (flags & int(StepFlag.STEP_REJECTED)).any()
-    assert np.isfinite(table).all()
-    # never frozen: the loads move, unless each held step is refused for its interval
-    held = np.all(np.diff(table[:, :4], axis=0) == 0.0, axis=1)
-    refused = (flags[1:] & int(StepFlag.INTERVAL_SHORT)) != 0
-    assert not held.all() or refused.all()
-    # never beyond the load limit
-    weight = limit * np.maximum(mass, table[:, 4]) * GRAVITY
-    assert (np.abs(table[:, :4]) <= weight[:, None] * (1 + 1e-12)).all()
+    _never_broken(limit, mass, table, flags)
