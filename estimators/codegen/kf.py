@@ -17,7 +17,17 @@ strict flags they are bit-identical.
 With runtime parameters, ``wheelload_kf_set_param`` sets a calibration value and recomputes
 the parameters derived from it (the static loads, the default roll split) with C emitted from
 the models' own derivation (:mod:`~wheelload.estimators.codegen.runtime_parameters`): a spring
-set at run time gives the Python filter of the vehicle file with that spring.
+set at run time gives the Python filter of the vehicle file with that spring. It makes
+``wheelload_kf_init``'s checks (each field's domain and the relations between fields, one
+declaration: :data:`~wheelload.estimators.codegen.runtime_parameters.PARAMETERS`) and keeps
+the previous value when it refuses one.
+
+Any log rate: the step computes everything that depends on the interval from each call's
+``dt``; the nominal interval of the measurement noise is the run-time parameter
+``sample_interval`` (``CodegenOptions.sample_interval`` its default), and a step faster
+than it over ``interval_band`` is refused with ``StepFlag.INTERVAL_SHORT`` and counted in
+the state, as the Python step does. The rate-derivative filter's gain is computed at run
+time for the nominal interval.
 
 Files written to the output folder, for prefix ``wheelload_kf``:
 ``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),

@@ -31,6 +31,7 @@ import math
 import textwrap
 
 import casadi as ca
+import numpy as np
 
 from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, literal
 from wheelload.estimators.kernels.layout import Domain, Field, Layout
@@ -110,8 +111,9 @@ PARAMETERS = Layout(
             for name in ModelParameters.names()
         ],
         *TUNING.fields,
+        # No upper bound: the first step replaces reset's covariance by the ceiling.
         Field("initial_std", unit="N", file_key=("filter", "initial_std"), doc="reset's std",
-              domain=Domain(1e-3, 1e7)),
+              domain=Domain(1e-3)),
     ),
 )  # fmt: skip
 
@@ -131,6 +133,11 @@ def relations_function() -> ca.Function:
     return ca.Function("parameter_relations", [values], [ca.vertcat(*margins)])
 
 
+def _largest(precision: Precision) -> float:
+    """The largest finite number of ``precision`` (a bound beyond it is no bound there)."""
+    return float(np.finfo(np.float32 if precision is Precision.FLOAT else np.float64).max)
+
+
 def domain_function(
     fields: tuple[str, ...], domains: dict[str, Domain], precision: Precision, prefix: str,
     name: str = "param_in_domain",
@@ -144,7 +151,7 @@ def domain_function(
         tests = ["FINITE(value)"]
         if math.isfinite(d.low):
             tests.append(f"value {'>' if d.open_low else '>='} {literal(d.low, precision)}")
-        if math.isfinite(d.high):
+        if math.isfinite(d.high) and d.high < _largest(precision):
             tests.append(f"value {'<' if d.open_high else '<='} {literal(d.high, precision)}")
         cases.setdefault(" && ".join(tests), []).append(k)
     lines = [f"static int {name}(int index, {real} value)\n{{\n    switch (index) {{"]

@@ -51,11 +51,12 @@ SMALLEST = 1e-9
 #: The values each tuning entry may take, where not ``(0, LARGEST]``.
 _DOMAINS = {
     # The constant densities: a 1-sigma of 0.01 N at 100 Hz at least (a calibrated R of 0
-    # holds the loads on the gate; Q of 0 stops the filter learning).
+    # holds the loads on the gate; Q of 0 stops the filter learning). Q has no upper bound:
+    # the covariance ceiling holds any (guards/limits.py).
+    "process_noise_density": Domain(1e-6),
     **dict.fromkeys(
-        ("process_noise_density", "suspension_noise_density", "constraint_noise_density"),
-        Domain(1e-6, LARGEST),
-    ),
+        ("suspension_noise_density", "constraint_noise_density"), Domain(1e-6, LARGEST)
+    ),  # fmt: skip
     "sample_interval": Domain(1e-6, 1e3),  # s: 1 MHz to one sample in 17 minutes
     "interval_band": Domain(1.0, 1e3, open_low=True),
     "isolation_fraction": Domain(0.0, 1.0, open_low=True, open_high=True),
