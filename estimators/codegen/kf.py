@@ -328,6 +328,7 @@ def _substitutions(
         "rate_gyro_noise_density": literal(float(rate_filter.gyro_noise_density), precision),
         "rate_interval": literal(float(options.sample_interval), precision),
         "nominal_interval": param("sample_interval"),
+        "interval_option": repr(float(options.sample_interval)),
         "interval_band": param("interval_band"),
         "short_index": str(StepFlag.guard_flags().index(StepFlag.INTERVAL_SHORT)),
         "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
