@@ -84,6 +84,10 @@ class StepFlag(enum.IntFlag):
     # than R times the paper's w_th (high slip, corner-based paper Sec. IV); with
     # TyreSettings.switch_covariances the lateral filter took the paper's high-slip Q, R.
     HIGH_SLIP = 1 << 28
+    # Bits 29-30: the step's interval against the nominal one (tuning sample_interval; guard
+    # setting interval_band, estimators/guards/settings.py), the last of ``status``.
+    INTERVAL_SHORT = 1 << 29  # dt < sample_interval / interval_band: refused, state held
+    INTERVAL_LONG = 1 << 30  # dt > sample_interval * interval_band: a gap, or a slower log
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:
@@ -120,11 +124,14 @@ class StepFlag(enum.IntFlag):
 
     @classmethod
     def guard_flags(cls) -> tuple[StepFlag, ...]:
-        """The guard flags in the order of the filter's ``status`` output (bits 8-15, 24-27)."""
+        """The guard flags in the order of the filter's ``status`` output (bits 8-15, 24-27,
+        29-30)."""
         return tuple(
             flag
             for flag in cls
-            if 1 << 8 <= flag.value < 1 << 16 or 1 << 24 <= flag.value < 1 << 28
+            if 1 << 8 <= flag.value < 1 << 16
+            or 1 << 24 <= flag.value < 1 << 28
+            or 1 << 29 <= flag.value < 1 << 31
         )
 
 

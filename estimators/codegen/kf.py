@@ -17,7 +17,17 @@ strict flags they are bit-identical.
 With runtime parameters, ``wheelload_kf_set_param`` sets a calibration value and recomputes
 the parameters derived from it (the static loads, the default roll split) with C emitted from
 the models' own derivation (:mod:`~wheelload.estimators.codegen.runtime_parameters`): a spring
-set at run time gives the Python filter of the vehicle file with that spring.
+set at run time gives the Python filter of the vehicle file with that spring. It makes
+``wheelload_kf_init``'s checks (each field's domain and the relations between fields, one
+declaration: :data:`~wheelload.estimators.codegen.runtime_parameters.PARAMETERS`) and keeps
+the previous value when it refuses one.
+
+Any log rate: the step computes everything that depends on the interval from each call's
+``dt``; the nominal interval of the measurement noise is the run-time parameter
+``sample_interval`` (``CodegenOptions.sample_interval`` its default), and a step faster
+than it over ``interval_band`` is refused with ``StepFlag.INTERVAL_SHORT`` and counted in
+the state, as the Python step does. The rate-derivative filter's gain is computed at run
+time for the nominal interval.
 
 Files written to the output folder, for prefix ``wheelload_kf``:
 ``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
@@ -47,6 +57,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.runtime_parameters import (
+    check_defaults,
     derivation_substitutions,
     runtime_fields,
 )
@@ -67,9 +78,7 @@ from wheelload.models import (
     load_vehicle,
 )
 from wheelload.models.inputs import input_description
-from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.runtime.build_folder import cached_object
-from wheelload.models.vehicle.description import SIGMA_KEYS
 
 #: Upper triangle of the 4 x 4 covariance, row by row: the symmetric storage.
 PACKED = tuple((i, j) for i in range(4) for j in range(i, 4))
@@ -85,20 +94,6 @@ FAST_CFLAGS = (
     "-fno-math-errno", "-fno-trapping-math", "-fno-thread-jumps", "-fno-tree-pre",
     "-Wall", "-Wextra", "-Wpedantic", "-Wdouble-promotion", "-Wconversion", "-Werror",
 )  # fmt: skip
-#: Tuning entries that may be 0: the payload filter switched off, its height not estimated.
-ZERO_ALLOWED = ("payload_position_std_z", "payload_estimate")
-#: Calibration values that must be positive (the rest must be finite).
-#: The input-dependent noise densities may be 0 (constant measurement noise), and so may the
-#: reported sigma's coefficients (a term left out) and :data:`ZERO_ALLOWED`.
-POSITIVE = (
-    "mass",
-    *[
-        n
-        for n in TUNING.names()
-        if n not in INPUT_DENSITIES and n not in SIGMA_KEYS and n not in ZERO_ALLOWED
-    ],
-    "initial_std",
-)
 
 
 class ParamMode(enum.Enum):
@@ -251,11 +246,12 @@ def _substitutions(
     step: ca.Function,
     kernel: ca.Function,
 ) -> dict[str, str]:
-    rate_gain = RateDerivativeFilter().gain(options.sample_interval)
     values = calibration_values(vehicle, options)
+    rate_filter = RateDerivativeFilter()
     precision, prefix = options.precision, options.prefix
     real = precision.value
     runtime = options.params is ParamMode.RUNTIME
+    check_defaults(values, runtime)
     fields = calibration_names() if runtime else ("initial_std",)
 
     def param(name: str) -> str:
@@ -276,10 +272,16 @@ def _substitutions(
         boolean_inputs=BOOLEAN_INPUTS,
         branch_free=options.branch_free,
     )
+    # One domain test per field (runtime_parameters.domain_code, set_param's too); then the
+    # relations between fields: 1 + the number of fields.
     checks = [
-        f"    if (!({_check(name)})) {{\n        return {k + 1};\n    }}"
+        f"    if (!param_in_domain({k}, params->{name})) {{\n        return {k + 1};\n    }}"
         for k, name in enumerate(fields)
     ]
+    if runtime:
+        checks.append(
+            f"    if (!relations_hold(params)) {{\n        return {len(fields) + 1};\n    }}"
+        )
     flags = [f"#define {prefix.upper()}_FLAG_{flag.name} {flag.value}u" for flag in StepFlag]
     return {
         "prefix": prefix,
@@ -325,9 +327,13 @@ def _substitutions(
             f"    {prefix}_real {name}; /* {input_description(name)} */" for name in INPUTS
         ),
         "input_names": "\n".join(f'    "{name}",' for name in INPUTS),
-        "rate_gain_0": literal(float(rate_gain[0]), precision),
-        "rate_gain_1": literal(float(rate_gain[1]), precision),
+        "rate_jerk_density": literal(float(rate_filter.jerk_density), precision),
+        "rate_gyro_noise_density": literal(float(rate_filter.gyro_noise_density), precision),
         "rate_interval": literal(float(options.sample_interval), precision),
+        "nominal_interval": param("sample_interval"),
+        "interval_option": repr(float(options.sample_interval)),
+        "interval_band": param("interval_band"),
+        "short_index": str(StepFlag.guard_flags().index(StepFlag.INTERVAL_SHORT)),
         "input_optional": ", ".join(str(int(name in OPTIONAL_INPUTS)) for name in INPUTS),
         "input_cases": "\n".join(
             f"    case {k}:\n        return &input->{name};" for k, name in enumerate(INPUTS)
@@ -358,12 +364,6 @@ def _substitutions(
         "batch_body": _indent(_batch_body(kernel, runtime, precision, prefix), 2),
         **derivation_substitutions(vehicle, runtime, precision, prefix, values),
     }
-
-
-def _check(name: str) -> str:
-    """C condition of a valid calibration value (finite; positive where it must be)."""
-    value = f"params->{name}"
-    return f"isfinite({value}) && {value} > ZERO" if name in POSITIVE else f"isfinite({value})"
 
 
 def _indent(text: str, levels: int = 1) -> str:
@@ -553,7 +553,8 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
     prefix = options.prefix
     if not options.tyre_forces:
         return {"tyre_forces": "0", "wheel_channel_names": "", "tyre_columns": "",
-                "tyre_example_note": "", "tyre_objects": "", "tyre_rule": ""}  # fmt: skip
+                "tyre_example_note": "", "tyre_objects": "", "tyre_rule": "",
+                "tyre_refusal_report": ""}  # fmt: skip
     columns = [f"{name}_{wheel}" for name in ("fx", "fx_std", "fy", "fy_std") for wheel in WHEELS]
     columns.append("high_slip")
     return {
@@ -568,11 +569,22 @@ def _tyre_fields(vehicle: Vehicle, options: CodegenOptions) -> dict[str, str]:
             + " high_slip after status."
         ),
         "tyre_objects": f" {prefix}_tyre.o",
+        "tyre_refusal_report": _TYRE_REFUSAL_REPORT.replace("PREFIX", prefix),
         "tyre_rule": (
             f"\n{prefix}_tyre.o: {prefix}_tyre.c {prefix}_tyre.h {prefix}.h\n"
             f"\t$(CC) $(CFLAGS) -c -o $@ {prefix}_tyre.c\n"
         ),
     }
+
+
+_TYRE_REFUSAL_REPORT = """
+#if TYRE_FORCES
+    if (tyre.interval_refusals > 0u) {
+        fprintf(stderr, "%lu tyre steps refused: their interval is not the %g s the tyre "
+                "step is discretised at; regenerate with wheelload codegen --interval SECONDS"
+                "\\n", (unsigned long)tyre.interval_refusals, (double)PREFIX_tyre_interval);
+    }
+#endif"""
 
 
 def build_program(

@@ -93,6 +93,7 @@ from wheelload.estimators.codegen.kf import CodegenOptions, generate
 from wheelload.estimators.codegen.mhe_workspace import make_reentrant
 from wheelload.estimators.kernels.c_emitter import Precision, emit_statements
 from wheelload.estimators.kf.projection import Weighting, projection_step_function
+from wheelload.estimators.kf.tuning import TUNING
 from wheelload.estimators.logs.output_files import atomic_write, check_output_folder
 from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 from wheelload.estimators.mhe.qp import csc_value_order
@@ -198,7 +199,7 @@ def _generate_into(
     settings = embedded_settings(settings, filter_linked=linked, precision=precision)
     if linked:
         hard = settings.constraint is Constraint.HARD
-        _write_filter(vehicle, Path(vehicle_path), folder, precision, hard)
+        _write_filter(vehicle, Path(vehicle_path), folder, precision, hard, dt)
     mhe = MovingHorizonEstimator(vehicle, settings)
     state = mhe.initial_state(dt)
     P0 = mhe.filter.initial_state().P
@@ -346,11 +347,17 @@ FILTER_PREFIX = "wheelload_mhe_kf"
 
 
 def _write_filter(
-    vehicle: Vehicle, vehicle_path: Path, folder: Path, precision: Precision, hard: bool
+    vehicle: Vehicle,
+    vehicle_path: Path,
+    folder: Path,
+    precision: Precision,
+    hard: bool,
+    dt: float,
 ) -> None:
     """The MHE's fallback filter for ``vehicle_path`` as ``wheelload_mhe_kf.c/.h`` in ``folder``.
 
-    Soft constraint: the two-stage KF library; hard: the same library around the
+    Its nominal interval (params ``sample_interval``) is the MHE's ``dt``. Soft
+    constraint: the two-stage KF library; hard: the same library around the
     projection KF's step (:math:`W = P^{-1}`), as the Python MHE's ``filter``.
     """
     if load_vehicle(vehicle_path, allow_unusual=True) != vehicle:
@@ -359,7 +366,8 @@ def _write_filter(
             "was read from"
         )
     with tempfile.TemporaryDirectory(dir=folder) as scratch:
-        options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX)
+        # Its nominal interval the MHE's: a step below it over interval_band is refused.
+        options = CodegenOptions(precision=precision, prefix=FILTER_PREFIX, sample_interval=dt)
         step = projection_step_function(Weighting.MAXIMUM_PROBABILITY) if hard else None
         library = generate(vehicle_path, Path(scratch), options, step, allow_unusual=True)
         for path in (library.header, library.source):
@@ -407,6 +415,10 @@ def _common_defines(mhe, settings: MheSettings, state, dt: float, p0: float) -> 
         f"#define Q_DENSITY {mhe.process_noise_density!r}\n",
         f"#define P0_VAR {p0!r}\n",
         f"#define MAX_INTERVAL {float(MAX_INTERVAL)!r}\n",
+        # A step below DT / INTERVAL_BAND is refused (the guard setting interval_band of the
+        # linked filter): the cost scale, arrival weight and filter are DT's.
+        f"#define INTERVAL_BAND {float(TUNING.value(mhe.tuning, 'interval_band'))!r}\n",
+        f"#define INTERVAL_SHORT {int(StepFlag.INTERVAL_SHORT)}u\n",
         f"#define COST {float(state.cost)!r}\n#define RHO0 {float(settings.solver.rho)!r}\n",
         f"#define EPS_ABS {float(settings.solver.eps_abs)!r}\n",
         f"#define EPS_REL {float(settings.solver.eps_rel)!r}\n",
@@ -548,7 +560,8 @@ typedef struct {
     double bias[6];     /* bias states: travel offsets FL..RR [m] and/or ax, ay [m/s^2] */
     int iterations;     /* ADMM iterations */
     int fallback;       /* 1: the QP was not solved or its loads out of bounds: the filter's */
-    unsigned flags;     /* skipped updates and dropped terms (StepFlag); 255: interval rejected */
+    unsigned flags;     /* skipped updates and dropped terms (StepFlag); 255: interval rejected,
+                           with StepFlag INTERVAL_SHORT (1 << 29) when below DT / interval_band */
 } wheelload_mhe_output;
 
 /* Start a new log in state: its solver set up afresh, inert window, static loads. */
@@ -556,7 +569,9 @@ void wheelload_mhe_reset(wheelload_mhe_state *state);
 
 /* One sample u[WHEELLOAD_MHE_N_INPUTS] (non-finite entries: missing; the terms they feed are
    dropped) after the interval dt [s] (0 < dt < the maximum interval, else nothing is solved:
-   the last estimate is held, status 0, flags 255). Returns OSQP's status (1 = solved), or
+   the last estimate is held, status 0, flags 255; so too below the generated interval DT over
+   the filter's interval_band, the log faster than the MHE was generated for: flags
+   255 | INTERVAL_SHORT, regenerate with --interval). Returns OSQP's status (1 = solved), or
    WHEELLOAD_MHE_NOT_RESET. */
 int wheelload_mhe_step(wheelload_mhe_state *state, const double *u, double dt,
                        wheelload_mhe_output *out);

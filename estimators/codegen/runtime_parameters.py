@@ -27,12 +27,16 @@ True
 from __future__ import annotations
 
 import enum
+import math
 import textwrap
 
+import casadi as ca
+import numpy as np
+
 from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, literal
-from wheelload.estimators.kernels.layout import Field, Layout
+from wheelload.estimators.kernels.layout import Domain, Field, Layout
 from wheelload.estimators.kf.tuning import TUNING
-from wheelload.models import ModelParameters, Vehicle
+from wheelload.models import GRAVITY, WHEELS, ModelParameters, Vehicle
 from wheelload.models.parameters import (
     DERIVED,
     MASS_CENTRE_INPUTS,
@@ -53,22 +57,155 @@ class SetStatus(enum.IntEnum):
     NOT_FINITE = 2  # the value, or a parameter derived from it, is not finite
     FIXED = 3  # another value of a field that moves the mass centre with file values the
     # library does not hold
+    OUT_OF_RANGE = 4  # the value, or a parameter derived from it, is outside its domain
+    # (PARAMETERS; the same test PREFIX_init makes)
 
+
+#: The values each model parameter may take in the generated C (``PREFIX_set_param`` and
+#: ``PREFIX_init`` refuse others): wide physical bounds in which the step's arithmetic stays
+#: finite, in both precisions; not the vehicle file's plausibility ranges
+#: (models/vehicle/plausibility.py), which a deliberate calibration may leave.
+MODEL_DOMAINS: dict[str, Domain] = {
+    "mass": Domain(50.0, 1e6),  # kg
+    **dict.fromkeys(("lf", "lr"), Domain(1e-3, 100.0)),  # m
+    **dict.fromkeys(("track_front", "track_rear"), Domain(1e-2, 100.0)),  # m
+    "cg_height": Domain(0.0, 100.0),  # m
+    "air_density": Domain(0.0, 100.0),  # kg/m^3
+    "reference_area": Domain(0.0, 1e3),  # m^2
+    **dict.fromkeys(("lift_coefficient", "drag_coefficient"), Domain(-100.0, 100.0)),
+    **dict.fromkeys(("aero_x", "aero_z"), Domain(-100.0, 100.0)),  # m
+    **dict.fromkeys(("spring_front", "spring_rear"), Domain(1.0, 1e9)),  # N/m
+    **dict.fromkeys(("damper_push_front", "damper_pull_front", "damper_push_rear",
+                     "damper_pull_rear"), Domain(0.0, 1e9)),  # N s/m
+    **dict.fromkeys(("arb_rate_front", "arb_rate_rear"), Domain(0.0, 1e9)),  # N/m
+    **dict.fromkeys(("arb_ratio_front", "arb_ratio_rear"), Domain(0.0, 100.0)),
+    **dict.fromkeys(("static_fl", "static_fr", "static_rl", "static_rr"),
+                    Domain(0.0, 1e8)),  # N, derived: checked when recomputed too
+    "roll_split_front": Domain(0.0, 1.0),
+    "sprung_mass": Domain(50.0, 1e6),  # kg
+    "sprung_cg_height": Domain(0.0, 100.0),  # m
+    **dict.fromkeys(("inertia_xx", "inertia_yy"), Domain(1e-3, 1e9)),  # kg m^2
+    **dict.fromkeys(("unsprung_front", "unsprung_rear"), Domain(0.0, 1e6)),  # kg
+    **dict.fromkeys(("tyre_rate_front", "tyre_rate_rear"), Domain(1.0, 1e10)),  # N/m
+    **dict.fromkeys(("roll_centre_front", "roll_centre_rear"), Domain(-100.0, 100.0)),  # m
+    **dict.fromkeys(("anti_brake_front", "anti_brake_rear", "anti_drive_front",
+                     "anti_drive_rear"), Domain(-10.0, 10.0)),
+    **dict.fromkeys(("bump_gap_front", "bump_gap_rear", "rebound_gap_front",
+                     "rebound_gap_rear"), Domain(1e-6, 10.0)),  # m
+    **dict.fromkeys(("stop_rate_front", "stop_rate_rear"), Domain(0.0, 1e10)),  # N/m
+    **dict.fromkeys(("stop_progressive_front", "stop_progressive_rear"),
+                    Domain(0.0, 1e14)),  # N/m^2
+    **dict.fromkeys(("imu_x", "imu_y", "imu_z", "cg_y"), Domain(-100.0, 100.0)),  # m
+    **{f"imu_r{i}{j}": Domain(-1.0, 1.0) for i in (1, 2, 3) for j in (1, 2, 3)},
+    **{name: Domain(0.0, 1.0) for name in ModelParameters.names() if name.startswith("term_")},
+}  # fmt: skip
 
 #: The runtime parameter struct ``PREFIX_params``, in member order: the model parameters
 #: (the step's ``p``), the tuning vector (its ``tuning``, :data:`TUNING`'s declaration), the
-#: initial standard deviation of reset.
+#: initial standard deviation of reset; each with the values it may take (its domain).
 PARAMETERS = Layout(
     "params",
     (
         *[
-            Field(name, doc="model parameter (models.parameters)")
+            Field(name, doc="model parameter (models.parameters)", domain=MODEL_DOMAINS[name])
             for name in ModelParameters.names()
         ],
         *TUNING.fields,
-        Field("initial_std", unit="N", file_key=("filter", "initial_std"), doc="reset's std"),
+        # No upper bound: the first step replaces reset's covariance by the ceiling.
+        Field("initial_std", unit="N", file_key=("filter", "initial_std"), doc="reset's std",
+              domain=Domain(1e-3)),
     ),
-)
+)  # fmt: skip
+
+
+def relations_function() -> ca.Function:
+    """``parameter_relations(params) -> margins``: relations between fields a calibration
+    must satisfy, each as a margin that holds at or below 0 (:data:`PARAMETERS` order in):
+    every static load within the step's load limit, ``|static_w| <= load_limit m g`` (else
+    the reset state is one the step's load limit would refuse)."""
+    values = ca.SX.sym("params", PARAMETERS.size)
+
+    def value(name: str) -> ca.SX:
+        return values[PARAMETERS.index(name)]
+
+    limit = value("load_limit") * value("mass") * GRAVITY
+    margins = [ca.fabs(value(f"static_{wheel}")) - limit for wheel in WHEELS]
+    return ca.Function("parameter_relations", [values], [ca.vertcat(*margins)])
+
+
+def _largest(precision: Precision) -> float:
+    """The largest finite number of ``precision`` (a bound beyond it is no bound there)."""
+    return float(np.finfo(np.float32 if precision is Precision.FLOAT else np.float64).max)
+
+
+def domain_function(
+    fields: tuple[str, ...], domains: dict[str, Domain], precision: Precision, prefix: str,
+    name: str = "param_in_domain",
+) -> str:  # fmt: skip
+    """C ``static int NAME(int index, PREFIX_real value)``: 1 if ``value`` is finite and
+    within the domain of field ``index`` (of ``fields``, ``domains`` theirs)."""
+    real = f"{prefix}_real"
+    cases: dict[str, list[int]] = {}
+    for k, field in enumerate(fields):
+        d = domains[field]
+        tests = ["FINITE(value)"]
+        if math.isfinite(d.low):
+            tests.append(f"value {'>' if d.open_low else '>='} {literal(d.low, precision)}")
+        if math.isfinite(d.high) and d.high < _largest(precision):
+            tests.append(f"value {'<' if d.open_high else '<='} {literal(d.high, precision)}")
+        cases.setdefault(" && ".join(tests), []).append(k)
+    lines = [f"static int {name}(int index, {real} value)\n{{\n    switch (index) {{"]
+    for condition, indices in cases.items():
+        lines += [f"    case {k}: /* {fields[k]} */" for k in indices]
+        lines.append(f"        return {condition};")
+    lines.append("    default:\n        return 0;\n    }\n}")
+    return "\n".join(lines)
+
+
+def domain_code(fields: tuple[str, ...], runtime: bool, precision: Precision, prefix: str) -> str:
+    """C of the checks ``PREFIX_init`` and ``PREFIX_set_param`` share, from the one
+    declaration (:data:`PARAMETERS`' domains, :func:`relations_function`):
+    ``param_in_domain(index, value)`` (1: finite and within field ``index``'s domain) and,
+    with runtime parameters, ``relations_hold(params)``."""
+    real = f"{prefix}_real"
+    lines = [
+        f"/* 1 if value is finite and within the domain of field index ({prefix}_param_names;"
+        "\n * wheelload.estimators.codegen.runtime_parameters.PARAMETERS). */",
+        domain_function(fields, PARAMETERS.domains(), precision, prefix),
+    ]
+    if runtime:
+        function = relations_function()
+        body = emit_statements(
+            function, [[f"params->{name}" for name in fields]], ["margin[{}]"], precision, real
+        )
+        n = function.nnz_out(0)
+        lines.append(
+            f"\n/* 1 if the relations between fields hold (parameter_relations of\n"
+            f" * wheelload.estimators.codegen.runtime_parameters: each static load within\n"
+            f" * +-load_limit m g). */\nstatic int relations_hold(const {prefix}_params *params)"
+            f"\n{{\n    {real} margin[{n}];\n    int k, hold = 1;\n"
+            + "\n".join(f"    {line}" for line in body.splitlines())
+            + f"\n    for (k = 0; k < {n}; ++k) {{\n        hold &= margin[k] <= ZERO;\n    }}"
+            "\n    return hold;\n}"
+        )
+    return "\n".join(lines)
+
+
+def check_defaults(values: dict[str, float], runtime: bool) -> None:
+    """Raise ``ValueError`` naming each default outside its domain, or a failed relation:
+    the generated ``PREFIX_init`` would refuse the library's own defaults."""
+    domains = PARAMETERS.domains()
+    fields = runtime_fields() if runtime else ("initial_std",)
+    bad = [f"{name} = {values[name]!r} (domain {domains[name].describe()})"
+           for name in fields if not domains[name].holds(values[name])]  # fmt: skip
+    if runtime:
+        margins = relations_function()([values[name] for name in fields]).full().ravel()
+        bad += [f"static_{wheel} beyond load_limit m g" for wheel, margin in zip(WHEELS, margins)
+                if not margin <= 0.0]  # fmt: skip
+    if bad:
+        raise ValueError(
+            f"the calibration is outside what the generated C accepts: {'; '.join(bad)}"
+        )
 
 
 def runtime_fields() -> tuple[str, ...]:
@@ -120,7 +257,9 @@ def derivation_substitutions(
             ),
             "derivation_fields": "",
             "derivation_defaults": "",
-            "derivation_code": _baked_set_param(prefix),
+            "derivation_code": domain_code(("initial_std",), False, precision, prefix)
+            + "\n\n"
+            + _baked_set_param(prefix),
             "derivation_check": "",
         }
     fields = runtime_fields()
@@ -173,7 +312,7 @@ def derivation_substitutions(
         )
         + f"\n    uint32_t derived;\n    {real} record[{len(record)}];",
         "derivation_defaults": "\n".join(defaults),
-        "derivation_code": code,
+        "derivation_code": domain_code(fields, True, precision, prefix) + "\n\n" + code,
         "derivation_check": _runtime_check(prefix, record),
     }
 
@@ -195,6 +334,9 @@ def _baked_set_param(prefix: str) -> str:
     }}
     if (!isfinite(value)) {{
         return {PREFIX}_SET_NOT_FINITE;
+    }}
+    if (!param_in_domain(index, value)) {{
+        return {PREFIX}_SET_OUT_OF_RANGE;
     }}
     *field = value;
     return {PREFIX}_SET_OK;
@@ -230,6 +372,9 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
     if (!isfinite(value)) {{
         return {PREFIX}_SET_NOT_FINITE;
     }}
+    if (!param_in_domain(index, value)) {{
+        return {PREFIX}_SET_OUT_OF_RANGE;
+    }}
     if (param_feeds[index] & FIXED_BIT) {{ /* its own value only: nothing moves */
         const int same = value == *{prefix}_param_field(params, index);
         return same ? {PREFIX}_SET_OK : {PREFIX}_SET_FIXED;
@@ -249,6 +394,9 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
                 if (!isfinite(derived[k])) {{
                     return {PREFIX}_SET_NOT_FINITE;
                 }}
+                if (!param_in_domain(derived_index[k], derived[k])) {{
+                    return {PREFIX}_SET_OUT_OF_RANGE;
+                }}
                 *{prefix}_param_field(&changed, derived_index[k]) = derived[k];
             }}
         }}
@@ -264,6 +412,9 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
         if (field == index || derived_here) {{
             changed.record[j] = *{prefix}_param_field(&changed, field);
         }}
+    }}
+    if (!relations_hold(&changed)) {{
+        return {PREFIX}_SET_OUT_OF_RANGE;
     }}
     *params = changed;
     return {PREFIX}_SET_OK;

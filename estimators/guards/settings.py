@@ -82,6 +82,12 @@ class GuardSettings:
     hold_time: float = 0.15  # s a term holds a missing or gated input's last valid value
     load_limit: float = 3.0  # m g, largest |Fz| an update may reach
     total_margin: float = 0.25  # m g the total load may pass the log's own vertical-row range
+    # The step's interval against the nominal one (tuning ``sample_interval``, which sets the
+    # measurement noise): a dt below sample_interval / interval_band is refused (the log is
+    # faster than the nominal interval: the noise would be wrong; INTERVAL_SHORT), one above
+    # sample_interval * interval_band is taken and flagged (a gap, or a slower log;
+    # INTERVAL_LONG).
+    interval_band: float = 1.5  # > 1
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -91,6 +97,8 @@ class GuardSettings:
                 raise ValueError(f"guard setting {field.name} must be > 0 and finite, got {value}")
         if self.isolation_fraction >= 1.0:
             raise ValueError("guard setting isolation_fraction must be below 1")
+        if self.interval_band <= 1.0:
+            raise ValueError("guard setting interval_band must be above 1")
 
     @staticmethod
     def names() -> tuple[str, ...]:

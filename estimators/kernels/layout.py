@@ -14,11 +14,44 @@ Example
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
+
+
+@dataclass(frozen=True)
+class Domain:
+    """The values an entry may take: finite, within ``[low, high]`` (an end excluded where
+    ``open_low`` / ``open_high``); an infinite end is no bound."""
+
+    low: float = -math.inf
+    high: float = math.inf
+    open_low: bool = False
+    open_high: bool = False
+
+    def holds(self, value: float) -> bool:
+        """``value`` is finite and within the domain."""
+        value = float(value)
+        if not math.isfinite(value):
+            return False
+        above = value > self.low if self.open_low else value >= self.low
+        below = value < self.high if self.open_high else value <= self.high
+        return above and below
+
+    def describe(self) -> str:
+        """The domain as an interval, e.g. ``(0, inf)``."""
+        left = "(" if self.open_low or math.isinf(self.low) else "["
+        right = ")" if self.open_high or math.isinf(self.high) else "]"
+        return f"{left}{self.low:g}, {self.high:g}{right}"
+
+
+#: Any finite value; a value that is positive; one that is not negative.
+FINITE = Domain()
+POSITIVE = Domain(0.0, open_low=True)
+NON_NEGATIVE = Domain(0.0)
 
 
 @dataclass(frozen=True)
@@ -32,6 +65,7 @@ class Field:
     file_key: tuple[str, ...] | None = None
     doc: str = ""
     parts: tuple[str, ...] = field(default=())
+    domain: Domain = FINITE  # the values each part may take
 
     def __post_init__(self) -> None:
         size = self.size or len(self.parts) or 1
@@ -131,6 +165,10 @@ class Layout:
     def replaced(self, vector, values: Mapping):
         """``vector`` with the fields of ``values`` replaced (the rest kept)."""
         return self.pack({**{f.name: vector[self.slice(f.name)] for f in self.fields}, **values})
+
+    def domains(self) -> dict[str, Domain]:
+        """``{scalar entry: its field's domain}``, in vector order."""
+        return {part: f.domain for f in self.fields for part in f.parts}
 
     def file_keys(self) -> dict[str, tuple[str, ...]]:
         """``{field name: vehicle-file key}`` of the fields that have one."""

@@ -91,11 +91,19 @@ def step_stages(suspension, equilibrium, *, constraint_update, measurement_noise
     )
 
 
-def _interval(dt):
-    """A non-positive or non-finite interval skips the whole step: the state is held."""
-    dt_ok = interval_is_valid(dt)
+def _interval(dt, tuning):
+    """A non-positive or non-finite interval skips the whole step: the state is held; so
+    does one below the nominal interval (tuning ``sample_interval``, which sets the
+    measurement noise) over the guard setting ``interval_band`` (the log is faster than the
+    nominal interval says: ``short``); one above it times the band is taken (``long``)."""
+    nominal = TUNING.value(tuning, "sample_interval")
+    band = TUNING.value(tuning, "interval_band")
+    valid = interval_is_valid(dt)
+    short = ca.logic_and(valid, dt * band < nominal)
+    long = ca.logic_and(valid, dt > nominal * band)
+    dt_ok = ca.logic_and(valid, 1 - short)
     dt_safe = ca.if_else(dt_ok, dt, 1.0)
-    return {"dt_ok": dt_ok, "dt_used": dt_safe * dt_ok}
+    return {"dt_ok": dt_ok, "dt_used": dt_safe * dt_ok, "short": short, "long": long}
 
 
 def _payload(m, u_raw, valid_raw, dt_used, p_file, tuning):
@@ -358,15 +366,17 @@ def _monitor_next(
 def _outputs(
     x_next, A, b, mask_s, mask_c, used_s, used_c, dropped, dt_ok, y_s, y_c, S_s, S_c,
     passes_s, passes_c, released_s, released_c, valid_raw, in_range, fault, limited_pred,
-    limited_new, jump, held, bounded,
+    limited_new, jump, held, bounded, short, long,
 ):  # fmt: skip
-    """The step's reported outputs: residual, used rows, innovations and the guard flags."""
+    """The step's reported outputs: residual, used rows, innovations and the guard flags
+    (the interval's two last)."""
     available = ca.vertcat(mask_s, mask_c)
     record = _record(passes_s, passes_c, released_s, released_c)
     status = _status(
         record, available, valid_raw, in_range, fault,
         ca.logic_or(limited_pred, limited_new), jump, held, 1 - bounded,
     )  # fmt: skip
+    status = ca.vertcat(status, short, long)
     return {
         "residual": b - ca.mtimes(A, x_next),
         "used": ca.vertcat(used_s, used_c, (1 - dropped) * dt_ok),

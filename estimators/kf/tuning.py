@@ -20,7 +20,7 @@ import numpy as np
 
 from wheelload.estimators.guards.settings import GuardSettings, guard_settings_for
 from wheelload.estimators.kernels import order_statistics
-from wheelload.estimators.kernels.layout import Field, Layout
+from wheelload.estimators.kernels.layout import Domain, Field, Layout
 from wheelload.estimators.types import step_blocks
 from wheelload.models import Vehicle
 from wheelload.models.input_validity import MAX_INTERVAL
@@ -43,10 +43,48 @@ def _rows(stem: str, suffix: str = "") -> tuple[str, ...]:
 
 
 _FAULT_KEYS = {f.name for f in dataclasses.fields(FaultTuning)}
-#: The tuning vector, in order: each entry's name, unit and vehicle-file key.
+#: Largest value a tuning entry may take (``PREFIX_set_param`` and ``PREFIX_init`` of the
+#: generated C): its square stays finite in float; and the smallest of a positive one (a
+#: denormal divisor would make the step's arithmetic overflow).
+LARGEST = 1e15
+SMALLEST = 1e-9
+#: The values each tuning entry may take, where not ``(0, LARGEST]``.
+_DOMAINS = {
+    # The constant densities: a 1-sigma of 0.01 N at 100 Hz at least (a calibrated R of 0
+    # holds the loads on the gate; Q of 0 stops the filter learning). Q has no upper bound:
+    # the covariance ceiling holds any (guards/limits.py).
+    "process_noise_density": Domain(1e-6),
+    **dict.fromkeys(
+        ("suspension_noise_density", "constraint_noise_density"), Domain(1e-6, LARGEST)
+    ),  # fmt: skip
+    "sample_interval": Domain(1e-6, 1e3),  # s: 1 MHz to one sample in 17 minutes
+    "interval_band": Domain(1.0, 1e3, open_low=True),
+    "isolation_fraction": Domain(0.0, 1.0, open_low=True, open_high=True),
+    "covariance_floor": Domain(0.0, 1e6, open_low=True),  # N
+    "payload_estimate": Domain(0.0, 1.0),
+    "payload_position_std": Domain(0.0, LARGEST),  # 0: that coordinate not estimated
+}
+
+
+def _domain(field: Field) -> Field:
+    """``field`` with its domain: :data:`_DOMAINS`; ``[0, LARGEST]`` for an input-dependent
+    density or a reported-sigma coefficient (0 leaves its term out); else
+    ``[SMALLEST, LARGEST]``."""
+    if field.name in _DOMAINS:
+        domain = _DOMAINS[field.name]
+    elif field.name.startswith("sigma_") or field.name.endswith(
+        ("_rate_density", "_hub_density", "_acceleration_density")
+    ):
+        domain = Domain(0.0, LARGEST)
+    else:
+        domain = Domain(SMALLEST, LARGEST)
+    return dataclasses.replace(field, domain=domain)
+
+
+#: The tuning vector, in order: each entry's name, unit, vehicle-file key and domain.
 TUNING = Layout(
     "tuning",
-    (
+    map(_domain, (
         _filter("process_noise_density", "N^2/s", "Q = q dt I"),
         _filter("suspension_noise_density", "N^2 s", "R_s = r_s / dt I"),
         _filter("constraint_noise_density", "N^2 s, N^2 m^2 s, N^2 m^2 s",
@@ -78,7 +116,7 @@ TUNING = Layout(
         _payload("apparent_moment", "kg m"),
         # The reported-sigma coefficients (.reported_std), last.
         *[_filter(key, "see FilterTuning", "reported sigma (.reported_std)") for key in SIGMA_KEYS],
-    ),
+    )),
 )  # fmt: skip
 #: The filter's constant noise densities (vehicle file [filter]); the input-dependent ones
 #: (default 0) are :data:`INPUT_DENSITY_FIELDS`.

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import enum
+import sys
 from pathlib import Path
 
 from wheelload.estimators import (
@@ -45,7 +46,6 @@ class Estimator(enum.Enum):
 KF_OPTIONS = {
     "params": ParamMode.RUNTIME.value,
     "prefix": "wheelload_kf",
-    "sample_interval": CodegenOptions().sample_interval,
     "tyre_forces": False,
     "fmu": False,
 }
@@ -53,7 +53,6 @@ MHE_OPTIONS = {
     "horizon": 10,
     "constraint": Constraint.SOFT.value,
     "bounded": False,
-    "dt": 0.01,
     "suspension_loss": Loss.QUADRATIC.value,
     "constraint_loss": Loss.QUADRATIC.value,
     "huber_threshold": 2.0,
@@ -61,6 +60,9 @@ MHE_OPTIONS = {
     "lag": 0,
     "arrival": Arrival.KALMAN.value,
 }
+#: The nominal sample interval's option, and its deprecated spellings (kf, mhe).
+INTERVAL_OPTION = "--interval"
+DEPRECATED_INTERVAL = ("--sample-interval", "--dt")
 #: ``--bias-states`` choices.
 BIAS_CHOICES = {
     "none": BiasStates.NONE,
@@ -105,6 +107,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=Precision.DOUBLE.value,
         help="double (default) or float: kf: the whole library; mhe: OSQP's OSQPFloat",
     )
+    parser.add_argument(
+        INTERVAL_OPTION,
+        type=float,
+        metavar="SECONDS",
+        help="the logger's nominal sample interval (default 0.01). kf: the default "
+        "measurement noise (params sample_interval, settable) and the tyre step's "
+        "discretisation; a step below it over interval_band is refused (INTERVAL_SHORT). "
+        "mhe: the cost scale, the steady-state arrival weight and the linked filter's "
+        "nominal interval",
+    )
+    for alias in DEPRECATED_INTERVAL:
+        parser.add_argument(
+            alias, type=float, dest=f"deprecated_{alias[2:].replace('-', '_')}",
+            metavar="SECONDS", help=f"deprecated: use {INTERVAL_OPTION}",
+        )  # fmt: skip
     kf = parser.add_argument_group("kf only")
     kf.add_argument(
         "--params",
@@ -112,12 +129,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="runtime (default): calibration in the parameter struct; baked: folded into the code",
     )
     kf.add_argument("--prefix", help="C symbol prefix (default wheelload_kf)")
-    kf.add_argument(
-        "--sample-interval",
-        type=float,
-        help="the logger's nominal interval [s] (default 0.01): the default measurement noise "
-        "and the gain of the rate-derivative filter",
-    )
     kf.add_argument(
         "--tyre-forces",
         action="store_const",
@@ -132,7 +143,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         const=True,
         help="write OUT/PREFIX.fmu instead: a source FMU (FMI 3.0 co-simulation) of the "
         "combined F_x, F_y, F_z step (implies --tyre-forces; needs --params runtime), "
-        "the parameters tunable, a fixed step of --sample-interval",
+        "the parameters tunable, a fixed step of --interval",
     )
     mhe = parser.add_argument_group("mhe only")
     mhe.add_argument("--horizon", type=int, help="window length N (default 10)")
@@ -142,7 +153,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="equilibrium as a penalty (soft, default) or an equality (hard)",
     )
     mhe.add_argument("--bounded", action="store_const", const=True, help="bounds 0 <= Fz")
-    mhe.add_argument("--dt", type=float, help="the fixed sample interval [s] (default 0.01)")
     losses = [loss.value for loss in Loss]
     mhe.add_argument("--suspension-loss", choices=losses, help="default quadratic")
     mhe.add_argument("--constraint-loss", choices=losses, help="default quadratic (soft only)")
@@ -167,6 +177,24 @@ def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estima
             for name, default in own.items()}  # fmt: skip
 
 
+def interval(args: argparse.Namespace) -> float:
+    """``--interval``, or a deprecated spelling of it (said on stderr); two different values
+    are an error."""
+    given = {INTERVAL_OPTION: args.interval}
+    for alias in DEPRECATED_INTERVAL:
+        value = getattr(args, f"deprecated_{alias[2:].replace('-', '_')}")
+        if value is not None:
+            print(f"wheelload codegen: {alias} is deprecated: use {INTERVAL_OPTION}",
+                  file=sys.stderr)  # fmt: skip
+            given[alias] = value
+    values = {name: value for name, value in given.items() if value is not None}
+    if len(set(values.values())) > 1:
+        raise ValueError(
+            f"{' and '.join(values)} give different intervals: give {INTERVAL_OPTION} only"
+        )
+    return next(iter(values.values()), CodegenOptions().sample_interval)
+
+
 def run(args: argparse.Namespace) -> int:
     estimator = Estimator(args.estimator)
     vehicle_path = vehicle_file(args)
@@ -178,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
         precision=Precision(args.precision),
         params=ParamMode(values["params"]),
         prefix=values["prefix"],
-        sample_interval=values["sample_interval"],
+        sample_interval=interval(args),
         tyre_forces=values["tyre_forces"],
     )
     if values["fmu"]:
@@ -225,14 +253,15 @@ def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
     )
     precision = Precision(args.precision)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
+    dt = interval(args)
     folder = generate_mhe(
-        vehicle, settings, Path(args.out), dt=values["dt"], precision=precision,
+        vehicle, settings, Path(args.out), dt=dt, precision=precision,
         vehicle_path=vehicle_path, force=args.force,
     )  # fmt: skip
     realised = embedded_settings(settings, filter_linked=True, precision=precision)
     linked = "two-stage KF" if settings.constraint is Constraint.SOFT else "projection KF"
     print(
         f"written the embedded {realised.label()} "
-        f"(dt = {values['dt']} s, OSQP in {precision.value}, {linked} linked in) to {folder}"
+        f"(dt = {dt} s, OSQP in {precision.value}, {linked} linked in) to {folder}"
     )
     return 0

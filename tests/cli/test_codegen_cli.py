@@ -41,7 +41,7 @@ def test_codegen_command_names_a_bad_prefix(tmp_path, capsys):
 def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
     out = tmp_path / "mhe"
     argv = ["codegen", "--estimator", "mhe", "--out", str(out), "--horizon", "5",
-            "--constraint", "hard", "--bounded", "--dt", "0.005",
+            "--constraint", "hard", "--bounded", "--interval", "0.005",
             "--precision", "float"]  # fmt: skip
     assert main(argv) == 0
     printed = capsys.readouterr().out

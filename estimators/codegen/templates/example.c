@@ -5,7 +5,8 @@
  *     ${prefix}_example LOG.csv [ESTIMATES.csv|- [NAME=VALUE ...]]
  *
  * NAME=VALUE pairs override fields of ${prefix}_default_params (see
- * ${prefix}_param_names), e.g. spring_front=65000, without regenerating,
+ * ${prefix}_param_names), e.g. spring_front=65000, without regenerating (built with the tyre
+ * step, tyre.NAME=VALUE a field of ${prefix}_tyre_params, e.g. tyre.yaw_inertia=2900),
  * through ${prefix}_set_param: the derived parameters follow (a spring moves
  * the roll split), in any order of the pairs; a refused one is reported.
  * LOG.csv has a header row and the columns of the wheelload log format, in
@@ -353,8 +354,46 @@ static void write_row(FILE *out, double t, const ${prefix}_output *estimate)
     fprintf(out, ",%lu", (unsigned long)estimate->flags);
 }
 
-/* Apply one NAME=VALUE override with ${prefix}_set_param; 0 (reported) if the
- * name is unknown, the value not a decimal number, or the library refuses it. */
+#if TYRE_FORCES
+/* The tyre step's parameters: its defaults, then the NAME=VALUE overrides of its fields. */
+static ${prefix}_tyre_params tyre_params;
+
+/* Apply tyre.NAME=VALUE to a field of the tyre step's parameters: 1 set, 0 refused
+ * (reported), -1 not one of its names. */
+static int override_tyre(const char *assignment, const char *equals)
+{
+    static const char prefix[] = "tyre.";
+    const char *field = assignment + (sizeof prefix - 1);
+    int k;
+    if (strncmp(assignment, prefix, sizeof prefix - 1) != 0) {
+        return -1;
+    }
+    for (k = 0; k < ${PREFIX}_TYRE_N_PARAMS; ++k) {
+        const char *name = ${prefix}_tyre_param_names[k];
+        if (strlen(name) == (size_t)(equals - field) && strncmp(name, field, strlen(name)) == 0) {
+            double value;
+            int status;
+            if (!is_decimal(equals + 1) || number(equals + 1, REAL_MAX, &value) != FIELD_OK) {
+                fprintf(stderr, "%s: the value is not a decimal number\n", assignment);
+                return 0;
+            }
+            status = ${prefix}_tyre_set_param(&tyre_params, k, (${prefix}_real)value);
+            if (status != ${PREFIX}_SET_OK) {
+                fprintf(stderr, "%s: refused by ${prefix}_tyre_set_param (status %d: %s)\n",
+                        assignment, status,
+                        status == ${PREFIX}_SET_FIXED ? "fixed by the observers' discretisation"
+                                                      : "not finite or outside its range");
+            }
+            return status == ${PREFIX}_SET_OK;
+        }
+    }
+    return -1;
+}
+#endif
+
+/* Apply one NAME=VALUE override with ${prefix}_set_param (or ${prefix}_tyre_set_param); 0
+ * (reported) if the name is unknown, the value not a decimal number, or the library refuses
+ * it. */
 static int override(${prefix}_params *params, const char *assignment)
 {
     const char *equals = strchr(assignment, '=');
@@ -377,6 +416,11 @@ static int override(${prefix}_params *params, const char *assignment)
                             "library does not hold: regenerate the library from the changed "
                             "vehicle file\n",
                             assignment, name);
+                } else if (status == ${PREFIX}_SET_OUT_OF_RANGE) {
+                    fprintf(stderr,
+                            "%s: '%s', a parameter derived from it, or a static load against "
+                            "load_limit m g is outside its range (see ${prefix}.h)\n",
+                            assignment, name);
                 } else if (status != ${PREFIX}_SET_OK) {
                     fprintf(stderr, "%s: '%s' or a parameter derived from it is not finite\n",
                             assignment, name);
@@ -385,6 +429,14 @@ static int override(${prefix}_params *params, const char *assignment)
             }
         }
     }
+#if TYRE_FORCES
+    if (equals != NULL) {
+        const int tyre = override_tyre(assignment, equals);
+        if (tyre >= 0) {
+            return tyre;
+        }
+    }
+#endif
     fprintf(stderr, "%s: unknown parameter (NAME=VALUE, NAME one of %s_param_names)\n",
             assignment, "${prefix}");
     return 0;
@@ -442,7 +494,11 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
 #endif
     double t = t_first[1], t_previous = t_first[0];
     int k, status = ${prefix}_init(&state, params);
-    ${prefix}_rate_filter_reset(&rates);
+    ${prefix}_rate_filter_reset(&rates, ${nominal_interval});
+    if (status > ${PREFIX}_N_PARAMS) {
+        fprintf(stderr, "a static load is beyond load_limit m g\n");
+        return 2;
+    }
     if (status > 0) {
         fprintf(stderr, "invalid parameter '%s'\n", ${prefix}_param_names[status - 1]);
         return 2;
@@ -469,7 +525,8 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
         ${prefix}_step(&state, params, &row[k].input, dt, &estimate);
         write_row(out, k ? t : t_previous, &estimate);
 #if TYRE_FORCES
-        ${prefix}_tyre_step(&tyre, &row[k].input, row[k].wheels, &estimate, dt, &forces);
+        ${prefix}_tyre_step(&tyre, &tyre_params, &row[k].input, row[k].wheels, &estimate, dt,
+                            &forces);
         write_forces(out, &forces);
 #endif
         fputc('\n', out);
@@ -481,6 +538,12 @@ static int run(log_reader *log, int n_columns, const int *column, const double *
             }
         }
     }
+    if (state.interval_refusals > 0u) {
+        fprintf(stderr, "%lu steps refused (status bit INTERVAL_SHORT): their interval is "
+                "below sample_interval / interval_band = %g s / %g; give the log's interval: "
+                "sample_interval=SECONDS\n", (unsigned long)state.interval_refusals,
+                (double)${nominal_interval}, (double)${interval_band});
+    }${tyre_refusal_report}
     return status < 0 ? 2 : 0;
 }
 
@@ -506,6 +569,9 @@ int main(int argc, char **argv)
         return 2;
     }
     params = ${prefix}_default_params;
+#if TYRE_FORCES
+    tyre_params = ${prefix}_tyre_default_params;
+#endif
     for (k = 3; k < argc; ++k) {
         if (!override(&params, argv[k])) {
             return 2;

@@ -64,6 +64,7 @@ typedef struct {
     ${prefix}_real wheels[${PREFIX}_TYRE_N_WHEEL];
     ${prefix}_rate_filter rates;
     ${prefix}_tyre_state tyre;
+    ${prefix}_tyre_params tyre_params; /* the tyre step's vehicle numbers: the file's */
     double outputs[N_OUTPUTS];
     fmi3UInt32 status;
     fmi3UInt32 faults;
@@ -121,8 +122,8 @@ static void run_sample(instance_t *instance)
     int k;
     ${prefix}_rate_filter_step(&instance->rates, &instance->input);
     (void)${prefix}_step(&instance->state, &instance->params, &instance->input, dt, &estimate);
-    (void)${prefix}_tyre_step(&instance->tyre, &instance->input, instance->wheels, &estimate, dt,
-                              &forces);
+    (void)${prefix}_tyre_step(&instance->tyre, &instance->tyre_params, &instance->input,
+                              instance->wheels, &estimate, dt, &forces);
     for (k = 0; k < 4; ++k) {
 ${output_copy}
     }
@@ -308,7 +309,8 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
         return refuse(self, "fmi3ExitInitializationMode", why);
     }
     (void)${prefix}_init(&self->state, &self->params);
-    ${prefix}_rate_filter_reset(&self->rates);
+    (void)${prefix}_rate_filter_reset(&self->rates, (${prefix}_real)INTERVAL);
+    self->tyre_params = ${prefix}_tyre_default_params;
     ${prefix}_tyre_reset(&self->tyre);
     self->samples = 0ul;
     initial_outputs(self);

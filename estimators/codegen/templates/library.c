@@ -114,6 +114,7 @@ ${static_loads}
     for (k = 0; k < 8; ++k) {
         state->mass_properties[k] = ZERO;
     }
+    state->interval_refusals = 0u;
     state->P[0] = variance;
     state->P[4] = variance;
     state->P[7] = variance;
@@ -171,6 +172,7 @@ ${input_copy}
         for (k = 0; k < ${n_status}; ++k) {
             flags |= status[k] > HALF ? guard_flags[k] : 0u;
         }
+        state->interval_refusals += status[${short_index}] > HALF ? 1u : 0u;
         for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
             faults |= fault[k] > HALF ? 1u << k : 0u;
         }
@@ -233,18 +235,62 @@ ${batch_body}
     }
 }
 
-/* The rate filter's steady-state gain and interval (estimators/kernels/kinematic.py). */
-static const ${prefix}_real rate_gain[2] = {${rate_gain_0}, ${rate_gain_1}};
-static const ${prefix}_real rate_interval = ${rate_interval};
+/* The rate filter's jerk density and gyro noise density (RateDerivativeFilter,
+ * estimators/logs/signals.py). */
+#define RATE_JERK_DENSITY ${rate_jerk_density}
+#define RATE_GYRO_NOISE_DENSITY ${rate_gyro_noise_density}
+#define RATE_MAX_ITERATIONS 100000
 
-void ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter)
+/* The steady-state gain of the kinematic filter at interval T (kinematic.steady_gain):
+ * the Riccati recursion from P = Q until two gains agree to 1e-13 relative. */
+static void rate_filter_gain(${prefix}_real T, ${prefix}_real gain[2])
+{
+    const ${prefix}_real q = RATE_JERK_DENSITY;
+    const ${prefix}_real r = RATE_GYRO_NOISE_DENSITY * RATE_GYRO_NOISE_DENSITY
+                             / (${PREFIX}_REAL_C(2.0) * T);
+    const ${prefix}_real Q00 = q * (T * T * T / ${PREFIX}_REAL_C(3.0));
+    const ${prefix}_real Q01 = q * (T * T / ${PREFIX}_REAL_C(2.0));
+    const ${prefix}_real Q11 = q * T;
+    ${prefix}_real P00 = Q00, P01 = Q01, P10 = Q01, P11 = Q11, K0 = ZERO, K1 = ZERO;
+    int k;
+    for (k = 0; k < RATE_MAX_ITERATIONS; ++k) {
+        /* M = (F P) F' + Q with F = [1 T; 0 1], in numpy's order */
+        const ${prefix}_real a00 = P00 + T * P10, a01 = P01 + T * P11;
+        const ${prefix}_real m00 = a00 + a01 * T + Q00, m01 = a01 + Q01;
+        const ${prefix}_real m10 = P10 + P11 * T + Q01, m11 = P11 + Q11;
+        const ${prefix}_real g0 = m00 / (m00 + r), g1 = m10 / (m00 + r);
+        const int same = ${fabs}(g0 - K0) <= ${PREFIX}_REAL_C(1e-13) * ${fabs}(K0)
+                         && ${fabs}(g1 - K1) <= ${PREFIX}_REAL_C(1e-13) * ${fabs}(K1);
+        P00 = m00 - g0 * m00;
+        P01 = m01 - g0 * m01;
+        P10 = m10 - g1 * m00;
+        P11 = m11 - g1 * m01;
+        K0 = g0;
+        K1 = g1;
+        if (same) {
+            break;
+        }
+    }
+    gain[0] = K0;
+    gain[1] = K1;
+}
+
+int ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter, ${prefix}_real interval)
 {
     int axis;
+    const int ok = FINITE(interval) && interval > ZERO;
     for (axis = 0; axis < 3; ++axis) {
         filter->w[axis] = ${PREFIX}_REAL_C(0.0);
         filter->w_dot[axis] = ${PREFIX}_REAL_C(0.0);
         filter->running[axis] = 0;
     }
+    filter->interval = ok ? interval : ZERO;
+    filter->gain[0] = ZERO;
+    filter->gain[1] = ZERO;
+    if (ok) {
+        rate_filter_gain(interval, filter->gain);
+    }
+    return !ok;
 }
 
 void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *input)
@@ -255,9 +301,9 @@ void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *
     for (axis = 0; axis < 3; ++axis) {
         const ${prefix}_real z = rate[axis];
         ${prefix}_real predicted, residual;
-        if (!isfinite(z)) {
+        if (!isfinite(z) || !(filter->interval > ZERO)) {
             filter->running[axis] = 0;
-            out[axis] = z;
+            out[axis] = isfinite(z) ? (${prefix}_real)NAN : z;
             continue;
         }
         if (!filter->running[axis]) { /* a run starts at [w, 0] */
@@ -266,10 +312,10 @@ void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *
             filter->running[axis] = 1;
         }
         /* x- = F x; x = x- + K (z - x-_0), in the order of the Python kernel */
-        predicted = filter->w[axis] + rate_interval * filter->w_dot[axis];
+        predicted = filter->w[axis] + filter->interval * filter->w_dot[axis];
         residual = z - predicted;
-        filter->w[axis] = predicted + rate_gain[0] * residual;
-        filter->w_dot[axis] = filter->w_dot[axis] + rate_gain[1] * residual;
+        filter->w[axis] = predicted + filter->gain[0] * residual;
+        filter->w_dot[axis] = filter->w_dot[axis] + filter->gain[1] * residual;
         out[axis] = filter->w_dot[axis];
     }
     input->wx_dot = out[0];

@@ -18,10 +18,10 @@
         return WHEELLOAD_MHE_NOT_RESET;
     }
     kf_covariance(mhe, previous_P);
-    if (!(dt > 0.0 && dt < MAX_INTERVAL)) {
+    if (!(dt > 0.0 && dt < MAX_INTERVAL) || dt * INTERVAL_BAND < DT) {
         memcpy(out->loads, mhe->HIST[N - 1], sizeof out->loads);
         kf_held(mhe, u, dt, mhe->HIST[N - 1], out->std, out->residual);
-        out->flags = 255u;
+        out->flags = dt * INTERVAL_BAND < DT && dt > 0.0 ? 255u | INTERVAL_SHORT : 255u;
         return 0;
     }
     for (int i = 0; i < N_INPUTS; ++i) {

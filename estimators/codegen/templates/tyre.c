@@ -10,12 +10,73 @@
 #define FINITE(v) (${fabs}(v) <= ${real_max})
 #define SQRT ${sqrt}
 
+const ${prefix}_real ${prefix}_tyre_interval = ${rate_interval};
+const ${prefix}_real ${prefix}_tyre_interval_tolerance = ${tyre_interval_tolerance};
+
+const ${prefix}_tyre_params ${prefix}_tyre_default_params = {
+${tyre_param_defaults}
+};
+
+const char *const ${prefix}_tyre_param_names[${PREFIX}_TYRE_N_PARAMS] = {
+${tyre_param_names}
+};
+
+/* 1: a spin inertia or radius, fixed by the observers' discretisation. */
+static const int tyre_fixed[${PREFIX}_TYRE_N_PARAMS] = {${tyre_fixed}};
+
+${prefix}_real *${prefix}_tyre_param_field(${prefix}_tyre_params *params, int index)
+{
+    switch (index) {
+${tyre_param_cases}
+    default:
+        return 0;
+    }
+}
+
+/* 1 if value is finite and within the domain of field index (the declaration of
+ * wheelload.estimators.codegen.tyre). */
+${tyre_domain_code}
+
+int ${prefix}_tyre_set_param(${prefix}_tyre_params *params, int index, ${prefix}_real value)
+{
+    ${prefix}_real *field = ${prefix}_tyre_param_field(params, index);
+    ${prefix}_tyre_params defaults = ${prefix}_tyre_default_params;
+    if (field == 0) {
+        return ${PREFIX}_SET_UNKNOWN;
+    }
+    if (!isfinite(value)) {
+        return ${PREFIX}_SET_NOT_FINITE;
+    }
+    if (!tyre_param_in_domain(index, value)) {
+        return ${PREFIX}_SET_OUT_OF_RANGE;
+    }
+    if (tyre_fixed[index] && value != *${prefix}_tyre_param_field(&defaults, index)) {
+        return ${PREFIX}_SET_FIXED;
+    }
+    *field = value;
+    return ${PREFIX}_SET_OK;
+}
+
+int ${prefix}_tyre_check_params(const ${prefix}_tyre_params *params)
+{
+    ${prefix}_tyre_params copy = *params, defaults = ${prefix}_tyre_default_params;
+    int k;
+    for (k = 0; k < ${PREFIX}_TYRE_N_PARAMS; ++k) {
+        const ${prefix}_real value = *${prefix}_tyre_param_field(&copy, k);
+        if (!tyre_param_in_domain(k, value)
+            || (tyre_fixed[k] && value != *${prefix}_tyre_param_field(&defaults, k))) {
+            return k + 1;
+        }
+    }
+    return 0;
+}
+
 const char *const ${prefix}_tyre_wheel_names[${PREFIX}_TYRE_N_WHEEL] = {
 ${wheel_names}
 };
 
 /* The observers' step (CasADi Function tyre_kernel): inputs core, wheels, wheels_valid,
- * u, u_valid, loads, mass_properties, dt; outputs core_next, fx, fx_std, fy, fy_std, high_slip.
+ * u, u_valid, loads, mass_properties, dt, params; outputs core_next, fx, fx_std, fy, fy_std, high_slip.
  * ${tyre_flops} arithmetic operations. */
 static void ${prefix}_tyre_kernel(const ${prefix}_real core[${PREFIX}_TYRE_N_CORE],
                                   const ${prefix}_real wheels[${PREFIX}_TYRE_N_WHEEL],
@@ -24,6 +85,7 @@ static void ${prefix}_tyre_kernel(const ${prefix}_real core[${PREFIX}_TYRE_N_COR
                                   const ${prefix}_real u_valid[${PREFIX}_N_INPUTS],
                                   const ${prefix}_real loads[4],
                                   const ${prefix}_real mass_properties[4], ${prefix}_real dt,
+                                  const ${prefix}_tyre_params *params,
                                   ${prefix}_real core_next[${PREFIX}_TYRE_N_CORE],
                                   ${prefix}_real fx[4], ${prefix}_real fx_std[4],
                                   ${prefix}_real fy[4], ${prefix}_real fy_std[4],
@@ -41,9 +103,11 @@ void ${prefix}_tyre_reset(${prefix}_tyre_state *state)
     for (k = 0; k < 16; ++k) {
         state->last[k] = ZERO;
     }
+    state->interval_refusals = 0u;
 }
 
-int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_input *input,
+int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_tyre_params *params,
+                        const ${prefix}_input *input,
                         const ${prefix}_real wheels[${PREFIX}_TYRE_N_WHEEL],
                         const ${prefix}_output *loads, ${prefix}_real dt,
                         ${prefix}_tyre_output *output)
@@ -52,7 +116,7 @@ int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_input *inpu
     ${prefix}_real w[${PREFIX}_TYRE_N_WHEEL], w_valid[${PREFIX}_TYRE_N_WHEEL];
     ${prefix}_real next[${PREFIX}_TYRE_N_CORE], fx[4], fx_std[4], fy[4], fy_std[4];
     ${prefix}_real slip[1] = {ZERO};
-    int k, accepted = 0;
+    int k, accepted = 0, off_interval = 0;
 ${input_copy}
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
         const int finite = FINITE(u[k]);
@@ -65,8 +129,13 @@ ${input_copy}
         w[k] = finite ? wheels[k] : ZERO;
     }
     if (FINITE(dt) && dt > ZERO) {
+        off_interval = !(${fabs}(dt - ${prefix}_tyre_interval) <= ${prefix}_tyre_interval_tolerance);
+        state->interval_refusals += off_interval ? 1u : 0u;
+    }
+    if (FINITE(dt) && dt > ZERO && !off_interval) {
         ${prefix}_tyre_kernel(state->core, w, w_valid, u, u_valid, loads->loads,
-                              loads->mass_properties, dt, next, fx, fx_std, fy, fy_std, slip);
+                              loads->mass_properties, dt, params, next, fx, fx_std, fy,
+                              fy_std, slip);
         accepted = 1;
         for (k = 0; k < ${PREFIX}_TYRE_N_CORE; ++k) {
             accepted &= FINITE(next[k]);
@@ -94,5 +163,6 @@ ${input_copy}
     }
     output->high_slip = accepted && slip[0] > HALF;
     output->rejected = !accepted;
+    output->interval_refused = off_interval;
     return output->rejected;
 }

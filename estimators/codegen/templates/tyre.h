@@ -6,15 +6,20 @@
  * with wheelload codegen --tyre-forces.
  *
  * The spin observers are discretised at ${rate_interval} s, the library's sample
- * interval: a log at another rate needs the library generated for it. The vehicle's
- * numbers this step uses (mass, yaw inertia, geometry, wheel inertias and radii, tyre
- * coefficients) are folded in: ${prefix}_set_param does not reach them; regenerate for a
- * changed vehicle file.
+ * interval (${prefix}_tyre_interval): a step whose dt differs from it by more than
+ * ${prefix}_tyre_interval_tolerance is refused (output rejected and interval_refused, the
+ * state's interval_refusals counted, the last forces repeated); a log at another rate
+ * needs the library generated for it (wheelload codegen --interval). The vehicle's
+ * numbers this step uses are run-time parameters (${prefix}_tyre_params, set with
+ * ${prefix}_tyre_set_param under the rules of ${prefix}_set_param): ${tyre_settable_names};
+ * the wheel centres follow lf, lr and the tracks. The spin inertias and loaded radii
+ * (${tyre_fixed_names}) set the observers' discretisation: readable fields, another value
+ * refused (SET_FIXED: regenerate for a changed vehicle file).
  * Tyre frame (ISO 8855): x along the wheel heading in the road plane, y to its left.
  *
  * Usage, one sample (the combined step of tyre-forces):
  *     ${prefix}_step(&state, &params, &input, dt, &out);
- *     ${prefix}_tyre_step(&tyre, &input, wheels, &out, dt, &forces);
+ *     ${prefix}_tyre_step(&tyre, &tyre_params, &input, wheels, &out, dt, &forces);
  */
 #ifndef ${PREFIX}_TYRE_H
 #define ${PREFIX}_TYRE_H
@@ -33,7 +38,13 @@ extern const char *const ${prefix}_tyre_wheel_names[${PREFIX}_TYRE_N_WHEEL];
 typedef struct {
     ${prefix}_real core[${PREFIX}_TYRE_N_CORE];
     ${prefix}_real last[16]; /* fx, fx_std, fy, fy_std of the last accepted step */
+    uint32_t interval_refusals; /* steps refused for their interval */
 } ${prefix}_tyre_state;
+
+/* The interval [s] the observers are discretised at, and the largest difference of a
+ * step's dt from it that is taken. */
+extern const ${prefix}_real ${prefix}_tyre_interval;
+extern const ${prefix}_real ${prefix}_tyre_interval_tolerance;
 
 typedef struct {
     ${prefix}_real fx[4];     /* longitudinal tyre forces [N] */
@@ -41,19 +52,44 @@ typedef struct {
     ${prefix}_real fy[4];     /* lateral tyre forces [N] */
     ${prefix}_real fy_std[4]; /* their standard deviations [N] */
     int high_slip;            /* 1: a wheel's spin changed fast (covariances switched) */
-    int rejected;             /* 1: the step was refused (dt not > 0 or a non-finite
-                               * result): state kept, the last forces repeated */
+    int rejected;             /* 1: the step was refused (dt not > 0, dt not the tyre
+                               * interval, or a non-finite result): state kept, the last
+                               * forces repeated */
+    int interval_refused;     /* 1: refused for dt not ${prefix}_tyre_interval */
 } ${prefix}_tyre_output;
+
+/* The tyre step's run-time parameters (SI units, names in ${prefix}_tyre_param_names). */
+#define ${PREFIX}_TYRE_N_PARAMS ${n_tyre_params}
+typedef struct {
+${tyre_param_fields}
+} ${prefix}_tyre_params;
+
+/* The vehicle file's values, and the field names in order. */
+extern const ${prefix}_tyre_params ${prefix}_tyre_default_params;
+extern const char *const ${prefix}_tyre_param_names[${PREFIX}_TYRE_N_PARAMS];
+
+/* Address of field `index` of params, or a null pointer for an index out of range. */
+${prefix}_real *${prefix}_tyre_param_field(${prefix}_tyre_params *params, int index);
+
+/* Set field `index` to value: ${PREFIX}_SET_OK, or (params unchanged, the previous value in
+ * force) ${PREFIX}_SET_UNKNOWN, _NOT_FINITE, _OUT_OF_RANGE (outside the field's domain:
+ * wheelload.estimators.codegen.tyre), _FIXED (another spin inertia or radius). */
+int ${prefix}_tyre_set_param(${prefix}_tyre_params *params, int index, ${prefix}_real value);
+
+/* The same checks on a whole struct (one written directly): 0, or 1 + the index of the
+ * first field outside its domain or (fixed) not the generated value. */
+int ${prefix}_tyre_check_params(const ${prefix}_tyre_params *params);
 
 /* Arithmetic operations of one tyre step (kernel, as generated). */
 #define ${PREFIX}_TYRE_FLOPS_PER_STEP ${tyre_flops}
 
 void ${prefix}_tyre_reset(${prefix}_tyre_state *state);
 
-/* One sample: input and loads are the sample's ${prefix}_step input and output (the
+/* One sample with params (checked by ${prefix}_tyre_check_params): input and loads are the sample's ${prefix}_step input and output (the
  * rate derivatives are not used), wheels the channels above, dt [s] the interval before
  * the sample. Returns output->rejected. */
-int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_input *input,
+int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_tyre_params *params,
+                        const ${prefix}_input *input,
                         const ${prefix}_real wheels[${PREFIX}_TYRE_N_WHEEL],
                         const ${prefix}_output *loads, ${prefix}_real dt,
                         ${prefix}_tyre_output *output);

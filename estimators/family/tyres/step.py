@@ -95,7 +95,9 @@ def _select(condition, when_true, when_false):
     return ca.if_else(condition, when_true, when_false, True)
 
 
-def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float]) -> ca.Function:
+def tyre_core_function(
+    constants, settings, high_slip_scales: tuple[float, float], parameters: ca.SX | None = None
+) -> ca.Function:
     """``tyre_core(core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, speed,
     speed_valid, loads, mass_properties, dt, observer) -> (core_next, fx, fx_std, fy, fy_std,
     high_slip)`` (module docstring).
@@ -104,6 +106,8 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     ``settings``: :class:`~wheelload.estimators.family.tyres.forces.TyreSettings`;
     ``high_slip_scales``: the factors on Q and R in high slip; ``mass_properties``: the
     KF's online ``[m', δx, y_c', h']`` (the file's where the payload is not estimated).
+    ``parameters``: the symbols some of the ``constants`` are made of (the generated C's
+    run-time tyre parameters), then the Function's last input ``parameters``.
     """
     k, s = constants, settings
     core = ca.SX.sym("core", CORE.size)
@@ -227,10 +231,13 @@ def tyre_core_function(constants, settings, high_slip_scales: tuple[float, float
     )  # fmt: skip
     inputs = [core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, speed,
               speed_valid, loads, mass_properties, dt, observer]  # fmt: skip
+    names = list(CORE_INPUTS)
+    if parameters is not None:
+        inputs, names = [*inputs, parameters], [*names, "parameters"]
     return ca.Function(
         "tyre_core",
         inputs,
         [core_next, fx, fx_std, fy, fy_std, high_slip],
-        list(CORE_INPUTS),
+        names,
         list(CORE_OUTPUTS),
     )

@@ -4,6 +4,8 @@ Python ``tyre-forces`` method on a plant lane change (real gcc, strict flags, CS
 One iso-dlc simulation (1353 samples), one library per precision; about 20 s in all.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from c_parity import assert_c_equals_python, kf_program, run_program
@@ -14,6 +16,7 @@ from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.registry import build
 from wheelload.estimators.result import StepFlag
 from wheelload.models import example_vehicle_path, load_vehicle
+from wheelload.models.vehicle.wheel_geometry import wheel_centres
 from wheelload.studies.drive.scenario_runner import run_scenario
 
 WHEELS = ("fl", "fr", "rl", "rr")
@@ -98,3 +101,43 @@ def test_example_names_a_missing_wheel_channel(tmp_path_factory, logs):
     result = run_program(binary, bare, "-", check=False)
     assert result.returncode == 2
     assert "missing column 'torque_rr'" in result.stderr
+
+
+def test_the_tyre_numbers_set_at_run_time_equal_python_with_those_numbers(tmp_path_factory, logs):
+    """``tyre.NAME=VALUE`` (``wheelload_kf_tyre_set_param``): a yaw inertia and a wheelbase
+    split set at run time give the Python method whose constants have them (the wheel
+    centres following lf), to 1e-9 N; the changed numbers move F_y by more than 1 N."""
+    binary = _example(tmp_path_factory, Precision.DOUBLE)
+    out = logs["clean"].with_name("set.csv")
+    result = run_program(binary, logs["clean"], out, "tyre.yaw_inertia=3000", "tyre.lf=1.3",
+                         check=False)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    import pandas as pd
+
+    c = pd.read_csv(out)
+    vehicle = load_vehicle(example_vehicle_path())
+    method = build("tyre-forces", vehicle)
+    k = method.constants
+    geometry = dataclasses.replace(vehicle.geometry, lf=1.3)
+    method.constants = dataclasses.replace(k, yaw_inertia=3000.0, lf=1.3,
+                                           positions=wheel_centres(geometry))  # fmt: skip
+    python = method.run(read_log(logs["clean"]))
+    for name, values in (("fx", python.fx), ("fy", python.fy)):
+        assert_c_equals_python(_columns(c, name), values, rtol=0, atol=1e-9, what=name)
+    assert np.abs(_columns(c, "fy") - _python(logs["clean"]).fy).max() > 1.0
+
+
+@pytest.mark.parametrize(
+    ("assignment", "reason"),
+    [("tyre.radius_fl=0.3", "fixed by the observers' discretisation"),
+     ("tyre.rolling=-1", "outside its range"), ("tyre.yaw_inertia=0", "outside its range")],
+)  # fmt: skip
+def test_a_refused_tyre_number_is_named(tmp_path_factory, logs, assignment, reason):
+    """A spin radius (it sets the discretisation) or a value outside its domain: refused,
+    exit status 2, the assignment and the reason named, no estimates written."""
+    binary = _example(tmp_path_factory, Precision.DOUBLE)
+    out = logs["clean"].with_name("refused.csv")
+    result = run_program(binary, logs["clean"], out, assignment, check=False)
+    assert result.returncode == 2
+    assert assignment in result.stderr and reason in result.stderr
+    assert not out.exists()
