@@ -11,21 +11,25 @@ from __future__ import annotations
 
 import argparse
 import enum
-import sys
 from pathlib import Path
 
 from wheelload.estimators import (
     Arrival,
-    BiasStates,
     Constraint,
     Loss,
-    MheSettings,
     Precision,
-    ResidualLoss,
 )
 from wheelload.estimators.codegen.kf import CodegenOptions, ParamMode, generate
 from wheelload.estimators.logs.output_files import check_output_folder
 from wheelload.models import load_vehicle
+from wheelload.studies.codegen_options import (
+    BIAS_CHOICES,
+    DEPRECATED_INTERVAL,
+    INTERVAL_OPTION,
+    interval,
+    mhe_settings,
+    own_options,
+)
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     CommandTraits,
@@ -59,21 +63,6 @@ MHE_OPTIONS = {
     "bias_states": "none",
     "lag": 0,
     "arrival": Arrival.KALMAN.value,
-}
-#: The nominal sample interval's option, and its deprecated spellings (kf, mhe).
-INTERVAL_OPTION = "--interval"
-DEPRECATED_INTERVAL = ("--sample-interval", "--dt")
-#: ``--bias-states`` choices.
-BIAS_CHOICES = {
-    "none": BiasStates.NONE,
-    "travel": BiasStates.TRAVEL,
-    "acceleration": BiasStates.ACCELERATION,
-    "travel+acceleration": BiasStates.TRAVEL | BiasStates.ACCELERATION,
-    "ride-height": BiasStates.RIDE_HEIGHT,
-    "ay": BiasStates.LATERAL,
-    "ride-height+ay": BiasStates.RIDE_HEIGHT | BiasStates.LATERAL,
-    "travel+ay": BiasStates.TRAVEL | BiasStates.LATERAL,
-    "ride-height+acceleration": BiasStates.RIDE_HEIGHT | BiasStates.ACCELERATION,
 }
 
 
@@ -168,40 +157,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def _options(args: argparse.Namespace, own: dict, other: dict, estimator: Estimator) -> dict:
-    """The estimator's options with defaults filled in; another estimator's is an error."""
-    foreign = [f"--{name.replace('_', '-')}" for name in other if getattr(args, name) is not None]
-    if foreign:
-        raise ValueError(f"{', '.join(foreign)}: not an option of --estimator {estimator.value}")
-    return {name: default if getattr(args, name) is None else getattr(args, name)
-            for name, default in own.items()}  # fmt: skip
-
-
-def interval(args: argparse.Namespace) -> float:
-    """``--interval``, or a deprecated spelling of it (said on stderr); two different values
-    are an error."""
-    given = {INTERVAL_OPTION: args.interval}
-    for alias in DEPRECATED_INTERVAL:
-        value = getattr(args, f"deprecated_{alias[2:].replace('-', '_')}")
-        if value is not None:
-            print(f"wheelload codegen: {alias} is deprecated: use {INTERVAL_OPTION}",
-                  file=sys.stderr)  # fmt: skip
-            given[alias] = value
-    values = {name: value for name, value in given.items() if value is not None}
-    if len(set(values.values())) > 1:
-        raise ValueError(
-            f"{' and '.join(values)} give different intervals: give {INTERVAL_OPTION} only"
-        )
-    return next(iter(values.values()), CodegenOptions().sample_interval)
-
-
 def run(args: argparse.Namespace) -> int:
     estimator = Estimator(args.estimator)
     vehicle_path = vehicle_file(args)
     check_output_folder(Path(args.out), [vehicle_path], force=args.force)
     if estimator is Estimator.MHE:
         return _run_mhe(args, vehicle_path)
-    values = _options(args, KF_OPTIONS, MHE_OPTIONS, estimator)
+    values = own_options(args, KF_OPTIONS, MHE_OPTIONS, estimator.value)
     options = CodegenOptions(
         precision=Precision(args.precision),
         params=ParamMode(values["params"]),
@@ -239,18 +201,7 @@ def _run_fmu(args: argparse.Namespace, vehicle_path: Path, options: CodegenOptio
 def _run_mhe(args: argparse.Namespace, vehicle_path: Path) -> int:
     from wheelload.estimators.codegen.mhe import embedded_settings, generate_mhe
 
-    values = _options(args, MHE_OPTIONS, KF_OPTIONS, Estimator.MHE)
-    threshold = values["huber_threshold"]
-    settings = MheSettings(
-        horizon=values["horizon"],
-        constraint=Constraint(values["constraint"]),
-        bounded=values["bounded"],
-        suspension_loss=ResidualLoss(kind=Loss(values["suspension_loss"]), threshold=threshold),
-        constraint_loss=ResidualLoss(kind=Loss(values["constraint_loss"]), threshold=threshold),
-        bias_states=BIAS_CHOICES[values["bias_states"]],
-        lag=values["lag"],
-        arrival=Arrival(values["arrival"]),
-    )
+    settings = mhe_settings(own_options(args, MHE_OPTIONS, KF_OPTIONS, Estimator.MHE.value))
     precision = Precision(args.precision)
     vehicle = load_vehicle(vehicle_path, allow_unusual=args.allow_unusual)
     dt = interval(args)

@@ -151,6 +151,8 @@ static fmi3Status set_parameter(instance_t *instance, int index, fmi3Float64 val
         "", "no such field", "not finite (or a parameter derived from it would not be)",
         "fixed: it moves the mass centre with vehicle-file values the library does not hold; "
         "regenerate from the changed vehicle file",
+        "out of its range: the value, or a parameter derived from it, is outside the domain "
+        "init accepts",
     };
     const ${prefix}_params previous = instance->params;
     char why[160];
@@ -161,7 +163,7 @@ static fmi3Status set_parameter(instance_t *instance, int index, fmi3Float64 val
     status = ${prefix}_set_param(&instance->params, index, (${prefix}_real)value);
     if (status != ${PREFIX}_SET_OK) {
         return refuse(instance, ${prefix}_param_names[index],
-                      status > 0 && status < 4 ? reasons[status] : "refused by set_param");
+                      status > 0 && status < 5 ? reasons[status] : "refused by set_param");
     }
     if (check_params(&instance->params, why, sizeof why) != 0) {
         instance->params = previous;

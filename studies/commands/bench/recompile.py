@@ -38,10 +38,10 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
         "recompile", help="vehicle-file edit -> many-logs run: keyed by structure vs by text"
     )
     add_vehicle_option(parser)
-    parser.add_argument("--repeats", type=int, default=3, help="edits timed (default 3)")
+    parser.add_argument("--repeats", type=int, default=3, help="rounds: edits timed (default 3)")
     parser.add_argument(
         "--log-count", dest="logs", type=int, default=5, metavar="N",
-        help="copies of the example log in the run (default 5)",
+        help="number of logs: copies of the example log in the run (default 5)",
     )  # fmt: skip
     parser.add_argument(
         "--after-only", action="store_true", help="leave out the text-keyed library (before)"

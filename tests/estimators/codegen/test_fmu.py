@@ -193,7 +193,7 @@ def _instance(unzipped, description, messages=None):
     [
         ("sprung_mass", 1500.0, "fixed: it moves the mass centre"),
         ("spring_front", float("nan"), "not finite"),
-        ("initial_std", -1.0, "invalid value of 'initial_std'"),
+        ("initial_std", -1.0, "out of its range"),
     ],
 )
 def test_refused_parameter_leaves_the_previous_value(fmu, name, value, reason):
