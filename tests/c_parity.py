@@ -182,3 +182,21 @@ def check_codegen(
     c = c_estimates(binary, log, Path(folder) / "estimates.csv")
     assert_c_equals_python(c[list(columns)], expected, rtol=rtol, atol=atol, what=str(log))
     return c
+
+
+def lane_change_logs(folder: Path, gaps) -> dict[str, tuple[Path, pd.DataFrame]]:
+    """The plant's ISO lane change written as CSV in ``folder``, clean and with ``gaps``
+    (``(column, first row, last row)`` set to NaN): ``{"clean" | "gaps": (path, frame)}``."""
+    from wheelload.models import example_vehicle_path
+    from wheelload.studies.drive.scenario_runner import run_scenario
+
+    frame = run_scenario("iso-dlc", example_vehicle_path()).log
+    holed = frame.copy()
+    for column, first, last in gaps:
+        holed.loc[first:last, column] = np.nan
+    logs = {}
+    for name, table in (("clean", frame), ("gaps", holed)):
+        path = folder / f"{name}.csv"
+        table.to_csv(path, index=False, float_format="%.17g")
+        logs[name] = (path, table)
+    return logs

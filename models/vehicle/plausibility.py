@@ -389,9 +389,9 @@ def _value(vehicle: Vehicle, key: str) -> object:
     return value
 
 
-def check_vehicle_ranges(vehicle: Vehicle) -> list[Violation]:
-    """Every key outside its accepted interval (:data:`RANGES`); optional keys only if given."""
-    violations = []
+def range_checks(vehicle: Vehicle):
+    """``(name, value, accepted)`` of every key the file gives, against its accepted interval
+    (:data:`RANGES`; a tuple key once per element, ``key[k]``; optional keys only if given)."""
     for key, rule in RANGES.items():
         value = _value(vehicle, key)
         if value is None:  # an optional key or section left out
@@ -400,7 +400,14 @@ def check_vehicle_ranges(vehicle: Vehicle) -> list[Violation]:
         ranges = rule(vehicle)
         ranges = ranges if isinstance(ranges, tuple) else (ranges,) * len(values)
         for k, (item, accepted) in enumerate(zip(values, ranges)):
-            if not accepted.holds(float(item)):  # type: ignore[arg-type]
-                name = f"{key}[{k}]" if isinstance(value, tuple) else key
-                violations.append(Violation(name, float(item), accepted))  # type: ignore[arg-type]
-    return violations
+            name = f"{key}[{k}]" if isinstance(value, tuple) else key
+            yield name, float(item), accepted  # type: ignore[arg-type]
+
+
+def check_vehicle_ranges(vehicle: Vehicle) -> list[Violation]:
+    """Every key outside its accepted interval (:data:`RANGES`); optional keys only if given."""
+    return [
+        Violation(name, value, accepted)
+        for name, value, accepted in range_checks(vehicle)
+        if not accepted.holds(value)
+    ]

@@ -142,24 +142,14 @@ def log_vehicle_ranges(vehicle) -> None:
     accepted interval (:data:`~wheelload.models.vehicle.plausibility.RANGES`)."""
     if not logger.isEnabledFor(logging.DEBUG):
         return
-    from wheelload.models.vehicle.plausibility import RANGES
+    from wheelload.models.vehicle.plausibility import range_checks
 
-    for key, rule in RANGES.items():
-        value: object = vehicle
-        for part in key.split("."):
-            value = None if value is None else getattr(value, part)
-        if value is None:  # an optional key or section left out
-            continue
-        values = value if isinstance(value, tuple) else (value,)
-        ranges = rule(vehicle)
-        ranges = ranges if isinstance(ranges, tuple) else (ranges,) * len(values)
-        for k, (item, accepted) in enumerate(zip(values, ranges)):
-            name = f"{key}[{k}]" if isinstance(value, tuple) else key
-            outcome = "passed" if accepted.holds(float(item)) else "outside"
-            logger.debug(
-                "range check '%s' = %.4g in [%.4g, %.4g]: %s (%s)",
-                name, float(item), accepted.low, accepted.high, outcome, accepted.reason,
-            )  # fmt: skip
+    for name, value, accepted in range_checks(vehicle):
+        outcome = "passed" if accepted.holds(value) else "outside"
+        logger.debug(
+            "range check '%s' = %.4g in [%.4g, %.4g]: %s (%s)",
+            name, value, accepted.low, accepted.high, outcome, accepted.reason,
+        )  # fmt: skip
 
 
 def log_vehicle_terms(vehicle) -> None:

@@ -15,6 +15,7 @@ from c_parity import (
     assert_c_equals_python,
     compile_c,
     kf_program,
+    lane_change_logs,
     needs_gcc,
     run_program,
 )
@@ -29,7 +30,6 @@ from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.registry import build
 from wheelload.models import WHEELS, example_vehicle_path, load_vehicle
 from wheelload.models.parameters import MASS_CENTRE_INPUTS
-from wheelload.studies.drive.scenario_runner import run_scenario
 
 fmpy = pytest.importorskip("fmpy", reason="FMPy (the test extra: pip install -e '.[test]')")
 from fmpy.build import build_platform_binary  # noqa: E402
@@ -48,15 +48,7 @@ OUTPUTS = [f"{group}_{wheel}" for group, _, _ in OUTPUT_GROUPS for wheel in WHEE
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory):
     """The plant's lane change as CSV, clean and with the :data:`GAPS`; and its frame."""
-    frame = run_scenario("iso-dlc", example_vehicle_path()).log
-    folder = tmp_path_factory.mktemp("fmu_logs")
-    gaps = frame.copy()
-    for column, first, last in GAPS:
-        gaps.loc[first:last, column] = np.nan
-    paths = {"clean": folder / "clean.csv", "gaps": folder / "gaps.csv"}
-    frame.to_csv(paths["clean"], index=False, float_format="%.17g")
-    gaps.to_csv(paths["gaps"], index=False, float_format="%.17g")
-    return {"clean": (paths["clean"], frame), "gaps": (paths["gaps"], gaps)}
+    return lane_change_logs(tmp_path_factory.mktemp("fmu_logs"), GAPS)
 
 
 @pytest.fixture(scope="module")

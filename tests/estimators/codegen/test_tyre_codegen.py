@@ -8,7 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from c_parity import assert_c_equals_python, kf_program, run_program
+from c_parity import assert_c_equals_python, kf_program, lane_change_logs, run_program
 
 from wheelload.estimators import read_log
 from wheelload.estimators.codegen.kf import CodegenOptions
@@ -17,7 +17,6 @@ from wheelload.estimators.registry import build
 from wheelload.estimators.result import StepFlag
 from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.models.vehicle.wheel_geometry import wheel_centres
-from wheelload.studies.drive.scenario_runner import run_scenario
 
 WHEELS = ("fl", "fr", "rl", "rr")
 #: Cells made missing in the log with gaps: (column, first row, last row).
@@ -28,15 +27,8 @@ GAPS = (("omega_fr", 300, 310), ("torque_rl", 500, 500), ("steer", 600, 605), ("
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory):
     """The plant's lane change as CSV, clean and with the :data:`GAPS`."""
-    frame = run_scenario("iso-dlc", example_vehicle_path()).log
-    folder = tmp_path_factory.mktemp("tyre_logs")
-    gaps = frame.copy()
-    for column, first, last in GAPS:
-        gaps.loc[first:last, column] = np.nan
-    paths = {"clean": folder / "clean.csv", "gaps": folder / "gaps.csv"}
-    frame.to_csv(paths["clean"], index=False, float_format="%.17g")
-    gaps.to_csv(paths["gaps"], index=False, float_format="%.17g")
-    return paths
+    logs = lane_change_logs(tmp_path_factory.mktemp("tyre_logs"), GAPS)
+    return {name: path for name, (path, _) in logs.items()}
 
 
 def _example(tmp_path_factory, precision):
