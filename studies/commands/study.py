@@ -237,7 +237,7 @@ def _run_experiment(args: argparse.Namespace, out: Path, model: EstimatorModel) 
         progress=show_progress(args),
     )
     outputs = Outputs(folder=out, force=args.force)
-    told(args)  # the arguments are checked: the work starts
+    # the vehicle's line waits for the end: a refusal inside the run (lock, cache) is one line
     start = time.perf_counter()
     with runner:
         experiments.run_study(args.name, Context(settings=settings, runner=runner, outputs=outputs))

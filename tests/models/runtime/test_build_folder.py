@@ -123,6 +123,10 @@ def test_a_long_compile_is_announced_with_what_why_and_its_time(tmp_path, monkey
     from wheelload.models.runtime.build_folder import keyed_library
 
     _private_build_folder(tmp_path, monkeypatch)
+    # the command line's logging setup (an earlier test in this process) may stop the
+    # "wheelload" logger propagating to the root, where caplog listens: listen on it
+    monkeypatch.setattr(logging.getLogger("wheelload"), "handlers", [caplog.handler])
+    monkeypatch.setattr(logging.getLogger("wheelload"), "propagate", False)
     monkeypatch.setattr(folder, "ANNOUNCE_AFTER", 0.0)
     source = lambda: "int tiny(int x) { return 2 * x; }\n"  # noqa: E731
     with caplog.at_level(logging.WARNING, logger="wheelload"):
