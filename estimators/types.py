@@ -289,13 +289,27 @@ def _check_time(t: np.ndarray, source: str) -> None:
             )
 
 
+#: A step longer than this many median intervals is a gap (a sample or more missing): the
+#: log is split there into segments, each uniform on its own (:class:`Steps`).
+GAP_RATIO = 1.5
+
+
 @dataclass(frozen=True)
 class Steps:
     r"""A log's sample intervals as the uniformity and sample-rate checks read them: their
-    median and their largest deviation from it, :math:`\max_k |\Delta t_k - m|`."""
+    median :math:`m`, their largest deviation from it within the segments,
+    :math:`\max_k |\Delta t_k - m|` over the steps :math:`\Delta t_k \le` :data:`GAP_RATIO`
+    :math:`m`, and the gaps (the longer steps): their number and the longest.
+
+    A gap (a logger pause, a dropped block of an MF4 clock group) splits the log into
+    segments; the filters that need uniform steps restart after it (:class:`~wheelload.
+    estimators.logs.signals.ChunkFilter`) rather than refuse the log.
+    """
 
     median: float
     deviation: float
+    gaps: int = 0
+    longest_gap: float = 0.0
 
     @staticmethod
     def of(t: np.ndarray) -> Steps:
@@ -304,11 +318,24 @@ class Steps:
         blocks = step_blocks(t)
         steps = lambda: (values for _, values in blocks())  # noqa: E731
         median = float(order_statistics.blocked_median(steps, t.size - 1))
-        deviation = max(float(np.max(np.abs(values - median))) for values in steps())
-        return Steps(median, deviation)
+        limit = GAP_RATIO * median
+        deviation, gaps, longest = 0.0, 0, 0.0
+        for values in steps():
+            gap = values > limit
+            if np.any(~gap):
+                deviation = max(deviation, float(np.max(np.abs(values[~gap] - median))))
+            if np.any(gap):
+                gaps += int(np.count_nonzero(gap))
+                longest = max(longest, float(np.max(values[gap])))
+        return Steps(median, deviation, gaps, longest)
+
+    @property
+    def gap(self) -> float:
+        """The shortest step taken as a gap [s]."""
+        return GAP_RATIO * self.median
 
     def uniform(self, tolerance: float = 0.05) -> bool:
-        """Whether every step is within ``tolerance`` of the median."""
+        """Whether every step within a segment is within ``tolerance`` of the median."""
         return self.deviation <= tolerance * self.median
 
 

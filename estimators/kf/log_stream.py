@@ -327,13 +327,13 @@ class LogStream:
                 raise LogError(f"{self.source}: changed while it was read: read it again")
             columns = dict(chunk)
             if travel_rates is not None:
-                derived = travel_rates(_travel(chunk, n))
+                derived = travel_rates(_travel(chunk, n), t)
                 columns.update({name: derived[:, i] for i, name in enumerate(TRAVEL_RATE)})
             if self.az_assumed:
                 columns["az"] = np.broadcast_to(np.float64(GRAVITY), (n,))
             columns["vx"] = _speed(chunk, n)[0]
             if rate_dots is not None:
-                derived = rate_dots(np.column_stack([chunk[name] for name in RATES]))
+                derived = rate_dots(np.column_stack([chunk[name] for name in RATES]), t)
                 columns.update({name: derived[:, i] for i, name in enumerate(RATE_DERIVATIVES)})
             start += n
             yield t, columns
@@ -473,6 +473,7 @@ def scan_log(
     wiring_end = None
     t0 = None
     speed_source = SpeedSource.LOGGED
+    finite_counts = dict.fromkeys(("ax", "ay", "az", "vx"), 0)
     for chunk in read_chunks(path, list(names), rows=rows):
         n = len(chunk["t"])
         if n == 0:
@@ -481,6 +482,9 @@ def scan_log(
         t_store.append(t)
         t0 = t[0] if t0 is None else t0
         speed, speed_source = _speed(chunk, n)
+        for name in finite_counts:
+            if name in chunk:
+                finite_counts[name] += int(np.count_nonzero(np.isfinite(chunk[name])))
         if "az" in chunk:
             az_store.append(chunk["az"])
         d = _travel(chunk, n)
@@ -525,6 +529,10 @@ def scan_log(
     t = t_store.array()
     if not t.size:
         raise ChunkError(f"{source}: no rows")
+    sparse = [name for name, count in finite_counts.items() if name in names
+              and (count == 0 or (name == "vx" and count <= 0.5 * t.size))]  # fmt: skip
+    if sparse:  # the ordinary reader names an empty channel, assumes az, interpolates vx
+        raise ChunkError(f"{source}: column '{sparse[0]}' is empty or slower than the log")
     steps = check_time_column(t, source)
     az_assumed = "az" not in names
     az_median = _nanmedian(az_store.array())

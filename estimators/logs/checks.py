@@ -183,10 +183,19 @@ def response_jacobians_function() -> ca.Function:
                        ["A", "dz_du", "db_du"])  # fmt: skip
 
 
-def _fill(values: np.ndarray) -> np.ndarray | None:
-    """Interpolate missing samples; None if more than half are missing."""
+#: Hz, the lowest mean rate of a channel's samples that the :data:`CUTOFF` low-pass can use:
+#: a channel at a lower logging rate (NaN where it has no new value) is interpolated
+#: between its samples; a sparser one is left out of the checks (could not decide).
+MIN_CHANNEL_RATE = 4.0 * CUTOFF
+
+
+def _fill(values: np.ndarray, duration: float) -> np.ndarray | None:
+    """Interpolate missing samples between the channel's own (a channel at a lower rate,
+    or with dropouts); None if it has fewer than :data:`MIN_CHANNEL_RATE` samples per second
+    over ``duration`` [s] (or fewer than two)."""
     good = np.isfinite(values)
-    if good.sum() < 0.5 * values.size:
+    count = int(good.sum())
+    if count < 2 or count < MIN_CHANNEL_RATE * duration:
         return None
     index = np.arange(values.size)
     return np.interp(index, index[good], values[good])
@@ -198,8 +207,10 @@ def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np
     b, a = zero_phase.butter2(min(CUTOFF / (0.5 * fs), 0.9))
     step = max(int(fs / RATE), 1)
     result = {}
+    duration = float(t[-1] - t[0])
     for name, values in channels.items():
-        low = _low_passed(np.asarray(values, float).tobytes(), tuple(b), tuple(a), step)
+        values = np.asarray(values, float)
+        low = _low_passed(values.tobytes(), tuple(b), tuple(a), step, duration)
         if low is not None:
             result[name] = low
     result["t"] = t[::step]
@@ -207,10 +218,12 @@ def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np
 
 
 @functools.lru_cache(maxsize=32)
-def _low_passed(values: bytes, b: tuple, a: tuple, step: int) -> np.ndarray | None:
+def _low_passed(
+    values: bytes, b: tuple, a: tuple, step: int, duration: float
+) -> np.ndarray | None:
     """One channel of :func:`quasi_static` (``values``: its float64 bytes), read-only, or
     None; kept, as the wiring and plausibility checks examine the same window."""
-    filled = _fill(np.frombuffer(values))
+    filled = _fill(np.frombuffer(values), duration)
     if filled is None or filled.size <= 3 * max(len(a), len(b)):
         return None
     despiked = zero_phase.medfilt(filled, MEDIAN_WINDOW)  # single-sample outliers
@@ -417,7 +430,8 @@ def _kinematic_checks(
     relations = {"longitudinal": ("dvx/dt against ax", "ax"),
                  "lateral": ("vx wz against ay", "ay")}  # fmt: skip
     for key, (name, axis) in relations.items():
-        missing = [c for c in ("vx", "wz" if key == "lateral" else "vx") if c not in q]
+        needed = ("vx", "wz", axis) if key == "lateral" else ("vx", axis)
+        missing = [c for c in needed if c not in q]
         if missing:
             checks.append(undecided_check(name, f"no {missing[0]} in the log"))
             continue

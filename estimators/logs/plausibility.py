@@ -333,8 +333,8 @@ def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     found = travel_range_check(q, parameters)
     checks += found[0]
     mistakes += found[1]
-    if not all(f"d_{w}" in q for w in WHEELS) or not all(a in q for a in ("vx", "az")):
-        checks.append(undecided_check("travel scale", "needs four travel channels, vx and az"))
+    if not all(f"d_{w}" in q for w in WHEELS) or not all(a in q for a in ("vx", "ax", "ay", "az")):
+        checks.append(undecided_check("travel scale", "needs four travel channels, vx, ax, ay and az"))
         return PlausibilityReport(checks=tuple(checks), mistakes=tuple(mistakes))
     A, loads, b = _rows(_inputs(q), parameters.vector())
     n = q["t"].size

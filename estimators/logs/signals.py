@@ -27,7 +27,10 @@ optional input is missing is dropped for that sample (flag bits 16-19).
 Missing suspension velocities are derived by a causal first-order filtered
 differentiator, :math:`H(s) = \\omega_c s / (s + \\omega_c)` with
 :math:`f_c = 20` Hz (Tustin), which passes body and wheel-hop motion
-(1-15 Hz) and attenuates sensor noise above it.
+(1-15 Hz) and attenuates sensor noise above it. A gap in the time stamps (a step
+longer than 1.5 median intervals, :data:`~wheelload.estimators.types.GAP_RATIO`) splits the
+log into segments: the differentiator and the body-rate derivative filter restart after it,
+and the filter's step over it is flagged ``INTERVAL_LONG``; the log is never refused for it.
 
 Example
 -------
@@ -38,6 +41,7 @@ Example
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -73,6 +77,7 @@ if TYPE_CHECKING:
 
 
 VELOCITY_CUTOFF = 20.0  # Hz, differentiator corner frequency
+_log = logging.getLogger("wheelload")
 
 
 def travel_quantum(d: np.ndarray) -> np.ndarray:
@@ -205,17 +210,23 @@ def signals_from_frame(
             )
         return np.column_stack([column(name) for name in names])
 
-    t = column("t")
+    t = time_seconds(frame["t"]) if is_time_stamp(frame["t"]) else column("t")
     check_time_column(t, source)
     missing = np.full((t.size, 4), np.nan)
-    az_assumed = "az" not in frame.columns
+    for name in REQUIRED[1:]:
+        if not np.isfinite(column(name)).any():
+            raise LogError(
+                f"{source}: column '{name}' has no values: the filter needs {name} "
+                "(log the IMU's axis, or map its channel with --channels)"
+            )
+    az_assumed = "az" not in frame.columns or not np.isfinite(column("az")).any()
     az = np.full(t.size, GRAVITY) if az_assumed else column("az")
     acc = np.column_stack([column("ax"), column("ay"), az])
     d = group(TRAVEL)
     d = missing if d is None else d
     v = group(TRAVEL_RATE)
-    if "vx" in frame.columns:
-        speed, speed_source = column("vx"), SpeedSource.LOGGED
+    if "vx" in frame.columns and np.isfinite(column("vx")).any():
+        speed, speed_source = slow_channel(t, column("vx"), "vx", source), SpeedSource.LOGGED
     elif any(name in frame.columns for name in WHEEL_SPEED):
         wheels = np.column_stack([column(n) for n in WHEEL_SPEED if n in frame.columns])
         finite = np.isfinite(wheels)
@@ -256,6 +267,57 @@ def signals_from_frame(
     )
 
 
+#: s, the longest interval over which a slow channel is interpolated between two samples.
+SLOW_CHANNEL_GAP = 2.0
+
+
+def slow_channel(t: np.ndarray, values: np.ndarray, name: str, source: str) -> np.ndarray:
+    """A slowly varying channel (the speed) logged at a lower rate than the log's clock
+    (NaN where it has no new value) interpolated linearly between its own samples, up to
+    :data:`SLOW_CHANNEL_GAP` apart; a channel with a value at more than half the rows is
+    returned as it is (its missing samples are dropouts, skipped and flagged). Says so on
+    the ``wheelload`` logger (a note)."""
+    good = np.isfinite(values)
+    if good.sum() > 0.5 * values.size or good.sum() < 2:
+        return values
+    from wheelload.estimators.logs.readers.resample import Method, resample
+
+    rate = (good.sum() - 1) / float(t[good][-1] - t[good][0])
+    _log.warning(
+        "%s: note: column '%s' has a value at %d of %d rows (%.3g Hz): interpolated linearly "
+        "between its samples onto the log's clock (up to %g s apart)",
+        source, name, int(good.sum()), values.size, rate, SLOW_CHANNEL_GAP,
+    )  # fmt: skip
+    return resample(t[good], values[good], t, Method.LINEAR, SLOW_CHANNEL_GAP)
+
+
+def is_time_stamp(values: pd.Series) -> bool:
+    """Whether a time column holds date-time stamps (Parquet ``timestamp[ns/us/ms]``, with or
+    without a time zone) or durations (``duration[..]``), not numbers of seconds."""
+    import pandas as pd
+
+    kind = values.dtype
+    return bool(pd.api.types.is_datetime64_any_dtype(kind) or pd.api.types.is_timedelta64_dtype(kind))
+
+
+def time_seconds(values: pd.Series) -> np.ndarray:
+    """Date-time stamps or durations as seconds from the first one (float64, from integer
+    nanoseconds: a day-long log keeps better than a microsecond); a missing stamp is NaN."""
+    import pandas as pd
+
+    if pd.api.types.is_timedelta64_dtype(values.dtype):
+        nanoseconds = values.astype("timedelta64[ns]").to_numpy().astype("int64")
+    else:
+        if values.dt.tz is not None:
+            values = values.dt.tz_convert("UTC").dt.tz_localize(None)
+        nanoseconds = values.astype("datetime64[ns]").to_numpy().astype("int64")
+    valid = values.notna().to_numpy()
+    if not valid.any():
+        return np.full(values.size, np.nan)
+    seconds = (nanoseconds - nanoseconds[valid][0]) * 1e-9
+    return np.where(valid, seconds, np.nan)
+
+
 def check_units(acc, d, v, vx, source: str) -> None:
     """Report values that look like the wrong unit rather than guess."""
     az = order_statistics.nanmedian(acc[:, 2]) if np.any(np.isfinite(acc[:, 2])) else np.nan
@@ -294,13 +356,14 @@ def derive_velocities(
 ) -> np.ndarray:
     r"""Causal filtered derivative of the travel, :math:`\omega_c s/(s+\omega_c)` (Tustin).
 
-    Needs near-uniform sampling (jitter below 5 % of the median interval). A
-    missing travel sample gives a missing velocity, and the filter restarts at
-    rest on the first sample after a gap, so a gap makes no false velocity.
+    Needs near-uniform sampling within each segment (jitter below 5 % of the median
+    interval; a longer step is a gap between segments). A missing travel sample gives a
+    missing velocity, and the filter restarts at rest on the first sample after a missing
+    sample or a time gap, so a gap makes no false velocity.
     """
     if not np.isfinite(d).any():
         return np.full(d.shape, np.nan)
-    return Differentiator(Steps.of(t), d.shape[1], cutoff, source)(d)
+    return Differentiator(Steps.of(t), d.shape[1], cutoff, source)(d, t)
 
 
 class ChunkFilter:
@@ -309,11 +372,15 @@ class ChunkFilter:
     Called on consecutive chunks (2-D, one column per channel), it returns what one
     call on the whole log returns, to the bit: each run of finite samples is filtered
     with the state it left at the end of the previous chunk; a run after a gap starts
-    afresh (:meth:`start`). Subclasses give :meth:`start` and :meth:`filter`.
+    afresh (:meth:`start`). A gap is a missing sample, or, given the time stamps ``t``,
+    a step longer than ``gap`` seconds (a logger pause: the log's next segment).
+    Subclasses give :meth:`start` and :meth:`filter`.
     """
 
-    def __init__(self, channels: int) -> None:
+    def __init__(self, channels: int, gap: float = np.inf) -> None:
         self._state: list[np.ndarray | None] = [None] * channels  # None: not inside a run
+        self._gap = gap
+        self._last: float | None = None  # the previous chunk's last time stamp
 
     def start(self, first: float) -> np.ndarray:
         """The state before a run whose first sample is ``first``."""
@@ -323,15 +390,25 @@ class ChunkFilter:
         """``(outputs, state at the end)`` of one run of finite samples."""
         raise NotImplementedError
 
-    def __call__(self, samples: np.ndarray) -> np.ndarray:
+    def _segment_starts(self, t: np.ndarray | None, n: int) -> np.ndarray:
+        """Rows of this chunk that start a segment (a step longer than the gap before them)."""
+        if t is None or n == 0:
+            return np.zeros(n, bool)
+        previous = np.concatenate([[np.nan if self._last is None else self._last], t[:-1]])
+        self._last = float(t[-1])
+        return t - previous > self._gap
+
+    def __call__(self, samples: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
         """Outputs of the next chunk (rows: samples, columns: channels); NaN where missing."""
         out = np.full(samples.shape, np.nan)
+        starts = self._segment_starts(t, samples.shape[0])
         for channel in range(samples.shape[1]):
             valid = np.isfinite(samples[:, channel])
             carried = self._state[channel]
-            for start, stop in _valid_runs(valid):
+            for start, stop in _valid_runs(valid, starts):
                 run = samples[start:stop, channel]
-                state = carried if start == 0 and carried is not None else self.start(run[0])
+                fresh = start > 0 or carried is None or starts[start]
+                state = self.start(run[0]) if fresh else carried
                 out[start:stop, channel], carried = self.filter(run, state)
             self._state[channel] = carried if valid.size and valid[-1] else None
         return out
@@ -350,7 +427,7 @@ class Differentiator(ChunkFilter):
         cutoff: float = VELOCITY_CUTOFF,
         source: str = "<log>",
     ) -> None:
-        super().__init__(channels)
+        super().__init__(channels, steps.gap)
         median = steps.median
         if not steps.uniform():
             raise LogError(
@@ -409,7 +486,7 @@ class RateEstimator(ChunkFilter):
         source: str = "<log>",
         settings: RateDerivativeFilter = RateDerivativeFilter(),
     ) -> None:
-        super().__init__(channels)
+        super().__init__(channels, steps.gap)
         median = steps.median
         if not steps.uniform():
             raise LogError(
@@ -426,10 +503,20 @@ class RateEstimator(ChunkFilter):
         return kinematic.kinematic_filter(self._interval, self._gain, run, state)
 
 
-def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
-    """``(start, stop)`` of each run of consecutive True values."""
+def _valid_runs(valid: np.ndarray, starts: np.ndarray | None = None) -> list[tuple[int, int]]:
+    """``(start, stop)`` of each run of consecutive True values, split before each row
+    where ``starts`` is True."""
     edges = np.diff(np.concatenate([[0], valid.astype(np.int8), [0]]))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+    runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+    if starts is None or not np.any(starts):
+        return runs
+    cuts = np.flatnonzero(starts)
+    split = []
+    for start, stop in runs:
+        inner = cuts[(cuts > start) & (cuts < stop)]
+        bounds = [start, *inner.tolist(), stop]
+        split += list(zip(bounds[:-1], bounds[1:]))
+    return split
 
 
 def write_log(signals: Signals, path: str | Path) -> None:
@@ -458,6 +545,6 @@ def rate_derivatives(signals: Signals) -> np.ndarray:
     if signals.rates is None or len(signals) < 2:
         return np.full((len(signals), 3), np.nan)
     try:
-        return RateEstimator(Steps.of(signals.t), 3, signals.source)(signals.rates)
+        return RateEstimator(Steps.of(signals.t), 3, signals.source)(signals.rates, signals.t)
     except LogError:
         return np.full((len(signals), 3), np.nan)

@@ -29,6 +29,7 @@ or a unit of the wrong kind, is an error naming the file and the key.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -72,6 +73,7 @@ GROUPS = (
     tuple(f"az_{w}" for w in WHEELS),
 )
 DEFAULT_MAX_GAP = 0.1  # s
+_log = logging.getLogger("wheelload")
 
 
 class ChannelMapError(ValueError):
@@ -317,6 +319,21 @@ def check_stamps(t: np.ndarray, source: str, name: str, where: str) -> None:
         )
 
 
+#: A channel logged slower than ``clock.max_gap`` (a 1 Hz speed on CAN) is resampled over
+#: gaps up to this many of its own median intervals, not dropped between its samples.
+SLOW_GAP_RATIO = 1.5
+
+
+def slow_gap(t: np.ndarray, max_gap: float) -> float:
+    """The longest gap [s] to bridge for a channel with time stamps ``t``: ``max_gap``, or
+    :data:`SLOW_GAP_RATIO` times the channel's median interval if that is longer."""
+    t = np.asarray(t, float)
+    t = t[np.isfinite(t)]
+    if t.size < 2:
+        return max_gap
+    return max(max_gap, SLOW_GAP_RATIO * float(np.median(np.diff(t))))
+
+
 def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: str) -> pd.DataFrame:
     """Our columns on one clock, in SI units (a frame for ``signals_from_frame``)."""
     import pandas as pd
@@ -341,7 +358,15 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
         channel = raw[spec.source]
         values = convert(spec, TARGETS[name], channel.values, f"{where}: channel '{spec.source}'")
         method = spec.method or channel_map.clock.method
-        columns[name] = resample(channel.t, values, clock, method, channel_map.clock.max_gap)
+        max_gap = slow_gap(channel.t, channel_map.clock.max_gap)
+        if max_gap > channel_map.clock.max_gap:
+            _log.warning(
+                "%s: note: channel '%s' (for '%s') is logged every %.3g s, slower than "
+                "clock.max_gap = %g s: %s onto the clock over gaps up to %.3g s",
+                where, spec.source, name, max_gap / SLOW_GAP_RATIO, channel_map.clock.max_gap,
+                "held" if method is Method.HOLD else "interpolated linearly", max_gap,
+            )  # fmt: skip
+        columns[name] = resample(channel.t, values, clock, method, max_gap)
     for group in GROUPS:
         if any(name in columns for name in group):
             for name in group:

@@ -143,8 +143,8 @@ def test_derived_velocity_restarts_after_a_gap():
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        (lambda f: f.assign(t=pd.to_datetime(f["t"], unit="s")), "column 't' has type"),
-        (lambda f: f.assign(t=pd.to_timedelta(f["t"], unit="s")), "column 't' has type"),
+        (lambda f: f.assign(ax=pd.to_datetime(f["t"], unit="s")), "column 'ax' has type"),
+        (lambda f: f.assign(ay=pd.to_timedelta(f["t"], unit="s")), "column 'ay' has type"),
         (lambda f: f.assign(ay=f["ay"] > 0), "column 'ay' has type bool"),
         (lambda f: f.assign(t=(f["t"] * 1000).round()), "looks like milliseconds"),
     ],
