@@ -218,9 +218,7 @@ def quasi_static(t: np.ndarray, channels: dict[str, np.ndarray]) -> dict[str, np
 
 
 @functools.lru_cache(maxsize=32)
-def _low_passed(
-    values: bytes, b: tuple, a: tuple, step: int, duration: float
-) -> np.ndarray | None:
+def _low_passed(values: bytes, b: tuple, a: tuple, step: int, duration: float) -> np.ndarray | None:
     """One channel of :func:`quasi_static` (``values``: its float64 bytes), read-only, or
     None; kept, as the wiring and plausibility checks examine the same window."""
     filled = _fill(np.frombuffer(values), duration)

@@ -334,7 +334,8 @@ def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     checks += found[0]
     mistakes += found[1]
     if not all(f"d_{w}" in q for w in WHEELS) or not all(a in q for a in ("vx", "ax", "ay", "az")):
-        checks.append(undecided_check("travel scale", "needs four travel channels, vx, ax, ay and az"))
+        note = "needs four travel channels, vx, ax, ay and az"
+        checks.append(undecided_check("travel scale", note))
         return PlausibilityReport(checks=tuple(checks), mistakes=tuple(mistakes))
     A, loads, b = _rows(_inputs(q), parameters.vector())
     n = q["t"].size

@@ -297,7 +297,8 @@ def is_time_stamp(values: pd.Series) -> bool:
     import pandas as pd
 
     kind = values.dtype
-    return bool(pd.api.types.is_datetime64_any_dtype(kind) or pd.api.types.is_timedelta64_dtype(kind))
+    types = pd.api.types
+    return bool(types.is_datetime64_any_dtype(kind) or types.is_timedelta64_dtype(kind))
 
 
 def time_seconds(values: pd.Series) -> np.ndarray:
