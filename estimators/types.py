@@ -161,6 +161,13 @@ class Signals:
         return np.any(np.isfinite(self.d), axis=0)
 
     @property
+    def reference_present(self) -> np.ndarray:
+        """(4,) True for each wheel whose reference load ``fz_*`` has a finite sample."""
+        if self.reference is None:
+            return np.zeros(4, bool)
+        return np.any(np.isfinite(self.reference), axis=0)
+
+    @property
     def travel_sensors(self) -> TravelSensors:
         """The travel sensor set (see :class:`TravelSensors`)."""
         count = int(self.travel_present.sum())

@@ -49,8 +49,8 @@ class SigmaData:
     """Per settled sample and wheel: the error [N], P_ii [N^2] and the features g (last axis
     :data:`SIGMA_KEYS`)."""
 
-    error: np.ndarray  # (n, 4)
-    features: np.ndarray  # (n, 4, K)
+    error: np.ndarray  # (n, w): the w wheels with a reference load
+    features: np.ndarray  # (n, w, K)
 
     def std(self, coefficients: np.ndarray) -> np.ndarray:
         """The reported sigma (n, 4) with ``coefficients`` (:data:`SIGMA_KEYS` order)."""
@@ -77,9 +77,13 @@ def sigma_data(kf: TwoStageKF, signals: Signals) -> SigmaData:
             features.append(estimate.std[settled])
     finally:
         kf.tuning = base
-    error = estimate.loads[settled] - signals.reference[settled]
+    # The wheels with a reference (front transducers only: FL, FR), each sample where all
+    # of them have one; the others are not scored.
+    wheels = signals.reference_present
+    error = (estimate.loads[settled] - signals.reference[settled])[:, wheels]
     keep = np.all(np.isfinite(error), axis=1)
-    return SigmaData(error=error[keep], features=np.stack(features, axis=2)[keep])
+    features = np.stack(features, axis=2)[:, wheels]
+    return SigmaData(error=error[keep], features=features[keep])
 
 
 @dataclass(frozen=True, kw_only=True)

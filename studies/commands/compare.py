@@ -102,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
         write_csv(long_table(comparison), csv)
         print(f"table written to {csv}")
     if figures:
-        plot_comparison(comparison, signals, figures, title=f"{log_path.name}, {vehicle.name}")
-        print(f"figures written to {', '.join(str(p) for p in figures)}")
+        title = f"{log_path.name}, {vehicle.name}"
+        written = plot_comparison(comparison, signals, figures, title=title)
+        print(f"figures written to {', '.join(str(p) for p in written)}")
     return 0

@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     # imported to run, not for --help (studies/commands/__init__.py)
     from wheelload.estimators.registry import build
     from wheelload.studies.experiments.sensor_sets import (
+        absent_channels,
         reference_split,
         sensor_set_table,
         split_sweep,
@@ -47,6 +48,8 @@ def run(args: argparse.Namespace) -> int:
     frame = log_of(path, args).to_frame()
     table = sensor_set_table(frame, vehicle, Path(path).name)
     print(f"{Path(path).name} on vehicle '{vehicle.name}'")
+    for note in absent_channels(frame):
+        print(f"note: {note}")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.0f}"))
     default = float(build("kf", vehicle).parameters.roll_split_front)
     missing = [f"fz_{w}" for w in WHEELS if not frame[f"fz_{w}"].notna().any()]

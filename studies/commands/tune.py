@@ -68,7 +68,12 @@ def register(subparsers) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     # imported to run, not for --help (studies/commands/__init__.py)
-    from wheelload.studies.pipeline.tuning import evaluation_table, tune_file, tuned_text
+    from wheelload.studies.pipeline.tuning import (
+        evaluation_table,
+        reference_notes,
+        tune_file,
+        tuned_text,
+    )
 
     vehicle_path = Path(args.vehicle)
     inputs = (vehicle_path, *map(Path, args.logs))
@@ -79,10 +84,12 @@ def handle(args: argparse.Namespace) -> int:
     logs = tuple(log_of(path, args) for path in args.logs)
     evaluated = tuple(log_of(path, args) for path in args.evaluate)  # read before the fit
     for path, log in zip(args.evaluate, evaluated):
-        if log.reference is None:
+        if not log.reference_present.any():
             raise ValueError(
                 f"{path}: no reference loads fz_fl..fz_rr; --evaluate needs logs with them"
             )
+    for note in reference_notes(logs + evaluated):
+        print(f"note: {note}", file=sys.stderr)
     tuned = tune_file(vehicle, logs, iterations=args.iterations)
     print("\n".join(tuned.report))
     for warning in tuned.warnings:

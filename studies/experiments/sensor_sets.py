@@ -33,17 +33,40 @@ def _dead(wheels: tuple[str, ...]) -> Callable[[pd.DataFrame], pd.DataFrame]:
     return edit
 
 
+def _without(*names: str) -> Callable[[pd.DataFrame], pd.DataFrame]:
+    """The log without the columns ``names`` (those it has: a log without ``az`` assumes
+    g in every mode, :func:`absent_channels`)."""
+    return lambda frame: frame.drop(columns=[n for n in names if n in frame.columns])
+
+
+def _rear_wheel_speeds(frame: pd.DataFrame) -> pd.DataFrame:
+    if "vx" not in frame.columns:
+        return frame
+    return frame.drop(columns=["vx"]).assign(ws_rl=frame.vx, ws_rr=frame.vx)
+
+
 MODES: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
     "full": lambda f: f,
-    "IMU-only": lambda f: f.drop(columns=TRAVEL),
+    "IMU-only": _without(*TRAVEL),
     "one per axle (FL, RL)": _dead(("fr", "rr")),
     "front pair (FL, FR)": _dead(("rl", "rr")),
     "dead corner (RR)": _dead(("rr",)),
-    "no az": lambda f: f.drop(columns=["az"]),
-    "no vx, no wheel speeds": lambda f: f.drop(columns=["vx"]),
-    "vx from rear wheel speeds": lambda f: f.drop(columns=["vx"]).assign(ws_rl=f.vx, ws_rr=f.vx),
-    "IMU-only, no az, no vx": lambda f: f.drop(columns=[*TRAVEL, "az", "vx"]),
+    "no az": _without("az"),
+    "no vx, no wheel speeds": _without("vx"),
+    "vx from rear wheel speeds": _rear_wheel_speeds,
+    "IMU-only, no az, no vx": _without(*TRAVEL, "az", "vx"),
 }
+
+
+def absent_channels(frame: pd.DataFrame) -> list[str]:
+    """A line per channel a mode removes that the log has not (its modes then equal
+    others'): ``az`` is assumed g, ``vx`` taken from the wheel speeds or left out."""
+    notes = []
+    if "az" not in frame.columns:
+        notes.append("the log has no az: every mode assumes az = g (flag AZ_ASSUMED_G)")
+    if "vx" not in frame.columns:
+        notes.append("the log has no vx: every mode runs without it (no vx: no aero terms)")
+    return notes
 
 
 def sensor_set_table(frame: pd.DataFrame, vehicle: Vehicle, source: str) -> pd.DataFrame:
@@ -67,7 +90,7 @@ def sensor_set_table(frame: pd.DataFrame, vehicle: Vehicle, source: str) -> pd.D
 
 def split_sweep(frame: pd.DataFrame, vehicle: Vehicle, splits: list[float]) -> pd.DataFrame:
     """IMU-only: relative RMS error of the front and rear lateral load differences per split."""
-    signals = signals_from_frame(frame.drop(columns=TRAVEL), source="IMU-only")
+    signals = signals_from_frame(_without(*TRAVEL)(frame), source="IMU-only")
     reference = signals.reference
     rows = []
     for split in splits:

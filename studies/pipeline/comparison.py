@@ -24,6 +24,7 @@ from wheelload.estimators.protocol import MethodInfo
 from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.types import Signals
+from wheelload.models.conventions import WHEELS
 from wheelload.models import Vehicle
 from wheelload.studies.identical import identical_groups, identity_notes, label
 from wheelload.studies.metrics import COLUMNS, pooled_force_error, wheel_metrics
@@ -197,8 +198,17 @@ def format_table(comparison: Comparison) -> str:
             metric = UNITS[column] if j == 0 else ""
             lines.append(
                 f"{metric:<10}{name:<{width + 2}}"
-                + "".join(f"{values[w]:>10.{digits}f}" for w in ("fl", "fr", "rl", "rr", "pooled"))
+                + "".join(
+                    f"{values[w]:>10.{digits}f}" if w in values.index else f"{'-':>10}"
+                    for w in ("fl", "fr", "rl", "rr", "pooled")
+                )
             )
+    unscored = _unscored_wheels(comparison)
+    if unscored:
+        lines.append(
+            f"note: not scored: {' '.join(w.upper() for w in unscored)} (no reference loads "
+            f"fz_{'/'.join(unscored)} in the log); pooled is over the scored wheels"
+        )
     lines.extend(f"note: {note}" for note in comparison.notes())
     lines.extend(_force_lines(comparison, width))
     lines.append("")
@@ -212,6 +222,14 @@ def format_table(comparison: Comparison) -> str:
             f"   {result.info.description}"
         )
     return "\n".join(lines)
+
+
+def _unscored_wheels(comparison: Comparison) -> list[str]:
+    """The wheels without a row in the metrics (no finite reference load)."""
+    if not comparison.results:
+        return []
+    scored = comparison.results[0].metrics.index
+    return [w for w in WHEELS if w not in scored]
 
 
 def _force_lines(comparison: Comparison, width: int) -> list[str]:

@@ -28,6 +28,7 @@ from wheelload.estimators.identification.tuning import (
 )
 from wheelload.estimators.types import Signals
 from wheelload.models import Vehicle
+from wheelload.models.conventions import WHEELS
 from wheelload.models.vehicle.description import SIGMA_KEYS
 from wheelload.models.vehicle.file import add_values, prepend_comment
 
@@ -44,6 +45,29 @@ NO_REFERENCE = (
     "no reference loads fz_* in every log: cannot calibrate the reported sigma; "
     "the input file's sigma_* (or the defaults) are kept"
 )
+
+
+def reference_notes(logs: tuple[Signals, ...]) -> list[str]:
+    """Lines said before the fit: the logs without reference loads (the RMSE tuning and the
+    sigma calibration then do not run) and the wheels a partial reference leaves unscored."""
+    notes = []
+    without = [Path(s.source).name for s in logs if not s.reference_present.any()]
+    if without and len(without) < len(logs):
+        notes.append(
+            f"no reference loads fz_* in {', '.join(without)}: the densities are fitted on "
+            "every log, the RMSE tuning and the sigma calibration need references in every "
+            "log and are left out (tune the logs with references on their own for them)"
+        )
+    for signals in logs:
+        present = signals.reference_present
+        if present.any() and not present.all():
+            missing = " ".join(w.upper() for w, ok in zip(WHEELS, present) if not ok)
+            shown = " ".join(w.upper() for w, ok in zip(WHEELS, present) if ok)
+            notes.append(
+                f"{Path(signals.source).name}: reference loads on {shown} only: "
+                f"{missing} not scored (RMSE and sigma on the wheels with a reference)"
+            )
+    return notes
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,7 +92,7 @@ def tune_file(vehicle: Vehicle, logs: tuple[Signals, ...], *, iterations: int) -
     )
     from wheelload.estimators.identification.tuning import FilterRuns, tune, tuned_vehicle
 
-    references = all(signals.reference is not None for signals in logs)
+    references = all(signals.reference_present.any() for signals in logs)
     runs = FilterRuns(vehicle, logs)
     result = tune(runs, noise_densities(vehicle), references=references, iterations=iterations)
     report = fit_report(result, runs, references)
@@ -218,7 +242,7 @@ def evaluation_table(
 ) -> tuple[str, tuple[str, ...]]:
     """Per-log and pooled ±2σ coverage, RMSE and σ–``|error|`` correlation, input and tuned;
     and the warnings of a held-out log's coverage out of band."""
-    if any(signals.reference is None for signals in logs):
+    if any(not signals.reference_present.any() for signals in logs):
         raise ValueError("--evaluate needs logs with reference loads fz_*")
     from wheelload.estimators.identification.sigma_fit import coverage_warnings
     from wheelload.estimators.identification.tuning import FilterRuns  # SciPy: on use

@@ -99,10 +99,15 @@ def comparison_figure(
 def plot_comparison(
     comparison: Comparison, signals: Signals, paths: list[Path], title: str = ""
 ) -> list[Path]:
-    """Save :func:`comparison_figure` of each wheel to ``paths`` (FL, FR, RL, RR)."""
+    """Save :func:`comparison_figure` of each wheel with a reference load to its path of
+    ``paths`` (FL, FR, RL, RR); the paths written (a wheel without a reference has none)."""
+    scored = comparison.results[0].metrics.index if comparison.results else []
+    written = []
     for i, path in enumerate(paths):
-        _save(comparison_figure(comparison, signals, i, title), path)
-    return paths
+        if WHEELS[i] in scored:
+            _save(comparison_figure(comparison, signals, i, title), path)
+            written.append(path)
+    return written
 
 
 def write_csv(frame, path: Path) -> Path:
