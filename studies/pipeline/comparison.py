@@ -24,8 +24,8 @@ from wheelload.estimators.protocol import MethodInfo
 from wheelload.estimators.registry import build, method
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.types import Signals
-from wheelload.models.conventions import WHEELS
 from wheelload.models import Vehicle
+from wheelload.models.conventions import WHEELS
 from wheelload.studies.identical import identical_groups, identity_notes, label
 from wheelload.studies.metrics import COLUMNS, pooled_force_error, wheel_metrics
 
