@@ -49,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
         if spec.radius is not None:
             extras.append(f"radius {spec.radius:g} m, ratio {spec.ratio:g}")
         method = (spec.method or channel_map.clock.method).value
-        print(f"{name:>6} <- {spec.source} [{spec.unit}] {', '.join(extras)}, {method}")
+        unit = spec.unit or "the log's unit"
+        print(f"{name:>6} <- {spec.source} [{unit}] {', '.join(extras)}, {method}")
     print(f"clock: {channel_map.clock.channel}, gaps > {channel_map.clock.max_gap:g} s missing")
     if args.log:
         signals = read_log(args.log, channels=args.map)

@@ -29,6 +29,7 @@ or a unit of the wrong kind, is an error naming the file and the key.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from dataclasses import dataclass
@@ -38,7 +39,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wheelload.estimators.logs.readers.resample import Method, resample
-from wheelload.estimators.logs.readers.units import Kind, UnitError, unit_factor
+from wheelload.estimators.logs.readers.units import UNITS, Kind, UnitError, unit_factor
 from wheelload.models.conventions import WHEELS
 from wheelload.models.runtime.toml_file import TomlFileKind, read_toml
 
@@ -101,10 +102,11 @@ class Channel:
 
 @dataclass(frozen=True, kw_only=True)
 class ChannelSpec:
-    """How one of our channels is made from a source channel."""
+    """How one of our channels is made from a source channel; ``unit`` "" takes the unit
+    the log declares (MDF4, the units row of an AiM or MoTeC export)."""
 
     source: str
-    unit: str
+    unit: str = ""
     sign: float = 1.0
     motion_ratio: float = 1.0
     radius: float | None = None
@@ -197,12 +199,13 @@ def _string(table: dict, key: str, prefix: str, where: str) -> str:
 def _channel(name: str, table: dict, where: str) -> ChannelSpec:
     prefix = f"channels.{name}."
     _keys(table, {"source", "unit", "sign", "motion_ratio", "radius", "ratio", "method"},
-          {"source", "unit"}, prefix, where)  # fmt: skip
-    unit = _string(table, "unit", prefix, where)
-    try:
-        unit_factor(unit, TARGETS[name], f"{where}: key '{prefix}unit'")
-    except UnitError as error:
-        raise ChannelMapError(str(error)) from None
+          {"source"}, prefix, where)  # fmt: skip
+    unit = _string(table, "unit", prefix, where) if "unit" in table else ""
+    if unit:
+        try:
+            unit_factor(unit, TARGETS[name], f"{where}: key '{prefix}unit'")
+        except UnitError as error:
+            raise ChannelMapError(str(error)) from None
     sign = 1.0
     if "sign" in table:
         sign = _number(table, "sign", prefix, where, positive=False)
@@ -334,6 +337,23 @@ def slow_gap(t: np.ndarray, max_gap: float) -> float:
     return max(max_gap, SLOW_GAP_RATIO * float(np.median(np.diff(t))))
 
 
+def _check_rotation(name: str, spec: ChannelSpec, where: str) -> None:
+    """A rotation speed the log declares is a wheel speed's (with its radius) or a wheel
+    spin's: else an error naming the key (the map's own units are checked when read)."""
+    if spec.unit not in ("rpm", "1/min", "rad/s_wheel"):
+        return
+    if name.startswith("ws_") and spec.radius is None:
+        raise ChannelMapError(
+            f"{where}: the log gives '{spec.unit}': key 'channels.{name}.radius' (rolling "
+            "radius [m]) is needed"
+        )
+    if not name.startswith(("ws_", "omega_")):
+        raise ChannelMapError(
+            f"{where}: the log gives '{spec.unit}', a rotation speed, for '{name}': give key "
+            f"'channels.{name}.unit'"
+        )
+
+
 def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: str) -> pd.DataFrame:
     """Our columns on one clock, in SI units (a frame for ``signals_from_frame``)."""
     import pandas as pd
@@ -345,7 +365,14 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
                 "is not in the log"
             )
         declared = raw[spec.source].unit.strip()
-        if declared and declared != spec.unit.strip():
+        given = spec.unit.strip()
+        if not given and not declared:
+            raise ChannelMapError(
+                f"{where}: channel '{spec.source}' declares no unit in the log: give key "
+                f"'channels.{name}.unit' in {channel_map.source}"
+            )
+        same = declared == given or (declared in UNITS and UNITS.get(declared) == UNITS.get(given))
+        if declared and given and not same:
             raise ChannelMapError(
                 f"{where}: channel '{spec.source}' is declared in '{declared}' in the log but "
                 f"in '{spec.unit}' in {channel_map.source} (key 'channels.{name}.unit')"
@@ -356,7 +383,17 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
     columns: dict[str, np.ndarray] = {"t": clock}
     for name, spec in channel_map.channels.items():
         channel = raw[spec.source]
-        values = convert(spec, TARGETS[name], channel.values, f"{where}: channel '{spec.source}'")
+        if not spec.unit.strip():  # the log's own unit
+            spec = dataclasses.replace(spec, unit=channel.unit.strip())
+            _check_rotation(name, spec, f"{where}: channel '{spec.source}' (for '{name}')")
+        try:
+            values = convert(
+                spec, TARGETS[name], channel.values, f"{where}: channel '{spec.source}'"
+            )
+        except UnitError as error:
+            raise ChannelMapError(
+                f"{error} (key 'channels.{name}.unit' in {channel_map.source})"
+            ) from None
         method = spec.method or channel_map.clock.method
         max_gap = slow_gap(channel.t, channel_map.clock.max_gap)
         if max_gap > channel_map.clock.max_gap:

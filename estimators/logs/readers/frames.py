@@ -1,11 +1,16 @@
-"""A log of any format read as our columns on one clock (:func:`read_frame`)."""
+"""A log of any format read as our columns on one clock (:func:`read_frame`).
+
+MDF4, ERG and the CSV exports of logger software (AiM, MoTeC: :mod:`.logger_csv`) carry
+each channel's time stamps and unit; other CSV and Parquet logs are tables on one time
+column (:mod:`.tabular`).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from wheelload.estimators.logs.readers import erg, mdf, tabular
+from wheelload.estimators.logs.readers import erg, logger_csv, mdf, tabular
 from wheelload.estimators.logs.readers.channel_map import (
     ChannelMap,
     ChannelMapError,
@@ -33,6 +38,9 @@ def channel_names(path: str | Path) -> list[str]:
         return mdf.mdf_channel_names(path)
     if suffix in erg.SUFFIXES:
         return erg.erg_channel_names(path)
+    export = logger_csv.logger_export(path)
+    if export is not None:
+        return [name for name in export.names if name != logger_csv.TIME]
     return tabular.table_columns(path)
 
 
@@ -40,12 +48,16 @@ def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame
     """Our columns of a log on one clock; ``None`` maps channels named as ours, in SI."""
     path = Path(path)
     suffix = _kind(path)
-    if suffix in mdf.SUFFIXES or suffix in erg.SUFFIXES:
+    export = logger_csv.logger_export(path)
+    if suffix in mdf.SUFFIXES or suffix in erg.SUFFIXES or export is not None:
         if channel_map is None:
             channel_map = identity_map(channel_names(path), str(path))
         names = [spec.source for spec in channel_map.channels.values()]
-        read = mdf.read_mdf_channels if suffix in mdf.SUFFIXES else erg.read_erg_channels
-        raw = read(path, names)
+        if export is not None:
+            raw = logger_csv.read_export_channels(path, export, names)
+        else:
+            read = mdf.read_mdf_channels if suffix in mdf.SUFFIXES else erg.read_erg_channels
+            raw = read(path, names)
     elif channel_map is None:
         return tabular.read_table(path)
     else:

@@ -36,6 +36,7 @@ class Kind(enum.Enum):
 #: unit string -> (kind, factor to the SI unit of the kind)
 UNITS: dict[str, tuple[Kind, float]] = {
     "s": (Kind.TIME, 1.0),
+    "sec": (Kind.TIME, 1.0),
     "ms": (Kind.TIME, 1e-3),
     "us": (Kind.TIME, 1e-6),
     "ns": (Kind.TIME, 1e-9),
@@ -53,6 +54,7 @@ UNITS: dict[str, tuple[Kind, float]] = {
     "m/s2": (Kind.ACCELERATION, 1.0),
     "m/s²": (Kind.ACCELERATION, 1.0),
     "g": (Kind.ACCELERATION, GRAVITY),  # standard gravity, not the gram
+    "G": (Kind.ACCELERATION, GRAVITY),  # as AiM and MoTeC exports spell it
     "rad/s": (Kind.ANGULAR_RATE, 1.0),
     "deg/s": (Kind.ANGULAR_RATE, math.pi / 180.0),
     "°/s": (Kind.ANGULAR_RATE, math.pi / 180.0),
