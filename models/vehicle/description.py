@@ -498,8 +498,23 @@ def _build(cls: type, table: dict, prefix: str) -> object:
     return cls(**values)
 
 
+def field_default(key: tuple[str, ...]) -> object:
+    """The dataclass default of the vehicle-file key ``key`` (its table's parts, then
+    the key)."""
+    cls: type = Vehicle
+    *parents, name = key
+    for part in parents:
+        cls = field_types(cls)[part]  # type: ignore[assignment]
+    (field,) = [f for f in dataclasses.fields(cls) if f.name == name]
+    return field.default
+
+
 def vehicle_from_dict(table: dict) -> Vehicle:
-    """Build and validate a :class:`Vehicle` from a parsed TOML table."""
+    """Build and validate a :class:`Vehicle` from a parsed TOML table; the defaults that
+    scale with the car are its own (:mod:`~wheelload.models.vehicle.scaled_defaults`)."""
+    from wheelload.models.vehicle.scaled_defaults import MASS_POWERS, with_scaled_defaults
+
+    table = with_scaled_defaults(table, {key: field_default(key) for key in MASS_POWERS})
     vehicle = _build(Vehicle, table, "")
     _validate(vehicle, "")
     return vehicle  # type: ignore[return-value]
