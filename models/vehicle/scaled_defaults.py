@@ -25,13 +25,13 @@ import math
 
 #: kg, the mass of the vehicle the defaults were calibrated on (models/vehicles/sports_car.toml)
 REFERENCE_MASS = 1613.2
+_SIGMA_KEYS = ("sigma_floor", "sigma_ax", "sigma_ay", "sigma_travel_rate", "sigma_travel",
+               "sigma_no_travel", "sigma_no_travel_ax", "sigma_no_travel_ay",
+               "sigma_no_travel_az")  # fmt: skip
 #: file key (its table's parts, then the key) -> power of m / REFERENCE_MASS
 MASS_POWERS: dict[tuple[str, ...], int] = {
     # the reported sigma (estimators/kf/reported_std.py): N, N per m/s^2, N per m/s, N per m
-    **{("filter", key): 1 for key in (
-        "sigma_floor", "sigma_ax", "sigma_ay", "sigma_travel_rate", "sigma_travel",
-        "sigma_no_travel", "sigma_no_travel_ax", "sigma_no_travel_ay", "sigma_no_travel_az",
-    )},  # fmt: skip
+    **{("filter", key): 1 for key in _SIGMA_KEYS},
     # the payload filter (estimators/kf/payload.py): kg, kg m; N^2 s and kg^2/s
     ("filter", "payload", "mass_std"): 1,
     ("filter", "payload", "apparent_mass"): 1,

@@ -187,4 +187,3 @@ def test_a_slow_channel_in_a_map_is_bridged_over_its_own_interval(plant_frame, t
     t = np.arange(0.0, 10.0 + 1e-9, 1.0)
     assert slow_gap(t, 0.1) == pytest.approx(1.5)
     assert slow_gap(np.arange(0.0, 1.0, 0.01), 0.1) == 0.1
-
