@@ -5,6 +5,8 @@ Each variant is scored against the plant's reference loads beside the full-rate 
 same run (the two-stage KF, fixed mass); the tolerances are stated per test.
 """
 
+import logging
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -137,7 +139,7 @@ def test_a_gap_in_an_mf4_clock_group_is_not_refused(plant_frame, kf, full_rmse, 
 
 @pytest.mark.parametrize("suffix", [".csv", ".mf4"])
 def test_a_1_hz_speed_is_interpolated_onto_the_log_clock(
-    plant_frame, kf, full_rmse, tmp_path, suffix, caplog
+    plant_frame, kf, full_rmse, tmp_path, suffix, caplog, monkeypatch
 ):
     """vx at 1 Hz (a CAN speed): interpolated linearly between its samples onto the 100 Hz
     clock (said on the wheelload logger), not dropped on 99 % of the rows; vx equals
@@ -151,7 +153,11 @@ def test_a_1_hz_speed_is_interpolated_onto_the_log_clock(
     else:
         fast = {c: plant_frame[c].to_numpy() for c in plant_frame.columns if c not in ("t", "vx")}
         _write_mdf(path, [(t, fast), (t[slow], {"vx": plant_frame["vx"].to_numpy()[slow]})])
-    with caplog.at_level("WARNING", logger="wheelload"):
+    # the command line's logging setup (an earlier test in this process) may stop the
+    # "wheelload" logger propagating to the root, where caplog listens: listen on it
+    monkeypatch.setattr(logging.getLogger("wheelload"), "handlers", [caplog.handler])
+    monkeypatch.setattr(logging.getLogger("wheelload"), "propagate", False)
+    with caplog.at_level(logging.WARNING, logger="wheelload"):
         signals = read_log(path)
     assert "interpolated linearly" in caplog.text
     inside = (t >= t[slow][0]) & (t <= t[slow][-1])

@@ -23,6 +23,7 @@ REVOLUTION = 2.0 * math.pi
 
 DEFINITIONS = {
     "s": (Kind.TIME, 1.0),
+    "sec": (Kind.TIME, 1.0),
     "ms": (Kind.TIME, 1e-3),
     "us": (Kind.TIME, 1e-6),
     "ns": (Kind.TIME, 1e-9),
@@ -40,6 +41,7 @@ DEFINITIONS = {
     "m/s2": (Kind.ACCELERATION, 1.0),
     "m/s²": (Kind.ACCELERATION, 1.0),
     "g": (Kind.ACCELERATION, STANDARD_GRAVITY),
+    "G": (Kind.ACCELERATION, STANDARD_GRAVITY),
     "rad/s": (Kind.ANGULAR_RATE, 1.0),
     "deg/s": (Kind.ANGULAR_RATE, DEGREE),
     "°/s": (Kind.ANGULAR_RATE, DEGREE),
