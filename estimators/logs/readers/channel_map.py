@@ -429,7 +429,8 @@ channel = "ax"       # output clock: this channel's time stamps (the IMU's)
 method = "linear"    # default resampling: "linear" interpolation or zero-order "hold"
 max_gap = 0.1        # s; a longer gap between source samples is a missing sample
 
-# CSV / Parquet logs only: the time column (MDF4 and ERG carry their own).
+# CSV / Parquet logs only: the time column (MDF4, ERG and AiM / MoTeC CSV exports
+# carry their own; their declared units stand for a missing 'unit' key).
 # [time]
 # source = "Time"
 # unit = "s"
