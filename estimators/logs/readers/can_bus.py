@@ -31,8 +31,9 @@ RAW_FRAMES = "CAN_DataFrame"
 
 def needs_dbc(path: Path, source: str) -> ChannelMapError:
     """The error for a CAN log read without a DBC: name the file and the fix."""
+    raw = "" if path.suffix.lower() in SUFFIXES else f" ({RAW_FRAMES})"
     return ChannelMapError(
-        f"{path}: holds raw CAN frames ({RAW_FRAMES}): give the DBC that decodes them, "
+        f"{path}: holds raw CAN frames{raw}: give the DBC that decodes them, "
         f'dbc = "car.dbc" at the top of the channel map ({source})'
     )
 
