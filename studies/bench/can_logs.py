@@ -15,6 +15,7 @@ printed with its ratio to the synchronous log's.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 import tempfile
 from dataclasses import dataclass
@@ -85,7 +86,9 @@ def can_study(folder: Path, delay: float = 0.3, seed: int = 0) -> tuple[list[Can
     truth.to_csv(sync, index=False, float_format="%.17g")
     base, _ = _rmse(kf, sync, None, truth)
     rows = [CanScore(log="sync.csv", channel_map="-", rmse=base, ratio=1.0)]
-    cars = {"can": CanCar(seed=seed), "late": CanCar(seed=seed, signal_delays={"ay": delay})}
+    radius = (vehicle.tyres.radius_front, vehicle.tyres.radius_rear)
+    car = CanCar(seed=seed, wheel_radius=radius)
+    cars = {"can": car, "late": dataclasses.replace(car, signal_delays={"ay": delay})}
     for stem, car in cars.items():
         write_can_logs(truth, folder, stem, car, replace=True)
     union = folder / "can.union.toml"

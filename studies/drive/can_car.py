@@ -78,7 +78,8 @@ class CanCar:
     latency: dict[str, float] = field(default_factory=lambda: dict(LATENCIES))
     jitter: float = 20e-6  # s, standard deviation of a frame's logging time
     signal_delays: dict[str, float] = field(default_factory=dict)  # our channel -> s
-    wheel_radius: tuple[float, float] = (0.327, 0.345)  # m, front and rear (wheel speeds)
+    #: m, front and rear tyre radius: wheel speeds from the log's wheel spins (else vx)
+    wheel_radius: tuple[float, float] | None = None
     reorder: bool = False
     seed: int = 0
 
@@ -103,8 +104,10 @@ def _signal_values(log: pd.DataFrame, car: CanCar) -> dict[str, np.ndarray]:
     speed = log["vx"].to_numpy(float)
     for k, wheel in enumerate(WHEELS):
         spin = f"omega_{wheel}"
-        radius = car.wheel_radius[k // 2]
-        values[f"ws_{wheel}"] = log[spin].to_numpy(float) * radius if spin in log else speed
+        radius = None if car.wheel_radius is None else car.wheel_radius[k // 2]
+        values[f"ws_{wheel}"] = (
+            speed if radius is None or spin not in log else log[spin].to_numpy(float) * radius
+        )
     values.setdefault("steer", np.zeros(len(log)))
     return values
 
@@ -209,17 +212,23 @@ def channel_map_text(dbc: str = DBC_NAME, latency: dict[str, float] | None = Non
     return "\n".join(lines)
 
 
+def can_outputs(folder: Path, stem: str) -> list[Path]:
+    """The files :func:`write_can_logs` writes."""
+    names = [f"{stem}.mf4", f"{stem}.blf", f"{stem}.dbc", f"{stem}.toml", f"{stem}.latency.toml"]
+    return [folder / name for name in names]
+
+
 def write_can_logs(
     log: pd.DataFrame, folder: Path, stem: str, car: CanCar = CanCar(), *, replace: bool = False
 ) -> list[Path]:
-    """``STEM.mf4``, ``STEM.blf``, the DBC and two channel maps in ``folder``: one without
-    latency keys, one (``STEM.latency.toml``) with the car's frame latencies."""
+    """``STEM.mf4``, ``STEM.blf``, the DBC (``STEM.dbc``) and two channel maps in ``folder``:
+    ``STEM.toml`` without latency keys, ``STEM.latency.toml`` with the car's frame latencies."""
     frames = can_frames(log, car)
-    paths = [folder / f"{stem}.mf4", folder / f"{stem}.blf", folder / DBC_NAME,
-             folder / f"{stem}.toml", folder / f"{stem}.latency.toml"]  # fmt: skip
+    paths = can_outputs(folder, stem)
     write_bus_logging(frames, paths[0], replace=replace)
     write_vector_log(frames, paths[1], replace=replace)
     write_text(paths[2], dbc_path().read_text(), replace=replace)
-    write_text(paths[3], channel_map_text(), replace=replace)
-    write_text(paths[4], channel_map_text(latency=car.latency), replace=replace)
+    dbc = paths[2].name
+    write_text(paths[3], channel_map_text(dbc), replace=replace)
+    write_text(paths[4], channel_map_text(dbc, latency=car.latency), replace=replace)
     return paths
