@@ -411,6 +411,8 @@ TEMPLATE = """\
 # wheelload channel map: your log's channels -> the log format (SI, ISO 8855).
 # Use with: wheelload estimate LOG --vehicle car.toml --channels this.toml
 # Every key is checked; unknown keys, channels and units are errors.
+# A CAN log (.mf4 bus logging, .blf, .asc): dbc = "car.dbc" (the DBC that decodes it,
+# relative to this map) at the top, and each source is a signal name of that DBC.
 # Units: s ms us | m cm mm in | m/s mm/s km/h mph | m/s^2 g | rad/s deg/s | N kN
 #        | N m kNm | rad deg | rpm (wheel speeds with radius and ratio; wheel spins
 #        omega_*). "g" is standard gravity.
@@ -449,6 +451,7 @@ unit = "deg/s"
 source = "VehSpd_CAN"
 unit = "km/h"
 method = "hold"      # a CAN signal: zero-order hold
+# latency = 0.012    # s, logged this late: its time stamps are shifted back by it
 
 # Suspension travel, compression positive. motion_ratio = damper travel /
 # wheel travel. Leave a corner out for a dead sensor, all four for IMU-only.
