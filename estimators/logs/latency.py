@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wheelload.estimators.kernels import zero_phase
+from wheelload.estimators.kernels import order_statistics, zero_phase
 from wheelload.models.conventions import WHEELS
 
 #: Hz, the band of each relation: the body's quasi-static response for the accelerations;
@@ -155,7 +155,7 @@ def channel_lags(
     t = np.asarray(t, float)
     if t.size < 4 or not np.isfinite(t[[0, -1]]).all() or t[-1] - t[0] < 4.0:
         return []
-    step = float(np.median(np.diff(t)))
+    step = float(order_statistics.median(np.diff(t)))
     grid = np.arange(t[0], t[-1], step)
     fs = 1.0 / step
     on = lambda values: _uniform(t, np.asarray(values, float), grid)  # noqa: E731
