@@ -7,9 +7,14 @@ log. It is re-sampled as the CAN car of ``studies/data/can_car.dbc`` sends it
 BLF, then read through a channel map with and without the frames' ``latency``
 keys, and once more with ``ay`` delayed by ``--delay`` seconds inside the IMU
 (a filter nothing declares): the wiring checks' lag of ``ay``, and the RMSE with
-that lag added to ``ay``'s latency key. Each RMSE is the KF's, pooled over the four
-wheels, against the plant's reference loads at the log's own time stamps, and is
-printed with its ratio to the synchronous log's.
+that lag added to ``ay``'s latency key. The CAN car's maps put the channels on an
+even 200 Hz clock (``[clock] rate = 200``); ``STEM.stamps.toml`` on the IMU frame's
+own stamps instead, which a jitter of :data:`ROUGH_JITTER` (``rough``) makes too
+uneven for the filter's differentiators; ``STEM.union.toml`` on the union of every
+channel's stamps (``[clock] union = true``), read from the jittered log and from one
+without jitter (``still``), whose shifted stamps fall on the IMU's 5 ms grid. Each
+RMSE is the KF's, pooled over the four wheels, against the plant's reference loads at
+the log's own time stamps, and is printed with its ratio to the synchronous log's.
 """
 
 from __future__ import annotations
@@ -28,10 +33,11 @@ from wheelload.estimators import LogError, read_log
 from wheelload.estimators.registry import build
 from wheelload.models.conventions import WHEELS
 from wheelload.models.vehicle.file import example_vehicle_path, load_vehicle
-from wheelload.studies.drive.can_car import CanCar, write_can_logs
+from wheelload.studies.drive.can_car import UNION_CLOCK, CanCar, channel_map_text, write_can_logs
 from wheelload.studies.drive.scenario_runner import run_scenario
 
 RATE = 200.0  # Hz, the synchronous log
+ROUGH_JITTER = 200e-6  # s, a logger whose stamps jitter as much as a busy bus delays frames
 REFERENCE = [f"fz_{w}" for w in WHEELS]
 
 
@@ -88,17 +94,26 @@ def can_study(folder: Path, delay: float = 0.3, seed: int = 0) -> tuple[list[Can
     rows = [CanScore(log="sync.csv", channel_map="-", rmse=base, ratio=1.0)]
     radius = (vehicle.tyres.radius_front, vehicle.tyres.radius_rear)
     car = CanCar(seed=seed, wheel_radius=radius)
-    cars = {"can": car, "late": dataclasses.replace(car, signal_delays={"ay": delay})}
+    cars = {"can": car, "late": dataclasses.replace(car, signal_delays={"ay": delay}),
+            "still": dataclasses.replace(car, jitter=0.0),
+            "rough": dataclasses.replace(car, jitter=ROUGH_JITTER)}  # fmt: skip
     for stem, car in cars.items():
         write_can_logs(truth, folder, stem, car, replace=True)
-    union = folder / "can.union.toml"
-    latency_map = (folder / "can.latency.toml").read_text()
-    union.write_text(latency_map.replace('channel = "ax"', "union = true"))
+    for stem, car in cars.items():
+        (folder / f"{stem}.union.toml").write_text(
+            channel_map_text(f"{stem}.dbc", car.latency, UNION_CLOCK)
+        )
+        (folder / f"{stem}.stamps.toml").write_text(
+            channel_map_text(f"{stem}.dbc", car.latency, ('channel = "ax"',))
+        )
     lag, _, _ = ay_lag(folder / "late.mf4", folder / "late.latency.toml")
     fixed = folder / "late.fixed.toml"
     fixed.write_text(with_latency((folder / "late.latency.toml").read_text(), "ay", lag))
     cases = [("can.mf4", "can.toml"), ("can.mf4", "can.latency.toml"),
-             ("can.blf", "can.latency.toml"), ("can.mf4", "can.union.toml"),
+             ("can.blf", "can.latency.toml"), ("can.mf4", "can.stamps.toml"),
+             ("rough.mf4", "rough.stamps.toml"), ("rough.mf4", "rough.latency.toml"),
+             ("rough.blf", "rough.latency.toml"), ("can.mf4", "can.union.toml"),
+             ("still.mf4", "still.union.toml"),
              ("late.mf4", "late.latency.toml"), ("late.mf4", "late.fixed.toml"),
              ("late.blf", "late.fixed.toml")]  # fmt: skip
     for log, channels in cases:

@@ -200,10 +200,21 @@ def write_vector_log(frames: CanFrames, path: Path, *, replace: bool = False) ->
             writer.stop()
 
 
-def channel_map_text(dbc: str = DBC_NAME, latency: dict[str, float] | None = None) -> str:
-    """The channel map of the CAN car (TOML); ``latency``: frame -> its ``latency`` key."""
+#: The clock of the CAN car's channel maps: the IMU's span at its rate, evenly stepped.
+EVEN_CLOCK = ('channel = "ax"', "rate = 200")
+#: The clock of the long table of channels on their own stamps.
+UNION_CLOCK = ("union = true",)
+
+
+def channel_map_text(
+    dbc: str = DBC_NAME,
+    latency: dict[str, float] | None = None,
+    clock: tuple[str, ...] = EVEN_CLOCK,
+) -> str:
+    """The channel map of the CAN car (TOML); ``latency``: frame -> its ``latency`` key;
+    ``clock``: the lines of its ``[clock]`` table."""
     lines = ["# The CAN car's signals (studies/data/can_car.dbc) as our channels.",
-             f'dbc = "{dbc}"', "", "[clock]", 'channel = "ax"', ""]  # fmt: skip
+             f'dbc = "{dbc}"', "", "[clock]", *clock, ""]  # fmt: skip
     for name, (frame, signal, unit) in SIGNALS.items():
         lines += [f"[channels.{name}]", f'source = "{signal}"', f'unit = "{unit}"']
         if latency and frame in latency:

@@ -28,9 +28,11 @@ their own time stamps. A CAN log (MDF4 bus logging, Vector BLF or ASC) is decode
 the DBC file named by the top-level key ``dbc = "car.dbc"`` (relative to the map), and
 ``source`` is a signal name of that DBC (``readers/can_bus.py``). ``[clock] union = true``
 puts every channel on the union of the channels' time stamps, each with NaN where it has
-no new value, instead of resampling onto one clock channel. Every key is checked: an
-unknown key, target or unit, or a unit of the wrong kind, is an error naming the file and
-the key.
+no new value, instead of resampling onto one clock channel; ``[clock] rate = 200``
+resamples onto a uniform clock at that rate over the clock channel's span (time stamps
+that jitter, as a CAN logger's do, onto the even steps the filter's differentiators
+need). Every key is checked: an unknown key, target or unit, or a unit of the wrong kind,
+is an error naming the file and the key.
 """
 
 from __future__ import annotations
@@ -127,6 +129,7 @@ class Clock:
     method: Method = Method.LINEAR
     max_gap: float = DEFAULT_MAX_GAP
     union: bool = False
+    rate: float | None = None  # Hz: a uniform clock over the clock channel's span
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -281,7 +284,7 @@ def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelM
     clock = Clock()
     if "clock" in table:
         raw = _table(table["clock"], "clock", where)
-        _keys(raw, {"channel", "method", "max_gap", "union"}, set(), "clock.", where)
+        _keys(raw, {"channel", "method", "max_gap", "union", "rate"}, set(), "clock.", where)
         if not isinstance(raw.get("union", False), bool):
             raise ChannelMapError(f"{where}: key 'clock.union' must be true or false")
         default = Clock()
@@ -296,7 +299,12 @@ def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelM
             if "max_gap" in raw
             else default.max_gap,
             union=raw.get("union", False),
+            rate=_number(raw, "rate", "clock.", where) if "rate" in raw else None,
         )
+        if clock.union and clock.rate is not None:
+            raise ChannelMapError(
+                f"{where}: keys 'clock.union' and 'clock.rate' exclude each other"
+            )
     time = None
     if "time" in table:
         raw = _table(table["time"], "time", where)
@@ -386,6 +394,9 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
         clock = union_clock(list(stamps.values()))
     else:
         clock = stamps[channel_map.clock.channel]
+    rate = channel_map.clock.rate
+    if rate is not None and clock.size:
+        clock = clock[0] + np.arange(int((clock[-1] - clock[0]) * rate) + 1) / rate
     columns: dict[str, np.ndarray] = {"t": clock}
     for name, spec in channel_map.channels.items():
         channel = raw[spec.source]
@@ -419,6 +430,7 @@ TEMPLATE = """\
 
 [clock]
 channel = "ax"       # output clock: this channel's time stamps (the IMU's)
+# rate = 200         # Hz: a uniform clock over that channel's span (jittering CAN stamps)
 method = "linear"    # default resampling: "linear" interpolation or zero-order "hold"
 max_gap = 0.1        # s; a longer gap between source samples is a missing sample
 

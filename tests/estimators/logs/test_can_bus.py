@@ -26,6 +26,7 @@ from wheelload.studies.drive.can_car import (
     PERIODS,
     SIGNALS,
     TO_UNIT,
+    UNION_CLOCK,
     CanCar,
     CanFrames,
     can_frames,
@@ -112,7 +113,7 @@ def test_latency_key_shifts_a_channel_back_to_its_send_times(can_logs):
 
 def test_union_table_holds_each_channel_at_its_own_stamps(can_logs):
     folder, frames = can_logs
-    text = channel_map_text(str(dbc_path()), LATENCIES).replace('channel = "ax"', "union = true")
+    text = channel_map_text(str(dbc_path()), LATENCIES, UNION_CLOCK)
     (folder / "union.toml").write_text(text)
     table = read_frame(folder / "drive.mf4", load_channel_map(folder / "union.toml"))
     per_frame = {f: int(np.sum(frames.frame_id == i)) for f, i in
@@ -200,3 +201,28 @@ def test_a_dbc_key_on_a_table_log_is_refused(can_logs, tmp_path):
     _source().to_csv(tmp_path / "drive.csv", index=False)
     message = _one_line_error(tmp_path / "drive.csv", folder / "plain.toml")
     assert "decodes CAN logs" in message
+
+
+def test_an_even_clock_takes_jittering_stamps(can_logs, tmp_path):
+    """A logger's jitter (0.2 ms, 4 % of the IMU's period) onto ``[clock] rate = 200``:
+    even steps (to 1e-12 s), and ax as on the jitter-free log within its slope times the
+    jitter (A w = 3 * 2 pi 0.7 m/s^3 times 1 ms, five standard deviations of the seeded
+    draw) plus a DBC step."""
+    folder, _ = can_logs
+    rough = can_frames(_source(), CanCar(jitter=200e-6))
+    write_bus_logging(rough, tmp_path / "rough.mf4")
+    channel_map = load_channel_map(folder / "latency.toml")
+    assert channel_map.clock.rate == 200.0
+    table = read_frame(tmp_path / "rough.mf4", channel_map)
+    assert np.max(np.abs(np.diff(table["t"]) - 0.005)) < 1e-12
+    still = read_frame(folder / "drive.mf4", channel_map)
+    rows = min(len(table), len(still)) - 1
+    assert np.nanmax(np.abs(table["ax"][:rows] - still["ax"][:rows])) < 3 * 2 * np.pi * 0.7 * 1e-3 + 0.001
+
+
+def test_union_and_rate_exclude_each_other(can_logs, tmp_path):
+    folder, _ = can_logs
+    text = channel_map_text(str(dbc_path()), LATENCIES, ("union = true", "rate = 200"))
+    (tmp_path / "both.toml").write_text(text)
+    message = _one_line_error(folder / "drive.mf4", tmp_path / "both.toml")
+    assert "'clock.union' and 'clock.rate' exclude each other" in message
