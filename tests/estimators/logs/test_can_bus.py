@@ -217,7 +217,10 @@ def test_an_even_clock_takes_jittering_stamps(can_logs, tmp_path):
     assert np.max(np.abs(np.diff(table["t"]) - 0.005)) < 1e-12
     still = read_frame(folder / "drive.mf4", channel_map)
     rows = min(len(table), len(still)) - 1
-    assert np.nanmax(np.abs(table["ax"][:rows] - still["ax"][:rows])) < 3 * 2 * np.pi * 0.7 * 1e-3 + 0.001
+    assert (
+        np.nanmax(np.abs(table["ax"][:rows] - still["ax"][:rows]))
+        < 3 * 2 * np.pi * 0.7 * 1e-3 + 0.001
+    )
 
 
 def test_union_and_rate_exclude_each_other(can_logs, tmp_path):
