@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from wheelload.estimators.logs.readers import erg, mdf, tabular
+from wheelload.estimators.logs.readers import can_bus, erg, mdf, tabular
 from wheelload.estimators.logs.readers.channel_map import (
     ChannelMap,
     ChannelMapError,
@@ -33,6 +33,8 @@ def channel_names(path: str | Path) -> list[str]:
         return mdf.mdf_channel_names(path)
     if suffix in erg.SUFFIXES:
         return erg.erg_channel_names(path)
+    if suffix in can_bus.SUFFIXES:
+        raise can_bus.needs_dbc(path, "--channels MAP")
     return tabular.table_columns(path)
 
 
@@ -40,7 +42,15 @@ def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame
     """Our columns of a log on one clock; ``None`` maps channels named as ours, in SI."""
     path = Path(path)
     suffix = _kind(path)
+    if suffix in can_bus.SUFFIXES or (channel_map is not None and channel_map.dbc is not None):
+        if channel_map is None:
+            raise can_bus.needs_dbc(path, "--channels MAP")
+        return apply_channel_map(
+            can_bus.read_can_channels(path, channel_map), channel_map, str(path)
+        )
     if suffix in mdf.SUFFIXES or suffix in erg.SUFFIXES:
+        if suffix in mdf.SUFFIXES:
+            _refuse_raw_frames(path, channel_map)
         if channel_map is None:
             channel_map = identity_map(channel_names(path), str(path))
         names = [spec.source for spec in channel_map.channels.values()]
@@ -51,3 +61,13 @@ def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame
     else:
         raw = tabular.read_tabular_channels(path, channel_map)
     return apply_channel_map(raw, channel_map, str(path))
+
+
+def _refuse_raw_frames(path: Path, channel_map: ChannelMap | None) -> None:
+    """An MDF4 of raw CAN frames read without a DBC: one line that says to give one."""
+    names = set(mdf.mdf_channel_names(path))
+    if can_bus.RAW_FRAMES not in names:
+        return
+    wanted = ["ax"] if channel_map is None else channel_map.sources()
+    if any(name not in names for name in wanted):
+        raise can_bus.needs_dbc(path, channel_map.source if channel_map else "--channels MAP")
