@@ -17,16 +17,24 @@ from typing import Any
 
 import numpy as np
 
-from wheelload.estimators.logs.signals import rate_derivatives
+from wheelload.estimators.logs.signals import (
+    DEFAULT_RATE_FILTER,
+    RateDerivativeFilter,
+    rate_derivatives,
+)
 from wheelload.estimators.protocol import Estimator, sample_intervals
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.types import Sample, Signals
 
 
-def samples(signals: Signals) -> Iterator[Sample]:
-    """The log's samples in order, with the body rates, their (causal, filtered)
-    derivative and the hub accelerometers where the log has them."""
-    rate_dots = rate_derivatives(signals) if signals.rates is not None else signals.rate_dots
+def samples(
+    signals: Signals, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
+) -> Iterator[Sample]:
+    """The log's samples in order, with the body rates, their (causal, filtered by
+    ``rate_filter``) derivative and the hub accelerometers where the log has them."""
+    rate_dots = (
+        rate_derivatives(signals, rate_filter) if signals.rates is not None else signals.rate_dots
+    )
     for k in range(len(signals)):
         yield Sample(
             d=signals.d[k],
@@ -67,11 +75,13 @@ def step_through(estimator: Estimator, signals: Signals, state: Any = None) -> E
     """``estimator.step`` over every sample from ``state`` (default: a fresh initial state).
 
     The reference that ``run`` must reproduce; intervals as in the KF's ``run``
-    (the first sample reuses the first interval).
+    (the first sample reuses the first interval), the body-rate derivatives filtered as
+    the estimator's vehicle file says.
     """
     state = estimator.initial_state() if state is None else state
     estimates = []
-    for sample, dt in zip(samples(signals), sample_intervals(signals.t)):
+    rate_filter = RateDerivativeFilter.of(estimator.vehicle)
+    for sample, dt in zip(samples(signals, rate_filter), sample_intervals(signals.t)):
         state, estimate = estimator.step(state, sample, float(dt))
         estimates.append(estimate)
     return concatenate(estimates, signals.t)

@@ -48,6 +48,7 @@ from wheelload.estimators.kf.tuning import nominal_interval
 from wheelload.estimators.kf.two_stage import TwoStageKF, sensor_faults
 from wheelload.estimators.logs.inputs import input_blocks
 from wheelload.estimators.logs.output_files import write_text
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.result import Estimate
 from wheelload.estimators.types import Signals, input_bits
 from wheelload.models import INPUTS, load_vehicle
@@ -325,8 +326,11 @@ def _pointers(arrays: list[np.ndarray], n: int) -> ctypes.Array:
     return (ctypes.c_void_p * n)(*[array.ctypes.data for array in arrays])
 
 
-def _channels(logs: list[Signals], n: int, keep: list) -> tuple[ctypes.Array, np.ndarray]:
-    """Each log's input channels as (address, stride in samples), read in place.
+def _channels(
+    logs: list[Signals], n: int, keep: list, rate_filter: RateDerivativeFilter
+) -> tuple[ctypes.Array, np.ndarray]:
+    """Each log's input channels as (address, stride in samples), read in place (the
+    body-rate derivatives, where not logged, from ``rate_filter``).
 
     Address 0 where the log lacks the channel, and for the filters after the logs up
     to ``n``. An array that is not float64 with strides of whole doubles is copied
@@ -334,7 +338,7 @@ def _channels(logs: list[Signals], n: int, keep: list) -> tuple[ctypes.Array, np
     """
     addresses, strides = [], []
     for log in logs:
-        for values, width in input_blocks(log):
+        for values, width in input_blocks(log, rate_filter):
             if values is None:
                 addresses += [0] * width
                 strides += [0] * width
@@ -405,7 +409,7 @@ def _run_group(
     P = np.repeat(np.array([initial.P[i, j] for i, j in PACKED])[:, None], n, axis=1)
     monitor = np.repeat(initial.m[:, None], n, axis=1)
     keep: list[np.ndarray] = []
-    channels, strides = _channels(logs, n, keep)
+    channels, strides = _channels(logs, n, keep, RateDerivativeFilter.of(kf.vehicle))
     times = [np.ascontiguousarray(log.t, dtype=np.float64) for log in logs]
     bits = np.zeros(n, np.int64)
     bits[:count] = [input_bits(log.az_assumed, log.speed_source) for log in logs]

@@ -247,7 +247,7 @@ def _substitutions(
     kernel: ca.Function,
 ) -> dict[str, str]:
     values = calibration_values(vehicle, options)
-    rate_filter = RateDerivativeFilter()
+    rate_filter = RateDerivativeFilter.of(vehicle)
     precision, prefix = options.precision, options.prefix
     real = precision.value
     runtime = options.params is ParamMode.RUNTIME

@@ -34,6 +34,7 @@ from wheelload.estimators.codegen.mhe import (
 )
 from wheelload.estimators.kernels.c_emitter import Precision
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import DEFAULT_RATE_FILTER, RateDerivativeFilter
 from wheelload.estimators.mhe.settings import MheSettings
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.types import Signals
@@ -74,8 +75,12 @@ class CompiledMhe:
         """Bytes of one instance's state, ``sizeof(wheelload_mhe_state)``."""
         return int(self._lib.wheelload_mhe_state_size())
 
-    def run(self, signals: Signals) -> EmbeddedResult:
-        u = np.ascontiguousarray(input_matrix(signals).T, dtype=float)
+    def run(
+        self, signals: Signals, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
+    ) -> EmbeddedResult:
+        """The log through the C MHE (the body-rate derivatives, where not logged, from
+        ``rate_filter``: a vehicle file's is ``RateDerivativeFilter.of(vehicle)``)."""
+        u = np.ascontiguousarray(input_matrix(signals, rate_filter).T, dtype=float)
         dt = np.ascontiguousarray(sample_intervals(signals.t), dtype=float)
         n = len(signals)
         out = dict(
@@ -207,8 +212,11 @@ def build_mhe_program(
     return binary
 
 
-def write_inputs(signals: Signals, path: Path) -> Path:
-    """The log's intervals and inputs as text rows for :data:`MAIN` (17 digits, 'nan' missing)."""
-    rows = np.column_stack([sample_intervals(signals.t), input_matrix(signals).T])
+def write_inputs(
+    signals: Signals, path: Path, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
+) -> Path:
+    """The log's intervals and inputs as text rows for :data:`MAIN` (17 digits, 'nan' missing;
+    ``rate_filter`` as :meth:`EmbeddedMhe.run`)."""
+    rows = np.column_stack([sample_intervals(signals.t), input_matrix(signals, rate_filter).T])
     np.savetxt(path, rows, fmt="%.17g")
     return path

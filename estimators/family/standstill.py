@@ -32,6 +32,7 @@ import numpy as np
 
 from wheelload.estimators.family.quarter_car import unsprung_masses
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, ModelParameters, Vehicle, vehicle_mass_centre
 from wheelload.models.family.quarter_car import tyre_load_function
@@ -128,7 +129,7 @@ def at_rest(signals: Signals, vehicle: Vehicle, settings: WeighSettings) -> Atti
     loads = np.asarray(
         loads_of(signals.d[usable].T, signals.v[usable].T, a_u.T, unsprung_masses(vehicle), p)
     ).T
-    u = input_matrix(signals)[:, usable].T
+    u = input_matrix(signals, RateDerivativeFilter.of(vehicle))[:, usable].T
     valid = np.all(np.isfinite(u), axis=0)
     mean_inputs = np.where(valid, np.nanmean(np.where(np.isfinite(u), u, 0.0), axis=0), 0.0)
     gates = np.asarray(gates_function()(valid.astype(float), p)[0], float).ravel()

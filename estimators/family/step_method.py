@@ -34,6 +34,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.protocol import DEFAULT_MODEL, SuspensionModel, sample_intervals
 from wheelload.estimators.result import Estimate
@@ -122,7 +123,7 @@ class StepMethod:
         and the per-sample outputs. Chunks bound the memory of the per-sample
         inputs (a 14 x 14 transition per sample for the road-angle KF).
         """
-        u_all = input_matrix(signals).T
+        u_all = input_matrix(signals, RateDerivativeFilter.of(self.vehicle)).T
         dt_all = sample_intervals(signals.t)
         state = list(self.initial_state())
         histories: list[list[np.ndarray]] = [[] for _ in range(self._n_accum)]

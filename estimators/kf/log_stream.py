@@ -51,8 +51,10 @@ from wheelload.estimators.logs.model_error import (
 )
 from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns, read_chunks
 from wheelload.estimators.logs.signals import (
+    DEFAULT_RATE_FILTER,
     VELOCITY_CUTOFF,
     Differentiator,
+    RateDerivativeFilter,
     RateEstimator,
     check_units,
 )
@@ -237,7 +239,7 @@ class LogStream:
         base = input_bits(self.az_assumed, self.speed_source)
         tracker = _FaultTracker()
         start = 0
-        for t, columns in self.signal_chunks():
+        for t, columns in self.signal_chunks(rate_filter=RateDerivativeFilter.of(kf.vehicle)):
             n = len(t)
             if diagnosis is not None and np.any(diagnosis.travel_zero):
                 columns = {**columns, **{name: columns[name] - diagnosis.travel_zero[i]
@@ -271,7 +273,7 @@ class LogStream:
         static loads were given."""
         if len(self) == 0:
             return NOTHING
-        t, inputs = self.thinned_inputs(MAX_SAMPLES)
+        t, inputs = self.thinned_inputs(MAX_SAMPLES, RateDerivativeFilter.of(vehicle))
         return diagnose_inputs(
             inputs,
             vehicle,
@@ -280,12 +282,14 @@ class LogStream:
             mass_properties=mass_properties,
         )
 
-    def thinned_inputs(self, most: int) -> tuple[np.ndarray, np.ndarray]:
+    def thinned_inputs(
+        self, most: int, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Every k-th sample's time and inputs (:data:`INPUTS` x m), at most about ``most``
         samples: the whole log as the file check reads it, without holding it."""
         step = max(1, len(self) // most)
         times, blocks, start = [], [], 0
-        for t, columns in self.signal_chunks():
+        for t, columns in self.signal_chunks(rate_filter=rate_filter):
             keep = np.arange((-start) % step, len(t), step)
             times.append(t[keep])
             blocks.append(_input_rows(columns, len(t))[:, keep])
@@ -293,7 +297,9 @@ class LogStream:
         return np.concatenate(times), np.hstack(blocks)
 
     def signal_chunks(
-        self, extra: tuple[str, ...] = ()
+        self,
+        extra: tuple[str, ...] = (),
+        rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER,
     ) -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
         """The log's signals chunk by chunk, ``(t, {name: values})``, as the whole-log reader
         makes them: the columns read (ours and ``extra``, other columns of the file), the
@@ -311,7 +317,7 @@ class LogStream:
         # term the inputs allow (as the whole-log path, estimators/logs/signals.py).
         if RATE_DERIVATIVES[0] not in self.names and RATES[0] in self.names:
             try:
-                rate_dots = RateEstimator(self.steps, 3, self.source)
+                rate_dots = RateEstimator(self.steps, 3, self.source, rate_filter)
             except LogError:
                 rate_dots = None  # too irregular: the terms that need them are dropped
         names = list(self.names) + [name for name in extra if name not in self.names]

@@ -41,6 +41,7 @@ from wheelload.estimators.kf.tuning import (
     tuning_vector,
 )
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.loops.compiled import CompiledLoop
 from wheelload.estimators.protocol import sample_intervals
 from wheelload.estimators.result import Estimate, SensorFault, StepFlag
@@ -147,6 +148,7 @@ class TwoStageKF:
         check_file: bool = True,
     ) -> None:
         self.vehicle = vehicle
+        self.rate_filter = RateDerivativeFilter.of(vehicle)  # body-rate derivatives
         self.check_file = check_file
         self._static = static
         self.parameters = ModelParameters.from_vehicle(vehicle, static)
@@ -353,14 +355,14 @@ class TwoStageKF:
                 diagnosis.corrected(signals), state, with_covariance
             )
         if diagnosis.finding is not None:
-            change = diagnosis.load_change(input_matrix(signals))
+            change = diagnosis.load_change(input_matrix(signals, self.rate_filter))
             std = np.sqrt(estimate.std**2 + change**2)
             estimate = dataclasses.replace(estimate, std=std, model_errors=(diagnosis.finding,))
         return estimate, covariances, innovations
 
     def _filter(self, signals: Signals, state: FilterState | None, with_covariance: bool):
         state = state or self.initial_state()
-        u = input_matrix(signals).T
+        u = input_matrix(signals, self.rate_filter).T
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = sample_intervals(signals.t)[:, None]

@@ -44,6 +44,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.kernels import order_statistics, zero_phase
+from wheelload.estimators.logs.latency import Lag, channel_lags
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import TRAVEL, input_index
@@ -371,7 +372,29 @@ def check_wiring(
     if any(s < 0 for s in [*sum(observed.values(), []), *signs.values()]):
         mistakes.append(_explain(observed, signs["lateral"], signs["longitudinal"]))
     mistakes += _unit_mistakes(ratios) + roll_mistakes
-    return WiringReport(checks=(*travel, *kinematic, *roll), diagnosis="; and ".join(mistakes))
+    lags = _lag_checks(channel_lags(t[window], vx[window], acc[window], d[window],
+                                    None if rates is None else rates[window]))  # fmt: skip
+    return WiringReport(checks=(*travel, *kinematic, *roll, *lags),
+                        diagnosis="; and ".join(mistakes))  # fmt: skip
+
+
+def _lag_checks(lags: list[Lag]) -> list[Check]:
+    """A check per channel lag (``latency.py``): passed when no lag, failed (a note, not a
+    refusal) with the channel map's fix when the channel lags, else undecided."""
+    checks = []
+    for lag in lags:
+        name = f"{lag.channel} lag against {lag.against}"
+        if not lag.decided:
+            checks.append(undecided_check(name, lag.note, lag.lag))
+            continue
+        key = "d_*" if lag.channel.startswith("d ") else lag.channel
+        found = f"{lag.lag:+.3f} s +- {lag.std:.3f} s (r {abs(lag.correlation):.2f})"
+        note = f"{lag.channel} lags {lag.against} by {found}" + (
+            f": add {lag.lag:.3f} to channels.{key}.latency" if lag.lag > 0 else ""
+        )
+        outcome = Outcome.FAILED if lag.significant else Outcome.PASSED
+        checks.append(Check(name=name, statistic=lag.lag, outcome=outcome, note=note))
+    return checks
 
 
 def motion_window(t: np.ndarray, vx: np.ndarray) -> slice | None:
@@ -510,8 +533,11 @@ def describe(report: CheckReport, title: str = "wiring checks") -> str:
     report of :mod:`~wheelload.estimators.logs.plausibility`, with its ``title``).
     """
     passed = sum(c.outcome is Outcome.PASSED for c in report.checks)
-    return f"{title}: {passed} passed" + (
-        f"; could not decide: {_undecided_names(report)}" if report.undecided else ""
+    lags = [c.note for c in report.failures if " lag against " in c.name]
+    return (
+        f"{title}: {passed} passed"
+        + (f"; could not decide: {_undecided_names(report)}" if report.undecided else "")
+        + "".join(f"; {note}" for note in lags)
     )
 
 

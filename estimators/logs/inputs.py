@@ -12,13 +12,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from wheelload.estimators.logs.signals import rate_derivatives
+from wheelload.estimators.logs.signals import (
+    DEFAULT_RATE_FILTER,
+    RateDerivativeFilter,
+    rate_derivatives,
+)
 from wheelload.estimators.types import Signals
 from wheelload.models import INPUTS
 
 
-def input_blocks(signals: Signals) -> list[tuple[np.ndarray | None, int]]:
-    """The log's arrays in :data:`INPUTS` order: ``(array (n, width) or None, width)``.
+def input_blocks(
+    signals: Signals, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
+) -> list[tuple[np.ndarray | None, int]]:
+    """The log's arrays in :data:`INPUTS` order: ``(array (n, width) or None, width)``;
+    the body-rate derivatives, where not logged, from ``rate_filter`` (a vehicle file's:
+    ``RateDerivativeFilter.of(vehicle)``).
 
     None where the log lacks an optional channel group (its inputs are NaN).
     The arrays are the log's own (no copies): the batched C driver reads them in place.
@@ -29,13 +37,16 @@ def input_blocks(signals: Signals) -> list[tuple[np.ndarray | None, int]]:
         (signals.acc, 3),
         (signals.vx[:, None], 1),
         (signals.rates, 3),
-        (rate_derivatives(signals), 3),
+        (rate_derivatives(signals, rate_filter), 3),
         (signals.hub, 4),
     ]
 
 
-def input_matrix(signals: Signals) -> np.ndarray:
-    """The per-sample inputs of a log in :data:`INPUTS` order, shape (len(INPUTS), n).
+def input_matrix(
+    signals: Signals, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
+) -> np.ndarray:
+    """The per-sample inputs of a log in :data:`INPUTS` order, shape (len(INPUTS), n)
+    (``rate_filter`` as :func:`input_blocks`).
 
     Optional channels the log lacks are NaN (their terms are dropped).
     """
@@ -43,7 +54,7 @@ def input_matrix(signals: Signals) -> np.ndarray:
     rows = np.vstack(
         [
             np.full((width, n), np.nan) if values is None else values.T
-            for values, width in input_blocks(signals)
+            for values, width in input_blocks(signals, rate_filter)
         ]
     )
     if rows.shape[0] != len(INPUTS):

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.result import ModelError
 from wheelload.estimators.types import Signals
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
@@ -260,7 +261,9 @@ NOTHING = Diagnosis(finding=None, travel_zero=np.zeros(4))
 
 def diagnose(signals: Signals, vehicle: Vehicle, **options) -> Diagnosis:
     """:func:`diagnose_inputs` on a whole log's :class:`Signals`."""
-    return diagnose_inputs(input_matrix(signals), vehicle, **options)
+    return diagnose_inputs(
+        input_matrix(signals, RateDerivativeFilter.of(vehicle)), vehicle, **options
+    )
 
 
 def diagnose_inputs(

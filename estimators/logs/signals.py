@@ -71,9 +71,12 @@ from wheelload.estimators.types import (
     check_time_column,
 )
 from wheelload.models.conventions import GRAVITY, WHEELS
+from wheelload.models.vehicle.sensor_section import MTI_1_GYRO_NOISE_DENSITY
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from wheelload.models.vehicle.description import Vehicle
 
 
 VELOCITY_CUTOFF = 20.0  # Hz, differentiator corner frequency
@@ -460,17 +463,29 @@ class RateDerivativeFilter:
     The kinematic filter of :mod:`~wheelload.estimators.kernels.kinematic` with jerk
     density :math:`q` and the gyroscope's white noise to the Nyquist frequency,
     :math:`r = N^2 / (2 T)`: its bandwidth follows the sample rate and the noise.
+    The defaults are a file's without ``[filter] rate_jerk_density`` and ``[sensors]``
+    (an MTi-1 class gyroscope); :meth:`of` takes a vehicle file's.
     """
 
-    # q [(rad/s^3)^2/Hz], from plant logs at 100-1000 Hz: 0.1 lags the bounce sweep's body
-    # motion (sports car 62 -> 104 N), 10 lets the gyro noise in at rest
-    jerk_density: float = 1.0
-    gyro_noise_density: float = 0.007 * np.pi / 180.0  # N [rad/s/sqrt(Hz)], MTi-1 class
+    jerk_density: float = 1.0  # q [(rad/s^3)^2/Hz]
+    gyro_noise_density: float = MTI_1_GYRO_NOISE_DENSITY  # N [rad/s/sqrt(Hz)]
+
+    @classmethod
+    def of(cls, vehicle: Vehicle) -> RateDerivativeFilter:
+        """The settings a vehicle file states (``[filter]`` and ``[sensors]``)."""
+        return cls(
+            jerk_density=vehicle.filter.rate_jerk_density,
+            gyro_noise_density=vehicle.sensors.gyro_noise_density,
+        )
 
     def gain(self, interval: float) -> np.ndarray:
         """The steady-state gain at the sample interval ``interval`` [s]."""
         noise = self.gyro_noise_density**2 / (2.0 * interval)
         return kinematic.steady_gain(interval, self.jerk_density, noise)
+
+
+#: A vehicle file's without ``[filter] rate_jerk_density`` and ``[sensors]``.
+DEFAULT_RATE_FILTER = RateDerivativeFilter()
 
 
 class RateEstimator(ChunkFilter):
@@ -485,7 +500,7 @@ class RateEstimator(ChunkFilter):
         steps: Steps,
         channels: int = 3,
         source: str = "<log>",
-        settings: RateDerivativeFilter = RateDerivativeFilter(),
+        settings: RateDerivativeFilter = DEFAULT_RATE_FILTER,
     ) -> None:
         super().__init__(channels, steps.gap)
         median = steps.median
@@ -532,11 +547,13 @@ def write_log(signals: Signals, path: str | Path) -> None:
         raise LogError(f"{path}: unknown log format '{path.suffix}' (use .csv or .parquet)")
 
 
-def rate_derivatives(signals: Signals) -> np.ndarray:
+def rate_derivatives(
+    signals: Signals, settings: RateDerivativeFilter = DEFAULT_RATE_FILTER
+) -> np.ndarray:
     r"""Estimated derivatives of the body rates ``wx wy wz``, shape (n, 3) [rad/s^2].
 
     The logged ``wx_dot wy_dot wz_dot`` when present, else the causal kinematic
-    filter of :class:`RateEstimator` (not a differentiator: a filtered derivative
+    filter of :class:`RateEstimator` with ``settings`` (not a differentiator: a filtered derivative
     of a noisy gyro at 20 Hz carries more noise into the body-inertia term than
     the term is worth). All NaN where the log has no rates or its time stamps are
     too irregular: the terms that need them are then dropped and flagged, not guessed.
@@ -546,6 +563,7 @@ def rate_derivatives(signals: Signals) -> np.ndarray:
     if signals.rates is None or len(signals) < 2:
         return np.full((len(signals), 3), np.nan)
     try:
-        return RateEstimator(Steps.of(signals.t), 3, signals.source)(signals.rates, signals.t)
+        estimator = RateEstimator(Steps.of(signals.t), 3, signals.source, settings)
+        return estimator(signals.rates, signals.t)
     except LogError:
         return np.full((len(signals), 3), np.nan)

@@ -76,6 +76,7 @@ from wheelload.estimators.kf.two_stage import (
     TwoStageKF,
 )
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import RateDerivativeFilter
 from wheelload.estimators.mhe.extended import advance_extended, initial_extended
 from wheelload.estimators.mhe.qp import (
     LOAD_LIMIT,
@@ -453,7 +454,7 @@ class MovingHorizonEstimator:
         dt = sample_intervals(signals.t)
         state = state or self.initial_state(float(order_statistics.median(dt)))
         fallback, covariances = self.filter.run_with_covariance(signals, state.kf)
-        u = input_matrix(signals)
+        u = input_matrix(signals, RateDerivativeFilter.of(self.filter.vehicle))
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         out = self.terms.map(n)(

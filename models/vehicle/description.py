@@ -34,6 +34,7 @@ from wheelload.models.vehicle.section_checks import (
     require_positive,
     require_share,
 )
+from wheelload.models.vehicle.sensor_section import Sensors
 from wheelload.models.vehicle.wheel_section import Cornering, Wheels
 
 TOTAL_MASS_TOLERANCE = 0.5  # kg, allowed |total - (sprung + unsprung)|
@@ -305,6 +306,11 @@ class FilterTuning:
     # scales the densities by c to calibrate sigma, so that the gate keeps the decisions it
     # had (S scales by c, the innovations do not).
     gate_scale: float = 1.0
+    # Optional: the body-rate derivative filter's jerk density q [(rad/s^3)^2/Hz]
+    # (estimators/logs/signals.py, RateDerivativeFilter), from plant logs at 100-1000 Hz:
+    # 0.1 lags the bounce sweep's body motion (sports car 62 -> 104 N), 10 lets the gyro
+    # noise in at rest. Its measurement noise is [sensors] gyro_noise_density's.
+    rate_jerk_density: float = 1.0
     # Optional: input-dependent measurement noise (models/measurement_noise.py), default 0
     # (constant R). N^2 s per (m/s)^2 of damper velocity, per (m/s^2)^2 of hub acceleration
     # relative to the body; vertical, pitch, roll rows per (m/s^2)^2 of az - g, ax, ay.
@@ -361,6 +367,7 @@ class FilterTuning:
         require_positive(self, "suspension_noise_density")
         require_positive(self, "initial_std")
         require_positive(self, "gate_scale")
+        require_positive(self, "rate_jerk_density")
         if min(self.constraint_noise_density) <= 0.0:
             raise SectionKeyError("constraint_noise_density", "must be > 0 in every row")
 
@@ -398,6 +405,7 @@ class Vehicle:
     filter: FilterTuning
     wheels: Wheels | None = None  # the tyre-force estimators (models/vehicle/wheel_section.py)
     cornering: Cornering | None = None  # their left/right split, beyond the paper
+    sensors: Sensors = Sensors()  # the logged sensors' noise (models/vehicle/sensor_section.py)
     plant: Plant | None = None  # ground-truth simulator only (models/vehicle/plant_section.py)
 
     def _check(self) -> None:

@@ -271,6 +271,12 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.gate_scale": _fixed(
         1e-4, 1e4, "factor on the innovation variance the gate compares against"
     ),
+    # The body-rate derivative filter (estimators/logs/signals.py): 0.1 lags the bounce
+    # sweep's body motion, 10 lets an MTi-1 gyroscope's noise in at rest.
+    "filter.rate_jerk_density": _fixed(1e-3, 1e3, "jerk density of body rates, (rad/s^3)^2/Hz"),
+    "sensors.gyro_noise_density": _fixed(
+        1e-6, 1e-2, "gyroscopes' noise densities, 0.00006-0.6 deg/s/sqrt(Hz), in rad/s/sqrt(Hz)"
+    ),
     "filter.bias.travel_offset_std": _fixed(1e-4, 0.05, "0.1-50 mm of travel-sensor offset"),
     "filter.bias.travel_offset_bound": _fixed(1e-3, 0.1, "1-100 mm of travel-sensor offset"),
     "filter.bias.travel_offset_density": _fixed(1e-14, 1e-4, "travel offset random walk, m^2/s"),

@@ -18,6 +18,7 @@ from wheelload.studies.commands.options import (
     vehicle_file,
     vehicle_of,
 )
+from wheelload.studies.drive.can_car import CanCar, can_outputs, write_can_logs
 from wheelload.studies.drive.payload_schedule import PayloadChange, PayloadSchedule
 from wheelload.studies.drive.rig import RigSettings, rig_sweep, write_rig
 from wheelload.studies.drive.roads import ISO_CLASSES
@@ -102,6 +103,12 @@ def register(subparsers) -> None:
         help="the payload becomes KG at X,Y,Z from time T [s] on, over 1.5 s, while the car "
         "stands still (standstill, stop-and-go)",
     )
+    parser.add_argument(
+        "--can",
+        metavar="DIR",
+        help="also write the log as the CAN car of studies/data/can_car.dbc sends it: "
+        "DIR/STEM.mf4 (bus logging), DIR/STEM.blf, the DBC and two channel maps",
+    )
     add_common_options(parser, TRAITS)
     parser.set_defaults(handler=handle)
 
@@ -157,6 +164,7 @@ def handle(args: argparse.Namespace) -> int:
     payload = payload_schedule(args)
     out = Path(args.out)
     outputs = [out, metadata_path(out), *([Path(args.plot)] if args.plot else [])]
+    outputs += can_outputs(Path(args.can), out.stem) if args.can else []
     check_outputs(outputs, [Path(vehicle)], force=args.force)
     table_format(out)
     if args.plot:
@@ -176,6 +184,11 @@ def handle(args: argparse.Namespace) -> int:
         sensors=sensor_grade(args.sensors),
     )
     sidecar = write_log(result.log, out, result.metadata, replace=args.force)
+    if args.can:
+        tyres = vehicle_of(vehicle, args).tyres
+        car = CanCar(wheel_radius=(tyres.radius_front, tyres.radius_rear))
+        can_files = write_can_logs(result.log, Path(args.can), out.stem, car, replace=args.force)
+        print(f"CAN car logs: {', '.join(str(path) for path in can_files)}")
     if args.plot:
         title = f"{args.name} ({result.metadata['vehicle']})"
         plot_scenario(result.truth.frame, args.plot, title, replace=args.force)

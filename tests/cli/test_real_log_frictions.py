@@ -86,7 +86,7 @@ def test_a_partial_rate_set_is_read_and_its_terms_flagged(plant, tmp_path, capsy
         return float(next(line for line in text.splitlines() if "POOLED" in line).split()[1])
 
     assert "samples with a model term dropped (body inertia dropped)" in partial
-    assert "wiring checks: 5 passed" in partial  # the rates present are still checked
+    assert "wiring checks: 7 passed" in partial  # the rates present are still checked
     assert abs(pooled(partial) - pooled(full)) < 1.0
 
 
@@ -148,6 +148,6 @@ def test_many_logs_keep_each_logs_messages(plant, tmp_path, capsys):
     printed = capsys.readouterr().out
     summary = pd.read_csv(out / "summary.csv")
     for name in ("full.csv", "no_pitch_rate.csv"):
-        assert f"{folder / name}: wiring checks: 5 passed" in printed
+        assert f"{folder / name}: wiring checks: 7 passed" in printed
         row = summary[summary["log"].str.endswith(name)].iloc[0]
-        assert "wiring checks: 5 passed" in row["messages"]
+        assert "wiring checks: 7 passed" in row["messages"]

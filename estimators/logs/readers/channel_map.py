@@ -12,6 +12,7 @@ A TOML file (``wheelload channels --template`` prints a commented one)::
     unit = "km/h"        # converted by the units table (units.py)
     sign = 1             # -1 for an axis that points the other way
     method = "hold"      # this channel only (a CAN signal)
+    latency = 0.012      # s, this channel's time stamps are shifted back by it
 
     [channels.d_fl]
     source = "DamperPot_FL"
@@ -23,8 +24,15 @@ Our channel names (targets) are those of the log format (signals.py) plus
 when it is not mapped; a wheel speed in ``rpm`` needs ``radius`` [m] and
 ``ratio`` (shaft turns per wheel turn, default 1). For CSV and Parquet logs
 ``[time]`` names the time column and its unit; MDF4 and ERG channels carry
-their own time stamps. Every key is checked: an unknown key, target or unit,
-or a unit of the wrong kind, is an error naming the file and the key.
+their own time stamps. A CAN log (MDF4 bus logging, Vector BLF or ASC) is decoded with
+the DBC file named by the top-level key ``dbc = "car.dbc"`` (relative to the map), and
+``source`` is a signal name of that DBC (``readers/can_bus.py``). ``[clock] union = true``
+puts every channel on the union of the channels' time stamps, each with NaN where it has
+no new value, instead of resampling onto one clock channel; ``[clock] rate = 200``
+resamples onto a uniform clock at that rate over the clock channel's span (time stamps
+that jitter, as a CAN logger's do, onto the even steps the filter's differentiators
+need). Every key is checked: an unknown key, target or unit, or a unit of the wrong kind,
+is an error naming the file and the key.
 """
 
 from __future__ import annotations
@@ -39,6 +47,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wheelload.estimators.logs.readers.resample import Method, resample
+from wheelload.estimators.logs.readers.union import on_union, union_clock
 from wheelload.estimators.logs.readers.units import UNITS, Kind, UnitError, unit_factor
 from wheelload.models.conventions import WHEELS
 from wheelload.models.runtime.toml_file import TomlFileKind, read_toml
@@ -112,15 +121,19 @@ class ChannelSpec:
     radius: float | None = None
     ratio: float = 1.0
     method: Method | None = None
+    latency: float = 0.0  # s, the source's time stamps minus this are the measurement's
 
 
 @dataclass(frozen=True, kw_only=True)
 class Clock:
-    """The output clock: the time stamps of ``channel``; default method and gap."""
+    """The output clock: the time stamps of ``channel``, or with ``union`` those of every
+    channel (each NaN where it has no sample); default method and gap."""
 
     channel: str = "ax"
     method: Method = Method.LINEAR
     max_gap: float = DEFAULT_MAX_GAP
+    union: bool = False
+    rate: float | None = None  # Hz: a uniform clock over the clock channel's span
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -139,6 +152,7 @@ class ChannelMap:
     clock: Clock = Clock()
     time: TimeColumn | None = None
     source: str = "<channel map>"
+    dbc: Path | None = None  # the DBC file that decodes a CAN log
 
     def sources(self) -> list[str]:
         """The source channel names the map reads."""
@@ -198,8 +212,8 @@ def _string(table: dict, key: str, prefix: str, where: str) -> str:
 
 def _channel(name: str, table: dict, where: str) -> ChannelSpec:
     prefix = f"channels.{name}."
-    _keys(table, {"source", "unit", "sign", "motion_ratio", "radius", "ratio", "method"},
-          {"source"}, prefix, where)  # fmt: skip
+    _keys(table, {"source", "unit", "sign", "motion_ratio", "radius", "ratio", "method",
+                  "latency"}, {"source"}, prefix, where)  # fmt: skip
     unit = _string(table, "unit", prefix, where) if "unit" in table else ""
     if unit:
         try:
@@ -239,16 +253,45 @@ def _channel(name: str, table: dict, where: str) -> ChannelSpec:
         radius=_number(table, "radius", prefix, where) if "radius" in table else None,
         ratio=_number(table, "ratio", prefix, where) if "ratio" in table else 1.0,
         method=_method(table["method"], f"{prefix}method", where) if "method" in table else None,
+        latency=_latency(table, prefix, where),
     )
+
+
+MAX_LATENCY = 10.0  # s, a larger channel latency is a unit mistake (ms for s)
+
+
+def _latency(table: dict, prefix: str, where: str) -> float:
+    """The ``latency`` key [s], 0 <= latency < :data:`MAX_LATENCY`; 0 without it."""
+    if "latency" not in table:
+        return 0.0
+    latency = _number(table, "latency", prefix, where, positive=False)
+    if not 0.0 <= latency < MAX_LATENCY:
+        raise ChannelMapError(
+            f"{where}: key '{prefix}latency' must be in [0, {MAX_LATENCY:g}) s, got {latency:g} "
+            "(seconds, not milliseconds)"
+        )
+    return latency
+
+
+def _dbc(table: dict, where: str) -> Path | None:
+    """The top-level ``dbc`` key: the DBC file, relative to the map's folder."""
+    if "dbc" not in table:
+        return None
+    path = Path(_string(table, "dbc", "", where)).expanduser()
+    if not path.is_absolute() and Path(where).parent.is_dir():
+        path = Path(where).parent / path
+    return path
 
 
 def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelMap:
     """Validate a parsed channel-map table."""
-    _keys(table, {"clock", "time", "channels"}, {"channels"}, "", where)
+    _keys(table, {"clock", "time", "channels", "dbc"}, {"channels"}, "", where)
     clock = Clock()
     if "clock" in table:
         raw = _table(table["clock"], "clock", where)
-        _keys(raw, {"channel", "method", "max_gap"}, set(), "clock.", where)
+        _keys(raw, {"channel", "method", "max_gap", "union", "rate"}, set(), "clock.", where)
+        if not isinstance(raw.get("union", False), bool):
+            raise ChannelMapError(f"{where}: key 'clock.union' must be true or false")
         default = Clock()
         clock = Clock(
             channel=_string(raw, "channel", "clock.", where)
@@ -260,7 +303,13 @@ def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelM
             max_gap=_number(raw, "max_gap", "clock.", where)
             if "max_gap" in raw
             else default.max_gap,
+            union=raw.get("union", False),
+            rate=_number(raw, "rate", "clock.", where) if "rate" in raw else None,
         )
+        if clock.union and clock.rate is not None:
+            raise ChannelMapError(
+                f"{where}: keys 'clock.union' and 'clock.rate' exclude each other"
+            )
     time = None
     if "time" in table:
         raw = _table(table["time"], "time", where)
@@ -285,7 +334,9 @@ def channel_map_from_dict(table: dict, where: str = "<channel map>") -> ChannelM
         raise ChannelMapError(
             f"{where}: key 'clock.channel' is '{clock.channel}', which the map does not define"
         )
-    return ChannelMap(channels=channels, clock=clock, time=time, source=where)
+    return ChannelMap(
+        channels=channels, clock=clock, time=time, source=where, dbc=_dbc(table, where)
+    )
 
 
 def load_channel_map(path: str | Path) -> ChannelMap:
@@ -379,7 +430,17 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
             )
     for name, spec in channel_map.channels.items():
         check_stamps(raw[spec.source].t, spec.source, name, where)
-    clock = np.asarray(raw[channel_map.channels[channel_map.clock.channel].source].t, float)
+    stamps = {
+        name: np.asarray(raw[spec.source].t, float) - spec.latency
+        for name, spec in channel_map.channels.items()
+    }
+    if channel_map.clock.union:
+        clock = union_clock(list(stamps.values()))
+    else:
+        clock = stamps[channel_map.clock.channel]
+    rate = channel_map.clock.rate
+    if rate is not None and clock.size:
+        clock = clock[0] + np.arange(int((clock[-1] - clock[0]) * rate) + 1) / rate
     columns: dict[str, np.ndarray] = {"t": clock}
     for name, spec in channel_map.channels.items():
         channel = raw[spec.source]
@@ -394,8 +455,11 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
             raise ChannelMapError(
                 f"{error} (key 'channels.{name}.unit' in {channel_map.source})"
             ) from None
+        if channel_map.clock.union:
+            columns[name] = on_union(stamps[name], values, clock)
+            continue
         method = spec.method or channel_map.clock.method
-        max_gap = slow_gap(channel.t, channel_map.clock.max_gap)
+        max_gap = slow_gap(stamps[name], channel_map.clock.max_gap)
         if max_gap > channel_map.clock.max_gap:
             _log.warning(
                 "%s: note: channel '%s' (for '%s') is logged every %.3g s, slower than "
@@ -403,7 +467,7 @@ def apply_channel_map(raw: dict[str, Channel], channel_map: ChannelMap, where: s
                 where, spec.source, name, max_gap / SLOW_GAP_RATIO, channel_map.clock.max_gap,
                 "held" if method is Method.HOLD else "interpolated linearly", max_gap,
             )  # fmt: skip
-        columns[name] = resample(channel.t, values, clock, method, max_gap)
+        columns[name] = resample(stamps[name], values, clock, method, max_gap)
     for group in GROUPS:
         if any(name in columns for name in group):
             for name in group:
@@ -420,12 +484,15 @@ TEMPLATE = """\
 # wheelload channel map: your log's channels -> the log format (SI, ISO 8855).
 # Use with: wheelload estimate LOG --vehicle car.toml --channels this.toml
 # Every key is checked; unknown keys, channels and units are errors.
+# A CAN log (.mf4 bus logging, .blf, .asc): dbc = "car.dbc" (the DBC that decodes it,
+# relative to this map) at the top, and each source is a signal name of that DBC.
 # Units: s ms us | m cm mm in | m/s mm/s km/h mph | m/s^2 g | rad/s deg/s | N kN
 #        | N m kNm | rad deg | rpm (wheel speeds with radius and ratio; wheel spins
 #        omega_*). "g" is standard gravity.
 
 [clock]
 channel = "ax"       # output clock: this channel's time stamps (the IMU's)
+# rate = 200         # Hz: a uniform clock over that channel's span (jittering CAN stamps)
 method = "linear"    # default resampling: "linear" interpolation or zero-order "hold"
 max_gap = 0.1        # s; a longer gap between source samples is a missing sample
 
@@ -459,6 +526,7 @@ unit = "deg/s"
 source = "VehSpd_CAN"
 unit = "km/h"
 method = "hold"      # a CAN signal: zero-order hold
+# latency = 0.012    # s, logged this late: its time stamps are shifted back by it
 
 # Suspension travel, compression positive. motion_ratio = damper travel /
 # wheel travel. Leave a corner out for a dead sensor, all four for IMU-only.

@@ -1,8 +1,9 @@
 """A log of any format read as our columns on one clock (:func:`read_frame`).
 
 MDF4, ERG and the CSV exports of logger software (AiM, MoTeC: :mod:`.logger_csv`) carry
-each channel's time stamps and unit; other CSV and Parquet logs are tables on one time
-column (:mod:`.tabular`).
+each channel's time stamps and unit; CAN logs are decoded with the map's DBC
+(:mod:`.can_bus`); other CSV and Parquet logs are tables on one time column
+(:mod:`.tabular`).
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from wheelload.estimators.logs.readers import erg, logger_csv, mdf, tabular
+from wheelload.estimators.logs.readers import can_bus, erg, logger_csv, mdf, tabular
 from wheelload.estimators.logs.readers.channel_map import (
     ChannelMap,
     ChannelMapError,
@@ -38,6 +39,8 @@ def channel_names(path: str | Path) -> list[str]:
         return mdf.mdf_channel_names(path)
     if suffix in erg.SUFFIXES:
         return erg.erg_channel_names(path)
+    if suffix in can_bus.SUFFIXES:
+        raise can_bus.needs_dbc(path, "--channels MAP")
     export = logger_csv.logger_export(path)
     if export is not None:
         return [name for name in export.names if name != logger_csv.TIME]
@@ -48,8 +51,16 @@ def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame
     """Our columns of a log on one clock; ``None`` maps channels named as ours, in SI."""
     path = Path(path)
     suffix = _kind(path)
+    if suffix in can_bus.SUFFIXES or (channel_map is not None and channel_map.dbc is not None):
+        if channel_map is None:
+            raise can_bus.needs_dbc(path, "--channels MAP")
+        return apply_channel_map(
+            can_bus.read_can_channels(path, channel_map), channel_map, str(path)
+        )
     export = logger_csv.logger_export(path)
     if suffix in mdf.SUFFIXES or suffix in erg.SUFFIXES or export is not None:
+        if suffix in mdf.SUFFIXES:
+            _refuse_raw_frames(path, channel_map)
         if channel_map is None:
             channel_map = identity_map(channel_names(path), str(path))
         names = [spec.source for spec in channel_map.channels.values()]
@@ -63,3 +74,13 @@ def read_frame(path: str | Path, channel_map: ChannelMap | None) -> pd.DataFrame
     else:
         raw = tabular.read_tabular_channels(path, channel_map)
     return apply_channel_map(raw, channel_map, str(path))
+
+
+def _refuse_raw_frames(path: Path, channel_map: ChannelMap | None) -> None:
+    """An MDF4 of raw CAN frames read without a DBC: one line that says to give one."""
+    names = set(mdf.mdf_channel_names(path))
+    if can_bus.RAW_FRAMES not in names:
+        return
+    wanted = ["ax"] if channel_map is None else channel_map.sources()
+    if any(name not in names for name in wanted):
+        raise can_bus.needs_dbc(path, channel_map.source if channel_map else "--channels MAP")
