@@ -16,7 +16,7 @@ from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.models import load_vehicle
 from wheelload.models.runtime.toml_file import read_toml
 from wheelload.models.vehicle.file import VEHICLE_FILE, example_vehicle_path
-from wheelload.models.vehicle.scaled_defaults import MASS_POWERS, REFERENCE_MASS
+from wheelload.models.vehicle.scaled_defaults import CALIBRATED_MASSES, MASS_POWERS
 from wheelload.studies.drive.scenario_runner import run_scenario
 
 FILE = Path(__file__).parent / "data" / "formula_student.toml"
@@ -39,14 +39,19 @@ def test_the_file_states_none_of_the_scaled_defaults():
 
 
 def test_the_scaled_defaults_follow_the_mass():
-    """Each default is the sports car's times (m / 1613.2 kg)^k (independent arithmetic on
-    the two files' values), and the sports car's own are unchanged."""
-    light, reference = load_vehicle(FILE), load_vehicle(example_vehicle_path())
-    assert reference.mass.total == REFERENCE_MASS
-    ratio = light.mass.total / REFERENCE_MASS
+    """Each default is the fitted one times (m / 1613.2 kg)^k below the lighter fitted car
+    (independent arithmetic on the files' values); the two fitted cars keep the fitted
+    values (the dataclass defaults)."""
+    light, sports = load_vehicle(FILE), load_vehicle(example_vehicle_path())
+    suv = load_vehicle(example_vehicle_path().with_name("suv.toml"))
+    assert (sports.mass.total, suv.mass.total) == CALIBRATED_MASSES
+    ratio = light.mass.total / CALIBRATED_MASSES[0]
     for key, power in MASS_POWERS.items():
-        got, want = _value(light, key), _value(reference, key)
-        np.testing.assert_allclose(got, np.asarray(want) * ratio**power, rtol=1e-12)
+        fitted = _value(sports, key)
+        assert _value(suv, key) == fitted, key
+        np.testing.assert_allclose(
+            _value(light, key), np.asarray(fitted) * ratio**power, rtol=1e-12
+        )
     assert light.filter.sigma_no_travel_az == pytest.approx(288.4 * 284.0 / 1613.2)
     assert light.filter.payload.mass_std == pytest.approx(300.0 * 284.0 / 1613.2)
 
