@@ -57,6 +57,7 @@ from wheelload.estimators.logs.signals import (
     RateDerivativeFilter,
     RateEstimator,
     check_units,
+    say_gaps,
 )
 from wheelload.estimators.loops.compiled import ColumnLayout, ColumnLoop, FlagRule
 from wheelload.estimators.result import MASS_PROPERTY_COLUMNS, RESIDUALS, SensorFault, StepFlag
@@ -540,6 +541,7 @@ def scan_log(
     if sparse:  # the ordinary reader names an empty channel, assumes az, interpolates vx
         raise ChunkError(f"{source}: column '{sparse[0]}' is empty or slower than the log")
     steps = check_time_column(t, source)
+    say_gaps(steps, source)
     az_assumed = "az" not in names
     az_median = _nanmedian(az_store.array())
     check_units(

@@ -214,7 +214,7 @@ def signals_from_frame(
         return np.column_stack([column(name) for name in names])
 
     t = time_seconds(frame["t"]) if is_time_stamp(frame["t"]) else column("t")
-    check_time_column(t, source)
+    say_gaps(check_time_column(t, source), source)
     missing = np.full((t.size, 4), np.nan)
     for name in REQUIRED[1:]:
         if not np.isfinite(column(name)).any():
@@ -268,6 +268,20 @@ def signals_from_frame(
         reference_fx=group(REFERENCE_FX, partial=True),
         reference_fy=group(REFERENCE_FY, partial=True),
     )
+
+
+def say_gaps(steps: Steps, source: str) -> None:
+    """A note on the ``wheelload`` logger for a log whose time stamps have gaps (steps longer
+    than :data:`~wheelload.estimators.types.GAP_RATIO` median intervals): it is run as
+    segments, the derived channels restarted after each gap, the step over it flagged."""
+    if steps.gaps:
+        _log.warning(
+            "%s: note: %d gap(s) in the time stamps (longest %.3g s, %.0f sample intervals): "
+            "run as %d segments, derived velocities restarted after each, the step over it "
+            "flagged INTERVAL_LONG",
+            source, steps.gaps, steps.longest_gap, steps.longest_gap / steps.median,
+            steps.gaps + 1,
+        )  # fmt: skip
 
 
 #: s, the longest interval over which a slow channel is interpolated between two samples.

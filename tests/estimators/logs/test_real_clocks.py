@@ -86,16 +86,22 @@ def test_an_empty_az_is_assumed_g_and_flagged(plant_frame, kf, tmp_path):
     assert np.all(estimate.flags & StepFlag.AZ_ASSUMED_G)
 
 
-def test_a_gap_in_a_csv_splits_the_log_into_segments(plant_frame, kf, full_rmse, tmp_path):
+def test_a_gap_in_a_csv_splits_the_log_into_segments(
+    plant_frame, kf, full_rmse, tmp_path, caplog, monkeypatch
+):
     """5 s missing from a CSV without v_* (refused before: "not uniform enough"): each
     segment's velocities are the differentiator run on that segment alone (to 1e-12 m/s), the
-    first step after the gap is flagged INTERVAL_LONG, and the RMSE over the kept rows is
+    first step after the gap is flagged INTERVAL_LONG (and said in a note), and the RMSE over the kept rows is
     within 10 % of the full-rate log's (the filter holds its state over the gap)."""
     t = plant_frame["t"].to_numpy()
     keep = (t < 4.0) | (t >= 9.0)
     path = tmp_path / "gap.csv"
     plant_frame[keep].to_csv(path, index=False)
-    signals = read_log(path)
+    monkeypatch.setattr(logging.getLogger("wheelload"), "handlers", [caplog.handler])
+    monkeypatch.setattr(logging.getLogger("wheelload"), "propagate", False)
+    with caplog.at_level(logging.WARNING, logger="wheelload"):
+        signals = read_log(path)
+    assert "1 gap(s) in the time stamps (longest 5.01 s" in caplog.text
     first = np.flatnonzero(signals.t >= 9.0)[0]
     d = signals.d
     separate = np.vstack(
