@@ -91,8 +91,9 @@ def test_a_gap_in_a_csv_splits_the_log_into_segments(
 ):
     """5 s missing from a CSV without v_* (refused before: "not uniform enough"): each
     segment's velocities are the differentiator run on that segment alone (to 1e-12 m/s), the
-    first step after the gap is flagged INTERVAL_LONG (and said in a note), and the RMSE over the kept rows is
-    within 10 % of the full-rate log's (the filter holds its state over the gap)."""
+    first step after the gap is flagged INTERVAL_LONG (and said in a note), and the RMSE over
+    the kept rows is within 10 % of the full-rate log's (the filter holds its state over the
+    gap)."""
     t = plant_frame["t"].to_numpy()
     keep = (t < 4.0) | (t >= 9.0)
     path = tmp_path / "gap.csv"
