@@ -80,9 +80,7 @@ def time_ordered_reference(kf: TwoStageKF, stamps, channels, accepted, *, speed_
     """Loads (m, 4) and the sorted unique stamps (m,) of the accepted measurements, filtered
     in time order by ``kf``'s reference step (a filter of its own with the timed filter's
     tuning: ``interval_band`` at its largest)."""
-    guards = dataclasses.replace(
-        guard_settings_for(kf.vehicle), interval_band=TIMED_INTERVAL_BAND
-    )
+    guards = dataclasses.replace(guard_settings_for(kf.vehicle), interval_band=TIMED_INTERVAL_BAND)
     nominal = kf.sample_interval or float(TUNING.value(kf.tuning, "sample_interval"))
     reference = TwoStageKF(kf.vehicle, guard_settings=guards, sample_interval=nominal,
                            check_file=False)  # fmt: skip

@@ -274,8 +274,9 @@ class TwoStageKF:
 
         stamps, channels = measurements(t, inputs, latency)
         return run_timed(
-            lambda record: self.timed(settings, first_interval=first_interval,
-                                      on_output=record),  # fmt: skip
+            lambda record: self.timed(
+                settings, first_interval=first_interval, on_output=record
+            ),  # fmt: skip
             stamps,
             channels,
         )
