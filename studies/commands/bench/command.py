@@ -39,6 +39,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench.identify",
     "wheelload.studies.commands.bench.discernment",
     "wheelload.studies.commands.bench.recompile",
+    "wheelload.studies.commands.bench.timed",
 )
 
 
