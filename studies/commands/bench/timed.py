@@ -1,6 +1,6 @@
 """``wheelload bench timed``: the generated C's time-stamped step, ordinary and worst case.
 
-Prints, over ``--rounds`` rounds, the seconds per call of the synchronous ``wheelload_kf_step``,
+Prints, over ``--repeats`` rounds, the seconds per call of the synchronous ``wheelload_kf_step``,
 of ``wheelload_kf_step_at`` with measurements in order, and of its worst case, a rewind of
 the full ring of checkpoints (:mod:`~wheelload.studies.bench.timed_step`), and their ratios
 to the synchronous step (min / median / max). Printed, never asserted.
@@ -19,18 +19,18 @@ def register_bench(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "timed", help="C step_at: in order and a full rewind of the ring, against the step"
     )
-    parser.add_argument("--rounds", type=int, default=15, help="rounds timed (default 15)")
+    parser.add_argument("--repeats", type=int, default=15, help="rounds timed (default 15)")
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.rounds < 1:
-        raise ValueError("--rounds must be >= 1")
+    if args.repeats < 1:
+        raise ValueError("--repeats must be >= 1")
     print("timed C step (wheelload_kf_step_at), double, runtime parameters, strict flags; "
           "bundled example log")  # fmt: skip
-    times = time_timed_step(args.rounds)
+    times = time_timed_step(args.repeats)
     ring = times.checkpoints
-    print(f"  ring of {ring} checkpoints; per call, over {args.rounds} rounds, "
+    print(f"  ring of {ring} checkpoints; per call, over {args.repeats} rounds, "
           "min / median / max")  # fmt: skip
     rows = (
         ("wheelload_kf_step (synchronous) [us]", times.step),
