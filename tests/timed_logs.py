@@ -40,12 +40,9 @@ FRAMES = {
 }
 
 
-def latency_vector() -> np.ndarray:
-    """Each input's latency [s] (INPUTS order)."""
-    latency = np.zeros(len(INPUTS))
-    for channels, _, delay in FRAMES.values():
-        latency[[INPUTS.index(c) for c in channels]] = delay
-    return latency
+def latencies() -> dict[str, float]:
+    """Each frame's channels with its latency [s]."""
+    return {channel: delay for channels, _, delay in FRAMES.values() for channel in channels}
 
 
 def can_car_log(signals, duration: float, *, seed: int = 3, far_late: int = 3):

@@ -40,6 +40,7 @@ Example
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -230,20 +231,37 @@ class TimedFilter:
         self._hold = hold
 
 
-def measurements(t: np.ndarray, inputs: np.ndarray, latency: np.ndarray | None = None):
+def latency_vector(latency) -> np.ndarray:
+    """Each input's latency [s] (INPUTS order) from None (all 0), a vector, or a mapping of
+    channel names to seconds (the channels not named: 0)."""
+    if latency is None:
+        return np.zeros(len(INPUTS))
+    if isinstance(latency, Mapping):
+        unknown = sorted(set(latency) - set(INPUTS))
+        if unknown:
+            raise ValueError(
+                f"latency: no input channel {', '.join(unknown)}; the channels are {INPUTS}"
+            )
+        latency = [float(latency.get(name, 0.0)) for name in INPUTS]
+    latency = np.asarray(latency, float)
+    if latency.shape != (len(INPUTS),) or not np.all(np.isfinite(latency) & (latency >= 0)):
+        raise ValueError(f"latency: one value >= 0 s per channel of {INPUTS}")
+    return latency
+
+
+def measurements(t: np.ndarray, inputs: np.ndarray, latency=None):
     """A long table's rows as measurements in order of arrival: ``(stamps, channels)``.
 
     ``t`` (n,) the times the rows were logged (their arrival, in row order, not necessarily
     increasing); ``inputs`` (n, INPUTS) NaN where a channel has no new value; ``latency``
-    (INPUTS,) [s] per channel, 0 where None: a value logged at ``t`` was measured at
+    [s] per channel (:func:`latency_vector`: a vector, a mapping of names, or None for 0): a
+    value logged at ``t`` was measured at
     ``t - latency``. The channels of one row with one latency form one measurement; within a
     row the most delayed come first. Rows without a value are left out.
     """
     t = np.asarray(t, float)
     inputs = np.asarray(inputs, float)
-    latency = np.zeros(len(INPUTS)) if latency is None else np.asarray(latency, float)
-    if latency.shape != (len(INPUTS),) or not np.all(np.isfinite(latency) & (latency >= 0)):
-        raise ValueError(f"latency: one value >= 0 s per channel of {INPUTS}")
+    latency = latency_vector(latency)
     groups = [latency == value for value in np.unique(latency)[::-1]]
     stamps, channels = [], []
     for k in range(t.size):

@@ -267,8 +267,9 @@ class TwoStageKF:
     def run_timed(self, t: np.ndarray, inputs: np.ndarray, latency=None, settings=None, *,
                   first_interval: float | None = None):  # fmt: skip
         """A long table through :meth:`timed`: rows in order of arrival at times ``t`` [s],
-        ``inputs`` (n, INPUTS) NaN where a channel has no new value, ``latency`` (INPUTS,)
-        [s] per channel (:func:`~wheelload.estimators.kf.rewind.measurements`). Returns a
+        ``inputs`` (n, INPUTS) NaN where a channel has no new value (a log's
+        ``input_matrix(signals).T``), ``latency`` [s] per channel, a vector or a mapping of
+        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`). Returns a
         :class:`~wheelload.estimators.kf.rewind.TimedRun`."""
         from wheelload.estimators.kf.rewind import measurements, run_timed
 

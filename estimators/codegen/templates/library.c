@@ -383,6 +383,20 @@ static void timed_evict(${prefix}_timed *timed)
     timed->count -= 1;
 }
 
+/* Set the checkpoint of `slot`: the filter before it, that state's time (has_time 0: the
+ * initial state) and the speed held then. */
+static void set_before(${prefix}_checkpoint *slot, const ${prefix}_state *state,
+                       ${prefix}_real time, int has_time, ${prefix}_real speed,
+                       ${prefix}_real speed_time, int has_speed)
+{
+    slot->before = *state;
+    slot->t_before = time;
+    slot->has_before = has_time;
+    slot->speed = speed;
+    slot->speed_time = speed_time;
+    slot->has_speed = has_speed;
+}
+
 /* Open slot `position` for a measurement; its checkpoint is that of the measurement after
  * it, or the current state for the newest (the replay sets the later ones). */
 static void timed_insert(${prefix}_timed *timed, int position, ${prefix}_real t,
@@ -400,20 +414,12 @@ static void timed_insert(${prefix}_timed *timed, int position, ${prefix}_real t,
     }
     slot->channels = channels;
     if (position == timed->count) {
-        slot->before = timed->state;
-        slot->t_before = timed->t;
-        slot->has_before = timed->started;
-        slot->speed = timed->speed;
-        slot->speed_time = timed->speed_time;
-        slot->has_speed = timed->has_speed;
+        set_before(slot, &timed->state, timed->t, timed->started, timed->speed,
+                   timed->speed_time, timed->has_speed);
     } else {
         const ${prefix}_checkpoint *next = &CHECKPOINT(timed, position + 1);
-        slot->before = next->before;
-        slot->t_before = next->t_before;
-        slot->has_before = next->has_before;
-        slot->speed = next->speed;
-        slot->speed_time = next->speed_time;
-        slot->has_speed = next->has_speed;
+        set_before(slot, &next->before, next->t_before, next->has_before, next->speed,
+                   next->speed_time, next->has_speed);
     }
     timed->count += 1;
 }
@@ -430,12 +436,7 @@ static void timed_replay(${prefix}_timed *timed, const ${prefix}_params *params,
         ${prefix}_checkpoint *c = &CHECKPOINT(timed, k);
         ${prefix}_input input;
         if (k > start) {
-            c->before = timed->state;
-            c->t_before = time;
-            c->has_before = has_time;
-            c->speed = speed;
-            c->speed_time = speed_time;
-            c->has_speed = has_speed;
+            set_before(c, &timed->state, time, has_time, speed, speed_time, has_speed);
             timed->replayed += 1u;
         }
         for (j = 0; j < ${PREFIX}_N_INPUTS; ++j) {

@@ -28,7 +28,7 @@ from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS, example_vehicle_path
 
 sys.path.insert(0, str(Path(__file__).parents[2]))
-from timed_logs import can_car_log, latency_vector  # noqa: E402
+from timed_logs import can_car_log, latencies  # noqa: E402
 
 pytestmark = needs_gcc
 
@@ -93,7 +93,7 @@ def timed_program(tmp_path_factory):
 @pytest.fixture(scope="module")
 def can_measurements(plant_log):
     t, inputs = can_car_log(plant_log("iso-dlc"), 5.0)
-    return measurements(t, inputs, latency_vector())
+    return measurements(t, inputs, latencies())
 
 
 def test_the_c_timed_step_equals_python_on_a_can_car_log(vehicle, timed_program,

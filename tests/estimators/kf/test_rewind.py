@@ -22,7 +22,7 @@ from wheelload.models import INPUTS
 sys.path.insert(0, str(Path(__file__).parents[2]))
 from timed_logs import (  # noqa: E402
     can_car_log,
-    latency_vector,
+    latencies,
     time_ordered_reference,
 )
 
@@ -44,7 +44,7 @@ def kf(vehicle):
 @pytest.fixture(scope="module")
 def can_run(kf, dlc):
     t, inputs = can_car_log(dlc, 5.0)
-    run = kf.run_timed(t, inputs, latency_vector())
+    run = kf.run_timed(t, inputs, latencies())
     return t, inputs, run
 
 
@@ -63,7 +63,7 @@ def test_only_the_rows_of_absent_channels_are_skipped(kf, can_run):
     """A travel frame updates the four suspension rows and no equilibrium row, an IMU frame
     the three equilibrium rows (the speed held from its own frame) and no suspension row."""
     t, inputs, run = can_run
-    stamps, channels = measurements(t, inputs, latency_vector())
+    stamps, channels = measurements(t, inputs, latencies())
     kept = run.flags != TOO_OLD
     travel = kept & np.isfinite(channels[:, INPUTS.index("d_fl")])
     imu = kept & np.isfinite(channels[:, INPUTS.index("ax")])
@@ -80,7 +80,7 @@ def test_only_the_rows_of_absent_channels_are_skipped(kf, can_run):
 
 def test_rewinds_give_the_measurements_fed_in_time_order(kf, can_run):
     t, inputs, run = can_run
-    stamps, channels = measurements(t, inputs, latency_vector())
+    stamps, channels = measurements(t, inputs, latencies())
     assert run.rewinds > 300, "late (latency) and out-of-order frames rewound"
     assert run.dropped == 3 and np.sum(run.flags == TOO_OLD) == 3, "the three far too late"
     kept = run.flags != TOO_OLD
@@ -144,3 +144,5 @@ def test_settings_refuse_what_cannot_work():
         RewindSettings(max_rewind_age=-1.0)
     with pytest.raises(ValueError, match="latency: one value >= 0 s per channel"):
         measurements(np.zeros(1), np.zeros((1, len(INPUTS))), np.full(3, 0.01))
+    with pytest.raises(ValueError, match="latency: no input channel a_y; the channels are"):
+        measurements(np.zeros(1), np.zeros((1, len(INPUTS))), {"a_y": 0.3})
