@@ -43,4 +43,6 @@ def run(args: argparse.Namespace) -> int:
     worst = [w / s for w, s in zip(times.full_rewind, times.step, strict=True)]
     print(f"  {'step_at in order / step':<40} {spread(ordered)}")
     print(f"  {'worst case (full rewind) / step':<40} {spread(worst)}")
+    fastest = min(times.full_rewind) / min(times.step)
+    print(f"  {'fastest full rewind / fastest step':<40} {fastest:.3g}")
     return 0
