@@ -29,12 +29,17 @@ from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.models import example_vehicle_path
 from wheelload.studies.pipeline.example_log import example_log_path
 
+#: Full rewinds timed per round.
+REWINDS = 50
+
 PROGRAM = r"""
 #define _POSIX_C_SOURCE 199309L
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 #include "wheelload_kf.h"
+
+#define REWINDS @REWINDS@
 
 static double seconds(void)
 {
@@ -96,12 +101,12 @@ int main(int argc, char **argv)
         ordered = (seconds() - start) / n;
         /* The ring is full: a measurement of the oldest checkpoint's time stamp. */
         start = seconds();
-        for (k = 0; k < 50; ++k) {
+        for (k = 0; k < REWINDS; ++k) {
             const double oldest = timed.ring[timed.head].t;
             wheelload_kf_step_at(&timed, &params, &samples[k], all, oldest, &out);
             sink += out.loads[0];
         }
-        rewind = (seconds() - start) / 50;
+        rewind = (seconds() - start) / REWINDS;
         printf("round %.9g %.9g %.9g %lu\n", step, ordered, rewind,
                (unsigned long)timed.replayed);
     }
@@ -119,6 +124,7 @@ class TimedStepTimes:
     step: list[float]
     in_order: list[float]
     full_rewind: list[float]
+    replayed: list[float]  # steps filtered again per full rewind (checkpoints - 1)
 
 
 def time_timed_step(rounds: int, folder: Path | None = None) -> TimedStepTimes:
@@ -131,7 +137,7 @@ def time_timed_step(rounds: int, folder: Path | None = None) -> TimedStepTimes:
         where = Path(folder or temporary)
         library = generate(example_vehicle_path(), where, CodegenOptions(sample_interval=interval))
         main = where / "timed_bench.c"
-        main.write_text(PROGRAM)
+        main.write_text(PROGRAM.replace("@REWINDS@", str(REWINDS)))
         binary = build_program(library, main, where / "timed_bench")
         data = where / "samples.txt"
         rows = "\n".join(" ".join(repr(float(v)) for v in row) for row in inputs)
@@ -140,5 +146,8 @@ def time_timed_step(rounds: int, folder: Path | None = None) -> TimedStepTimes:
                               text=True, check=True)  # fmt: skip
     lines = done.stdout.split("\n")
     checkpoints = int(lines[0].split()[1])
-    measured = np.array([[float(v) for v in line.split()[1:4]] for line in lines[1:] if line])
-    return TimedStepTimes(checkpoints, *(list(column) for column in measured.T))
+    measured = np.array([[float(v) for v in line.split()[1:5]] for line in lines[1:] if line])
+    step, in_order, full_rewind, replayed = measured.T
+    per_rewind = np.diff(np.concatenate([[0.0], replayed])) / REWINDS
+    return TimedStepTimes(checkpoints, list(step), list(in_order), list(full_rewind),
+                          list(per_rewind))  # fmt: skip

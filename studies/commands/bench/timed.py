@@ -30,7 +30,8 @@ def run(args: argparse.Namespace) -> int:
           "bundled example log")  # fmt: skip
     times = time_timed_step(args.repeats)
     ring = times.checkpoints
-    print(f"  ring of {ring} checkpoints; per call, over {args.repeats} rounds, "
+    print(f"  ring of {ring} checkpoints (a full rewind filters the merged measurement and "
+          f"{min(times.replayed):.0f} more); per call, over {args.repeats} rounds, "
           "min / median / max")  # fmt: skip
     rows = (
         ("wheelload_kf_step (synchronous) [us]", times.step),
