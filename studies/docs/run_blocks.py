@@ -48,7 +48,7 @@ def run_block(kind: str, code: str, cwd: Path, *, name: str = "block.py") -> str
     env["PATH"] = str(Path(sys.executable).parent) + os.pathsep + env.get("PATH", "")
     command = ["bash", "-e", "-o", "pipefail", "-c", code]
     if kind == "python":
-        (Path(cwd) / name).write_text(code + "\n")
+        (Path(cwd) / name).write_text(code if code.endswith("\n") else code + "\n")
         command = [sys.executable, name]
     done = subprocess.run(
         command,
