@@ -89,7 +89,7 @@ def test_every_equation_is_typeset_without_a_network(site, page, tmp_path):
     """Each equation of the page becomes one MathJax container and no raw TeX is left."""
     written = (site / page).read_text()
     equations = [body for _, body in MATH.findall(written)]
-    assert equations and all(body.startswith(("\\(", "\\[")) for body in equations)
+    assert equations and all(body.strip().startswith(("\\(", "\\[")) for body in equations)
     dom = _rendered(site / page, tmp_path / "profile")
     assert len(TYPESET.findall(dom)) == len(equations)
     left = [body for _, body in MATH.findall(TYPESET.sub("", dom)) if body.strip()]
