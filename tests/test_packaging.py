@@ -16,7 +16,15 @@ def test_every_python_folder_is_a_listed_package():
         and path.parent.relative_to(ROOT).parts[0] in ("models", "estimators", "studies")
         and "__pycache__" not in path.parts
     }
-    assert folders == listed
+    assert folders | {"wheelload"} == listed  # the top level's __init__ and py.typed
+
+
+def test_the_package_ships_its_typing_marker():
+    """PEP 561: ``py.typed`` beside the top level's ``__init__``, listed as package data."""
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert (ROOT / "py.typed").is_file()
+    assert (ROOT / "__init__.py").is_file()
+    assert "py.typed" in config["tool"]["setuptools"]["package-data"]["wheelload"]
 
 
 def test_installed_package_is_importable_under_one_name():
@@ -24,4 +32,4 @@ def test_installed_package_is_importable_under_one_name():
     import wheelload.models
     import wheelload.studies
 
-    assert Path(wheelload.models.__file__).parent == ROOT / "models"
+    assert Path(wheelload.models.__file__).resolve().parent == ROOT / "models"
