@@ -16,15 +16,18 @@ def test_every_python_folder_is_a_listed_package():
         and path.parent.relative_to(ROOT).parts[0] in ("models", "estimators", "studies")
         and "__pycache__" not in path.parts
     }
-    assert folders | {"wheelload"} == listed  # the top level's __init__ and py.typed
+    assert folders == listed
 
 
-def test_the_package_ships_its_typing_marker():
-    """PEP 561: ``py.typed`` beside the top level's ``__init__``, listed as package data."""
+def test_the_packages_ship_their_typing_marker():
+    """PEP 561: ``wheelload`` is a namespace package (the repository's top level holds no
+    ``__init__``), so ``py.typed`` sits in each of its packages, listed as package data."""
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    assert (ROOT / "py.typed").is_file()
-    assert (ROOT / "__init__.py").is_file()
-    assert "py.typed" in config["tool"]["setuptools"]["package-data"]["wheelload"]
+    data = config["tool"]["setuptools"]["package-data"]
+    for package in ("models", "estimators", "studies"):
+        assert (ROOT / package / "py.typed").is_file()
+        assert "py.typed" in data[f"wheelload.{package}"]
+    assert not (ROOT / "__init__.py").exists()
 
 
 def test_installed_package_is_importable_under_one_name():
