@@ -67,6 +67,6 @@ _LAZY_MODULES = {
     "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
     "wheelload.estimators.kernels.order_statistics": ("linear_percentile", "percentile"),
 }
-__getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
+__getattr__, __dir__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
 
 __all__ = list(_LAZY_NAMES)

@@ -88,6 +88,9 @@ class StepFlag(enum.IntFlag):
     # setting interval_band, estimators/guards/settings.py), the last of ``status``.
     INTERVAL_SHORT = 1 << 29  # dt < sample_interval / interval_band: refused, state held
     INTERVAL_LONG = 1 << 30  # dt > sample_interval * interval_band: a gap, or a slower log
+    # Bit 31: a time-stamped measurement older than the rewind allows (estimators/kf/rewind.py):
+    # dropped, the state unchanged.
+    MEASUREMENT_TOO_OLD = 1 << 31
 
     @classmethod
     def update_flags(cls) -> tuple[StepFlag, ...]:

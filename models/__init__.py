@@ -24,6 +24,6 @@ _LAZY_MODULES = {
     ),
     "wheelload.models.vehicle.file": ("example_vehicle_path", "load_vehicle", "vehicle_template"),
 }
-__getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
+__getattr__, __dir__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
 
 __all__ = list(_LAZY_NAMES)

@@ -63,6 +63,7 @@ from wheelload.estimators.codegen.runtime_parameters import (
 )
 from wheelload.estimators.guards.settings import FAULT_CHANNELS
 from wheelload.estimators.kernels.c_emitter import Precision, emit_statements, flop_count, literal
+from wheelload.estimators.kf.rewind import DEFAULT_CHECKPOINTS, TIMED_INTERVAL_BAND
 from wheelload.estimators.kf.step import step_function
 from wheelload.estimators.kf.step_cache import STEP_INPUT_NAMES, STEP_NAME, STEP_OUTPUT_NAMES
 from wheelload.estimators.kf.tuning import DEFAULT_SAMPLE_INTERVAL, TUNING, tuning_vector
@@ -346,6 +347,9 @@ def _substitutions(
         "n_faults": str(len(FAULT_CHANNELS)),
         "fault_channels": ", ".join(FAULT_CHANNELS),
         "kernel_params_doc": ", p, tuning" if runtime else " (vehicle and tuning baked in)",
+        "n_checkpoints": str(DEFAULT_CHECKPOINTS),
+        "timed_interval_band": repr(TIMED_INTERVAL_BAND),
+        "speed_index": str(INPUTS.index("vx")),
         "kernel_params_arg": f", const {prefix}_params *params" if runtime else "",
         "kernel_params_call": ", params" if runtime else "",
         "unused_params": "" if runtime else "    (void)params;",

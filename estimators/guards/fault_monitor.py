@@ -34,6 +34,7 @@ import casadi as ca
 from wheelload.estimators.guards.monitor_state import (
     ANCHOR,
     CLEAR,
+    CREDIT,
     D_PREV,
     EXCITATION,
     FAULT,
@@ -111,12 +112,17 @@ def monitor(
     # A reading that jumped faster than max_travel_rate (a dead sensor falling to its rail)
     # and has not changed since is dropped at once, and is stuck after stuck_time even
     # when the body is still.
-    # (A channel's first valid sample has nothing to jump from.)
+    # (A channel's first valid sample has nothing to jump from.) The jump is over the time
+    # since the travel's last valid value, dt plus what its hold has used of hold_time
+    # (plausibility.hold_inputs; at least hold_time once that has run out): the interval of
+    # a travel frame, not of the last row, when other channels come between travel frames.
     seen = m[TRAVEL_SEEN]
+    credit = m[CREDIT]
+    since = [dt + (g.hold_time - credit[INPUTS.index(name)]) for name in TRAVEL]
     jump = [
         ca.if_else(
             changed[i],
-            seen[i] * (ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * dt),
+            seen[i] * (ca.fabs(d[i] - d_prev[i]) > g.max_travel_rate * since[i]),
             m[JUMP][i],
         )
         for i in range(4)

@@ -32,4 +32,4 @@ _LAZY_MODULES = {
         "piecewise_model",
     ),
 }
-__getattr__, __all__ = lazy_names(__name__, _LAZY_MODULES)
+__getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY_MODULES)

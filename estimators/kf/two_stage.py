@@ -238,6 +238,52 @@ class TwoStageKF:
             max_interval=MAX_INTERVAL,
         )
 
+    def timed(self, settings=None, *, first_interval: float | None = None, on_output=None):
+        """A :class:`~wheelload.estimators.kf.rewind.TimedFilter` from the initial state:
+        time-stamped measurements, each predicted to its own time, late ones by rewind and
+        replay (:mod:`wheelload.estimators.kf.rewind`).
+
+        ``settings``: a :class:`~wheelload.estimators.kf.rewind.RewindSettings` (ring size,
+        oldest rewind, speed hold); the measurement noise follows the constructor's
+        ``sample_interval`` (else the tuning's default), as :meth:`run` with that interval;
+        ``first_interval`` [s] is the prediction before the first measurement (default that
+        interval; :meth:`run` uses the log's first interval).
+        """
+        from wheelload.estimators.kf.rewind import RewindSettings, TimedFilter, timed_tuning
+        from wheelload.estimators.loops.fast_step import LiveFilter
+
+        nominal = float(self.sample_interval or self.tuning[_INTERVAL_INDEX])
+        state = self.initial_state()
+        live = LiveFilter(
+            self._fast_step, state.x, state.P, state.m, interval_index=None,
+            default_interval=nominal, max_interval=MAX_INTERVAL,
+        )  # fmt: skip
+        live.set_fixed(self.p, timed_tuning(self.tuning_for(nominal)))
+        return TimedFilter(
+            live,
+            settings or RewindSettings(),
+            nominal if first_interval is None else first_interval,
+            on_output,
+        )
+
+    def run_timed(self, t: np.ndarray, inputs: np.ndarray, latency=None, settings=None, *,
+                  first_interval: float | None = None):  # fmt: skip
+        """A long table through :meth:`timed`: rows in order of arrival at times ``t`` [s],
+        ``inputs`` (n, INPUTS) NaN where a channel has no new value (a log's
+        ``input_matrix(signals).T``), ``latency`` [s] per channel, a vector or a mapping of
+        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`). Returns a
+        :class:`~wheelload.estimators.kf.rewind.TimedRun`."""
+        from wheelload.estimators.kf.rewind import measurements, run_timed
+
+        stamps, channels = measurements(t, inputs, latency)
+        return run_timed(
+            lambda record: self.timed(
+                settings, first_interval=first_interval, on_output=record
+            ),  # fmt: skip
+            stamps,
+            channels,
+        )
+
     @functools.cached_property
     def _step(self) -> ca.Function:
         """:attr:`step_function` without the fault monitor (built on first use)."""

@@ -345,6 +345,15 @@ class LiveFilter:
         self._m[:] = m
         self._fast._views["x_next"][:] = x
 
+    def state_view(self) -> np.ndarray:
+        """``x``, ``P`` (column-major) and ``m`` as one view into the buffer: what is written
+        into it is the state the next update starts from."""
+        return self._fast._state
+
+    def set_fixed(self, p: np.ndarray, tuning: np.ndarray) -> None:
+        """Write this filter's parameters and tuning (its own buffer's)."""
+        self._fast.set_fixed(p, tuning)
+
     @property
     def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Copies of the current ``x``, ``P`` (4 x 4) and ``m``."""

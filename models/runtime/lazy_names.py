@@ -6,7 +6,7 @@ them does not pay for them.
 
 Example
 -------
->>> __getattr__, LAZY_NAMES = lazy_names(__name__, {"pkg.slow": ("Fit",)})
+>>> __getattr__, __dir__, LAZY_NAMES = lazy_names(__name__, {"pkg.slow": ("Fit",)})
 """
 
 from __future__ import annotations
@@ -18,9 +18,11 @@ from collections.abc import Callable
 
 def lazy_names(
     package: str, modules: dict[str, tuple[str, ...]]
-) -> tuple[Callable[[str], object], list[str]]:
+) -> tuple[Callable[[str], object], Callable[[], list[str]], list[str]]:
     """The package's ``__getattr__`` importing each name of ``modules`` (by module) when
-    first asked for, and the sorted names (for ``__all__``)."""
+    first asked for, its ``__dir__`` (the lazy names and the module's own public and
+    special names, so ``dir(package)`` shows the face before any is imported), and the
+    sorted names (for ``__all__``)."""
     table = {name: module for module, names in modules.items() for name in names}
 
     def __getattr__(name: str):
@@ -30,4 +32,10 @@ def lazy_names(
         setattr(sys.modules[package], name, value)  # found directly from now on
         return value
 
-    return __getattr__, sorted(table)
+    def __dir__() -> list[str]:
+        own = vars(sys.modules[package])
+        shown = {name for name in own if name.startswith("__") or not name.startswith("_")}
+        shown.discard("lazy_names")  # the helper this face is built with, not part of it
+        return sorted(shown | set(table))
+
+    return __getattr__, __dir__, sorted(table)

@@ -35,8 +35,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--mathjax",
-        help="a local MathJax tex-svg.js to serve with the site, for reading it offline "
-        "(default: the pages load MathJax from its CDN)",
+        help="a MathJax tex-svg.js to serve with the site (default: the one of the "
+        "sphinx-mathjax-offline package, in the docs extra); the pages need no network",
     )
     add_common_options(parser, TRAITS)
     parser.set_defaults(handler=run)

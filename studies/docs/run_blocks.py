@@ -7,9 +7,11 @@ In a page::
     wheelload estimate --example
     ```
 
-runs the block (``shell``: bash; ``python``: the building interpreter) in the page's own
-working folder (``_run/<page>/`` in the build's source folder, shared by the page's blocks
-in order) and shows the code, then what it printed (``:tail: N`` keeps the last N lines).
+runs the block (``shell``: bash; ``python``: written to ``block-<line>.py`` and run as a
+file by the building interpreter, as a reader who pastes it into a file would) in the
+page's own working folder (``_run/<page>/`` in the build's source folder, shared by the
+page's blocks in order) and shows the code, then what it printed (``:tail: N`` keeps the
+last N lines).
 ``:image: FILE`` shows a figure the block wrote. A block that fails stops the build with
 its output, so a page never shows a command that does not work.
 """
@@ -36,13 +38,18 @@ def page_folder(srcdir: Path, docname: str) -> Path:
     return folder
 
 
-def run_block(kind: str, code: str, cwd: Path) -> str:
-    """Run one block in ``cwd``; its standard output and error, or ExtensionError on failure."""
+def run_block(kind: str, code: str, cwd: Path, *, name: str = "block.py") -> str:
+    """Run one block in ``cwd``; its standard output and error, or ExtensionError on failure.
+
+    A python block is written to ``cwd / name`` and run as that file (a process pool or a
+    Dask cluster it starts then needs its ``if __name__ == "__main__":`` guard, as in a
+    reader's own file)."""
     env = dict(os.environ, MPLBACKEND="Agg", COLUMNS="100")
     env["PATH"] = str(Path(sys.executable).parent) + os.pathsep + env.get("PATH", "")
     command = ["bash", "-e", "-o", "pipefail", "-c", code]
     if kind == "python":
-        command = [sys.executable, "-c", code]
+        (Path(cwd) / name).write_text(code if code.endswith("\n") else code + "\n")
+        command = [sys.executable, name]
     done = subprocess.run(
         command,
         cwd=cwd,
@@ -74,7 +81,7 @@ class RunBlock(Directive):
         env = self.state.document.settings.env
         cwd = page_folder(env.srcdir, env.docname)
         code = "\n".join(self.content)
-        output = run_block(kind, code, cwd).rstrip("\n")
+        output = run_block(kind, code, cwd, name=f"block-{self.lineno}.py").rstrip("\n")
         if "tail" in self.options:
             output = "\n".join(output.splitlines()[-self.options["tail"] :])
         shown: list[nodes.Node] = [nodes.literal_block(code, code, language=LANGUAGES[kind])]

@@ -322,3 +322,200 @@ void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *
     input->wy_dot = out[1];
     input->wz_dot = out[2];
 }
+
+#if ${PREFIX}_RUNTIME_PARAMS
+/* Time-stamped measurements: see ${prefix}.h (and wheelload.estimators.kf.rewind, the same
+ * steps in the same order). */
+#define SPEED_INDEX ${speed_index}
+#define CHECKPOINT(timed, i) ((timed)->ring[((timed)->head + (i)) % ${PREFIX}_N_CHECKPOINTS])
+
+typedef char channels_fit_the_mask[${PREFIX}_N_INPUTS <= 32 ? 1 : -1];
+
+int ${prefix}_timed_init(${prefix}_timed *timed, const ${prefix}_params *params,
+                         ${prefix}_real first_interval, ${prefix}_real max_rewind_age,
+                         ${prefix}_real speed_hold)
+{
+    static const int diagonal[4] = {0, 4, 7, 9};
+    int k, status;
+    if (!(FINITE(first_interval) && first_interval > ZERO && FINITE(max_rewind_age)
+          && max_rewind_age >= ZERO && FINITE(speed_hold) && speed_hold >= ZERO)) {
+        return 2 + ${PREFIX}_N_PARAMS;
+    }
+    status = ${prefix}_init(&timed->state, params);
+    if (status != 0) {
+        return status;
+    }
+    timed->t = ZERO;
+    timed->first_interval = first_interval;
+    timed->max_rewind_age = max_rewind_age;
+    timed->speed_hold = speed_hold;
+    timed->speed = ZERO;
+    timed->speed_time = ZERO;
+    timed->has_speed = 0;
+    timed->started = 0;
+    timed->head = 0;
+    timed->count = 0;
+    timed->dropped = 0u;
+    timed->rewinds = 0u;
+    timed->replayed = 0u;
+    for (k = 0; k < 4; ++k) {
+        timed->last.loads[k] = timed->state.x[k];
+        timed->last.std[k] = SQRT(timed->state.P[diagonal[k]]);
+    }
+    for (k = 0; k < 3; ++k) {
+        timed->last.residual[k] = ZERO;
+    }
+    for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
+        timed->last.fault_statistic[k] = ZERO;
+    }
+    for (k = 0; k < 8; ++k) {
+        timed->last.mass_properties[k] = ZERO;
+    }
+    timed->last.faults = 0u;
+    timed->last.flags = 0u;
+    return 0;
+}
+
+/* Drop the oldest checkpoint (its successor keeps the state before that). */
+static void timed_evict(${prefix}_timed *timed)
+{
+    timed->head = (timed->head + 1) % ${PREFIX}_N_CHECKPOINTS;
+    timed->count -= 1;
+}
+
+/* Set the checkpoint of `slot`: the filter before it, that state's time (has_time 0: the
+ * initial state) and the speed held then. */
+static void set_before(${prefix}_checkpoint *slot, const ${prefix}_state *state,
+                       ${prefix}_real time, int has_time, ${prefix}_real speed,
+                       ${prefix}_real speed_time, int has_speed)
+{
+    slot->before = *state;
+    slot->t_before = time;
+    slot->has_before = has_time;
+    slot->speed = speed;
+    slot->speed_time = speed_time;
+    slot->has_speed = has_speed;
+}
+
+/* Open slot `position` for a measurement; its checkpoint is that of the measurement after
+ * it, or the current state for the newest (the replay sets the later ones). */
+static void timed_insert(${prefix}_timed *timed, int position, ${prefix}_real t,
+                         const ${prefix}_real u[${PREFIX}_N_INPUTS], uint32_t channels)
+{
+    ${prefix}_checkpoint *slot;
+    int k;
+    for (k = timed->count; k > position; --k) {
+        CHECKPOINT(timed, k) = CHECKPOINT(timed, k - 1);
+    }
+    slot = &CHECKPOINT(timed, position);
+    slot->t = t;
+    for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
+        slot->u[k] = u[k];
+    }
+    slot->channels = channels;
+    if (position == timed->count) {
+        set_before(slot, &timed->state, timed->t, timed->started, timed->speed,
+                   timed->speed_time, timed->has_speed);
+    } else {
+        const ${prefix}_checkpoint *next = &CHECKPOINT(timed, position + 1);
+        set_before(slot, &next->before, next->t_before, next->has_before, next->speed,
+                   next->speed_time, next->has_speed);
+    }
+    timed->count += 1;
+}
+
+/* Restore the checkpoint of measurement `start` and filter it and every later one. */
+static void timed_replay(${prefix}_timed *timed, const ${prefix}_params *params, int start)
+{
+    const ${prefix}_checkpoint *first = &CHECKPOINT(timed, start);
+    ${prefix}_real time = first->t_before, speed = first->speed, speed_time = first->speed_time;
+    int has_time = first->has_before, has_speed = first->has_speed;
+    int k, j;
+    timed->state = first->before;
+    for (k = start; k < timed->count; ++k) {
+        ${prefix}_checkpoint *c = &CHECKPOINT(timed, k);
+        ${prefix}_input input;
+        if (k > start) {
+            set_before(c, &timed->state, time, has_time, speed, speed_time, has_speed);
+            timed->replayed += 1u;
+        }
+        for (j = 0; j < ${PREFIX}_N_INPUTS; ++j) {
+            *${prefix}_input_field(&input, j) = c->u[j];
+        }
+        if ((c->channels >> SPEED_INDEX) & 1u) {
+            speed = c->u[SPEED_INDEX];
+            speed_time = c->t;
+            has_speed = 1;
+        } else if (has_speed && c->t - speed_time <= timed->speed_hold) {
+            *${prefix}_input_field(&input, SPEED_INDEX) = speed;
+        }
+        (void)${prefix}_step(&timed->state, params, &input,
+                             has_time ? c->t - time : timed->first_interval, &timed->last);
+        time = c->t;
+        has_time = 1;
+    }
+    timed->t = time;
+    timed->speed = speed;
+    timed->speed_time = speed_time;
+    timed->has_speed = has_speed;
+    timed->started = 1;
+}
+
+uint32_t ${prefix}_step_at(${prefix}_timed *timed, const ${prefix}_params *params,
+                           const ${prefix}_input *input, uint32_t channels, ${prefix}_real t,
+                           ${prefix}_output *output)
+{
+    ${prefix}_params timed_params = *params;
+    ${prefix}_input given = *input;
+    ${prefix}_real u[${PREFIX}_N_INPUTS];
+    uint32_t present = 0u;
+    int k, position = 0, n = timed->count;
+    int accepted = FINITE(t);
+    timed_params.interval_band = ${PREFIX}_TIMED_INTERVAL_BAND;
+    for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
+        const ${prefix}_real value = *${prefix}_input_field(&given, k);
+        const int here = ((channels >> k) & 1u) && FINITE(value);
+        u[k] = here ? value : (${prefix}_real)NAN;
+        present |= here ? 1u << k : 0u;
+    }
+    if (accepted && (n == 0 || t > timed->t)) {
+        if (n == ${PREFIX}_N_CHECKPOINTS) {
+            timed_evict(timed);
+            n -= 1;
+        }
+        timed_insert(timed, n, t, u, present);
+        timed_replay(timed, &timed_params, n);
+        *output = timed->last;
+        return output->flags;
+    }
+    accepted = accepted && !(t < timed->t - timed->max_rewind_age);
+    while (accepted && position < n && CHECKPOINT(timed, position).t < t) {
+        ++position;
+    }
+    if (accepted && CHECKPOINT(timed, position).t == t) {
+        ${prefix}_checkpoint *same = &CHECKPOINT(timed, position);
+        for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
+            same->u[k] = (present >> k) & 1u ? u[k] : same->u[k];
+        }
+        same->channels |= present;
+    } else if (accepted && position == 0 && n == ${PREFIX}_N_CHECKPOINTS) {
+        accepted = 0;
+    } else if (accepted) {
+        if (n == ${PREFIX}_N_CHECKPOINTS) {
+            timed_evict(timed);
+            position -= 1;
+        }
+        timed_insert(timed, position, t, u, present);
+    }
+    if (!accepted) {
+        timed->dropped += 1u;
+        *output = timed->last;
+        output->flags = ${PREFIX}_FLAG_MEASUREMENT_TOO_OLD;
+        return output->flags;
+    }
+    timed->rewinds += 1u;
+    timed_replay(timed, &timed_params, position);
+    *output = timed->last;
+    return output->flags;
+}
+#endif

@@ -224,4 +224,68 @@ int ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter, ${prefix}_real in
  * (non-finite where the rate is). */
 void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *input);
 
+#if ${PREFIX}_RUNTIME_PARAMS
+/* Time-stamped measurements (wheelload.estimators.kf.rewind, the same semantics): each
+ * measurement is predicted to its own time stamp t [s] and updates the rows its channels
+ * inform (a channel not in the mask, or not finite, is absent: the rows that need it are
+ * skipped). A measurement older than the newest (a channel's latency, a frame out of
+ * order) rewinds: the state before it is restored from a fixed ring of the last
+ * ${PREFIX}_N_CHECKPOINTS measurements, each with the state before it, and every later
+ * measurement is filtered again; one of a time stamp already in the ring merges into it
+ * (its channels replace those there). The result is that of the measurements fed in time
+ * order. A measurement more than max_rewind_age behind the newest, or older than the
+ * oldest checkpoint of a full ring, is dropped: ${PREFIX}_FLAG_MEASUREMENT_TOO_OLD alone,
+ * counted in dropped, the state unchanged. A measurement without vx takes the last vx at or
+ * before its time stamp, at most speed_hold old. No interval is refused as short (the
+ * step runs with interval_band ${PREFIX}_TIMED_INTERVAL_BAND); the measurement noise follows
+ * params' sample_interval. No allocation: the ring is in the struct. Time stamps are in
+ * the library's precision (a float build: keep them small, e.g. from a recent origin).
+ * Worst case of one call: a rewind to the oldest checkpoint, ${PREFIX}_N_CHECKPOINTS steps.
+ * Define ${PREFIX}_N_CHECKPOINTS before including this header (the same value everywhere)
+ * for another ring size. */
+#ifndef ${PREFIX}_N_CHECKPOINTS
+#define ${PREFIX}_N_CHECKPOINTS ${n_checkpoints}
+#endif
+#define ${PREFIX}_TIMED_INTERVAL_BAND ${PREFIX}_REAL_C(${timed_interval_band})
+
+typedef struct {
+    ${prefix}_real t;                        /* the measurement's time stamp [s] */
+    ${prefix}_real u[${PREFIX}_N_INPUTS];    /* its channels, in input order */
+    uint32_t channels;                       /* bit k: channel k present */
+    ${prefix}_state before;                  /* the filter before it */
+    ${prefix}_real t_before;                 /* the time of that state (if has_before) */
+    ${prefix}_real speed, speed_time;        /* the held vx before it and its time stamp */
+    int has_before;                          /* 0: before it, the initial state */
+    int has_speed;                           /* 0: no vx held before it */
+} ${prefix}_checkpoint;
+
+typedef struct {
+    ${prefix}_state state;     /* the filter at the newest time stamp t */
+    ${prefix}_output last;     /* the output of the last step */
+    ${prefix}_real t;          /* the newest time stamp [s] (if count > 0) */
+    ${prefix}_real first_interval, max_rewind_age, speed_hold; /* [s] */
+    ${prefix}_real speed, speed_time; /* vx held after the newest, its time stamp */
+    int has_speed;
+    int started;               /* 0 before the first measurement */
+    int head, count;           /* ring[head] the oldest of count checkpoints */
+    uint32_t dropped, rewinds, replayed; /* measurements dropped, rewinds, steps filtered again */
+    ${prefix}_checkpoint ring[${PREFIX}_N_CHECKPOINTS];
+} ${prefix}_timed;
+
+/* Check params (as ${prefix}_init) and start from the initial state: first_interval [s] the
+ * prediction before the first measurement (params' sample_interval for the Python default),
+ * max_rewind_age and speed_hold [s] (>= 0 and finite). Returns ${prefix}_init's code, or
+ * 2 + ${PREFIX}_N_PARAMS for an interval, age or hold out of range. */
+int ${prefix}_timed_init(${prefix}_timed *timed, const ${prefix}_params *params,
+                         ${prefix}_real first_interval, ${prefix}_real max_rewind_age,
+                         ${prefix}_real speed_hold);
+
+/* One measurement at time stamp t [s]: channel k of input is read where bit k of channels is
+ * set (input order, ${prefix}_input_names). Writes the output after it (the newest time
+ * stamp's estimate) and returns its flags. */
+uint32_t ${prefix}_step_at(${prefix}_timed *timed, const ${prefix}_params *params,
+                           const ${prefix}_input *input, uint32_t channels, ${prefix}_real t,
+                           ${prefix}_output *output);
+#endif
+
 #endif /* ${PREFIX}_H */

@@ -19,6 +19,6 @@ _LAZY_MODULES = {
     "wheelload.estimators.logs.readers.frames": ("channel_names", "read_frame"),
     "wheelload.estimators.logs.readers.resample": ("Method",),
 }
-__getattr__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
+__getattr__, __dir__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
 
 __all__ = ["SUFFIXES", *_LAZY_NAMES]

@@ -40,6 +40,7 @@ BENCHMARKS = (
     "wheelload.studies.commands.bench.discernment",
     "wheelload.studies.commands.bench.recompile",
     "wheelload.studies.bench.can_logs",
+    "wheelload.studies.commands.bench.timed",
 )
 
 

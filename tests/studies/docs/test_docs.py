@@ -4,17 +4,21 @@ The site is built once (``wheelload.studies.docs.build_docs``, as ``wheelload do
 runs every journey's commands and programs: a command that fails stops the build. The
 tests then read what the pages show: the outputs the journeys printed, checked against the
 tolerances the library promises (the C example equals Python to 1e-9 N; the Dask cluster's
-summary equals the local processes' to 1e-9).
+summary equals the local processes' to 1e-9). A headless Chromium with no network opens
+pages of the built site from disk and shows every equation typeset by the MathJax the site
+carries.
 """
 
 import html
 import re
+import shutil
+import subprocess
 
 import pytest
 from sphinx.errors import ExtensionError
 
 from wheelload.studies.docs.build import DocsBuildError, build_docs
-from wheelload.studies.docs.reference import packages
+from wheelload.studies.docs.reference import CONTRACT, packages
 from wheelload.studies.docs.run_blocks import run_block
 
 pytestmark = [pytest.mark.heavy(77), pytest.mark.filterwarnings("ignore::DeprecationWarning")]
@@ -45,6 +49,66 @@ def test_every_package_has_a_reference_page_with_rendered_math(site):
     models = (site / "reference" / "wheelload.models.suspension.html").read_text()
     assert 'class="math' in models  # the docstrings' .. math:: reach MathJax
     assert "wheelload.models.suspension.elements.damper_force" in models
+
+
+#: A headless Chromium (Debian's package; .ci/run installs it where apt-get works) with no
+#: network: every host resolves to nothing and every request goes to a closed proxy. The
+#: virtual time budget lets MathJax typeset before the DOM is dumped.
+CHROMIUM = next(filter(None, map(shutil.which, ("chromium", "chromium-browser"))), None)
+OFFLINE = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--proxy-server=http://127.0.0.1:9",
+    "--host-resolver-rules=MAP * ~NOTFOUND",
+    "--virtual-time-budget=30000",
+)
+#: An equation as Sphinx writes it (``\(...\)`` inline, ``\[...\]`` displayed), and as
+#: MathJax leaves it once typeset.
+MATH = re.compile(r'<(span|div) class="math notranslate nohighlight">(.*?)</\1>', re.DOTALL)
+TYPESET = re.compile(r"<mjx-container[ >].*?</mjx-container>", re.DOTALL)
+
+
+def _rendered(page, profile) -> str:
+    """The page's DOM after a headless Chromium with no network has run its scripts."""
+    command = [CHROMIUM, *OFFLINE, f"--user-data-dir={profile}", "--dump-dom", page.as_uri()]
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no chromium: apt-get install chromium (.ci/run does)")
+@pytest.mark.parametrize(
+    "page", ["reference/contract.html", "reference/wheelload.models.suspension.html"]
+)
+def test_every_equation_is_typeset_without_a_network(site, page, tmp_path):
+    """Each equation of the page becomes one MathJax container and no raw TeX is left."""
+    written = (site / page).read_text()
+    equations = [body for _, body in MATH.findall(written)]
+    assert equations and all(body.strip().startswith(("\\(", "\\[")) for body in equations)
+    dom = _rendered(site / page, tmp_path / "profile")
+    assert len(TYPESET.findall(dom)) == len(equations)
+    left = [body for _, body in MATH.findall(TYPESET.sub("", dom)) if body.strip()]
+    assert left == []  # no \( or \[ left in the rendered equations
+
+
+def test_the_reference_opens_with_the_contract(site):
+    """The contract page lists every name of the faces, in their own namespace, and the
+    internals do not describe those objects again."""
+    index = _text(site / "reference" / "index.html")
+    assert index.index("The contract") < index.index("Internals")
+    contract = (site / "reference" / "contract.html").read_text()
+    for face, groups in CONTRACT.items():
+        for _, names in groups:
+            for name in names:
+                assert f'id="{face}.{name}"' in contract, f"{face}.{name}"
+    registry = (site / "reference" / "wheelload.estimators.html").read_text()
+    assert 'id="wheelload.estimators.registry.build"' not in registry
+    assert 'id="wheelload-estimators-registry"' in registry  # the module's other members
 
 
 def test_the_journeys_are_pages_of_the_site(site):
