@@ -1,0 +1,129 @@
+"""The MISRA C:2012 deviation record shipped beside the generated C (``MISRA_DEVIATIONS.md``).
+
+Each deviation names a rule, the generated files it covers (shell patterns, ``PREFIX`` for the C
+symbol prefix), where in them the pattern is, and why the code keeps it. The generators write
+the record (:func:`write_deviation_record`) into the folder they write;
+:func:`~wheelload.estimators.codegen.misra.analyse` reads it back from the folder
+(:func:`read_deviations`), so the record that ships is the record that is checked.
+
+Example
+-------
+>>> write_deviation_record(Path("out/c"), KF_DEVIATIONS, "wheelload_kf")
+"""
+
+from __future__ import annotations
+
+import fnmatch
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from wheelload.estimators.logs.output_files import write_text
+
+#: The record's file name in a generated folder.
+RECORD_NAME = "MISRA_DEVIATIONS.md"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Deviation:
+    """A rule the generated code departs from, in which files, where and why."""
+
+    rule: str  # "10.3"
+    files: tuple[str, ...]  # shell patterns of file names in the folder
+    where: str
+    why: str
+
+    def covers(self, rule: str, file: str) -> bool:
+        return rule == self.rule and any(fnmatch.fnmatch(file, p) for p in self.files)
+
+    def for_prefix(self, prefix: str) -> Deviation:
+        return Deviation(
+            rule=self.rule,
+            files=tuple(p.replace("PREFIX", prefix) for p in self.files),
+            where=self.where,
+            why=self.why,
+        )
+
+
+#: Files of the host-side programs written beside the library: the CSV example and the self-test.
+_HOST = ("PREFIX_example.c", "PREFIX_selftest.c")
+_HOST_WHY = (
+    "host-side program (CSV log in, CSV out; timing on a PC), not part of the ECU build, "
+    "which is PREFIX.c and PREFIX_tyre.c"
+)
+
+
+def _host(rule: str, where: str, why: str) -> Deviation:
+    return Deviation(rule=rule, files=_HOST, where=where, why=f"{_HOST_WHY}: {why}")
+
+
+#: Deviations of the two-stage KF library, its tyre step and the FMU wrapper.
+KF_DEVIATIONS: tuple[Deviation, ...] = (
+    Deviation(
+        rule="8.14",
+        files=("PREFIX.c",),
+        where="PREFIX_step_batch: one restrict pointer per row of the struct-of-arrays storage",
+        why="the rows of a batch never overlap (the caller's arrays, row k at k * n); restrict "
+        "states it so that the compiler vectorises the loop over filters, the batched step's "
+        "purpose; the single step (PREFIX_step) has no restrict",
+    ),
+    _host(
+        "21.1",
+        "#define _POSIX_C_SOURCE",
+        "asks the C library for POSIX fchmod/fdopen/clock_gettime",
+    ),
+    _host("21.6", "#include <stdio.h>", "reads and writes files"),
+    _host("21.7", "atoi of a command-line count", "command-line parsing on a PC"),
+    _host("21.9", "qsort of the timings", "median of the timings on a PC"),
+    _host("21.10", "#include <time.h>, clock_gettime", "timing on a PC"),
+    _host("7.1", "0666 file mode", "POSIX file modes are octal by convention"),
+    _host("8.6", "main", "each program defines its own main; they are linked apart"),
+    _host("10.3", "int and double conversions in the parsing and the test signal", "parsing"),
+    _host("10.4", "size_t against int counts", "parsing"),
+    _host("10.8", "(size_t)(pointer difference)", "parsing"),
+    _host("14.2", "for loops over characters and lines", "parsing"),
+    _host("14.4", "character class tests, ferror", "parsing"),
+    _host("15.7", "if ... else if without else", "parsing"),
+    _host("17.7", "fprintf's return value unused", "messages on stderr"),
+    _host("22.8", "strtod without errno reset", "range errors are caught by isfinite"),
+)
+#: Deviations of the embedded MHE (its driver, the CasADi-generated terms, the linked filter).
+MHE_DEVIATIONS: tuple[Deviation, ...] = ()
+
+_HEADER = """# MISRA C:2012 deviations of the generated code
+
+cppcheck's MISRA add-on (`wheelload misra FOLDER`) reports the findings of this folder's C; a
+required finding of a rule and file listed here is a deviation, with its reason. Any other
+required finding is an error of the generator.
+
+| rule | files | where | why |
+| --- | --- | --- | --- |
+"""
+
+
+def deviation_record(deviations: Sequence[Deviation]) -> str:
+    """The record's Markdown text."""
+    rows = [f"| {d.rule} | {' '.join(d.files)} | {d.where} | {d.why} |" for d in deviations]
+    return _HEADER + "\n".join(rows) + "\n"
+
+
+def write_deviation_record(folder: Path, deviations: Sequence[Deviation], prefix: str) -> Path:
+    """Write the record of ``deviations`` (files for ``prefix``) into ``folder``."""
+    path = Path(folder) / RECORD_NAME
+    write_text(path, deviation_record([d.for_prefix(prefix) for d in deviations]), replace=True)
+    return path
+
+
+def read_deviations(folder: Path) -> tuple[Deviation, ...]:
+    """The deviations of the record in ``folder`` (none without a record)."""
+    path = Path(folder) / RECORD_NAME
+    if not path.is_file():
+        return ()
+    deviations = []
+    for line in path.read_text("utf-8").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 4 or cells[0] in ("rule", "---"):
+            continue
+        rule, files, where, why = cells
+        deviations.append(Deviation(rule=rule, files=tuple(files.split()), where=where, why=why))
+    return tuple(deviations)
