@@ -67,6 +67,35 @@ KF_DEVIATIONS: tuple[Deviation, ...] = (
         "states it so that the compiler vectorises the loop over filters, the batched step's "
         "purpose; the single step (PREFIX_step) has no restrict",
     ),
+    Deviation(
+        rule="5.5",
+        files=("PREFIX_fmu.c",),
+        where="the fmi3 functions' definitions",
+        why="the FMI 3.0 standard's fmi3Functions.h defines each function name as a macro "
+        "(FMI3_FUNCTION_PREFIX) and the FMU must define the functions under those names",
+    ),
+    Deviation(
+        rule="11.1",
+        files=("PREFIX_fmu.c",),
+        where="(void) of unused callback parameters (intermediateUpdate, clockUpdate, "
+        "lockPreemption)",
+        why="a conversion of a function pointer to void, which the rule's exception 2 allows; "
+        "the add-on does not know the exception",
+    ),
+    Deviation(
+        rule="21.3",
+        files=("PREFIX_fmu.c",),
+        where="calloc in fmi3InstantiateCoSimulation, free in fmi3FreeInstance",
+        why="FMI 3.0 gives an FMU no memory callbacks: the importer asks for instances at run "
+        "time and the FMU allocates each one once, at instantiation, never in a step",
+    ),
+    Deviation(
+        rule="21.6",
+        files=("PREFIX_fmu.c",),
+        where="snprintf into the message of the FMI logger callback",
+        why="FMI's logMessage takes a formatted text; snprintf is bounded by the buffer size "
+        "and runs only when the importer enabled logging or on a refused call",
+    ),
     _host(
         "21.1",
         "#define _POSIX_C_SOURCE",

@@ -1,4 +1,4 @@
-"""MISRA C:2012 findings on the generated C, by cppcheck's MISRA add-on (``cppcheck --addon=misra``).
+"""MISRA C:2012 findings on the generated C by cppcheck's MISRA add-on (``--addon=misra``).
 
 cppcheck's value-flow pass grows with the square of a function's length: on the KF library's
 straight-line kernels (two functions of 6 000-8 000 one-line statements each) it does not finish

@@ -185,7 +185,8 @@ def domain_code(fields: tuple[str, ...], runtime: bool, precision: Precision, pr
             f" * +-load_limit m g). */\nstatic bool relations_hold(const {prefix}_params *params)"
             f"\n{{\n    {real} margin[{n}];\n    int k;\n    bool hold = true;\n"
             + "\n".join(f"    {line}" for line in body.splitlines())
-            + f"\n    for (k = 0; k < {n}; ++k) {{\n        hold = hold && (margin[k] <= ZERO);\n    }}"
+            + f"\n    for (k = 0; k < {n}; ++k) {{"
+            "\n        hold = hold && (margin[k] <= ZERO);\n    }}"
             "\n    return hold;\n}"
         )
     return "\n".join(lines)
@@ -408,8 +409,8 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
         const int field = record_index[j];
         bool derived_here = false;
         for (k = 0; k < {PREFIX}_N_DERIVED; ++k) {{
-            derived_here = derived_here
-                           || ((derived_index[k] == field) && ((recompute & (1u << (uint32_t)k)) != 0u));
+            const bool source_recomputed = (recompute & (1u << (uint32_t)k)) != 0u;
+            derived_here = derived_here || ((derived_index[k] == field) && source_recomputed);
         }}
         if (field == index || derived_here) {{
             changed.record[j] = *{prefix}_param_field(&changed, field);

@@ -95,8 +95,8 @@ def table(report: Report, baseline: collections.Counter | None) -> list[str]:
     for file in files:
         seconds = report.seconds.get(file)
         lines.append(file + (f"  (cppcheck {seconds:.1f} s)" if seconds is not None else ""))
-        rules = sorted({r for f, r in now if f == file} | {r for f, r in baseline or {} if f == file},
-                       key=_rule_key)  # fmt: skip
+        rules = {r for f, r in now if f == file} | {r for f, r in baseline or {} if f == file}
+        rules = sorted(rules, key=_rule_key)
         for rule in rules:
             count = _count(baseline, now, (file, rule))
             mark = "deviated" if (file, rule) in deviated else ("OPEN" if (
@@ -104,8 +104,11 @@ def table(report: Report, baseline: collections.Counter | None) -> list[str]:
             lines.append(f"  {rule:<32} {category(rule):<9} {count:>12}  {mark}")
         for kind in ("required", "advisory"):
             after = sum(n for (f, r), n in now.items() if f == file and category(r) == kind)
-            before = None if baseline is None else sum(
-                n for (f, r), n in baseline.items() if f == file and category(r) == kind)  # fmt: skip
+            before = (
+                None
+                if baseline is None
+                else sum(n for (f, r), n in baseline.items() if f == file and category(r) == kind)
+            )
             text = str(after) if before is None else f"{before} -> {after}"
             lines.append(f"  {'all ' + kind:<32} {kind:<9} {text:>12}")
     open_findings = report.required_open()

@@ -68,7 +68,7 @@ def _emitted_function(tmp_path: Path) -> Path:
     body = emit_statements(f, ["x[{}]"], ["y[{}]"], Precision.DOUBLE, "double")
     source = tmp_path / "emitted.c"
     source.write_text(
-        "#include <math.h>\n#include \"emitted.h\"\n"
+        '#include <math.h>\n#include "emitted.h"\n'
         "void emitted(const double x[6], double y[48])\n{\n"
         + "\n".join(f"    {line}" for line in body.splitlines())
         + "\n}\n"
