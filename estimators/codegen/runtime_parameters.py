@@ -186,7 +186,7 @@ def domain_code(fields: tuple[str, ...], runtime: bool, precision: Precision, pr
             f"\n{{\n    {real} margin[{n}];\n    int k;\n    bool hold = true;\n"
             + "\n".join(f"    {line}" for line in body.splitlines())
             + f"\n    for (k = 0; k < {n}; ++k) {{"
-            "\n        hold = hold && (margin[k] <= ZERO);\n    }}"
+            "\n        hold = hold && (margin[k] <= ZERO);\n    }"
             "\n    return hold;\n}"
         )
     return "\n".join(lines)
