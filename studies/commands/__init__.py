@@ -65,7 +65,7 @@ CATALOG: dict[str, Command] = {
         summary="generate the two-stage KF (default) or the MHE as C",
     ),
     "misra": Command(
-        module=f"{_PACKAGE}.misra",
+        module=f"{_PACKAGE}.misra.command",
         summary="MISRA C:2012 findings on generated C (cppcheck), per file and rule",
     ),
     "weigh": Command(
