@@ -37,11 +37,12 @@ class Deviation:
         return rule == self.rule and any(fnmatch.fnmatch(file, p) for p in self.files)
 
     def for_prefix(self, prefix: str) -> Deviation:
+        """The deviation with ``PREFIX`` replaced by the C symbol prefix."""
         return Deviation(
             rule=self.rule,
             files=tuple(p.replace("PREFIX", prefix) for p in self.files),
-            where=self.where,
-            why=self.why,
+            where=self.where.replace("PREFIX", prefix),
+            why=self.why.replace("PREFIX", prefix),
         )
 
 
@@ -57,8 +58,8 @@ def _host(rule: str, where: str, why: str) -> Deviation:
     return Deviation(rule=rule, files=_HOST, where=where, why=f"{_HOST_WHY}: {why}")
 
 
-#: Deviations of the two-stage KF library, its tyre step and the FMU wrapper.
-KF_DEVIATIONS: tuple[Deviation, ...] = (
+#: Deviations of the two-stage KF library and its tyre step (PREFIX.c, PREFIX_tyre.c).
+LIBRARY_DEVIATIONS: tuple[Deviation, ...] = (
     Deviation(
         rule="8.14",
         files=("PREFIX.c",),
@@ -67,6 +68,9 @@ KF_DEVIATIONS: tuple[Deviation, ...] = (
         "states it so that the compiler vectorises the loop over filters, the batched step's "
         "purpose; the single step (PREFIX_step) has no restrict",
     ),
+)
+#: Deviations of the FMU wrapper (PREFIX_fmu.c).
+FMU_DEVIATIONS: tuple[Deviation, ...] = (
     Deviation(
         rule="5.5",
         files=("PREFIX_fmu.c",),
@@ -96,6 +100,9 @@ KF_DEVIATIONS: tuple[Deviation, ...] = (
         why="FMI's logMessage takes a formatted text; snprintf is bounded by the buffer size "
         "and runs only when the importer enabled logging or on a refused call",
     ),
+)
+#: Deviations of the host-side example program and self-test.
+HOST_DEVIATIONS: tuple[Deviation, ...] = (
     _host(
         "21.1",
         "#define _POSIX_C_SOURCE",
@@ -116,6 +123,9 @@ KF_DEVIATIONS: tuple[Deviation, ...] = (
     _host("17.7", "fprintf's return value unused", "messages on stderr"),
     _host("22.8", "strtod without errno reset", "range errors are caught by isfinite"),
 )
+#: Deviations of a KF folder written by ``wheelload codegen``: the library and the host programs.
+KF_DEVIATIONS: tuple[Deviation, ...] = (*LIBRARY_DEVIATIONS, *HOST_DEVIATIONS)
+
 #: OSQP's own sources and headers in an embedded MHE folder, as OSQP's code generator copies them.
 _OSQP = ("osqp/src/*.c", "osqp/inc/*")
 #: The required rules OSQP's sources depart from (cppcheck's add-on on OSQP 1.0's embedded code).

@@ -29,7 +29,12 @@ from importlib import resources
 from importlib.metadata import version
 from pathlib import Path
 
-from wheelload.estimators.codegen.deviations import KF_DEVIATIONS, RECORD_NAME, deviation_record
+from wheelload.estimators.codegen.deviations import (
+    FMU_DEVIATIONS,
+    LIBRARY_DEVIATIONS,
+    RECORD_NAME,
+    deviation_record,
+)
 from wheelload.estimators.codegen.fmu_variables import (
     OUTPUT_GROUPS,
     OUTPUTS,
@@ -104,7 +109,8 @@ def generate_fmu(
     files[wrapper] = wrapper_source(variables, options, token, vehicle_path.name).encode()
     sources = (library.source.name, library.tyre[1].name, wrapper)
     files["buildDescription.xml"] = build_description(prefix, sources).encode()
-    files[RECORD_NAME] = deviation_record([d.for_prefix(prefix) for d in KF_DEVIATIONS]).encode()
+    deviations = (*LIBRARY_DEVIATIONS, *FMU_DEVIATIONS)
+    files[RECORD_NAME] = deviation_record([d.for_prefix(prefix) for d in deviations]).encode()
     description = model_description(
         variables, model_identifier=prefix, token=token, interval=options.sample_interval,
         description=f"wheelload tyre-forces: F_z, F_x, F_y per wheel with sigma and status "

@@ -90,7 +90,7 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.deviations import (
-    KF_DEVIATIONS,
+    LIBRARY_DEVIATIONS,
     MHE_DEVIATIONS,
     write_deviation_record,
 )
@@ -243,7 +243,7 @@ def _generate_into(
     (folder / "wheelload_mhe.c").write_text(source)
     (folder / EXAMPLE).write_text((TEMPLATES / "mhe_main.c").read_text())
     (folder / "Makefile").write_text(_makefile(folder))
-    filter_deviations = [d.for_prefix(FILTER_PREFIX) for d in KF_DEVIATIONS] if linked else []
+    filter_deviations = [d.for_prefix(FILTER_PREFIX) for d in LIBRARY_DEVIATIONS] if linked else []
     write_deviation_record(folder, [*filter_deviations, *MHE_DEVIATIONS], "wheelload_mhe")
 
 
