@@ -2,10 +2,10 @@
 
 cppcheck's value-flow pass grows faster than a function's length (the tyre step's kernel of
 2 700 statements: 30 s): on the KF library's straight-line kernels (two functions of 8 000-9 000
-one-line statements each) it does not finish in 15 minutes, while the add-on's rules look at one statement at a time. So each straight-line
-run of one-line assignments (the emitted kernels: :mod:`~wheelload.estimators.kernels.c_emitter`,
-CasADi's generator in the MHE) is analysed once per *statement shape*: a copy of the file keeps
-the first statement of each shape and blanks the others (the line numbers stay), cppcheck
+one-line statements each) it does not finish in 15 minutes, while the add-on's rules look at one
+statement at a time. So each straight-line run of one-line assignments (the emitted kernels:
+:mod:`~wheelload.estimators.kernels.c_emitter`, CasADi's generator in the MHE) is analysed once
+per *statement shape*: a copy of the file keeps the first statement of each shape and blanks the others (the line numbers stay), cppcheck
 analyses that copy, and a finding on a kept statement is counted on every statement of its
 shape. The shape of a statement is its text with the digits of the names taken away (``w12``,
 ``x_3``), array indices set to 0, and each number other than ``0`` and ``1`` replaced by ``2``
@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import collections
 import itertools
+import os
 import re
 import resource
 import shutil
@@ -112,8 +113,8 @@ class Finding:
 
 @dataclass(frozen=True)
 class Report:
-    """The findings on a folder's generated C, its deviation record, cppcheck's seconds per
-    translation unit (wall clock) and its processor seconds in all."""
+    """The findings on a folder's generated C, its deviation record, cppcheck's processor
+    seconds per translation unit and in all (the whole-program pass included)."""
 
     findings: tuple[Finding, ...]
     deviations: tuple[Deviation, ...]
@@ -233,21 +234,38 @@ def analyse(
     return Report(tuple(sorted(expanded)), read_deviations(folder), seconds, cpu)
 
 
+def _cpu_seconds(pid: int) -> float | None:
+    """Processor seconds of process ``pid`` and its waited-for children (Linux ``/proc``)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return sum(int(value) for value in fields[11:15]) / os.sysconf("SC_CLK_TCK")
+
+
 def _run(
     executable: str, work: Path, includes: list[str], units: list[str]
 ) -> tuple[set[Finding], dict[str, float]]:
-    """One cppcheck run over ``units``; seconds per unit from its progress lines."""
+    """One cppcheck run over ``units``; processor seconds per unit (cppcheck and its add-on,
+    from ``/proc``; elsewhere wall-clock seconds) between its progress lines."""
     command = [executable, *CPPCHECK_OPTIONS, *includes, *units]
     seconds: dict[str, float] = {}
     with tempfile.TemporaryFile("w+", encoding="utf-8") as stderr:
         process = subprocess.Popen(
             command, cwd=work, stdout=subprocess.PIPE, stderr=stderr, text=True
         )
-        current, started = None, time.perf_counter()
+
+        on_proc = _cpu_seconds(process.pid) is not None
+
+        def clock() -> float:
+            used = _cpu_seconds(process.pid) if on_proc else None
+            return time.perf_counter() if used is None else used
+
+        current, started = None, clock()
         for line in itertools.chain(process.stdout, ["files checked"]):  # type: ignore[arg-type]
             checking = re.match(r"Checking (\S+)", line)
             if checking or "files checked" in line:
-                now = time.perf_counter()
+                now = clock()
                 if current is not None:
                     seconds[current] = seconds.get(current, 0.0) + now - started
                 current, started = None, now

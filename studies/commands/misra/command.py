@@ -94,7 +94,7 @@ def table(report: Report, baseline: collections.Counter | None) -> list[str]:
     lines = [f"{'file / rule':<34} {'category':<9} {'findings':>12}  deviation"]
     for file in files:
         seconds = report.seconds.get(file)
-        lines.append(file + (f"  (cppcheck {seconds:.1f} s)" if seconds is not None else ""))
+        lines.append(file + (f"  (cppcheck {seconds:.1f} s cpu)" if seconds is not None else ""))
         rules = {r for f, r in now if f == file} | {r for f, r in baseline or {} if f == file}
         rules = sorted(rules, key=_rule_key)
         for rule in rules:
