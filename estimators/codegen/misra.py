@@ -1,21 +1,21 @@
 """MISRA C:2012 findings on the generated C by cppcheck's MISRA add-on (``--addon=misra``).
 
 cppcheck's value-flow pass grows faster than a function's length (the tyre step's kernel of
-2 700 statements: 30 s): on the KF library's straight-line kernels (two functions of 8 000-9 000
+2700 statements: 30 s): on the KF library's straight-line kernels (two functions of 8 000-9 000
 one-line statements each) it does not finish in 15 minutes, while the add-on's rules look at one
 statement at a time. So each straight-line run of one-line assignments (the emitted kernels:
 :mod:`~wheelload.estimators.kernels.c_emitter`, CasADi's generator in the MHE) is analysed once
-per *statement shape*: a copy of the file keeps the first statement of each shape and blanks the others (the line numbers stay), cppcheck
-analyses that copy, and a finding on a kept statement is counted on every statement of its
-shape. The shape of a statement is its text with the digits of the names taken away (``w12``,
-``x_3``), array indices set to 0, and each number other than ``0`` and ``1`` replaced by ``2``
-of its kind (integer, floating, with its suffix), so two statements of one shape have the same
-tokens, operators, essential types and literal zeros and ones: the add-on's rules, all of which
-look at the tokens, the types and those literals, give them the same findings. Everything else
-(declarations, the templated code, the headers) is analysed as written. One cppcheck run with
-every translation unit of a folder together (``--max-configs=1``: the generated code has one
-configuration) so the whole-program rules (unused macros and types, identifiers across files,
-external linkage) see them all.
+per *statement shape*: a copy of the file keeps the first statement of each shape and blanks the
+others (the line numbers stay), cppcheck analyses that copy, and a finding on a kept statement
+is counted on every statement of its shape. The shape of a statement is its text with the digits
+of the names taken away (``w12``, ``x_3``), array indices set to 0, and each number other than
+``0`` and ``1`` replaced by ``2`` of its kind (integer, floating, with its suffix), so two
+statements of one shape have the same tokens, operators, essential types and literal zeros and
+ones: the add-on's rules, all of which look at the tokens, the types and those literals, give
+them the same findings. Everything else (declarations, the templated code, the headers) is
+analysed as written. One cppcheck run with every translation unit of a folder together
+(``--max-configs=1``: the generated code has one configuration) so the whole-program rules
+(unused macros and types, identifiers across files, external linkage) see them all.
 
 Each finding is classed by its rule's category (:data:`CATEGORIES`, the MISRA C:2012
 guidelines with amendments 1 and 2): mandatory and required rules count as *required*, the

@@ -182,11 +182,12 @@ const char *fmi3GetVersion(void)
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[])
 {
+    instance_t *const self = (instance_t *)instance;
     (void)nCategories;
     (void)categories;
-    ((instance_t *)instance)->logging = 0;
+    self->logging = 0;
     if (loggingOn) {
-        ((instance_t *)instance)->logging = 1;
+        self->logging = 1;
     }
     return fmi3OK;
 }
