@@ -29,6 +29,12 @@ from importlib import resources
 from importlib.metadata import version
 from pathlib import Path
 
+from wheelload.estimators.codegen.deviations import (
+    FMU_DEVIATIONS,
+    LIBRARY_DEVIATIONS,
+    RECORD_NAME,
+    deviation_record,
+)
 from wheelload.estimators.codegen.fmu_variables import (
     OUTPUT_GROUPS,
     OUTPUTS,
@@ -103,6 +109,8 @@ def generate_fmu(
     files[wrapper] = wrapper_source(variables, options, token, vehicle_path.name).encode()
     sources = (library.source.name, library.tyre[1].name, wrapper)
     files["buildDescription.xml"] = build_description(prefix, sources).encode()
+    deviations = (*LIBRARY_DEVIATIONS, *FMU_DEVIATIONS)
+    files[RECORD_NAME] = deviation_record([d.for_prefix(prefix) for d in deviations]).encode()
     description = model_description(
         variables, model_identifier=prefix, token=token, interval=options.sample_interval,
         description=f"wheelload tyre-forces: F_z, F_x, F_y per wheel with sigma and status "
@@ -128,6 +136,11 @@ def _token(files: dict[str, bytes]) -> str:
     return "{" + digest.hexdigest()[:32] + "}"
 
 
+def _offset(first: int) -> str:
+    """``first + `` before an index, nothing for 0 (no ``0 + k``: MISRA C:2012 rule 2.2)."""
+    return f"{first} + " if first else ""
+
+
 def wrapper_source(variables, options: CodegenOptions, token: str, vehicle_name: str) -> str:
     """``PREFIX_fmu.c`` from ``templates/fmu.c``: the value-reference table of ``variables``."""
     rows = [f"    {{FMU_KIND_{v.kind.name}, {v.index}}}, /* {k}: {v.name} */"
@@ -143,14 +156,14 @@ def wrapper_source(variables, options: CodegenOptions, token: str, vehicle_name:
         interval=repr(float(options.sample_interval)),
         n_variables=str(len(variables)),
         n_outputs=str(len(OUTPUTS)),
-        kind_defines="\n".join(f"#define FMU_KIND_{kind.name} {kind.value}" for kind in Kind),
+        kind_defines="\n".join(f"#define FMU_KIND_{kind.name} {kind.value}u" for kind in Kind),
         variable_table="\n".join(rows),
         output_copy="\n".join(
-            f"        instance->outputs[{first[group]} + k] = (double){source}[k];"
+            f"        instance->outputs[{_offset(first[group])}k] = (double){source}[k];"
             for group, source in C_OUTPUTS.items()
         ),
         initial_copy="\n".join(
-            f"        instance->outputs[{first[group]} + k] = (double){source};"
+            f"        instance->outputs[{_offset(first[group])}k] = (double){source};"
             for group, source in C_INITIAL_OUTPUTS.items()
         ),
     )

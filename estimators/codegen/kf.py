@@ -32,7 +32,8 @@ time for the nominal interval.
 Files written to the output folder, for prefix ``wheelload_kf``:
 ``wheelload_kf.h``, ``wheelload_kf.c`` (the library: depends on libm only),
 ``wheelload_kf_example.c`` (CSV log in, CSV estimates out),
-``wheelload_kf_selftest.c`` (long-run check and timing) and a ``Makefile``.
+``wheelload_kf_selftest.c`` (long-run check and timing), a ``Makefile`` and the MISRA
+C:2012 deviation record ``MISRA_DEVIATIONS.md`` (:mod:`~wheelload.estimators.codegen.deviations`).
 
 Example
 -------
@@ -56,6 +57,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.codegen.deviations import KF_DEVIATIONS, write_deviation_record
 from wheelload.estimators.codegen.runtime_parameters import (
     check_defaults,
     derivation_substitutions,
@@ -394,7 +396,8 @@ def _batch_rows(kernel: ca.Function, prefix: str) -> str:
     for name, (array, size, const) in rows.items():
         qualifier = "const " if const else ""
         for k in range(size):
-            lines.append(f"    {qualifier}{prefix}_real *restrict {name}_{k} = {array} + {k} * n;")
+            offset = ("", " + n")[k] if k < 2 else f" + {k} * n"  # no x + 0 * n (rule 2.2)
+            lines.append(f"    {qualifier}{prefix}_real *restrict {name}_{k} = {array}{offset};")
     return "\n".join(lines)
 
 
@@ -542,6 +545,7 @@ def generate(
     tyre = {"tyre.h": out_dir / f"{prefix}_tyre.h", "tyre.c": out_dir / f"{prefix}_tyre.c"}
     for template, target in {**targets, **(tyre if options.tyre_forces else {})}.items():
         write_text(target, _template(template).substitute(values), replace=True)
+    write_deviation_record(out_dir, KF_DEVIATIONS, prefix)
     return GeneratedLibrary(
         *targets.values(), kernel=kernel,
         tyre=tuple(tyre.values()) if options.tyre_forces else None,

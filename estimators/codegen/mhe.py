@@ -89,6 +89,11 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from wheelload.estimators.codegen.deviations import (
+    LIBRARY_DEVIATIONS,
+    MHE_DEVIATIONS,
+    write_deviation_record,
+)
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
 from wheelload.estimators.codegen.mhe_workspace import make_reentrant
 from wheelload.estimators.kernels.c_emitter import Precision, emit_statements
@@ -238,6 +243,8 @@ def _generate_into(
     (folder / "wheelload_mhe.c").write_text(source)
     (folder / EXAMPLE).write_text((TEMPLATES / "mhe_main.c").read_text())
     (folder / "Makefile").write_text(_makefile(folder))
+    filter_deviations = [d.for_prefix(FILTER_PREFIX) for d in LIBRARY_DEVIATIONS] if linked else []
+    write_deviation_record(folder, [*filter_deviations, *MHE_DEVIATIONS], "wheelload_mhe")
 
 
 def _undated(path: Path) -> None:

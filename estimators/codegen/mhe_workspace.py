@@ -139,13 +139,15 @@ def reentrant_sources(workspace: Workspace) -> tuple[str, str]:
         if o.size is not None:
             members.append(f"    {o.type} {o.name}[{o.size}];")
             if o.values is None:
-                assignments.append(f"    memset(w->{o.name}, 0, sizeof w->{o.name});")
+                assignments.append(f"    (void)memset(w->{o.name}, 0, sizeof w->{o.name});")
                 continue
             if PREFIX in o.values:
                 raise WorkspaceFormatError(f"OSQP workspace: array {o.name} points at objects")
             values = " ".join(o.values.split())
             tables.append(f"static const {o.type} initial_{o.name}[{o.size}] = {{{values}}};")
-            assignments.append(f"    memcpy(w->{o.name}, initial_{o.name}, sizeof w->{o.name});")
+            assignments.append(
+                f"    (void)memcpy(w->{o.name}, initial_{o.name}, sizeof w->{o.name});"
+            )
         else:
             if o.values is None:
                 raise WorkspaceFormatError(f"OSQP workspace: struct {o.name} has no initialiser")

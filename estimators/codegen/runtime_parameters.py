@@ -180,12 +180,13 @@ def domain_code(fields: tuple[str, ...], runtime: bool, precision: Precision, pr
         )
         n = function.nnz_out(0)
         lines.append(
-            f"\n/* 1 if the relations between fields hold (parameter_relations of\n"
+            f"\n/* true if the relations between fields hold (parameter_relations of\n"
             f" * wheelload.estimators.codegen.runtime_parameters: each static load within\n"
-            f" * +-load_limit m g). */\nstatic int relations_hold(const {prefix}_params *params)"
-            f"\n{{\n    {real} margin[{n}];\n    int k, hold = 1;\n"
+            f" * +-load_limit m g). */\nstatic bool relations_hold(const {prefix}_params *params)"
+            f"\n{{\n    {real} margin[{n}];\n    int k;\n    bool hold = true;\n"
             + "\n".join(f"    {line}" for line in body.splitlines())
-            + f"\n    for (k = 0; k < {n}; ++k) {{\n        hold &= margin[k] <= ZERO;\n    }}"
+            + f"\n    for (k = 0; k < {n}; ++k) {{"
+            "\n        hold = hold && (margin[k] <= ZERO);\n    }"
             "\n    return hold;\n}"
         )
     return "\n".join(lines)
@@ -293,6 +294,7 @@ def derivation_substitutions(
         feeds=table,
         derived_index=", ".join(str(PARAMETERS.index(name)) for name in DERIVED),
         record_index=", ".join(str(PARAMETERS.index(name)) for name in record),
+        n_record=len(record),
         fixed=f"{FIXED_BIT}u",
     )
     defaults = [f"    {bits}u, /* derived: {' '.join(follow) or 'none'} follow their sources */"]
@@ -349,8 +351,8 @@ _RUNTIME_SET_PARAM = """/* Per field: bit k if it is a source of derived paramet
 static const uint32_t param_feeds[{PREFIX}_N_PARAMS] = {{{feeds}}};
 /* Field index of each derived parameter and of each record entry. */
 static const int derived_index[{PREFIX}_N_DERIVED] = {{{derived_index}}};
-#define N_RECORD ((int)(sizeof record_index / sizeof record_index[0]))
-static const int record_index[] = {{{record_index}}};
+#define N_RECORD {n_record}
+static const int record_index[N_RECORD] = {{{record_index}}};
 
 /* The derived parameters of params (CasADi Function derived_parameters of
  * wheelload.models.parameters, the values the Python parameters take). */
@@ -375,8 +377,8 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
     if (!param_in_domain(index, value)) {{
         return {PREFIX}_SET_OUT_OF_RANGE;
     }}
-    if (param_feeds[index] & FIXED_BIT) {{ /* its own value only: nothing moves */
-        const int same = value == *{prefix}_param_field(params, index);
+    if ((param_feeds[index] & FIXED_BIT) != 0u) {{ /* its own value only: nothing moves */
+        const bool same = value == *{prefix}_param_field(params, index);
         return same ? {PREFIX}_SET_OK : {PREFIX}_SET_FIXED;
     }}
     changed = *params;
@@ -384,13 +386,13 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
     recompute = param_feeds[index] & changed.derived;
     for (k = 0; k < {PREFIX}_N_DERIVED; ++k) {{
         if (derived_index[k] == index) {{
-            changed.derived &= ~(1u << k); /* set itself: pinned */
+            changed.derived &= ~(1u << (uint32_t)k); /* set itself: pinned */
         }}
     }}
     if (recompute != 0u) {{
         {prefix}_derive(&changed, derived);
         for (k = 0; k < {PREFIX}_N_DERIVED; ++k) {{
-            if ((recompute & (1u << k)) != 0u) {{
+            if ((recompute & (1u << (uint32_t)k)) != 0u) {{
                 if (!isfinite(derived[k])) {{
                     return {PREFIX}_SET_NOT_FINITE;
                 }}
@@ -405,9 +407,10 @@ int {prefix}_set_param({prefix}_params *params, int index, {real} value)
      * written directly before stays unrecorded, and init refuses it). */
     for (j = 0; j < N_RECORD; ++j) {{
         const int field = record_index[j];
-        int derived_here = 0;
+        bool derived_here = false;
         for (k = 0; k < {PREFIX}_N_DERIVED; ++k) {{
-            derived_here |= derived_index[k] == field && (recompute & (1u << k)) != 0u;
+            const bool source_recomputed = (recompute & (1u << (uint32_t)k)) != 0u;
+            derived_here = derived_here || ((derived_index[k] == field) && source_recomputed);
         }}
         if (field == index || derived_here) {{
             changed.record[j] = *{prefix}_param_field(&changed, field);

@@ -4,9 +4,11 @@ Used by ``wheelload bench speed`` to put the single step's time beside
 
 - its dependency-chain bound (:func:`~wheelload.estimators.kernels.c_emitter.critical_path`,
   cycles) at the clock the core actually runs, measured here by a chain of
-  dependent integer additions (one cycle each on every x86-64 core): the
-  ``cpu MHz`` of ``/proc/cpuinfo`` is the nominal clock, and a boosting
-  core runs faster;
+  dependent 64-bit register multiplies (``imul r64, r64``: :data:`IMUL_LATENCY` cycles
+  each on every Intel core since Nehalem and every AMD Zen; a multiply cannot be folded
+  at rename, as a chain of ``add $1`` is on Intel cores from Golden Cove on, which made
+  that chain report several times the true clock): the ``cpu MHz`` of ``/proc/cpuinfo``
+  is the nominal clock, and a boosting core runs faster;
 - a throughput bound from the compiled kernel's instructions
   (``objdump -d``): on AMD Zen 3/4, multiplies, FMAs and ``blendv`` share
   two pipes, additions, compares and ``min``/``max`` two others, a scalar
@@ -38,6 +40,12 @@ _MULTIPLY = re.compile(r"^v(mul|fn?madd|fn?msub|blendv)\w*s[sd]$|^vblendvp[sd]$"
 _ADD = re.compile(r"^v(add|sub|cmp\w*|max|min)s[sd]$")
 _DIVIDE = re.compile(r"^v(div|sqrt)s[sd]$")
 
+#: Latency of ``imul r64, r64`` [cycles] (Intel since Nehalem, AMD Zen 1-5; Agner Fog's
+#: instruction tables), the link of the clock's dependent chain.
+IMUL_LATENCY = 3
+#: Links of the chain per timed run.
+CLOCK_CHAIN = 1_000_000
+
 _CLOCK_SOURCE = r"""
 #define _POSIX_C_SOURCE 199309L
 #include <stdio.h>
@@ -51,32 +59,44 @@ static double seconds(void)
 int main(void)
 {
     double best = 1e9;
-    long x = 0;
+    long x = 3;
+    const long factor = 5;
     int r;
     for (r = 0; r < 300; ++r) {
         double start = seconds(), elapsed;
         long i;
-        for (i = 0; i < 2000; ++i) {
-            __asm__ volatile(".rept 500\n\tadd $1, %0\n\t.endr" : "+r"(x));
+        for (i = 0; i < CHAIN / 500; ++i) {
+            __asm__ volatile(".rept 500\n\timul %1, %0\n\t.endr" : "+r"(x) : "r"(factor));
         }
         elapsed = seconds() - start;
         best = elapsed < best ? elapsed : best;
     }
-    printf("%.1f\n", 1e6 / best * 1e-6);
+    printf("%.1f\n", (double)CHAIN * LATENCY / best * 1e-6);
     return x == 0;
 }
 """
 
 
 def measured_clock_mhz(folder: Path, compiler: str = "gcc") -> float | None:
-    """Clock the core runs at [MHz]: 1e6 dependent additions, fastest of 300 runs.
+    """Clock the core runs at [MHz]: :data:`CLOCK_CHAIN` dependent multiplies of
+    :data:`IMUL_LATENCY` cycles each, fastest of 300 runs.
 
     None off x86-64 or when the helper cannot be built.
     """
     source, binary = folder / "clock.c", folder / "clock"
     source.write_text(_CLOCK_SOURCE)
     built = subprocess.run(
-        [compiler, "-O2", "-o", str(binary), str(source)], capture_output=True, text=True
+        [
+            compiler,
+            "-O2",
+            f"-DCHAIN={CLOCK_CHAIN}L",
+            f"-DLATENCY={IMUL_LATENCY}.0",
+            "-o",
+            str(binary),
+            str(source),
+        ],
+        capture_output=True,
+        text=True,
     )
     if built.returncode != 0:
         return None

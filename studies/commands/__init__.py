@@ -64,6 +64,10 @@ CATALOG: dict[str, Command] = {
         module=f"{_PACKAGE}.codegen",
         summary="generate the two-stage KF (default) or the MHE as C",
     ),
+    "misra": Command(
+        module=f"{_PACKAGE}.misra.command",
+        summary="MISRA C:2012 findings on generated C (cppcheck), per file and rule",
+    ),
     "weigh": Command(
         module=f"{_PACKAGE}.weigh",
         summary="vehicle mass and CG position from logs at rest on one or more slopes",

@@ -33,7 +33,7 @@
 
 #define INSTANTIATION_TOKEN "${token}"
 #define INTERVAL ${interval}
-#define N_VARIABLES ${n_variables}
+#define N_VARIABLES ${n_variables}u
 #define N_OUTPUTS ${n_outputs}
 
 /* What a value reference addresses (wheelload.estimators.codegen.fmu_variables.Kind). */
@@ -141,6 +141,8 @@ static int check_params(const ${prefix}_params *params, char *why, size_t size)
     } else if (status < 0) {
         (void)snprintf(why, size, "'%s' was written without ${prefix}_set_param",
                        ${prefix}_param_names[-status - 1]);
+    } else {
+        /* accepted: no reason */
     }
     return status;
 }
@@ -180,9 +182,13 @@ const char *fmi3GetVersion(void)
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[])
 {
+    instance_t *const self = (instance_t *)instance;
     (void)nCategories;
     (void)categories;
-    ((instance_t *)instance)->logging = loggingOn ? 1 : 0;
+    self->logging = 0;
+    if (loggingOn) {
+        self->logging = 1;
+    }
     return fmi3OK;
 }
 
@@ -241,7 +247,10 @@ fmi3Instance fmi3InstantiateCoSimulation(
     }
     instance->environment = instanceEnvironment;
     instance->log = logMessage;
-    instance->logging = loggingOn ? 1 : 0;
+    instance->logging = 0;
+    if (loggingOn) {
+        instance->logging = 1;
+    }
     instance->mode = INSTANTIATED;
     instance->params = ${prefix}_default_params;
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
@@ -314,7 +323,7 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
     (void)${prefix}_rate_filter_reset(&self->rates, (${prefix}_real)INTERVAL);
     self->tyre_params = ${prefix}_tyre_default_params;
     ${prefix}_tyre_reset(&self->tyre);
-    self->samples = 0ul;
+    self->samples = 0UL;
     initial_outputs(self);
     self->mode = STEP;
     return fmi3OK;
@@ -446,7 +455,7 @@ fmi3Status fmi3SetUInt32(fmi3Instance instance, const fmi3ValueReference valueRe
     (void)valueReferences;
     (void)values;
     (void)nValues;
-    if (nValueReferences == 0) {
+    if (nValueReferences == 0u) {
         return fmi3OK;
     }
     return refuse((instance_t *)instance, "fmi3SetUInt32", "the UInt32 variables are outputs");
@@ -455,7 +464,7 @@ fmi3Status fmi3SetUInt32(fmi3Instance instance, const fmi3ValueReference valueRe
 /* A type of which this FMU has no variable: a call with any value reference is refused. */
 static fmi3Status no_variable(fmi3Instance instance, const char *call, size_t n)
 {
-    return n == 0 ? fmi3OK : refuse((instance_t *)instance, call, "no variable of this type");
+    return (n == 0u) ? fmi3OK : refuse((instance_t *)instance, call, "no variable of this type");
 }
 
 #define NO_VARIABLES(type)                                                                     \

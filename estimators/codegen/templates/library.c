@@ -3,6 +3,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdbool.h>
 
 #define ZERO ${PREFIX}_REAL_C(0.0)
 #define ONE ${PREFIX}_REAL_C(1.0)
@@ -80,14 +81,15 @@ static void ${prefix}_kernel(const ${prefix}_real x[4], const ${prefix}_real P[1
 ${kernel_body}
 }
 
-/* 1 if every value is finite: one test per value, no early exit (no branch). */
-static int all_finite(const ${prefix}_real *values, int n)
+/* true if every value is finite: one test per value, no early exit (no branch). */
+static bool all_finite(const ${prefix}_real *values, int n)
 {
-    int k, finite = 1;
+    int k;
+    unsigned int finite = 1u;
     for (k = 0; k < n; ++k) {
-        finite &= FINITE(values[k]);
+        finite &= FINITE(values[k]) ? 1u : 0u;
     }
-    return finite;
+    return finite == 1u;
 }
 
 ${derivation_code}
@@ -132,12 +134,12 @@ uint32_t ${prefix}_step(${prefix}_state *state, const ${prefix}_params *params,
     ${prefix}_real fault_statistic[${PREFIX}_N_FAULT_CHANNELS], fault[${PREFIX}_N_FAULT_CHANNELS];
     ${prefix}_real mass_properties[8];
     uint32_t flags = 0u, faults = 0u;
-    int accepted = 0;
+    bool accepted = false;
     int k;
 ${unused_params}
 ${input_copy}
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
-        const int finite = FINITE(u[k]);
+        const bool finite = FINITE(u[k]);
         u_valid[k] = finite ? ONE : ZERO;
         u[k] = finite ? u[k] : ZERO;
     }
@@ -145,12 +147,12 @@ ${input_copy}
         ${prefix}_kernel(state->x, state->P, state->monitor, u, u_valid, dt${kernel_params_call},
                          x_next, P_next, m_next, std, residual, used, status, fault_statistic,
                          fault, mass_properties, mass_properties + 4);
-        accepted = all_finite(x_next, 4) & all_finite(P_next, 10) & all_finite(std, 4)
-                   & all_finite(residual, 3) & all_finite(m_next, ${PREFIX}_N_MONITOR)
-                   & all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS)
-                   & all_finite(mass_properties, 8);
+        accepted = all_finite(x_next, 4) && all_finite(P_next, 10) && all_finite(std, 4)
+                   && all_finite(residual, 3) && all_finite(m_next, ${PREFIX}_N_MONITOR)
+                   && all_finite(fault_statistic, ${PREFIX}_N_FAULT_CHANNELS)
+                   && all_finite(mass_properties, 8);
         for (k = 0; k < 4; ++k) {
-            accepted &= P_next[diagonal[k]] > ZERO;
+            accepted = accepted && (P_next[diagonal[k]] > ZERO);
         }
     }
     if (accepted) {
@@ -174,7 +176,7 @@ ${input_copy}
         }
         state->interval_refusals += status[${short_index}] > HALF ? 1u : 0u;
         for (k = 0; k < ${PREFIX}_N_FAULT_CHANNELS; ++k) {
-            faults |= fault[k] > HALF ? 1u << k : 0u;
+            faults |= (fault[k] > HALF) ? (1u << (uint32_t)k) : 0u;
         }
     } else {
         for (k = 0; k < 4; ++k) {
@@ -259,7 +261,7 @@ static void rate_filter_gain(${prefix}_real T, ${prefix}_real gain[2])
         const ${prefix}_real m00 = a00 + a01 * T + Q00, m01 = a01 + Q01;
         const ${prefix}_real m10 = P10 + P11 * T + Q01, m11 = P11 + Q11;
         const ${prefix}_real g0 = m00 / (m00 + r), g1 = m10 / (m00 + r);
-        const int same = ${fabs}(g0 - K0) <= ${PREFIX}_REAL_C(1e-13) * ${fabs}(K0)
+        const bool same = ${fabs}(g0 - K0) <= ${PREFIX}_REAL_C(1e-13) * ${fabs}(K0)
                          && ${fabs}(g1 - K1) <= ${PREFIX}_REAL_C(1e-13) * ${fabs}(K1);
         P00 = m00 - g0 * m00;
         P01 = m01 - g0 * m01;
@@ -278,7 +280,7 @@ static void rate_filter_gain(${prefix}_real T, ${prefix}_real gain[2])
 int ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter, ${prefix}_real interval)
 {
     int axis;
-    const int ok = FINITE(interval) && interval > ZERO;
+    const bool ok = FINITE(interval) && (interval > ZERO);
     for (axis = 0; axis < 3; ++axis) {
         filter->w[axis] = ${PREFIX}_REAL_C(0.0);
         filter->w_dot[axis] = ${PREFIX}_REAL_C(0.0);
@@ -290,7 +292,7 @@ int ${prefix}_rate_filter_reset(${prefix}_rate_filter *filter, ${prefix}_real in
     if (ok) {
         rate_filter_gain(interval, filter->gain);
     }
-    return !ok;
+    return ok ? 0 : 1;
 }
 
 void ${prefix}_rate_filter_step(${prefix}_rate_filter *filter, ${prefix}_input *input)

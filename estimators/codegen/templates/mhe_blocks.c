@@ -7,7 +7,7 @@
  *   solve: the end of the driver's "QP data finite" branch (loaded and warm-started): solve,
  *          or the sample is not handed to OSQP. */
 @@ reset_filter
-    memcpy(mhe->FALLBACK, X0, sizeof X0);
+    (void)memcpy(mhe->FALLBACK, X0, sizeof X0);
     kf_reset(mhe);
     wheelload_mhe_workspace_init(&mhe->osqp);
     osqp_update_rho(&mhe->osqp.solver, (OSQPFloat)RHO0);
@@ -19,7 +19,7 @@
     }
     kf_covariance(mhe, previous_P);
     if (!(dt > 0.0 && dt < MAX_INTERVAL) || dt * INTERVAL_BAND < DT) {
-        memcpy(out->loads, mhe->HIST[N - 1], sizeof out->loads);
+        (void)memcpy(out->loads, mhe->HIST[N - 1], sizeof out->loads);
         kf_held(mhe, u, dt, mhe->HIST[N - 1], out->std, out->residual);
         out->flags = dt * INTERVAL_BAND < DT && dt > 0.0 ? 255u | INTERVAL_SHORT : 255u;
         return 0;

@@ -9,8 +9,8 @@ static void kf_covariance(const wheelload_mhe_state *mhe, double *P) {
 static void kf_step(wheelload_mhe_state *mhe, const double *u, double dt, double *x, double *std) {
     (void)u;
     (void)dt;
-    memcpy(x, mhe->HIST[N - 1], sizeof(double) * 4);
-    memset(std, 0, sizeof(double) * 4);
+    (void)memcpy(x, mhe->HIST[N - 1], sizeof(double) * 4);
+    (void)memset(std, 0, sizeof(double) * 4);
 }
 
 static void kf_held(const wheelload_mhe_state *mhe, const double *u, double dt, const double *held,
@@ -19,6 +19,6 @@ static void kf_held(const wheelload_mhe_state *mhe, const double *u, double dt, 
     (void)u;
     (void)dt;
     (void)held;
-    memset(std, 0, sizeof(double) * 4);
-    memset(residual, 0, sizeof(double) * 3);
+    (void)memset(std, 0, sizeof(double) * 4);
+    (void)memset(residual, 0, sizeof(double) * 3);
 }

@@ -6,28 +6,28 @@
 
 void wheelload_mhe_reset(wheelload_mhe_state *mhe) {
     mhe->K = 0;
-    memset(mhe->XW, 0, sizeof mhe->XW);
-    memset(mhe->YW, 0, sizeof mhe->YW);
-    memset(mhe->HB, 0, sizeof mhe->HB);
-    memset(mhe->G, 0, sizeof mhe->G);
-    memset(mhe->LINK, 0, sizeof mhe->LINK);
-    memset(mhe->DRIFT, 0, sizeof mhe->DRIFT);
-    memset(mhe->XP, 0, sizeof mhe->XP);
-    memset(mhe->LO, 0, sizeof mhe->LO);
-    memset(mhe->HI, 0, sizeof mhe->HI);
-    memset(mhe->BW, 0, sizeof mhe->BW);
-    memset(mhe->ARR, 0, sizeof mhe->ARR);
+    (void)memset(mhe->XW, 0, sizeof mhe->XW);
+    (void)memset(mhe->YW, 0, sizeof mhe->YW);
+    (void)memset(mhe->HB, 0, sizeof mhe->HB);
+    (void)memset(mhe->G, 0, sizeof mhe->G);
+    (void)memset(mhe->LINK, 0, sizeof mhe->LINK);
+    (void)memset(mhe->DRIFT, 0, sizeof mhe->DRIFT);
+    (void)memset(mhe->XP, 0, sizeof mhe->XP);
+    (void)memset(mhe->LO, 0, sizeof mhe->LO);
+    (void)memset(mhe->HI, 0, sizeof mhe->HI);
+    (void)memset(mhe->BW, 0, sizeof mhe->BW);
+    (void)memset(mhe->ARR, 0, sizeof mhe->ARR);
     for (int j = 0; j < N; ++j) {
         for (int a = 0; a < W; ++a) mhe->HB[j][a * W + a] = 1.0; /* inert samples before the log */
-        memcpy(mhe->HIST[j], X0, sizeof X0);
-        memcpy(mhe->KFX[j], X0, sizeof X0);
+        (void)memcpy(mhe->HIST[j], X0, sizeof X0);
+        (void)memcpy(mhe->KFX[j], X0, sizeof X0);
     }
 @@ reset_filter
 }
 
 static void shift(double *rows, const double *value, int width) {
-    memmove(rows, rows + width, sizeof(double) * (size_t)(width * (N - 1)));
-    memcpy(rows + width * (N - 1), value, sizeof(double) * (size_t)width);
+    (void)memmove(rows, rows + width, sizeof(double) * (size_t)(width * (N - 1)));
+    (void)memcpy(rows + width * (N - 1), value, sizeof(double) * (size_t)width);
 }
 
 /* Upper-triangular Hessian values in OSQP's CSC order; 1 if they differ from the loaded. */
@@ -67,7 +67,7 @@ static int checked(const wheelload_mhe_state *mhe, int j, double *loads) {
 int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
                       wheelload_mhe_output *out) {
     double u0[N_INPUTS], valid[N_INPUTS], cost = COST, previous_P[16];
-    memset(out, 0, sizeof *out);
+    (void)memset(out, 0, sizeof *out);
 @@ interval_and_inputs
     double std[4];
     kf_step(mhe, u, dt, mhe->FALLBACK, std);
@@ -93,9 +93,9 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
     shift(mhe->KFX[0], mhe->FALLBACK, 4);
     shift(mhe->ARR[0], arrival, 16);
     int j0 = mhe->K < N - 1 ? (int)(N - 1 - mhe->K) : 0;
-    memmove(mhe->XW, mhe->XW + W, sizeof(OSQPFloat) * (NX - W));
+    (void)memmove(mhe->XW, mhe->XW + W, sizeof(OSQPFloat) * (NX - W));
 #if HAS_Y
-    memmove(mhe->YW, mhe->YW + W, sizeof(OSQPFloat) * (NY - W));
+    (void)memmove(mhe->YW, mhe->YW + W, sizeof(OSQPFloat) * (NY - W));
 #endif
     int data = 0;
     for (int j = j0; j < N; ++j)
@@ -175,9 +175,9 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
 #endif
 @@ solve
         if (status == 1) {
-            memcpy(mhe->XW, mhe->osqp.solver.solution->x, sizeof mhe->XW);
+            (void)memcpy(mhe->XW, mhe->osqp.solver.solution->x, sizeof mhe->XW);
 #if HAS_Y
-            memcpy(mhe->YW, mhe->osqp.solver.solution->y, sizeof mhe->YW);
+            (void)memcpy(mhe->YW, mhe->osqp.solver.solution->y, sizeof mhe->YW);
 #endif
         }
     }
@@ -188,7 +188,7 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
     ++mhe->K;
     /* the output: the window's estimate of sample k - LAG */
     if (LAG == 0 || failed) {
-        memcpy(out->loads, x, sizeof x);
+        (void)memcpy(out->loads, x, sizeof x);
     } else if (!checked(mhe, N - 1 - LAG, out->loads)) {
         fallback_loads(mhe->KFX[N - 1 - LAG], mhe->HIST[N - 1], out->loads);
     }
@@ -196,7 +196,7 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
         out->residual[r] = mhe->BW[N - 1 - LAG][r];
         for (int c = 0; c < 4; ++c) out->residual[r] -= A_MATRIX[r * 4 + c] * out->loads[c];
     }
-    memcpy(out->std, std, sizeof std);
+    (void)memcpy(out->std, std, sizeof std);
     out->fallback = failed;
     return status;
 }

@@ -6,7 +6,7 @@ static void arrival_weight(int first, const double *P, double dt, double *weight
         return;
     }
     if (!KALMAN_ARRIVAL) {
-        memcpy(weight, ARRIVAL_STEADY, sizeof(double) * 16);
+        (void)memcpy(weight, ARRIVAL_STEADY, sizeof(double) * 16);
         return;
     }
     double a[16], inverse[16];
@@ -34,9 +34,9 @@ void wheelload_mhe_run(wheelload_mhe_state *mhe, int n, const double *u, const d
         clock_gettime(CLOCK_MONOTONIC, &stop);
         seconds[k] = (double)(stop.tv_sec - start.tv_sec)
                      + 1e-9 * (double)(stop.tv_nsec - start.tv_nsec);
-        memcpy(loads + 4 * k, out.loads, sizeof out.loads);
-        memcpy(std + 4 * k, out.std, sizeof out.std);
-        memcpy(residual + 3 * k, out.residual, sizeof out.residual);
+        (void)memcpy(loads + 4 * k, out.loads, sizeof out.loads);
+        (void)memcpy(std + 4 * k, out.std, sizeof out.std);
+        (void)memcpy(residual + 3 * k, out.residual, sizeof out.residual);
         for (int i = 0; i < WHEELLOAD_MHE_N_BIAS; ++i)
             bias[WHEELLOAD_MHE_N_BIAS * k + i] = out.bias[i];
         iterations[k] = out.iterations;

@@ -22,17 +22,17 @@ typedef wheelload_mhe_sample sample_t;
 
 void wheelload_mhe_reset(wheelload_mhe_state *mhe) {
     mhe->K = 0;
-    memset(mhe->S, 0, sizeof mhe->S);
-    memset(mhe->ARR, 0, sizeof mhe->ARR);
-    memset(mhe->XW, 0, sizeof mhe->XW);
-    memset(mhe->YW, 0, sizeof mhe->YW);
-    memset(mhe->BETA, 0, sizeof mhe->BETA);
-    memset(mhe->INFO, 0, sizeof mhe->INFO);
+    (void)memset(mhe->S, 0, sizeof mhe->S);
+    (void)memset(mhe->ARR, 0, sizeof mhe->ARR);
+    (void)memset(mhe->XW, 0, sizeof mhe->XW);
+    (void)memset(mhe->YW, 0, sizeof mhe->YW);
+    (void)memset(mhe->BETA, 0, sizeof mhe->BETA);
+    (void)memset(mhe->INFO, 0, sizeof mhe->INFO);
     for (int i = 0; i < NB; ++i) mhe->INFO[i * NK + i] = BETA_INFO0[i];
     for (int j = 0; j < N; ++j) {
-        memcpy(mhe->S[j].z, X0, sizeof X0);
-        memcpy(mhe->S[j].kfx, X0, sizeof X0);
-        memcpy(mhe->HIST[j], X0, sizeof X0);
+        (void)memcpy(mhe->S[j].z, X0, sizeof X0);
+        (void)memcpy(mhe->S[j].kfx, X0, sizeof X0);
+        (void)memcpy(mhe->HIST[j], X0, sizeof X0);
     }
 @@ reset_filter
 }
@@ -90,7 +90,7 @@ static void add_rows(double *H, int ld, double *g, const int *cols, int nc, cons
 /* The data rows of a sample over [loads (W), biases (NB)]: Ms (4 x NM), and for the soft
    constraint Mc (3 x NM), each scaled by the rows' square-root weights. */
 static void row_matrices(const sample_t *s, double *Ms, double *Mc) {
-    memset(Ms, 0, sizeof(double) * 4 * NM);
+    (void)memset(Ms, 0, sizeof(double) * 4 * NM);
     for (int i = 0; i < 4; ++i) {
 #if HARD
         Ms[i * NM] = -LOAD_SCALE * NULL_VECTOR[i];
@@ -115,7 +115,7 @@ static void row_matrices(const sample_t *s, double *Ms, double *Mc) {
         for (int c = 0; c < NM; ++c) Ms[i * NM + c] *= s->ls[i];
     }
 #if !HARD
-    memset(Mc, 0, sizeof(double) * 3 * NM);
+    (void)memset(Mc, 0, sizeof(double) * 3 * NM);
     for (int i = 0; i < 3; ++i) {
         for (int c = 0; c < 4; ++c) Mc[i * NM + c] = -A_MATRIX[i * 4 + c] * LOAD_SCALE;
 #if NB > ND
@@ -159,8 +159,8 @@ static void group(double *H, double *g, const double *M, int k, const double *r,
 /* The sample's data rows as (Hl, gl) over its block and the biases (physical units). */
 static void local_terms(sample_t *s) {
     double Ms[4 * NM], Mc[3 * NM], r[4];
-    memset(s->Hl, 0, sizeof s->Hl);
-    memset(s->gl, 0, sizeof s->gl);
+    (void)memset(s->Hl, 0, sizeof s->Hl);
+    (void)memset(s->gl, 0, sizeof s->gl);
     row_matrices(s, Ms, Mc);
     for (int i = 0; i < 4; ++i) r[i] = -s->ls[i] * (s->z[i] - s->xp[i]);
     group(s->Hl, s->gl, Ms, 4, r, SUSPENSION_ROBUST, KAPPA_S, MU_S, W);
@@ -174,10 +174,10 @@ static void local_terms(sample_t *s) {
    on loading). */
 static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
                      const double *arrival) {
-    memset(mhe->HV, 0, sizeof mhe->HV);
-    memset(mhe->GD, 0, sizeof mhe->GD);
+    (void)memset(mhe->HV, 0, sizeof mhe->HV);
+    (void)memset(mhe->GD, 0, sizeof mhe->GD);
     double X[4 * W];
-    memset(X, 0, sizeof X);
+    (void)memset(X, 0, sizeof X);
     for (int i = 0; i < 4; ++i) {
 #if HARD
         X[i] = LOAD_SCALE * NULL_VECTOR[i];
@@ -225,7 +225,7 @@ static void assemble(wheelload_mhe_state *mhe, int j0, const double *prior,
 #if NB > 0
     int cols[NB];
     double eye[NB * NB];
-    memset(eye, 0, sizeof eye);
+    (void)memset(eye, 0, sizeof eye);
     for (int a = 0; a < NB; ++a) {
         cols[a] = N * WIDTH + a;
         eye[a * NB + a] = 1.0;
@@ -269,14 +269,14 @@ static void leaving_information(wheelload_mhe_state *mhe, const OSQPFloat *v) {
         double rho = s->ls[i] * (s->z[i] - jd - x[i]);
         weights[i] = effective(SUSPENSION_ROBUST, CORNER_S, SCALE_S, rho);
     }
-    memcpy(M, Ms, sizeof Ms);
+    (void)memcpy(M, Ms, sizeof Ms);
 #if !HARD
     for (int i = 0; i < 3; ++i) {
         double r = s->b[i] - s->Ba[i * 2] * ba[0] - s->Ba[i * 2 + 1] * ba[1];
         for (int c = 0; c < 4; ++c) r -= A_MATRIX[i * 4 + c] * x[c];
         weights[4 + i] = effective(CONSTRAINT_ROBUST, CORNER_C, SCALE_C, s->lc[i] * r);
     }
-    memcpy(M + 4 * NM, Mc, sizeof Mc);
+    (void)memcpy(M + 4 * NM, Mc, sizeof Mc);
     k = 7;
 #else
     (void)ba;
@@ -346,13 +346,13 @@ static void prior_solution(wheelload_mhe_state *mhe, int j0, const double *prior
 int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
                       wheelload_mhe_output *out) {
     double u0[N_INPUTS], valid[N_INPUTS], cost = COST;
-    memset(out, 0, sizeof *out);
+    (void)memset(out, 0, sizeof *out);
     double previous_P[16];
 @@ interval_and_inputs
     double kf_std[4];
     kf_step(mhe, u, dt, mhe->FALLBACK, kf_std);
     sample_t *s = &mhe->S[0];
-    memmove(mhe->S, mhe->S + 1, sizeof(sample_t) * (N - 1));
+    (void)memmove(mhe->S, mhe->S + 1, sizeof(sample_t) * (N - 1));
     s = &mhe->S[N - 1];
     {
         double h[W * W], g[W], link, lo[W], hi[W], used[N_USED];
@@ -360,8 +360,8 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
                             s->xp, lo, hi, s->b, used);
         for (int i = 0; i < N_USED; ++i) out->flags |= used[i] < 0.5 ? UPDATE_FLAGS[i] : 0u;
         s->link = mhe->K == 0 ? 0.0 : link / (COST * LOAD_SCALE * LOAD_SCALE);
-        memcpy(s->lower, lo, sizeof lo);
-        memcpy(s->upper, hi, sizeof hi);
+        (void)memcpy(s->lower, lo, sizeof lo);
+        (void)memcpy(s->upper, hi, sizeof hi);
     }
     {
         double Jd[16], Ba[6];
@@ -371,14 +371,14 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 2; ++c) s->Ba[r * 2 + c] = Ba[c * 3 + r];
     }
-    memcpy(s->kfx, mhe->FALLBACK, sizeof mhe->FALLBACK);
+    (void)memcpy(s->kfx, mhe->FALLBACK, sizeof mhe->FALLBACK);
     local_terms(s);
-    memmove(mhe->ARR[0], mhe->ARR[1], sizeof(double) * 16 * (N - 1));
+    (void)memmove(mhe->ARR[0], mhe->ARR[1], sizeof(double) * 16 * (N - 1));
     arrival_weight(mhe->K == 0, previous_P, dt, mhe->ARR[N - 1]);
     int j0 = mhe->K < N - 1 ? (int)(N - 1 - mhe->K) : 0;
     if (mhe->K == 0) osqp_update_rho(&mhe->osqp.solver, (OSQPFloat)RHO0);
-    memmove(mhe->XW, mhe->XW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
-    memmove(mhe->YW, mhe->YW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
+    (void)memmove(mhe->XW, mhe->XW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
+    (void)memmove(mhe->YW, mhe->YW + WIDTH, sizeof(OSQPFloat) * (N - 1) * WIDTH);
     int data = 0;
     for (int j = j0; j < N; ++j) {
         for (int i = 0; i < 4; ++i) data |= mhe->S[j].ls[i] != 0.0;
@@ -414,8 +414,8 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
             osqp_warm_start(&mhe->osqp.solver, mhe->XW, mhe->YW);
 @@ solve
         if (status == 1) {
-            memcpy(mhe->XW, mhe->osqp.solver.solution->x, sizeof mhe->XW);
-            memcpy(mhe->YW, mhe->osqp.solver.solution->y, sizeof mhe->YW);
+            (void)memcpy(mhe->XW, mhe->osqp.solver.solution->x, sizeof mhe->XW);
+            (void)memcpy(mhe->YW, mhe->osqp.solver.solution->y, sizeof mhe->YW);
         }
     }
     double x[4];
@@ -433,7 +433,7 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
     {
         double walk = s->link > 0.0 ? 1.0 / (Q_DENSITY * s->link) : 0.0;
         double a[NB * NB], covariance[NB * NB];
-        memcpy(a, mhe->INFO, sizeof a);
+        (void)memcpy(a, mhe->INFO, sizeof a);
         invert(a, NB, covariance);
         for (int i = 0; i < NB; ++i) covariance[i * NB + i] += BETA_DENSITY[i] * walk;
         invert(covariance, NB, a);
@@ -442,13 +442,13 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
                 mhe->INFO[r * NK + c] = 0.5 * (a[r * NB + c] + a[c * NB + r]);
     }
 #endif
-    memmove(mhe->HIST[0], mhe->HIST[1], sizeof(double) * 4 * (N - 1));
-    memcpy(mhe->HIST[N - 1], x, sizeof x);
+    (void)memmove(mhe->HIST[0], mhe->HIST[1], sizeof(double) * 4 * (N - 1));
+    (void)memcpy(mhe->HIST[N - 1], x, sizeof x);
     ++mhe->K;
     /* the output: the window's estimate of sample k - LAG */
     const sample_t *lagged = &mhe->S[N - 1 - LAG];
     if (LAG == 0 || failed) {
-        memcpy(out->loads, x, sizeof x);
+        (void)memcpy(out->loads, x, sizeof x);
     } else if (!checked(mhe->XW + (N - 1 - LAG) * WIDTH, lagged, out->loads)) {
         fallback_loads(lagged->kfx, mhe->HIST[N - 1], out->loads);
     }
@@ -456,7 +456,7 @@ int wheelload_mhe_step(wheelload_mhe_state *mhe, const double *u, double dt,
         out->residual[r] = lagged->b[r];
         for (int c = 0; c < 4; ++c) out->residual[r] -= A_MATRIX[r * 4 + c] * out->loads[c];
     }
-    memcpy(out->std, kf_std, sizeof kf_std);
+    (void)memcpy(out->std, kf_std, sizeof kf_std);
 #if NB > 0
     int nr = 0;
 #if ND > 0

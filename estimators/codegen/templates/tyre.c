@@ -3,6 +3,8 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdbool.h>
+#include <stddef.h>
 
 #define ZERO ${PREFIX}_REAL_C(0.0)
 #define ONE ${PREFIX}_REAL_C(1.0)
@@ -29,7 +31,7 @@ ${prefix}_real *${prefix}_tyre_param_field(${prefix}_tyre_params *params, int in
     switch (index) {
 ${tyre_param_cases}
     default:
-        return 0;
+        return NULL;
     }
 }
 
@@ -41,7 +43,7 @@ int ${prefix}_tyre_set_param(${prefix}_tyre_params *params, int index, ${prefix}
 {
     ${prefix}_real *field = ${prefix}_tyre_param_field(params, index);
     ${prefix}_tyre_params defaults = ${prefix}_tyre_default_params;
-    if (field == 0) {
+    if (field == NULL) {
         return ${PREFIX}_SET_UNKNOWN;
     }
     if (!isfinite(value)) {
@@ -116,15 +118,16 @@ int ${prefix}_tyre_step(${prefix}_tyre_state *state, const ${prefix}_tyre_params
     ${prefix}_real w[${PREFIX}_TYRE_N_WHEEL], w_valid[${PREFIX}_TYRE_N_WHEEL];
     ${prefix}_real next[${PREFIX}_TYRE_N_CORE], fx[4], fx_std[4], fy[4], fy_std[4];
     ${prefix}_real slip[1] = {ZERO};
-    int k, accepted = 0, off_interval = 0;
+    bool accepted = false, off_interval = false;
+    int k;
 ${input_copy}
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
-        const int finite = FINITE(u[k]);
+        const bool finite = FINITE(u[k]);
         u_valid[k] = finite ? ONE : ZERO;
         u[k] = finite ? u[k] : ZERO;
     }
     for (k = 0; k < ${PREFIX}_TYRE_N_WHEEL; ++k) {
-        const int finite = FINITE(wheels[k]);
+        const bool finite = FINITE(wheels[k]);
         w_valid[k] = finite ? ONE : ZERO;
         w[k] = finite ? wheels[k] : ZERO;
     }
@@ -136,12 +139,13 @@ ${input_copy}
         ${prefix}_tyre_kernel(state->core, w, w_valid, u, u_valid, loads->loads,
                               loads->mass_properties, dt, params, next, fx, fx_std, fy,
                               fy_std, slip);
-        accepted = 1;
+        accepted = true;
         for (k = 0; k < ${PREFIX}_TYRE_N_CORE; ++k) {
-            accepted &= FINITE(next[k]);
+            accepted = accepted && FINITE(next[k]);
         }
         for (k = 0; k < 4; ++k) {
-            accepted &= FINITE(fx[k]) & FINITE(fx_std[k]) & FINITE(fy[k]) & FINITE(fy_std[k]);
+            accepted = accepted && FINITE(fx[k]) && FINITE(fx_std[k]) && FINITE(fy[k])
+                       && FINITE(fy_std[k]);
         }
     }
     if (accepted) {
@@ -161,8 +165,17 @@ ${input_copy}
         output->fy[k] = state->last[8 + k];
         output->fy_std[k] = state->last[12 + k];
     }
-    output->high_slip = accepted && slip[0] > HALF;
-    output->rejected = !accepted;
-    output->interval_refused = off_interval;
+    output->high_slip = 0;
+    output->rejected = 1;
+    output->interval_refused = 0;
+    if (accepted) {
+        output->rejected = 0;
+        if (slip[0] > HALF) {
+            output->high_slip = 1;
+        }
+    }
+    if (off_interval) {
+        output->interval_refused = 1;
+    }
     return output->rejected;
 }

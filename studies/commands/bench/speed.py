@@ -35,7 +35,11 @@ from wheelload.estimators.kernels.c_emitter import Precision, critical_path, flo
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.registry import build
 from wheelload.models import load_vehicle
-from wheelload.studies.bench.c_step_bounds import compiled_mix, measured_clock_mhz
+from wheelload.studies.bench.c_step_bounds import (
+    IMUL_LATENCY,
+    compiled_mix,
+    measured_clock_mhz,
+)
 from wheelload.studies.bench.step_timing import (
     batched_against_run,
     cpu_mhz,
@@ -210,7 +214,8 @@ def single_step_vs_bounds(vehicle_path: Path, folder: Path, args) -> None:
     chain = critical_path(kernel)
     mhz = clock or nominal
     print(f"Single C step (double) against its bounds; clock {_mhz(clock)} measured "
-          f"(dependent adds), {_mhz(nominal)} nominal (/proc/cpuinfo)")  # fmt: skip
+          f"(dependent imul, {IMUL_LATENCY} cycles each), {_mhz(nominal)} nominal "
+          "(/proc/cpuinfo)")  # fmt: skip
     in_ns = f" = {chain / mhz * 1e3:.0f} ns" if mhz else ""
     print(f"  kernel: {kernel.n_instructions()} CasADi instructions, {flop_count(kernel)} FLOPs; "
           f"chain bound {chain} cycles{in_ns}")  # fmt: skip

@@ -1,0 +1,1 @@
+"""``wheelload misra``: the MISRA C:2012 report of generated C (``command``)."""
