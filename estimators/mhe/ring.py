@@ -25,6 +25,7 @@ import time
 
 import numpy as np
 
+from wheelload.estimators.mhe.low_level import LowLevelSolver, report_arrays, window_loads
 from wheelload.estimators.mhe.qp import (
     OSQP_INFINITY,
     SOLVED,
@@ -36,6 +37,7 @@ from wheelload.estimators.mhe.qp import (
     prior_solution,
 )
 from wheelload.estimators.mhe.quiet import quiet_stdout
+from wheelload.estimators.mhe.soft_window import run_soft
 from wheelload.estimators.mhe.terms import LOAD_SCALE
 
 
@@ -59,61 +61,6 @@ class MirroredRing:
     def window(self) -> np.ndarray:
         """The last ``N`` rows, oldest first (a view)."""
         return self.data[self.head : self.head + self.N]
-
-
-class LowLevelSolver:
-    """The window's OSQP problem driven through the solver object, remembering what it holds.
-
-    Same update rules as :class:`wheelload.estimators.mhe.qp.MheWorkspace` (load only
-    what differs, bounds clamped to OSQP's infinity as its wrapper does), so the
-    solver sees the same data in the same order.
-    """
-
-    def __init__(self, workspace) -> None:
-        self.workspace = workspace
-        self.solver = workspace.low_level
-        self.Px = workspace.Px.copy()
-        self.bounds = (workspace.bounds[0].copy(), workspace.bounds[1].copy())
-        self.rho = workspace.rho
-        self.polish = workspace.polish
-
-    def solve(self, Px, q, lower, upper, x, y, rho) -> tuple[int, int, float]:
-        """Load, warm-start and solve; returns (status, iterations, rho after the solve)."""
-        solver = self.solver
-        if not (Px == self.Px).all():  # np.array_equal for equal shapes
-            solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
-            self.Px[:] = Px
-        if rho != self.rho:
-            self.workspace.solver.update_settings(rho=rho)
-        if lower is not None and not (
-            (lower == self.bounds[0]).all() and (upper == self.bounds[1]).all()
-        ):
-            low = np.maximum(lower, -OSQP_INFINITY)
-            high = np.minimum(upper, OSQP_INFINITY)
-            solver.update_data_vec(q=q, l=low, u=high)
-            self.bounds = (lower.copy(), upper.copy())
-        else:
-            solver.update_data_vec(q=q, l=None, u=None)
-        solver.warm_start(x, y if y.size else None)
-        with quiet_stdout(self.polish):
-            solver.solve()
-        # OSQP adapts rho during the solve; the window passes back what the solver holds,
-        # so it is read once, when the workspace is handed back (release)
-        info = solver.info
-        check_interrupted(info.status_val)
-        return int(info.status_val), int(info.iter), self.rho
-
-    def solution(self) -> tuple[np.ndarray, np.ndarray]:
-        """The last solution (OSQP's binding returns a new array on each access)."""
-        solution = self.solver.solution
-        return solution.x, solution.y
-
-    def release(self) -> None:
-        """Hand the remembered values back to the workspace (for :meth:`.qp.MheWorkspace.solve`)."""
-        self.rho = self.solver.get_settings().rho
-        self.workspace.Px = self.Px.copy()
-        self.workspace.bounds = self.bounds
-        self.workspace.rho = self.rho
 
 
 class HessianBuffers:
@@ -172,12 +119,6 @@ class HessianBuffers:
         return q.ravel()
 
 
-def report_arrays(n: int) -> tuple[np.ndarray, ...]:
-    """A log's per-sample outputs: loads (n, 4), status, iterations, fallback, solve time."""
-    int64 = np.int64
-    return np.empty((n, 4)), np.empty(n, int64), np.empty(n, int64), np.zeros(n, bool), np.empty(n)
-
-
 def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record=None):
     """The plain window over a log (see module docstring).
 
@@ -228,12 +169,14 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
                 nW = null @ arrivals[j]
                 rows_["nW"][j] = nW
                 rows_["nWn"][j, 0] = nW @ null
-    if hard and N > 1:  # the one-variable window: its own loop over whole-log arrays
+    if N > 1:  # each window its own loop over whole-log arrays (the arithmetic hoisted)
         whole = {
             name: np.concatenate([previous[name], parts[name]]).reshape(N + n, *shape)
             for name, (_, shape) in fields.items()
         }
-        return run_hard(mhe, state, whole, kf_loads, record)
+        if hard:
+            return run_hard(mhe, state, whole, kf_loads, record)
+        return run_soft(mhe, state, whole, kf_loads, record)
     for name in fields:
         rows[:, columns[name]] = parts[name]
         initial[:, columns[name]] = previous[name]
@@ -313,7 +256,7 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
         history.push(x)
         if lag and not failed:
             j = N - 1 - lag
-            x = _window_loads(mhe, x_sol, window, kfx.window, j, eps, x)
+            x = window_loads(mhe, x_sol, window, kfx.window, j, eps, x)
         loads[i] = x
         status[i], iterations[i], failed_all[i] = code, iters, failed
         solve_time[i] = time.perf_counter() - start
@@ -324,18 +267,9 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     final_held = history.window[-1].copy()
 
     def final(j: int) -> np.ndarray:
-        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
+        return window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
 
     return loads, status, iterations, failed_all, solve_time, final
-
-
-def _window_loads(mhe, x_sol, window, kfx, j, eps, held) -> np.ndarray:
-    """:meth:`MovingHorizonEstimator.window_loads` of the ring's window (``held``: the newest
-    estimate)."""
-    w = mhe.width
-    block = x_sol[j * w : (j + 1) * w]
-    x = mhe.check.checked(block, window["lower"][j], window["upper"][j], window["xp"][j])
-    return mhe.check.fallback(kfx[j], held) if x is None else x
 
 
 def _hard_loads(
@@ -506,7 +440,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
             x = mhe.check.fallback(kf_loads[i], history[N + i - 1])
         history[N + i] = x
         if lag and not failed:
-            x = _window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)
+            x = window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)
         loads[i] = x
         status[i], iterations[i], failed_all[i] = code, iters, failed
         solve_time[i] = perf_counter() - start
@@ -520,6 +454,6 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     final_held = np.array(history[N + last], dtype=float)
 
     def final(j: int) -> np.ndarray:
-        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
+        return window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
 
     return loads, status, iterations, failed_all, solve_time, final
