@@ -37,7 +37,7 @@ from wheelload.estimators.mhe.qp import (
     prior_solution,
 )
 from wheelload.estimators.mhe.quiet import quiet_stdout
-from wheelload.estimators.mhe.soft_window import run_soft
+from wheelload.estimators.mhe.soft_window import bad_windows, run_soft
 from wheelload.estimators.mhe.terms import LOAD_SCALE
 
 
@@ -328,6 +328,15 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     interior[:-1] = (G[:-1] + D[:-1]) - D[1:]
     interior[-1] = 0.0
     bounded = state.y.size > 0
+    finite = np.isfinite
+    bad = bad_windows(
+        ~(finite(H0) & finite(G)),
+        ~(finite(L) & finite(D)),
+        ~(finite(rows["nWn"]) & finite(rows["nW"]).all(axis=1) & finite(rows["xp"]).all(axis=1)),
+        (rows["lower"], rows["upper"]) if bounded else None,
+        N,
+    ).tolist()  # each window's Px and q: H, g of its samples, links and drifts after its
+    # oldest, the arrival weight's n^T W and n^T W n and the xp of its oldest
     if bounded:
         lower, upper = rows["lower"][:, 0], rows["upper"][:, 0]
         low_clamped = np.maximum(lower, -OSQP_INFINITY)
@@ -404,11 +413,14 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                 recorded = (low, high) if bounded else (None, None)
                 record.append(tuple(None if v is None else np.array(v)
                                     for v in (Px, q, *recorded, x_warm, y_warm)))  # fmt: skip
-            if not finite_data(Px, q, *((low, high) if bounded else ())):
+            refused = (
+                bad[i] if j0 == 0 else not finite_data(Px, q, *((low, high) if bounded else ()))
+            )
+            if refused:
                 code, iters = UNSOLVED, 0  # not handed to OSQP: the filter's estimate
             else:
                 # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
-                if Px[1] != held_Px[1] or not (Px == held_Px).all():
+                if Px[0] != held_Px[0] or not (Px == held_Px).all():
                     osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
                     Px, held_Px = held_Px, Px  # the buffer just loaded is now the one held
                 if rho != solver.rho:
@@ -421,7 +433,10 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
                 else:
                     osqp_solver.update_data_vec(q=q, l=None, u=None)
                 osqp_solver.warm_start(x_warm, y_warm if bounded else None)
-                with quiet_stdout(solver.polish):
+                if solver.polish:
+                    with quiet_stdout():
+                        osqp_solver.solve()
+                else:
                     osqp_solver.solve()
                 info = osqp_solver.info
                 code, iters = info.status_val, info.iter

@@ -93,25 +93,33 @@ def hessian_parts(rows: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return inner, oldest, newest
 
 
-def _bad_windows(rows: dict, N: int, bounded: bool) -> np.ndarray:
+def _not_finite(values: np.ndarray) -> np.ndarray:
+    """Per sample (first axis): whether any of its values is not finite."""
+    return ~np.isfinite(values.reshape(values.shape[0], -1)).all(axis=1)
+
+
+def bad_windows(
+    every: np.ndarray, after_oldest: np.ndarray, oldest: np.ndarray, bounds, N: int
+) -> np.ndarray:
     """Windows (arrival weight on the oldest sample) that
-    :func:`~wheelload.estimators.mhe.qp.finite_data` refuses, entry by entry: a value of their
-    Hessian or linear term not finite (each sample's :math:`H, g`, the links after the
-    oldest, the oldest's arrival weight), a bound NaN, or both infinities in one array."""
-    m = rows["link"].size
-    terms = ~(np.isfinite(rows["H"].reshape(m, -1)).all(axis=1)
-              & np.isfinite(rows["g"]).all(axis=1))  # fmt: skip
-    links = np.concatenate([[0], np.cumsum(~np.isfinite(rows["link"]), dtype=np.int64)])
-    arrival = ~np.isfinite(rows["arrival"].reshape(m, -1)).all(axis=1)
-    a = np.arange(1, m - N + 1)  # each window's oldest sample
-    bad = (_window_counts(terms, N) > 0) | (links[a + N] > links[a + 1]) | arrival[a]
-    if bounded:
-        for name in ("lower", "upper"):
-            values = rows[name]
-            bad |= _window_counts(np.isnan(values).any(axis=1), N) > 0
-            up = _window_counts(np.isposinf(values).any(axis=1), N) > 0
-            down = _window_counts(np.isneginf(values).any(axis=1), N) > 0
-            bad |= up & down
+    :func:`~wheelload.estimators.mhe.qp.finite_data` refuses, entry by entry.
+
+    A window ``[a, a + N)`` (``a = i + 1``) is refused when a sample's flag in
+    ``every`` is set, one after its oldest in ``after_oldest``, its oldest's in
+    ``oldest`` (per-sample flags: a value of the Hessian or linear term not finite),
+    or, ``bounds`` given (``(lower, upper)``, per sample), a bound is NaN or one array
+    holds both infinities.
+    """
+    m = every.size
+    after = np.concatenate([[0], np.cumsum(after_oldest, dtype=np.int64)])
+    a = np.arange(1, m - N + 1)
+    bad = (_window_counts(every, N) > 0) | (after[a + N] > after[a + 1]) | oldest[a]
+    for values in bounds or ():
+        values = values.reshape(m, -1)
+        bad |= _window_counts(np.isnan(values).any(axis=1), N) > 0
+        up = _window_counts(np.isposinf(values).any(axis=1), N) > 0
+        down = _window_counts(np.isneginf(values).any(axis=1), N) > 0
+        bad |= up & down
     return bad
 
 
@@ -145,7 +153,13 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
     flat = inner.ravel()
     G = rows["g"].ravel()
     W = rows["arrival"]
-    bad = _bad_windows(rows, N, bounded).tolist()
+    bad = bad_windows(
+        _not_finite(rows["H"]) | _not_finite(rows["g"]),
+        _not_finite(rows["link"]),
+        _not_finite(rows["arrival"]),
+        (rows["lower"], rows["upper"]) if bounded else None,
+        N,
+    ).tolist()  # each window's Px: H, g of its samples, the links after its oldest, W_a
     lower, upper = rows["lower"], rows["upper"]
     if bounded:
         low_clamped = np.maximum(lower, -OSQP_INFINITY).ravel()
