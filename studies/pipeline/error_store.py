@@ -41,23 +41,45 @@ def order_statistic(columns: list[np.ndarray], k: int) -> float:
 
 
 class ErrorStore:
-    """The errors of ``wheels`` columns, at most ``samples`` rows, appended chunk by chunk."""
+    """The errors of ``wheels`` columns, ``samples`` rows (None: not known, grown as they
+    come), appended chunk by chunk."""
 
-    def __init__(self, wheels: int, samples: int, memory_limit: int | None = None) -> None:
+    def __init__(
+        self, wheels: int, samples: int | None, memory_limit: int | None = None
+    ) -> None:
         self.wheels = wheels
         self.count = 0
         self._rows = None
         self._folder = None
-        if wheels * samples * 8 <= (MEMORY_LIMIT if memory_limit is None else memory_limit):
+        self.limit = MEMORY_LIMIT if memory_limit is None else memory_limit
+        if samples is None:  # not known: grown in memory, to files beyond the limit
+            self._rows = np.empty((wheels, 1 << 16))
+        elif wheels * samples * 8 <= self.limit:
             self._rows = np.empty((wheels, samples))  # one contiguous row a wheel
         else:
-            self._folder = tempfile.TemporaryDirectory(prefix="wheelload-errors-")
-            self._paths = [Path(self._folder.name) / f"wheel{i}.f8" for i in range(wheels)]
-            self._files = [path.open("wb") for path in self._paths]
+            self._to_files()
+
+    def _to_files(self) -> None:
+        """Keep the errors on disk from now on (those held so far written first)."""
+        self._folder = tempfile.TemporaryDirectory(prefix="wheelload-errors-")
+        self._paths = [Path(self._folder.name) / f"wheel{i}.f8" for i in range(self.wheels)]
+        self._files = [path.open("wb") for path in self._paths]
+        if self._rows is not None:
+            for i, file in enumerate(self._files):
+                file.write(self._rows[i, : self.count].tobytes())
+            self._rows = None
 
     def append(self, errors: np.ndarray) -> None:
         """Take the next chunk's errors, (count, wheels)."""
         m = len(errors)
+        if self._rows is not None and self.count + m > self._rows.shape[1]:
+            size = max(2 * self._rows.shape[1], self.count + m)
+            if self.wheels * size * 8 <= self.limit:
+                grown = np.empty((self.wheels, size))
+                grown[:, : self.count] = self._rows[:, : self.count]
+                self._rows = grown
+            else:
+                self._to_files()
         if self._rows is not None:
             self._rows[:, self.count : self.count + m] = errors.T
         else:
