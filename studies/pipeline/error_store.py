@@ -23,6 +23,8 @@ from wheelload.estimators import linear_percentile, percentile
 #: Bytes of errors kept in memory; a longer log's go to disk (64 MiB: 2 M samples, 4 wheels).
 MEMORY_LIMIT = 64 * 2**20
 PERCENTILE = 95.0
+#: Rows held at first when the log's length is not known (doubled as they come).
+FIRST_ROWS = 1 << 16
 
 
 def order_statistic(columns: list[np.ndarray], k: int) -> float:
@@ -44,20 +46,23 @@ class ErrorStore:
     """The errors of ``wheels`` columns, ``samples`` rows (None: not known, grown as they
     come), appended chunk by chunk."""
 
-    def __init__(
-        self, wheels: int, samples: int | None, memory_limit: int | None = None
-    ) -> None:
+    def __init__(self, wheels: int, samples: int | None, memory_limit: int | None = None) -> None:
         self.wheels = wheels
         self.count = 0
         self._rows = None
         self._folder = None
         self.limit = MEMORY_LIMIT if memory_limit is None else memory_limit
-        if samples is None:  # not known: grown in memory, to files beyond the limit
-            self._rows = np.empty((wheels, 1 << 16))
-        elif wheels * samples * 8 <= self.limit:
-            self._rows = np.empty((wheels, samples))  # one contiguous row a wheel
+        known = samples is not None  # not known: grown as they come, to files beyond the limit
+        rows = samples if known else min(FIRST_ROWS, self.limit // (8 * wheels))
+        if (known or rows > 0) and wheels * rows * 8 <= self.limit:
+            self._rows = np.empty((wheels, rows))  # one contiguous row a wheel
         else:
             self._to_files()
+
+    @property
+    def on_disk(self) -> bool:
+        """Whether the errors go to files."""
+        return self._rows is None
 
     def _to_files(self) -> None:
         """Keep the errors on disk from now on (those held so far written first)."""
