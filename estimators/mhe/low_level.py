@@ -73,6 +73,19 @@ def report_arrays(n: int) -> tuple[np.ndarray, ...]:
     return np.empty((n, 4)), np.empty(n, int64), np.empty(n, int64), np.zeros(n, bool), np.empty(n)
 
 
+def fill_reports(reports, estimates, lag, loads, status, iterations, fallback) -> None:
+    """The report arrays of a loop that kept each sample's ``(status, iterations, fallback)``
+    in ``reports`` and its estimate in ``estimates`` (n, 4): ``loads`` takes the estimates,
+    with a ``lag`` only where the loop fell back (the others it wrote, lagged)."""
+    if reports:
+        codes, counts, failed = zip(*reports, strict=True)
+        status[:], iterations[:], fallback[:] = codes, counts, failed
+    if lag:
+        loads[fallback] = estimates[fallback]
+    else:
+        loads[:] = estimates
+
+
 def window_loads(mhe, x_sol, window, kfx, j, eps, held) -> np.ndarray:
     """:meth:`MovingHorizonEstimator.window_loads` of the ring's window (``held``: the newest
     estimate)."""

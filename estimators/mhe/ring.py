@@ -25,7 +25,12 @@ import time
 
 import numpy as np
 
-from wheelload.estimators.mhe.low_level import LowLevelSolver, report_arrays, window_loads
+from wheelload.estimators.mhe.low_level import (
+    LowLevelSolver,
+    fill_reports,
+    report_arrays,
+    window_loads,
+)
 from wheelload.estimators.mhe.qp import (
     OSQP_INFINITY,
     SOLVED,
@@ -356,6 +361,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     if solver is not None:
         solver = LowLevelSolver(workspace)
     loads, status, iterations, failed_all, solve_time = report_arrays(n)
+    reports: list[tuple[int, int, bool]] = []  # status, iterations, fallback per sample
     lag = s.lag
     x_warm = np.empty(N)
     y_warm = np.empty_like(y_sol)
@@ -456,13 +462,14 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
         history[N + i] = x
         if lag and not failed:
             x = window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)
-        loads[i] = x
-        status[i], iterations[i], failed_all[i] = code, iters, failed
+            loads[i] = x  # else the estimate held in history (copied at the end)
+        reports.append((code, iters, failed))
         solve_time[i] = perf_counter() - start
     if solver is not None:
         solver.Px[:] = held_Px
         solver.bounds = (held_low.copy(), held_high.copy())
         solver.release()
+    fill_reports(reports, history[N:], lag, loads, status, iterations, failed_all)
     last = n - 1
     final_window = {name: view.copy() for name, view in window(last).items()}
     final_kfx = kfx[last + 1 : last + 1 + N].copy()
