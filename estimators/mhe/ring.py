@@ -332,6 +332,10 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     interior = np.empty(N + n)
     interior[:-1] = (G[:-1] + D[:-1]) - D[1:]
     interior[-1] = 0.0
+    # a window's end values once its arrival weight is on its oldest sample (j0 = 0)
+    first_px = ((H0[:-1] + (0.0 + L[1:])) + rows["nWn"][:-1]).tolist()
+    last_px = (H0 + L).tolist()
+    first_q, last_q = (G[:-1] - D[1:]).tolist(), (G + D).tolist()
     bounded = state.y.size > 0
     finite = np.isfinite
     bad = bad_windows(
@@ -406,12 +410,16 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
             x = mhe.check.newest(x_sol[-1:], current)
         else:
             Px[:] = interleaved[2 * a + 1 : 2 * a + 2 * N]
-            Px[0] = H0l[a] + (0.0 + Ll[a + 1])
-            Px[-1] = H0l[newest] + Ll[newest]
-            Px[2 * j0] += nWn[a + j0]
             q[:] = interior[a : a + N]
-            q[0] = Gl[a] - Dl[a + 1]
-            q[-1] = Gl[newest] + Dl[newest]
+            if j0 == 0:
+                Px[0], Px[-1] = first_px[a], last_px[newest]
+                q[0], q[-1] = first_q[a], last_q[newest]
+            else:  # the log's first samples: inert samples before j0
+                Px[0] = H0l[a] + (0.0 + Ll[a + 1])
+                Px[-1] = H0l[newest] + Ll[newest]
+                Px[2 * j0] += nWn[a + j0]
+                q[0] = Gl[a] - Dl[a + 1]
+                q[-1] = Gl[newest] + Dl[newest]
             q[j0] += nW[a + j0] @ (xp[a + j0] - prior) / LOAD_SCALE
             if bounded:
                 low, high = lower[a : a + N], upper[a : a + N]
