@@ -13,6 +13,11 @@ low-level solver object (``update_data_vec``, ``update_data_mat``,
 ``warm_start``, ``solve``), skipping the wrapper's result namespace. The
 numbers are those of the per-sample state path to the bit (tested).
 
+A window of more than one sample takes a loop over whole-log arrays instead, every
+term known before it formed once per sample: the hard window :func:`run_hard`, the
+soft one :func:`~wheelload.estimators.mhe.soft_window.run_soft`; the ring buffers
+serve the one-sample window.
+
 Example
 -------
 >>> estimate = MovingHorizonEstimator(vehicle, MheSettings(horizon=20)).run(signals)
