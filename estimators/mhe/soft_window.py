@@ -38,9 +38,10 @@ import time
 import numpy as np
 
 from wheelload.estimators.mhe.low_level import (
-    LowLevelSolver,
-    fill_reports,
+    HeldSolver,
+    finish_run,
     report_arrays,
+    samples_without_data,
     window_loads,
 )
 from wheelload.estimators.mhe.qp import (
@@ -48,13 +49,11 @@ from wheelload.estimators.mhe.qp import (
     SOLVED,
     UNSOLVED,
     MheWorkspace,
-    check_interrupted,
     finite_data,
     hessian_values,
     linear_term,
     prior_solution,
 )
-from wheelload.estimators.mhe.quiet import quiet_stdout
 from wheelload.estimators.mhe.terms import LOAD_SCALE
 
 #: A 4 x 4 block's upper triangle in CSC order: (row, column) by column, then row.
@@ -175,11 +174,7 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
     history[:N] = state.history
     kfx = np.concatenate([state.kfx, kf_loads])
     x_sol, y_sol, rho = state.x.copy(), state.y.copy(), state.rho
-    workspace = solver = None if k0 == 0 else mhe.workspace
-    if solver is not None:
-        solver = LowLevelSolver(workspace)
-        osqp_solver = solver.solver
-        held_Px, held_low, held_high = solver.Px, *solver.bounds
+    held = None if k0 == 0 else HeldSolver(mhe.workspace, rho)
     loads, status, iterations, failed_all, solve_time = report_arrays(n)
     reports: list[tuple[int, int, bool]] = []  # status, iterations, fallback per sample
     lag = s.lag
@@ -187,11 +182,9 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
     y_warm = np.empty_like(y_sol)
     Px, q = np.empty(10 + 14 * (N - 1)), np.empty(N * w)
     has_data = rows["data"].tolist()
-    flags = has_data[:N]
-    since = next((N - 1 - j for j in range(N - 1, -1, -1) if flags[j]), N)
+    since = samples_without_data(has_data, N)
     perf_counter = time.perf_counter
     low = high = None
-    polish = mhe.workspace.polish
 
     def window(i: int) -> dict:
         return {name: values[i + 1 : i + 1 + N] for name, values in rows.items()}
@@ -205,12 +198,10 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
         j0 = N - 1 - k if k < N - 1 else 0
         prior = history[i]  # the oldest estimate
         if k == 0:
-            if solver is not None:
-                solver.release()
-            mhe.workspace = workspace = MheWorkspace(s, w)
-            solver = LowLevelSolver(workspace)
-            osqp_solver = solver.solver
-            held_Px, held_low, held_high = solver.Px, *solver.bounds
+            if held is not None:
+                held.release()
+            mhe.workspace = MheWorkspace(s, w)
+            held = HeldSolver(mhe.workspace, rho)
         x_warm[:-w] = x_sol[w:]
         x_warm[-w:] = x_sol[-w:]
         if bounded:
@@ -245,31 +236,14 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
             if refused:
                 code, iters = UNSOLVED, 0  # not handed to OSQP: the filter's estimate
             else:
-                # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
-                if Px[0] != held_Px[0] or not (Px == held_Px).all():
-                    osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
-                    Px, held_Px = held_Px, Px  # the buffer just loaded is now the one held
-                if rho != solver.rho:
-                    workspace.solver.update_settings(rho=rho)
-                if bounded and not ((low == held_low).all() and (high == held_high).all()):
-                    osqp_solver.update_data_vec(
-                        q=q, l=low_clamped[4 * a : 4 * a + 4 * N],
-                        u=high_clamped[4 * a : 4 * a + 4 * N],
-                    )  # fmt: skip
-                    held_low, held_high = low, high
-                else:
-                    osqp_solver.update_data_vec(q=q, l=None, u=None)
-                osqp_solver.warm_start(x_warm, y_warm if bounded else None)
-                if polish:
-                    with quiet_stdout():
-                        osqp_solver.solve()
-                else:
-                    osqp_solver.solve()
-                info = osqp_solver.info
-                code, iters = info.status_val, info.iter
-                check_interrupted(code)
+                span = slice(4 * a, 4 * a + 4 * N)
+                code, iters, Px = held.solve(
+                    Px, q, (low, high) if bounded else None,
+                    (low_clamped[span], high_clamped[span]) if bounded else None,
+                    x_warm, y_warm,
+                )  # fmt: skip
                 if code == SOLVED:
-                    solution = osqp_solver.solution
+                    solution = held.osqp.solution
                     x_sol = solution.x
                     if bounded:
                         y_sol = solution.y
@@ -286,17 +260,6 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
             loads[i] = x  # else the estimate held in history (copied at the end)
         reports.append((code, iters, failed))
         solve_time[i] = perf_counter() - start
-    if solver is not None:
-        solver.Px[:] = held_Px
-        solver.bounds = (held_low.copy(), held_high.copy())
-        solver.release()
-    fill_reports(reports, history[N:], lag, loads, status, iterations, failed_all)
-    last = n - 1
-    final_window = {name: view.copy() for name, view in window(last).items()}
-    final_kfx = kfx[last + 1 : last + 1 + N].copy()
-    final_held = np.array(history[N + last], dtype=float)
-
-    def final(j: int) -> np.ndarray:
-        return window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
-
+    final = finish_run(mhe, held, reports, history, lag, (loads, status, iterations, failed_all),
+                       x_sol, window(n - 1), kfx[n : n + N], eps)  # fmt: skip
     return loads, status, iterations, failed_all, solve_time, final
