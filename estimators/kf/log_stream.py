@@ -1,21 +1,24 @@
 """The two-stage KF over a log file in chunks: memory bounded by the chunk, not the log.
 
-The lean whole-log path of ``wheelload estimate``. Two passes over the file
+The lean whole-log path of ``wheelload estimate``
 (``estimators/logs/readers/chunks.py``: Parquet record batches, CSV blocks):
 
-1. :func:`scan_log` reads the chunks once and keeps what the whole-log checks
+1. :class:`LogScan` takes the chunks and keeps what the whole-log checks
    need: the time column (8 bytes a sample: the nominal interval, the time and
    sample-rate checks, the differentiators' uniformity check), the median of
    ``az`` (unit check; freed after it), the channels' peaks and which
    channels have a finite sample, the first :data:`~log_checks.WINDOW` s of
    motion (wiring checks, exactly the window :func:`check_wiring` examines on
-   the whole log) and the first seconds (still period).
-2. :meth:`LogStream.chunks` reads the chunks again and runs the filter's
-   :class:`~wheelload.estimators.loops.compiled.ColumnLoop` on their column arrays
+   the whole log) and the first seconds (still period). :func:`scan_log` reads
+   the whole log through it.
+2. :meth:`LogStream.chunks` runs the filter's
+   :class:`~wheelload.estimators.loops.compiled.ColumnLoop` on the chunks' column arrays
    (validity, sample interval and ``uint32`` status bits computed in C; no
    stacked copies), the filter state and the differentiators' state carried
    from chunk to chunk, so the loads equal ``TwoStageKF.run`` on the whole log
-   to the bit.
+   to the bit: the chunks read again after :func:`scan_log`, or, handed as
+   ``source``, the chunks a :class:`LogScan` takes as they are read (the log read
+   once: its time column first, :mod:`~wheelload.studies.pipeline.lean_estimate`).
 
 A log this path cannot read as plain numbers raises
 :class:`~wheelload.estimators.logs.readers.chunks.ChunkError` before any output,
