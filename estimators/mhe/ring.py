@@ -292,10 +292,12 @@ def _hard_loads(
     collapsed interval, ``low == high``: clipped); None beyond ``limit`` or not finite.
     """
     eps_abs, eps_rel = eps
-    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, abs(omega)))
+    size = abs(omega)  # min and max of two as conditionals: the same values, NaN included
+    tolerance = 10.0 * (eps_abs + eps_rel * (size if size > 1.0 else 1.0))
     if omega < low - tolerance or omega > high + tolerance:
         return None
-    scaled = min(max(omega, low), high) * LOAD_SCALE
+    omega = low if low > omega else omega
+    scaled = (high if high < omega else omega) * LOAD_SCALE
     x = [a + b * scaled for a, b in zip(xp, null)]
     tolerance = math.inf if low == high else 10.0 * (1e-9 + 1e-12 * max(1.0, max(map(abs, x))))
     lowest, highest = bounds
@@ -303,7 +305,8 @@ def _hard_loads(
     for value in x:
         if value < lowest - tolerance or value > highest + tolerance or not abs(value) <= limit:
             return None
-        clipped.append(min(max(value, lowest), highest))
+        value = lowest if lowest > value else value
+        clipped.append(highest if highest < value else value)
     return clipped
 
 

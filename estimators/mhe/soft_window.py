@@ -137,7 +137,8 @@ def _soft_loads(values: list, lows: list, highs: list, eps, limit: float) -> lis
     for x, a, b in zip(values, lows, highs, strict=True):
         if x < a - tolerance or x > b + tolerance:
             return None
-        x = min(max(x, a), b) * LOAD_SCALE
+        x = a if a > x else x  # min and max of two as conditionals: the same, NaN included
+        x = (b if b < x else x) * LOAD_SCALE
         if not abs(x) <= limit:
             return None
         loads.append(x)
