@@ -1,7 +1,8 @@
-"""OSQP's solver object driven by the plain window's loops, and what they report.
+"""OSQP's solver object driven by the plain window's loop over a log, and what it reports.
 
-Shared by the ring buffers (:mod:`~wheelload.estimators.mhe.ring`: the window of one
-sample and the hard window) and the soft window (:mod:`~wheelload.estimators.mhe.soft_window`).
+Shared by the loop (:mod:`~wheelload.estimators.mhe.window_loop`) and the windows that
+hand it their arithmetic (:mod:`~wheelload.estimators.mhe.ring`,
+:mod:`~wheelload.estimators.mhe.soft_window`).
 """
 
 from __future__ import annotations
@@ -96,7 +97,7 @@ def window_loads(mhe, x_sol, window, kfx, j, eps, held) -> np.ndarray:
 
 
 class HeldSolver:
-    """The window's OSQP problem in a loop over a log (``run_hard``, ``run_soft``): it loads
+    """The window's OSQP problem in the loop over a log (``window_loop.run_window``): it loads
     only what differs from what it holds (the Hessian values compared from their first),
     swapping the caller's buffer for the one it held instead of copying. The same calls
     in the same order as :meth:`LowLevelSolver.solve`."""

@@ -33,28 +33,15 @@ Example
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-from wheelload.estimators.mhe.low_level import (
-    HeldSolver,
-    finish_run,
-    report_arrays,
-    samples_without_data,
-    window_loads,
-)
 from wheelload.estimators.mhe.qp import (
-    OSQP_INFINITY,
-    SOLVED,
-    UNSOLVED,
-    MheWorkspace,
     finite_data,
     hessian_values,
     linear_term,
-    prior_solution,
 )
 from wheelload.estimators.mhe.terms import LOAD_SCALE
+from wheelload.estimators.mhe.window_loop import run_window
 
 #: A 4 x 4 block's upper triangle in CSC order: (row, column) by column, then row.
 _UPPER = tuple(zip(*[(r, a) for a in range(4) for r in range(a + 1)], strict=True))
@@ -148,10 +135,7 @@ def _soft_loads(values: list, lows: list, highs: list, eps, limit: float) -> lis
 def run_soft(mhe, state, rows: dict, kf_loads, record=None):
     """The soft window over a log (module docstring); returns what ``run_ring`` does."""
     s = mhe.settings
-    N, w = s.horizon, 4
-    n = len(kf_loads)
-    k0 = state.k
-    eps = (s.solver.eps_abs, s.solver.eps_rel)
+    N = s.horizon
     null = mhe.null
     bounded = state.y.size > 0
     inner, oldest, newest = hessian_parts(rows)
@@ -165,102 +149,26 @@ def run_soft(mhe, state, rows: dict, kf_loads, record=None):
         (rows["lower"], rows["upper"]) if bounded else None,
         N,
     ).tolist()  # each window's Px: H, g of its samples, the links after its oldest, W_a
-    lower, upper = rows["lower"], rows["upper"]
-    if bounded:
-        low_clamped = np.maximum(lower, -OSQP_INFINITY).ravel()
-        high_clamped = np.minimum(upper, OSQP_INFINITY).ravel()
-    lower_list, upper_list = lower.tolist(), upper.tolist()
-    limit = mhe.load_limit
-    history = np.empty((N + n, 4))
-    history[:N] = state.history
-    kfx = np.concatenate([state.kfx, kf_loads])
-    x_sol, y_sol, rho = state.x.copy(), state.y.copy(), state.rho
-    held = None if k0 == 0 else HeldSolver(mhe.workspace, rho)
-    loads, status, iterations, failed_all, solve_time = report_arrays(n)
-    reports: list[tuple[int, int, bool]] = []  # status, iterations, fallback per sample
-    lag = s.lag
-    x_warm = np.empty(N * w)
-    y_warm = np.empty_like(y_sol)
-    Px, q = np.empty(10 + 14 * (N - 1)), np.empty(N * w)
-    has_data = rows["data"].tolist()
-    since = samples_without_data(has_data, N)
-    perf_counter = time.perf_counter
-    low = high = None
+    lower_list, upper_list = rows["lower"].tolist(), rows["upper"].tolist()
+    eps, limit = (s.solver.eps_abs, s.solver.eps_rel), mhe.load_limit
 
-    def window(i: int) -> dict:
-        return {name: values[i + 1 : i + 1 + N] for name, values in rows.items()}
-
-    for i in range(n):
-        start = perf_counter()
-        k = k0 + i
-        a = i + 1  # the window's oldest sample in the arrays over initial window + log
+    def form(i, a, j0, prior, Px, q, low, high) -> bool:
+        if j0:  # the log's first samples: inert samples before j0
+            current = {name: values[a : a + N] for name, values in rows.items()}
+            Px[:] = hessian_values(current, j0, null, False)
+            q[:] = linear_term(current, j0, prior, null, False)
+            return not finite_data(Px, q, *(() if low is None else (low, high)))
         newest_row = a + N - 1
-        since = 0 if has_data[newest_row] else since + 1
-        j0 = N - 1 - k if k < N - 1 else 0
-        prior = history[i]  # the oldest estimate
-        if k == 0:
-            if held is not None:
-                held.release()
-            mhe.workspace = MheWorkspace(s, w)
-            held = HeldSolver(mhe.workspace, rho)
-        x_warm[:-w] = x_sol[w:]
-        x_warm[-w:] = x_sol[-w:]
-        if bounded:
-            y_warm[:-w] = y_sol[w:]
-            y_warm[-w:] = y_sol[-w:]
-        x = None
-        if since >= min(k + 1, N):  # no sample of the window has a data term
-            current = window(i)
-            x_sol = prior_solution(current, j0, history[i + N - 1], null, False, x_warm, w)
-            y_sol = y_warm.copy()
-            code, iters = SOLVED, 0
-            x = mhe.check.newest(x_sol[-w:], current)
-        else:
-            if bounded:
-                low, high = lower[a : a + N].ravel(), upper[a : a + N].ravel()
-            if j0:  # the log's first samples: inert samples before j0
-                current = window(i)
-                Px[:] = hessian_values(current, j0, null, False)
-                q[:] = linear_term(current, j0, prior, null, False)
-                refused = not finite_data(Px, q, *((low, high) if bounded else ()))
-            else:
-                refused = bad[i]
-                Px[10:-14] = flat[14 * a + 14 : 14 * newest_row]
-                Px[:10] = oldest[a]
-                Px[-14:] = newest[newest_row]
-                q[:] = G[4 * a : 4 * newest_row + 4]
-                q[:4] -= W[a] @ prior / LOAD_SCALE
-            if record is not None:
-                recorded = (low, high) if bounded else (None, None)
-                record.append(tuple(None if v is None else np.array(v)
-                                    for v in (Px, q, *recorded, x_warm, y_warm)))  # fmt: skip
-            if refused:
-                code, iters = UNSOLVED, 0  # not handed to OSQP: the filter's estimate
-            else:
-                span = slice(4 * a, 4 * a + 4 * N)
-                code, iters, Px = held.solve(
-                    Px, q, (low, high) if bounded else None,
-                    (low_clamped[span], high_clamped[span]) if bounded else None,
-                    x_warm, y_warm,
-                )  # fmt: skip
-                if code == SOLVED:
-                    solution = held.osqp.solution
-                    x_sol = solution.x
-                    if bounded:
-                        y_sol = solution.y
-                    x = _soft_loads(x_sol[-w:].tolist(), lower_list[newest_row],
-                                    upper_list[newest_row], eps, limit)  # fmt: skip
-            if code != SOLVED:
-                x_sol, y_sol = x_warm.copy(), y_warm.copy()
-        failed = x is None
-        if failed:
-            x = mhe.check.fallback(kf_loads[i], history[N + i - 1])
-        history[N + i] = x
-        if lag and not failed:
-            x = window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)
-            loads[i] = x  # else the estimate held in history (copied at the end)
-        reports.append((code, iters, failed))
-        solve_time[i] = perf_counter() - start
-    final = finish_run(mhe, held, reports, history, lag, (loads, status, iterations, failed_all),
-                       x_sol, window(n - 1), kfx[n : n + N], eps)  # fmt: skip
-    return loads, status, iterations, failed_all, solve_time, final
+        Px[10:-14] = flat[14 * a + 14 : 14 * newest_row]
+        Px[:10] = oldest[a]
+        Px[-14:] = newest[newest_row]
+        q[:] = G[4 * a : 4 * newest_row + 4]
+        q[:4] -= W[a] @ prior / LOAD_SCALE
+        return bad[i]
+
+    def newest_loads(x, newest_row: int) -> list | None:
+        return _soft_loads(x[-4:].tolist(), lower_list[newest_row], upper_list[newest_row], eps,
+                           limit)  # fmt: skip
+
+    return run_window(mhe, state, rows, kf_loads, record, form=form, newest_loads=newest_loads,
+                      size=10 + 14 * (N - 1))  # fmt: skip
