@@ -22,6 +22,12 @@ from wheelload.studies.pipeline.log_settings import EstimateSettings
 AGAIN = "estimated again"
 
 
+@pytest.fixture
+def caplog(library_caplog):
+    """pytest's caplog on the library's own logger (tests/studies/conftest.py)."""
+    return library_caplog
+
+
 @pytest.fixture(scope="module")
 def long_log() -> pd.DataFrame:
     """The example log repeated to 81 180 rows (more than one chunk), time increasing."""
