@@ -64,7 +64,7 @@ _LAZY_MODULES = {
         "guard_settings_for",
     ),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
-    "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
+    "wheelload.estimators.kf.log_stream": ("LogScan", "LogStream", "ThinnedInputs", "scan_log"),
     "wheelload.estimators.kernels.order_statistics": ("linear_percentile", "percentile"),
 }
 __getattr__, __dir__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)

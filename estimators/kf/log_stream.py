@@ -1,21 +1,24 @@
 """The two-stage KF over a log file in chunks: memory bounded by the chunk, not the log.
 
-The lean whole-log path of ``wheelload estimate``. Two passes over the file
+The lean whole-log path of ``wheelload estimate``
 (``estimators/logs/readers/chunks.py``: Parquet record batches, CSV blocks):
 
-1. :func:`scan_log` reads the chunks once and keeps what the whole-log checks
+1. :class:`LogScan` takes the chunks and keeps what the whole-log checks
    need: the time column (8 bytes a sample: the nominal interval, the time and
    sample-rate checks, the differentiators' uniformity check), the median of
    ``az`` (unit check; freed after it), the channels' peaks and which
    channels have a finite sample, the first :data:`~log_checks.WINDOW` s of
    motion (wiring checks, exactly the window :func:`check_wiring` examines on
-   the whole log) and the first seconds (still period).
-2. :meth:`LogStream.chunks` reads the chunks again and runs the filter's
-   :class:`~wheelload.estimators.loops.compiled.ColumnLoop` on their column arrays
+   the whole log) and the first seconds (still period). :func:`scan_log` reads
+   the whole log through it.
+2. :meth:`LogStream.chunks` runs the filter's
+   :class:`~wheelload.estimators.loops.compiled.ColumnLoop` on the chunks' column arrays
    (validity, sample interval and ``uint32`` status bits computed in C; no
    stacked copies), the filter state and the differentiators' state carried
    from chunk to chunk, so the loads equal ``TwoStageKF.run`` on the whole log
-   to the bit.
+   to the bit: the chunks read again after :func:`scan_log`, or, handed as
+   ``source``, the chunks a :class:`LogScan` takes as they are read (the log read
+   once: its time column first, :mod:`~wheelload.studies.pipeline.lean_estimate`).
 
 A log this path cannot read as plain numbers raises
 :class:`~wheelload.estimators.logs.readers.chunks.ChunkError` before any output,
@@ -31,7 +34,7 @@ Example
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,7 +52,12 @@ from wheelload.estimators.logs.model_error import (
     Diagnosis,
     diagnose_inputs,
 )
-from wheelload.estimators.logs.readers.chunks import ChunkError, chunk_columns, read_chunks
+from wheelload.estimators.logs.readers.chunks import (
+    PARQUET_ROWS,
+    ChunkError,
+    chunk_columns,
+    read_chunks,
+)
 from wheelload.estimators.logs.signals import (
     DEFAULT_RATE_FILTER,
     VELOCITY_CUTOFF,
@@ -80,6 +88,7 @@ from wheelload.estimators.types import (
 )
 from wheelload.models import GRAVITY, INPUTS
 from wheelload.models.conventions import WHEELS
+from wheelload.models.input_validity import MAX_INTERVAL
 from wheelload.models.runtime.spill import Appended, release
 
 GROUPS = (TRAVEL, TRAVEL_RATE, RATES, HUB, RATE_DERIVATIVES)
@@ -215,6 +224,26 @@ class LogStream:
         """The sensor set in words (as :meth:`Signals.mode`)."""
         return sensor_mode(self.travel_present, self.az_assumed, self.speed_source)
 
+    def filter_facts(self) -> tuple:
+        """What the filter takes of the whole log (:meth:`chunks`): the nominal sample
+        interval, the steps' median and uniformity, the channels present, the speed's
+        source. The nominal interval is the steps' median where every step is below
+        :data:`~wheelload.models.input_validity.MAX_INTERVAL` (the same steps: no second
+        pass over the time stamps)."""
+        steps = self.steps
+        every_step = steps.median + steps.deviation < 0.5 * MAX_INTERVAL
+        reference = self.reference_present
+        return (
+            steps.median if every_step else nominal_interval(self.t),
+            steps.median,
+            steps.uniform(),
+            tuple(self.travel_present.tolist()),
+            None if reference is None else tuple(reference.tolist()),
+            self.velocities_derived,
+            self.az_assumed,
+            self.speed_source,
+        )
+
     def wiring_report(self):
         """:func:`check_wiring` on the log (its first WINDOW s of motion)."""
         if self.wiring is None:
@@ -228,10 +257,14 @@ class LogStream:
         *,
         faults: list[SensorFault] | None = None,
         diagnosis: Diagnosis | None = None,
+        source: Iterable[dict[str, np.ndarray]] | None = None,
+        thinned: ThinnedInputs | None = None,
     ) -> Iterator[EstimateChunk]:
         """The estimates, chunk by chunk; ``faults`` receives the isolated sensor faults.
         With a file check's ``diagnosis`` (:mod:`~wheelload.estimators.logs.model_error`) its
-        travel zero is taken off and its file parameter widens σ, as in ``TwoStageKF.run``."""
+        travel zero is taken off and its file parameter widens σ, as in ``TwoStageKF.run``.
+        ``source``: the log's chunks as read (:meth:`signal_chunks`); ``thinned`` takes
+        the inputs the file check reads (:meth:`file_check`)."""
         loop = filter_loop(kf)
         state0 = kf.initial_state()
         state = [np.ascontiguousarray(np.ravel(a, order="F"), dtype=float)
@@ -239,16 +272,20 @@ class LogStream:
         tuning = kf.tuning_for(kf.sample_interval or nominal_interval(self.t))
         base = input_bits(self.az_assumed, self.speed_source)
         tracker = _FaultTracker()
-        start = 0
-        for t, columns in self.signal_chunks(rate_filter=RateDerivativeFilter.of(kf.vehicle)):
+        start, last = 0, 0.0
+        rate_filter = RateDerivativeFilter.of(kf.vehicle)
+        for t, columns in self.signal_chunks(source=source, rate_filter=rate_filter):
             n = len(t)
+            if thinned is not None:
+                thinned.add(t, columns)
             if diagnosis is not None and np.any(diagnosis.travel_zero):
                 columns = {**columns, **{name: columns[name] - diagnosis.travel_zero[i]
                                          for i, name in enumerate(TRAVEL)}}  # fmt: skip
             values = [columns.get(name) for name in INPUTS]
             block = np.empty((loop.n_columns, n))
             flags = np.empty(n, dtype=np.uint32)
-            dt_first = float(t[1] - t[0]) if start == 0 else float(t[0] - self.t[start - 1])
+            dt_first = float(t[1] - t[0]) if start == 0 else float(t[0] - last)
+            last = t[-1]
             loop(state, [kf.p, tuning], values, t, dt_first, list(block), flags, base)
             tracker.add(t, block[11:18], block[18:25])
             if diagnosis is not None and diagnosis.change is not None:
@@ -265,16 +302,24 @@ class LogStream:
             faults.extend(tracker.finish())
 
     def file_check(
-        self, vehicle, faults, mass_properties: np.ndarray | None, *, static_given: bool
+        self,
+        vehicle,
+        faults,
+        mass_properties: np.ndarray | None,
+        *,
+        static_given: bool,
+        thinned: ThinnedInputs | None = None,
     ) -> Diagnosis:
         """The file check of ``TwoStageKF.run`` on this log, read in chunks: every k-th
         sample (:data:`~wheelload.estimators.logs.model_error.MAX_SAMPLES` at most), the
         samples about the ``faults`` isolated left out, the car as ``mass_properties``
         (the payload estimate's at the end) found it; the travel zeros are known when
-        static loads were given."""
+        static loads were given. ``thinned``: those samples, taken while the log was
+        estimated (:meth:`chunks`), else read here."""
         if len(self) == 0:
             return NOTHING
-        t, inputs = self.thinned_inputs(MAX_SAMPLES, RateDerivativeFilter.of(vehicle))
+        rate_filter = RateDerivativeFilter.of(vehicle)
+        t, inputs = (thinned or self.thinned_inputs(MAX_SAMPLES, rate_filter)).result()
         return diagnose_inputs(
             inputs,
             vehicle,
@@ -285,21 +330,18 @@ class LogStream:
 
     def thinned_inputs(
         self, most: int, rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Every k-th sample's time and inputs (:data:`INPUTS` x m), at most about ``most``
-        samples: the whole log as the file check reads it, without holding it."""
-        step = max(1, len(self) // most)
-        times, blocks, start = [], [], 0
+    ) -> ThinnedInputs:
+        """The whole log's inputs as the file check reads them (:class:`ThinnedInputs`),
+        without holding it (the body-rate derivatives from ``rate_filter``)."""
+        thinned = ThinnedInputs(most)
         for t, columns in self.signal_chunks(rate_filter=rate_filter):
-            keep = np.arange((-start) % step, len(t), step)
-            times.append(t[keep])
-            blocks.append(_input_rows(columns, len(t))[:, keep])
-            start += len(t)
-        return np.concatenate(times), np.hstack(blocks)
+            thinned.add(t, columns)
+        return thinned
 
     def signal_chunks(
         self,
         extra: tuple[str, ...] = (),
+        source: Iterable[dict[str, np.ndarray]] | None = None,
         rate_filter: RateDerivativeFilter = DEFAULT_RATE_FILTER,
     ) -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
         """The log's signals chunk by chunk, ``(t, {name: values})``, as the whole-log reader
@@ -307,7 +349,8 @@ class LogStream:
         travel rates and body-rate derivatives derived where not logged (their filters'
         state carried, so each equals the whole log's to the bit; the derivatives left out
         where the time stamps are too irregular for them), ``az`` where assumed (g) and
-        ``vx`` (logged, the wheel speeds' mean, or 0)."""
+        ``vx`` (logged, the wheel speeds' mean, or 0). ``source``: the chunks of our
+        columns as read (:class:`LogScan`), instead of reading the file again."""
         travel_rates = (
             Differentiator(self.steps, 4, VELOCITY_CUTOFF, self.source)
             if self.velocities_derived
@@ -323,15 +366,17 @@ class LogStream:
                 rate_dots = None  # too irregular: the terms that need them are dropped
         names = list(self.names) + [name for name in extra if name not in self.names]
         start = 0
-        for chunk in read_chunks(self.path, names, rows=self.rows):
+        read = source is None
+        for chunk in read_chunks(self.path, names, rows=self.rows) if read else source:
             n = len(chunk["t"])
             if n == 0:
                 continue
             t = chunk["t"]
-            same = np.array_equal(self.t[start : start + n], t)
-            release(self.t)
-            if not same:
-                raise LogError(f"{self.source}: changed while it was read: read it again")
+            if read:
+                same = np.array_equal(self.t[start : start + n], t)
+                release(self.t)
+                if not same:
+                    raise LogError(f"{self.source}: changed while it was read: read it again")
             columns = dict(chunk)
             if travel_rates is not None:
                 derived = travel_rates(_travel(chunk, n), t)
@@ -344,8 +389,46 @@ class LogStream:
                 columns.update({name: derived[:, i] for i, name in enumerate(RATE_DERIVATIVES)})
             start += n
             yield t, columns
-        if start != len(self.t):
+        if read and start != len(self.t):
             raise LogError(f"{self.source}: changed while it was read: read it again")
+
+
+class ThinnedInputs:
+    """Every k-th sample's time and inputs (:data:`INPUTS` x m) of the samples taken, k
+    the largest power of two up to ``n // most`` (at least 1) for the ``n`` taken: between
+    ``most`` and ``4 most`` samples of a long log. Taken in one pass: k doubles as ``n``
+    grows and the samples off the new k are dropped."""
+
+    def __init__(self, most: int) -> None:
+        self.most, self.step, self.count = most, 1, 0
+        self.index: list[np.ndarray] = []
+        self.times: list[np.ndarray] = []
+        self.blocks: list[np.ndarray] = []
+
+    def add(self, t: np.ndarray, columns: dict[str, np.ndarray]) -> None:
+        """The next samples: their times (n,), their signals by name (as :meth:`signal_chunks`)."""
+        n = len(t)
+        keep = np.arange((-self.count) % self.step, n, self.step)
+        self.index.append(self.count + keep)
+        self.times.append(t[keep])
+        kept = {name: np.broadcast_to(columns[name], (n,))[keep]
+                for name in INPUTS if name in columns}  # fmt: skip
+        self.blocks.append(_input_rows(kept, keep.size))
+        self.count += len(t)
+        if self.count // self.most >= 2 * self.step:
+            while self.count // self.most >= 2 * self.step:
+                self.step *= 2
+            index = np.concatenate(self.index)
+            kept = index % self.step == 0
+            self.index = [index[kept]]
+            self.times = [np.concatenate(self.times)[kept]]
+            self.blocks = [np.hstack(self.blocks)[:, kept]]
+
+    def result(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kept samples' times (m,) and inputs (INPUTS x m)."""
+        if not self.times:
+            return np.zeros(0), np.zeros((len(INPUTS), 0))
+        return np.concatenate(self.times), np.hstack(self.blocks)
 
 
 def _input_rows(columns: dict[str, np.ndarray], n: int) -> np.ndarray:
@@ -455,49 +538,102 @@ def scan_log(
     Raises :class:`ChunkError` where the ordinary reader must take the log
     (and name the problem), :class:`LogError` for a log that cannot be used.
     """
-    path = Path(path)
-    source = str(path)
-    present = chunk_columns(path)
-    for name in REQUIRED:
-        if name not in present:
-            raise ChunkError(
-                f"{source}: missing column '{name}' "
-                "(a logger's names: give a channel map, --channels)"
-            )
-    for group in GROUPS:
-        if 0 < sum(name in present for name in group) < len(group):
-            raise ChunkError(f"{source}: a partial group of {group[0]}")
-    ours = {"t", "ax", "ay", "az", "vx", *WHEEL_SPEED, *REFERENCE, *(n for g in GROUPS for n in g)}
-    names = tuple(name for name in present if name in ours)
-    t_store, az_store = Appended(), Appended()
-    peaks = {"d": np.zeros(4), "v": np.zeros(4), "vx": 0.0}
-    travel_present = np.zeros(4, bool)
-    reference_present = np.zeros(4, bool)
-    stats = {"travel_count": np.zeros(4, np.int64), "travel_peak": np.zeros(4),
-             "rate_count": np.zeros(4, np.int64), "rate_min": np.full(4, np.inf),
-             "rate_max": np.full(4, -np.inf)}  # fmt: skip
-    wiring, head = _Head(), _Head()
-    wiring_end = None
-    t0 = None
-    speed_source = SpeedSource.LOGGED
-    finite_counts = dict.fromkeys(("ax", "ay", "az", "vx"), 0)
-    for chunk in read_chunks(path, list(names), rows=rows):
+    scan = LogScan(path, rows=rows, still_period=still_period, wiring_checks=wiring_checks)
+    for chunk in read_chunks(scan.path, list(scan.names), rows=rows):
+        scan.add(chunk)
+    return scan.finish()
+
+
+class LogScan:
+    """What :func:`scan_log` keeps of a log, taken chunk by chunk (:meth:`add`): the time
+    column, the median of ``az``, the channels' peaks and which have a finite sample, the
+    first seconds (:attr:`head`) and the first :data:`~log_checks.WINDOW` s of motion
+    (:attr:`wiring`). :meth:`finish` checks them and gives the :class:`LogStream`;
+    :meth:`provisional` gives one of the samples taken so far (one read of a log,
+    :func:`~wheelload.studies.pipeline.lean_estimate.estimate_lean`).
+
+    Raises :class:`ChunkError` where the ordinary reader must take the log.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        *,
+        rows: int,
+        still_period: float | None,
+        wiring_checks: bool,
+        time_column: bool = False,
+    ) -> None:
+        self.path = Path(path)
+        self.source = source = str(self.path)
+        present = chunk_columns(self.path)
+        for name in REQUIRED:
+            if name not in present:
+                raise ChunkError(
+                    f"{source}: missing column '{name}' "
+                    "(a logger's names: give a channel map, --channels)"
+                )
+        for group in GROUPS:
+            if 0 < sum(name in present for name in group) < len(group):
+                raise ChunkError(f"{source}: a partial group of {group[0]}")
+        ours = {"t", "ax", "ay", "az", "vx", *WHEEL_SPEED, *REFERENCE,
+                *(n for g in GROUPS for n in g)}  # fmt: skip
+        self.names = tuple(name for name in present if name in ours)
+        self.rows, self.still_period, self.wiring_checks = rows, still_period, wiring_checks
+        self.t_store, self.az_store = Appended(), Appended()
+        self.peaks = {"d": np.zeros(4), "v": np.zeros(4), "vx": 0.0}
+        self.travel_present = np.zeros(4, bool)
+        self.reference_present = np.zeros(4, bool)
+        self.stats = {"travel_count": np.zeros(4, np.int64), "travel_peak": np.zeros(4),
+                      "rate_count": np.zeros(4, np.int64), "rate_min": np.full(4, np.inf),
+                      "rate_max": np.full(4, -np.inf)}  # fmt: skip
+        self.wiring, self.head = _Head(), _Head()
+        self.wiring_end = None
+        self.t0 = None
+        self.speed_source = SpeedSource.LOGGED
+        self.finite_counts = dict.fromkeys(("ax", "ay", "az", "vx"), 0)
+        self.t = self.steps = None
+        self.taken = 0
+        if time_column:  # read first: the filter needs the whole log's steps from its start
+            store = Appended()
+            for chunk in read_chunks(self.path, ["t"], rows=PARQUET_ROWS):
+                store.append(chunk["t"])
+            self.t = store.array()
+            if not self.t.size:
+                raise ChunkError(f"{source}: no rows")
+            self.steps = check_time_column(self.t, source)
+
+    @property
+    def settled(self) -> bool:
+        """Whether the head and the wiring window are complete (what follows adds to neither)."""
+        return self.head.done and (self.wiring.done or not self.wiring_checks)
+
+    def add(self, chunk: dict[str, np.ndarray]) -> None:
+        """Take the next chunk of the log's columns (:attr:`names`)."""
         n = len(chunk["t"])
         if n == 0:
-            continue
+            return
         t = chunk["t"]
-        t_store.append(t)
-        t0 = t[0] if t0 is None else t0
-        speed, speed_source = _speed(chunk, n)
-        for name in finite_counts:
+        if self.t is None:
+            self.t_store.append(t)
+        else:  # the time column read before: the same stamps, or the file changed
+            same = np.array_equal(self.t[self.taken : self.taken + n], t)
+            release(self.t)
+            if not same:
+                raise LogError(f"{self.source}: changed while it was read: read it again")
+        self.taken += n
+        self.t0 = t[0] if self.t0 is None else self.t0
+        peaks, stats = self.peaks, self.stats
+        speed, self.speed_source = _speed(chunk, n)
+        for name in self.finite_counts:
             if name in chunk:
-                finite_counts[name] += int(np.count_nonzero(np.isfinite(chunk[name])))
+                self.finite_counts[name] += int(np.count_nonzero(np.isfinite(chunk[name])))
         if "az" in chunk:
-            az_store.append(chunk["az"])
+            self.az_store.append(chunk["az"])
         d = _travel(chunk, n)
         peaks["d"] = np.maximum(peaks["d"], _column_peak(d))
         finite = np.isfinite(d)
-        travel_present |= finite.any(axis=0)
+        self.travel_present |= finite.any(axis=0)
         stats["travel_count"] += finite.sum(axis=0)
         stats["travel_peak"] = np.maximum(
             stats["travel_peak"], np.max(np.abs(np.where(finite, d, 0.0)), axis=0)
@@ -516,60 +652,83 @@ def scan_log(
         peaks["vx"] = max(peaks["vx"], float(np.nanmax(np.abs(speed), initial=0.0)))
         for i, name in enumerate(REFERENCE):
             if name in chunk:
-                reference_present[i] |= bool(np.isfinite(chunk[name]).any())
+                self.reference_present[i] |= bool(np.isfinite(chunk[name]).any())
         collected = dict(chunk, vx=speed)
+        head, wiring = self.head, self.wiring
         if not head.done:
-            stop = int(np.searchsorted(t, t0 + (still_period or 0.0), side="right"))
+            stop = int(np.searchsorted(t, self.t0 + (self.still_period or 0.0), side="right"))
             head.add(collected, 0, min(stop + 1, n))  # one sample past the period
             head.done = stop < n
-        if wiring_checks and not wiring.done:
+        if self.wiring_checks and not wiring.done:
             first = 0
-            if wiring_end is None:
+            if self.wiring_end is None:
                 moving = np.flatnonzero(np.abs(np.nan_to_num(speed)) > MOVING)
                 if moving.size:
                     first = int(moving[0])
-                    wiring_end = t[first] + WINDOW
-            if wiring_end is not None:
-                stop = int(np.searchsorted(t, wiring_end))
+                    self.wiring_end = t[first] + WINDOW
+            if self.wiring_end is not None:
+                stop = int(np.searchsorted(t, self.wiring_end))
                 wiring.add(collected, first, stop)
                 wiring.done = stop < n
-    t = t_store.array()
-    if not t.size:
-        raise ChunkError(f"{source}: no rows")
-    sparse = [name for name, count in finite_counts.items() if name in names
-              and (count == 0 or (name == "vx" and count <= 0.5 * t.size))]  # fmt: skip
-    if sparse:  # the ordinary reader names an empty channel, assumes az, interpolates vx
-        raise ChunkError(f"{source}: column '{sparse[0]}' is empty or slower than the log")
-    steps = check_time_column(t, source)
-    say_gaps(steps, source)
-    az_assumed = "az" not in names
-    az_median = _nanmedian(az_store.array())
-    check_units(
-        np.array([[0.0, 0.0, az_median]]),
-        peaks["d"][None, :],
-        peaks["v"][None, :] if TRAVEL_RATE[0] in names else None,
-        np.array([peaks["vx"]]),
-        source,
-    )
-    stream = LogStream(
-        path=path,
-        source=source,
-        names=names,
-        t=t,
-        steps=steps,
-        travel_present=travel_present,
-        reference_present=reference_present if any(n in names for n in REFERENCE) else None,
-        velocities_derived=TRAVEL_RATE[0] not in names and bool(travel_present.any()),
-        az_assumed=az_assumed,
-        speed_source=speed_source,
-        channel_stats=ChannelStats(**stats),
-        wiring=_signals(wiring, source, az_assumed) if wiring.parts else None,
-        head=_signals(head, source, az_assumed),
-        rows=rows,
-    )
-    if stream.velocities_derived:
-        Differentiator(steps, 4, VELOCITY_CUTOFF, source)  # its checks, before any output
-    return stream
+
+    def provisional(self) -> LogStream:
+        """The :class:`LogStream` of the time column read first and the channels as far as
+        taken: what the filter needs of the whole log (its channels' presence taken from
+        the samples read so far, :meth:`LogStream.filter_facts`)."""
+        return self._stream(self.t, self.steps)
+
+    def finish(self) -> LogStream:
+        """The whole log's :class:`LogStream`, its time column and units checked
+        (:class:`LogError` for a log that cannot be used)."""
+        if self.t is not None:
+            if self.taken != self.t.size:
+                raise LogError(f"{self.source}: changed while it was read: read it again")
+            t, steps = self.t, self.steps
+        else:
+            t = self.t_store.array()
+            if not t.size:
+                raise ChunkError(f"{self.source}: no rows")
+            steps = check_time_column(t, self.source)
+        sparse = [name for name, count in self.finite_counts.items() if name in self.names
+                  and (count == 0 or (name == "vx" and count <= 0.5 * t.size))]  # fmt: skip
+        if sparse:  # the ordinary reader names an empty channel, assumes az, interpolates vx
+            raise ChunkError(f"{self.source}: column '{sparse[0]}' is empty or slower than the log")
+        say_gaps(steps, self.source)
+        az_median = _nanmedian(self.az_store.array())
+        peaks = self.peaks
+        check_units(
+            np.array([[0.0, 0.0, az_median]]),
+            peaks["d"][None, :],
+            peaks["v"][None, :] if TRAVEL_RATE[0] in self.names else None,
+            np.array([peaks["vx"]]),
+            self.source,
+        )
+        stream = self._stream(t, steps)
+        if stream.velocities_derived:
+            Differentiator(steps, 4, VELOCITY_CUTOFF, self.source)  # its checks, before output
+        return stream
+
+    def _stream(self, t: np.ndarray, steps: Steps) -> LogStream:
+        names, source = self.names, self.source
+        az_assumed = "az" not in names
+        return LogStream(
+            path=self.path,
+            source=source,
+            names=names,
+            t=t,
+            steps=steps,
+            travel_present=self.travel_present.copy(),
+            reference_present=(
+                self.reference_present.copy() if any(n in names for n in REFERENCE) else None
+            ),
+            velocities_derived=TRAVEL_RATE[0] not in names and bool(self.travel_present.any()),
+            az_assumed=az_assumed,
+            speed_source=self.speed_source,
+            channel_stats=ChannelStats(**{k: np.copy(v) for k, v in self.stats.items()}),
+            wiring=_signals(self.wiring, source, az_assumed) if self.wiring.parts else None,
+            head=_signals(self.head, source, az_assumed),
+            rows=self.rows,
+        )
 
 
 def _nanmedian(values: np.ndarray) -> float:

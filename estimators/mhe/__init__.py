@@ -1,1 +1,1 @@
-"""The moving-horizon estimator: settings, QP, per-sample state, ring buffers, windows, terms."""
+"""The moving-horizon estimator: settings, QP, per-sample state, loop over a log, windows."""

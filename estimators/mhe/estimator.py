@@ -31,7 +31,7 @@ sample by :meth:`MovingHorizonEstimator.step`; the generated C calls the
 same Function. :class:`MheState` holds the window of terms, the fallback
 filter's state, the previous estimates, the warm start and OSQP's
 :math:`\rho`; ``step`` advances it. ``run`` advances the plain window
-(quadratic losses, no bias states) in preallocated ring buffers instead
+(quadratic losses, no bias states) in whole-log arrays instead
 (:mod:`wheelload.estimators.mhe.ring`), with the same arithmetic and OSQP calls
 as ``step``'s path, bit for bit; the extended window shares ``step``'s code. So
 ``run`` and ``step`` agree to rounding in the filter and the terms (far below
@@ -493,13 +493,13 @@ class MovingHorizonEstimator:
         return estimate_from_reports(signals.t.copy(), reports, self.A, lag=lag)
 
     #: True: :meth:`run` advances the plain window through :meth:`_advance` and a new
-    #: :class:`MheState` per sample (the reference the ring buffers are tested against)
+    #: :class:`MheState` per sample (the reference the loop over a log is tested against)
     per_sample_states = False
     #: a list: the ring loop appends each solved QP's data to it (``wheelload bench mhe``)
     qp_record: list | None = None
 
     def _run_ring(self, signals: Signals, state: MheState, out: tuple, fallback, arrival):
-        """The plain window's loop in preallocated ring buffers (:mod:`.ring`)."""
+        """The plain window's loop over whole-log arrays (:mod:`.ring`)."""
         H, g, link, xp, lower, upper, b, used = out
         loads, status, iterations, failed, solve_time, final = run_ring(
             self, state, H, g, link, xp, lower, upper, fallback.loads, arrival, self.qp_record

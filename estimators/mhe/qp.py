@@ -11,8 +11,8 @@ minimiser (:func:`prior_solution`). :class:`MheWorkspace` holds the OSQP problem
 unbounded window's without over-relaxation or scaling: :data:`UNCONSTRAINED_SETTINGS`);
 :class:`LoadCheck` turns a sample's QP variables into loads within the bounds, or refuses.
 
-Shared by the per-sample window (:mod:`~wheelload.estimators.mhe.estimator`) and the ring
-buffers (:mod:`~wheelload.estimators.mhe.ring`).
+Shared by the per-sample window (:mod:`~wheelload.estimators.mhe.estimator`) and the loop
+over a log (:mod:`~wheelload.estimators.mhe.ring`).
 
 Example
 -------
@@ -138,7 +138,7 @@ def low_level(solver: osqp.OSQP):
 
     The only reach into OSQP's private ``_solver``: the wrapper offers neither the
     :math:`\\rho` it adapted during a solve nor updates and solves without building its
-    result namespace, which the ring buffers (:mod:`~wheelload.estimators.mhe.ring`) and
+    result namespace, which the loop over a log (:mod:`~wheelload.estimators.mhe.ring`) and
     the extended window (:meth:`.window.WindowQP.solve_raw`) skip per sample.
     """
     return solver._solver

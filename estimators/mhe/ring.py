@@ -1,17 +1,17 @@
-r"""The plain MHE window over a whole log in preallocated ring buffers, updated in place.
+r"""The plain MHE window over a whole log, the per-sample terms laid out as whole-log arrays.
 
 :meth:`MovingHorizonEstimator.run` with quadratic losses and no bias states
 advances the window here instead of through a new :class:`MheState` per
-sample. Every per-sample array of the window lives in a *mirrored* ring of
-length :math:`2N`: sample :math:`k` is written at slots :math:`k \bmod N`
-and :math:`k \bmod N + N`, so the window, oldest first, is always the
-contiguous view ``ring[h + 1 : h + 1 + N]`` (no copy, no shift). The QP's
-Hessian values and linear term are written into preallocated arrays with the
-same arithmetic as :func:`wheelload.estimators.mhe.qp.hessian_values` and
-:func:`~wheelload.estimators.mhe.qp.linear_term`, and OSQP is driven through its
-low-level solver object (``update_data_vec``, ``update_data_mat``,
-``warm_start``, ``solve``), skipping the wrapper's result namespace. The
-numbers are those of the per-sample state path to the bit (tested).
+sample. :func:`run_ring` lays each per-sample term out as one array over the
+initial window and the log (name -> ``(N + n, ...)``), so the window of sample
+``i`` is the view ``[i + 1 : i + 1 + N]`` (no copy, no shift), and hands it to
+the loop of :mod:`~wheelload.estimators.mhe.window_loop` with the window's own
+arithmetic: the hard window's hoisted out of the loop (:func:`run_hard`), the soft
+one's (:func:`~wheelload.estimators.mhe.soft_window.run_soft`), the one-sample
+window's the per-sample functions themselves (:func:`run_single`). OSQP is driven
+through its low-level solver object (``update_data_vec``, ``update_data_mat``,
+``warm_start``, ``solve``), skipping the wrapper's result namespace. The numbers are
+those of the per-sample state path to the bit (tested).
 
 Example
 -------
@@ -21,161 +21,13 @@ Example
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
-from wheelload.estimators.mhe.qp import (
-    OSQP_INFINITY,
-    SOLVED,
-    UNSOLVED,
-    MheWorkspace,
-    check_interrupted,
-    csc_value_order,
-    finite_data,
-    prior_solution,
-)
-from wheelload.estimators.mhe.quiet import quiet_stdout
+from wheelload.estimators.mhe.qp import finite_data, hessian_values, linear_term
+from wheelload.estimators.mhe.soft_window import bad_windows, run_soft
 from wheelload.estimators.mhe.terms import LOAD_SCALE
-
-
-class MirroredRing:
-    """``(2N, *shape)`` buffer whose window of the last ``N`` rows is a contiguous view."""
-
-    def __init__(self, initial: np.ndarray) -> None:
-        N = initial.shape[0]
-        self.N = N
-        self.data = np.concatenate([initial, initial]).astype(float)
-        self.head = 0  # slot of the oldest sample
-
-    def push(self, value) -> None:
-        """Drop the oldest row and append ``value`` as the newest (in place)."""
-        h = self.head
-        self.data[h] = value
-        self.data[h + self.N] = value
-        self.head = h + 1 if h + 1 < self.N else 0
-
-    @property
-    def window(self) -> np.ndarray:
-        """The last ``N`` rows, oldest first (a view)."""
-        return self.data[self.head : self.head + self.N]
-
-
-class LowLevelSolver:
-    """The window's OSQP problem driven through the solver object, remembering what it holds.
-
-    Same update rules as :class:`wheelload.estimators.mhe.qp.MheWorkspace` (load only
-    what differs, bounds clamped to OSQP's infinity as its wrapper does), so the
-    solver sees the same data in the same order.
-    """
-
-    def __init__(self, workspace) -> None:
-        self.workspace = workspace
-        self.solver = workspace.low_level
-        self.Px = workspace.Px.copy()
-        self.bounds = (workspace.bounds[0].copy(), workspace.bounds[1].copy())
-        self.rho = workspace.rho
-        self.polish = workspace.polish
-
-    def solve(self, Px, q, lower, upper, x, y, rho) -> tuple[int, int, float]:
-        """Load, warm-start and solve; returns (status, iterations, rho after the solve)."""
-        solver = self.solver
-        if not (Px == self.Px).all():  # np.array_equal for equal shapes
-            solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
-            self.Px[:] = Px
-        if rho != self.rho:
-            self.workspace.solver.update_settings(rho=rho)
-        if lower is not None and not (
-            (lower == self.bounds[0]).all() and (upper == self.bounds[1]).all()
-        ):
-            low = np.maximum(lower, -OSQP_INFINITY)
-            high = np.minimum(upper, OSQP_INFINITY)
-            solver.update_data_vec(q=q, l=low, u=high)
-            self.bounds = (lower.copy(), upper.copy())
-        else:
-            solver.update_data_vec(q=q, l=None, u=None)
-        solver.warm_start(x, y if y.size else None)
-        with quiet_stdout(self.polish):
-            solver.solve()
-        # OSQP adapts rho during the solve; the window passes back what the solver holds,
-        # so it is read once, when the workspace is handed back (release)
-        info = solver.info
-        check_interrupted(info.status_val)
-        return int(info.status_val), int(info.iter), self.rho
-
-    def solution(self) -> tuple[np.ndarray, np.ndarray]:
-        """The last solution (OSQP's binding returns a new array on each access)."""
-        solution = self.solver.solution
-        return solution.x, solution.y
-
-    def release(self) -> None:
-        """Hand the remembered values back to the workspace (for :meth:`.qp.MheWorkspace.solve`)."""
-        self.rho = self.solver.get_settings().rho
-        self.workspace.Px = self.Px.copy()
-        self.workspace.bounds = self.bounds
-        self.workspace.rho = self.rho
-
-
-class HessianBuffers:
-    """Preallocated arrays for the window's Hessian values and linear term."""
-
-    def __init__(self, N: int, width: int, order: np.ndarray) -> None:
-        self.N, self.w = N, width
-        self.order = order
-        self.source = np.empty(N * width * width + (N - 1) * width)
-        self.blocks = self.source[: N * width * width].reshape(N, width, width)
-        self.couplings = self.source[N * width * width :].reshape(N - 1, width)
-        self.diagonal = np.empty(N)
-        self.scaled = np.empty((N, width, width))
-        self.eye = np.eye(width)
-        self.values = np.empty(order.size)
-        self.q = np.empty((N, width))
-
-    def hessian(self, H, link, arrival_j0, j0, null, hard, nWn=None) -> np.ndarray:
-        """:func:`wheelload.estimators.mhe.qp.hessian_values` into the buffers (same
-        arithmetic).
-
-        ``nWn`` (hard): :math:`n^\top W n` of the arrival weight, computed beforehand.
-        """
-        diagonal = self.diagonal
-        diagonal[:] = link
-        diagonal[0] = 0.0
-        diagonal[:-1] += link[1:]
-        if hard:
-            blocks = self.source[: self.N]
-            np.add(H[:, 0, 0], diagonal, out=blocks)
-            blocks[j0] += nWn
-            np.negative(link[1:], out=self.source[self.N : 2 * self.N - 1])
-            np.take(self.source[: 2 * self.N - 1], self.order, out=self.values)
-            return self.values
-        np.multiply(diagonal[:, None, None], self.eye, out=self.scaled)
-        np.add(H, self.scaled, out=self.blocks)
-        self.blocks[j0] += arrival_j0
-        self.couplings[:] = -link[1:, None]
-        np.take(self.source, self.order, out=self.values)
-        return self.values
-
-    def linear(self, g, j0, prior, arrival_j0, drift, xp_j0, null, hard, scale) -> np.ndarray:
-        """:func:`wheelload.estimators.mhe.qp.linear_term` into the buffers (same arithmetic).
-
-        Hard: ``arrival_j0`` is :math:`n^\top W` (computed beforehand), soft: :math:`W`.
-        """
-        q = self.q
-        q[:] = g
-        if hard:
-            d = drift[1:]
-            q[1:, 0] += d
-            q[:-1, 0] -= d
-            q[j0, 0] += arrival_j0 @ (xp_j0 - prior) / scale
-        else:
-            q[j0] -= arrival_j0 @ prior / scale
-        return q.ravel()
-
-
-def report_arrays(n: int) -> tuple[np.ndarray, ...]:
-    """A log's per-sample outputs: loads (n, 4), status, iterations, fallback, solve time."""
-    int64 = np.int64
-    return np.empty((n, 4)), np.empty(n, int64), np.empty(n, int64), np.zeros(n, bool), np.empty(n)
+from wheelload.estimators.mhe.window_loop import run_window
 
 
 def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record=None):
@@ -194,16 +46,11 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
     n = H.shape[0]
     hard, null = mhe.hard, mhe.null
     k0 = state.k
-    eps = (s.solver.eps_abs, s.solver.eps_rel)
-    fields = {  # one packed row per sample: (name, width, shape of the window view)
+    fields = {  # per sample: name -> (width, shape in the window)
         "H": (w * w, (w, w)), "g": (w, (w,)), "link": (1, ()), "drift": (1, ()),
         "xp": (4, (4,)), "lower": (w, (w,)), "upper": (w, (w,)), "arrival": (16, (4, 4)),
         "data": (1, ()), "nW": (4, (4,)), "nWn": (1, ()),
     }  # fmt: skip
-    columns, offset = {}, 0
-    for name, (size, _) in fields.items():
-        columns[name] = slice(offset, offset + size)
-        offset += size
     H = H.reshape(n, w * w)
     links = np.where(np.arange(k0, k0 + n) > 0, link[:, 0], 0.0)
     drifts = np.zeros(n)
@@ -211,12 +58,10 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
         before = np.vstack([state.xp[-1:], xp[:-1]])
         for i in range(n):
             drifts[i] = links[i] / LOAD_SCALE * float(null @ (xp[i] - before[i]))
-    rows = np.empty((n, offset))
     parts = {"H": H, "g": g, "link": links[:, None], "drift": drifts[:, None], "xp": xp,
              "lower": lower, "upper": upper, "arrival": arrival.reshape(n, 16),
              "data": H.any(axis=1)[:, None], "nW": np.zeros((n, 4)),
              "nWn": np.zeros((n, 1))}  # fmt: skip
-    initial = np.empty((N, offset))
     previous = {"H": state.H.reshape(N, w * w), "g": state.g, "link": state.link[:, None],
              "drift": state.drift[:, None], "xp": state.xp, "lower": state.lower,
              "upper": state.upper, "arrival": state.arrival.reshape(N, 16),
@@ -228,114 +73,36 @@ def run_ring(mhe, state, H, g, link, xp, lower, upper, kf_loads, arrival, record
                 nW = null @ arrivals[j]
                 rows_["nW"][j] = nW
                 rows_["nWn"][j, 0] = nW @ null
-    if hard and N > 1:  # the one-variable window: its own loop over whole-log arrays
-        whole = {
-            name: np.concatenate([previous[name], parts[name]]).reshape(N + n, *shape)
-            for name, (_, shape) in fields.items()
-        }
-        return run_hard(mhe, state, whole, kf_loads, record)
-    for name in fields:
-        rows[:, columns[name]] = parts[name]
-        initial[:, columns[name]] = previous[name]
-    ring = MirroredRing(initial)
-    views = [
-        {
-            name: ring.data[h : h + N, columns[name]].reshape((N, *fields[name][1]))
-            for name in fields
-        }
-        for h in range(N)
-    ]
-    history = MirroredRing(state.history)
-    kfx = MirroredRing(state.kfx)
-    x_sol, y_sol, rho = state.x.copy(), state.y.copy(), state.rho
-    bounded = state.y.size > 0
-    buffers = HessianBuffers(N, w, csc_value_order(N, w))
-    solver = None if state.k == 0 else LowLevelSolver(mhe.workspace)
-    loads, status, iterations, failed_all, solve_time = report_arrays(n)
-    lag = s.lag
-    x_warm = np.empty(N * w)
-    y_warm = np.empty_like(y_sol)
-    has_data = parts["data"][:, 0].tolist()
-    # samples since the newest with data (the initial window's inert samples count as data:
-    # the test below only looks at the min(k + 1, N) samples of the log)
-    flags = previous["data"][:, 0].tolist()
-    since = next((N - 1 - j for j in range(N - 1, -1, -1) if flags[j]), N)
-    for i in range(n):
-        start = time.perf_counter()
-        k = k0 + i
-        since = 0 if has_data[i] else since + 1
-        ring.push(rows[i])
-        window = views[ring.head]
-        j0 = max(0, N - 1 - k)
-        prior = history.data[history.head]  # the oldest estimate (read before the push)
-        if k == 0:
-            if solver is not None:
-                solver.release()
-            mhe.workspace = MheWorkspace(s, w)
-            solver = LowLevelSolver(mhe.workspace)
-        x_warm[:-w] = x_sol[w:]
-        x_warm[-w:] = x_sol[-w:]
-        if bounded:
-            y_warm[:-w] = y_sol[w:]
-            y_warm[-w:] = y_sol[-w:]
-        x = None
-        if since >= min(k + 1, N):  # no sample of the window has a data term
-            last = history.window[-1]
-            x_sol = prior_solution(window, j0, last, null, hard, x_warm, w)
-            y_sol = y_warm.copy()
-            code, iters = SOLVED, 0
-            x = mhe.check.newest(x_sol[-w:], window)
-        else:
-            Px = buffers.hessian(window["H"], window["link"], window["arrival"][j0], j0, null,
-                                 hard, window["nWn"][j0])  # fmt: skip
-            q = buffers.linear(
-                window["g"], j0, prior, window["nW"][j0] if hard else window["arrival"][j0],
-                window["drift"], window["xp"][j0], null, hard, LOAD_SCALE,
-            )  # fmt: skip
-            low = window["lower"].ravel() if bounded else None
-            high = window["upper"].ravel() if bounded else None
-            if record is not None:
-                record.append(tuple(None if a is None else np.array(a)
-                                    for a in (Px, q, low, high, x_warm, y_warm)))  # fmt: skip
-            if finite_data(Px, q, *((low, high) if bounded else ())):
-                code, iters, rho = solver.solve(Px, q, low, high, x_warm, y_warm, rho)
-            else:
-                code, iters = UNSOLVED, 0
-            if code == SOLVED:
-                x_sol, y_sol = solver.solution()
-                x = mhe.check.newest(x_sol[-w:], window)
-            else:
-                x_sol, y_sol = x_warm.copy(), y_warm.copy()
-        failed = x is None
-        if failed:
-            x = mhe.check.fallback(kf_loads[i], history.window[-1])
-        kfx.push(kf_loads[i])
-        history.push(x)
-        if lag and not failed:
-            j = N - 1 - lag
-            x = _window_loads(mhe, x_sol, window, kfx.window, j, eps, x)
-        loads[i] = x
-        status[i], iterations[i], failed_all[i] = code, iters, failed
-        solve_time[i] = time.perf_counter() - start
-    if solver is not None:
-        solver.release()
-    final_window = {name: view.copy() for name, view in views[ring.head].items()}
-    final_kfx = kfx.window.copy()
-    final_held = history.window[-1].copy()
-
-    def final(j: int) -> np.ndarray:
-        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
-
-    return loads, status, iterations, failed_all, solve_time, final
+    whole = {
+        name: np.concatenate([previous[name], parts[name]]).reshape(N + n, *shape)
+        for name, (_, shape) in fields.items()
+    }
+    if N > 1:  # the window's arithmetic hoisted out of the loop
+        if hard:
+            return run_hard(mhe, state, whole, kf_loads, record)
+        return run_soft(mhe, state, whole, kf_loads, record)
+    return run_single(mhe, state, whole, kf_loads, record)
 
 
-def _window_loads(mhe, x_sol, window, kfx, j, eps, held) -> np.ndarray:
-    """:meth:`MovingHorizonEstimator.window_loads` of the ring's window (``held``: the newest
-    estimate)."""
-    w = mhe.width
-    block = x_sol[j * w : (j + 1) * w]
-    x = mhe.check.checked(block, window["lower"][j], window["upper"][j], window["xp"][j])
-    return mhe.check.fallback(kfx[j], held) if x is None else x
+def run_single(mhe, state, rows: dict, kf_loads, record=None):
+    """The window of one sample over a log: its QP formed by
+    :func:`~wheelload.estimators.mhe.qp.hessian_values` and
+    :func:`~wheelload.estimators.mhe.qp.linear_term` themselves."""
+    null, hard, w = mhe.null, mhe.hard, mhe.width
+
+    def form(i, a, j0, prior, Px, q, low, high) -> bool:
+        current = {name: values[a : a + 1] for name, values in rows.items()}
+        Px[:] = hessian_values(current, j0, null, hard)
+        q[:] = linear_term(current, j0, prior, null, hard)
+        return not finite_data(Px, q, *(() if low is None else (low, high)))
+
+    lower, upper, xp = rows["lower"], rows["upper"], rows["xp"]
+
+    def newest_loads(x, newest: int):
+        return mhe.check.checked(x[-w:], lower[newest], upper[newest], xp[newest])
+
+    return run_window(mhe, state, rows, kf_loads, record, form=form, newest_loads=newest_loads,
+                      size=w * (w + 1) // 2)  # fmt: skip
 
 
 def _hard_loads(
@@ -348,10 +115,12 @@ def _hard_loads(
     collapsed interval, ``low == high``: clipped); None beyond ``limit`` or not finite.
     """
     eps_abs, eps_rel = eps
-    tolerance = 10.0 * (eps_abs + eps_rel * max(1.0, abs(omega)))
+    size = abs(omega)  # min and max of two as conditionals: the same values, NaN included
+    tolerance = 10.0 * (eps_abs + eps_rel * (size if size > 1.0 else 1.0))
     if omega < low - tolerance or omega > high + tolerance:
         return None
-    scaled = min(max(omega, low), high) * LOAD_SCALE
+    omega = low if low > omega else omega
+    scaled = (high if high < omega else omega) * LOAD_SCALE
     x = [a + b * scaled for a, b in zip(xp, null)]
     tolerance = math.inf if low == high else 10.0 * (1e-9 + 1e-12 * max(1.0, max(map(abs, x))))
     lowest, highest = bounds
@@ -359,7 +128,8 @@ def _hard_loads(
     for value in x:
         if value < lowest - tolerance or value > highest + tolerance or not abs(value) <= limit:
             return None
-        clipped.append(min(max(value, lowest), highest))
+        value = lowest if lowest > value else value
+        clipped.append(highest if highest < value else value)
     return clipped
 
 
@@ -381,8 +151,6 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     s = mhe.settings
     N = s.horizon
     n = len(kf_loads)
-    k0 = state.k
-    eps = (s.solver.eps_abs, s.solver.eps_rel)
     H0, L, D, G = rows["H"][:, 0, 0], rows["link"], rows["drift"], rows["g"][:, 0]
     # Px in CSC order: [d_0, -l_1, d_1, ..., -l_{N-1}, d_{N-1}] = interleaved (-l_j, d_j)[1:]
     interleaved = np.empty((N + n, 2))
@@ -393,133 +161,47 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     interior = np.empty(N + n)
     interior[:-1] = (G[:-1] + D[:-1]) - D[1:]
     interior[-1] = 0.0
+    # a window's end values once its arrival weight is on its oldest sample (j0 = 0)
+    first_px = ((H0[:-1] + (0.0 + L[1:])) + rows["nWn"][:-1]).tolist()
+    last_px = (H0 + L).tolist()
+    first_q, last_q = (G[:-1] - D[1:]).tolist(), (G + D).tolist()
     bounded = state.y.size > 0
-    if bounded:
-        lower, upper = rows["lower"][:, 0], rows["upper"][:, 0]
-        low_clamped = np.maximum(lower, -OSQP_INFINITY)
-        high_clamped = np.minimum(upper, OSQP_INFINITY)
+    finite = np.isfinite
+    bad = bad_windows(
+        ~(finite(H0) & finite(G)),
+        ~(finite(L) & finite(D)),
+        ~(finite(rows["nWn"]) & finite(rows["nW"]).all(axis=1) & finite(rows["xp"]).all(axis=1)),
+        (rows["lower"], rows["upper"]) if bounded else None,
+        N,
+    ).tolist()  # each window's Px and q: H, g of its samples, links and drifts after its
+    # oldest, the arrival weight's n^T W and n^T W n and the xp of its oldest
     H0l, Ll, Dl, Gl = H0.tolist(), L.tolist(), D.tolist(), G.tolist()
     lower_list = rows["lower"][:, 0].tolist()
     upper_list = rows["upper"][:, 0].tolist()
     xp_list = rows["xp"].tolist()
     nW, nWn, xp = rows["nW"], rows["nWn"].tolist(), rows["xp"]
     null = mhe.null.tolist()
-    bounds = mhe.load_bounds
-    history = np.empty((N + n, 4))
-    history[:N] = state.history
-    kfx = np.concatenate([state.kfx, kf_loads])
-    x_sol, y_sol, rho = state.x.copy(), state.y.copy(), state.rho
-    workspace = solver = None if k0 == 0 else mhe.workspace
-    if solver is not None:
-        solver = LowLevelSolver(workspace)
-    loads, status, iterations, failed_all, solve_time = report_arrays(n)
-    lag = s.lag
-    x_warm = np.empty(N)
-    y_warm = np.empty_like(y_sol)
-    Px, q = np.empty(2 * N - 1), np.empty(N)
-    has_data = rows["data"].tolist()
-    flags = has_data[:N]
-    since = next((N - 1 - j for j in range(N - 1, -1, -1) if flags[j]), N)
-    perf_counter = time.perf_counter
+    bounds, eps = mhe.load_bounds, (s.solver.eps_abs, s.solver.eps_rel)
 
-    def window(i: int) -> dict:
-        return {name: values[i + 1 : i + 1 + N] for name, values in rows.items()}
-
-    for i in range(n):
-        start = perf_counter()
-        k = k0 + i
-        a = i + 1  # the window's oldest sample in the arrays over initial window + log
-        since = 0 if has_data[a + N - 1] else since + 1
-        j0 = N - 1 - k if k < N - 1 else 0
-        prior = history[i]  # the oldest estimate
-        if k == 0:
-            if solver is not None:
-                solver.release()
-            mhe.workspace = workspace = MheWorkspace(s, 1)
-            solver = LowLevelSolver(workspace)
-            osqp_solver = solver.solver
-            held_Px, held_low, held_high = solver.Px, *solver.bounds
-        elif i == 0:
-            osqp_solver = solver.solver
-            held_Px, held_low, held_high = solver.Px, *solver.bounds
-        x_warm[:-1] = x_sol[1:]
-        x_warm[-1] = x_sol[-1]
-        if bounded:
-            y_warm[:-1] = y_sol[1:]
-            y_warm[-1] = y_sol[-1]
-        x = None
+    def form(i, a, j0, prior, Px, q, low, high) -> bool:
         newest = a + N - 1
-        if since >= min(k + 1, N):  # no sample of the window has a data term
-            current = window(i)
-            x_sol = prior_solution(current, j0, history[i + N - 1], mhe.null, True, x_warm, 1)
-            y_sol = y_warm.copy()
-            code, iters = SOLVED, 0
-            x = mhe.check.newest(x_sol[-1:], current)
-        else:
-            Px[:] = interleaved[2 * a + 1 : 2 * a + 2 * N]
+        Px[:] = interleaved[2 * a + 1 : 2 * a + 2 * N]
+        q[:] = interior[a : a + N]
+        if j0 == 0:
+            Px[0], Px[-1] = first_px[a], last_px[newest]
+            q[0], q[-1] = first_q[a], last_q[newest]
+        else:  # the log's first samples: inert samples before j0
             Px[0] = H0l[a] + (0.0 + Ll[a + 1])
             Px[-1] = H0l[newest] + Ll[newest]
             Px[2 * j0] += nWn[a + j0]
-            q[:] = interior[a : a + N]
             q[0] = Gl[a] - Dl[a + 1]
             q[-1] = Gl[newest] + Dl[newest]
-            q[j0] += nW[a + j0] @ (xp[a + j0] - prior) / LOAD_SCALE
-            if bounded:
-                low, high = lower[a : a + N], upper[a : a + N]
-            if record is not None:
-                recorded = (low, high) if bounded else (None, None)
-                record.append(tuple(None if v is None else np.array(v)
-                                    for v in (Px, q, *recorded, x_warm, y_warm)))  # fmt: skip
-            if not finite_data(Px, q, *((low, high) if bounded else ())):
-                code, iters = UNSOLVED, 0  # not handed to OSQP: the filter's estimate
-            else:
-                # LowLevelSolver.solve inlined: load only what differs, then warm start and solve
-                if Px[1] != held_Px[1] or not (Px == held_Px).all():
-                    osqp_solver.update_data_mat(P_x=Px, P_i=None, A_x=None, A_i=None)
-                    Px, held_Px = held_Px, Px  # the buffer just loaded is now the one held
-                if rho != solver.rho:
-                    workspace.solver.update_settings(rho=rho)
-                if bounded and not ((low == held_low).all() and (high == held_high).all()):
-                    osqp_solver.update_data_vec(
-                        q=q, l=low_clamped[a : a + N], u=high_clamped[a : a + N]
-                    )
-                    held_low, held_high = low, high
-                else:
-                    osqp_solver.update_data_vec(q=q, l=None, u=None)
-                osqp_solver.warm_start(x_warm, y_warm if bounded else None)
-                with quiet_stdout(solver.polish):
-                    osqp_solver.solve()
-                info = osqp_solver.info
-                code, iters = info.status_val, info.iter
-                check_interrupted(code)
-                if code == SOLVED:
-                    solution = osqp_solver.solution
-                    x_sol = solution.x
-                    if bounded:
-                        y_sol = solution.y
-                    x = _hard_loads(float(x_sol[-1]), lower_list[newest], upper_list[newest],
-                                    xp_list[newest], null, bounds, eps, mhe.load_limit)  # fmt: skip
-            if code != SOLVED:
-                x_sol, y_sol = x_warm.copy(), y_warm.copy()
-        failed = x is None
-        if failed:
-            x = mhe.check.fallback(kf_loads[i], history[N + i - 1])
-        history[N + i] = x
-        if lag and not failed:
-            x = _window_loads(mhe, x_sol, window(i), kfx[a : a + N], N - 1 - lag, eps, x)
-        loads[i] = x
-        status[i], iterations[i], failed_all[i] = code, iters, failed
-        solve_time[i] = perf_counter() - start
-    if solver is not None:
-        solver.Px[:] = held_Px
-        solver.bounds = (held_low.copy(), held_high.copy())
-        solver.release()
-    last = n - 1
-    final_window = {name: view.copy() for name, view in window(last).items()}
-    final_kfx = kfx[last + 1 : last + 1 + N].copy()
-    final_held = np.array(history[N + last], dtype=float)
+        q[j0] += nW[a + j0] @ (xp[a + j0] - prior) / LOAD_SCALE
+        return bad[i] if j0 == 0 else not finite_data(Px, q, *(() if low is None else (low, high)))
 
-    def final(j: int) -> np.ndarray:
-        return _window_loads(mhe, x_sol, final_window, final_kfx, j, eps, final_held)
+    def newest_loads(x, newest: int) -> list | None:
+        return _hard_loads(float(x[-1]), lower_list[newest], upper_list[newest], xp_list[newest],
+                           null, bounds, eps, mhe.load_limit)  # fmt: skip
 
-    return loads, status, iterations, failed_all, solve_time, final
+    return run_window(mhe, state, rows, kf_loads, record, form=form, newest_loads=newest_loads,
+                      size=2 * N - 1)  # fmt: skip

@@ -23,6 +23,8 @@ from wheelload.estimators import linear_percentile, percentile
 #: Bytes of errors kept in memory; a longer log's go to disk (64 MiB: 2 M samples, 4 wheels).
 MEMORY_LIMIT = 64 * 2**20
 PERCENTILE = 95.0
+#: Rows held at first when the log's length is not known (doubled as they come).
+FIRST_ROWS = 1 << 16
 
 
 def order_statistic(columns: list[np.ndarray], k: int) -> float:
@@ -41,23 +43,48 @@ def order_statistic(columns: list[np.ndarray], k: int) -> float:
 
 
 class ErrorStore:
-    """The errors of ``wheels`` columns, at most ``samples`` rows, appended chunk by chunk."""
+    """The errors of ``wheels`` columns, ``samples`` rows (None: not known, grown as they
+    come), appended chunk by chunk."""
 
-    def __init__(self, wheels: int, samples: int, memory_limit: int | None = None) -> None:
+    def __init__(self, wheels: int, samples: int | None, memory_limit: int | None = None) -> None:
         self.wheels = wheels
         self.count = 0
         self._rows = None
         self._folder = None
-        if wheels * samples * 8 <= (MEMORY_LIMIT if memory_limit is None else memory_limit):
-            self._rows = np.empty((wheels, samples))  # one contiguous row a wheel
+        self.limit = MEMORY_LIMIT if memory_limit is None else memory_limit
+        known = samples is not None  # not known: grown as they come, to files beyond the limit
+        rows = samples if known else min(FIRST_ROWS, self.limit // (8 * wheels))
+        if (known or rows > 0) and wheels * rows * 8 <= self.limit:
+            self._rows = np.empty((wheels, rows))  # one contiguous row a wheel
         else:
-            self._folder = tempfile.TemporaryDirectory(prefix="wheelload-errors-")
-            self._paths = [Path(self._folder.name) / f"wheel{i}.f8" for i in range(wheels)]
-            self._files = [path.open("wb") for path in self._paths]
+            self._to_files()
+
+    @property
+    def on_disk(self) -> bool:
+        """Whether the errors go to files."""
+        return self._rows is None
+
+    def _to_files(self) -> None:
+        """Keep the errors on disk from now on (those held so far written first)."""
+        self._folder = tempfile.TemporaryDirectory(prefix="wheelload-errors-")
+        self._paths = [Path(self._folder.name) / f"wheel{i}.f8" for i in range(self.wheels)]
+        self._files = [path.open("wb") for path in self._paths]
+        if self._rows is not None:
+            for i, file in enumerate(self._files):
+                file.write(self._rows[i, : self.count].tobytes())
+            self._rows = None
 
     def append(self, errors: np.ndarray) -> None:
         """Take the next chunk's errors, (count, wheels)."""
         m = len(errors)
+        if self._rows is not None and self.count + m > self._rows.shape[1]:
+            size = max(2 * self._rows.shape[1], self.count + m)
+            if self.wheels * size * 8 <= self.limit:
+                grown = np.empty((self.wheels, size))
+                grown[:, : self.count] = self._rows[:, : self.count]
+                self._rows = grown
+            else:
+                self._to_files()
         if self._rows is not None:
             self._rows[:, self.count : self.count + m] = errors.T
         else:

@@ -36,13 +36,14 @@ _SUSPENSION = (StepFlag.SUSPENSION_FL_SKIPPED, StepFlag.SUSPENSION_FR_SKIPPED,
 class EstimateDigest:
     """Summary figures of estimates added chunk by chunk (module docstring).
 
-    ``samples``: the log's length (sizes the error store); ``reference_wheels``:
+    ``samples``: the log's length (sizes the error store; None: not known, the store
+    grows); ``reference_wheels``:
     (4,) True for each wheel whose reference has a finite sample in the whole
     log, or None without reference loads.
     """
 
     def __init__(
-        self, *, samples: int, reference_wheels: np.ndarray | None, has_std: bool = True
+        self, *, samples: int | None, reference_wheels: np.ndarray | None, has_std: bool = True
     ) -> None:
         self.n = 0
         self.has_std = has_std

@@ -1,12 +1,21 @@
 """One CSV or Parquet log through the lean whole-log path: memory bounded by the chunk.
 
-The log is scanned (:func:`~wheelload.estimators.scan_log`: time
-column, wiring window, sensor set), then read again chunk by chunk through
-the compiled column loop; each chunk is written (``out``) and summarised
+The log is read once. Its first chunks are held until the first seconds (still
+period) and the first :data:`~wheelload.estimators.logs.checks.WINDOW` s of motion
+(wiring checks) are in (:class:`~wheelload.estimators.LogScan`); the checks and the
+static loads run on them, and the filter starts on the chunks held and goes on with
+each chunk as it is read, through the compiled column loop: each chunk is scanned
+(time column, channels' peaks), estimated, written (``out``) and summarised
 (:class:`~wheelload.studies.pipeline.estimate_digest.EstimateDigest`) before the next
-is read. The estimates are those of :meth:`TwoStageKF.run` on the whole log,
-to the bit. ``wheelload estimate`` takes this path for one log and, for long
-logs, for each log of many (:mod:`wheelload.studies.pipeline.batch`).
+is read. What the filter takes of the whole log (the median sample interval, the time
+stamps' uniformity, which channels have a sample) is taken from the chunks held and
+checked against the whole log at its end, before ``out`` is renamed into place: a log
+whose later samples differ in these is estimated again from a second read (as is one
+whose first seconds of motion do not fit in :data:`HELD_BYTES`, read once to scan it,
+then again to estimate it; and one whose file check finds a model error). The
+estimates are those of :meth:`TwoStageKF.run` on the whole log, to the bit.
+``wheelload estimate`` takes this path for one log and, for long logs, for each log of
+many (:mod:`wheelload.studies.pipeline.batch`).
 """
 
 from __future__ import annotations
@@ -14,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -63,6 +73,15 @@ def takes_lean_path(path: Path, settings) -> bool:
     )
 
 
+#: Bytes of a log's first chunks held while the first seconds of motion are read (the
+#: wiring window); a log still standing beyond them is scanned first, then estimated.
+HELD_BYTES = 64 << 20
+
+
+class _Differs(Exception):
+    """The whole log differs from its first chunks in what the filter takes of it."""
+
+
 def estimate_lean(
     path: Path, settings, out: Path | None, *, force: bool = False
 ) -> LeanResult | None:
@@ -71,18 +90,63 @@ def estimate_lean(
     None (nothing written) for a log the chunked reader cannot take as plain
     numbers: the ordinary reader then reads it and names the problem.
     """
-    from wheelload.estimators import scan_log
-    from wheelload.estimators.logs.readers.chunks import ChunkError
-    from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
+    from wheelload.estimators import LogScan
+    from wheelload.estimators.logs.readers.chunks import ChunkError, read_chunks
 
     try:
-        with phase("read (scan)"):
-            stream = scan_log(
-                path, still_period=settings.still_period, wiring_checks=settings.wiring_checks
+        with phase("read (time column)"):
+            scan = LogScan(
+                path,
+                rows=1 << 16,
+                still_period=settings.still_period,
+                wiring_checks=settings.wiring_checks,
+                time_column=True,
             )
+        reader = read_chunks(scan.path, list(scan.names), rows=scan.rows)
+        with phase("read (first chunks)"):
+            held, complete = _first_chunks(scan, reader)
+        first = _provisional(scan, held, complete)
+        if first is None:  # standing beyond the chunks held, or a time column to refuse
+            with phase("read (scan)"):
+                for chunk in reader:
+                    scan.add(chunk)
+                stream = scan.finish()
+            log_stream(stream)
+            return _estimate(path, settings, out, force, stream)
+        return _estimate(path, settings, out, force, first, scan=scan, chunks=(held, reader))
     except ChunkError:
         return None
-    log_stream(stream)
+
+
+def _first_chunks(scan, reader) -> tuple[list[dict], bool]:
+    """Chunks read (and scanned) until the scan is settled, or beyond :data:`HELD_BYTES`;
+    whether they are the whole log."""
+    held, size = [], 0
+    for chunk in reader:
+        scan.add(chunk)
+        held.append(chunk)
+        size += sum(values.nbytes for values in chunk.values())
+        if scan.settled or size > HELD_BYTES:
+            return held, False
+    return held, True
+
+
+def _provisional(scan, held: list[dict], complete: bool) -> LogStream | None:
+    """The stream of the chunks held, or None where the filter cannot start on them (the
+    log standing beyond them)."""
+    if not (scan.settled or complete) or not held:
+        return None
+    return scan.provisional()
+
+
+def _estimate(path, settings, out, force, stream, *, scan=None, chunks=None) -> LeanResult:
+    """The checks, the filter over the log's chunks and the file check; ``scan`` and
+    ``chunks`` (the chunks held, then the reader): the log read once, ``stream`` the
+    stream of the chunks held (module docstring)."""
+    from wheelload.estimators import ThinnedInputs
+    from wheelload.estimators.logs.model_error import MAX_SAMPLES
+    from wheelload.studies.pipeline.log_warnings import channel_warnings, negative_load_warnings
+
     prepared = prepare_log(
         load_vehicle(settings.vehicle, allow_unusual=settings.allow_unusual),
         settings,
@@ -93,11 +157,36 @@ def estimate_lean(
     )
     vehicle, static, notes = prepared.vehicle, prepared.static, prepared.notes
     kf = build(settings.method, vehicle, static=static)
-    digest, faults = _estimate_chunks(stream, kf, out, force)
+    thinned = None
+    if scan is not None:
+        first, whole = stream, None
+
+        def verify():
+            nonlocal whole
+            whole = scan.finish()
+            if first.filter_facts() != whole.filter_facts():
+                raise _Differs
+
+        thinned = ThinnedInputs(MAX_SAMPLES)
+        try:
+            digest, faults = _estimate_chunks(
+                stream, kf, out, force, source=_scanned(scan, *chunks), thinned=thinned,
+                verify=verify,
+            )  # fmt: skip
+            stream = whole
+        except _Differs:
+            logger.info("the log's later samples differ from its first: estimated again")
+            stream, thinned = whole, None
+            digest, faults = _estimate_chunks(stream, kf, out, force)
+        log_stream(stream)
+    else:
+        digest, faults = _estimate_chunks(stream, kf, out, force)
     # The file check (estimators/logs/model_error.py) on every k-th sample; a finding that
     # changes the estimates (a travel zero taken off, σ widened) runs the log again.
     properties = None if digest.mass_properties is None else digest.mass_properties[:4]
-    diagnosis = stream.file_check(vehicle, faults, properties, static_given=static is not None)
+    diagnosis = stream.file_check(
+        vehicle, faults, properties, static_given=static is not None, thinned=thinned
+    )
     if diagnosis.finding is not None:
         digest, faults = _estimate_chunks(stream, kf, out, True, diagnosis)
         digest.model_errors = (diagnosis.finding,)
@@ -122,29 +211,59 @@ def estimate_lean(
     )
 
 
-def _estimate_chunks(stream: LogStream, kf, out: Path | None, force: bool, diagnosis=None):
-    """The log's estimates chunk by chunk into a digest (and ``out``); the faults found."""
+def _scanned(scan, held: list[dict], reader) -> Iterator[dict]:
+    """The chunks held (let go as they are handed on), then the rest of the log, scanned."""
+    while held:
+        yield held.pop(0)
+    for chunk in reader:
+        scan.add(chunk)
+        yield chunk
+
+
+def _estimate_chunks(
+    stream: LogStream,
+    kf,
+    out: Path | None,
+    force: bool,
+    diagnosis=None,
+    *,
+    source=None,
+    thinned=None,
+    verify=None,
+):
+    """The log's estimates chunk by chunk into a digest (and ``out``); the faults found.
+    ``source``, ``thinned``: as :meth:`LogStream.chunks`; ``verify()`` is called once the
+    last chunk is estimated, before ``out`` is renamed into place (an error leaves no
+    ``out``)."""
     from wheelload.estimators.logs.output_files import table_writer
 
-    digest = EstimateDigest(samples=len(stream), reference_wheels=stream.reference_present)
+    samples = len(stream) if source is None else None
+    digest = EstimateDigest(samples=samples, reference_wheels=stream.reference_present)
     faults: list[SensorFault] = []
     start, writing = time.perf_counter(), 0.0
     with contextlib.ExitStack() as stack:
         write = (
             stack.enter_context(table_writer(Path(out), replace=force)) if out is not None else None
         )
-        for chunk in stream.chunks(kf, faults=faults, diagnosis=diagnosis):
+        chunks = stream.chunks(
+            kf, faults=faults, diagnosis=diagnosis, source=source, thinned=thinned
+        )
+        for chunk in chunks:
             if write is not None:
                 handed = time.perf_counter()
                 write(chunk.columns())
                 writing += time.perf_counter() - handed
             digest.add(chunk.loads, chunk.std, chunk.flags, chunk.reference)
             digest.add_mass_properties(chunk.mass_properties)
+        if verify is not None:
+            verify()
         closing = time.perf_counter()
     writing += time.perf_counter() - closing
     total = time.perf_counter() - start
     again = ", run again after the file check" if diagnosis is not None else ""
-    logger.info("filter (chunks read, estimated, digested%s): %.3f s", again, total - writing)
+    read = "" if source is None else ", scanned"
+    logger.info("filter (chunks read%s, estimated, digested%s): %.3f s", read, again,
+                total - writing)  # fmt: skip
     if out is not None:
         logger.info("write %s (handing chunks to the writer, closing it): %.3f s", out, writing)
     return digest, faults

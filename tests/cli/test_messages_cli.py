@@ -38,7 +38,7 @@ def test_estimate_v_tells_what_was_read_derived_and_timed(tmp_path, capsys):
     assert "INFO: channel map: none" in err
     assert "INFO: derived: v_* (travel rates) from d_*" in err
     assert f"INFO: vehicle file {vehicle}: 'sports_car', 1613.2 kg" in err
-    for name in ("read (scan)", "checks", "filter"):
+    for name in ("read (time column)", "read (first chunks)", "checks", "filter"):
         assert f"INFO: {name}" in err and " s\n" in err, name
     assert "DEBUG" not in err  # each check's numbers at -vv only
 

@@ -12,6 +12,11 @@ so that all meet the same machine load, ``--repeat`` times each:
 - ``in-memory``: ``--in-memory``, the whole log read into memory (pandas),
   ``TwoStageKF.run``, ``Estimate.to_pandas`` written by pyarrow (as CSV).
 
+Beside them, in this process, the filter alone: the compiled column loop over the log's
+first 1e6 samples held in memory (no read, no write, no summary), per sample; each
+way's CPU time per sample over it is what reading, checking, summarising and writing
+cost on top of the compiled step.
+
 ``--example`` cold (a fresh, empty build folder: the compiled loop is built)
 and warm (the same folder again). Figures: min / median / max of wall time,
 CPU time (user + system: on a shared machine the wall time includes waiting
@@ -151,6 +156,15 @@ def run(args: argparse.Namespace) -> int:
                 print(f"    {way:13s} wall {_spread(walls, '7.2f')} s   "
                       f"cpu {_spread(cpu, '7.2f')} s"
                       f"   peak RSS {_spread(peaks, '6.0f')} MB")  # fmt: skip
+            loop = _loop_per_sample(log, vehicle, args.repeat)
+            print(f"    compiled loop on chunks in memory (first {min(n, LOOP_SAMPLES)} samples): "
+                  f"{_spread([v * 1e6 for v in loop], '.3f')} us per sample")  # fmt: skip
+            step = statistics.median(loop)
+            for way in ("lean .csv", "lean .parquet"):
+                cpu = [r[2] / n / step for r in figures[way]]
+                wall = [r[0] / n / step for r in figures[way]]
+                print(f"    {way} per sample / compiled loop: cpu {_spread(cpu, '.2f')}   "
+                      f"wall {_spread(wall, '.2f')}")  # fmt: skip
             pairs = list(zip(figures["lean .csv"], figures["lean .parquet"], strict=True))
             print(f"    CSV / Parquet, pair by pair: wall "
                   f"{_spread([c[0] / p[0] for c, p in pairs], '.2f')}   cpu "
@@ -175,6 +189,40 @@ def run(args: argparse.Namespace) -> int:
                   f"cpu {_spread(cpu, '6.2f')} s")  # fmt: skip
     print(f"  load average {_load()} at the end")
     return 0
+
+
+#: Samples of the log the compiled loop is timed on (held in memory).
+LOOP_SAMPLES = 1_000_000
+
+
+def _loop_per_sample(log: Path, vehicle: str, repeat: int) -> list[float]:
+    """CPU seconds per sample of the KF's compiled column loop (``LogStream.chunks``) over
+    the log's first :data:`LOOP_SAMPLES` samples, read into memory first."""
+    from wheelload.estimators.kf.log_stream import LogScan
+    from wheelload.estimators.logs.readers.chunks import read_chunks
+    from wheelload.estimators.registry import build
+    from wheelload.models import load_vehicle
+
+    scan = LogScan(log, rows=1 << 16, still_period=None, wiring_checks=False)
+    chunks, count = [], 0
+    for chunk in read_chunks(log, list(scan.names), rows=scan.rows):
+        chunk = {name: values[: LOOP_SAMPLES - count] for name, values in chunk.items()}
+        scan.add(chunk)
+        chunks.append(chunk)
+        count += len(chunk["t"])
+        if count >= LOOP_SAMPLES:
+            break
+    stream = scan.finish()
+    kf = build("kf", load_vehicle(vehicle))
+    for _ in stream.chunks(kf, source=iter(chunks[:1])):  # the loop built, warm
+        pass
+    times = []
+    for _ in range(repeat):
+        start = time.process_time()
+        for _ in stream.chunks(kf, source=iter(chunks)):
+            pass
+        times.append((time.process_time() - start) / count)
+    return times
 
 
 def _load() -> str:

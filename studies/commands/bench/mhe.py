@@ -100,7 +100,7 @@ def _bench_window(vehicle, signals, horizons: list[int], repeats: int) -> None:
 
     if repeats < 1:
         raise ValueError(f"--repeats must be >= 1, got {repeats}")
-    print(f"MHE window from Python (ring buffers: update + solve) against bare OSQP solving the "
+    print(f"MHE window from Python (update + solve) against bare OSQP solving the "
           f"same QPs, per sample; {repeats} repeats: min / median / max")  # fmt: skip
     for horizon in horizons:
         for constraint in Constraint:

@@ -266,7 +266,7 @@ def test_the_streamed_file_check_equals_run(tmp_path, example, vehicle, wrong):
     frame.to_csv(path, index=False)
     whole = TwoStageKF(vehicle).run(read_log(path, wiring_checks=False))
     stream = scan_log(path, rows=ROWS, wiring_checks=False)
-    _, inputs = stream.thinned_inputs(MAX_SAMPLES)
+    _, inputs = stream.thinned_inputs(MAX_SAMPLES).result()
     lean = TwoStageKF(vehicle, check_file=False)
     properties = lean.run(read_log(path, wiring_checks=False)).mass_properties[-1]
     diagnosis = diagnose_inputs(inputs, vehicle, mass_properties=properties)

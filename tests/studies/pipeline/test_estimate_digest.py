@@ -22,13 +22,18 @@ def _plain(errors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rmse, p95, absolute.max(axis=0)
 
 
-@pytest.mark.parametrize("store", ["memory", "disk"])
+@pytest.mark.parametrize("store", ["memory", "disk", "growing", "growing to disk"])
 def test_the_figures_equal_the_plain_ones_in_chunks_with_gaps(store, monkeypatch, tmp_path):
     """In memory and on disk (the store's files in a private folder under TMPDIR, removed
-    once the figures are made)."""
+    once the figures are made); a log's length not known (the one read of the lean path):
+    grown in memory, or grown and then, beyond the memory limit, moved to disk."""
     if store == "disk":
         monkeypatch.setattr(error_store, "MEMORY_LIMIT", 0)
-        monkeypatch.setattr(error_store.tempfile, "tempdir", str(tmp_path))
+    if store.startswith("growing"):
+        monkeypatch.setattr(error_store, "FIRST_ROWS", 5000)  # 5000 -> 10000 -> 20000 rows
+    if store == "growing to disk":
+        monkeypatch.setattr(error_store, "MEMORY_LIMIT", 8 * 4 * 8000)  # 10000 rows: disk
+    monkeypatch.setattr(error_store.tempfile, "tempdir", str(tmp_path))
     rng = np.random.default_rng(7)
     n = 20_000
     reference = 4000.0 + 500.0 * rng.standard_normal((n, 4))
@@ -37,11 +42,15 @@ def test_the_figures_equal_the_plain_ones_in_chunks_with_gaps(store, monkeypatch
     errors[::97, 2] = 0.0
     reference[5::301, 1] = np.nan  # unscored samples: the store has a tail
     loads = reference + errors
-    digest = EstimateDigest(samples=n, reference_wheels=np.ones(4, bool))
+    known = None if store.startswith("growing") else n
+    digest = EstimateDigest(samples=known, reference_wheels=np.ones(4, bool))
+    if store == "growing to disk":
+        assert not digest.errors.on_disk  # in memory at first
     for start in range(0, n, 6000):
         part = slice(start, start + 6000)
         m = len(loads[part])
         digest.add(loads[part], np.ones((m, 4)), np.zeros(m, np.uint32), reference[part])
+    assert digest.errors.on_disk == (store in ("disk", "growing to disk"))
     names, rows = digest.metric_rows("log.csv")
     scored = np.all(np.isfinite(reference), axis=1)
     expected = (loads - reference)[scored]

@@ -20,16 +20,9 @@ from wheelload.studies.pipeline.run_messages import (
 
 
 @pytest.fixture
-def caplog(caplog):
-    """The library's records straight from its logger (the console command stops them
-    propagating to the root, where pytest listens, once it has run in this process)."""
-    library = logging.getLogger("wheelload")
-    propagate = library.propagate
-    library.addHandler(caplog.handler)
-    library.propagate = False
-    yield caplog
-    library.removeHandler(caplog.handler)
-    library.propagate = propagate
+def caplog(library_caplog):
+    """pytest's caplog on the library's own logger (tests/studies/conftest.py)."""
+    return library_caplog
 
 
 def test_a_log_without_rates_or_az_says_what_was_derived(tmp_path, caplog):
