@@ -129,7 +129,8 @@ def _lag(channel: str, against: str, key: str, y, p, fs: float) -> Lag:
     lag, r, kappa = cross_lag(y, p, rate)
     unaligned = float(y @ p) / math.sqrt(float(y @ y) * float(p @ p))
     independent = 2.0 * (BANDS[key][1] - BANDS[key][0]) * y.size / rate
-    std = math.sqrt((1 - r * r) / (r * r * independent * kappa)) if kappa > 0 else math.inf
+    share = max(0.0, 1.0 - r * r)  # |r| may round a hair above 1 on a perfect match
+    std = math.sqrt(share / (r * r * independent * kappa)) if kappa > 0 and r != 0 else math.inf
     note = ""
     if abs(r) < MIN_CORRELATION:
         note = f"correlation {abs(r):.2f} below {MIN_CORRELATION}"

@@ -44,6 +44,7 @@ class MheMethod:
         # OSQP and scipy.sparse load here, not when the registry lists the methods.
         from wheelload.estimators.mhe.estimator import MovingHorizonEstimator
 
+        self.vehicle = vehicle
         self.mhe = MovingHorizonEstimator(vehicle, settings)
         self.interval = interval
         self.name = self.mhe.name

@@ -24,8 +24,9 @@ The export is told by its first row (``Format`` and the program's name); the cha
 row is the first after the metadata block that starts with ``Time``; the units row follows
 it; the data start at the first row after it whose first cell is a number. A ``;``
 separator takes a decimal comma. Each channel's unit comes from the units row and is
-converted by the units table (:mod:`.units`), so a channel map for an export needs no
-``unit`` keys, and no ``[time]`` table (the ``Time`` column, in the units row's unit).
+converted by the units table (:mod:`~wheelload.estimators.logs.readers.units`), so a
+channel map for an export needs no ``unit`` keys, and no ``[time]`` table (the ``Time``
+column, in the units row's unit).
 """
 
 from __future__ import annotations
