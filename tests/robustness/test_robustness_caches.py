@@ -75,8 +75,11 @@ def temporaries(folder: Path) -> list[Path]:
 
 
 def one_line(err: str) -> str:
-    assert err.count("\n") == 1 and "Traceback" not in err, err
-    return err
+    """The one line said, beside the notes of a build that took over 2 s (a loaded machine
+    builds what the copied build folder lacks)."""
+    said = [line for line in err.splitlines() if "note: compiling" not in line]
+    assert len(said) == 1 and "Traceback" not in err, err
+    return said[0] + "\n"
 
 
 @pytest.fixture(scope="session")
@@ -284,9 +287,7 @@ def test_a_second_study_into_the_same_folder_refuses_at_once(built, tmp_path):
     assert "jobs computed" not in second.stdout
     output, err = stop(first, signal.SIGINT)  # Ctrl-C: one line, exit 130, no temporary left
     assert first.returncode == 130, (output, err)
-    # the plant's first build announces itself when it takes over 2 s (a loaded machine)
-    said = [line for line in err.splitlines() if "note: compiling" not in line]
-    assert said == ["wheelload study: interrupted"] and "Traceback" not in err, err
+    assert one_line(err) == "wheelload study: interrupted\n"
     assert temporaries(out) == []
 
 

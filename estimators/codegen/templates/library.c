@@ -444,12 +444,14 @@ static void timed_replay(${prefix}_timed *timed, const ${prefix}_params *params,
         for (j = 0; j < ${PREFIX}_N_INPUTS; ++j) {
             *${prefix}_input_field(&input, j) = c->u[j];
         }
-        if ((c->channels >> SPEED_INDEX) & 1u) {
+        if (((c->channels >> SPEED_INDEX) & 1u) != 0u) {
             speed = c->u[SPEED_INDEX];
             speed_time = c->t;
             has_speed = 1;
         } else if (has_speed && c->t - speed_time <= timed->speed_hold) {
             *${prefix}_input_field(&input, SPEED_INDEX) = speed;
+        } else {
+            /* no speed, or one older than speed_hold: the rows that need it are skipped */
         }
         (void)${prefix}_step(&timed->state, params, &input,
                              has_time ? c->t - time : timed->first_interval, &timed->last);
@@ -472,13 +474,15 @@ uint32_t ${prefix}_step_at(${prefix}_timed *timed, const ${prefix}_params *param
     ${prefix}_real u[${PREFIX}_N_INPUTS];
     uint32_t present = 0u;
     int k, position = 0, n = timed->count;
-    int accepted = FINITE(t);
+    bool accepted = FINITE(t);
+    uint32_t bit = 1u; /* 1 << k, by one constant shift a channel */
     timed_params.interval_band = ${PREFIX}_TIMED_INTERVAL_BAND;
     for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
         const ${prefix}_real value = *${prefix}_input_field(&given, k);
-        const int here = ((channels >> k) & 1u) && FINITE(value);
+        const bool here = ((channels & bit) != 0u) && FINITE(value);
         u[k] = here ? value : (${prefix}_real)NAN;
-        present |= here ? 1u << k : 0u;
+        present |= here ? bit : 0u;
+        bit <<= 1u;
     }
     if (accepted && (n == 0 || t > timed->t)) {
         if (n == ${PREFIX}_N_CHECKPOINTS) {
@@ -496,18 +500,22 @@ uint32_t ${prefix}_step_at(${prefix}_timed *timed, const ${prefix}_params *param
     }
     if (accepted && CHECKPOINT(timed, position).t == t) {
         ${prefix}_checkpoint *same = &CHECKPOINT(timed, position);
+        bit = 1u;
         for (k = 0; k < ${PREFIX}_N_INPUTS; ++k) {
-            same->u[k] = (present >> k) & 1u ? u[k] : same->u[k];
+            same->u[k] = ((present & bit) != 0u) ? u[k] : same->u[k];
+            bit <<= 1u;
         }
         same->channels |= present;
     } else if (accepted && position == 0 && n == ${PREFIX}_N_CHECKPOINTS) {
-        accepted = 0;
+        accepted = false;
     } else if (accepted) {
         if (n == ${PREFIX}_N_CHECKPOINTS) {
             timed_evict(timed);
             position -= 1;
         }
         timed_insert(timed, position, t, u, present);
+    } else {
+        /* refused: counted and flagged below */
     }
     if (!accepted) {
         timed->dropped += 1u;
