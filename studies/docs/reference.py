@@ -50,6 +50,8 @@ CONTRACT: dict[str, tuple[tuple[str, tuple[str, ...]], ...]] = {
                 "LogError",
                 "scan_log",
                 "LogStream",
+                "LogScan",
+                "ThinnedInputs",
             ),
         ),
         (
