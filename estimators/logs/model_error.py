@@ -62,6 +62,10 @@ SIGNIFICANT = 0.5
 #: A hypothesis of another family explaining this share of the best's is named beside it
 #: (mass and CG height both scale the load transfer m h a).
 RIVAL = 0.95
+#: A motion ratio must leave at most this share of the residual energy the best other
+#: hypothesis leaves (the bundled cars' plant logs: a front motion ratio of 0.7 forgotten
+#: 0.11-0.69 on every log with motion; every other wrong file 0.91 or more).
+MOTION_RATIO_MARGIN = 0.8
 #: Lateral acceleration magnitude below which the car is quiet (travel warp and offsets
 #: are read there) [m/s^2].
 QUIET_ACCELERATION = 1.0
@@ -341,6 +345,7 @@ def diagnose_inputs(
     weight = 1.0 / np.sqrt(np.asarray(vehicle.filter.constraint_noise_density, float))
     fits = [_weighted_fit(r, S[:, :, k], weight) for k in range(len(HYPOTHESES))]
     explained = np.array([1.0 - left / base if base > 0 else 0.0 for _, left, base in fits])
+    explained[~_considered(fits)] = -np.inf
     order = np.argsort(-explained)
     best = int(order[0])
     size, left, base = fits[best]
@@ -366,6 +371,17 @@ def diagnose_inputs(
     steps = [best, *([rivals[0]] if close else [])]
     change = np.column_stack([dp[:, k] * fits[k][0] for k in steps])
     return Diagnosis(finding=finding, travel_zero=np.zeros(4), p=p, change=change)
+
+
+def _considered(fits) -> np.ndarray:
+    """The hypotheses (bool, :data:`HYPOTHESES` order) that may be named: a motion ratio, which
+    moves four rates of an axle at once, only when it leaves at most :data:`MOTION_RATIO_MARGIN`
+    of the residual energy the best other hypothesis leaves."""
+    left = np.array([left for _, left, _ in fits])
+    ratio = np.array([h.family == "motion ratio" for h in HYPOTHESES])
+    return ~ratio | (
+        left.min(where=ratio, initial=np.inf) <= MOTION_RATIO_MARGIN * left[~ratio].min()
+    )
 
 
 def _rows(U, p, dp) -> dict[str, np.ndarray]:
