@@ -31,10 +31,12 @@ from wheelload.models.family.tyre_forces import (
     load_shares,
     observer_gains,
     rolling_resistance_force,
+    slip_ratios,
     tyre_split,
+    wheel_centre_speeds,
     wheel_lateral_forces,
-    wheel_slip_velocity,
 )
+from wheelload.models.vehicle.wheel_geometry import rolling_radius
 
 
 class LateralSplit(enum.Enum):
@@ -50,7 +52,7 @@ class CoreLayout:
     observer: slice = slice(0, 16)  # per wheel: omega_hat, a_hat, last torque, last spin
     x: slice = slice(16, 22)  # lateral filter: F_yf, F_yr, e, r, torque gain g, S_x bias
     P: slice = slice(22, 58)  # its covariance, 6 x 6 column-major
-    last_slip: slice = slice(58, 62)  # slip velocities R w - v of the last sample with all
+    last_slip: slice = slice(58, 62)  # slip ratios of the last sample with every spin, speed
     slip_rate: slice = slice(62, 66)  # their rates, low-passed over slip_time
     last_fx: slice = slice(66, 70)  # the last F_x (held through a missing spin or torque)
     observer_started: int = 70  # 1 once a sample had every spin and torque
@@ -160,18 +162,20 @@ def tyre_core_function(
     P = _select(lateral, ca.reshape(core[CORE.P], n, n), P0)
     steer = steer * wheels_valid[8]
 
-    # §IV's high slip: a wheel's slip velocity R w - v changing faster than R w_th,
-    # low-passed over slip_time (a kerb's spin oscillation averages out).
-    slip_velocity = wheel_slip_velocity(spin, k.radius, speed, rate * rate_valid, steer,
-                                        k.positions)  # fmt: skip
+    # §IV's high slip: a wheel's slip ratio (on its effective rolling radius under the KF's
+    # load) changing faster than slip_ratio_rate, low-passed over slip_time (a kerb's spin
+    # oscillation averages out).
+    deflection = ca.fmax(loads, 0.0) / ca.DM(k.vertical_stiffness)
+    speeds = wheel_centre_speeds(speed, rate * rate_valid, steer, k.positions)
+    slip = slip_ratios(spin, rolling_radius(ca.DM(k.free_radius), deflection), speeds,
+                       s.slip_speed)  # fmt: skip
     slip_valid = spins_valid * speed_valid
     seen = core[CORE.slip_seen] * slip_valid * (dt > 0)
-    raw_rate = (slip_velocity - core[CORE.last_slip]) / ca.fmax(dt, 1e-9)
+    raw_rate = (slip - core[CORE.last_slip]) / ca.fmax(dt, 1e-9)
     blend = dt / (s.slip_time + dt)
     slip_rate = _select(seen, core[CORE.slip_rate] + blend * (raw_rate - core[CORE.slip_rate]),
                         core[CORE.slip_rate])  # fmt: skip
-    spin_acceleration = ca.fabs(slip_rate) / ca.DM(k.radius)
-    high_slip = seen * (ca.mmax(spin_acceleration) >= s.slip_acceleration)
+    high_slip = seen * (ca.mmax(ca.fabs(slip_rate)) >= s.slip_ratio_rate)
     switched = high_slip * float(s.switch_covariances)
     q_scale = _select(switched, high_slip_scales[0], 1.0)
     r_scale = _select(switched, high_slip_scales[1], 1.0)
@@ -226,7 +230,7 @@ def tyre_core_function(
 
     core_next = ca.vertcat(
         *observers, x, ca.reshape(P, n * n, 1),
-        _select(slip_valid, slip_velocity, core[CORE.last_slip]), slip_rate, fx,
+        _select(slip_valid, slip, core[CORE.last_slip]), slip_rate, fx,
         ca.fmax(started, inputs_valid), 1.0, ca.fmax(core[CORE.slip_seen], slip_valid),
     )  # fmt: skip
     inputs = [core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, speed,
