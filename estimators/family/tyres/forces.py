@@ -8,7 +8,11 @@ r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage K
   the paper's Remark 1 holds them, which lags a spin ramp by half a sample), minus the
   rolling resistance on the KF's :math:`F_z`. The torque's feed-through is scaled by a
   gain :math:`g` (1 nominal) that the lateral filter estimates from :math:`S_x`, so a
-  torque signal a few % off is learned, its σ in :math:`F_x`'s.
+  torque signal a few % off is learned, its σ in :math:`F_x`'s. In high slip and
+  ``slip_hold`` after it, :math:`F_x` is a second, fast observer's (30 Hz against the
+  nominal 1 Hz, both always running): a cycling ABS moves the force at 4-10 Hz, which the
+  nominal one cannot follow (F_x 46 → 26 % of its RMS on the plant's ABS braking), while
+  elsewhere the fast one would pass the spin noise (lane change 3.5 → 25 %).
 - ``tyre-lateral`` (§III-B, eq. 10-16): a Kalman filter on
   :math:`(F_{yf}, F_{yr}, e, r, g, b_x)`: the axles' lateral forces, the front left/right
   difference beyond the load split (the paper's :math:`\bar F_{yf}`; see
@@ -108,6 +112,10 @@ class TyreSettings:
 
     observer_frequency: float = 1.0  # Hz, natural frequency of eq. 9's poles
     observer_damping: float = 0.8  # -
+    # In high slip and slip_hold after it F_x takes a fast observer's: a cycling ABS
+    # moves the force at 4-10 Hz (module docstring).
+    slip_observer_frequency: float = 30.0  # Hz
+    slip_hold: float = 0.2  # s
     spin_noise: float = 0.02  # rad/s, 1 sigma white spin noise (sigma of F_x)
     rolling_resistance_std: float = 0.3  # share of the rolling resistance (sigma of F_x)
     force_share_std: float = 0.04  # share of F_x: the loaded radius and torque (sigma of F_x)
@@ -138,8 +146,11 @@ class TyreSettings:
     missing_std: float = 1.0e4  # N, sigma of an F_x held through a missing spin or torque
 
     def __post_init__(self) -> None:
-        for key in ("observer_frequency", "observer_damping", "force_rate", "split_rate",
-                    "split_std", "yaw_rate_noise", "force_noise", "gyro_noise",
+        if not self.slip_hold >= 0:
+            raise ValueError(f"tyre settings: slip_hold must be >= 0, got {self.slip_hold}")
+        for key in ("observer_frequency", "slip_observer_frequency", "observer_damping",
+                    "force_rate", "split_rate", "split_std", "yaw_rate_noise", "force_noise",
+                    "gyro_noise",
                     "initial_force_std", "torque_gain_std", "torque_gain_rate",
                     "force_bias_std", "force_bias_rate", "slip_ratio_rate",
                     "slip_time", "slip_speed"):  # fmt: skip
@@ -338,11 +349,15 @@ class TyreForces:
         return CompiledLoop(self.core_function, 1, CORE_INPUTS[1:])
 
     def observer_input(self, dt: float) -> np.ndarray:
-        """The core step's ``observer`` input for an interval ``dt`` (rounded to 1 ns)."""
+        """The core step's ``observer`` input for an interval ``dt`` (rounded to 1 ns): the
+        nominal observers, then the fast ones of high slip."""
         k, s = self.constants, self.settings
-        return observer_inputs([discrete_observer(k.inertia[i], k.radius[i], s.observer_frequency,
-                                                  s.observer_damping, round(float(dt), 9))
-                                for i in range(4)])  # fmt: skip
+        return np.concatenate([
+            observer_inputs([discrete_observer(k.inertia[i], k.radius[i], frequency,
+                                               s.observer_damping, round(float(dt), 9))
+                             for i in range(4)])
+            for frequency in (s.observer_frequency, s.slip_observer_frequency)
+        ])  # fmt: skip
 
     def core_step(self, core: np.ndarray, inputs: Inputs, dt: float):
         """One sample of the observers: ``(core, fx, fx_std, fy, fy_std)``."""

@@ -23,6 +23,7 @@ from wheelload.estimators.family.tyres.forces import (
 from wheelload.estimators.family.tyres.step import CORE, LateralSplit
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
+from wheelload.estimators.result import StepFlag
 from wheelload.estimators.samples import step_through
 from wheelload.models import example_vehicle_path, load_vehicle, vehicle_from_dict
 from wheelload.models.family.tyre_forces import (
@@ -265,6 +266,26 @@ def test_step_equals_run(dlc):
         np.testing.assert_array_equal(stepped.flags, ran.flags)
 
 
+def test_high_slip_rides_the_fast_observer(dlc):
+    """In high slip (and slip_hold after it) F_x is the fast observer's: with every sample
+    after the first flagged (a threshold of 1e-9 /s) and a hold longer than the log, F_x
+    (from the first sample, where both start rolling steadily) and its σ (from the first
+    flagged one) equal those of a method whose nominal observer runs at the fast one's 30 Hz
+    and that never flags (to 1e-9 N: the same algebra); the nominal 1 Hz observer's differ."""
+    vehicle = load_vehicle(example_vehicle_path())
+    short = dlc.slice(0, 400)
+    fast = TyreSettings(slip_ratio_rate=1e-9, slip_hold=1e3)
+    flagged = build("tyre-forces", vehicle, settings=fast).run(short)
+    assert ((flagged.flags[1:] & StepFlag.HIGH_SLIP) != 0).all()
+    quick = TyreSettings(observer_frequency=fast.slip_observer_frequency, slip_ratio_rate=1e9)
+    reference = build("tyre-forces", vehicle, settings=quick).run(short)
+    assert not (reference.flags & StepFlag.HIGH_SLIP).any()
+    np.testing.assert_allclose(flagged.fx, reference.fx, rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(flagged.fx_std[1:], reference.fx_std[1:], rtol=0.0, atol=1e-9)
+    nominal = build("tyre-forces", vehicle).run(short)
+    assert np.max(np.abs(nominal.fx - flagged.fx)) > 1.0
+
+
 def test_registered_apart_from_the_load_methods(dlc):
     """The tyre methods are built by the registry but not ranked as load estimators; a log
     without wheel spins gets a one-line error naming the channel."""
@@ -415,6 +436,7 @@ def test_high_slip_takes_the_papers_covariances(load_split):
         inputs = dataclasses.replace(first, spin=spin, speed=speed)
         after, fx, _, fy, _, high_slip = method.core_step(core, inputs, dt)
         assert high_slip[0] == flagged
+        assert after[CORE.slip_hold] == (settings.slip_hold if flagged else 0.0)
         rest = fx - after[CORE.x][4] * inputs.torque / method.constants.radius
         x, P, fy_expected, _ = lateral_reference(method, core[CORE.x],
                                                  core[CORE.P].reshape(6, 6), rest, inputs,
