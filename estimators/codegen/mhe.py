@@ -92,9 +92,9 @@ import casadi as ca
 import numpy as np
 
 from wheelload.estimators.codegen.deviations import (
-    HARD_MHE_DEVIATIONS,
     LIBRARY_DEVIATIONS,
     MHE_DEVIATIONS,
+    TRIVIAL_SIZE_DEVIATIONS,
     write_deviation_record,
 )
 from wheelload.estimators.codegen.kf import CodegenOptions, generate
@@ -248,8 +248,10 @@ def _generate_into(
     (folder / EXAMPLE).write_text((TEMPLATES / "mhe_main.c").read_text())
     (folder / "Makefile").write_text(_makefile(folder))
     filter_deviations = [d.for_prefix(FILTER_PREFIX) for d in LIBRARY_DEVIATIONS] if linked else []
-    hard = HARD_MHE_DEVIATIONS if mhe.hard else ()
-    write_deviation_record(folder, [*filter_deviations, *MHE_DEVIATIONS, *hard], "wheelload_mhe")
+    qp = mhe.window_qp if settings.extended else None
+    trivial = mhe.hard or (qp is not None and qp.n_bias > 0 and not qp.travel_bias)
+    sizes = TRIVIAL_SIZE_DEVIATIONS if trivial else ()
+    write_deviation_record(folder, [*filter_deviations, *MHE_DEVIATIONS, *sizes], "wheelload_mhe")
 
 
 def _undated(path: Path) -> None:
