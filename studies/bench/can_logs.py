@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
 def register_bench(subparsers) -> None:
     """``wheelload bench can``."""
     parser = subparsers.add_parser(
-        "can", help="the KF on a CAN car's MDF4 and BLF logs, latency found and applied",
+        "can",
         description=__doc__.splitlines()[0],
     )  # fmt: skip
     parser.add_argument("--delay", type=float, default=0.3, help="ay's hidden delay [s]")

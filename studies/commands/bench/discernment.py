@@ -10,10 +10,7 @@ from wheelload.studies.drive.sensors import sensor_grade
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "discernment",
-        help="model error, a changed car or a sensor fault: exact, loaded and wrong files",
-    )
+    parser = subparsers.add_parser("discernment")
     parser.add_argument(
         "--grades",
         default="mti-1,consumer-mems",

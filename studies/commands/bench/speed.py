@@ -67,9 +67,7 @@ PASSES = 101
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench speed``."""
-    parser = subparsers.add_parser(
-        "speed", help="step vs filterpy, batched C vs single C step, C step vs its chain bound"
-    )
+    parser = subparsers.add_parser("speed")
     add_vehicle_option(parser)
     parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
