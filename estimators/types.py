@@ -137,6 +137,9 @@ class Signals:
     steer: np.ndarray | None = None  # (n,) front road-wheel angle [rad]
     reference_fx: np.ndarray | None = None  # (n, 4) fx_* [N], tyre frame
     reference_fy: np.ndarray | None = None  # (n, 4) fy_* [N], tyre frame
+    #: Channels on their own clocks (``[clock] union``): each NaN where it has no new value;
+    #: derivatives on each channel's own stamps, the KF at each row's own time stamp.
+    own_clocks: bool = False
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
@@ -244,6 +247,7 @@ class Signals:
             steer=cut(self.steer),
             reference_fx=cut(self.reference_fx),
             reference_fy=cut(self.reference_fy),
+            own_clocks=self.own_clocks,
         )
 
 

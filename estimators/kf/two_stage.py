@@ -351,11 +351,27 @@ class TwoStageKF:
         step = self.step_function
         return np.cumsum([step.nnz_out(i) for i in range(step.n_out())])[:-1]
 
+    def log_tuning(self, signals: Signals) -> np.ndarray:
+        """The tuning :meth:`run` filters ``signals`` with: the nominal interval the
+        constructor's ``sample_interval`` or the log's median interval; for channels on their
+        own clocks (``signals.own_clocks``) the IMU's (``ax``'s own stamps) and
+        :meth:`timed`'s interval band, so that each row is filtered at its own time stamp
+        as the timed filter does (:mod:`~wheelload.estimators.kf.rewind`)."""
+        if not signals.own_clocks:
+            return self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        from wheelload.estimators.kf.rewind import timed_tuning
+
+        imu = signals.t[np.isfinite(signals.acc[:, 0])]
+        return timed_tuning(self.tuning_for(self.sample_interval or nominal_interval(imu)))
+
     def run(self, signals: Signals, state: FilterState | None = None) -> Estimate:
         """Filter a whole log in compiled code; same numbers as repeated :meth:`step`.
 
         The nominal interval is the constructor's ``sample_interval`` or the
-        log's median interval.
+        log's median interval (:meth:`log_tuning`). A log of channels on their own clocks
+        (``[clock] union``: each row the samples logged at its time stamp, NaN elsewhere)
+        is filtered as :meth:`run_timed` filters its rows: each predicted to its own time
+        stamp and updated by the rows its channels inform.
         """
         return self._run(signals, state, with_covariance=False)[0]
 
@@ -373,7 +389,8 @@ class TwoStageKF:
         filtered, covariances = self.run_with_covariance(signals, state)
         A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)
         dt = sample_intervals(signals.t)
-        return rts_smooth(filtered, covariances, dt, self._step, self.p, self.tuning, A)
+        tuning = self.log_tuning(signals) if signals.own_clocks else self.tuning
+        return rts_smooth(filtered, covariances, dt, self._step, self.p, tuning, A)
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
@@ -412,7 +429,7 @@ class TwoStageKF:
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = sample_intervals(signals.t)[:, None]
-        tuning = self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        tuning = self.log_tuning(signals)
         _, history, outputs = self._loop(
             [state.x, state.P, state.m],
             [self.p, tuning],

@@ -16,6 +16,7 @@ import pytest
 from wheelload.estimators.kf.rewind import RewindSettings, measurements
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS
 
@@ -24,6 +25,7 @@ from timed_logs import (  # noqa: E402
     can_car_log,
     latencies,
     time_ordered_reference,
+    union_frame,
 )
 
 TOO_OLD = int(StepFlag.MEASUREMENT_TOO_OLD)
@@ -97,6 +99,27 @@ def test_rewinds_give_the_measurements_fed_in_time_order(kf, can_run):
     # What a running filter showed: the time-ordered estimate at its newest stamp, where no
     # measurement of an older stamp was still to come.
     assert np.all(np.isfinite(run.arrival_loads))
+
+
+def test_a_log_on_its_own_clocks_runs_as_the_timed_filter_runs_its_rows(kf, dlc):
+    """``run`` on channels on their own clocks (``[clock] union``; travel rates and body-rate
+    derivatives derived on each channel's own stamps) is the timed filter fed the rows in
+    time order, each at its own stamp: 1e-9 N (0 measured), the flags equal. (Up to the
+    last speed sample: beyond it the log has no speed, the timed filter holds the last.)"""
+    signals = signals_from_frame(union_frame(dlc, 5.0), wiring_checks=False, own_clocks=True)
+    signals = signals.slice(0, int(np.flatnonzero(np.isfinite(signals.vx))[-1]) + 1)
+    run = kf.run(signals)
+    timed = kf.run_timed(
+        signals.t,
+        input_matrix(signals, kf.rate_filter).T,
+        first_interval=signals.t[1] - signals.t[0],
+    )
+    assert timed.loads.shape == run.loads.shape and timed.rewinds == 0
+    np.testing.assert_allclose(timed.loads, run.loads, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(timed.flags, run.flags)
+    travel = np.isfinite(signals.d[:, 0])
+    assert np.all(np.isfinite(signals.v[travel])) and np.all(run.flags[travel] & SUSPENSION == 0)
+    assert not np.any(run.flags & int(StepFlag.INTERVAL_SHORT | StepFlag.INTERVAL_LONG))
 
 
 def test_a_small_ring_drops_what_is_older_than_its_oldest_checkpoint(kf):
