@@ -267,21 +267,25 @@ class TwoStageKF:
         )
 
     def run_timed(self, t: np.ndarray, inputs: np.ndarray, latency=None, settings=None, *,
-                  first_interval: float | None = None):  # fmt: skip
+                  first_interval: float | None = None,
+                  input_flags: np.ndarray | None = None):  # fmt: skip
         """A long table through :meth:`timed`: rows in order of arrival at times ``t`` [s],
         ``inputs`` (n, INPUTS) NaN where a channel has no new value (a log's
         ``input_matrix(signals).T``), ``latency`` [s] per channel, a vector or a mapping of
-        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`). Returns a
+        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`);
+        ``input_flags`` (n,) per row, a log's ``signals.input_flags()``, ORed into the flags
+        of the row's measurements as :meth:`run` does. Returns a
         :class:`~wheelload.estimators.kf.rewind.TimedRun`."""
-        from wheelload.estimators.kf.rewind import measurements, run_timed
+        from wheelload.estimators.kf.rewind import measurement_rows, run_timed
 
-        stamps, channels = measurements(t, inputs, latency)
+        stamps, channels, rows = measurement_rows(t, inputs, latency)
         return run_timed(
             lambda record: self.timed(
                 settings, first_interval=first_interval, on_output=record
             ),  # fmt: skip
             stamps,
             channels,
+            None if input_flags is None else np.asarray(input_flags, np.int64)[rows],
         )
 
     @functools.cached_property
