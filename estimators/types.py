@@ -188,8 +188,10 @@ class Signals:
 
     @property
     def sample_rate(self) -> float:
-        """Median sample rate [Hz]."""
-        return float(1.0 / order_statistics.median(np.diff(self.t)))
+        """Median sample rate [Hz] (of the IMU's own stamps, ``ax``'s, for channels on their
+        own clocks)."""
+        t = self.t[np.isfinite(self.acc[:, 0])] if self.own_clocks else self.t
+        return float(1.0 / order_statistics.median(np.diff(t)))
 
     def to_frame(self) -> pd.DataFrame:
         """The signals as a DataFrame with the log's column names (no ``az`` where assumed)."""

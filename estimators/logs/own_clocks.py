@@ -68,3 +68,12 @@ def on_imu_clock(t: np.ndarray, acc: np.ndarray, *columns: np.ndarray | None) ->
     sample) and each column :func:`on_clock` onto them (None kept)."""
     clock = t[np.isfinite(acc[:, 0])]
     return (clock, *(c if c is None else on_clock(t, c, clock) for c in columns))
+
+
+def scored_reference(signals) -> np.ndarray | None:
+    """A log's reference loads (n, 4) as the metrics score them: the log's own, or for
+    channels on their own clocks each wheel's samples :func:`on_clock` onto every row (a
+    transducer frame may carry one corner, so no row would hold all four)."""
+    if signals.reference is None or not signals.own_clocks:
+        return signals.reference
+    return on_clock(signals.t, signals.reference, signals.t)
