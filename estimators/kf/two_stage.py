@@ -279,21 +279,25 @@ class TwoStageKF:
         )
 
     def run_timed(self, t: np.ndarray, inputs: np.ndarray, latency=None, settings=None, *,
-                  first_interval: float | None = None):  # fmt: skip
+                  first_interval: float | None = None,
+                  input_flags: np.ndarray | None = None):  # fmt: skip
         """A long table through :meth:`timed`: rows in order of arrival at times ``t`` [s],
         ``inputs`` (n, INPUTS) NaN where a channel has no new value (a log's
         ``input_matrix(signals).T``), ``latency`` [s] per channel, a vector or a mapping of
-        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`). Returns a
+        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`);
+        ``input_flags`` (n,) per row, a log's ``signals.input_flags()``, ORed into the flags
+        of the row's measurements as :meth:`run` does. Returns a
         :class:`~wheelload.estimators.kf.rewind.TimedRun`."""
-        from wheelload.estimators.kf.rewind import measurements, run_timed
+        from wheelload.estimators.kf.rewind import measurement_rows, run_timed
 
-        stamps, channels = measurements(t, inputs, latency)
+        stamps, channels, rows = measurement_rows(t, inputs, latency)
         return run_timed(
             lambda record: self.timed(
                 settings, first_interval=first_interval, on_output=record
             ),  # fmt: skip
             stamps,
             channels,
+            None if input_flags is None else np.asarray(input_flags, np.int64)[rows],
         )
 
     @functools.cached_property
@@ -363,11 +367,27 @@ class TwoStageKF:
         step = self.step_function
         return np.cumsum([step.nnz_out(i) for i in range(step.n_out())])[:-1]
 
+    def log_tuning(self, signals: Signals) -> np.ndarray:
+        """The tuning :meth:`run` filters ``signals`` with: the nominal interval the
+        constructor's ``sample_interval`` or the log's median interval; for channels on their
+        own clocks (``signals.own_clocks``) the IMU's (``ax``'s own stamps) and
+        :meth:`timed`'s interval band, so that each row is filtered at its own time stamp
+        as the timed filter does (:mod:`~wheelload.estimators.kf.rewind`)."""
+        if not signals.own_clocks:
+            return self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        from wheelload.estimators.kf.rewind import timed_tuning
+
+        imu = signals.t[np.isfinite(signals.acc[:, 0])]
+        return timed_tuning(self.tuning_for(self.sample_interval or nominal_interval(imu)))
+
     def run(self, signals: Signals, state: FilterState | None = None) -> Estimate:
         """Filter a whole log in compiled code; same numbers as repeated :meth:`step`.
 
         The nominal interval is the constructor's ``sample_interval`` or the
-        log's median interval.
+        log's median interval (:meth:`log_tuning`). A log of channels on their own clocks
+        (``[clock] union``: each row the samples logged at its time stamp, NaN elsewhere)
+        is filtered as :meth:`run_timed` filters its rows: each predicted to its own time
+        stamp and updated by the rows its channels inform.
         """
         return self._run(signals, state, with_covariance=False)[0]
 
@@ -385,7 +405,8 @@ class TwoStageKF:
         filtered, covariances = self.run_with_covariance(signals, state)
         A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)
         dt = sample_intervals(signals.t)
-        return rts_smooth(filtered, covariances, dt, self._step, self.p, self.tuning, A)
+        tuning = self.log_tuning(signals) if signals.own_clocks else self.tuning
+        return rts_smooth(filtered, covariances, dt, self._step, self.p, tuning, A)
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
@@ -439,7 +460,7 @@ class TwoStageKF:
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = sample_intervals(signals.t)[:, None]
-        tuning = self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        tuning = self.log_tuning(signals)
         _, history, outputs = self._loop(
             [state.x, state.P, state.m],
             [self.p, tuning],
