@@ -3,7 +3,9 @@
 This face is the contract a user and the studies build on: the protocol and result
 types, the registry (``build``, the method table), the log I/O, each method's options
 dataclass with the settings its fields take (MHE, guards, tyres, weighing), and the
-lean whole-log reader of the compiled methods. Implementations stay in their modules;
+lean whole-log reader of the compiled methods (its scan's parts, ``LogScan`` and
+``ThinnedInputs``, are found here too, for the studies' one-read estimate, but are not
+the contract: they are documented with their module). Implementations stay in their modules;
 studies reach them through :func:`build` (benchmarks excepted).
 
 Every name of this face is imported on first use, by module (``_LAZY_MODULES``): the
@@ -64,9 +66,12 @@ _LAZY_MODULES = {
         "guard_settings_for",
     ),
     "wheelload.estimators.family.standstill": ("WeighSettings", "sprung_geometry", "weigh"),
-    "wheelload.estimators.kf.log_stream": ("LogScan", "LogStream", "ThinnedInputs", "scan_log"),
+    "wheelload.estimators.kf.log_stream": ("LogStream", "scan_log"),
     "wheelload.estimators.kernels.order_statistics": ("linear_percentile", "percentile"),
 }
-__getattr__, __dir__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES)
+#: Names the studies' one-read estimate takes through this door that are not the contract
+#: (the log scan's parts): found on first use, not listed in ``__all__`` or ``dir()``.
+_INTERNAL = {"wheelload.estimators.kf.log_stream": ("LogScan", "ThinnedInputs")}
+__getattr__, __dir__, _LAZY_NAMES = lazy_names(__name__, _LAZY_MODULES, _INTERNAL)
 
 __all__ = list(_LAZY_NAMES)

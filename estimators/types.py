@@ -137,6 +137,9 @@ class Signals:
     steer: np.ndarray | None = None  # (n,) front road-wheel angle [rad]
     reference_fx: np.ndarray | None = None  # (n, 4) fx_* [N], tyre frame
     reference_fy: np.ndarray | None = None  # (n, 4) fy_* [N], tyre frame
+    #: Channels on their own clocks (``[clock] union``): each NaN where it has no new value;
+    #: derivatives on each channel's own stamps, the KF at each row's own time stamp.
+    own_clocks: bool = False
 
     def __post_init__(self) -> None:
         n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else -1
@@ -185,8 +188,10 @@ class Signals:
 
     @property
     def sample_rate(self) -> float:
-        """Median sample rate [Hz]."""
-        return float(1.0 / order_statistics.median(np.diff(self.t)))
+        """Median sample rate [Hz] (of the IMU's own stamps, ``ax``'s, for channels on their
+        own clocks)."""
+        t = self.t[np.isfinite(self.acc[:, 0])] if self.own_clocks else self.t
+        return float(1.0 / order_statistics.median(np.diff(t)))
 
     def to_frame(self) -> pd.DataFrame:
         """The signals as a DataFrame with the log's column names (no ``az`` where assumed)."""
@@ -244,6 +249,7 @@ class Signals:
             steer=cut(self.steer),
             reference_fx=cut(self.reference_fx),
             reference_fy=cut(self.reference_fy),
+            own_clocks=self.own_clocks,
         )
 
 

@@ -29,6 +29,10 @@ side, pitch :math:`\theta > 0` lowers the nose; travel ``d > 0`` in compression.
             \theta = -\frac{m_s h_s (1 - a) f_x}{K_\theta}
 
   and :func:`attitude_travel`, the four travels of a body roll and pitch.
+- :func:`lateral_mismatch`: the lateral specific force the path's curvature does not
+  explain, :math:`a_y - v_x \omega_z` (the body's lateral velocity rate
+  :math:`\dot v_y` plus the gravity of bank and roll; a lag or bias of the ``ay`` channel
+  shows in it too).
 """
 
 from __future__ import annotations
@@ -119,6 +123,14 @@ class RollPitchStiffness:
     roll_share_front: float  # front axle's part of the roll stiffness
     pitch: float
     pitch_damping: float
+
+
+def lateral_mismatch(ay, vx, wz):
+    r""":math:`a_y - v_x \omega_z`: the lateral specific force minus the centripetal
+    acceleration of the path (rigid body in the plane, ISO 8855: a left turn has
+    :math:`\omega_z > 0`, :math:`a_y > 0`); :math:`\dot v_y` plus bank and roll gravity
+    and any lag or bias of ``ay``."""
+    return ay - vx * wz
 
 
 def roll_pitch_stiffness(vehicle: Vehicle) -> RollPitchStiffness:

@@ -60,7 +60,20 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
             importlib.import_module(command.module).register(subparsers)
         else:  # listed in the help; never parses (argv does not name it)
             subparsers.add_parser(name, help=command.summary, add_help=False)
+    if argv is None:  # every parser whole, those a command builds on first use too
+        _build_arguments(parser)
     return parser
+
+
+def _build_arguments(parser: argparse.ArgumentParser) -> None:
+    """Build ``parser``'s sub-parsers' arguments where they wait for first use (``wheelload
+    bench WHAT``: ``DeferredParser.build_arguments``), all the way down."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                if hasattr(child, "build_arguments"):
+                    child.build_arguments()
+                _build_arguments(child)
 
 
 def _command_of(argv: Sequence[str]) -> str | None:

@@ -1,5 +1,9 @@
 """A plant log re-sampled as a CAN car sends it, and the time-ordered feed it stands for.
 
+:func:`union_frame`: the same frames as one long table in time order, each channel at its
+own (jittered) stamps and NaN elsewhere, travel rates and body-rate derivatives left to be
+derived: what a channel map with ``[clock] union`` reads.
+
 :func:`can_car_log`: each frame on its own clock (travel and hub accelerometers 100 Hz,
 IMU 200 Hz, wheel speed 50 Hz, each with clock jitter), logged its latency after it was
 measured (10, 5 and 20 ms), as one long table in order of arrival with NaN where a row has no
@@ -38,6 +42,38 @@ FRAMES = {
     "imu": (SPECIFIC_FORCE + BODY_RATES + BODY_RATE_DERIVATIVES, 200.0, 0.005),
     "speed": (("vx",), 50.0, 0.020),
 }
+
+
+#: The frames of :func:`union_frame`: the channels of a log, rate [Hz], first stamp [s].
+UNION_FRAMES = {
+    "travel": (TRAVEL, 100.0, 0.023),
+    "imu": (SPECIFIC_FORCE + BODY_RATES, 200.0, 0.02),
+    "speed": (("vx",), 50.0, 0.027),
+}
+
+
+def union_frame(signals, duration: float, *, seed: int = 3, jitter: float = 0.2e-3):
+    """A DataFrame of the log's channels on the union of their frames' stamps (time order),
+    each stamp jittered by up to ``jitter`` [s] (within the 5 % of a 100 Hz travel's
+    interval its differentiator allows)."""
+    import pandas as pd
+
+    rng = np.random.default_rng(seed)
+    t_plant = signals.t - signals.t[0]
+    values = dict(zip(INPUTS, input_matrix(signals), strict=True))
+    stamps = {}
+    for name, (_, rate, first) in UNION_FRAMES.items():
+        own = np.arange(first, duration, 1.0 / rate)
+        stamps[name] = own + rng.uniform(-jitter / 2, jitter / 2, own.size)  # clock jitter
+    t = np.unique(np.concatenate(list(stamps.values())))
+    frame = pd.DataFrame({"t": t})
+    for name, (channels, _, _) in UNION_FRAMES.items():
+        rows = np.searchsorted(t, stamps[name])
+        for channel in channels:
+            column = np.full(t.size, np.nan)
+            column[rows] = np.interp(stamps[name], t_plant, values[channel])
+            frame[channel] = column
+    return frame
 
 
 def latencies() -> dict[str, float]:

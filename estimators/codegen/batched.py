@@ -294,7 +294,7 @@ def _recorded(record: Path) -> tuple[Path, Path] | None:
         names = record.read_text().split()
     except OSError:
         return None
-    paths = tuple(record.with_name(name) for name in names)
+    paths = tuple(build_folder() / name for name in names)
     if len(paths) != 2 or any(checked_library(path) is not None for path in paths):
         return None
     return paths[0], paths[1]

@@ -1,7 +1,8 @@
 r"""The filter step's sensor-fault monitor: detection and isolation, carried in ``m``.
 
-A travel channel that does not change for ``stuck_time`` while ``stuck_corners``
-other corners move is *stuck*; the parity residual :math:`r = b - A z` of the raw
+A travel channel that does not change for ``stuck_time`` (seconds: each of its samples
+adds the time since its last one) while ``stuck_corners`` other corners move is *stuck*;
+the parity residual :math:`r = b - A z` of the raw
 suspension loads (every model term the inputs allow,
 :func:`~wheelload.models.terms.parity_model`),
 low-pass filtered, is matched against the signature of
@@ -96,11 +97,20 @@ def monitor(
     d = ca.vertcat(*[u[INPUTS.index(name)] for name in TRAVEL])
     d_prev, frozen, rbar = m[D_PREV], m[FROZEN], m[RBAR]
     persist, clear, fault = m[PERSIST], m[CLEAR], m[FAULT]
-    # Stuck / dead travel channels: no change at all while another corner moves.
+    # Stuck / dead travel channels: no change at all while another corner moves. The time a
+    # travel has not changed grows at each of its samples by the time since its last valid
+    # value (``since``, below; the row's dt once it has been seen every row): seconds, not
+    # rows, when other channels come between travel frames.
     d_valid = [valid[INPUTS.index(name)] * (dt > 0) for name in TRAVEL]
     changed = [d_valid[i] * (d[i] != d_prev[i]) for i in range(4)]
+    seen = m[TRAVEL_SEEN]
+    credit = m[CREDIT]
+    since = [dt + (g.hold_time - credit[INPUTS.index(name)]) for name in TRAVEL]
     frozen_next = ca.vertcat(
-        *[ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * dt) for i in range(4)]
+        *[
+            ca.if_else(changed[i], 0, frozen[i] + d_valid[i] * ca.if_else(seen[i], since[i], dt))
+            for i in range(4)
+        ]
     )
     d_prev_next = ca.vertcat(*[ca.if_else(d_valid[i], d[i], d_prev[i]) for i in range(4)])
     # A corner "moves" when its travel leaves +-stuck_motion of its anchor (then re-anchored):
@@ -116,9 +126,6 @@ def monitor(
     # since the travel's last valid value, dt plus what its hold has used of hold_time
     # (plausibility.hold_inputs; at least hold_time once that has run out): the interval of
     # a travel frame, not of the last row, when other channels come between travel frames.
-    seen = m[TRAVEL_SEEN]
-    credit = m[CREDIT]
-    since = [dt + (g.hold_time - credit[INPUTS.index(name)]) for name in TRAVEL]
     jump = [
         ca.if_else(
             changed[i],

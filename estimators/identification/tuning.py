@@ -61,7 +61,7 @@ from wheelload.estimators.kf.tuning import (
     noise_densities,
     with_filter_sigma,
 )
-from wheelload.estimators.kf.two_stage import TwoStageKF
+from wheelload.estimators.kf.two_stage import FileCheck, TwoStageKF
 from wheelload.estimators.types import Signals
 from wheelload.models.measurement_noise import INPUT_DENSITIES
 from wheelload.models.vehicle.description import FilterTuning, Vehicle
@@ -136,7 +136,12 @@ class FilterRuns:
     """
 
     def __init__(
-        self, vehicle: Vehicle, logs: tuple[Signals, ...], *, filter_sigma: bool = True
+        self,
+        vehicle: Vehicle,
+        logs: tuple[Signals, ...],
+        *,
+        filter_sigma: bool = True,
+        checks: list[FileCheck | None] | None = None,
     ) -> None:
         if not logs:
             raise ValueError("no logs to tune on")
@@ -153,6 +158,11 @@ class FilterRuns:
         self._gate_open = self._base.copy()
         for name, value in GATE_OPEN.items():
             self._gate_open[TUNING.index(name)] = value
+        # The file is checked against each log once, with the file's own tuning: the check
+        # reads the vehicle file, not the densities, and each run applies its finding.
+        self._checks = checks or [
+            self._kf.file_check(signals) if self._kf.check_file else None for signals in logs
+        ]
 
     def run(self, tuning: np.ndarray, *, gate_factor: float = 1.0, gate_open: bool = False):
         """Estimates and innovations of every log with the noise densities ``tuning``
@@ -168,7 +178,10 @@ class FilterRuns:
         full[_VARIANCE_SCALE] *= 1.0 if gate_open else gate_factor
         full[_DENSITY_INDEX] = densities
         self._kf.tuning = full
-        return [self._kf.run_innovations(signals) for signals in self.logs]
+        return [
+            self._kf.run_innovations(signals, checked=checked)
+            for signals, checked in zip(self.logs, self._checks, strict=True)
+        ]
 
     def negative_log_likelihood(self, tuning: np.ndarray) -> float:
         """Minus the innovation log likelihood, innovation gate open (every row with inputs)."""
@@ -190,7 +203,11 @@ class FilterRuns:
 
     def subset(self, keep: list[int]) -> FilterRuns:
         """The same filter over the logs at ``keep`` (with the filter's own sigma)."""
-        return FilterRuns(self.vehicle, tuple(self.logs[k] for k in keep))
+        return FilterRuns(
+            self.vehicle,
+            tuple(self.logs[k] for k in keep),
+            checks=[self._checks[k] for k in keep],
+        )
 
     def pooled_rmse(self, tuning: np.ndarray, gate_factor: float = 1.0) -> float:
         errors = []

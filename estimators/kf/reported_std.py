@@ -17,9 +17,13 @@ running RMS :math:`\sqrt{\overline{\delta_i^2}}`; the suspension row's innovatio
 :math:`|y_i|` and its running RMS; last, for a wheel whose suspension row is missing (no
 travel: its load comes from the equilibrium and the roll split alone), 1, :math:`|a_x|`,
 :math:`|a_y|` (the split's and the quasi-static attitude's errors grow with the load
-transfer) and :math:`|a_z - g|` (heave and pitch the equilibrium cannot split; it reads
+transfer), :math:`|a_z - g|` (heave and pitch the equilibrium cannot split; it reads
 :math:`g (1 - \cos\alpha)` at rest on a grade :math:`\alpha`: the norm of the specific
-force instead grows with the lateral acceleration, 0.6 kN of σ on a lap). A running mean
+force instead grows with the lateral acceleration, 0.6 kN of σ on a lap) and
+:math:`|a_y - v_x \omega_z|` (:func:`~wheelload.models.body_attitude.lateral_mismatch`:
+the lateral force the path's curvature does not explain; a lagging ``ay`` channel, a bank
+or a sliding car move the lateral transfer the equilibrium splits without travel; 0 where
+``ay``, ``vx`` or ``wz`` is missing). A running mean
 is an exponentially weighted mean :math:`\bar q \leftarrow \bar q + \alpha (q - \bar q)`,
 :math:`\alpha = \Delta t / (\tau + \Delta t)`, :math:`\tau` = :data:`SIGMA_TIME`, carried
 in the monitor state
@@ -30,7 +34,7 @@ filter's own (Siegloff & Choi §III, eq. 19-25).
 
 Example
 -------
->>> g, means = sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt)
+>>> g, means = sigma_features(P, u, valid, z, A, b, mask_s, mask_c, y_s, m, dt)
 >>> std = reported_std(g, tuning[SIGMA_TUNING])
 """
 
@@ -40,6 +44,7 @@ import casadi as ca
 
 from wheelload.estimators.guards import monitor_state
 from wheelload.models import GRAVITY
+from wheelload.models.body_attitude import lateral_mismatch
 from wheelload.models.inputs import SPECIFIC_FORCE, TRAVEL, TRAVEL_RATE, input_index
 from wheelload.models.vehicle.description import SIGMA_KEYS
 
@@ -48,6 +53,7 @@ SIGMA_TIME = 1.0
 _TRAVEL = input_index(TRAVEL)
 _RATE = input_index(TRAVEL_RATE)
 _AX, _AY, _AZ = input_index(SPECIFIC_FORCE)
+_VX, _WZ = input_index(("vx", "wz"))
 
 
 def _running(mean, value, available, dt):
@@ -57,14 +63,15 @@ def _running(mean, value, available, dt):
     return mean + alpha * (value - mean)
 
 
-def sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt):
+def sigma_features(P, u, valid, z, A, b, mask_s, mask_c, y_s, m, dt):
     """Features ``g`` (4 wheels x :data:`SIGMA_KEYS`) and the next running means.
 
     ``P``: the filter's covariance after the sample; ``u``: the sample's inputs (0 where
-    missing); ``z, A, b``: the pseudo-measurement and the equilibrium rows; ``mask_s,
-    mask_c``: their availability; ``y_s``: the suspension rows' innovations; ``m``: the
-    monitor state; ``dt``: the interval used (0: skipped). Returns ``(g, means)``, ``means``
-    the monitor's next :data:`~wheelload.estimators.guards.monitor_state.SIGMA_SLOTS`.
+    missing), ``valid`` their availability; ``z, A, b``: the pseudo-measurement and the
+    equilibrium rows; ``mask_s, mask_c``: their availability; ``y_s``: the suspension rows'
+    innovations; ``m``: the monitor state; ``dt``: the interval used (0: skipped). Returns
+    ``(g, means)``, ``means`` the monitor's next
+    :data:`~wheelload.estimators.guards.monitor_state.SIGMA_SLOTS`.
     """
     every_row = mask_s[0] * mask_s[1] * mask_s[2] * mask_s[3] * mask_c[0] * mask_c[1] * mask_c[2]
     delta = ca.mtimes(A.T, ca.solve(ca.mtimes(A, A.T), b - ca.mtimes(A, z))) * every_row
@@ -73,6 +80,8 @@ def sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt):
     innovation_mean = _running(m[monitor_state.SIGMA_INNOVATION], innovation**2, mask_s, dt)
     own = ca.sqrt(ca.fmax(ca.diag(P), 0))
     heave = ca.fabs(u[_AZ] - GRAVITY) * (u[_AZ] != 0)  # u is 0 where az is missing
+    lateral = ca.fabs(lateral_mismatch(u[_AY], u[_VX], u[_WZ])) * valid[_AY] * valid[_VX]
+    lateral = lateral * valid[_WZ]
     rows = []
     for i in range(4):
         rows.append(
@@ -91,6 +100,7 @@ def sigma_features(P, u, z, A, b, mask_s, mask_c, y_s, m, dt):
                 ca.fabs(u[_AX]) * (1 - mask_s[i]),
                 ca.fabs(u[_AY]) * (1 - mask_s[i]),
                 heave * (1 - mask_s[i]),
+                lateral * (1 - mask_s[i]),
             )
         )
     return ca.vertcat(*rows), ca.vertcat(residual_mean, innovation_mean)

@@ -250,7 +250,15 @@ def latency_vector(latency) -> np.ndarray:
 
 
 def measurements(t: np.ndarray, inputs: np.ndarray, latency=None):
-    """A long table's rows as measurements in order of arrival: ``(stamps, channels)``.
+    """A long table's rows as measurements in order of arrival: ``(stamps, channels)``
+    (:func:`measurement_rows` without the rows)."""
+    stamps, channels, _ = measurement_rows(t, inputs, latency)
+    return stamps, channels
+
+
+def measurement_rows(t: np.ndarray, inputs: np.ndarray, latency=None):
+    """A long table's rows as measurements in order of arrival: ``(stamps, channels, rows)``,
+    ``rows`` the row of the table each measurement comes from.
 
     ``t`` (n,) the times the rows were logged (their arrival, in row order, not necessarily
     increasing); ``inputs`` (n, INPUTS) NaN where a channel has no new value; ``latency``
@@ -263,7 +271,7 @@ def measurements(t: np.ndarray, inputs: np.ndarray, latency=None):
     inputs = np.asarray(inputs, float)
     latency = latency_vector(latency)
     groups = [latency == value for value in np.unique(latency)[::-1]]
-    stamps, channels = [], []
+    stamps, channels, rows = [], [], []
     for k in range(t.size):
         row = inputs[k]
         present = np.isfinite(row)
@@ -274,7 +282,9 @@ def measurements(t: np.ndarray, inputs: np.ndarray, latency=None):
                 u[here] = row[here]
                 stamps.append(t[k] - latency[group][0])
                 channels.append(u)
-    return np.array(stamps), np.array(channels).reshape(-1, len(INPUTS))
+                rows.append(k)
+    return (np.array(stamps), np.array(channels).reshape(-1, len(INPUTS)),
+            np.array(rows, np.int64))  # fmt: skip
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -301,8 +311,12 @@ class TimedRun:
     replayed: int
 
 
-def run_timed(make_filter, stamps: np.ndarray, channels: np.ndarray) -> TimedRun:
-    """Feed the measurements ``(stamps, channels)`` in order to ``make_filter(on_output)``."""
+def run_timed(
+    make_filter, stamps: np.ndarray, channels: np.ndarray, input_flags: np.ndarray | None = None
+) -> TimedRun:
+    """Feed the measurements ``(stamps, channels)`` in order to ``make_filter(on_output)``;
+    ``input_flags`` (n,) :class:`StepFlag` bits of inputs the log did not have (``Signals.
+    input_flags()`` of each measurement's row), ORed into its flags as ``run`` does."""
     n = stamps.size
     loads = np.full((n, 4), np.nan)
     std = np.full((n, 4), np.nan)
@@ -321,6 +335,9 @@ def run_timed(make_filter, stamps: np.ndarray, channels: np.ndarray) -> TimedRun
         arrival_flags[k] = timed.update_at(stamps[k], channels[k])
         arrival_time[k] = timed.time
         arrival_loads[k] = timed._state[:4]
+    if input_flags is not None:
+        arrival_flags |= input_flags
+        flags |= input_flags
     return TimedRun(
         stamps=stamps, arrival_time=arrival_time, arrival_loads=arrival_loads,
         arrival_flags=arrival_flags, loads=loads, std=std, flags=flags,

@@ -324,11 +324,11 @@ def _payload_update(
     }
 
 
-def _sigma(P_next, u, z, A, b, mask_s, mask_c, y_s, m, dt_used, tuning):
+def _sigma(P_next, u, valid_plausible, z, A, b, mask_s, mask_c, y_s, m, dt_used, tuning):
     """The reported sigma (:mod:`.reported_std`): P and the model's mismatch terms (the gain
     does not see them)."""
     features, sigma_means = reported_std.sigma_features(
-        P_next, u, z, A, b, mask_s, mask_c, y_s, m, dt_used
+        P_next, u, valid_plausible, z, A, b, mask_s, mask_c, y_s, m, dt_used
     )
     std = reported_std.reported_std(features, tuning[SIGMA_TUNING])
     return {"std": std, "sigma_means": sigma_means}

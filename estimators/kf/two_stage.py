@@ -53,6 +53,8 @@ from wheelload.models.loaded_vehicle import PAYLOAD_STATES, mass_properties
 if TYPE_CHECKING:
     import pandas as pd
 
+    from wheelload.estimators.logs.model_error import Diagnosis
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Innovations:
@@ -79,6 +81,16 @@ class Innovations:
         columns.update({f"variance_{r}": self.variance[:, i] for i, r in enumerate(UPDATE_ROWS)})
         columns.update({f"used_{r}": self.used[:, i] for i, r in enumerate(UPDATE_ROWS)})
         return pd.DataFrame(columns)
+
+
+@dataclass(frozen=True, eq=False)
+class FileCheck:
+    """The vehicle file checked against one log (:meth:`TwoStageKF.file_check`): the
+    diagnosis, and for a named file parameter the loads' change [N] (n, 4) the estimate's σ
+    is widened by (None without one)."""
+
+    diagnosis: Diagnosis
+    load_change: np.ndarray | None
 
 
 @dataclass(frozen=True)
@@ -267,21 +279,25 @@ class TwoStageKF:
         )
 
     def run_timed(self, t: np.ndarray, inputs: np.ndarray, latency=None, settings=None, *,
-                  first_interval: float | None = None):  # fmt: skip
+                  first_interval: float | None = None,
+                  input_flags: np.ndarray | None = None):  # fmt: skip
         """A long table through :meth:`timed`: rows in order of arrival at times ``t`` [s],
         ``inputs`` (n, INPUTS) NaN where a channel has no new value (a log's
         ``input_matrix(signals).T``), ``latency`` [s] per channel, a vector or a mapping of
-        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`). Returns a
+        channel names (:func:`~wheelload.estimators.kf.rewind.measurements`);
+        ``input_flags`` (n,) per row, a log's ``signals.input_flags()``, ORed into the flags
+        of the row's measurements as :meth:`run` does. Returns a
         :class:`~wheelload.estimators.kf.rewind.TimedRun`."""
-        from wheelload.estimators.kf.rewind import measurements, run_timed
+        from wheelload.estimators.kf.rewind import measurement_rows, run_timed
 
-        stamps, channels = measurements(t, inputs, latency)
+        stamps, channels, rows = measurement_rows(t, inputs, latency)
         return run_timed(
             lambda record: self.timed(
                 settings, first_interval=first_interval, on_output=record
             ),  # fmt: skip
             stamps,
             channels,
+            None if input_flags is None else np.asarray(input_flags, np.int64)[rows],
         )
 
     @functools.cached_property
@@ -351,11 +367,27 @@ class TwoStageKF:
         step = self.step_function
         return np.cumsum([step.nnz_out(i) for i in range(step.n_out())])[:-1]
 
+    def log_tuning(self, signals: Signals) -> np.ndarray:
+        """The tuning :meth:`run` filters ``signals`` with: the nominal interval the
+        constructor's ``sample_interval`` or the log's median interval; for channels on their
+        own clocks (``signals.own_clocks``) the IMU's (``ax``'s own stamps) and
+        :meth:`timed`'s interval band, so that each row is filtered at its own time stamp
+        as the timed filter does (:mod:`~wheelload.estimators.kf.rewind`)."""
+        if not signals.own_clocks:
+            return self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        from wheelload.estimators.kf.rewind import timed_tuning
+
+        imu = signals.t[np.isfinite(signals.acc[:, 0])]
+        return timed_tuning(self.tuning_for(self.sample_interval or nominal_interval(imu)))
+
     def run(self, signals: Signals, state: FilterState | None = None) -> Estimate:
         """Filter a whole log in compiled code; same numbers as repeated :meth:`step`.
 
         The nominal interval is the constructor's ``sample_interval`` or the
-        log's median interval.
+        log's median interval (:meth:`log_tuning`). A log of channels on their own clocks
+        (``[clock] union``: each row the samples logged at its time stamp, NaN elsewhere)
+        is filtered as :meth:`run_timed` filters its rows: each predicted to its own time
+        stamp and updated by the rows its channels inform.
         """
         return self._run(signals, state, with_covariance=False)[0]
 
@@ -373,21 +405,42 @@ class TwoStageKF:
         filtered, covariances = self.run_with_covariance(signals, state)
         A, _ = equilibrium_function()(np.zeros(len(INPUTS)), np.zeros(len(GATES)), self.p)
         dt = sample_intervals(signals.t)
-        return rts_smooth(filtered, covariances, dt, self._step, self.p, self.tuning, A)
+        tuning = self.log_tuning(signals) if signals.own_clocks else self.tuning
+        return rts_smooth(filtered, covariances, dt, self._step, self.p, tuning, A)
 
     @functools.cached_property
     def _loop(self) -> CompiledLoop:
         """This filter's step looped over a log in C (state x, P, m carried)."""
         return CompiledLoop(self.step_function, N_CARRIED, ("u", "u_valid", "dt"))
 
-    def _run(self, signals: Signals, state: FilterState | None, with_covariance: bool):
+    def _run(self, signals: Signals, state: FilterState | None, with_covariance: bool,
+             checked: FileCheck | None = None):  # fmt: skip
         if not self.check_file:
             return self._filter(signals, state, with_covariance)
+        first = None
+        if checked is None:
+            first = self._filter(signals, state, with_covariance)
+            checked = self.file_check(signals, first[0])
+        if np.any(checked.diagnosis.travel_zero):
+            first = self._filter(checked.diagnosis.corrected(signals), state, with_covariance)
+        estimate, covariances, innovations = first or self._filter(signals, state, with_covariance)
+        if checked.load_change is not None:
+            std = np.sqrt(estimate.std**2 + checked.load_change**2)
+            model_errors = (checked.diagnosis.finding,)
+            estimate = dataclasses.replace(estimate, std=std, model_errors=model_errors)
+        return estimate, covariances, innovations
+
+    def file_check(self, signals: Signals, estimate: Estimate | None = None) -> FileCheck:
+        """The vehicle file checked against ``signals`` (:func:`~wheelload.estimators.logs.
+        model_error.diagnose`) on this filter's ``estimate`` of them (default: run here,
+        from the initial state, before any correction): the samples about an
+        isolated sensor fault and those a guard doubted left out (they are the sensor's, not
+        the file's), the car as the payload estimate found it at the end; given static
+        loads (a still period, corner weights) have taken the travel zeros."""
         from wheelload.estimators.logs.model_error import diagnose
 
-        estimate, covariances, innovations = self._filter(signals, state, with_covariance)
-        # The samples about an isolated sensor fault are the fault channel's, not the file's;
-        # given static loads (a still period, corner weights) have taken the travel zeros.
+        if estimate is None:
+            estimate = self._filter(signals, None, with_covariance=False)[0]
         diagnosis = diagnose(
             signals,
             self.vehicle,
@@ -396,15 +449,10 @@ class TwoStageKF:
             travel_zero=self._static is None,
             mass_properties=None if len(signals) == 0 else estimate.mass_properties[-1],
         )
-        if np.any(diagnosis.travel_zero):
-            estimate, covariances, innovations = self._filter(
-                diagnosis.corrected(signals), state, with_covariance
-            )
+        change = None
         if diagnosis.finding is not None:
             change = diagnosis.load_change(input_matrix(signals, self.rate_filter))
-            std = np.sqrt(estimate.std**2 + change**2)
-            estimate = dataclasses.replace(estimate, std=std, model_errors=(diagnosis.finding,))
-        return estimate, covariances, innovations
+        return FileCheck(diagnosis=diagnosis, load_change=change)
 
     def _filter(self, signals: Signals, state: FilterState | None, with_covariance: bool):
         state = state or self.initial_state()
@@ -412,7 +460,7 @@ class TwoStageKF:
         valid = np.isfinite(u).astype(float)
         u = np.nan_to_num(u, nan=0.0, posinf=0.0, neginf=0.0)
         dt = sample_intervals(signals.t)[:, None]
-        tuning = self.tuning_for(self.sample_interval or nominal_interval(signals.t))
+        tuning = self.log_tuning(signals)
         _, history, outputs = self._loop(
             [state.x, state.P, state.m],
             [self.p, tuning],
@@ -441,7 +489,11 @@ class TwoStageKF:
         return estimate, covariances, innovations
 
     def run_innovations(
-        self, signals: Signals, state: FilterState | None = None
+        self,
+        signals: Signals,
+        state: FilterState | None = None,
+        *,
+        checked: FileCheck | None = None,
     ) -> tuple[Estimate, Innovations]:
         r"""As :meth:`run`, also returning every update row's innovation and its variance.
 
@@ -449,8 +501,11 @@ class TwoStageKF:
         normals under the model once divided by :math:`\sqrt{S}`, so the log
         likelihood of the tuning is :math:`-\tfrac12 \sum (\log 2\pi S + y^2 / S)`
         over the rows used (Mehra 1970).
+
+        ``checked``: the file check of these ``signals`` made before (:meth:`file_check`; a
+        tuner runs one log with many densities, and the file is the same for all of them).
         """
-        estimate, _, innovations = self._run(signals, state, with_covariance=False)
+        estimate, _, innovations = self._run(signals, state, False, checked)
         return estimate, innovations
 
 

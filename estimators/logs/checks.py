@@ -45,6 +45,7 @@ import numpy as np
 
 from wheelload.estimators.kernels import order_statistics, zero_phase
 from wheelload.estimators.logs.latency import Lag, channel_lags
+from wheelload.estimators.logs.own_clocks import on_imu_clock
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.conventions import WHEELS
 from wheelload.models.inputs import TRAVEL, input_index
@@ -354,8 +355,17 @@ def check_wiring(
     acc: np.ndarray,
     d: np.ndarray,
     rates: np.ndarray | None = None,
+    *,
+    own_clocks: bool = False,
 ) -> WiringReport:
-    """Run every check on the first :data:`WINDOW` s of motion (see module docstring)."""
+    """Run every check on the first :data:`WINDOW` s of motion (see module docstring).
+
+    ``own_clocks``: the channels are on their own clocks, NaN where one has no new value
+    (``[clock] union``); the checks compare them on the IMU's own stamps (``ax``'s),
+    each interpolated onto them (:func:`~wheelload.estimators.logs.own_clocks.on_imu_clock`).
+    """
+    if own_clocks:
+        t, vx, acc, d, rates = on_imu_clock(t, acc, vx, acc, d, rates)
     window = motion_window(t, vx)
     if window is None:
         note = f"less than 4 s above {MOVING} m/s"

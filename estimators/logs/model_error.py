@@ -37,6 +37,7 @@ Example
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -317,11 +318,7 @@ def diagnose_inputs(
     if index.size < 100:
         return NOTHING
     index = index[:: max(1, index.size // MAX_SAMPLES)]
-    parameters = ModelParameters.from_vehicle(vehicle)
-    p = parameters.vector()
-    dp = np.column_stack(
-        [ModelParameters.from_vehicle(h.step(vehicle)).vector() - p for h in HYPOTHESES]
-    )
+    parameters, p, dp = _unit_steps(vehicle)
     rows = _rows(U[:, index], p, dp)
     # A residual beyond what the car's weight can make is a sample no guard caught (a spike
     # of 1e30): left out, as are the samples the guards doubted.
@@ -382,6 +379,20 @@ def _considered(fits) -> np.ndarray:
     return ~ratio | (
         left.min(where=ratio, initial=np.inf) <= MOTION_RATIO_MARGIN * left[~ratio].min()
     )
+
+
+@functools.lru_cache(maxsize=8)
+def _unit_steps(vehicle: Vehicle) -> tuple[ModelParameters, np.ndarray, np.ndarray]:
+    """The file's parameters, their vector ``p`` and each hypothesis's unit step in it
+    (columns of ``dp``): read-only, kept for the last few files (a study runs one file
+    over many logs)."""
+    parameters = ModelParameters.from_vehicle(vehicle)
+    p = parameters.vector()
+    dp = np.column_stack(
+        [ModelParameters.from_vehicle(h.step(vehicle)).vector() - p for h in HYPOTHESES]
+    )
+    p.flags.writeable = dp.flags.writeable = False
+    return parameters, p, dp
 
 
 def _rows(U, p, dp) -> dict[str, np.ndarray]:

@@ -66,6 +66,7 @@ from wheelload.estimators.logs.checks import (
     travel_response,
     undecided_check,
 )
+from wheelload.estimators.logs.own_clocks import on_imu_clock
 from wheelload.models import GRAVITY, INPUTS, ModelParameters, Vehicle
 from wheelload.models.inputs import WHEELS
 from wheelload.models.runtime.function_library import compiled_function
@@ -311,20 +312,22 @@ def frozen_samples(t: np.ndarray, d: np.ndarray) -> np.ndarray:
 def check_plausibility(signals, vehicle: Vehicle) -> PlausibilityReport:
     """Every check of the module docstring on a
     :class:`~wheelload.estimators.types.Signals`."""
-    rate, mistake = sample_rate_check(signals.t)
+    t, vx, acc, d = signals.t, signals.vx, signals.acc, signals.d
+    if signals.own_clocks:  # channels on their own clocks: compared on the IMU's stamps
+        t, vx, acc, d = on_imu_clock(t, acc, vx, acc, d)
+    rate, mistake = sample_rate_check(t)
     checks, mistakes = [rate], [mistake] if mistake else []
-    window = motion_window(signals.t, signals.vx)
+    window = motion_window(t, vx)
     if window is None or mistake:
         checks.append(undecided_check("travel and speed", "less than 4 s of motion"))
         return PlausibilityReport(checks=tuple(checks), mistakes=tuple(mistakes))
-    channels = {"vx": signals.vx, "ax": signals.acc[:, 0], "ay": signals.acc[:, 1],
-                "az": signals.acc[:, 2]}  # fmt: skip
+    channels = {"vx": vx, "ax": acc[:, 0], "ay": acc[:, 1], "az": acc[:, 2]}
     present = signals.travel_present
-    channels.update({f"d_{w}": signals.d[:, k] for k, w in enumerate(WHEELS) if present[k]})
-    q = quasi_static(signals.t[window], {k: v[window] for k, v in channels.items()})
-    frozen = frozen_samples(signals.t[window], signals.d[window][:, present])
+    channels.update({f"d_{w}": d[:, k] for k, w in enumerate(WHEELS) if present[k]})
+    q = quasi_static(t[window], {k: v[window] for k, v in channels.items()})
+    frozen = frozen_samples(t[window], d[window][:, present])
     if frozen.any():
-        keep = ~np.isin(q["t"], signals.t[window][frozen])
+        keep = ~np.isin(q["t"], t[window][frozen])
         q = {name: values[keep] for name, values in q.items()}
     if q["t"].size < MIN_SECONDS * RATE:
         checks.append(undecided_check("travel and speed", "a travel sensor holds one value"))

@@ -50,6 +50,7 @@ import numpy as np
 
 from wheelload.estimators.kernels import first_order, kinematic, order_statistics
 from wheelload.estimators.logs.checks import check_wiring, duplicate_columns, raise_for_wiring
+from wheelload.estimators.logs.own_clocks import on_own_stamps
 from wheelload.estimators.types import (
     HUB,
     RATE_DERIVATIVES,
@@ -149,7 +150,11 @@ def read_log(
     except ValueError as error:  # pandas: a column named in a map is not in the file
         raise LogError(f"{path}: cannot be read: {error}") from None
     return signals_from_frame(
-        frame, source=str(path), velocity_cutoff=velocity_cutoff, wiring_checks=wiring_checks
+        frame,
+        source=str(path),
+        velocity_cutoff=velocity_cutoff,
+        wiring_checks=wiring_checks,
+        own_clocks=channel_map is not None and channel_map.clock.union,
     )
 
 
@@ -159,8 +164,10 @@ def signals_from_frame(
     velocity_cutoff: float = VELOCITY_CUTOFF,
     *,
     wiring_checks: bool = True,
+    own_clocks: bool = False,
 ) -> Signals:
-    """Validate a DataFrame with the log's columns and build :class:`Signals`."""
+    """Validate a DataFrame with the log's columns and build :class:`Signals`; ``own_clocks``:
+    its channels are on their own clocks, NaN where one has no new value (``[clock] union``)."""
     import pandas as pd
 
     duplicate = duplicate_columns(frame.columns)
@@ -214,7 +221,7 @@ def signals_from_frame(
         return np.column_stack([column(name) for name in names])
 
     t = time_seconds(frame["t"]) if is_time_stamp(frame["t"]) else column("t")
-    say_gaps(check_time_column(t, source), source)
+    steps = check_time_column(t, source)
     missing = np.full((t.size, 4), np.nan)
     for name in REQUIRED[1:]:
         if not np.isfinite(column(name)).any():
@@ -225,26 +232,36 @@ def signals_from_frame(
     az_assumed = "az" not in frame.columns or not np.isfinite(column("az")).any()
     az = np.full(t.size, GRAVITY) if az_assumed else column("az")
     acc = np.column_stack([column("ax"), column("ay"), az])
+    imu = np.isfinite(acc[:, 0])
+    if not own_clocks:
+        say_gaps(steps, source)
+    elif imu.sum() > 1:
+        say_gaps(Steps.of(t[imu]), source, own_clocks=True)
     d = group(TRAVEL)
     d = missing if d is None else d
     v = group(TRAVEL_RATE)
     if "vx" in frame.columns and np.isfinite(column("vx")).any():
-        speed, speed_source = slow_channel(t, column("vx"), "vx", source), SpeedSource.LOGGED
+        speed, speed_source = (
+            slow_channel(t, column("vx"), "vx", source, own_clock=own_clocks),
+            SpeedSource.LOGGED,
+        )
     elif any(name in frame.columns for name in WHEEL_SPEED):
         wheels = np.column_stack([column(n) for n in WHEEL_SPEED if n in frame.columns])
         finite = np.isfinite(wheels)
         count = finite.sum(axis=1)
         total = np.where(finite, wheels, 0.0).sum(axis=1)
         speed = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        speed = slow_channel(t, speed, "ws_*", source, own_clock=own_clocks)
         speed_source = SpeedSource.WHEEL_SPEEDS
     else:
         speed, speed_source = np.zeros(t.size), SpeedSource.NONE
     check_units(acc, d, v, speed, source)
     if wiring_checks:
-        raise_for_wiring(check_wiring(t, speed, acc, d, group(RATES, partial=True)), source)
+        report = check_wiring(t, speed, acc, d, group(RATES, partial=True), own_clocks=own_clocks)
+        raise_for_wiring(report, source)
     derived = v is None and bool(np.isfinite(d).any())
     if derived:
-        v = derive_velocities(t, d, velocity_cutoff, source)
+        v = derive_velocities(t, d, velocity_cutoff, source, own_clocks=own_clocks)
     elif v is None:
         v = missing.copy()
     return Signals(
@@ -267,35 +284,47 @@ def signals_from_frame(
         steer=column(STEER) if STEER in frame.columns else None,
         reference_fx=group(REFERENCE_FX, partial=True),
         reference_fy=group(REFERENCE_FY, partial=True),
+        own_clocks=own_clocks,
     )
 
 
-def say_gaps(steps: Steps, source: str) -> None:
+def say_gaps(steps: Steps, source: str, *, own_clocks: bool = False) -> None:
     """A note on the ``wheelload`` logger for a log whose time stamps have gaps (steps longer
     than :data:`~wheelload.estimators.types.GAP_RATIO` median intervals): it is run as
-    segments, the derived channels restarted after each gap, the step over it flagged."""
-    if steps.gaps:
-        _log.warning(
-            "%s: note: %d gap(s) in the time stamps (longest %.3g s, %.0f sample intervals): "
-            "run as %d segments, derived velocities restarted after each, the step over it "
-            "flagged INTERVAL_LONG",
-            source, steps.gaps, steps.longest_gap, steps.longest_gap / steps.median,
-            steps.gaps + 1,
-        )  # fmt: skip
+    segments, the derived channels restarted after each gap, the step over it flagged.
+    ``own_clocks``: ``steps`` are the IMU's own (channels on their own clocks), each channel's
+    derived values restart after its own gaps and the filter predicts over them."""
+    if not steps.gaps:
+        return
+    where, then = (
+        ("the IMU's own time stamps", "each channel's derived values restarted after its own")
+        if own_clocks
+        else ("the time stamps", "derived velocities restarted after each, the step over it "
+              "flagged INTERVAL_LONG")
+    )  # fmt: skip
+    _log.warning(
+        "%s: note: %d gap(s) in %s (longest %.3g s, %.0f sample intervals): run as %d "
+        "segments, %s",
+        source, steps.gaps, where, steps.longest_gap, steps.longest_gap / steps.median,
+        steps.gaps + 1, then,
+    )  # fmt: skip
 
 
 #: s, the longest interval over which a slow channel is interpolated between two samples.
 SLOW_CHANNEL_GAP = 2.0
 
 
-def slow_channel(t: np.ndarray, values: np.ndarray, name: str, source: str) -> np.ndarray:
+def slow_channel(
+    t: np.ndarray, values: np.ndarray, name: str, source: str, *, own_clock: bool = False
+) -> np.ndarray:
     """A slowly varying channel (the speed) logged at a lower rate than the log's clock
     (NaN where it has no new value) interpolated linearly between its own samples, up to
     :data:`SLOW_CHANNEL_GAP` apart; a channel with a value at more than half the rows is
-    returned as it is (its missing samples are dropouts, skipped and flagged). Says so on
+    returned as it is (its missing samples are dropouts, skipped and flagged), unless it is
+    on its own clock (``own_clock``: a row without a value is another channel's). Says so on
     the ``wheelload`` logger (a note)."""
     good = np.isfinite(values)
-    if good.sum() > 0.5 * values.size or good.sum() < 2:
+    if (good.sum() > 0.5 * values.size and not own_clock) or good.sum() < 2:
         return values
     from wheelload.estimators.logs.readers.resample import Method, resample
 
@@ -370,17 +399,29 @@ def check_units(acc, d, v, vx, source: str) -> None:
 
 
 def derive_velocities(
-    t: np.ndarray, d: np.ndarray, cutoff: float = VELOCITY_CUTOFF, source: str = "<log>"
+    t: np.ndarray,
+    d: np.ndarray,
+    cutoff: float = VELOCITY_CUTOFF,
+    source: str = "<log>",
+    *,
+    own_clocks: bool = False,
 ) -> np.ndarray:
     r"""Causal filtered derivative of the travel, :math:`\omega_c s/(s+\omega_c)` (Tustin).
 
     Needs near-uniform sampling within each segment (jitter below 5 % of the median
     interval; a longer step is a gap between segments). A missing travel sample gives a
     missing velocity, and the filter restarts at rest on the first sample after a missing
-    sample or a time gap, so a gap makes no false velocity.
+    sample or a time gap, so a gap makes no false velocity. With ``own_clocks`` (channels
+    on their own clocks, NaN where a channel has no new value) each travel is differentiated
+    on its own time stamps (:func:`on_own_stamps`).
     """
     if not np.isfinite(d).any():
         return np.full(d.shape, np.nan)
+    if own_clocks:
+        return on_own_stamps(
+            lambda steps, name: Differentiator(steps, 1, cutoff, f"{source}: channel '{name}'"),
+            t, d, TRAVEL,
+        )  # fmt: skip
     return Differentiator(Steps.of(t), d.shape[1], cutoff, source)(d, t)
 
 
@@ -567,16 +608,22 @@ def rate_derivatives(
     r"""Estimated derivatives of the body rates ``wx wy wz``, shape (n, 3) [rad/s^2].
 
     The logged ``wx_dot wy_dot wz_dot`` when present, else the causal kinematic
-    filter of :class:`RateEstimator` with ``settings`` (not a differentiator: a filtered derivative
-    of a noisy gyro at 20 Hz carries more noise into the body-inertia term than
-    the term is worth). All NaN where the log has no rates or its time stamps are
-    too irregular: the terms that need them are then dropped and flagged, not guessed.
+    filter of :class:`RateEstimator` with ``settings`` (not a differentiator: a filtered
+    derivative of a noisy gyro at 20 Hz carries more noise into the body-inertia term than
+    the term is worth), each rate on its own stamps for channels on their own clocks. All
+    NaN where the log has no rates or its time stamps are too irregular: the terms that need
+    them are then dropped and flagged, not guessed.
     """
     if signals.rate_dots is not None:
         return signals.rate_dots
     if signals.rates is None or len(signals) < 2:
         return np.full((len(signals), 3), np.nan)
     try:
+        if signals.own_clocks:  # each rate on its own stamps
+            return on_own_stamps(
+                lambda steps, name: RateEstimator(steps, 1, signals.source, settings),
+                signals.t, signals.rates, RATES,
+            )  # fmt: skip
         estimator = RateEstimator(Steps.of(signals.t), 3, signals.source, settings)
         return estimator(signals.rates, signals.t)
     except LogError:

@@ -119,10 +119,23 @@ def linear_term(
         drift = window["drift"][1:]
         q[1:, 0] += drift
         q[:-1, 0] -= drift
-        q[j0, 0] += null @ W @ (window["xp"][j0] - prior) / LOAD_SCALE
+        q[j0, 0] += arrival_pull((null @ W).tolist(), window["xp"][j0].tolist(), prior.tolist())
     else:
         q[j0] -= W @ prior / LOAD_SCALE
     return q.ravel()
+
+
+def arrival_pull(nW: list, xp: list, prior: list) -> float:
+    r"""The hard window's arrival prior on its oldest warp variable,
+    :math:`n^\top W (\bar x_p - \hat x) / s` (:math:`nW = n^\top W`, :math:`s` =
+    :data:`LOAD_SCALE`), in plain floats summed wheel by wheel (the same bits on every path:
+    the per-sample state and the loop over a log, :func:`.ring.run_hard`)."""
+    return (
+        nW[0] * (xp[0] - prior[0])
+        + nW[1] * (xp[1] - prior[1])
+        + nW[2] * (xp[2] - prior[2])
+        + nW[3] * (xp[3] - prior[3])
+    ) / LOAD_SCALE
 
 
 def check_interrupted(status: int) -> None:

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from wheelload.estimators.mhe.qp import finite_data, hessian_values, linear_term
+from wheelload.estimators.mhe.qp import arrival_pull, finite_data, hessian_values, linear_term
 from wheelload.estimators.mhe.soft_window import bad_windows, run_soft
 from wheelload.estimators.mhe.terms import LOAD_SCALE
 from wheelload.estimators.mhe.window_loop import run_window
@@ -121,16 +121,21 @@ def _hard_loads(
         return None
     omega = low if low > omega else omega
     scaled = (high if high < omega else omega) * LOAD_SCALE
-    x = [a + b * scaled for a, b in zip(xp, null)]
-    tolerance = math.inf if low == high else 10.0 * (1e-9 + 1e-12 * max(1.0, max(map(abs, x))))
+    x = [xp[0] + null[0] * scaled, xp[1] + null[1] * scaled,
+         xp[2] + null[2] * scaled, xp[3] + null[3] * scaled]  # fmt: skip
     lowest, highest = bounds
-    clipped = []
-    for value in x:
-        if value < lowest - tolerance or value > highest + tolerance or not abs(value) <= limit:
+    if low == high:
+        below, above = -math.inf, math.inf
+    else:  # a NaN load is refused below whatever its tolerance
+        largest = max(1.0, abs(x[0]), abs(x[1]), abs(x[2]), abs(x[3]))
+        tolerance = 10.0 * (1e-9 + 1e-12 * largest)
+        below, above = lowest - tolerance, highest + tolerance
+    for j, value in enumerate(x):
+        if value < below or value > above or not abs(value) <= limit:
             return None
         value = lowest if lowest > value else value
-        clipped.append(highest if highest < value else value)
-    return clipped
+        x[j] = highest if highest < value else value
+    return x
 
 
 def run_hard(mhe, state, rows: dict, kf_loads, record=None):
@@ -179,7 +184,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
     lower_list = rows["lower"][:, 0].tolist()
     upper_list = rows["upper"][:, 0].tolist()
     xp_list = rows["xp"].tolist()
-    nW, nWn, xp = rows["nW"], rows["nWn"].tolist(), rows["xp"]
+    nW, nWn = rows["nW"].tolist(), rows["nWn"].tolist()
     null = mhe.null.tolist()
     bounds, eps = mhe.load_bounds, (s.solver.eps_abs, s.solver.eps_rel)
 
@@ -196,7 +201,7 @@ def run_hard(mhe, state, rows: dict, kf_loads, record=None):
             Px[2 * j0] += nWn[a + j0]
             q[0] = Gl[a] - Dl[a + 1]
             q[-1] = Gl[newest] + Dl[newest]
-        q[j0] += nW[a + j0] @ (xp[a + j0] - prior) / LOAD_SCALE
+        q[j0] += arrival_pull(nW[a + j0], xp_list[a + j0], prior.tolist())
         return bad[i] if j0 == 0 else not finite_data(Px, q, *(() if low is None else (low, high)))
 
     def newest_loads(x, newest: int) -> list | None:

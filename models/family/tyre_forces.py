@@ -192,17 +192,26 @@ def load_share_split(total, loads):
     return total[:, None] * weights / np.maximum(weights.sum(axis=1, keepdims=True), 1.0)
 
 
-def wheel_slip_velocity(spin, radius, speed, rate, steer, positions):
-    r"""Each wheel's slip velocity :math:`R_i \omega_i - v_i` [m/s] (4,): its rolling speed
-    less the speed of its centre along its heading, :math:`v_i = (v_x - r y_i) \cos\delta_i
-    + r x_i \sin\delta_i` (front wheels steered by :math:`\delta`, rear 0; the body's
-    lateral speed, unknown, taken as 0: it changes slowly). ``positions``: (x, y) per
-    wheel from the CG [m]. Free rolling keeps it near 0 (a constant offset where the
-    rolling radius differs from ``radius``); a wheel past its force peak spins up or locks.
-    """
+def wheel_centre_speeds(speed, rate, steer, positions):
+    r"""Each wheel centre's speed along its heading [m/s] (4,):
+    :math:`v_i = (v_x - r y_i) \cos\delta_i + r x_i \sin\delta_i` (front wheels steered
+    by :math:`\delta`, rear 0). The body's lateral speed is taken as 0: on the plant's laps
+    and its ABS braking, its true value changes the slip ratios below by < 0.001 rms.
+    ``positions``: (x, y) per wheel from the CG [m]."""
     result = []
     for i, (x, y) in enumerate(positions):
         angle = steer if i < 2 else 0.0
-        along = (speed - rate * y) * ca.cos(angle) + rate * x * ca.sin(angle)
-        result.append(radius[i] * spin[i] - along)
+        result.append((speed - rate * y) * ca.cos(angle) + rate * x * ca.sin(angle))
     return ca.vertcat(*result)
+
+
+def slip_ratios(spin, radius, speeds, min_speed: float):
+    r"""Each wheel's longitudinal slip ratio (4,): :math:`\kappa_i = (R_{e,i} \omega_i - v_i)
+    / \max(|v_i|, v_{min})`, the slip velocity per unit speed (SAE J670, ISO 8855), with
+    ``radius`` the effective rolling radius :math:`R_e`
+    (:func:`~wheelload.models.vehicle.wheel_geometry.rolling_radius`: with a fixed radius
+    the load's change of :math:`R_e` reads as slip) and ``speeds`` :func:`wheel_centre_speeds`;
+    ``min_speed`` keeps it finite at rest. A stable wheel's slip follows its force,
+    :math:`\kappa \approx F_x / C_\kappa`; past the force peak it runs away (locks or spins).
+    """
+    return (radius * spin - speeds) / ca.fmax(ca.fabs(speeds), min_speed)

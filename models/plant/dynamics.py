@@ -67,7 +67,7 @@ from wheelload.models.suspension.elements import anti_roll_bar_forces, stop_forc
 from wheelload.models.terms import rotation_x, rotation_y, rotation_z
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.models.vehicle.plant_section import DamperMap, Plant
-from wheelload.models.vehicle.wheel_geometry import loaded_radii, wheel_centres
+from wheelload.models.vehicle.wheel_geometry import loaded_radii, rolling_radius, wheel_centres
 
 STATE_NAMES = (
     ("s", "n", "z", "phi", "theta", "psi", "u", "v", "w", "p", "q", "r")
@@ -373,14 +373,14 @@ def plant_dynamics(vehicle: Vehicle, road: RoadSurface, payload: bool = False):
         fx, fy = tyre_forces(kappa[i], alpha[i], fz, c.nominal_load, tyre)
         force = fx * e_x + fy * e_y + fz * normal
         loaded = ca.fmin(gap, c.radius)
-        rolling_radius = c.radius - ca.fmax(deflection, 0.0) / 3.0
+        effective_radius = rolling_radius(c.radius, ca.fmax(deflection, 0.0))
         spin_sign = spin_direction(spin[i])
         spin_acc = (
             wheel_torque(drive[i], brake[i], spin_sign)
             - fx * loaded
             - tyre.rolling_resistance * fz * loaded * spin_sign
         ) / c.spin_inertia
-        kappa_dot = ((spin[i] * rolling_radius - vx_w) - ca.fabs(vx_w) * kappa[i]) / (
+        kappa_dot = ((spin[i] * effective_radius - vx_w) - ca.fabs(vx_w) * kappa[i]) / (
             tyre.relaxation_length_x
         )
         alpha_dot = (-vy_w - ca.fabs(vx_w) * alpha[i]) / tyre.relaxation_length_y

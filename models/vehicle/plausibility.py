@@ -309,6 +309,7 @@ RANGES: dict[str, Callable[[Vehicle], Range | tuple[Range, ...]]] = {
     "filter.sigma_no_travel_ax": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
     "filter.sigma_no_travel_ay": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
     "filter.sigma_no_travel_az": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
+    "filter.sigma_no_travel_lateral": lambda v: Range(0.0, v.mass.total, "0 to m N per m/s^2"),
     # The payload filter (estimators/kf/payload.py).
     "filter.payload.estimate": _fixed(0.0, 1.0, "a switch: false or true"),
     "filter.payload.travel_from_reference": _fixed(0.0, 1.0, "a switch: false or true"),

@@ -30,7 +30,7 @@ import math
 CALIBRATED_MASSES = (1613.2, 2275.0)
 _SIGMA_KEYS = ("sigma_floor", "sigma_ax", "sigma_ay", "sigma_travel_rate", "sigma_travel",
                "sigma_no_travel", "sigma_no_travel_ax", "sigma_no_travel_ay",
-               "sigma_no_travel_az")  # fmt: skip
+               "sigma_no_travel_az", "sigma_no_travel_lateral")  # fmt: skip
 #: file key (its table's parts, then the key) -> power of the mass ratio
 MASS_POWERS: dict[tuple[str, ...], int] = {
     # the reported sigma (estimators/kf/reported_std.py): N, N per m/s^2, N per m/s, N per m

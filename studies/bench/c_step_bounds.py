@@ -30,6 +30,8 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
+from wheelload.studies.bench.c_clock import SECONDS
+
 #: Dispatch width and pipes of the throughput model (AMD Zen 3/4).
 DISPATCH_WIDTH = 6
 MULTIPLY_PIPES = 2
@@ -46,16 +48,10 @@ IMUL_LATENCY = 3
 #: Links of the chain per timed run.
 CLOCK_CHAIN = 1_000_000
 
-_CLOCK_SOURCE = r"""
-#define _POSIX_C_SOURCE 199309L
+_CLOCK_SOURCE = (
+    SECONDS
+    + r"""
 #include <stdio.h>
-#include <time.h>
-static double seconds(void)
-{
-    struct timespec now;
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
-}
 int main(void)
 {
     double best = 1e9;
@@ -75,6 +71,7 @@ int main(void)
     return x == 0;
 }
 """
+)
 
 
 def measured_clock_mhz(folder: Path, compiler: str = "gcc") -> float | None:

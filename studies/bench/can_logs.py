@@ -11,8 +11,10 @@ that lag added to ``ay``'s latency key. The CAN car's maps put the channels on a
 even 200 Hz clock (``[clock] rate = 200``); ``STEM.stamps.toml`` on the IMU frame's
 own stamps instead, which a jitter of :data:`ROUGH_JITTER` (``rough``) makes too
 uneven for the filter's differentiators; ``STEM.union.toml`` on the union of every
-channel's stamps (``[clock] union = true``), read from the jittered log and from one
-without jitter (``still``), whose shifted stamps fall on the IMU's 5 ms grid. Each
+channel's stamps (``[clock] union = true``: each travel's rate derived on its own stamps,
+each row filtered at its own time stamp as the timed filter does), read from the jittered
+log and from one without jitter (``still``), whose shifted stamps fall on the IMU's 5 ms
+grid. Each
 RMSE is the KF's, pooled over the four wheels, against the plant's reference loads at
 the log's own time stamps, and is printed with its ratio to the synchronous log's.
 """
@@ -69,7 +71,8 @@ def ay_lag(path: Path, channels: Path) -> tuple[float, float, str]:
     from wheelload.estimators.logs.checks import check_wiring
 
     signals = read_log(path, channels=channels, wiring_checks=False)
-    report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates)
+    report = check_wiring(signals.t, signals.vx, signals.acc, signals.d, signals.rates,
+                          own_clocks=signals.own_clocks)  # fmt: skip
     (check,) = [c for c in report.checks if c.name.startswith("ay lag")]
     std = re.search(r"\+- ([0-9.]+) s", check.note)
     return check.statistic, float(std.group(1)) if std else float("nan"), check.note
@@ -137,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
 def register_bench(subparsers) -> None:
     """``wheelload bench can``."""
     parser = subparsers.add_parser(
-        "can", help="the KF on a CAN car's MDF4 and BLF logs, latency found and applied",
+        "can",
         description=__doc__.splitlines()[0],
     )  # fmt: skip
     parser.add_argument("--delay", type=float, default=0.3, help="ay's hidden delay [s]")

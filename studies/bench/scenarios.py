@@ -49,9 +49,7 @@ def bench(names: Sequence[str], internal_rate: float, output_rate: float) -> lis
 
 def register_bench(subparsers) -> None:
     """``wheelload bench scenarios``."""
-    parser = subparsers.add_parser(
-        "scenarios", help="wall time of each plant scenario", description=__doc__
-    )
+    parser = subparsers.add_parser("scenarios", description=__doc__)
     parser.add_argument("names", nargs="*", metavar="NAME", help="scenarios (default: all)")
     parser.add_argument(
         "--internal-rate",

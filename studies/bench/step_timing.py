@@ -195,6 +195,18 @@ def fast_selftest(
     return library, binary
 
 
+def single_and_batched_ns(
+    binary: Path, samples: int, passes: int, batch: int, repeats: int
+) -> tuple[list[float], list[float]]:
+    """ns per step of the self-test's single step and per filter-step of its batch of
+    ``batch`` filters (each the fastest of ``passes`` passes), ``repeats`` times in turn."""
+    single, batched = [], []
+    for _ in range(repeats):
+        single.append(selftest_ns(binary, "bench", samples, passes))
+        batched.append(selftest_ns(binary, "batch-bench", max(samples // batch, 1), passes, batch))
+    return single, batched
+
+
 def batched_against_run(kf: TwoStageKF, vehicle_path: Path, logs: list, repeats: int):
     """µs per sample of :func:`~wheelload.estimators.codegen.batched.run_batched` over the
     logs and of :meth:`TwoStageKF.run` on each, ``repeats`` times in turn: two lists."""

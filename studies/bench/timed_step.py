@@ -28,29 +28,23 @@ from wheelload.estimators import read_log
 from wheelload.estimators.codegen.kf import CodegenOptions, build_program, generate
 from wheelload.estimators.logs.inputs import input_matrix
 from wheelload.models import example_vehicle_path
+from wheelload.studies.bench.c_clock import SECONDS
 from wheelload.studies.pipeline.example_log import example_log_path
 
 #: Batches per round (the fastest counts) and full rewinds in a batch.
 BATCHES = 8
 REWINDS = 4
 
-PROGRAM = r"""
-#define _POSIX_C_SOURCE 199309L
+PROGRAM = (
+    SECONDS
+    + r"""
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 #include "wheelload_kf.h"
 
 #define REWINDS @REWINDS@
 #define BATCHES @BATCHES@
 #define SAMPLES_PER_BATCH 256
-
-static double seconds(void)
-{
-    struct timespec now;
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
-}
 
 /* argv: samples file (interval, then one sample of N_INPUTS values a line), rounds. */
 int main(int argc, char **argv)
@@ -127,6 +121,7 @@ int main(int argc, char **argv)
     return 0;
 }
 """
+)
 
 
 @dataclass(frozen=True)

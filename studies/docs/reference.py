@@ -50,8 +50,6 @@ CONTRACT: dict[str, tuple[tuple[str, tuple[str, ...]], ...]] = {
                 "LogError",
                 "scan_log",
                 "LogStream",
-                "LogScan",
-                "ThinnedInputs",
             ),
         ),
         (

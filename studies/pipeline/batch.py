@@ -109,8 +109,13 @@ def _prepare_log(path: Path, settings: EstimateSettings):
         settings,
         source=signals.source,
         wiring_report=lambda: check_wiring(
-            signals.t, signals.vx, signals.acc, signals.d, signals.rates
-        ),
+            signals.t,
+            signals.vx,
+            signals.acc,
+            signals.d,
+            signals.rates,
+            own_clocks=signals.own_clocks,
+        ),  # fmt: skip
         checked_signals=lambda: signals,
         static_loads=lambda vehicle: measured_static_loads(signals, vehicle, settings),
         notes=() if coarse is None else (coarse,),

@@ -17,6 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from wheelload.estimators import Estimate, Signals, StepFlag
+from wheelload.estimators.logs.own_clocks import scored_reference
 from wheelload.models import WHEELS
 from wheelload.studies.metrics import pooled_force_error, wheel_metrics
 from wheelload.studies.pipeline.estimate_digest import EstimateDigest
@@ -39,7 +40,7 @@ class ScannedLog(Protocol):
 
 def digest_of(estimate: Estimate, signals: Signals) -> EstimateDigest:
     """The summary figures of a whole-log estimate (one chunk)."""
-    reference = signals.reference
+    reference = scored_reference(signals)
     wheels = None if reference is None else np.any(np.isfinite(reference), axis=0)
     digest = EstimateDigest(
         samples=len(estimate), reference_wheels=wheels, has_std=estimate.has_std
@@ -244,7 +245,7 @@ class LoadFigures:
     @classmethod
     def of_estimate(cls, estimate: Estimate, signals: Signals, source: str) -> LoadFigures:
         """The figures of a whole-log estimate, computed on its arrays."""
-        reference = signals.reference
+        reference = scored_reference(signals)
         rmse = np.nan
         if reference is not None and np.isfinite(reference).any():
             rmse = _pooled_rmse(lambda: wheel_metrics(estimate.loads, reference, source=source))

@@ -113,8 +113,8 @@ def test_the_help_imports_no_command_and_lists_every_command():
 
 @pytest.mark.parametrize(
     "command",
-    ["vehicle", "estimate", "methods", "compare", "channels", "sensor-sets", "weigh", "identify",
-     "tune", "docs"],
+    ["vehicle", "estimate", "methods", "compare", "channels", "sensor-sets", "bench", "weigh",
+     "identify", "tune", "docs"],
 )  # fmt: skip
 def test_a_commands_help_imports_only_its_parser(command):
     """``wheelload COMMAND --help`` builds that command's parser: none of what it runs with."""

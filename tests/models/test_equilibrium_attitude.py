@@ -63,15 +63,17 @@ def test_imu_only_total_load_in_a_turn(path, name, noise):
     total = (estimate.loads - signals.reference).sum(axis=1)
     assert turn.sum() > 300
     assert np.abs(total[turn]).mean() < 100.0
-    # The reported sigma of a wheel without travel (sigma_no_travel*, fitted IMU-only by
-    # `study sigma`): +-2 sigma covers the errors after the first second (measured 100 %,
-    # 99.7 %, 100 %); RMS sigma 1.5-4.3x the RMSE (64 / 15, 83 / 54, 80 / 24 N: one model
-    # serves both cars, whose IMU-only errors differ by 3-5x).
+    # The reported sigma of a wheel without travel (sigma_no_travel*, fitted by `bench
+    # discernment --fit-no-travel` on IMU-only logs as logged and with ay 0.5 s late, so
+    # that a real car's front-only reference log is covered): +-2 sigma covers the errors
+    # after the first second (measured 99.99 %, 99.97 %, 100 %); RMS sigma 1-10x the RMSE
+    # (measured 8.8, 6.5 and 4.5x; 1.5-4.3x before the late-ay calibration): on the plant's
+    # own logs, whose ay is on time, the |ay - vx wz| term over-covers a turn.
     settled = signals.t - signals.t[0] >= 1.0
     error = (estimate.loads - signals.reference)[settled]
     sigma = estimate.std[settled]
     assert np.mean(np.abs(error) <= 2 * sigma) >= 0.95
     ratio = np.sqrt(np.mean(sigma**2)) / np.sqrt(np.mean(error**2))
-    assert 1.0 <= ratio <= 5.0
+    assert 1.0 <= ratio <= 10.0
     # The road frame stays on, flagged with the bit of a term without its input.
     assert (estimate.flags & StepFlag.ROAD_FRAME_OR_LINKS_DROPPED).all()

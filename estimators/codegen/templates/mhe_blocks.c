@@ -10,7 +10,7 @@
     (void)memcpy(mhe->FALLBACK, X0, sizeof X0);
     kf_reset(mhe);
     wheelload_mhe_workspace_init(&mhe->osqp);
-    osqp_update_rho(&mhe->osqp.solver, (OSQPFloat)RHO0);
+    (void)osqp_update_rho(&mhe->osqp.solver, (OSQPFloat)RHO0);
     mhe->self = mhe;
 @@ interval_and_inputs
     if (mhe->self != mhe) { /* never reset, or copied or moved since: its solver is elsewhere */
@@ -29,7 +29,7 @@
         u0[i] = valid[i] != 0.0 ? u[i] : 0.0;
     }
 @@ solve
-            osqp_solve(&mhe->osqp.solver);
+            (void)osqp_solve(&mhe->osqp.solver);
             status = (int)mhe->osqp.solver.info->status_val;
             out->iterations = (int)mhe->osqp.solver.info->iter;
         } else {

@@ -3,7 +3,9 @@ static void kf_reset(wheelload_mhe_state *mhe) { (void)mhe; }
 
 static void kf_covariance(const wheelload_mhe_state *mhe, double *P) {
     (void)mhe;
-    for (int e = 0; e < 16; ++e) P[e] = e % 5 == 0 ? P0_VAR : 0.0;
+    for (int e = 0; e < 16; ++e) {
+        P[e] = e % 5 == 0 ? P0_VAR : 0.0;
+    }
 }
 
 static void kf_step(wheelload_mhe_state *mhe, const double *u, double dt, double *x, double *std) {

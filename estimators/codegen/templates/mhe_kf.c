@@ -10,16 +10,19 @@ static void kf_reset(wheelload_mhe_state *mhe) {
 
 static void kf_covariance(const wheelload_mhe_state *mhe, double *P) {
     static const int index[16] = {0, 1, 2, 3, 1, 4, 5, 6, 2, 5, 7, 8, 3, 6, 8, 9};
-    for (int e = 0; e < 16; ++e) P[e] = (double)mhe->kf.P[index[e]];
+    for (int e = 0; e < 16; ++e) {
+        P[e] = (double)mhe->kf.P[index[e]];
+    }
 }
 
 static void kf_run(wheelload_mhe_kf_state *state, const double *u, double dt,
                    wheelload_mhe_kf_output *output) {
     wheelload_mhe_kf_input input;
-    for (int i = 0; i < N_INPUTS; ++i)
+    for (int i = 0; i < N_INPUTS; ++i) {
         *wheelload_mhe_kf_input_field(&input, i) = (wheelload_mhe_kf_real)u[i];
-    wheelload_mhe_kf_step(state, &wheelload_mhe_kf_default_params, &input,
-                          (wheelload_mhe_kf_real)dt, output);
+    }
+    (void)wheelload_mhe_kf_step(state, &wheelload_mhe_kf_default_params, &input,
+                                (wheelload_mhe_kf_real)dt, output);
 }
 
 static void kf_step(wheelload_mhe_state *mhe, const double *u, double dt, double *x, double *std) {
@@ -35,13 +38,17 @@ static void kf_step(wheelload_mhe_state *mhe, const double *u, double dt, double
    estimate; the filter's state is not advanced. */
 static void kf_held(const wheelload_mhe_state *mhe, const double *u, double dt, const double *held,
                     double *std, double *residual) {
-    wheelload_mhe_kf_state copy = mhe->kf;
+    wheelload_mhe_kf_state copy;
+    (void)memcpy(&copy, &mhe->kf, sizeof copy);
     wheelload_mhe_kf_output output;
     kf_run(&copy, u, dt, &output);
-    for (int i = 0; i < 4; ++i) std[i] = (double)output.std[i];
+    for (int i = 0; i < 4; ++i) {
+        std[i] = (double)output.std[i];
+    }
     for (int r = 0; r < 3; ++r) {
         residual[r] = (double)output.residual[r];
-        for (int c = 0; c < 4; ++c)
+        for (int c = 0; c < 4; ++c) {
             residual[r] += A_MATRIX[r * 4 + c] * ((double)copy.x[c] - held[c]);
+        }
     }
 }

@@ -8,7 +8,11 @@ r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage K
   the paper's Remark 1 holds them, which lags a spin ramp by half a sample), minus the
   rolling resistance on the KF's :math:`F_z`. The torque's feed-through is scaled by a
   gain :math:`g` (1 nominal) that the lateral filter estimates from :math:`S_x`, so a
-  torque signal a few % off is learned, its σ in :math:`F_x`'s.
+  torque signal a few % off is learned, its σ in :math:`F_x`'s. In high slip and
+  ``slip_hold`` after it, :math:`F_x` is a second, fast observer's (30 Hz against the
+  nominal 1 Hz, both always running): a cycling ABS moves the force at 4-10 Hz, which the
+  nominal one cannot follow (F_x 46 → 26 % of its RMS on the plant's ABS braking), while
+  elsewhere the fast one would pass the spin noise (lane change 3.5 → 25 %).
 - ``tyre-lateral`` (§III-B, eq. 10-16): a Kalman filter on
   :math:`(F_{yf}, F_{yr}, e, r, g, b_x)`: the axles' lateral forces, the front left/right
   difference beyond the load split (the paper's :math:`\bar F_{yf}`; see
@@ -17,13 +21,18 @@ r"""Tyre forces per wheel: the corner-based paper's observers on the two-stage K
   gyro's yaw rate; :math:`g` and :math:`b_x` (the bias of :math:`S_x`: the
   accelerometer's, the drag's) enter the :math:`S_x` row. Random-walk forces
   (:math:`A_y = 0`, eq. 10), the yaw rate integrated from eq. 3. High slip (§IV): the
-  paper's :math:`|\dot\omega_{ij}| \ge \dot\omega_{th}` (40 rad/s²) taken on the
-  wheel's slip velocity, :math:`|\tfrac{d}{dt}(R\omega - v)| / R
-  \ge \dot\omega_{th}` (low-passed over ``slip_time``): :math:`R\dot\omega = \dot v (1 +
-  \kappa) + v \dot\kappa`, so the slip's own change counts and the car's deceleration
-  (1 g braking: :math:`\dot\omega \approx` 30 rad/s²) does not. It sets
-  ``StepFlag.HIGH_SLIP``; with ``switch_covariances`` the filter also takes the paper's
-  high-slip pair, :math:`Q` times :math:`(0.036/0.11)^2` and :math:`R` times
+  paper's :math:`|\dot\omega_{ij}| \ge \dot\omega_{th}` taken per unit speed, on the
+  wheel's slip ratio :math:`\kappa = (R_e\omega - v)/v`
+  (:func:`~wheelload.models.family.tyre_forces.slip_ratios`, :math:`R_e` the effective
+  rolling radius under the KF's :math:`F_z`): :math:`|\dot\kappa| \ge \dot\kappa_{th}`
+  (low-passed over ``slip_time``). From :math:`R\dot\omega = \dot v (1 + \kappa) + v
+  \dot\kappa`, the car's own deceleration drops out, and per unit speed a stable wheel's
+  slip, which follows its torque (:math:`\kappa \approx F_x / C_\kappa`), is not flagged at
+  50 m/s where :math:`v\dot\kappa` is large: a wheel past its force peak runs away at any
+  speed. :math:`\dot\kappa_{th}` = 1/s, a choice: the paper's 40 rad/s² on a 0.33 m wheel
+  at 13 m/s (47 km/h), and on the plant it parts a cycling ABS from a lap (results.md). It
+  sets ``StepFlag.HIGH_SLIP``; with ``switch_covariances`` the filter also takes the
+  paper's high-slip pair, :math:`Q` times :math:`(0.036/0.11)^2` and :math:`R` times
   :math:`(0.4/0.018)^2` (the paper's ratios). Off by default: on the plant's laps and kerb
   it raised the F_y error wherever it acted (the force sums it mutes stay valid in slip).
 - ``tyre-forces``: the KF's :math:`F_z` with σ, ``tyre-pid``'s :math:`F_x` and
@@ -103,6 +112,10 @@ class TyreSettings:
 
     observer_frequency: float = 1.0  # Hz, natural frequency of eq. 9's poles
     observer_damping: float = 0.8  # -
+    # In high slip and slip_hold after it F_x takes a fast observer's: a cycling ABS
+    # moves the force at 4-10 Hz (module docstring).
+    slip_observer_frequency: float = 30.0  # Hz
+    slip_hold: float = 0.2  # s
     spin_noise: float = 0.02  # rad/s, 1 sigma white spin noise (sigma of F_x)
     rolling_resistance_std: float = 0.3  # share of the rolling resistance (sigma of F_x)
     force_share_std: float = 0.04  # share of F_x: the loaded radius and torque (sigma of F_x)
@@ -121,9 +134,11 @@ class TyreSettings:
     # S_x's bias: an MTi-class a_x turn-on bias (0.1 m/s^2) times m, and the drag's error.
     force_bias_std: float = 200.0  # N, initial sigma
     force_bias_rate: float = 5.0  # N/sqrt(s), random walk
-    # High slip: |d(R w - v)/dt| / R of any wheel, low-passed, at least the paper's w_th.
-    slip_acceleration: float = 40.0  # rad/s^2
+    # High slip: |d kappa/dt| of any wheel's slip ratio, low-passed, at least this (a
+    # choice: the paper's 40 rad/s^2 on a 0.33 m wheel at 13 m/s; module docstring).
+    slip_ratio_rate: float = 1.0  # 1/s
     slip_time: float = 0.05  # s, time constant of that low-pass
+    slip_speed: float = 2.0  # m/s, the slip ratio is taken per at least this speed
     switch_covariances: bool = False  # in high slip, the paper's Q and R (module docstring)
     # None: the tyres' load sensitivity where the file has [cornering], else the paper's
     # normal-load share.
@@ -131,11 +146,14 @@ class TyreSettings:
     missing_std: float = 1.0e4  # N, sigma of an F_x held through a missing spin or torque
 
     def __post_init__(self) -> None:
-        for key in ("observer_frequency", "observer_damping", "force_rate", "split_rate",
-                    "split_std", "yaw_rate_noise", "force_noise", "gyro_noise",
+        if not self.slip_hold >= 0:
+            raise ValueError(f"tyre settings: slip_hold must be >= 0, got {self.slip_hold}")
+        for key in ("observer_frequency", "slip_observer_frequency", "observer_damping",
+                    "force_rate", "split_rate", "split_std", "yaw_rate_noise", "force_noise",
+                    "gyro_noise",
                     "initial_force_std", "torque_gain_std", "torque_gain_rate",
-                    "force_bias_std", "force_bias_rate", "slip_acceleration",
-                    "slip_time"):  # fmt: skip
+                    "force_bias_std", "force_bias_rate", "slip_ratio_rate",
+                    "slip_time", "slip_speed"):  # fmt: skip
             if not getattr(self, key) > 0:
                 raise ValueError(f"tyre settings: {key} must be > 0, got {getattr(self, key)}")
 
@@ -154,6 +172,8 @@ class Constants:
 
     inertia: np.ndarray  # (4,) spin inertia [kg m^2]
     radius: np.ndarray  # (4,) static loaded radius [m]
+    free_radius: np.ndarray  # (4,) unloaded tyre radius [m]
+    vertical_stiffness: np.ndarray  # (4,) tyre vertical stiffness [N/m]
     rolling: float  # rolling-resistance coefficient
     mass: float  # whole-vehicle mass [kg]
     yaw_inertia: float  # about the sprung CG, unsprung masses included [kg m^2]
@@ -186,6 +206,10 @@ def vehicle_constants(vehicle: Vehicle) -> Constants:
     return Constants(
         inertia=np.array([wheels.spin_inertia_front] * 2 + [wheels.spin_inertia_rear] * 2),
         radius=np.array(loaded_radii(t, static_loads(vehicle))),
+        free_radius=np.array([t.radius_front] * 2 + [t.radius_rear] * 2),
+        vertical_stiffness=np.array(
+            [t.vertical_stiffness_front] * 2 + [t.vertical_stiffness_rear] * 2
+        ),  # fmt: skip
         rolling=float(wheels.rolling_resistance),
         mass=float(m.total),
         yaw_inertia=float(m.inertia[2])
@@ -325,11 +349,15 @@ class TyreForces:
         return CompiledLoop(self.core_function, 1, CORE_INPUTS[1:])
 
     def observer_input(self, dt: float) -> np.ndarray:
-        """The core step's ``observer`` input for an interval ``dt`` (rounded to 1 ns)."""
+        """The core step's ``observer`` input for an interval ``dt`` (rounded to 1 ns): the
+        nominal observers, then the fast ones of high slip."""
         k, s = self.constants, self.settings
-        return observer_inputs([discrete_observer(k.inertia[i], k.radius[i], s.observer_frequency,
-                                                  s.observer_damping, round(float(dt), 9))
-                                for i in range(4)])  # fmt: skip
+        return np.concatenate([
+            observer_inputs([discrete_observer(k.inertia[i], k.radius[i], frequency,
+                                               s.observer_damping, round(float(dt), 9))
+                             for i in range(4)])
+            for frequency in (s.observer_frequency, s.slip_observer_frequency)
+        ])  # fmt: skip
 
     def core_step(self, core: np.ndarray, inputs: Inputs, dt: float):
         """One sample of the observers: ``(core, fx, fx_std, fy, fy_std)``."""

@@ -31,10 +31,12 @@ from wheelload.models.family.tyre_forces import (
     load_shares,
     observer_gains,
     rolling_resistance_force,
+    slip_ratios,
     tyre_split,
+    wheel_centre_speeds,
     wheel_lateral_forces,
-    wheel_slip_velocity,
 )
+from wheelload.models.vehicle.wheel_geometry import rolling_radius
 
 
 class LateralSplit(enum.Enum):
@@ -50,13 +52,15 @@ class CoreLayout:
     observer: slice = slice(0, 16)  # per wheel: omega_hat, a_hat, last torque, last spin
     x: slice = slice(16, 22)  # lateral filter: F_yf, F_yr, e, r, torque gain g, S_x bias
     P: slice = slice(22, 58)  # its covariance, 6 x 6 column-major
-    last_slip: slice = slice(58, 62)  # slip velocities R w - v of the last sample with all
+    last_slip: slice = slice(58, 62)  # slip ratios of the last sample with every spin, speed
     slip_rate: slice = slice(62, 66)  # their rates, low-passed over slip_time
     last_fx: slice = slice(66, 70)  # the last F_x (held through a missing spin or torque)
     observer_started: int = 70  # 1 once a sample had every spin and torque
     lateral_started: int = 71  # 1 after the first sample
     slip_seen: int = 72  # 1 once last_slip holds a sample
-    size: int = 73
+    fast_observer: slice = slice(73, 81)  # per wheel: omega_hat, a_hat of the fast observer
+    slip_hold: int = 81  # s left on the fast observer after the last high-slip sample
+    size: int = 82
 
 
 CORE = CoreLayout()
@@ -70,13 +74,16 @@ WHEEL_INPUTS = (
 )  # fmt: skip
 #: Entries per wheel of :func:`observer_inputs`: Phi (2 x 2), Gamma1, Gamma2 row-major, gain.
 OBSERVER_ENTRIES = 13
+#: The observers per wheel: the nominal one, then the fast one of high slip.
+OBSERVER_BANKS = 2
 CORE_INPUTS = ("core", "wheels", "wheels_valid", "sums", "sums_valid", "rate", "rate_valid",
                "speed", "speed_valid", "loads", "mass_properties", "dt", "observer")  # fmt: skip
 CORE_OUTPUTS = ("core_next", "fx", "fx_std", "fy", "fy_std", "high_slip")
 
 
 def observer_inputs(discrete: list[tuple]) -> np.ndarray:
-    """The ``observer`` input (52,) from each wheel's
+    """The ``observer`` input (13 per entry: the nominal observers' four, then the fast
+    ones' four) from each wheel's
     :func:`~wheelload.estimators.family.tyres.forces.discrete_observer` result."""
     rows = [np.concatenate([np.ravel(phi), np.ravel(g1), np.ravel(g2), [gain]])
             for phi, g1, g2, _, _, gain in discrete]  # fmt: skip
@@ -120,35 +127,64 @@ def tyre_core_function(
     loads = ca.SX.sym("loads", 4)
     mass_properties = ca.SX.sym("mass_properties", 4)
     dt = ca.SX.sym("dt")
-    observer = ca.SX.sym("observer", 4 * OBSERVER_ENTRIES)
+    observer = ca.SX.sym("observer", OBSERVER_BANKS * 4 * OBSERVER_ENTRIES)
     spin, torque, steer = wheels[0:4], wheels[4:8], wheels[8]
     spins_valid = _all(wheels_valid[0:4])
     inputs_valid = spins_valid * _all(wheels_valid[4:8])
     started = core[CORE.observer_started]
     n = len(LATERAL_STATES)
+    steer = steer * wheels_valid[8]
 
-    # F_x: eq. 4-5's spin observers; their force split into the torque's feed-through
-    # T / R (scaled by the lateral filter's torque gain g) and the rest.
-    observers, fx_rest, fx_torque, fx_noise = [], [], [], []
+    # §IV's high slip: a wheel's slip ratio (on its effective rolling radius under the KF's
+    # load) changing faster than slip_ratio_rate, low-passed over slip_time (a kerb's spin
+    # oscillation averages out).
+    deflection = ca.fmax(loads, 0.0) / ca.DM(k.vertical_stiffness)
+    speeds = wheel_centre_speeds(speed, rate * rate_valid, steer, k.positions)
+    slip = slip_ratios(spin, rolling_radius(ca.DM(k.free_radius), deflection), speeds,
+                       s.slip_speed)  # fmt: skip
+    slip_valid = spins_valid * speed_valid
+    seen = core[CORE.slip_seen] * slip_valid * (dt > 0)
+    raw_rate = (slip - core[CORE.last_slip]) / ca.fmax(dt, 1e-9)
+    blend = dt / (s.slip_time + dt)
+    slip_rate = _select(seen, core[CORE.slip_rate] + blend * (raw_rate - core[CORE.slip_rate]),
+                        core[CORE.slip_rate])  # fmt: skip
+    high_slip = seen * (ca.mmax(ca.fabs(slip_rate)) >= s.slip_ratio_rate)
+
+    # F_x: eq. 4-5's spin observers, the nominal one and the fast one that F_x rides in
+    # high slip and slip_hold after it (a cycling ABS moves the force faster than the
+    # nominal one follows); their force split into the torque's feed-through T / R (scaled
+    # by the lateral filter's torque gain g) and the rest.
+    hold = _select(high_slip, s.slip_hold, ca.fmax(core[CORE.slip_hold] - dt, 0.0))
+    fast = hold >= 0.5 * dt
+    frequencies = (s.observer_frequency, s.slip_observer_frequency)
+    observers, fast_observers, fx_rest, fx_torque, fx_noise = [], [], [], [], []
     for i in range(4):
-        k1, _ = observer_gains(inertia=k.inertia[i], radius=k.radius[i],
-                               frequency=s.observer_frequency,
-                               damping=s.observer_damping)  # fmt: skip
-        entries = observer[OBSERVER_ENTRIES * i : OBSERVER_ENTRIES * (i + 1)]
-        phi, g1, g2 = (ca.reshape(entries[4 * j : 4 * j + 4], 2, 2).T for j in range(3))
-        gain = entries[12]
         state = core[CORE.observer][4 * i : 4 * i + 4]
-        z, previous = state[0:2], state[2:4]
+        fast_state = core[CORE.fast_observer][2 * i : 2 * i + 2]
+        previous = state[2:4]
         u = ca.vertcat(torque[i], spin[i])
         first = ca.vertcat(spin[i], 0.0)  # start rolling steadily: F = T / R
-        z = _select(started, ca.mtimes(phi, z) + ca.mtimes(g1, previous)
-                    + ca.mtimes(g2, u - previous), first)  # fmt: skip
-        observers.append(_select(inputs_valid, ca.vertcat(z, u), state))
+        z, rest, gain = [], [], []
+        for bank, z_last in enumerate((state[0:2], fast_state)):
+            k1, _ = observer_gains(inertia=k.inertia[i], radius=k.radius[i],
+                                   frequency=frequencies[bank],
+                                   damping=s.observer_damping)  # fmt: skip
+            start = OBSERVER_ENTRIES * (4 * bank + i)
+            entries = observer[start : start + OBSERVER_ENTRIES]
+            phi, g1, g2 = (ca.reshape(entries[4 * j : 4 * j + 4], 2, 2).T for j in range(3))
+            z_next = _select(started, ca.mtimes(phi, z_last) + ca.mtimes(g1, previous)
+                             + ca.mtimes(g2, u - previous), first)  # fmt: skip
+            z.append(z_next)
+            # C z + D u of observer_matrices, the torque's part apart.
+            rest.append(k1 * z_next[0] - k.inertia[i] / k.radius[i] * z_next[1] - k1 * spin[i])
+            gain.append(entries[12])
+        observers.append(_select(inputs_valid, ca.vertcat(z[0], u), state))
+        fast_observers.append(_select(inputs_valid, z[1], fast_state))
         rolling = rolling_resistance_force(loads[i], spin[i], k.rolling)
-        # C z + D u of observer_matrices, the torque's part apart.
-        fx_rest.append(k1 * z[0] - k.inertia[i] / k.radius[i] * z[1] - k1 * spin[i] - rolling)
+        fx_rest.append(_select(fast, rest[1], rest[0]) - rolling)
         fx_torque.append(torque[i] / k.radius[i])
-        fx_noise.append((gain * s.spin_noise) ** 2 + (s.rolling_resistance_std * rolling) ** 2)
+        fx_noise.append((_select(fast, gain[1], gain[0]) * s.spin_noise) ** 2
+                        + (s.rolling_resistance_std * rolling) ** 2)  # fmt: skip
     fx_rest, fx_torque = ca.vertcat(*fx_rest), ca.vertcat(*fx_torque)
 
     # The lateral filter (eq. 10-16) with the torque gain, initialised on the first sample.
@@ -158,20 +194,6 @@ def tyre_core_function(
                        + [s.split_std**2, s.gyro_noise**2, s.torque_gain_std**2,
                           s.force_bias_std**2]))  # fmt: skip
     P = _select(lateral, ca.reshape(core[CORE.P], n, n), P0)
-    steer = steer * wheels_valid[8]
-
-    # §IV's high slip: a wheel's slip velocity R w - v changing faster than R w_th,
-    # low-passed over slip_time (a kerb's spin oscillation averages out).
-    slip_velocity = wheel_slip_velocity(spin, k.radius, speed, rate * rate_valid, steer,
-                                        k.positions)  # fmt: skip
-    slip_valid = spins_valid * speed_valid
-    seen = core[CORE.slip_seen] * slip_valid * (dt > 0)
-    raw_rate = (slip_velocity - core[CORE.last_slip]) / ca.fmax(dt, 1e-9)
-    blend = dt / (s.slip_time + dt)
-    slip_rate = _select(seen, core[CORE.slip_rate] + blend * (raw_rate - core[CORE.slip_rate]),
-                        core[CORE.slip_rate])  # fmt: skip
-    spin_acceleration = ca.fabs(slip_rate) / ca.DM(k.radius)
-    high_slip = seen * (ca.mmax(spin_acceleration) >= s.slip_acceleration)
     switched = high_slip * float(s.switch_covariances)
     q_scale = _select(switched, high_slip_scales[0], 1.0)
     r_scale = _select(switched, high_slip_scales[1], 1.0)
@@ -226,8 +248,9 @@ def tyre_core_function(
 
     core_next = ca.vertcat(
         *observers, x, ca.reshape(P, n * n, 1),
-        _select(slip_valid, slip_velocity, core[CORE.last_slip]), slip_rate, fx,
+        _select(slip_valid, slip, core[CORE.last_slip]), slip_rate, fx,
         ca.fmax(started, inputs_valid), 1.0, ca.fmax(core[CORE.slip_seen], slip_valid),
+        *fast_observers, hold,
     )  # fmt: skip
     inputs = [core, wheels, wheels_valid, sums, sums_valid, rate, rate_valid, speed,
               speed_valid, loads, mass_properties, dt, observer]  # fmt: skip

@@ -493,6 +493,7 @@ TEMPLATE = """\
 [clock]
 channel = "ax"       # output clock: this channel's time stamps (the IMU's)
 # rate = 200         # Hz: a uniform clock over that channel's span (jittering CAN stamps)
+# union = true       # or each channel at its own stamps (NaN between; not with rate)
 method = "linear"    # default resampling: "linear" interpolation or zero-order "hold"
 max_gap = 0.1        # s; a longer gap between source samples is a missing sample
 

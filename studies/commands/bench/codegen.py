@@ -29,9 +29,7 @@ SCALAR_OPS_PER_CYCLE = 4
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench codegen``."""
-    parser = subparsers.add_parser(
-        "codegen", help="generated C step (double, float) against Python and filterpy"
-    )
+    parser = subparsers.add_parser("codegen")
     add_vehicle_option(parser)
     parser.add_argument("--samples", type=int, default=20_000, help="C samples per repeat")
     parser.add_argument("--repeats", type=int, default=51, help="C repeats (median taken)")

@@ -1,141 +1,73 @@
 """``wheelload bench WHAT``: timings, printed, never asserted.
 
-``kf`` is the two-stage KF's throughput; the other benchmarks are registered
-by the modules named in :data:`BENCHMARKS` (``register_bench(subparsers)``).
+Each benchmark is registered by its module's ``register_bench(subparsers)``
+(:data:`~wheelload.studies.commands.bench.BENCHMARKS`), on first use of its parser:
+``wheelload bench --help`` lists them from the table, and ``wheelload bench WHAT``
+imports WHAT's module only.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
-import time
 
-import numpy as np
-
-from wheelload.estimators import Sample
-from wheelload.estimators.protocol import sample_intervals
-from wheelload.estimators.registry import build
-from wheelload.models import example_vehicle_path, load_vehicle
-from wheelload.studies.bench.numpy_kf import joint_filter
 from wheelload.studies.commands import CATALOG
-from wheelload.studies.commands.options import (
-    CommandTraits,
-    add_message_options,
-    add_vehicle_file_options,
-)
-from wheelload.studies.drive.synthetic import SensorNoise, slalom, synthetic_log
-
-BENCHMARKS = (
-    "wheelload.studies.commands.bench.codegen",
-    "wheelload.studies.commands.bench.speed",
-    "wheelload.studies.commands.bench.mhe",
-    "wheelload.studies.bench.scenarios",
-    "wheelload.studies.commands.bench.logs",
-    "wheelload.studies.commands.bench.fleet",
-    "wheelload.studies.experiments.faults.fault_injection",
-    "wheelload.studies.commands.bench.estimate",
-    "wheelload.studies.commands.bench.family",
-    "wheelload.studies.commands.bench.hostile",
-    "wheelload.studies.commands.bench.identify",
-    "wheelload.studies.commands.bench.discernment",
-    "wheelload.studies.commands.bench.recompile",
-    "wheelload.studies.bench.can_logs",
-    "wheelload.studies.commands.bench.timed",
-)
-
+from wheelload.studies.commands.bench import BENCHMARKS
+from wheelload.studies.commands.options import CommandTraits, add_message_options
 
 #: The bench command itself only dispatches: each benchmark has its own options.
 TRAITS = CommandTraits()
 
 
+class DeferredParser(argparse.ArgumentParser):
+    """A benchmark's parser, its arguments added by its module (``module``) when it first
+    parses or prints its help, or when :meth:`build_arguments` is called."""
+
+    def __init__(self, *, benchmark: str, module: str, **kwargs) -> None:
+        super().__init__(**kwargs)
+        self.benchmark, self.module = benchmark, module
+        self.built = False
+
+    def build_arguments(self) -> None:
+        """Import the module and let its ``register_bench`` add the arguments (once)."""
+        if not self.built:
+            self.built = True
+            importlib.import_module(self.module).register_bench(_Into(self.benchmark, self))
+            add_message_options(self)
+
+    def parse_known_args(self, args=None, namespace=None):
+        self.build_arguments()
+        return super().parse_known_args(args, namespace)
+
+    def format_help(self) -> str:
+        self.build_arguments()
+        return super().format_help()
+
+    def format_usage(self) -> str:
+        self.build_arguments()
+        return super().format_usage()
+
+
+class _Into:
+    """What ``register_bench`` is handed instead of the sub-parsers: its ``add_parser``
+    returns the deferred parser itself (its summary is the table's, listed already)."""
+
+    def __init__(self, name: str, parser: DeferredParser) -> None:
+        self.name, self.parser = name, parser
+
+    def add_parser(self, name: str, *, description: str | None = None):
+        if name != self.name:
+            raise ValueError(f"{self.parser.module} registers bench {name}, not {self.name}")
+        self.parser.description = description
+        return self.parser
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
-    bench = subparsers.add_parser(
-        "bench",
-        help=CATALOG["bench"].summary,
+    bench = subparsers.add_parser("bench", help=CATALOG["bench"].summary)
+    benchmarks = bench.add_subparsers(
+        dest="what", required=True, metavar="WHAT", parser_class=DeferredParser
     )
-    benchmarks = bench.add_subparsers(dest="what", required=True, metavar="WHAT")
-    parser = benchmarks.add_parser("kf", help="two-stage KF: compiled run, step, numpy loop")
-    parser.add_argument(
-        "--samples", type=int, default=1_000_000, help="samples for the compiled run (default 1e6)"
-    )
-    parser.add_argument(
-        "--loop-samples",
-        type=int,
-        default=20_000,
-        help="samples for the per-sample Python loops (default 2e4)",
-    )
-    add_vehicle_file_options(parser)
-    parser.set_defaults(handler=run)
-    for module in BENCHMARKS:
-        importlib.import_module(module).register_bench(benchmarks)
+    for name, benchmark in BENCHMARKS.items():
+        benchmarks.add_parser(name, help=benchmark.summary, benchmark=name, module=benchmark.module)
     add_message_options(bench)
     bench.set_defaults(traits=TRAITS)
-    for benchmark in benchmarks.choices.values():
-        add_message_options(benchmark)
-
-
-def _tile(signals, n):
-    """A log of n samples made by repeating a shorter one (time kept increasing)."""
-    reps = -(-n // len(signals))
-    dt = float(np.median(np.diff(signals.t)))
-    t = np.arange(len(signals) * reps)[:n] * dt
-    tile = lambda a: np.tile(a, (reps, 1))[:n] if a.ndim == 2 else np.tile(a, reps)[:n]  # noqa: E731
-    return type(signals)(
-        t=t,
-        vx=tile(signals.vx),
-        acc=tile(signals.acc),
-        d=tile(signals.d),
-        v=tile(signals.v),
-        reference=None,
-        source="bench",
-    )
-
-
-def run(args: argparse.Namespace) -> int:
-    vehicle = load_vehicle(args.vehicle or example_vehicle_path(), allow_unusual=args.allow_unusual)
-    base = synthetic_log(
-        vehicle,
-        slalom(duration=30.0),
-        rate=1000.0,
-        noise=SensorNoise(acceleration=0.05, travel=0.0002),
-    )
-    kf = build("kf", vehicle)
-    start = time.perf_counter()
-    kf.run(base.slice(0, 10))
-    compile_time = time.perf_counter() - start
-
-    big = _tile(base, args.samples)
-    start = time.perf_counter()
-    kf.run(big)
-    run_time = time.perf_counter() - start
-
-    small = _tile(base, args.loop_samples)
-    start = time.perf_counter()
-    joint_filter(small, kf.p, kf.tuning, kf.initial_state().x)
-    numpy_time = time.perf_counter() - start
-
-    n_step = min(args.loop_samples, 5000)
-    dt = sample_intervals(small.t)
-    state = kf.initial_state()
-    start = time.perf_counter()
-    for k in range(n_step):
-        sample = Sample(d=small.d[k], v=small.v[k], acc=small.acc[k], vx=small.vx[k])
-        state, _ = kf.step(state, sample, dt[k])
-    step_time = time.perf_counter() - start
-
-    per_run = run_time / args.samples * 1e6
-    per_numpy = numpy_time / args.loop_samples * 1e6
-    per_step = step_time / n_step * 1e6
-    print(f"two-stage KF, {vehicle.name}, 1 kHz synthetic slalom log")
-    print(f"  build or load the compiled C loop:      {compile_time:8.2f} s")
-    print(
-        f"  run(), compiled C loop,  {args.samples:>9} samples: {run_time:8.3f} s "
-        f"= {per_run:7.3f} us/sample"
-    )
-    print(f"  plain numpy per-sample loop (joint update): {per_numpy:7.2f} us/sample")
-    print(f"  Python step() per sample (compiled step):   {per_step:7.2f} us/sample")
-    print(
-        f"  run() is {per_numpy / per_run:.0f}x faster than the numpy loop and "
-        f"{per_step / per_run:.0f}x faster than step()"
-    )
-    return 0

@@ -38,10 +38,7 @@ import numpy as np
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "estimate",
-        help="wheelload estimate --out end to end (CSV vs Parquet, lean vs in-memory), cold start",
-    )
+    parser = subparsers.add_parser("estimate")
     parser.add_argument(
         "--samples",
         type=float,

@@ -40,9 +40,7 @@ BOTH = "both"
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench family``."""
-    parser = subparsers.add_parser(
-        "family", help="every registered method's run over a log, as a ratio to the KF's"
-    )
+    parser = subparsers.add_parser("family")
     parser.add_argument("--log", help="log with the usual channels (default: the bundled example)")
     parser.add_argument(
         "--vehicle", help="vehicle TOML file (default: bundled sports car, the example's)"

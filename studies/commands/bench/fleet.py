@@ -59,9 +59,7 @@ PEER_TOLERANCE = 1e-9
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench fleet``."""
-    parser = subparsers.add_parser(
-        "fleet", help="many logs: run_batched vs the kernel, numpy and numba; 1/2 workers, Dask"
-    )
+    parser = subparsers.add_parser("fleet")
     add_vehicle_option(parser)
     parser.add_argument(
         "--log-count", dest="logs", type=int, default=1000, metavar="N",

@@ -43,9 +43,7 @@ SCENARIOS = (
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench hostile``."""
-    parser = subparsers.add_parser(
-        "hostile", help="KF Python / C double / C float and MHE C on hostile inputs"
-    )
+    parser = subparsers.add_parser("hostile")
     add_vehicle_option(parser)
     parser.add_argument("--scenario", default="iso-dlc", help="plant scenario (default iso-dlc)")
     parser.add_argument(

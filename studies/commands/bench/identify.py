@@ -19,9 +19,7 @@ EQUAL = 1e-9
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "identify", help="identification: time and peak memory against log length, dense/chunked"
-    )
+    parser = subparsers.add_parser("identify")
     parser.add_argument(
         "--log",
         help="one lap: a plant log with fz_* reference loads (default: a Nordschleife lap "

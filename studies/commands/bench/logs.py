@@ -38,7 +38,7 @@ from wheelload.studies.pipeline.summary_compare import compare
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("logs", help="many logs: serial, local processes, Dask")
+    parser = subparsers.add_parser("logs")
     parser.add_argument(
         "--log-count", dest="logs", type=int, default=200, metavar="N",
         help="number of logs (default 200)",

@@ -24,7 +24,7 @@ from wheelload.studies.experiments.mhe_vs_kf import robust_candidates, step_time
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench mhe``."""
-    bench = subparsers.add_parser("mhe", help="MHE and KF time per sample, Python and C")
+    bench = subparsers.add_parser("mhe")
     bench.add_argument("--samples", type=int, default=3000, help="samples per run (default 3000)")
     bench.add_argument(
         "--horizons", type=int, nargs="+", default=[10, 20], help="window lengths N (default 10 20)"

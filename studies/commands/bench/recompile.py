@@ -34,9 +34,7 @@ TARGET = 3.0
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench recompile``."""
-    parser = subparsers.add_parser(
-        "recompile", help="vehicle-file edit -> many-logs run: keyed by structure vs by text"
-    )
+    parser = subparsers.add_parser("recompile")
     add_vehicle_option(parser)
     parser.add_argument("--repeats", type=int, default=3, help="rounds: edits timed (default 3)")
     parser.add_argument(

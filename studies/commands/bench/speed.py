@@ -8,8 +8,9 @@ over ``--repeats`` alternating repeats (min / median / max of the ratio):
   updates (filterpy: the ``bench`` extra), and against the CasADi reference
   step;
 - the generated library's batched step (``--batch`` filters side by side)
-  against its single step, double and float, both built with the Makefile's
-  ``FAST_CFLAGS``;
+  against its single step, double and float, built with the Makefile's
+  default ``CFLAGS`` (-O2) and with its ``FAST_CFLAGS``; and the batched float
+  step per filter against the single double step;
 - :func:`~wheelload.estimators.codegen.batched.run_batched` over ``--logs`` logs
   against :meth:`TwoStageKF.run` on each (what ``estimate`` over many logs
   and the Monte Carlo study now use, against what they used);
@@ -30,7 +31,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from wheelload.estimators.codegen.kf import FAST_CFLAGS, CodegenOptions
+from wheelload.estimators.codegen.kf import FAST_CFLAGS, STRICT_CFLAGS, CodegenOptions
 from wheelload.estimators.kernels.c_emitter import Precision, critical_path, flop_count
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.registry import build
@@ -48,6 +49,7 @@ from wheelload.studies.bench.step_timing import (
     per_call_us,
     python_steps,
     selftest_ns,
+    single_and_batched_ns,
     spread,
 )
 from wheelload.studies.commands.options import add_allow_unusual, add_vehicle_option, vehicle_file
@@ -57,6 +59,7 @@ STEP_TARGET = 10.0  # µs per TwoStageKF.step
 FILTERPY_TARGET = 10.0  # times faster than filterpy
 BATCH_TARGETS = {Precision.DOUBLE: 4.0, Precision.FLOAT: 8.0}  # throughput vs single step
 CHAIN_TARGET = 1.3  # single C step / dependency-chain bound
+FLOAT_BATCH_TARGET = 0.25  # batched float per filter / single double step
 #: Passes of each C timing (of --samples filter-steps each): short passes, the
 #: fastest taken, so that a pass rarely loses the core on a shared machine.
 PASSES = 101
@@ -64,9 +67,7 @@ PASSES = 101
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench speed``."""
-    parser = subparsers.add_parser(
-        "speed", help="step vs filterpy, batched C vs single C step, C step vs its chain bound"
-    )
+    parser = subparsers.add_parser("speed")
     add_vehicle_option(parser)
     parser.add_argument("--repeats", type=int, default=5, help="alternating repeats (default 5)")
     parser.add_argument("--steps", type=int, default=2000, help="Python steps per repeat")
@@ -154,32 +155,30 @@ def run(args: argparse.Namespace) -> int:
 
     logs_vs_run(vehicle_path, kf, args)
     with tempfile.TemporaryDirectory(prefix="wheelload_speed_") as folder:
-        print(f"Generated C, FAST_CFLAGS: {' '.join(FAST_CFLAGS)}")
-        for precision in Precision:
-            batch_vs_single(vehicle_path, Path(folder), precision, args)
+        for name, flags in (("CFLAGS (default)", STRICT_CFLAGS), ("FAST_CFLAGS", FAST_CFLAGS)):
+            print(f"Generated C, {name}: {' '.join(flags)}")
+            times = {p: batch_vs_single(vehicle_path, Path(folder) / name[:6], p, flags, args)
+                     for p in Precision}  # fmt: skip
+            ratios = [f / d for f, d in zip(times[Precision.FLOAT][1], times[Precision.DOUBLE][0])]
+            print(f"  batched float / single double step {spread(ratios)} "
+                  f"(target <= {FLOAT_BATCH_TARGET:g})")  # fmt: skip
         single_step_vs_bounds(vehicle_path, Path(folder), args)
     return 0
 
 
-def batch_vs_single(vehicle_path: Path, folder: Path, precision: Precision, args) -> None:
-    """Print the batched step against the single step (both FAST_CFLAGS) in ``precision``."""
+def batch_vs_single(vehicle_path: Path, folder: Path, precision: Precision, flags, args):
+    """Print and return the single and batched step's ns per filter-step (``flags``)."""
     _, binary = fast_selftest(
-        vehicle_path, folder / precision.value, CodegenOptions(precision=precision), FAST_CFLAGS,
+        vehicle_path, folder / precision.value, CodegenOptions(precision=precision), flags,
         args.allow_unusual,
     )  # fmt: skip
-    single, batched = [], []
-    for _ in range(args.repeats):
-        single.append(selftest_ns(binary, "bench", args.samples, PASSES))
-        batched.append(
-            selftest_ns(
-                binary, "batch-bench", max(args.samples // args.batch, 1), PASSES, args.batch
-            )
-        )
+    single, batched = single_and_batched_ns(binary, args.samples, PASSES, args.batch, args.repeats)
     ratios = [s / b for s, b in zip(single, batched)]
     print(f"  {precision.value}: single step {spread(single)} ns; batch of {args.batch}: "
           f"{spread(batched)} ns per filter-step")  # fmt: skip
     print(f"    batched throughput {spread(ratios)} x the single step "
           f"(target >= {BATCH_TARGETS[precision]:g})")  # fmt: skip
+    return single, batched
 
 
 #: The single step as it was generated before the branch-free selects: plain C99

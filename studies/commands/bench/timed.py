@@ -16,9 +16,7 @@ from wheelload.studies.bench.timed_step import time_timed_step
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
     """``wheelload bench timed``."""
-    parser = subparsers.add_parser(
-        "timed", help="C step_at: in order and a full rewind of the ring, against the step"
-    )
+    parser = subparsers.add_parser("timed")
     parser.add_argument("--repeats", type=int, default=15, help="rounds timed (default 15)")
     parser.set_defaults(handler=run)
 

@@ -293,9 +293,7 @@ def alarm_bound(count: int, hours: float) -> float:
 
 
 def register_bench(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "faults", help="fault-injection table: RMSE with and without the guards, delays"
-    )
+    parser = subparsers.add_parser("faults")
     parser.add_argument(
         "--quick", action="store_true", help="iso-dlc and brake-in-turn only, no laps"
     )

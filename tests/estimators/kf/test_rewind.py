@@ -7,6 +7,7 @@ tests/estimators/loops/test_fast_step.py), so the comparisons ask for 1e-9 N whe
 allows it and get 0.
 """
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import pytest
 from wheelload.estimators.kf.rewind import RewindSettings, measurements
 from wheelload.estimators.kf.two_stage import TwoStageKF
 from wheelload.estimators.logs.inputs import input_matrix
+from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.result import StepFlag
 from wheelload.models import INPUTS
 
@@ -24,6 +26,7 @@ from timed_logs import (  # noqa: E402
     can_car_log,
     latencies,
     time_ordered_reference,
+    union_frame,
 )
 
 TOO_OLD = int(StepFlag.MEASUREMENT_TOO_OLD)
@@ -56,6 +59,20 @@ def test_synchronous_in_order_log_gives_the_synchronous_filter_bit_for_bit(vehic
     np.testing.assert_array_equal(timed.arrival_loads, synchronous.loads)
     np.testing.assert_array_equal(timed.loads, synchronous.loads)
     np.testing.assert_array_equal(timed.std, synchronous.std)
+    np.testing.assert_array_equal(timed.arrival_flags, synchronous.flags)
+
+
+def test_the_input_flags_are_ored_in_as_run_does(vehicle, dlc):
+    """A log without az (g assumed, flagged on every row by ``run``): the timed filter's
+    flags carry the bit too, and equal ``run``'s bit for bit."""
+    no_az = dataclasses.replace(dlc, acc=np.column_stack([dlc.acc[:, :2], np.full(len(dlc), 9.81)]),
+                                az_assumed=True)  # fmt: skip
+    kf = TwoStageKF(vehicle, sample_interval=0.01, check_file=False)
+    timed = kf.run_timed(no_az.t, input_matrix(no_az).T, first_interval=dlc.t[1] - dlc.t[0],
+                         input_flags=no_az.input_flags())  # fmt: skip
+    synchronous = kf.run(no_az)
+    assert np.all(timed.flags & int(StepFlag.AZ_ASSUMED_G))
+    np.testing.assert_array_equal(timed.flags, synchronous.flags)
     np.testing.assert_array_equal(timed.arrival_flags, synchronous.flags)
 
 
@@ -97,6 +114,48 @@ def test_rewinds_give_the_measurements_fed_in_time_order(kf, can_run):
     # What a running filter showed: the time-ordered estimate at its newest stamp, where no
     # measurement of an older stamp was still to come.
     assert np.all(np.isfinite(run.arrival_loads))
+
+
+def test_a_log_on_its_own_clocks_runs_as_the_timed_filter_runs_its_rows(kf, dlc):
+    """``run`` on channels on their own clocks (``[clock] union``; travel rates and body-rate
+    derivatives derived on each channel's own stamps) is the timed filter fed the rows in
+    time order, each at its own stamp: 1e-9 N (0 measured), the flags equal. (Up to the
+    last speed sample: beyond it the log has no speed, the timed filter holds the last.)"""
+    signals = signals_from_frame(union_frame(dlc, 5.0), wiring_checks=False, own_clocks=True)
+    signals = signals.slice(0, int(np.flatnonzero(np.isfinite(signals.vx))[-1]) + 1)
+    run = kf.run(signals)
+    timed = kf.run_timed(
+        signals.t,
+        input_matrix(signals, kf.rate_filter).T,
+        first_interval=signals.t[1] - signals.t[0],
+    )
+    assert timed.loads.shape == run.loads.shape and timed.rewinds == 0
+    np.testing.assert_allclose(timed.loads, run.loads, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(timed.flags, run.flags)
+    travel = np.isfinite(signals.d[:, 0])
+    assert np.all(np.isfinite(signals.v[travel])) and np.all(run.flags[travel] & SUSPENSION == 0)
+    assert not np.any(run.flags & int(StepFlag.INTERVAL_SHORT | StepFlag.INTERVAL_LONG))
+
+
+def test_a_stuck_travel_on_a_timed_log_is_isolated_on_time(kf, dlc):
+    """The stuck test counts the seconds a travel has not changed, not the rows: on a log
+    whose rows come about 3.5 times as often as the travel frames, d_fl frozen at 6 s in
+    the lane change is isolated once it has been still for ``stuck_time`` (to within one
+    10 ms travel frame and its 0.6 ms of jitter); counting rows it took 1.10 s."""
+    t, inputs = can_car_log(dlc, 9.0, far_late=0)
+    stamps, channels = measurements(t, inputs, latencies())
+    frozen_at, d_fl, v_fl = 6.0, INPUTS.index("d_fl"), INPUTS.index("v_fl")
+    stuck = (stamps >= frozen_at) & np.isfinite(channels[:, d_fl])
+    first = np.flatnonzero(stuck)[np.argmin(stamps[stuck])]
+    inputs = inputs.copy()
+    rows = np.isfinite(inputs[:, d_fl]) & (t - latencies()["d_fl"] >= stamps[first])
+    inputs[rows, d_fl], inputs[rows, v_fl] = channels[first, d_fl], 0.0
+    run = kf.run_timed(t, inputs, latencies())
+    faulty = (run.flags != TOO_OLD) & (run.flags & int(StepFlag.TRAVEL_FAULT) != 0)
+    assert faulty.any(), "the stuck d_fl is isolated"
+    delay = np.min(run.stamps[faulty]) - stamps[first]
+    stuck_time = kf.guard_settings.stuck_time
+    assert stuck_time <= delay <= stuck_time + 0.0106
 
 
 def test_a_small_ring_drops_what_is_older_than_its_oldest_checkpoint(kf):

@@ -6,7 +6,7 @@ from wheelload.estimators.family.tyres.forces import vehicle_constants
 from wheelload.models.body_attitude import corner_positions
 from wheelload.models.mass_properties import static_loads
 from wheelload.models.plant.dynamics import corners
-from wheelload.models.vehicle.wheel_geometry import loaded_radii, wheel_centres
+from wheelload.models.vehicle.wheel_geometry import loaded_radii, rolling_radius, wheel_centres
 
 
 def test_wheel_centres_follow_iso_8855(vehicle):
@@ -25,6 +25,17 @@ def test_a_loaded_radius_is_the_free_radius_less_the_static_deflection(vehicle):
     free = (t.radius_front,) * 2 + (t.radius_rear,) * 2
     deflection = np.array(free) - np.array(radii)
     assert np.all((deflection > 0.0) & (deflection < 0.03))  # a car tyre: mm to a few cm
+
+
+def test_the_rolling_radius_lies_a_third_of_the_deflection_below_the_free_one(vehicle):
+    """R_e = R_0 - rho / 3 by hand (0.327 m less a third of 9 mm is 0.324 m, to 1e-15), so
+    between the loaded radius (R_0 - rho) and the free one; the estimators' slip ratios
+    and the plant's slip both roll on it."""
+    assert abs(rolling_radius(0.327, 0.009) - 0.324) < 1e-15
+    t = vehicle.tyres
+    loads = static_loads(vehicle)
+    deflection = loads[0] / t.vertical_stiffness_front
+    assert loaded_radii(t, loads)[0] < rolling_radius(t.radius_front, deflection) < t.radius_front
 
 
 def test_estimators_and_plant_read_the_same_wheels(vehicle):

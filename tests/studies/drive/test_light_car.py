@@ -2,7 +2,7 @@
 its own values: read without --allow-unusual, simulated by the plant and estimated.
 
 The file (``data/formula_student.toml``) sets none of the defaults that scale with the car;
-before they were derived from its mass, ``filter.sigma_no_travel_az`` (288.4 N per m/s^2)
+before they were derived from its mass, ``filter.sigma_no_travel_az`` (then 288.4 N per m/s^2)
 and ``filter.payload.mass_std`` (300 kg) exceeded its mass and the file was refused.
 """
 
@@ -52,7 +52,7 @@ def test_the_scaled_defaults_follow_the_mass():
         np.testing.assert_allclose(
             _value(light, key), np.asarray(fitted) * ratio**power, rtol=1e-12
         )
-    assert light.filter.sigma_no_travel_az == pytest.approx(288.4 * 284.0 / 1613.2)
+    assert light.filter.sigma_no_travel_az == pytest.approx(307.7 * 284.0 / 1613.2)
     assert light.filter.payload.mass_std == pytest.approx(300.0 * 284.0 / 1613.2)
 
 

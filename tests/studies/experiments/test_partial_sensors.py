@@ -34,6 +34,10 @@ def _dead(frame, wheels):
 # Sigma bounds (the filter's own sigma, and the reported one): the steady-state 1-sigma of
 # each mode on this log (IMU-only 464 N, a dead
 # axle 352 N, full 187 N) rounded up; RMSE bounds: measured (26, 42, 33 N) with margin.
+# A wheel without travel reports more: its sigma also grows with |ay - vx wz|, calibrated to
+# cover an ay 0.5 s late (a real car's front-only reference log); on this lane change
+# (ay on time) the sideslip rate takes it to 656 N on every mode with such a wheel.
+REPORTED_WITHOUT_TRAVEL = 700.0
 MODES = [
     ("imu-only", lambda f: f.drop(columns=TRAVEL), "IMU-only", 250.0, 60.0, 0),
     ("one per axle", lambda f: _dead(f, ("fr", "rr")), "two travel sensors, missing FR RR",
@@ -56,7 +60,8 @@ def test_partial_sensor_set(vehicle, plant_log, name, edit, words, sigma, rmse, 
     signals = signals_from_frame(edit(plant_log), source=name)
     estimate = TwoStageKF(vehicle).run(signals)
     assert np.isfinite(estimate.loads).all() and np.isfinite(estimate.std).all()
-    assert estimate.std.max() <= sigma
+    without_travel = not signals.travel_present.all()
+    assert estimate.std.max() <= (REPORTED_WITHOUT_TRAVEL if without_travel else sigma)
     # Bounded, not merely small on a short log: the filter's own sigma (sqrt P) in the last
     # second is no wider than in the first after the start-up transient (a random walk left
     # unobserved grows as sqrt(t)).

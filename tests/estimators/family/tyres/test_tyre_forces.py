@@ -23,6 +23,7 @@ from wheelload.estimators.family.tyres.forces import (
 from wheelload.estimators.family.tyres.step import CORE, LateralSplit
 from wheelload.estimators.logs.signals import signals_from_frame
 from wheelload.estimators.registry import build, methods, tyre_methods
+from wheelload.estimators.result import StepFlag
 from wheelload.estimators.samples import step_through
 from wheelload.models import example_vehicle_path, load_vehicle, vehicle_from_dict
 from wheelload.models.family.tyre_forces import (
@@ -265,6 +266,26 @@ def test_step_equals_run(dlc):
         np.testing.assert_array_equal(stepped.flags, ran.flags)
 
 
+def test_high_slip_rides_the_fast_observer(dlc):
+    """In high slip (and slip_hold after it) F_x is the fast observer's: with every sample
+    after the first flagged (a threshold of 1e-9 /s) and a hold longer than the log, F_x
+    (from the first sample, where both start rolling steadily) and its σ (from the first
+    flagged one) equal those of a method whose nominal observer runs at the fast one's 30 Hz
+    and that never flags (to 1e-9 N: the same algebra); the nominal 1 Hz observer's differ."""
+    vehicle = load_vehicle(example_vehicle_path())
+    short = dlc.slice(0, 400)
+    fast = TyreSettings(slip_ratio_rate=1e-9, slip_hold=1e3)
+    flagged = build("tyre-forces", vehicle, settings=fast).run(short)
+    assert ((flagged.flags[1:] & StepFlag.HIGH_SLIP) != 0).all()
+    quick = TyreSettings(observer_frequency=fast.slip_observer_frequency, slip_ratio_rate=1e9)
+    reference = build("tyre-forces", vehicle, settings=quick).run(short)
+    assert not (reference.flags & StepFlag.HIGH_SLIP).any()
+    np.testing.assert_allclose(flagged.fx, reference.fx, rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(flagged.fx_std[1:], reference.fx_std[1:], rtol=0.0, atol=1e-9)
+    nominal = build("tyre-forces", vehicle).run(short)
+    assert np.max(np.abs(nominal.fx - flagged.fx)) > 1.0
+
+
 def test_registered_apart_from_the_load_methods(dlc):
     """The tyre methods are built by the registry but not ranked as load estimators; a log
     without wheel spins gets a one-line error naming the channel."""
@@ -374,28 +395,48 @@ def test_first_sample_by_hand(load_split):
     assert np.all(fy_std > 0) and high_slip[0] == 0.0
 
 
+def slip_by_hand(method, inputs):
+    """Each wheel's slip ratio in numpy: (R_e w - v_i) / v_i with R_e = R_0 - F_z / (3 k_t)
+    (the KF's loads) and v_i = (v_x - r y_i) cos(steer_i) + r x_i sin(steer_i)."""
+    k = method.constants
+    radius = k.free_radius - inputs.loads / (3.0 * k.vertical_stiffness)
+    x, y = np.array(k.positions).T
+    steer = np.array([inputs.steer] * 2 + [0.0] * 2)
+    along = (inputs.speed - inputs.rate * y) * np.cos(steer) + inputs.rate * x * np.sin(steer)
+    return (radius * inputs.spin - along) / along, radius, along
+
+
 def test_high_slip_takes_the_papers_covariances(load_split):
-    """§IV's switch on the slip condition: a second sample whose spins jumped by 3 rad/s in
-    10 ms with the car's speed unchanged (slip velocity rate over R: 300 rad/s^2; a sixth
-    of it after the 50 ms low-pass, 50 over the paper's 40 rad/s^2): flagged, and with
-    ``switch_covariances`` the lateral update equals the reference with the paper's
-    high-slip Q and R (0.036^2 / 0.11^2 and 0.4^2 / 0.018^2 times the nominal); without it
-    the nominal ones. A 2 rad/s jump (33 rad/s^2 after the low-pass), the same jump with the
-    car's speed rising with it (the wheels rolling with the car) and no jump are nominal."""
+    """§IV's switch on the slip condition: a second sample whose slip ratios (by hand,
+    :func:`slip_by_hand`) rose by 0.072 in 10 ms (7.2 /s, 1.2 /s after the 50 ms low-pass:
+    over the 1 /s threshold): flagged, and with ``switch_covariances`` the lateral update
+    equals the reference with the paper's high-slip Q and R (0.036^2 / 0.11^2 and 0.4^2 /
+    0.018^2 times the nominal); without it the nominal ones. A rise of 0.048 (0.8 /s after
+    the low-pass), the spins and the car's speed rising 5 % together (the wheels rolling
+    with the car: the slip unchanged) and no change are nominal."""
     dt = 0.01
     settings = dataclasses.replace(load_split.settings, switch_covariances=True)
     switching = TyreForces(load_split.vehicle, settings)
-    radius = load_split.constants.radius[2]
-    cases = ((switching, 63.0, 60.0 * radius, PAPER_HIGH_SLIP, 1.0),
-             (load_split, 63.0, 60.0 * radius, (1.0, 1.0), 1.0),
-             (switching, 62.0, 60.0 * radius, (1.0, 1.0), 0.0),
-             (switching, 63.0, 63.0 * radius, (1.0, 1.0), 0.0),
-             (switching, 60.0, 60.0 * radius, (1.0, 1.0), 0.0))  # fmt: skip
+    first = braking_turn(load_split)
+    slip, radius, along = slip_by_hand(load_split, first)
+
+    def spins(rise, speed_scale=1.0):
+        return (1.0 + slip + rise) * along * speed_scale / radius
+
+    faster = dataclasses.replace(first, speed=1.05 * first.speed)
+    rolling = (1.0 + slip) * slip_by_hand(load_split, faster)[2] / radius
+    cases = ((switching, spins(0.072), first.speed, PAPER_HIGH_SLIP, 1.0),
+             (load_split, spins(0.072), first.speed, (1.0, 1.0), 1.0),
+             (switching, spins(0.048), first.speed, (1.0, 1.0), 0.0),
+             (switching, rolling, faster.speed, (1.0, 1.0), 0.0),
+             (switching, first.spin, first.speed, (1.0, 1.0), 0.0))  # fmt: skip
     for method, spin, speed, scales, flagged in cases:
-        core, *_ = method.core_step(method.initial_state().core, braking_turn(method), dt)
-        inputs = braking_turn(method, spin=spin, speed=speed)
+        core, *_ = method.core_step(method.initial_state().core, first, dt)
+        np.testing.assert_allclose(core[CORE.last_slip], slip, rtol=1e-12, atol=1e-15)
+        inputs = dataclasses.replace(first, spin=spin, speed=speed)
         after, fx, _, fy, _, high_slip = method.core_step(core, inputs, dt)
         assert high_slip[0] == flagged
+        assert after[CORE.slip_hold] == (settings.slip_hold if flagged else 0.0)
         rest = fx - after[CORE.x][4] * inputs.torque / method.constants.radius
         x, P, fy_expected, _ = lateral_reference(method, core[CORE.x],
                                                  core[CORE.P].reshape(6, 6), rest, inputs,
