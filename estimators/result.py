@@ -185,6 +185,18 @@ class ModelError:
         fitted = ", ".join(_number(x) for x in self.fitted_value)
         given = ", ".join(_number(x) for x in self.file_value)
         also = f"; the {self.runner_up} fit almost as well" if self.runner_up else ""
+        if self.name.endswith("motion ratio"):
+            # Rates at the wheel are the damper's times the motion ratio squared.
+            ratio = self.fitted_value[0] / self.file_value[0]
+            return (
+                f"model error: the {self.name.split()[0]} axle's spring, damper and bar "
+                f"rates fit {ratio:.2f} times the file's ({', '.join(self.keys)}: spring "
+                f"{fitted} {self.unit}, not {given}; it explains {100 * self.explained:.0f} % "
+                f"of the equilibrium residual{also}), as if given at the damper with a motion "
+                f"ratio of {min(ratio, 1 / ratio) ** 0.5:.2f} left out; give them at the wheel "
+                f"(the damper's times the ratio squared): check the vehicle file, not the "
+                f"sensors"
+            )
         return (
             f"model error: the log's load transfer fits {self.name} of {fitted} {self.unit}, "
             f"not the file's {given} ({', '.join(self.keys)}: it explains "

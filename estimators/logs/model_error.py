@@ -4,8 +4,8 @@ Beside the sensor-fault channel (:mod:`.fault_monitor`, a bias of one sensor) th
 once per log, whether the equilibrium residual at the pseudo-measured loads,
 :math:`r_t = b(u_t; p) - A(p)\,z(u_t; p)` (every model term the inputs allow, as the
 parity test), is explained by one parameter of the vehicle file being wrong: each
-hypothesis :math:`k` changes the file by a unit step (springs, anti-roll bars, dampers,
-mass, CG height; :data:`HYPOTHESES`), whose signature
+hypothesis :math:`k` changes the file by a unit step (springs, anti-roll bars, one axle's
+rates together as a forgotten motion ratio, mass, CG height; :data:`HYPOTHESES`), whose signature
 :math:`s_{k,t} = (\partial r_t / \partial p)\,\Delta p_k` comes from the models' Jacobians.
 With a constant per row (what a payload, a sensor bias or a travel zero leaves: the online
 payload and the travel-zero check take those), weighted least squares
@@ -17,8 +17,8 @@ gives the size :math:`\delta_k` and the share of the residual's variation it exp
 :math:`e_k = 1 - E_k / E_0`. The best hypothesis is named when it explains at least
 :data:`EXPLAINED` of it, moves the residual by more than the model's own scatter
 (:data:`SIGNIFICANT` times the residual's spread without it) and fits a car (no negative
-stiffness or mass, within :data:`PLAUSIBLE_FACTOR` of the file; samples a guard doubted
-are left out). A gain the file has wrong
+stiffness or mass, within 2 times the file's value, 4 for a motion ratio; samples a guard
+doubted are left out). A gain the file has wrong
 grows with the excitation; a sensor bias does not (that is the fault monitor's).
 
 A corner's travel zero (a potentiometer not zeroed) is told by the travel *warp*:
@@ -63,6 +63,10 @@ SIGNIFICANT = 0.5
 #: A hypothesis of another family explaining this share of the best's is named beside it
 #: (mass and CG height both scale the load transfer m h a).
 RIVAL = 0.95
+#: A motion ratio must leave at most this share of the residual energy the best other
+#: hypothesis leaves (the bundled cars' plant logs: a front motion ratio of 0.7 forgotten
+#: 0.11-0.69 on every log with motion; every other wrong file 0.91 or more).
+MOTION_RATIO_MARGIN = 0.8
 #: Lateral acceleration magnitude below which the car is quiet (travel warp and offsets
 #: are read there) [m/s^2].
 QUIET_ACCELERATION = 1.0
@@ -104,6 +108,7 @@ class Hypothesis:
     unit: str  # unit of the values reported
     step: Callable[[Vehicle], Vehicle]  # the file with a unit step
     value: Callable[[Vehicle], tuple[float, ...]]  # the keys' values in the file
+    factor: float = 2.0  # a fitted value this factor from the file's (either way) is no car's
 
 
 def _relative(family, axles, key, unit, label):
@@ -129,6 +134,28 @@ def _bars(axles, label):
     )
 
 
+#: An axle's rates a motion ratio scales (the rates at the wheel are the damper's times the
+#: ratio squared); the stops are left out (their gaps are read at the wheel).
+AXLE_RATES = ("spring_rate", "damper_push", "damper_pull", "arb_rate")
+#: Smallest motion ratio a suspension has (double wishbones 0.5-1): its rates may then be
+#: up to 1 / 0.5^2 = 4 times those at the wheel.
+SMALLEST_MOTION_RATIO = 0.5
+
+
+def _motion_ratio(axle: str):
+    # All of one axle's rates by one factor: the file gives them at the damper (or the
+    # spring), not at the wheel. The value reported is the spring rate.
+    return Hypothesis(
+        factor=1.0 / SMALLEST_MOTION_RATIO**2,
+        name=f"{axle} motion ratio",
+        family="motion ratio",
+        keys=tuple(f"suspension.{axle}.{key}" for key in AXLE_RATES),
+        unit="N/m",
+        step=lambda v: _axles(v, (axle,), **{key: lambda x: x * 1.01 for key in AXLE_RATES}),
+        value=lambda v: (getattr(v.suspension, axle).spring_rate,),
+    )
+
+
 BOTH, FRONT, REAR = ("front", "rear"), ("front",), ("rear",)
 #: The file parameters a log's residual is tested against.
 HYPOTHESES: tuple[Hypothesis, ...] = (
@@ -138,6 +165,8 @@ HYPOTHESES: tuple[Hypothesis, ...] = (
     _bars(BOTH, "anti-roll bars"),
     _bars(FRONT, "front anti-roll bar"),
     _bars(REAR, "rear anti-roll bar"),
+    _motion_ratio("front"),
+    _motion_ratio("rear"),
     Hypothesis(
         name="mass",
         family="mass",
@@ -313,6 +342,7 @@ def diagnose_inputs(
     weight = 1.0 / np.sqrt(np.asarray(vehicle.filter.constraint_noise_density, float))
     fits = [_weighted_fit(r, S[:, :, k], weight) for k in range(len(HYPOTHESES))]
     explained = np.array([1.0 - left / base if base > 0 else 0.0 for _, left, base in fits])
+    explained[~_considered(fits)] = -np.inf
     order = np.argsort(-explained)
     best = int(order[0])
     size, left, base = fits[best]
@@ -322,7 +352,7 @@ def diagnose_inputs(
     file_value = hypothesis.value(vehicle)
     stepped = hypothesis.value(hypothesis.step(vehicle))
     fitted = tuple(v + size * (s - v) for v, s in zip(file_value, stepped, strict=True))
-    if not _plausible(fitted, file_value):
+    if not _plausible(fitted, file_value, hypothesis.factor):
         return NOTHING  # a sensor the guards did not catch, not a car
     rivals = [k for k in order[1:] if HYPOTHESES[k].family != hypothesis.family]
     close = rivals and explained[rivals[0]] > RIVAL * explained[best]
@@ -338,6 +368,17 @@ def diagnose_inputs(
     steps = [best, *([rivals[0]] if close else [])]
     change = np.column_stack([dp[:, k] * fits[k][0] for k in steps])
     return Diagnosis(finding=finding, travel_zero=np.zeros(4), p=p, change=change)
+
+
+def _considered(fits) -> np.ndarray:
+    """The hypotheses (bool, :data:`HYPOTHESES` order) that may be named: a motion ratio, which
+    moves four rates of an axle at once, only when it leaves at most :data:`MOTION_RATIO_MARGIN`
+    of the residual energy the best other hypothesis leaves."""
+    left = np.array([left for _, left, _ in fits])
+    ratio = np.array([h.family == "motion ratio" for h in HYPOTHESES])
+    return ~ratio | (
+        left.min(where=ratio, initial=np.inf) <= MOTION_RATIO_MARGIN * left[~ratio].min()
+    )
 
 
 @functools.lru_cache(maxsize=8)
@@ -396,15 +437,11 @@ def _physical(r, parameters: ModelParameters) -> np.ndarray:
         return np.all(np.isfinite(r) & (np.abs(r) <= scale), axis=1)
 
 
-#: A fitted value further than this factor from the file's (either way) is no car's.
-PLAUSIBLE_FACTOR = 2.0
-
-
-def _plausible(fitted, file_value) -> bool:
-    """Whether a fit is a car's: no negative value, and within :data:`PLAUSIBLE_FACTOR` of
-    a file value that is not 0 (a bar the file leaves out may be any stiffness)."""
+def _plausible(fitted, file_value, factor: float) -> bool:
+    """Whether a fit is a car's: no negative value, and within ``factor`` of a file value
+    that is not 0 (a bar the file leaves out may be any stiffness)."""
     for new, old in zip(fitted, file_value, strict=True):
-        if new < 0 or (old > 0 and not old / PLAUSIBLE_FACTOR <= new <= old * PLAUSIBLE_FACTOR):
+        if new < 0 or (old > 0 and not old / factor <= new <= old * factor):
             return False
     return True
 

@@ -52,6 +52,9 @@ PAYLOADS = {
 }
 #: One corner's travel zero for the zero rows [m].
 ZERO = 3e-3
+#: The motion ratio (damper over wheel travel) a file forgets: its front rates are then
+#: the damper's, 1 / 0.7^2 = 2.04 times those at the wheel.
+MOTION_RATIO = 0.7
 #: How late ``ay`` is in the no-travel case [s].
 LATE_AY = 0.5
 NO_TRAVEL = f"no travel, ay {LATE_AY:g} s late"
@@ -71,7 +74,9 @@ def without_travel(log: pd.DataFrame, late: float = LATE_AY) -> pd.DataFrame:
 
 
 def wrong_files(text: str) -> list[Variant]:
-    """The issue's wrong files: bars removed, springs and mass 20 % off."""
+    """The issue's wrong files: bars removed, springs and mass 20 % off, and the front
+    axle's spring, damper and bar rates given at the damper (a motion ratio forgotten)."""
+    at_damper = 1.0 / MOTION_RATIO**2
     return [
         Variant(label="bars removed",
                 edits=tuple(Edit(table=a, key="arb_rate", value=0.0) for a in SUSPENSION_TABLES)),
@@ -81,6 +86,9 @@ def wrong_files(text: str) -> list[Variant]:
                 edits=tuple(scaled(text, a, "spring_rate", 1.2) for a in SUSPENSION_TABLES)),
         Variant(label="mass -20 %", edits=mass_edits(text, 0.8)),
         Variant(label="mass +20 %", edits=mass_edits(text, 1.2)),
+        Variant(label=f"front motion ratio {MOTION_RATIO:g} forgotten",
+                edits=tuple(scaled(text, "suspension.front", key, at_damper)
+                            for key in ("spring_rate", "damper_push", "damper_pull", "arb_rate"))),
     ]  # fmt: skip
 
 

@@ -3,7 +3,9 @@ travel zero is named, sized and never blamed on a healthy sensor.
 
 Plant logs of the sports car (the file the plant ran on is exact); each wrong file changes
 one group of keys as the issue lists them. Tolerances: the fitted value against the
-plant's own (exact) value, 10 % for springs and mass, 15 % for the bars (their
+plant's own (exact) value, 10 % for springs, mass and a forgotten motion ratio (the
+front axle's spring, damper and bar rates given at the damper, 1/0.7^2 times the wheel's:
+the front spring rate fitted), 15 % for the bars (their
 signature is shared with the roll-centre links the fit leaves as they are); a travel
 zero within 1 mm (the travel sensors' own warp on these logs is up to 0.9 mm).
 """
@@ -37,8 +39,21 @@ def _mass(vehicle, factor):
     )
 
 
+def _front_at_damper(vehicle, motion_ratio=0.7):
+    """The front rates given at the damper: the wheel's over the motion ratio squared."""
+    front = vehicle.suspension.front
+    keys = ("spring_rate", "damper_push", "damper_pull", "arb_rate")
+    at_damper = {key: getattr(front, key) / motion_ratio**2 for key in keys}
+    return vehicle.replace(
+        suspension=dataclasses.replace(
+            vehicle.suspension, front=dataclasses.replace(front, **at_damper)
+        )
+    )
+
+
 WRONG = {
     "no bars": (lambda v: _axles(v, arb_rate=lambda x: 0.0), "anti-roll bars", 0.15),
+    "front motion ratio forgotten": (_front_at_damper, "front motion ratio", 0.10),
     "springs -20 %": (lambda v: _axles(v, spring_rate=lambda x: 0.8 * x), "springs", 0.10),
     "mass +20 %": (lambda v: _mass(v, 1.2), "mass", 0.10),
 }
@@ -56,12 +71,23 @@ def test_the_exact_file_is_not_questioned(vehicle, plant_log, scenario):
 
 @pytest.mark.parametrize("scenario", SCENARIOS)
 @pytest.mark.parametrize("wrong", list(WRONG))
-def test_a_wrong_file_is_named_sized_and_no_sensor_is_blamed(vehicle, plant_log, scenario, wrong):
+def test_a_wrong_file_is_named_sized_and_no_sensor_is_blamed(
+    vehicle, plant_log, scenario, wrong, request
+):
     """The finding names the group of keys (on the lane change springs and mass fit almost
     alike: the one not named is named as the rival) and its value is the plant's own
     within the tolerance; no channel is isolated; σ widens by the loads' change the
     finding (or its rival) implies, so that ±2σ covers at least 95 % of the error, σ
     at least twice the exact file's."""
+    if wrong == "front motion ratio forgotten" and scenario == "brake-in-turn":
+        request.applymarker(
+            pytest.mark.xfail(
+                strict=True,
+                reason="d_fr is isolated: in a steady turn the front rates' error looks like "
+                "a bias of the loaded front corner's travel (the gain/bias split is the "
+                "accelerometers' only)",
+            )
+        )
     edit, name, tolerance = WRONG[wrong]
     signals = plant_log(scenario)
     estimate = TwoStageKF(edit(vehicle)).run(signals)
@@ -71,6 +97,7 @@ def test_a_wrong_file_is_named_sized_and_no_sensor_is_blamed(vehicle, plant_log,
         "anti-roll bars": (vehicle.suspension.front.arb_rate, vehicle.suspension.rear.arb_rate),
         "springs": (vehicle.suspension.front.spring_rate, vehicle.suspension.rear.spring_rate),
         "mass": (vehicle.mass.total,),
+        "front motion ratio": (vehicle.suspension.front.spring_rate,),
     }
     if finding.name == name:
         np.testing.assert_allclose(finding.fitted_value, truth[name], rtol=tolerance)
