@@ -61,6 +61,7 @@ from wheelload.estimators.logs.checks import (
     Outcome,
     WiringError,
     describe,
+    load_regressors,
     motion_window,
     quasi_static,
     travel_response,
@@ -265,7 +266,8 @@ def _speed_mistake(slope: float) -> str:
 def front_rear_check(
     q: dict[str, np.ndarray], response: np.ndarray
 ) -> tuple[list[Check], list[str]]:
-    """Per-wheel travel per unit ax and az against the file's, and with front/rear exchanged."""
+    """Per-wheel travel per unit ax and az (the lift's vx^2 held, :func:`load_regressors`)
+    against the file's, and with front/rear exchanged."""
     name = "front/rear travel responses"
     if not all(f"d_{w}" in q for w in WHEELS):
         return [], []
@@ -277,7 +279,8 @@ def front_rear_check(
     spread = np.abs(expected[:2] - expected[2:]) / np.abs(expected).max(axis=0)
     if not np.any(spread > MIN_RESPONSE):
         return [undecided_check(name, "front and rear respond alike")], []
-    X = np.column_stack([np.ones(q["t"].size), *(q[a] for a in ("ax", "ay", "az"))])
+    _, regressors = load_regressors(q)  # ax, ay, az (used above), then vx^2
+    X = np.column_stack([np.ones(q["t"].size), regressors])
     d = np.column_stack([q[f"d_{w}"] for w in WHEELS])
     coef, *_ = np.linalg.lstsq(X, d - d.mean(axis=0), rcond=None)
     measured = coef[1:][axes].T  # (4 wheels, axes)
