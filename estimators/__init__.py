@@ -18,12 +18,8 @@ from wheelload.models.runtime.lazy_names import lazy_names
 #: Names imported on first use, by module: the contract the command line and the studies
 #: take from this face.
 _LAZY_MODULES = {
-    "wheelload.estimators.protocol": (
-        "DEFAULT_MODEL",
-        "Estimator",
-        "MethodInfo",
-        "SuspensionModel",
-    ),
+    "wheelload.estimators.protocol": ("Estimator", "MethodInfo"),
+    "wheelload.estimators.suspension_choice": ("DEFAULT_MODEL", "SuspensionModel"),
     "wheelload.estimators.types": ("LogError", "Sample", "Signals"),
     "wheelload.estimators.result": ("Estimate", "StepFlag"),
     "wheelload.estimators.registry": (

@@ -40,7 +40,6 @@ Example
 from __future__ import annotations
 
 import dataclasses
-import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
@@ -48,6 +47,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from wheelload.estimators.result import Estimate
+from wheelload.estimators.suspension_choice import DEFAULT_MODEL as DEFAULT_MODEL
+from wheelload.estimators.suspension_choice import SuspensionModel as SuspensionModel
 from wheelload.estimators.types import Sample, Signals
 
 
@@ -74,29 +75,6 @@ class Estimator(Protocol):
     def run(self, signals: Signals) -> Estimate:
         """A whole log from a fresh initial state; same numbers as repeated :meth:`step`."""
         ...
-
-
-class SuspensionModel(enum.Enum):
-    """The vehicle model of a family method (:mod:`wheelload.estimators.family.suspension_model`).
-
-    ``FULL``: the KF's own suspension pseudo-measurement and equilibrium with every
-    term the vehicle file switches on; ``PAPER``: the papers' bare eq. 9 and eq. 15-16.
-    """
-
-    FULL = "full"  # the KF's model, every term the vehicle file switches on
-    PAPER = "paper"  # the papers' bare eq. 9 and eq. 15-16
-
-    @classmethod
-    def parse(cls, text: str) -> SuspensionModel:
-        """``"full"`` or ``"paper"`` (command line); anything else names the choices."""
-        for member in cls:
-            if member.value == text:
-                return member
-        raise ValueError(f"unknown suspension model {text!r}; choose 'full' or 'paper'")
-
-
-#: A fair comparison: every method on the KF's own model.
-DEFAULT_MODEL = SuspensionModel.FULL
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -46,6 +46,7 @@ LAYERS = (
             "wheelload.estimators.result",
             "wheelload.estimators.estimate_figure",
             "wheelload.estimators.protocol",
+            "wheelload.estimators.suspension_choice",
         ),
     ),
     ("loops, logs", ("wheelload.estimators.loops", "wheelload.estimators.logs")),

@@ -76,9 +76,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help=CATALOG["codegen"].summary,
         description="kf: write PREFIX.h, PREFIX.c (the library, libm only), PREFIX_example.c "
         "(CSV log in, CSV estimates out; needs the v_* travel-rate columns), "
-        "PREFIX_selftest.c and a Makefile. mhe: write the embedded MHE (OSQP embedded "
-        "solver, wheelload_mhe_terms.c, wheelload_mhe.c, wheelload_mhe_state.h: one "
-        "caller-owned state per instance; the example wheelload_mhe_main.c and a Makefile).",
+        "PREFIX_selftest.c, a Makefile and MISRA_DEVIATIONS.md. mhe: write the embedded MHE "
+        "(OSQP's embedded solver in osqp/, wheelload_mhe_terms.c/.h, wheelload_mhe.c/.h, "
+        "wheelload_mhe_state.h: one caller-owned state per instance; the fallback filter "
+        "wheelload_mhe_kf.c/.h; wheelload_mhe_run.c, a whole log timed sample by sample "
+        "(POSIX); the example wheelload_mhe_main.c, a Makefile and MISRA_DEVIATIONS.md).",
     )
     parser.add_argument(
         "--estimator",

@@ -15,10 +15,9 @@ from pathlib import Path
 
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import CommandTraits, add_common_options, vehicle_of
-from wheelload.studies.drive.scenarios import SCENARIOS as SCENARIO_TABLE
-from wheelload.studies.experiments.identification_study import StudySettings, run_study
+from wheelload.studies.drive.scenario_names import SCENARIO_NAMES
+from wheelload.studies.experiments.runs.choices import IDENTIFY_ON
 
-SCENARIO_NAMES = tuple(sorted(SCENARIO_TABLE))
 QUICK = ("accel-in-turn", "iso-dlc", "slope-20")  # identified from accel-in-turn
 
 
@@ -41,9 +40,8 @@ def register(subparsers) -> None:
     parser.add_argument("--quick", action="store_true", help="three scenarios only")
     parser.add_argument(
         "--identify-on",
-        choices=SCENARIO_NAMES,
-        help=f"the one drive log to identify from (default {StudySettings().identify_on}; "
-        f"--quick: {QUICK[0]})",
+        choices=sorted(SCENARIO_NAMES),
+        help=f"the one drive log to identify from (default {IDENTIFY_ON}; --quick: {QUICK[0]})",
     )
     parser.add_argument(
         "--vehicle", help="the true vehicle file the plant runs (default: the bundled sports car)"
@@ -53,6 +51,8 @@ def register(subparsers) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
+    from wheelload.studies.experiments.identification_study import StudySettings, run_study
+
     settings = StudySettings()
     if args.quick:
         settings = StudySettings(scenarios=QUICK, identify_on=QUICK[0])

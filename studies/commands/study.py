@@ -15,9 +15,6 @@ import tempfile
 import time
 from pathlib import Path
 
-from wheelload.estimators import SuspensionModel, read_log
-from wheelload.estimators.logs.output_files import atomic_write, check_outputs
-from wheelload.models import example_vehicle_path, load_vehicle
 from wheelload.studies.commands import CATALOG
 from wheelload.studies.commands.options import (
     WORKERS,
@@ -32,14 +29,8 @@ from wheelload.studies.commands.options import (
     vehicle_file,
     vehicle_for_logs,
 )
-from wheelload.studies.experiments import catalog as experiments
-from wheelload.studies.experiments import mhe_vs_kf
-from wheelload.studies.experiments.faults.sensor_faults import Fault
-from wheelload.studies.experiments.runs.cache import ResultCache
-from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
-from wheelload.studies.experiments.runs.estimator_model import WORDS, EstimatorModel, on_model
-from wheelload.studies.experiments.runs.folder_lock import folder_lock
-from wheelload.studies.experiments.runs.runner import Runner, check_scheduler
+from wheelload.studies.experiments.runs import choices
+from wheelload.studies.experiments.runs.choices import EstimatorModel
 
 #: The shared option groups this command takes (options.CommandTraits).
 TRAITS = CommandTraits(log=True, vehicle=True, writes=True, many_logs=True)
@@ -53,7 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study = subparsers.add_parser("study", help=CATALOG["study"].summary)
     study.add_argument(
         "name",
-        choices=["mhe-vs-kf", *experiments.NAMES],
+        choices=["mhe-vs-kf", *choices.EXPERIMENT_NAMES],
         help="mhe-vs-kf: KF, projection KF, MHE; the others: studies/experiments/",
     )
     study.add_argument("--logs", nargs="+", metavar="LOG",
@@ -61,14 +52,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     study.add_argument(
         "--scenarios", nargs="*",
         help="mhe-vs-kf: simulate these plant scenarios first (no names: "
-        + ", ".join(mhe_vs_kf.STUDY_SCENARIOS) + ", those that exist)",
+        + ", ".join(choices.STUDY_SCENARIOS) + ", those that exist)",
     )  # fmt: skip
     study.add_argument(
         "--sweep", choices=["robust", "equivalence"],
         help="mhe-vs-kf: robust (default): robust losses, bias states, lagged output and the "
         "RTS smoother on clean and faulted logs; equivalence: KF, projection KF, plain MHEs",
     )  # fmt: skip
-    study.add_argument("--faults", nargs="+", choices=[f.value for f in Fault],
+    study.add_argument("--faults", nargs="+", choices=[f.value for f in choices.Fault],
                        help="mhe-vs-kf robust sweep: faults injected (default: all)")  # fmt: skip
     study.add_argument("--horizon", type=int,
                        help="mhe-vs-kf robust sweep: window length (default 10)")  # fmt: skip
@@ -77,7 +68,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="short segments, few trials; mhe-vs-kf robust sweep: the KF with and without its "
         "guards, RTS, the lagged and the Huber 0.5σ MHE only",
     )  # fmt: skip
-    horizons = " ".join(map(str, mhe_vs_kf.HORIZONS))
+    horizons = " ".join(map(str, choices.HORIZONS))
     study.add_argument("--horizons", type=int, nargs="+",
                        help=f"mhe-vs-kf equivalence: window lengths ({horizons})")  # fmt: skip
     study.add_argument(
@@ -95,8 +86,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         metavar="{" + ",".join(m.value for m in EstimatorModel) + "}",
         default=EstimatorModel.FULL.value,
         help="vehicle model of kf, projection and mhe (and of the family methods with "
-        f"--suspension full, the KF's own model): full = {WORDS[EstimatorModel.FULL]} "
-        f"(default); paper = {WORDS[EstimatorModel.PAPER]}. The plant keeps the vehicle file",
+        f"--suspension full, the KF's own model): full = {choices.WORDS[EstimatorModel.FULL]} "
+        f"(default); paper = {choices.WORDS[EstimatorModel.PAPER]}. "
+        "The plant keeps the vehicle file",
     )
     add_common_options(study, TRAITS)
     study.set_defaults(handler=run)
@@ -122,15 +114,18 @@ def run(args: argparse.Namespace) -> int:
 
 def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
     """The mhe-vs-kf study: the robust sweep (default) or the equivalence sweep and figure."""
+    from wheelload.estimators import read_log
+    from wheelload.estimators.logs.output_files import atomic_write, check_outputs
+    from wheelload.models import load_vehicle
+    from wheelload.studies.experiments import mhe_vs_kf
+    from wheelload.studies.experiments.runs.estimator_model import on_model
+
     paths = [Path(p) for p in args.logs or ()]
     given = set(paths)
     check_logs_exist(paths, "--logs")
     out = Path(args.out or "mhe-vs-kf")
-    second = (
-        out.with_name(out.name + "-vs-kf.csv")
-        if args.sweep != "equivalence"
-        else out.with_suffix(".png")
-    )
+    second = (out.with_name(out.name + "-vs-kf.csv") if args.sweep != "equivalence"
+              else out.with_suffix(".png"))  # fmt: skip
     outputs = [out.with_suffix(".csv"), second]
     check_outputs(outputs, [*paths, *([args.vehicle] if args.vehicle else [])], force=args.force)
     vehicle_path = vehicle_for_logs(args, paths)
@@ -143,25 +138,18 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
             from wheelload.studies.drive.scenario_runner import simulate_logs
             from wheelload.studies.drive.scenarios import SCENARIOS
 
-            names = args.scenarios or [
-                name for name in mhe_vs_kf.STUDY_SCENARIOS if name in SCENARIOS
-            ]
+            default = [name for name in choices.STUDY_SCENARIOS if name in SCENARIOS]
+            names = args.scenarios or default
             simulated = simulate_logs(names, Path(folder), vehicle_path, args.allow_unusual)
             for name, path, samples in simulated:
                 print(f"{name}: {samples} samples simulated")
                 paths.append(path)
-        logs = [
-            read_log(
-                path,
-                channels=args.channels if path in given else None,
-                wiring_checks=not args.skip_wiring_checks,
-            )
-            for path in paths
-        ]
+        logs = [read_log(path, channels=args.channels if path in given else None,
+                         wiring_checks=not args.skip_wiring_checks) for path in paths]  # fmt: skip
     print(f"vehicle '{vehicle.name}' ({vehicle_path}), model {model.value} (--model)")
     if args.sweep != "equivalence":
         return _robust(args, logs, paths, vehicle)
-    horizons = tuple(args.horizons or mhe_vs_kf.HORIZONS)
+    horizons = tuple(args.horizons or choices.HORIZONS)
     table = mhe_vs_kf.mhe_vs_kf(logs, vehicle, mhe_vs_kf.StudySettings(horizons=horizons))
     with atomic_write(outputs[0], replace=args.force) as temporary:
         table.to_csv(temporary)
@@ -175,16 +163,17 @@ def _mhe_vs_kf(args: argparse.Namespace, model: EstimatorModel) -> int:
 
 def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
     """The robust sweep: RMSE table, change against the KF, written as CSV."""
+    from wheelload.estimators.logs.output_files import atomic_write
+    from wheelload.studies.experiments import mhe_vs_kf
+
     horizon = 10 if args.horizon is None else args.horizon
-    faults = tuple(Fault(name) for name in args.faults or [fault.value for fault in Fault])
+    faults = tuple(choices.Fault(n) for n in args.faults or [f.value for f in choices.Fault])
     candidates = mhe_vs_kf.robust_candidates(horizon, quick=args.quick)
     table = mhe_vs_kf.robust_sweep(logs, vehicle, faults, candidates)
     change = mhe_vs_kf.against_kf(table, faults)
     out = Path(args.out or "mhe-vs-kf")
-    for frame, path in (
-        (table, out.with_suffix(".csv")),
-        (change, out.with_name(out.name + "-vs-kf.csv")),
-    ):
+    for frame, path in ((table, out.with_suffix(".csv")),
+                        (change, out.with_name(out.name + "-vs-kf.csv"))):  # fmt: skip
         with atomic_write(path, replace=args.force) as temporary:
             frame.to_csv(temporary)
     print(f"logs: {', '.join(str(p.name) for p in paths)} ({sum(map(len, logs))} samples)")
@@ -201,10 +190,11 @@ def _robust(args: argparse.Namespace, logs, paths, vehicle) -> int:
 
 def _experiment(args: argparse.Namespace, model: EstimatorModel) -> int:
     """Run experiment ``args.name`` into ``args.out``; print what was computed and cached."""
-    if args.name not in experiments.NAMES:
-        raise ValueError(
-            f"unknown study '{args.name}'; choose from mhe-vs-kf, {', '.join(experiments.NAMES)}"
-        )
+    from wheelload.studies.experiments.runs.folder_lock import folder_lock
+
+    if args.name not in choices.EXPERIMENT_NAMES:
+        names = ", ".join(choices.EXPERIMENT_NAMES)
+        raise ValueError(f"unknown study '{args.name}'; choose from mhe-vs-kf, {names}")
     if args.out is None:
         raise ValueError(f"study {args.name} needs --out DIR (a folder for tables and figures)")
     if args.workers < 1:
@@ -218,6 +208,13 @@ def _experiment(args: argparse.Namespace, model: EstimatorModel) -> int:
 
 
 def _run_experiment(args: argparse.Namespace, out: Path, model: EstimatorModel) -> int:
+    from wheelload.estimators import SuspensionModel
+    from wheelload.models import example_vehicle_path
+    from wheelload.studies.experiments import catalog as experiments
+    from wheelload.studies.experiments.runs.cache import ResultCache
+    from wheelload.studies.experiments.runs.context import Context, Outputs, Settings
+    from wheelload.studies.experiments.runs.runner import Runner, check_scheduler
+
     vehicle_path = vehicle_file(args)
     if not vehicle_path.is_file():
         raise ValueError(f"{vehicle_path}: no such vehicle file (--vehicle)")

@@ -30,6 +30,7 @@ from wheelload.models.plant.dynamics import vehicle_plant
 from wheelload.models.vehicle.description import Vehicle
 from wheelload.studies.drive import laps
 from wheelload.studies.drive.roads import Road, build_road, iso8608_profile, smooth_step
+from wheelload.studies.drive.scenario_names import SCENARIO_NAMES
 from wheelload.studies.drive.scenario_options import BeyondGrip, Options
 from wheelload.studies.drive.simulation import Run
 
@@ -282,6 +283,8 @@ SCENARIOS: dict[str, Callable[[Vehicle, Options], Run]] = {
     "hockenheim": laps.hockenheim,
     "nordschleife": laps.nordschleife,
 }
+if tuple(SCENARIOS) != SCENARIO_NAMES:  # the table --help lists (scenario_names.py) is this one
+    raise ImportError(f"scenarios {tuple(SCENARIOS)} differ from {SCENARIO_NAMES}")
 
 
 #: The scenarios that take :attr:`Options.beyond_grip`: the paper's Table I turns on snow.

@@ -21,9 +21,9 @@ from wheelload.studies.experiments import (
 )
 from wheelload.studies.experiments.forces import tyre_forces
 from wheelload.studies.experiments.report.variants import variants_markdown
+from wheelload.studies.experiments.runs.choices import EXPERIMENT_NAMES, WORDS
 from wheelload.studies.experiments.runs.common import Section, simulate, truth_spec
 from wheelload.studies.experiments.runs.context import Context, Settings, model_caption
-from wheelload.studies.experiments.runs.estimator_model import WORDS
 
 STUDIES: dict[str, Callable[[Context], Section]] = {
     "iso-dlc": partial(headline.run, scenario="iso-dlc"),
@@ -40,6 +40,8 @@ STUDIES: dict[str, Callable[[Context], Section]] = {
     "tyre-forces": tyre_forces.run,
 }
 NAMES = (*STUDIES, "all")
+if NAMES != EXPERIMENT_NAMES:  # the table --help lists (runs/choices.py) is this one
+    raise ImportError(f"studies {NAMES} differ from runs/choices.py's {EXPERIMENT_NAMES}")
 
 PREAMBLE = """# wheelload studies: our plant beside Siegloff & Choi §IV
 

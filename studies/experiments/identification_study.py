@@ -51,6 +51,7 @@ from wheelload.models import (
 from wheelload.models.vehicle.file import set_values
 from wheelload.studies.drive.scenario_log import file_hash, write_log
 from wheelload.studies.drive.scenario_runner import run_scenario
+from wheelload.studies.experiments.runs.choices import IDENTIFY_ON
 from wheelload.studies.metrics import pooled_metrics
 
 SCENARIOS = (
@@ -83,7 +84,7 @@ class StudySettings:
     # A lap of the Nordschleife (586 s): crests and compressions excite heave and the
     # dampers up to 1 m/s, the corners roll and the bars, braking and traction pitch;
     # a steady turn (accel-in-turn) leaves the damper rates within the sensor noise.
-    identify_on: str = "nordschleife"
+    identify_on: str = IDENTIFY_ON
     # A lane change and a steady turn: sigma is calibrated over both kinds of model error.
     tune_on: tuple[str, ...] = ("iso-dlc", "accel-in-turn")
     scenarios: tuple[str, ...] = SCENARIOS

@@ -44,13 +44,9 @@ from wheelload.estimators import (
 from wheelload.estimators.protocol import Estimator, sample_intervals
 from wheelload.estimators.registry import build
 from wheelload.models import Vehicle
-from wheelload.studies.experiments.faults.sensor_faults import Fault, inject
+from wheelload.studies.experiments.faults.sensor_faults import inject
+from wheelload.studies.experiments.runs.choices import HORIZONS, Fault
 from wheelload.studies.metrics import pooled_metrics
-
-HORIZONS = (1, 5, 10, 20, 50)
-
-#: The plant scenarios the study simulates when ``--scenarios`` names none.
-STUDY_SCENARIOS = ("iso-dlc", "nordschleife", "hockenheim", "wheel-lift")
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -49,6 +49,7 @@ def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
     assert "projection KF linked in" in printed  # the hard window's fallback, as in Python
     files = {"wheelload_mhe.c", "wheelload_mhe_terms.c", "wheelload_mhe_kf.c", "osqp"}
     assert files <= {p.name for p in out.iterdir()}
+    assert sorted(p.name for p in out.iterdir() if p.name not in _help_files(capsys)) == []
     assert "#define DT 0.005" in (out / "wheelload_mhe.c").read_text()
     assert "#define OSQP_USE_FLOAT" in (out / "osqp" / "osqp_configure.h").read_text()
     # Its own Makefile builds the static library (relative paths: the folder may move).
@@ -58,6 +59,16 @@ def test_codegen_command_writes_the_embedded_mhe(tmp_path, capsys):
     symbols = subprocess.run(["nm", str(moved / "libwheelload_mhe.a")], check=True,
                              capture_output=True, text=True).stdout  # fmt: skip
     assert " T wheelload_mhe_step" in symbols and " T wheelload_mhe_kf_step" in symbols
+
+
+def _help_files(capsys) -> set[str]:
+    """The file names ``wheelload codegen --help`` gives (``NAME.c/.h``: both, ``osqp/``: the
+    folder)."""
+    with pytest.raises(SystemExit):
+        main(["codegen", "--help"])
+    words = {w.rstrip(".,;:)/") for w in capsys.readouterr().out.replace("(", " ").split()}
+    pairs = {f"{w[:-5]}.{end}" for w in words if w.endswith(".c/.h") for end in "ch"}
+    return words | pairs
 
 
 def test_codegen_command_rejects_the_other_estimators_options(tmp_path, capsys):

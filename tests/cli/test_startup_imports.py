@@ -98,6 +98,12 @@ def test_the_version_imports_no_numerics():
 #: What the commands run with, none of it needed to list or describe them (casadi.casadi: the
 #: extension itself, "casadi" being a stand-in until used, studies/deferred.py).
 HEAVY = ("casadi.casadi", "scipy", "pandas", "pyarrow", "matplotlib", "osqp", "dask")
+#: The ground-truth plant, the scenarios built on it and the studies' experiments.
+PLANT_AND_STUDIES = (
+    "wheelload.models.plant",
+    "wheelload.studies.drive.scenarios",
+    "wheelload.studies.experiments.catalog",
+)
 
 
 def test_the_help_imports_no_command_and_lists_every_command():
@@ -114,13 +120,16 @@ def test_the_help_imports_no_command_and_lists_every_command():
 @pytest.mark.parametrize(
     "command",
     ["vehicle", "estimate", "methods", "compare", "channels", "sensor-sets", "bench", "weigh",
-     "identify", "tune", "docs"],
+     "identify", "tune", "docs", "study", "identify-study"],
 )  # fmt: skip
 def test_a_commands_help_imports_only_its_parser(command):
-    """``wheelload COMMAND --help`` builds that command's parser: none of what it runs with."""
+    """``wheelload COMMAND --help`` builds that command's parser: none of what it runs with
+    (``study`` and ``identify-study`` list their choices from studies/experiments/runs/choices.py
+    and studies/drive/scenario_names.py, not from the experiments and the plant)."""
     text, modules = _run_fresh([command, "--help"])
     assert text.startswith(f"usage: wheelload {command}")
     assert sorted(m for m in HEAVY if m in modules) == []
+    assert sorted(m for m in modules if m.startswith(PLANT_AND_STUDIES)) == []
     others = {c.module for name, c in CATALOG.items() if name != command}
     assert sorted(others & modules) == []
 

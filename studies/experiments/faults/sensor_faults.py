@@ -12,23 +12,11 @@ Example
 from __future__ import annotations
 
 import dataclasses
-import enum
 
 import numpy as np
 
 from wheelload.estimators import Signals
-
-
-class Fault(enum.Enum):
-    """The injected faults (front-left travel sensor unless stated)."""
-
-    CLEAN = "clean"
-    STUCK = "stuck"  # travel frozen at its value at the onset, its rate 0
-    DRIFT = "drift"  # travel drifts by 1 mm/s from the onset
-    SPIKES = "spikes"  # single-sample 20 mm spikes on 1 % of samples, random corners
-    ACCELERATION_BIAS = "ay-bias"  # lateral acceleration +0.5 m/s^2 from the onset
-    TRAVEL_OFFSET = "offset-4mm"  # both front travel sensors read 4 mm high (ride height)
-
+from wheelload.studies.experiments.runs.choices import Fault
 
 DRIFT_RATE = 0.001  # m/s
 SPIKE = 0.02  # m

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from wheelload.estimators import DEFAULT_MODEL, SuspensionModel
 from wheelload.models.runtime.temporaries import replacing
-from wheelload.studies.experiments.runs.estimator_model import SHORT_WORDS, EstimatorModel
+from wheelload.studies.experiments.runs.choices import SHORT_WORDS, EstimatorModel
 from wheelload.studies.experiments.runs.runner import Runner
 
 QUICK_SHORTEN = 0.01  # share of a lap driven in --quick mode

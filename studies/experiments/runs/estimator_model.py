@@ -16,39 +16,10 @@ Example
 from __future__ import annotations
 
 import dataclasses
-import enum
 
 from wheelload.models import Vehicle
 from wheelload.studies.experiments.equilibrium_residuals import paper_model
-
-
-class EstimatorModel(enum.Enum):
-    """The estimators' vehicle model: the file's (``full``) or the paper's (``paper``)."""
-
-    FULL = "full"  # the vehicle file's [model] terms and the online payload estimate
-    PAPER = "paper"  # every [model] term off, the payload estimate off
-
-    @classmethod
-    def parse(cls, text: str) -> EstimatorModel:
-        """``"full"`` or ``"paper"`` (command line); anything else names the choices."""
-        for member in cls:
-            if member.value == text:
-                return member
-        choices = ", ".join(member.value for member in cls)
-        raise ValueError(f"--model {text!r}: unknown vehicle model; choose one of {choices}")
-
-
-#: What each model is, in the words of the report and ``--help``.
-WORDS = {
-    EstimatorModel.FULL: "the vehicle file's [model] terms and the online payload estimate",
-    EstimatorModel.PAPER: "Siegloff & Choi's: every [model] term off, the payload estimate "
-    "off ([filter.payload] estimate = false)",
-}
-#: The same, in a table's caption.
-SHORT_WORDS = {
-    EstimatorModel.FULL: "the file's model terms, the online payload",
-    EstimatorModel.PAPER: "every model term off, the payload estimate off",
-}
+from wheelload.studies.experiments.runs.choices import EstimatorModel
 
 
 def on_model(vehicle: Vehicle, model: EstimatorModel) -> Vehicle:
