@@ -88,27 +88,16 @@ class Update:
     used: ca.SX  # (3,) rows used
 
 
-def _evidence(value, apparent):
-    """:math:`v^4 / (v^4 + a^4)`: 1/2 at the apparent size ``a``, ~0 below it, ~1 above."""
-    return value**4 / (value**4 + apparent**4)
-
-
 def applied(theta, tuning):
-    r"""The payload the loads take: its mass weighted by its evidence
-    :math:`w_m = e(\Delta m, a_m)`, each moment :math:`S_k` by
-    :math:`\max(w_m, e(S_k, a_S))`, with :math:`e(v, a) = v^4 / (v^4 + a^4)` and
-    :math:`a_m, a_S` the payload the sensors' own errors make appear
-    (``payload_apparent_mass``, ``_moment``). A payload is one body: its moment comes with
-    its mass, whole (75 kg against 15 kg: 99.8 %), or is taken on its own when it is well
-    above the sensors' (a load moved inside the car); a moment without a mass, of the
-    sensors' size, is their error (the travel sensors' front/rear offsets), not a changed
-    car. The height is taken as estimated."""
+    r"""The payload the loads take: each of mass, :math:`S_x`, :math:`S_y` weighted by its
+    evidence, :math:`\vartheta_k^3 / (\vartheta_k^2 + a_k^2)` with :math:`a_k` the payload
+    the sensors' own errors make appear (``payload_apparent_mass``, ``_moment``): the
+    posterior mean when the residual is either a sensor error of that size or a payload
+    (a real one, far above it, is taken whole; the height is taken as estimated)."""
     s = _settings(tuning)
-    mass = _evidence(theta[0], s["payload_apparent_mass"])
-    moments = [
-        theta[k] * ca.fmax(mass, _evidence(theta[k], s["payload_apparent_moment"])) for k in (1, 2)
-    ]
-    return ca.vertcat(theta[0] * mass, *moments, theta[3])
+    scale = (s["payload_apparent_mass"], s["payload_apparent_moment"], s["payload_apparent_moment"])
+    weighted = [theta[k] * theta[k] ** 2 / (theta[k] ** 2 + scale[k] ** 2) for k in range(3)]
+    return ca.vertcat(*weighted, theta[3])
 
 
 def update(theta, P, z, u, gates, p, mask, dt_nominal, tuning, residual: ca.Function) -> Update:

@@ -271,13 +271,11 @@ class PayloadTuning:
     acceleration_scale: Vector3 = (5.0, 1.5, 1.5)
     # The payload that the sensors' own errors make appear (kg; kg m for S_x, S_y): an
     # accelerometer bias of 0.1 m/s^2 on a 1600 kg car reads as 16 kg, 0.05 m/s^2 in ax or
-    # ay as 4 kg m, travel sensors 0.5 mm apart front to rear as 5-15 kg m. The loads take
-    # the mass weighted by its evidence e = theta^4 / (theta^4 + apparent^4), a moment by
-    # the larger of its mass's and its own: a moment comes with its payload's mass, or must
-    # stand well above the sensors' on its own (a load moved inside the car), so a sensor
+    # ay as 4 kg m, travel sensors 0.5 mm apart front to rear as 5-10 kg m. The loads take
+    # an estimate weighted by its evidence, theta^2 / (theta^2 + apparent^2), so a sensor
     # error is not learnt as a changed car.
     apparent_mass: float = 15.0
-    apparent_moment: float = 20.0
+    apparent_moment: float = 10.0
 
     def _check(self) -> None:
         for key in ("mass_std", "drift_density", "standstill_density", "standstill_speed",
