@@ -33,16 +33,14 @@ from wheelload.models.inputs import TRAVEL, TRAVEL_RATE
 from wheelload.models.payload import Payload
 from wheelload.models.vehicle.description import SIGMA_KEYS, vehicle_from_dict
 from wheelload.studies.drive.payload_schedule import PayloadSchedule
+from wheelload.studies.drive.scenario_names import MANOEUVRES
 from wheelload.studies.drive.scenario_runner import run_scenario
 from wheelload.studies.drive.sensors import sensor_grade
 from wheelload.studies.experiments.faults.fault_injection import bundled_vehicles
 from wheelload.studies.experiments.mismatch import mass_edits
 from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant, scaled
 
-SCENARIOS = (
-    "iso-dlc", "brake-in-turn", "accel-in-turn", "bounce-sweep", "slope-20",
-    "chicane-bank-30", "chicane-incline-20", "wheel-lift", "standstill", "stop-and-go",
-)  # fmt: skip
+SCENARIOS = MANOEUVRES
 QUICK_SCENARIOS = ("iso-dlc", "brake-in-turn")
 #: Payloads about the file's CG (x ahead, y left, z up) [kg, m]: rear seats, roof box.
 PAYLOADS = {

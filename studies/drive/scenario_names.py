@@ -18,3 +18,7 @@ SCENARIO_NAMES = (
     "hockenheim",
     "nordschleife",
 )
+#: The laps: whole tracks, minutes long.
+LAPS = ("hockenheim", "nordschleife")
+#: Every scenario but the laps: the manoeuvres of seconds to a minute.
+MANOEUVRES = tuple(name for name in SCENARIO_NAMES if name not in LAPS)

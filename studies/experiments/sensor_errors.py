@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 
 from wheelload.models import ModelTerms
+from wheelload.studies.drive.scenario_names import MANOEUVRES
 from wheelload.studies.drive.sensors import GRADES
 from wheelload.studies.experiments.report.tables import markdown
 from wheelload.studies.experiments.runs.common import (
@@ -37,17 +38,8 @@ from wheelload.studies.experiments.runs.units import TrialResult, TrialSpec
 from wheelload.studies.experiments.runs.vehicle_variants import Edit, Variant
 from wheelload.studies.experiments.vehicles import vehicle_files
 
-SCENARIOS = (
-    "iso-dlc",
-    "brake-in-turn",
-    "accel-in-turn",
-    "bounce-sweep",
-    "slope-20",
-    "chicane-bank-30",
-    "chicane-incline-20",
-    "wheel-lift",
-    "standstill",
-)
+#: The manoeuvres but stop-and-go.
+SCENARIOS = tuple(name for name in MANOEUVRES if name != "stop-and-go")
 QUICK_SCENARIOS = ("iso-dlc", "standstill")
 QUICK_VEHICLE = "sports_car"
 RATES = (100.0, 500.0, 1000.0)  # Hz, output rate of the logs
